@@ -1,0 +1,400 @@
+//! The model IR: a checked, name-resolved mechanism as plain data.
+//!
+//! Consumes: nothing (built by `front::lower`, rewritten by later model transformations).
+//! Produces: the input of `kane::derive` and of the back ends' naming.
+//!
+//! # Invariants (established by `front::lower`, relied on by every later phase)
+//! - `frames[Model::NEWTONIAN]` is the Newtonian frame, the only frame without a parent.
+//! - Every other frame's `parent` comes *before* it in the arena, so a forward scan visits
+//!   parents first (the kinematic tree in topological order). A tree joint is nothing but a
+//!   frame with a [`Motion`]; a body is attached to one frame; massless frames are allowed.
+//! - Each coordinate is driven by exactly one frame's motion; `u_i = q̇_i`.
+//! - All expressions are dimensionally consistent and in SI units (kg, m, s, rad, A).
+//! - Joint axes have unit length.
+//! - Loop closures (a later capability) are additional constraints between two points or
+//!   frames of the tree; they never change the tree itself.
+//!
+//! Model transformations (adding a twist axis to a hinge, say) insert frames and coordinates;
+//! since derivation only ever walks frames in arena order, the result must keep parents first.
+
+pub mod arena;
+
+pub use arena::{Arena, Handle};
+
+use crate::diag::Span;
+use crate::sym::Number;
+
+/// Physical dimension as integer exponents of the SI base quantities used by mechanisms.
+/// Angles are dimensionless (rad = 1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub struct Dimension {
+    pub mass: i8,
+    pub length: i8,
+    pub time: i8,
+    pub current: i8,
+}
+
+impl Dimension {
+    pub const NONE: Dimension = Dimension { mass: 0, length: 0, time: 0, current: 0 };
+    pub const MASS: Dimension = Dimension { mass: 1, ..Dimension::NONE };
+    pub const LENGTH: Dimension = Dimension { length: 1, ..Dimension::NONE };
+    pub const TIME: Dimension = Dimension { time: 1, ..Dimension::NONE };
+    pub const CURRENT: Dimension = Dimension { current: 1, ..Dimension::NONE };
+    /// kg·m/s²
+    pub const FORCE: Dimension = Dimension { mass: 1, length: 1, time: -2, current: 0 };
+    /// kg·m²/s² (also a torque, and a rotational stiffness N·m/rad)
+    pub const TORQUE: Dimension = Dimension { mass: 1, length: 2, time: -2, current: 0 };
+    /// kg·m²
+    pub const INERTIA: Dimension = Dimension { mass: 1, length: 2, time: 0, current: 0 };
+    pub const ACCELERATION: Dimension = Dimension { mass: 0, length: 1, time: -2, current: 0 };
+
+    pub fn mul(self, other: Dimension) -> Dimension {
+        Dimension {
+            mass: self.mass + other.mass,
+            length: self.length + other.length,
+            time: self.time + other.time,
+            current: self.current + other.current,
+        }
+    }
+    pub fn div(self, other: Dimension) -> Dimension {
+        self.mul(other.powi(-1))
+    }
+    pub fn powi(self, n: i8) -> Dimension {
+        Dimension {
+            mass: self.mass * n,
+            length: self.length * n,
+            time: self.time * n,
+            current: self.current * n,
+        }
+    }
+}
+
+impl std::fmt::Display for Dimension {
+    /// `kg*m/s^2`-style SI form; `1` for dimensionless.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let parts = [("kg", self.mass), ("m", self.length), ("s", self.time), ("A", self.current)];
+        let mut numerator = Vec::new();
+        let mut denominator = Vec::new();
+        for (unit, exponent) in parts {
+            let side = if exponent > 0 { &mut numerator } else { &mut denominator };
+            match exponent.abs() {
+                0 => {}
+                1 => side.push(unit.to_string()),
+                e => side.push(format!("{unit}^{e}")),
+            }
+        }
+        let top = if numerator.is_empty() { "1".to_string() } else { numerator.join("*") };
+        match denominator.len() {
+            0 => write!(f, "{top}"),
+            _ => write!(f, "{top}/{}", denominator.join("/")),
+        }
+    }
+}
+
+/// A scalar expression over parameters, inputs and time, as written in the model (after
+/// name resolution, unit scaling and dimension checking). `let` definitions are inlined.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Expr {
+    Number(Number),
+    Param(Handle<Param>),
+    Input(Handle<Input>),
+    /// Simulation time `t`, in s.
+    Time,
+    Pi,
+    Neg(Box<Expr>),
+    Add(Box<Expr>, Box<Expr>),
+    Sub(Box<Expr>, Box<Expr>),
+    Mul(Box<Expr>, Box<Expr>),
+    Div(Box<Expr>, Box<Expr>),
+    /// Power with a constant exponent (integer, or a rational such as 1/2).
+    Pow(Box<Expr>, Number),
+    Call(Function, Vec<Expr>),
+}
+
+impl Expr {
+    pub fn number(value: Number) -> Expr {
+        Expr::Number(value)
+    }
+    pub fn zero() -> Expr {
+        Expr::Number(Number::ZERO)
+    }
+    pub fn one() -> Expr {
+        Expr::Number(Number::ONE)
+    }
+}
+
+/// Elementary functions allowed in expressions.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Function {
+    Sin,
+    Cos,
+    Tan,
+    Sqrt,
+    Exp,
+    Ln,
+    Abs,
+    Atan2,
+}
+
+impl Function {
+    pub fn name(self) -> &'static str {
+        match self {
+            Function::Sin => "sin",
+            Function::Cos => "cos",
+            Function::Tan => "tan",
+            Function::Sqrt => "sqrt",
+            Function::Exp => "exp",
+            Function::Ln => "ln",
+            Function::Abs => "abs",
+            Function::Atan2 => "atan2",
+        }
+    }
+    pub fn arity(self) -> usize {
+        if self == Function::Atan2 {
+            2
+        } else {
+            1
+        }
+    }
+}
+
+/// Components of a vector in a frame's basis: `x·frame.x + y·frame.y + z·frame.z`.
+pub type Vec3 = [Expr; 3];
+
+/// A vector together with the frame its components are expressed in.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameVector {
+    pub frame: Handle<Frame>,
+    pub components: Vec3,
+}
+
+/// A parameter: a named constant, settable at run time (default from the model).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Param {
+    pub name: String,
+    /// Default value in SI units.
+    pub value: f64,
+    pub dimension: Dimension,
+    pub docs: Vec<String>,
+    pub span: Span,
+}
+
+/// A named time signal supplied at run time (constant, sine, chirp, CSV column, ...).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Input {
+    pub name: String,
+    /// Value used when no signal is given, in SI units.
+    pub default: f64,
+    pub dimension: Dimension,
+    pub docs: Vec<String>,
+    pub span: Span,
+}
+
+/// A generalized coordinate `q_i` with its speed `u_i = q̇_i`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Coordinate {
+    /// Name of the coordinate (by default the joint's name; `hinge` for a pin `hinge`).
+    pub name: String,
+    /// `Dimension::NONE` for angles (rad), `Dimension::LENGTH` for slides (m).
+    pub dimension: Dimension,
+    /// Initial value `q0` in SI units.
+    pub initial: f64,
+    /// Initial speed `u0` in SI units.
+    pub initial_speed: f64,
+    pub span: Span,
+}
+
+/// Rotation by `angle` about the unit vector `axis` (components in the rotating frame).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AxisAngle {
+    pub axis: Vec3,
+    pub angle: Expr,
+}
+
+/// How a frame moves relative to its parent, after its constant placement.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Motion {
+    /// Fixed in the parent (a body-fixed frame, a weld, an interframe).
+    Fixed,
+    /// Rotation by `q` about the unit `axis` through the frame's origin (components in this
+    /// frame, equal in the parent-side placement since the axis is invariant).
+    Revolute { axis: Vec3, coordinate: Handle<Coordinate> },
+    /// Translation by `q` along the unit `axis` (components in this frame's placement).
+    Prismatic { axis: Vec3, coordinate: Handle<Coordinate> },
+}
+
+impl Motion {
+    pub fn coordinate(&self) -> Option<Handle<Coordinate>> {
+        match self {
+            Motion::Fixed => None,
+            Motion::Revolute { coordinate, .. } | Motion::Prismatic { coordinate, .. } => Some(*coordinate),
+        }
+    }
+}
+
+/// A node of the kinematic tree.
+///
+/// Relative to its parent P, frame F is placed by
+/// - origin: `O_F = O_P + origin` (components in P) `+ q·axis` for a prismatic motion
+///   (axis components in F's placement, which for a prismatic motion equals F),
+/// - orientation: `C_{P←F} = R(orientation[0]) · R(orientation[1]) · … · R(axis, q)`
+///   where the last factor is present for a revolute motion and each `R(a, θ)` is the
+///   rotation by θ about a (Rodrigues).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    /// Qualified name: `newtonian`, `arm` (a body's frame), `arm.tilted`, or
+    /// `hinge.joint` for frames created by joints.
+    pub name: String,
+    pub parent: Option<Handle<Frame>>,
+    pub origin: Vec3,
+    pub orientation: Vec<AxisAngle>,
+    pub motion: Motion,
+    pub span: Span,
+}
+
+/// Inertia tensor entries about the centre of mass, in the body frame (tensor convention:
+/// off-diagonal entries are the tensor's, i.e. `I_xy = -∫ x y dm`, as in SymPy's `inertia`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Inertia {
+    pub xx: Expr,
+    pub yy: Expr,
+    pub zz: Expr,
+    pub xy: Expr,
+    pub yz: Expr,
+    pub zx: Expr,
+}
+
+/// A rigid body attached to one frame of the tree.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Body {
+    pub name: String,
+    pub frame: Handle<Frame>,
+    pub mass: Expr,
+    /// Centre of mass in the body frame.
+    pub center_of_mass: Vec3,
+    pub inertia: Inertia,
+    pub docs: Vec<String>,
+    pub span: Span,
+}
+
+/// A named point fixed in a frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Point {
+    /// Qualified name: `arm.tip`, or `arm` for a body's origin.
+    pub name: String,
+    pub frame: Handle<Frame>,
+    pub position: Vec3,
+    pub span: Span,
+}
+
+/// The kind of a joint, as declared (the frames it created carry the kinematics).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JointKind {
+    Pin,
+    Slider,
+    Weld,
+}
+
+/// A joint as declared in the model; kept for reports and diagnostics.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Joint {
+    pub name: String,
+    pub kind: JointKind,
+    pub parent: Handle<Body>,
+    pub child: Handle<Body>,
+    pub coordinates: Vec<Handle<Coordinate>>,
+    pub span: Span,
+}
+
+/// Something that does work: contributes to the generalized active forces `F_r`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Load {
+    /// A force applied at a point (acts on whatever the point's frame belongs to).
+    Force { point: Handle<Point>, force: FrameVector, span: Span },
+    /// A couple applied to the body owning `frame`.
+    Torque { frame: Handle<Frame>, torque: FrameVector, span: Span },
+    /// `−stiffness·(q − rest)` on one coordinate (joint spring); stores `½k(q−rest)²` of
+    /// potential energy.
+    Spring { coordinate: Handle<Coordinate>, stiffness: Expr, rest: Expr, span: Span },
+    /// `−damping·u` on one coordinate (joint damper).
+    Damper { coordinate: Handle<Coordinate>, damping: Expr, span: Span },
+}
+
+/// What an output measures. Vector outputs produce three scalar outputs `name.x|y|z`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum OutputKind {
+    /// Position of `point` relative to the origin of `frame`, components in `frame`.
+    Position { point: Handle<Point>, frame: Handle<Frame> },
+    /// Velocity of `point` in the Newtonian frame, components in `frame`.
+    Velocity { point: Handle<Point>, frame: Handle<Frame> },
+    Coordinate(Handle<Coordinate>),
+    Speed(Handle<Coordinate>),
+    KineticEnergy,
+    /// Gravity plus joint springs; zero at the Newtonian origin and at springs' rest values.
+    PotentialEnergy,
+    /// Any scalar expression of parameters, inputs and time.
+    Expr(Expr),
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Output {
+    pub name: String,
+    pub kind: OutputKind,
+    pub docs: Vec<String>,
+    pub span: Span,
+}
+
+/// A whole mechanism.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct Model {
+    /// Model name (snake_case), from `model NAME;` or the file stem.
+    pub name: String,
+    /// `///` comments before the `model` line (or at the top of the file).
+    pub docs: Vec<String>,
+    pub params: Arena<Param>,
+    pub inputs: Arena<Input>,
+    pub coordinates: Arena<Coordinate>,
+    /// The kinematic tree, parents first; `frames[NEWTONIAN]` is the root.
+    pub frames: Arena<Frame>,
+    pub bodies: Arena<Body>,
+    pub points: Arena<Point>,
+    pub joints: Arena<Joint>,
+    pub loads: Vec<Load>,
+    /// Gravitational acceleration, components in the Newtonian frame.
+    pub gravity: Option<Vec3>,
+    pub outputs: Vec<Output>,
+}
+
+impl Model {
+    pub const NEWTONIAN: Handle<Frame> = Handle::<Frame>::NEWTONIAN_INDEX;
+
+    /// A model with only the Newtonian frame.
+    pub fn new(name: impl Into<String>) -> Model {
+        let mut model = Model { name: name.into(), ..Model::default() };
+        model.frames.append(Frame {
+            name: "newtonian".to_string(),
+            parent: None,
+            origin: [Expr::zero(), Expr::zero(), Expr::zero()],
+            orientation: Vec::new(),
+            motion: Motion::Fixed,
+            span: Span::default(),
+        });
+        model
+    }
+
+    /// The chain of frames from the root to `frame`, root first.
+    pub fn frame_path(&self, frame: Handle<Frame>) -> Vec<Handle<Frame>> {
+        let mut path = vec![frame];
+        let mut current = frame;
+        while let Some(parent) = self.frames[current].parent {
+            path.push(parent);
+            current = parent;
+        }
+        path.reverse();
+        path
+    }
+}
+
+impl Handle<Frame> {
+    const NEWTONIAN_INDEX: Handle<Frame> = Handle::from_const(0);
+}

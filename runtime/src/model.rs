@@ -1,0 +1,58 @@
+//! The contract between a model (generated Rust, or the tape evaluator) and everything that
+//! runs it: integrators, analyses, the command line.
+//!
+//! A model is `M(q) u̇ = F(t, q, u, inputs)` with `q̇ = u`, plus outputs `y(t, q, u, inputs)`.
+//! Slices keep the trait object-safe and size-agnostic; generated models also offer
+//! fixed-size inherent methods (`SMatrix<f64, NU, NU>`) for embedding.
+
+/// A multibody model in Kane's form `M(q) u̇ = F(t, q, u, inputs)`, `q̇ = u`.
+///
+/// Matrices are written column-major into `out` (the layout of nalgebra's `DMatrix`).
+/// Implementations never allocate and never panic for slices of the documented lengths.
+pub trait Model {
+    /// Model name, snake_case, as in the `.mech` file.
+    fn name(&self) -> &str;
+    /// Number of generalized coordinates `q`.
+    fn nq(&self) -> usize;
+    /// Number of generalized speeds `u` (equal to `nq` for tree models).
+    fn nu(&self) -> usize;
+    /// Number of named inputs.
+    fn ninputs(&self) -> usize;
+    /// Number of scalar outputs.
+    fn noutputs(&self) -> usize;
+    /// Number of parameters.
+    fn nparams(&self) -> usize;
+
+    fn coordinate_name(&self, i: usize) -> &str;
+    fn input_name(&self, i: usize) -> &str;
+    fn output_name(&self, i: usize) -> &str;
+    fn param_name(&self, i: usize) -> &str;
+    fn param(&self, i: usize) -> f64;
+    fn set_param(&mut self, i: usize, value: f64);
+    /// Value an input takes when no signal is supplied.
+    fn input_default(&self, i: usize) -> f64;
+
+    /// Initial `q` and `u` written in the model (`q0`, `u0` of each joint).
+    fn initial_state(&self, q: &mut [f64], u: &mut [f64]);
+
+    /// `M(q)`, `nu × nu`, column-major, symmetric positive definite for a well-posed model.
+    fn mass_matrix(&self, t: f64, q: &[f64], inputs: &[f64], out: &mut [f64]);
+    /// `F(t, q, u, inputs)`: generalized active forces plus the velocity-dependent part of the
+    /// generalized inertia forces, so that `M u̇ = F`.
+    fn forcing(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]);
+    /// Outputs `y(t, q, u, inputs)`.
+    fn outputs(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]);
+
+    /// Index of the parameter called `name`.
+    fn param_index(&self, name: &str) -> Option<usize> {
+        (0..self.nparams()).find(|&i| self.param_name(i) == name)
+    }
+    /// Index of the input called `name`.
+    fn input_index(&self, name: &str) -> Option<usize> {
+        (0..self.ninputs()).find(|&i| self.input_name(i) == name)
+    }
+    /// Index of the output called `name`.
+    fn output_index(&self, name: &str) -> Option<usize> {
+        (0..self.noutputs()).find(|&i| self.output_name(i) == name)
+    }
+}
