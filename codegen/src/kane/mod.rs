@@ -1,0 +1,296 @@
+//! Kane's method: from a checked model to `M(q) u̇ = F(t, q, u, inputs)` and outputs.
+//!
+//! Consumes: an [`ir::Model`]. Produces: [`Equations`], plain data (a pool and root ids).
+//!
+//! For each generalized speed r (Kane & Levinson, *Dynamics: Theory and Applications*, ch. 6),
+//! `F_r + F_r* = 0` with
+//! - `F_r  = Σ_points f·∂v_P/∂u_r + Σ_bodies T·∂ω/∂u_r` (applied forces, gravity, joint
+//!   springs and dampers), the generalized active forces;
+//! - `F_r* = −Σ_bodies [m a_G·∂v_G/∂u_r + (I α + ω × I ω)·∂ω/∂u_r]`, the generalized inertia
+//!   forces.
+//!
+//! Splitting accelerations into their u̇ parts (`Σ_s ∂v/∂u_s u̇_s`) and the rest gives
+//! `M_rs = Σ_bodies m ∂v_G/∂u_r·∂v_G/∂u_s + ∂ω/∂u_r·I ∂ω/∂u_s` and
+//! `F_r = F_r + F_r*|_{u̇=0}` (SymPy's `forcing`). `M` is never inverted symbolically.
+
+mod kinematics;
+pub mod vector;
+
+use std::collections::BTreeMap;
+
+use crate::ir::{self, Load, Model, OutputKind};
+use crate::sym::{ExprId, ExprPool, Number, Symbol};
+pub use kinematics::{lower_expr, Kinematics};
+use vector::Vec3;
+
+/// The equations of motion of a model, ready for the back ends.
+#[derive(Clone, Debug)]
+pub struct Equations {
+    pub pool: ExprPool,
+    /// Number of generalized coordinates and speeds (equal for tree models).
+    pub nq: usize,
+    pub nu: usize,
+    /// `M(q)`, `nu × nu`, column-major; symmetric (`M[r + nu*s] == M[s + nu*r]`, same id).
+    pub mass_matrix: Vec<ExprId>,
+    /// `F(t, q, u, inputs)`, length `nu`.
+    pub forcing: Vec<ExprId>,
+    /// Scalar outputs in declaration order (vector outputs expanded to `.x`, `.y`, `.z`).
+    pub outputs: Vec<ExprId>,
+    pub output_names: Vec<String>,
+}
+
+/// Derives the equations of motion by Kane's method.
+pub fn derive(model: &Model) -> Equations {
+    let mut pool = ExprPool::new();
+    name_symbols(model, &mut pool);
+    let mut kinematics = Kinematics::new(model, &mut pool);
+    let nu = model.coordinates.len();
+
+    // Terms of M_rs (r ≤ s) and F_r, summed once at the end so each sum is built once.
+    let mut mass_terms: BTreeMap<(usize, usize), Vec<ExprId>> = BTreeMap::new();
+    let mut forcing_terms: Vec<Vec<ExprId>> = vec![Vec::new(); nu];
+
+    for (_, body) in model.bodies.iter() {
+        let body_terms = BodyTerms::new(&mut pool, &kinematics, body);
+        body_terms.add_to(&mut pool, &mut mass_terms, &mut forcing_terms);
+    }
+    for load in &model.loads {
+        add_load(&mut pool, &kinematics, model, load, &mut forcing_terms);
+    }
+
+    let zero = pool.zero();
+    let mut mass_matrix = vec![zero; nu * nu];
+    for ((r, s), terms) in mass_terms {
+        let entry = pool.add_all(&terms);
+        mass_matrix[r + nu * s] = entry;
+        mass_matrix[s + nu * r] = entry;
+    }
+    let forcing: Vec<ExprId> = forcing_terms.iter().map(|terms| pool.add_all(terms)).collect();
+
+    let mut outputs = Vec::new();
+    let mut output_names = Vec::new();
+    for output in &model.outputs {
+        for (suffix, id) in lower_output(&mut pool, &mut kinematics, model, &output.kind) {
+            output_names.push(format!("{}{suffix}", output.name));
+            outputs.push(id);
+        }
+    }
+    Equations { pool, nq: nu, nu, mass_matrix, forcing, outputs, output_names }
+}
+
+/// Display names: `q_<coordinate>`, `u_<coordinate>`, parameter and input names, `t`.
+fn name_symbols(model: &Model, pool: &mut ExprPool) {
+    for (handle, coordinate) in model.coordinates.iter() {
+        let i = handle.index() as u32;
+        pool.set_name(Symbol::Coordinate(i), format!("q_{}", coordinate.name));
+        pool.set_name(Symbol::Speed(i), format!("u_{}", coordinate.name));
+    }
+    for (handle, param) in model.params.iter() {
+        pool.set_name(Symbol::Param(handle.index() as u32), param.name.clone());
+    }
+    for (handle, input) in model.inputs.iter() {
+        pool.set_name(Symbol::Input(handle.index() as u32), input.name.clone());
+    }
+}
+
+/// What one rigid body contributes, in its own frame's basis.
+struct BodyTerms {
+    mass: ExprId,
+    inertia: [[ExprId; 3]; 3],
+    /// `(r, ∂v_G/∂u_r, ∂ω/∂u_r)` for every speed that moves the body.
+    partials: Vec<(usize, Vec3, Vec3)>,
+    /// `m (g − a_G|u̇=0)`: gravity minus the u̇-free inertia force of the mass centre.
+    translational_force: Vec3,
+    /// `I α|u̇=0 + ω × I ω`: the u̇-free inertia torque about the mass centre.
+    inertia_torque: Vec3,
+}
+
+impl BodyTerms {
+    fn new(pool: &mut ExprPool, kinematics: &Kinematics, body: &ir::Body) -> BodyTerms {
+        let frame = &kinematics.frames[body.frame.index()];
+        let mass = lower_expr(pool, &body.mass);
+        let com = kinematics::lower_vec(pool, &body.center_of_mass);
+        let inertia = inertia_matrix(pool, &body.inertia);
+
+        let velocity_partials = kinematics.point_partials(pool, body.frame, com);
+        let omega_partials = frame.partial_omega.clone();
+        let zero = vector::zero(pool);
+        let mut partials = Vec::new();
+        let all_speeds: std::collections::BTreeSet<usize> =
+            velocity_partials.iter().chain(&omega_partials).map(|&(r, _)| r).collect();
+        for r in all_speeds {
+            let v = velocity_partials.iter().find(|p| p.0 == r).map_or(zero, |p| p.1);
+            let w = omega_partials.iter().find(|p| p.0 == r).map_or(zero, |p| p.1);
+            partials.push((r, v, w));
+        }
+
+        let accel = kinematics.point_accel_rest(pool, body.frame, com);
+        let net = vector::sub(pool, frame.gravity, accel);
+        let translational_force = vector::scale(pool, net, mass);
+        let i_alpha = mat_vec3(pool, &inertia, frame.alpha_rest);
+        let i_omega = mat_vec3(pool, &inertia, frame.omega);
+        let gyroscopic = vector::cross(pool, frame.omega, i_omega);
+        let inertia_torque = vector::add(pool, i_alpha, gyroscopic);
+        BodyTerms { mass, inertia, partials, translational_force, inertia_torque }
+    }
+
+    /// Adds `m v_r·v_s + ω_r·I ω_s` to `M_rs` and `v_r·m(g − a) − ω_r·(Iα + ω×Iω)` to `F_r`.
+    fn add_to(&self, pool: &mut ExprPool, mass: &mut BTreeMap<(usize, usize), Vec<ExprId>>, forcing: &mut [Vec<ExprId>]) {
+        let inertia_times: Vec<Vec3> = self.partials.iter().map(|&(_, _, w)| mat_vec3(pool, &self.inertia, w)).collect();
+        for (i, &(r, v_r, w_r)) in self.partials.iter().enumerate() {
+            for (j, &(s, v_s, _)) in self.partials.iter().enumerate().skip(i) {
+                let translational = vector::dot(pool, v_r, v_s);
+                let translational = pool.mul(self.mass, translational);
+                let rotational = vector::dot(pool, w_r, inertia_times[j]);
+                let key = (r.min(s), r.max(s));
+                mass.entry(key).or_default().extend([translational, rotational]);
+            }
+            let active = vector::dot(pool, v_r, self.translational_force);
+            let inertial = vector::dot(pool, w_r, self.inertia_torque);
+            let inertial = pool.neg(inertial);
+            forcing[r].extend([active, inertial]);
+        }
+    }
+}
+
+/// The symmetric inertia matrix from tensor entries.
+fn inertia_matrix(pool: &mut ExprPool, inertia: &ir::Inertia) -> [[ExprId; 3]; 3] {
+    let [xx, yy, zz, xy, yz, zx] =
+        [&inertia.xx, &inertia.yy, &inertia.zz, &inertia.xy, &inertia.yz, &inertia.zx].map(|e| lower_expr(pool, e));
+    [[xx, xy, zx], [xy, yy, yz], [zx, yz, zz]]
+}
+
+fn mat_vec3(pool: &mut ExprPool, m: &[[ExprId; 3]; 3], v: Vec3) -> Vec3 {
+    vector::mat_vec(pool, m, v)
+}
+
+/// Contribution of one applied load to the generalized active forces `F_r`.
+fn add_load(pool: &mut ExprPool, kinematics: &Kinematics, model: &Model, load: &Load, forcing: &mut [Vec<ExprId>]) {
+    match load {
+        Load::Force { point, force, .. } => {
+            let point = &model.points[*point];
+            let offset = kinematics::lower_vec(pool, &point.position);
+            let f = kinematics::lower_vec(pool, &force.components);
+            let f = kinematics.express(pool, f, force.frame, point.frame);
+            for (r, v) in kinematics.point_partials(pool, point.frame, offset) {
+                forcing[r].push(vector::dot(pool, f, v));
+            }
+        }
+        Load::Torque { frame, torque, .. } => {
+            let t = kinematics::lower_vec(pool, &torque.components);
+            let t = kinematics.express(pool, t, torque.frame, *frame);
+            for (r, w) in kinematics.frames[frame.index()].partial_omega.clone() {
+                forcing[r].push(vector::dot(pool, t, w));
+            }
+        }
+        Load::Spring { coordinate, stiffness, rest, .. } => {
+            let k = lower_expr(pool, stiffness);
+            let rest = lower_expr(pool, rest);
+            let q = pool.symbol(Symbol::Coordinate(coordinate.index() as u32));
+            let stretch = pool.sub(q, rest);
+            let force = pool.mul(k, stretch);
+            forcing[coordinate.index()].push(pool.neg(force));
+        }
+        Load::Damper { coordinate, damping, .. } => {
+            let c = lower_expr(pool, damping);
+            let u = pool.symbol(Symbol::Speed(coordinate.index() as u32));
+            let force = pool.mul(c, u);
+            forcing[coordinate.index()].push(pool.neg(force));
+        }
+    }
+}
+
+/// Scalar outputs of one declared output, with name suffixes (`""` or `.x`, `.y`, `.z`).
+fn lower_output(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Model, kind: &OutputKind) -> Vec<(&'static str, ExprId)> {
+    let vector_output = |v: Vec3| vec![(".x", v[0]), (".y", v[1]), (".z", v[2])];
+    match kind {
+        OutputKind::Position { point, frame } => {
+            let point = &model.points[*point];
+            let position = point_position(pool, kinematics, point);
+            let (dcm, origin) = kinematics.to_newtonian(pool, *frame);
+            let relative = vector::sub(pool, position, origin);
+            vector_output(vector::mat_t_vec(pool, &dcm, relative))
+        }
+        OutputKind::Velocity { point, frame } => {
+            let point = &model.points[*point];
+            let offset = kinematics::lower_vec(pool, &point.position);
+            let partials = kinematics.point_partials(pool, point.frame, offset);
+            let velocity = combine_partials(pool, &partials);
+            vector_output(kinematics.express(pool, velocity, point.frame, *frame))
+        }
+        OutputKind::Coordinate(c) => vec![("", pool.symbol(Symbol::Coordinate(c.index() as u32)))],
+        OutputKind::Speed(c) => vec![("", pool.symbol(Symbol::Speed(c.index() as u32)))],
+        OutputKind::KineticEnergy => vec![("", kinetic_energy(pool, kinematics, model))],
+        OutputKind::PotentialEnergy => vec![("", potential_energy(pool, kinematics, model))],
+        OutputKind::Expr(e) => vec![("", lower_expr(pool, e))],
+    }
+}
+
+/// Position of a point from the Newtonian origin, in N's basis.
+fn point_position(pool: &mut ExprPool, kinematics: &mut Kinematics, point: &ir::Point) -> Vec3 {
+    let (dcm, origin) = kinematics.to_newtonian(pool, point.frame);
+    let offset = kinematics::lower_vec(pool, &point.position);
+    let offset = vector::mat_vec(pool, &dcm, offset);
+    vector::add(pool, origin, offset)
+}
+
+/// `Σ_r partial_r · u_r`.
+fn combine_partials(pool: &mut ExprPool, partials: &kinematics::Partials) -> Vec3 {
+    let mut total = vector::zero(pool);
+    for &(r, v) in partials {
+        let u = pool.symbol(Symbol::Speed(r as u32));
+        let term = vector::scale(pool, v, u);
+        total = vector::add(pool, total, term);
+    }
+    total
+}
+
+/// `½ Σ_bodies (m v_G·v_G + ω·I ω)`.
+fn kinetic_energy(pool: &mut ExprPool, kinematics: &Kinematics, model: &Model) -> ExprId {
+    let mut terms = Vec::new();
+    for (_, body) in model.bodies.iter() {
+        let mass = lower_expr(pool, &body.mass);
+        let com = kinematics::lower_vec(pool, &body.center_of_mass);
+        let partials = kinematics.point_partials(pool, body.frame, com);
+        let v = combine_partials(pool, &partials);
+        let omega = kinematics.frames[body.frame.index()].omega;
+        let inertia = inertia_matrix(pool, &body.inertia);
+        let i_omega = vector::mat_vec(pool, &inertia, omega);
+        let v2 = vector::dot(pool, v, v);
+        terms.push(pool.mul(mass, v2));
+        terms.push(vector::dot(pool, omega, i_omega));
+    }
+    let twice = pool.add_all(&terms);
+    pool.scale(twice, Number::rational(1, 2))
+}
+
+/// `−Σ_bodies m g·r_G + Σ_springs ½ k (q − rest)²`.
+fn potential_energy(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Model) -> ExprId {
+    let mut terms = Vec::new();
+    let gravity = kinematics.frames[ir::Model::NEWTONIAN.index()].gravity;
+    for (_, body) in model.bodies.iter() {
+        let mass = lower_expr(pool, &body.mass);
+        let (dcm, origin) = kinematics.to_newtonian(pool, body.frame);
+        let com = kinematics::lower_vec(pool, &body.center_of_mass);
+        let com = vector::mat_vec(pool, &dcm, com);
+        let position = vector::add(pool, origin, com);
+        let height_work = vector::dot(pool, gravity, position);
+        let work = pool.mul(mass, height_work);
+        terms.push(pool.neg(work));
+    }
+    for load in &model.loads {
+        if let Load::Spring { coordinate, stiffness, rest, .. } = load {
+            let k = lower_expr(pool, stiffness);
+            let rest = lower_expr(pool, rest);
+            let q = pool.symbol(Symbol::Coordinate(coordinate.index() as u32));
+            let stretch = pool.sub(q, rest);
+            let square = pool.pow(stretch, Number::int(2));
+            let energy = pool.mul(k, square);
+            terms.push(pool.scale(energy, Number::rational(1, 2)));
+        }
+    }
+    pool.add_all(&terms)
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,101 @@
+//! Small symbolic 3-vectors and 3×3 direction cosine matrices over an [`ExprPool`].
+//!
+//! A `Vec3` holds components in one frame's basis; a `Mat3` `C_{A←B}` maps components in B
+//! to components in A (rows indexed by A's axes).
+
+use crate::sym::{ExprId, ExprPool, Number};
+
+pub type Vec3 = [ExprId; 3];
+pub type Mat3 = [[ExprId; 3]; 3];
+
+pub fn zero(pool: &mut ExprPool) -> Vec3 {
+    let z = pool.zero();
+    [z, z, z]
+}
+
+pub fn identity(pool: &mut ExprPool) -> Mat3 {
+    let (z, o) = (pool.zero(), pool.one());
+    [[o, z, z], [z, o, z], [z, z, o]]
+}
+
+pub fn add(pool: &mut ExprPool, a: Vec3, b: Vec3) -> Vec3 {
+    [pool.add(a[0], b[0]), pool.add(a[1], b[1]), pool.add(a[2], b[2])]
+}
+
+pub fn sub(pool: &mut ExprPool, a: Vec3, b: Vec3) -> Vec3 {
+    [pool.sub(a[0], b[0]), pool.sub(a[1], b[1]), pool.sub(a[2], b[2])]
+}
+
+/// `s·a` for a scalar expression `s`.
+pub fn scale(pool: &mut ExprPool, a: Vec3, s: ExprId) -> Vec3 {
+    [pool.mul(a[0], s), pool.mul(a[1], s), pool.mul(a[2], s)]
+}
+
+pub fn scale_number(pool: &mut ExprPool, a: Vec3, c: Number) -> Vec3 {
+    [pool.scale(a[0], c), pool.scale(a[1], c), pool.scale(a[2], c)]
+}
+
+pub fn dot(pool: &mut ExprPool, a: Vec3, b: Vec3) -> ExprId {
+    let products = [pool.mul(a[0], b[0]), pool.mul(a[1], b[1]), pool.mul(a[2], b[2])];
+    pool.add_all(&products)
+}
+
+pub fn cross(pool: &mut ExprPool, a: Vec3, b: Vec3) -> Vec3 {
+    let component = |pool: &mut ExprPool, i: usize, j: usize| {
+        let left = pool.mul(a[i], b[j]);
+        let right = pool.mul(a[j], b[i]);
+        pool.sub(left, right)
+    };
+    [component(pool, 1, 2), component(pool, 2, 0), component(pool, 0, 1)]
+}
+
+/// `C·v`.
+pub fn mat_vec(pool: &mut ExprPool, c: &Mat3, v: Vec3) -> Vec3 {
+    [dot(pool, c[0], v), dot(pool, c[1], v), dot(pool, c[2], v)]
+}
+
+/// `Cᵀ·v` (for a DCM: the inverse map).
+pub fn mat_t_vec(pool: &mut ExprPool, c: &Mat3, v: Vec3) -> Vec3 {
+    let column = |i: usize| [c[0][i], c[1][i], c[2][i]];
+    [dot(pool, column(0), v), dot(pool, column(1), v), dot(pool, column(2), v)]
+}
+
+/// `A·B`.
+pub fn mat_mul(pool: &mut ExprPool, a: &Mat3, b: &Mat3) -> Mat3 {
+    let mut out = [[pool.zero(); 3]; 3];
+    for (i, row) in out.iter_mut().enumerate() {
+        for (j, entry) in row.iter_mut().enumerate() {
+            *entry = dot(pool, a[i], [b[0][j], b[1][j], b[2][j]]);
+        }
+    }
+    out
+}
+
+/// Rotation by `angle` about the unit `axis` (Rodrigues): `C_{P←F} = cosθ·I + sinθ·[a]× +
+/// (1 − cosθ)·a aᵀ`, the DCM of a frame F obtained by rotating P.
+pub fn rotation(pool: &mut ExprPool, axis: Vec3, angle: ExprId) -> Mat3 {
+    let c = pool.cos(angle);
+    let s = pool.sin(angle);
+    let one = pool.one();
+    let versine = pool.sub(one, c);
+    let mut out = [[pool.zero(); 3]; 3];
+    for (i, row) in out.iter_mut().enumerate() {
+        for (j, entry) in row.iter_mut().enumerate() {
+            let outer = pool.mul_all(&[versine, axis[i], axis[j]]);
+            // [a]× entry (i, j) = −ε_ijk a_k
+            let skew = match (i, j) {
+                (0, 1) => pool.neg(axis[2]),
+                (0, 2) => axis[1],
+                (1, 0) => axis[2],
+                (1, 2) => pool.neg(axis[0]),
+                (2, 0) => pool.neg(axis[1]),
+                (2, 1) => axis[0],
+                _ => pool.zero(),
+            };
+            let skew = pool.mul(s, skew);
+            let diagonal = if i == j { c } else { pool.zero() };
+            *entry = pool.add_all(&[diagonal, skew, outer]);
+        }
+    }
+    out
+}

@@ -1,0 +1,116 @@
+//! Differentiation of pool expressions.
+//!
+//! Consumes: an expression and a [`Symbol`]. Produces: the partial derivative, built with the
+//! canonicalizing constructors. Memoized per call, so the cost is linear in the size of the
+//! DAG below the root (shared subexpressions are differentiated once).
+
+use std::collections::HashMap;
+
+use super::expr::{ExprId, ExprPool, Func, Node, Symbol};
+use super::Number;
+
+impl ExprPool {
+    /// `∂root/∂symbol`.
+    pub fn diff(&mut self, root: ExprId, symbol: Symbol) -> ExprId {
+        let mut memo = HashMap::new();
+        self.diff_memo(root, symbol, &mut memo)
+    }
+
+    /// Total time derivative with `q̇ = u`, `u̇ = Acceleration`, explicit `t` (inputs are
+    /// treated as constants here: callers that need input rates must add them).
+    pub fn time_derivative(&mut self, root: ExprId) -> ExprId {
+        let mut terms = Vec::new();
+        for symbol in self.free_symbols(root) {
+            let rate = match symbol {
+                Symbol::Coordinate(i) => self.symbol(Symbol::Speed(i)),
+                Symbol::Speed(i) => self.symbol(Symbol::Acceleration(i)),
+                Symbol::Time => self.one(),
+                Symbol::Acceleration(_) | Symbol::Param(_) | Symbol::Input(_) => continue,
+            };
+            let partial = self.diff(root, symbol);
+            terms.push(self.mul(partial, rate));
+        }
+        self.add_all(&terms)
+    }
+
+    fn diff_memo(&mut self, id: ExprId, symbol: Symbol, memo: &mut HashMap<ExprId, ExprId>) -> ExprId {
+        if let Some(&d) = memo.get(&id) {
+            return d;
+        }
+        let result = match self.node(id).clone() {
+            Node::Number(_) => self.zero(),
+            Node::Symbol(s) => {
+                if s == symbol {
+                    self.one()
+                } else {
+                    self.zero()
+                }
+            }
+            Node::Add { terms, .. } => {
+                let mut items = Vec::with_capacity(terms.len());
+                for &(term, c) in terms.iter() {
+                    items.push((self.diff_memo(term, symbol, memo), c));
+                }
+                self.sum(&items)
+            }
+            Node::Mul { coefficient, factors } => {
+                // Product rule: Σᵢ c·eᵢ·bᵢ^(eᵢ−1)·∂bᵢ·Π_{j≠i} bⱼ^eⱼ
+                let mut items = Vec::new();
+                for (i, &(base, exponent)) in factors.iter().enumerate() {
+                    let d_base = self.diff_memo(base, symbol, memo);
+                    if self.is_zero(d_base) {
+                        continue;
+                    }
+                    let mut rest: Vec<(ExprId, Number)> = factors.to_vec();
+                    rest[i].1 = exponent.sub(Number::ONE);
+                    rest.push((d_base, Number::ONE));
+                    items.push((self.product(coefficient.mul(exponent), &rest), Number::ONE));
+                }
+                self.sum(&items)
+            }
+            Node::Call(func, x) => {
+                let dx = self.diff_memo(x, symbol, memo);
+                if self.is_zero(dx) {
+                    self.zero()
+                } else {
+                    let outer = self.derivative_of_call(func, x, id);
+                    self.mul(outer, dx)
+                }
+            }
+            Node::Atan2(y, x) => {
+                // d atan2(y, x) = (x dy − y dx) / (x² + y²)
+                let dy = self.diff_memo(y, symbol, memo);
+                let dx = self.diff_memo(x, symbol, memo);
+                let x_dy = self.mul(x, dy);
+                let y_dx = self.mul(y, dx);
+                let numerator = self.sub(x_dy, y_dx);
+                let x2 = self.pow(x, Number::int(2));
+                let y2 = self.pow(y, Number::int(2));
+                let denominator = self.add(x2, y2);
+                self.div(numerator, denominator)
+            }
+        };
+        memo.insert(id, result);
+        result
+    }
+
+    /// `f'(x)` for `call = f(x)`.
+    fn derivative_of_call(&mut self, func: Func, x: ExprId, call: ExprId) -> ExprId {
+        match func {
+            Func::Sin => self.cos(x),
+            Func::Cos => {
+                let s = self.sin(x);
+                self.neg(s)
+            }
+            Func::Tan => {
+                // 1 + tan²x
+                let square = self.pow(call, Number::int(2));
+                let one = self.one();
+                self.add(one, square)
+            }
+            Func::Exp => call,
+            Func::Ln => self.pow(x, Number::MINUS_ONE),
+            Func::Abs => self.div(x, call),
+        }
+    }
+}

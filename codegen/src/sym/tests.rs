@@ -1,0 +1,113 @@
+//! One-line tests of the symbolic engine in s-expression form (egg's `test_fn!` style).
+
+use super::*;
+
+/// Parsing `input` through the canonicalizing constructors prints as `expected`.
+fn check(input: &str, expected: &str) {
+    let mut pool = ExprPool::new();
+    let id = pool.parse_sexpr(input).unwrap();
+    assert_eq!(pool.sexpr(id), expected, "simplifying {input}");
+}
+
+/// `d input / d symbol` prints as `expected`.
+fn check_diff(input: &str, symbol: &str, expected: &str) {
+    let mut pool = ExprPool::new();
+    let id = pool.parse_sexpr(input).unwrap();
+    let symbol_id = pool.parse_sexpr(symbol).unwrap();
+    let Node::Symbol(s) = *pool.node(symbol_id) else { panic!("{symbol} is not a symbol") };
+    let d = pool.diff(id, s);
+    assert_eq!(pool.sexpr(d), expected, "d/d{symbol} {input}");
+}
+
+#[test]
+fn constants_fold_exactly() {
+    check("(+ 1/3 1/3 1/3)", "1");
+    check("(* 2 0.5)", "1");
+    check("(/ 3 6)", "1/2");
+    check("(^ 2/3 -2)", "9/4");
+    check("(sin 0)", "0");
+    check("(cos 0)", "1");
+}
+
+#[test]
+fn sums_collect_like_terms() {
+    check("(+ x x)", "(* 2 x)");
+    check("(- x x)", "0");
+    check("(+ x 0)", "x");
+    check("(+ (* 2 x y) (* -2 y x))", "0");
+    check("(+ (+ a b) (- a) 3)", "(+ 3 b)");
+}
+
+#[test]
+fn products_collect_powers() {
+    check("(* x x)", "(^ x 2)");
+    check("(* x (/ 1 x))", "1");
+    check("(* 0 x)", "0");
+    check("(* 1 x)", "x");
+    check("(* (^ x 2) (^ x -1/2))", "(^ x 3/2)");
+    check("(* 2 (+ a b))", "(+ (* 2 a) (* 2 b))");
+}
+
+#[test]
+fn pythagorean_identity() {
+    check("(+ (^ (sin q0) 2) (^ (cos q0) 2))", "1");
+    check("(+ (* m (^ (sin q0) 2)) (* m (^ (cos q0) 2)))", "m");
+    check("(+ x (* 3 l (^ (sin q0) 2)) (* 3 l (^ (cos q0) 2)))", "(+ x (* 3 l))");
+}
+
+#[test]
+fn odd_and_even_functions() {
+    check("(sin (- q0))", "(* -1 (sin q0))");
+    check("(cos (- q0))", "(cos q0)");
+}
+
+#[test]
+fn derivatives() {
+    check_diff("(sin q0)", "q0", "(cos q0)");
+    check_diff("(cos q0)", "q0", "(* -1 (sin q0))");
+    check_diff("(* m (^ l 2) q0)", "q0", "(* m (^ l 2))");
+    check_diff("(^ q0 3)", "q0", "(* 3 (^ q0 2))");
+    check_diff("(* q0 (sin q0))", "q0", "(+ (sin q0) (* q0 (cos q0)))");
+    check_diff("(sqrt q0)", "q0", "(* 1/2 (^ q0 -1/2))");
+    check_diff("(ln q0)", "q0", "(^ q0 -1)");
+    check_diff("(sin u0)", "q0", "0");
+}
+
+#[test]
+fn hash_consing_shares_equal_expressions() {
+    let mut pool = ExprPool::new();
+    let a = pool.parse_sexpr("(+ (sin q0) (* 2 x))").unwrap();
+    let b = pool.parse_sexpr("(+ (* x 2) (sin q0))").unwrap();
+    assert_eq!(a, b);
+}
+
+#[test]
+fn evaluation_matches_closed_form() {
+    let mut pool = ExprPool::new();
+    let e = pool.parse_sexpr("(+ (* 3 (^ q0 2)) (sqrt q0) (atan2 q0 1) (exp q0))").unwrap();
+    let q = 0.7_f64;
+    let value = pool.eval(&[e], &|_| q)[0];
+    let exact = 3.0 * q * q + q.sqrt() + q.atan2(1.0) + q.exp();
+    assert!((value - exact).abs() < 1e-15, "{value} vs {exact}");
+}
+
+#[test]
+fn derivative_agrees_with_finite_difference() {
+    let mut pool = ExprPool::new();
+    let e = pool.parse_sexpr("(* (sin (* 2 q0)) (^ (+ 1 (^ q0 2)) -1/2) (atan2 q0 (+ 2 q0)) (tan q0) (abs q0))").unwrap();
+    let d = pool.diff(e, Symbol::Coordinate(0));
+    let at = |x: f64| pool.eval(&[e], &|_| x)[0];
+    let x = 0.37;
+    let h = 1e-6;
+    let fd = (at(x + h) - at(x - h)) / (2.0 * h);
+    let exact = pool.eval(&[d], &|_| x)[0];
+    assert!((fd - exact).abs() < 1e-8, "{fd} vs {exact}");
+}
+
+#[test]
+fn parse_errors_are_reported() {
+    let mut pool = ExprPool::new();
+    assert!(pool.parse_sexpr("(+ 1").is_err());
+    assert!(pool.parse_sexpr("(frob 1)").is_err());
+    assert!(pool.parse_sexpr(")").is_err());
+}
