@@ -1,0 +1,109 @@
+//! Errors reported while running a model: by the integrators, the mass-matrix solve, the input
+//! signals and the simulation driver.
+
+use std::fmt;
+
+/// Everything that can go wrong while running a model.
+///
+/// Times `t` are in the model's time unit (seconds for `.mech` models); step sizes `h` likewise.
+/// Every message says what to try next.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum RuntimeError {
+    /// `M(q)` could not be factored: it is singular (to working precision) or the solution of
+    /// `M u̇ = F` was not finite although `M` and `F` were.
+    SingularMassMatrix {
+        /// Time at which the mass matrix was evaluated.
+        t: f64,
+    },
+    /// The adaptive step size fell below the smallest step allowed (the `h_min` option, or
+    /// ten units of roundoff of `t`): the solution is probably singular or very stiff there.
+    StepSizeUnderflow {
+        /// Time reached.
+        t: f64,
+        /// Step size that was about to be tried.
+        h: f64,
+    },
+    /// The state or its derivative contains a NaN or an infinity.
+    NonFiniteState {
+        /// Last time at which the state was finite.
+        t: f64,
+    },
+    /// The step budget (`max_steps`) was used up before the end time.
+    TooManySteps {
+        /// Time reached.
+        t: f64,
+        /// Number of steps taken (accepted and rejected).
+        steps: usize,
+    },
+    /// A slice has the wrong length.
+    LengthMismatch {
+        /// What the slice holds, e.g. `"q0"` or `"signals"`.
+        what: &'static str,
+        /// Length required.
+        expected: usize,
+        /// Length given.
+        found: usize,
+    },
+    /// An input signal is malformed (e.g. a table that is empty or not increasing in time).
+    InvalidSignal(String),
+    /// An option is out of range (e.g. a negative tolerance or an end time before the start).
+    InvalidOptions(String),
+    /// Dense output was requested outside the last step `[t_start, t_end]`.
+    InterpolationOutOfRange {
+        /// Requested time.
+        t: f64,
+        /// Start of the last step.
+        t_start: f64,
+        /// End of the last step.
+        t_end: f64,
+    },
+}
+
+impl fmt::Display for RuntimeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            RuntimeError::SingularMassMatrix { t } => write!(
+                f,
+                "the mass matrix is singular at t = {t}: check for bodies without mass or \
+                 inertia about a joint axis, and for a degenerate configuration (e.g. a lock-up)"
+            ),
+            RuntimeError::StepSizeUnderflow { t, h } => write!(
+                f,
+                "step size underflow at t = {t} (h = {h:e}): the solution is probably singular \
+                 or very stiff there; check the model near this time, loosen the tolerances, \
+                 or lower h_min"
+            ),
+            RuntimeError::NonFiniteState { t } => write!(
+                f,
+                "the state or its derivative became NaN or infinite after t = {t}: check the \
+                 initial state, the parameters and the inputs for values that make the model \
+                 blow up (divisions by zero, square roots of negative numbers)"
+            ),
+            RuntimeError::TooManySteps { t, steps } => write!(
+                f,
+                "gave up at t = {t} after {steps} steps: raise max_steps, shorten the \
+                 simulation, or loosen the tolerances (a very large step count often means \
+                 the model is stiff)"
+            ),
+            RuntimeError::LengthMismatch {
+                what,
+                expected,
+                found,
+            } => write!(
+                f,
+                "`{what}` has length {found} but the model needs {expected}: give one value per \
+                 entry, in the model's order"
+            ),
+            RuntimeError::InvalidSignal(msg) => write!(f, "invalid input signal: {msg}"),
+            RuntimeError::InvalidOptions(msg) => write!(f, "invalid options: {msg}"),
+            RuntimeError::InterpolationOutOfRange { t, t_start, t_end } => write!(
+                f,
+                "cannot interpolate at t = {t}: dense output only covers the last step \
+                 [{t_start}, {t_end}]; interpolate after each step, before taking the next"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for RuntimeError {}

@@ -1,0 +1,514 @@
+//! Simulation of a [`Model`]: the first-order form of its equations of motion, and a driver
+//! that integrates it and samples the trajectory on a regular output grid.
+//!
+//! The state is `x = [q; u]` and `ẋ = [u; M(q)⁻¹·F(t, q, u, inputs)]`. The accelerations are
+//! obtained by a Cholesky factorisation of `M` (symmetric positive definite for a well-posed
+//! model); if `M` is not symmetric, or Cholesky fails or is ill-conditioned, by LU with partial
+//! pivoting. The inputs are evaluated from one [`Signal`] per model input, in the model's input
+//! order.
+
+use crate::integrate::{Dopri5, Dopri5Options, Ode, Rk4, Stats, Stepper};
+use crate::{Model, RuntimeError, Signal};
+use nalgebra::{Cholesky, DMatrix, DVector};
+
+/// Integration method of [`simulate`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Method {
+    /// Adaptive Dormand–Prince 5(4) ([`Dopri5`]); see [`Dopri5Options`] for the error test.
+    Dopri5 {
+        /// Relative tolerance (≥ 0).
+        rtol: f64,
+        /// Absolute tolerance (> 0), in the units of each state component (q and u alike).
+        atol: f64,
+        /// Largest step in seconds (> 0; `f64::INFINITY` for no limit).
+        h_max: f64,
+    },
+    /// Classical fixed-step RK4 ([`Rk4`]).
+    Rk4 {
+        /// Step size in seconds (> 0).
+        step: f64,
+    },
+}
+
+impl Default for Method {
+    /// `Dopri5` with `rtol = 1e-8`, `atol = 1e-10` and no step limit.
+    fn default() -> Self {
+        Method::Dopri5 {
+            rtol: 1e-8,
+            atol: 1e-10,
+            h_max: f64::INFINITY,
+        }
+    }
+}
+
+/// Options of [`simulate`]. Times are in seconds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SimOptions {
+    /// Start time (default `0`).
+    pub t_start: f64,
+    /// End time, ≥ `t_start` (default `1`).
+    pub t_end: f64,
+    /// Spacing of the returned samples (> 0; default `1e-3`, i.e. 1 kHz). Samples are taken at
+    /// `t_start + k·output_interval` and at `t_end`, by dense output: the interval does not
+    /// restrict the integrator's steps.
+    pub output_interval: f64,
+    /// Integration method (default [`Method::default`]).
+    pub method: Method,
+    /// Budget of integration steps, accepted and rejected (default `1_000_000`).
+    pub max_steps: usize,
+}
+
+impl Default for SimOptions {
+    fn default() -> Self {
+        SimOptions {
+            t_start: 0.0,
+            t_end: 1.0,
+            output_interval: 1e-3,
+            method: Method::default(),
+            max_steps: 1_000_000,
+        }
+    }
+}
+
+/// A sampled simulation result. The outer index of every `Vec<Vec<f64>>` is the sample
+/// (matching `times`), the inner one the model's coordinate, speed, output or input index.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Trajectory {
+    /// Sample times in seconds: `t_start + k·output_interval`, then `t_end`.
+    pub times: Vec<f64>,
+    /// Generalized coordinates `q` at each sample.
+    pub q: Vec<Vec<f64>>,
+    /// Generalized speeds `u = q̇` at each sample.
+    pub u: Vec<Vec<f64>>,
+    /// Model outputs `y(t, q, u, inputs)` at each sample.
+    pub outputs: Vec<Vec<f64>>,
+    /// Input values (from the signals) at each sample.
+    pub inputs: Vec<Vec<f64>>,
+    /// Integrator work counters.
+    pub stats: Stats,
+}
+
+impl Trajectory {
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.times.len()
+    }
+
+    /// Whether there are no samples.
+    pub fn is_empty(&self) -> bool {
+        self.times.is_empty()
+    }
+}
+
+/// One [`Signal::Constant`] per model input, at the input's default value.
+pub fn default_signals<M: Model + ?Sized>(model: &M) -> Vec<Signal> {
+    (0..model.ninputs())
+        .map(|i| Signal::Constant(model.input_default(i)))
+        .collect()
+}
+
+fn check_len(what: &'static str, expected: usize, found: usize) -> Result<(), RuntimeError> {
+    if expected == found {
+        Ok(())
+    } else {
+        Err(RuntimeError::LengthMismatch {
+            what,
+            expected,
+            found,
+        })
+    }
+}
+
+/// Workspace for solving `M u̇ = F` without allocating.
+struct AccelSolver {
+    mass: DMatrix<f64>,
+    factor: DMatrix<f64>,
+    force: DVector<f64>,
+    pivots: Vec<usize>,
+}
+
+/// What the solve produced.
+enum Solve {
+    Ok,
+    /// `M` or `F` was not finite; `udot` is NaN.
+    NonFinite,
+    Singular,
+}
+
+impl AccelSolver {
+    fn new(nu: usize) -> Self {
+        AccelSolver {
+            mass: DMatrix::zeros(nu, nu),
+            factor: DMatrix::zeros(nu, nu),
+            force: DVector::zeros(nu),
+            pivots: vec![0; nu],
+        }
+    }
+
+    fn solve<M: Model + ?Sized>(
+        &mut self,
+        model: &M,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        inputs: &[f64],
+        udot: &mut [f64],
+    ) -> Solve {
+        model.mass_matrix(t, q, inputs, self.mass.as_mut_slice());
+        model.forcing(t, q, u, inputs, self.force.as_mut_slice());
+        let finite = |s: &[f64]| s.iter().all(|v| v.is_finite());
+        if !finite(self.mass.as_slice()) || !finite(self.force.as_slice()) {
+            udot.fill(f64::NAN);
+            return Solve::NonFinite;
+        }
+        // A factorisation with acceptable pivots and a non-finite result means F overflowed
+        // through M⁻¹ (not a singular M): report it as non-finite.
+        let factored = (self.is_symmetric() && self.cholesky(udot)) || self.lu(udot);
+        if !factored {
+            Solve::Singular
+        } else if finite(udot) {
+            Solve::Ok
+        } else {
+            udot.fill(f64::NAN);
+            Solve::NonFinite
+        }
+    }
+
+    /// Symmetric to 1e-10 relative to the largest entry.
+    fn is_symmetric(&self) -> bool {
+        let n = self.mass.nrows();
+        let scale = self.mass.amax();
+        (0..n).all(|j| {
+            (j + 1..n).all(|i| (self.mass[(i, j)] - self.mass[(j, i)]).abs() <= 1e-10 * scale)
+        })
+    }
+
+    /// Cholesky solve into `udot`; false if `M` is not (numerically) positive definite:
+    /// `min_j L_jj² <= ε·max_j M_jj`, which implies `cond(M) >= 1/ε`.
+    fn cholesky(&mut self, udot: &mut [f64]) -> bool {
+        let n = self.mass.nrows();
+        self.factor.copy_from(&self.mass);
+        // Factor in place: move the storage into the decomposition and take it back after.
+        let storage = std::mem::replace(&mut self.factor, DMatrix::zeros(0, 0));
+        let chol = Cholesky::new_unchecked(storage);
+        let l = chol.l_dirty();
+        let max_diag = (0..n).map(|j| self.mass[(j, j)]).fold(0.0, f64::max);
+        let ok = (0..n).all(|j| {
+            let d = l[(j, j)];
+            d.is_finite() && d > 0.0 && d * d > f64::EPSILON * max_diag
+        });
+        if ok {
+            let mut rhs = nalgebra::DVectorViewMut::from_slice(udot, n);
+            rhs.copy_from(&self.force);
+            chol.solve_mut(&mut rhs);
+        }
+        self.factor = chol.unpack_dirty();
+        ok
+    }
+
+    /// LU with partial pivoting, in place in `factor`; false if a pivot is below
+    /// `n·ε·max|M_ij|`.
+    fn lu(&mut self, udot: &mut [f64]) -> bool {
+        let n = self.mass.nrows();
+        let a = &mut self.factor;
+        a.copy_from(&self.mass);
+        let tol = n as f64 * f64::EPSILON * self.mass.amax();
+        for k in 0..n {
+            let mut p = k;
+            for i in k + 1..n {
+                if a[(i, k)].abs() > a[(p, k)].abs() {
+                    p = i;
+                }
+            }
+            self.pivots[k] = p;
+            if a[(p, k)].abs() <= tol {
+                return false;
+            }
+            if p != k {
+                a.swap_rows(k, p);
+            }
+            let pivot = a[(k, k)];
+            for i in k + 1..n {
+                a[(i, k)] /= pivot;
+            }
+            for j in k + 1..n {
+                let akj = a[(k, j)];
+                if akj != 0.0 {
+                    for i in k + 1..n {
+                        let aik = a[(i, k)];
+                        a[(i, j)] -= aik * akj;
+                    }
+                }
+            }
+        }
+        udot.copy_from_slice(self.force.as_slice());
+        for k in 0..n {
+            udot.swap(k, self.pivots[k]);
+        }
+        for i in 0..n {
+            let mut s = udot[i];
+            for j in 0..i {
+                s -= a[(i, j)] * udot[j];
+            }
+            udot[i] = s;
+        }
+        for i in (0..n).rev() {
+            let mut s = udot[i];
+            for j in i + 1..n {
+                s -= a[(i, j)] * udot[j];
+            }
+            udot[i] = s / a[(i, i)];
+        }
+        true
+    }
+}
+
+/// A [`Model`] driven by input [`Signal`]s, as a first-order [`Ode`] on `x = [q; u]`:
+/// `ẋ = [u; M(q)⁻¹·F(t, q, u, inputs(t))]`.
+///
+/// Holds preallocated storage for `M`, `F`, the factorisation and the inputs, so evaluating the
+/// right-hand side never allocates. A non-finite `M`, `F` or `u̇` yields a NaN derivative (which
+/// makes the adaptive integrator retry with a smaller step, and eventually report
+/// [`RuntimeError::NonFiniteState`]); a singular `M` is [`RuntimeError::SingularMassMatrix`].
+pub struct ModelOde<'a, M: Model + ?Sized> {
+    model: &'a M,
+    signals: &'a [Signal],
+    nq: usize,
+    inputs: Vec<f64>,
+    solver: AccelSolver,
+}
+
+impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
+    /// Wraps `model` with one signal per model input. Errors if `signals` has the wrong length,
+    /// a signal is invalid, or `nq != nu` (the kinematic equation is `q̇ = u`).
+    pub fn new(model: &'a M, signals: &'a [Signal]) -> Result<Self, RuntimeError> {
+        let (nq, nu) = (model.nq(), model.nu());
+        if nq != nu {
+            return Err(RuntimeError::InvalidOptions(format!(
+                "model `{}` has {nq} coordinates but {nu} speeds; simulation needs q̇ = u, \
+                 i.e. as many speeds as coordinates",
+                model.name()
+            )));
+        }
+        check_len("signals", model.ninputs(), signals.len())?;
+        for s in signals {
+            s.validate()?;
+        }
+        Ok(ModelOde {
+            model,
+            signals,
+            nq,
+            inputs: vec![0.0; model.ninputs()],
+            solver: AccelSolver::new(nu),
+        })
+    }
+
+    /// The wrapped model.
+    pub fn model(&self) -> &'a M {
+        self.model
+    }
+
+    /// The input signals.
+    pub fn signals(&self) -> &'a [Signal] {
+        self.signals
+    }
+
+    /// Writes the input values at time `t` into `out` (length `ninputs`).
+    pub fn inputs_at(&self, t: f64, out: &mut [f64]) {
+        for (o, s) in out.iter_mut().zip(self.signals) {
+            *o = s.value(t);
+        }
+    }
+
+    /// Solves `M(q) u̇ = F(t, q, u, inputs)` for `u̇` with the given input values (the signals
+    /// are not used). Errors: [`RuntimeError::SingularMassMatrix`] or, if `M`, `F` or the
+    /// result is not finite, [`RuntimeError::NonFiniteState`].
+    pub fn accelerations(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        inputs: &[f64],
+        udot: &mut [f64],
+    ) -> Result<(), RuntimeError> {
+        check_len("q", self.nq, q.len())?;
+        check_len("u", self.nq, u.len())?;
+        check_len("inputs", self.inputs.len(), inputs.len())?;
+        check_len("udot", self.nq, udot.len())?;
+        match self.solver.solve(self.model, t, q, u, inputs, udot) {
+            Solve::Ok => Ok(()),
+            Solve::NonFinite => Err(RuntimeError::NonFiniteState { t }),
+            Solve::Singular => Err(RuntimeError::SingularMassMatrix { t }),
+        }
+    }
+}
+
+impl<M: Model + ?Sized> Ode for ModelOde<'_, M> {
+    fn dim(&self) -> usize {
+        2 * self.nq
+    }
+
+    fn rhs(&mut self, t: f64, x: &[f64], dxdt: &mut [f64]) -> Result<(), RuntimeError> {
+        let (q, u) = x.split_at(self.nq);
+        for (v, s) in self.inputs.iter_mut().zip(self.signals) {
+            *v = s.value(t);
+        }
+        let (qdot, udot) = dxdt.split_at_mut(self.nq);
+        qdot.copy_from_slice(u);
+        match self.solver.solve(self.model, t, q, u, &self.inputs, udot) {
+            Solve::Ok | Solve::NonFinite => Ok(()),
+            Solve::Singular => Err(RuntimeError::SingularMassMatrix { t }),
+        }
+    }
+}
+
+/// Accelerations `u̇` solving `M(q) u̇ = F(t, q, u, inputs)` at one state, with explicit input
+/// values (length `ninputs`). Allocates a workspace per call; for repeated use build a
+/// [`ModelOde`] and call [`ModelOde::accelerations`].
+pub fn accelerations<M: Model + ?Sized>(
+    model: &M,
+    t: f64,
+    q: &[f64],
+    u: &[f64],
+    inputs: &[f64],
+    udot: &mut [f64],
+) -> Result<(), RuntimeError> {
+    let signals = default_signals(model);
+    let mut ode = ModelOde::new(model, &signals)?;
+    ode.accelerations(t, q, u, inputs, udot)
+}
+
+/// The output grid: `t_start + k·dt` while `<= t_end` (a point within `1e-9·dt` of `t_end` is
+/// replaced by it), then `t_end`.
+fn output_grid(t_start: f64, t_end: f64, dt: f64) -> Vec<f64> {
+    let span = t_end - t_start;
+    let n = ((span / dt) * (1.0 + 1e-12)).floor() as usize;
+    let mut times: Vec<f64> = (0..=n).map(|k| t_start + k as f64 * dt).collect();
+    let last = times.last_mut().expect("the grid has at least t_start");
+    if t_end - *last <= 1e-9 * dt {
+        *last = t_end;
+    } else {
+        times.push(t_end);
+    }
+    times
+}
+
+/// Simulates `model` from `(q0, u0)` at `options.t_start` to `options.t_end`, driven by one
+/// signal per model input (in the model's input order), and returns the trajectory sampled on
+/// the output grid.
+///
+/// `progress` is called with the current time after every accepted step (cheap calls; throttle
+/// any display on the caller's side).
+///
+/// Errors: wrong slice lengths, invalid options or signals, a singular mass matrix, a
+/// non-finite state, step-size underflow or an exhausted step budget. The state is never
+/// silently truncated: an error means no trajectory.
+pub fn simulate<M: Model + ?Sized>(
+    model: &M,
+    q0: &[f64],
+    u0: &[f64],
+    signals: &[Signal],
+    options: &SimOptions,
+    progress: &mut dyn FnMut(f64),
+) -> Result<Trajectory, RuntimeError> {
+    let ode = ModelOde::new(model, signals)?;
+    let nq = model.nq();
+    check_len("q0", nq, q0.len())?;
+    check_len("u0", nq, u0.len())?;
+    let SimOptions {
+        t_start,
+        t_end,
+        output_interval,
+        method,
+        max_steps,
+    } = *options;
+    if !(t_start.is_finite() && t_end.is_finite() && t_end >= t_start) {
+        return Err(RuntimeError::InvalidOptions(format!(
+            "need finite times with t_end >= t_start (got t_start = {t_start}, t_end = {t_end})"
+        )));
+    }
+    if !(output_interval > 0.0 && output_interval.is_finite()) {
+        return Err(RuntimeError::InvalidOptions(format!(
+            "output_interval must be finite and > 0 (got {output_interval})"
+        )));
+    }
+    let mut x0 = Vec::with_capacity(2 * nq);
+    x0.extend_from_slice(q0);
+    x0.extend_from_slice(u0);
+    let grid = output_grid(t_start, t_end, output_interval);
+    match method {
+        Method::Dopri5 { rtol, atol, h_max } => {
+            let opts = Dopri5Options {
+                rtol,
+                atol,
+                h_max,
+                max_steps,
+                ..Dopri5Options::default()
+            };
+            let stepper = Dopri5::new(ode, t_start, &x0, t_end, opts)?;
+            run(stepper, model, signals, grid, max_steps, progress)
+        }
+        Method::Rk4 { step } => {
+            let stepper = Rk4::new(ode, t_start, &x0, t_end, step)?;
+            run(stepper, model, signals, grid, max_steps, progress)
+        }
+    }
+}
+
+/// Steps `stepper` to its end time, sampling `grid` by dense output.
+fn run<M: Model + ?Sized, S: Stepper>(
+    mut stepper: S,
+    model: &M,
+    signals: &[Signal],
+    grid: Vec<f64>,
+    max_steps: usize,
+    progress: &mut dyn FnMut(f64),
+) -> Result<Trajectory, RuntimeError> {
+    let nq = model.nq();
+    let mut traj = Trajectory {
+        q: Vec::with_capacity(grid.len()),
+        u: Vec::with_capacity(grid.len()),
+        outputs: Vec::with_capacity(grid.len()),
+        inputs: Vec::with_capacity(grid.len()),
+        ..Trajectory::default()
+    };
+    let mut x = vec![0.0; 2 * nq];
+    let record = |t: f64, x: &[f64], traj: &mut Trajectory| {
+        let (q, u) = x.split_at(nq);
+        let inputs: Vec<f64> = signals.iter().map(|s| s.value(t)).collect();
+        let mut outputs = vec![0.0; model.noutputs()];
+        model.outputs(t, q, u, &inputs, &mut outputs);
+        traj.q.push(q.to_vec());
+        traj.u.push(u.to_vec());
+        traj.inputs.push(inputs);
+        traj.outputs.push(outputs);
+    };
+    record(grid[0], stepper.state(), &mut traj);
+    let mut next = 1;
+    while next < grid.len() {
+        let steps = stepper.stats().accepted_steps + stepper.stats().rejected_steps;
+        if steps >= max_steps {
+            return Err(RuntimeError::TooManySteps {
+                t: stepper.t(),
+                steps,
+            });
+        }
+        stepper.step()?;
+        progress(stepper.t());
+        while next < grid.len() && grid[next] <= stepper.t() {
+            stepper.interpolate(grid[next], &mut x)?;
+            record(grid[next], &x, &mut traj);
+            next += 1;
+        }
+        if stepper.is_finished() {
+            // The grid ends at t_end, where the stepper stops exactly; this is a safeguard.
+            while next < grid.len() {
+                record(grid[next], stepper.state(), &mut traj);
+                next += 1;
+            }
+        }
+    }
+    traj.times = grid;
+    traj.stats = stepper.stats();
+    Ok(traj)
+}

@@ -1,0 +1,306 @@
+#!/usr/bin/env python3
+"""Independent SymPy reference for mech: derives each model below with
+sympy.physics.mechanics.KanesMethod and writes M(q), forcing F(q, u) (with
+M u' = F, q' = u), kinetic and potential energy at fixed pseudo-random states
+to tests/peers/fixture.json.  Model definitions and conventions: README.md.
+
+Regenerate (from the repository root):
+    python3 -m venv .venv && .venv/bin/pip install sympy==1.14.0
+    .venv/bin/python tests/peers/sympy_models.py
+The output is deterministic (same bytes on every run with the same SymPy).
+"""
+import json
+import math
+import os
+import random
+import sys
+import time
+
+import mpmath
+import sympy as sm
+import sympy.physics.mechanics as me
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+OUT = os.path.join(HERE, 'fixture.json')
+G_ACC = '9.81'
+N_STATES = 3
+DPS = 50                       # mpmath working precision (decimal digits)
+t = me.dynamicsymbols._t
+
+
+def R(v):
+    """Exact rational of a decimal literal (0.0845 -> 169/2000)."""
+    return sm.Rational(str(v))
+
+
+class Model:
+    """A tree of rigid bodies built from pin/slider joints, plus loads."""
+
+    def __init__(self, name):
+        self.name = name
+        self.N = me.ReferenceFrame('N')
+        self.O = me.Point('O')
+        self.O.set_vel(self.N, 0)
+        self.q, self.u, self.coords = [], [], []
+        self.bodies, self.loads, self.nc_loads = [], [], []
+        self.joints, self.pe, self.params = {}, sm.S(0), {'g': float(G_ACC)}
+
+    def point(self, name, base, offset):
+        p = base.locatenew(name, offset)
+        p.set_vel(self.N, p.pos_from(self.O).dt(self.N))
+        return p
+
+    def vec(self, frame, xyz):
+        return sum((R(c) * e for c, e in zip(xyz, (frame.x, frame.y, frame.z))), me.Vector(0))
+
+    def _coord(self, name):
+        q, u = me.dynamicsymbols(f'{name} u_{name}')
+        self.q.append(q), self.u.append(u), self.coords.append(name)
+        return q
+
+    def pin(self, name, parent, joint_pt, axis, frame_name):
+        """Child frame = parent rotated by q about `axis` (fixed in parent)."""
+        q = self._coord(name)
+        B = parent.orientnew(frame_name, 'Axis', [q, axis])
+        self.joints[name] = ('pin', parent, B, axis, joint_pt, None)
+        return B
+
+    def slider(self, name, parent, parent_origin, offset, axis, frame_name):
+        """Child frame parallel to parent; child origin = parent_origin + offset + q*axis."""
+        q = self._coord(name)
+        B = parent.orientnew(frame_name, 'Axis', [0, parent.z])
+        P = self.point(f'{frame_name}o', parent_origin, offset + q * axis)
+        self.joints[name] = ('slider', parent, B, axis, P, parent_origin)
+        return B, P
+
+    def body(self, name, frame, origin, m, com, I):
+        G = self.point(f'G_{name}', origin, self.vec(frame, com))
+        self.bodies.append(me.RigidBody(name, G, frame, R(m), (me.inertia(frame, *map(R, I)), G)))
+        self.loads.append((G, -R(m) * R(G_ACC) * self.N.z))
+        self.pe += R(m) * R(G_ACC) * G.pos_from(self.O).dot(self.N.z)
+        self.params.update({f'{name}.mass': m, f'{name}.com': list(com), f'{name}.inertia': list(I)})
+        return G
+
+    def _joint_load(self, coord, mag, conservative):
+        """Equal/opposite torque (pin) or force (slider) along the joint axis."""
+        kind, parent, child, axis, pt, porigin = self.joints[coord]
+        if kind == 'pin':
+            pairs = [(child, mag * axis)] + ([(parent, -mag * axis)] if parent != self.N else [])
+        else:
+            pairs = [(pt, mag * axis)]
+            if parent != self.N:   # reaction at the parent's material point under the child origin
+                pp = porigin.locatenew(pt.name + '_p', pt.pos_from(porigin))
+                pp.v2pt_theory(porigin, self.N, parent)
+                pairs.append((pp, -mag * axis))
+        self.loads += pairs
+        if not conservative:
+            self.nc_loads += pairs
+
+    def spring(self, coord, k, rest):
+        q = self.q[self.coords.index(coord)]
+        self.pe += R(k) / 2 * (q - R(rest)) ** 2
+        self._joint_load(coord, -R(k) * (q - R(rest)), True)
+        self.params.update({f'{coord}.spring_k': k, f'{coord}.spring_rest': rest})
+
+    def damper(self, coord, c):
+        self._joint_load(coord, -R(c) * self.u[self.coords.index(coord)], False)
+        self.params[f'{coord}.damper_c'] = c
+
+    def external(self, key, target, vector, value):
+        self.loads.append((target, vector)), self.nc_loads.append((target, vector))
+        self.params[key] = value
+
+
+# ---------------------------------------------------------------- models
+# Chain parameters copied from ../shared/peers/chain_model.py (PARAM_VALUES).
+CHAIN = dict(m=1.0, l=1.0, d=0.5, Ixx=0.0845, Iyy=0.0855, Izz=0.0125, Ixy=0.001, Iyz=0.002, Izx=0.003)
+
+
+def chain(n):
+    """chain_model.py's N-link chain: joint k about parent x (k odd) / y (k even)."""
+    M = Model(f'chain{n}')
+    parent, P = M.N, M.O
+    inertia = [CHAIN[k] for k in ('Ixx', 'Iyy', 'Izz', 'Ixy', 'Iyz', 'Izx')]
+    for k in range(1, n + 1):
+        B = M.pin(f'q{k}', parent, P, parent.x if k % 2 else parent.y, f'B{k}')
+        M.body(f'B{k}', B, P, CHAIN['m'], (0, 0, -CHAIN['d']), inertia)
+        parent, P = B, M.point(f'P{k + 1}', P, -R(CHAIN['l']) * B.z)
+    M.params = {'g': float(G_ACC), **CHAIN}
+    return M
+
+
+LINKS = [  # (joint axis in parent coords, m, l, mass centre, (Ixx, Iyy, Izz, Ixy, Iyz, Izx))
+    ((1, 0, 0), 1.0, 1.0, (0.05, -0.02, -0.5), (0.09, 0.08, 0.012, 0.001, 0.002, 0.003)),
+    ((0, 0.6, 0.8), 0.7, 0.8, (-0.03, 0.04, -0.35), (0.05, 0.045, 0.008, -0.002, 0.001, 0.0015)),
+    ((1, 0, 0), 0.4, 0.6, (0.0, 0.01, -0.3), (0.02, 0.018, 0.004, 0.0005, -0.0007, 0.0002)),
+]
+
+
+def pendulum_3d(n, name):
+    M = Model(name)
+    parent, P = M.N, M.O
+    for k, (axis, m, l, com, I) in enumerate(LINKS[:n], start=1):
+        B = M.pin(f'q{k}', parent, P, M.vec(parent, axis), f'B{k}')
+        M.body(f'B{k}', B, P, m, com, I)
+        M.params.update({f'B{k}.axis': list(axis), f'B{k}.l': l})
+        parent, P = B, M.point(f'P{k + 1}', P, -R(l) * B.z)
+    return M
+
+
+def cart_pendulum():
+    M = Model('cart_pendulum')
+    C, Co = M.slider('x', M.N, M.O, me.Vector(0), M.N.x, 'C')
+    M.body('C', C, Co, 2.0, (0, 0, 0), (0.1, 0.1, 0.1, 0, 0, 0))
+    P = M.pin('theta', C, Co, C.y, 'P')
+    M.body('P', P, Co, 0.5, (0, 0, -0.4), (0.02, 0.025, 0.004, 0, 0, 0))
+    M.spring('x', 5.0, 0.1)
+    M.damper('x', 0.3)
+    M.damper('theta', 0.05)
+    M.external('force_on_C_origin_N', Co, R(0.7) * M.N.x, [0.7, 0, 0])
+    return M
+
+
+def mixed_chain():
+    M = Model('mixed_chain')
+    A, Ao = M.slider('s1', M.N, M.O, me.Vector(0), M.N.y, 'A')
+    M.body('A', A, Ao, 1.5, (0, 0, 0), (0.05, 0.06, 0.07, 0, 0, 0))
+    Bo = M.point('Bo', Ao, M.vec(A, (0.1, 0, 0)))
+    B = M.pin('q2', A, Bo, A.z, 'B')
+    M.body('B', B, Bo, 0.8, (0.3, 0, 0.02), (0.01, 0.03, 0.035, 0.001, 0.0, 0.002))
+    C, Co = M.slider('s3', B, Bo, M.vec(B, (0.2, 0, 0)), B.x, 'C')
+    M.body('C', C, Co, 0.3, (0.05, 0.01, 0), (0.002, 0.004, 0.004, 0, 0, 0.0005))
+    Do = M.point('Do', Co, M.vec(C, (0.1, 0, 0)))
+    D = M.pin('q4', C, Do, C.x, 'D')
+    M.body('D', D, Do, 0.2, (0, 0.05, -0.05), (0.001, 0.0012, 0.0009, 0.0001, 0.0002, 0.0003))
+    M.spring('s3', 20.0, 0.05)
+    M.spring('q4', 0.4, 0.2)
+    M.damper('q2', 0.02)
+    M.external('force_on_D_N', M.point('Dp', Do, M.vec(D, (0, 0.1, -0.1))),
+               M.vec(M.N, (0.3, -0.2, 0.1)), {'vector_N': [0.3, -0.2, 0.1], 'point_D': [0, 0.1, -0.1]})
+    M.external('torque_on_B_B', B, M.vec(B, (0.05, 0, 0.02)), [0.05, 0, 0.02])
+    return M
+
+
+MODELS = [lambda: chain(1), lambda: chain(2), lambda: chain(4),
+          lambda: pendulum_3d(2, 'double_pendulum_3d'), lambda: pendulum_3d(3, 'triple_pendulum_3d'),
+          cart_pendulum, mixed_chain]
+
+
+# ---------------------------------------------------------------- evaluation
+def derive(M):
+    qd = {qi.diff(t): ui for qi, ui in zip(M.q, M.u)}
+    kane = me.KanesMethod(M.N, q_ind=M.q, u_ind=M.u, kd_eqs=[a - b for a, b in qd.items()])
+    kane.kanes_equations(M.bodies, M.loads)
+    ke = sum(b.kinetic_energy(M.N) for b in M.bodies).xreplace(qd)
+    power = sum(v.dot(x.vel(M.N) if isinstance(x, me.Point) else x.ang_vel_in(M.N))
+                for x, v in M.nc_loads).xreplace(qd) if M.nc_loads else sm.S(0)
+    E = ke + M.pe
+    dE = [E.diff(s) for s in M.q + M.u]
+    exprs = [kane.mass_matrix.xreplace(qd), kane.forcing.xreplace(qd), ke, M.pe, power, dE]
+    args = M.q + M.u
+    for e in exprs[:5]:   # only q, u may remain (no q', no unsubstituted symbols)
+        e = sm.sympify(e)
+        assert e.free_symbols <= {t} and me.find_dynamicsymbols(e) <= set(args), e
+    return sm.lambdify(args, exprs, modules='mpmath')
+
+
+def mat(x):
+    return mpmath.matrix(x.tolist() if hasattr(x, 'tolist') else x)
+
+
+def check(name, Mm, F, ke, pe, power, dE, u):
+    n = len(u)
+    scale = max(abs(x) for x in Mm)
+    asym = max(abs(Mm[i, j] - Mm[j, i]) for i in range(n) for j in range(n))
+    assert asym <= mpmath.mpf(10) ** (-DPS + 10) * scale, f'{name}: M not symmetric ({asym})'
+    mpmath.cholesky(Mm)  # raises ValueError unless positive definite
+    assert ke > 0 or all(x == 0 for x in u)
+    # energy balance: dE/dt = sum dE/dq u + dE/du u' = power of non-conservative loads
+    ud = mpmath.lu_solve(Mm, F)
+    rate = sum(dE[i] * u[i] + dE[n + i] * ud[i] for i in range(n))
+    err = abs(rate - power)
+    assert err <= mpmath.mpf(10) ** (-DPS + 15) * (1 + abs(rate) + abs(power)), f'{name}: dE/dt {rate} != {power}'
+    return err
+
+
+def states(name, n):
+    rng = random.Random(f'mech-peer:{name}')
+    return [([rng.uniform(-1, 1) for _ in range(n)], [rng.uniform(-1, 1) for _ in range(n)])
+            for _ in range(N_STATES)]
+
+
+def f64(x):
+    v = float(x)
+    assert math.isfinite(v)
+    return v
+
+
+def cross_check_shared(fixture):
+    """If ../shared/peers/chain_model.py exists beside the repo, compare chain1/chain2 against it."""
+    shared = os.path.join(HERE, '..', '..', '..', 'shared', 'peers')
+    if not os.path.exists(os.path.join(shared, 'chain_model.py')):
+        print('  (../shared/peers/chain_model.py not found; skipping cross-check)')
+        return
+    sys.path.insert(0, shared)
+    import chain_model
+    for n in (1, 2, 4):
+        cm = chain_model.build_chain(n)
+        Mm, F = chain_model.derive(cm)
+        sub = dict(zip(cm['constants'], map(R, cm['const_values'])))
+        f = sm.lambdify(cm['q'] + cm['u'], [Mm.xreplace(sub), F.xreplace(sub)], modules='mpmath')
+        worst = 0.0
+        for s in fixture[f'chain{n}']['states']:
+            Ms, Fs = f(*s['q'], *s['u'])
+            ref = [x for row in s['mass_matrix'] for x in row] + s['forcing']
+            got = list(mat(Ms)) + list(mat(Fs))
+            worst = max(worst, max(abs(float(a) - b) / (1 + abs(b)) for a, b in zip(got, ref)))
+        assert worst < 1e-14, worst
+        print(f'  chain{n} vs shared chain_model.py: max rel diff {worst:.1e}')
+
+
+def encode(o, ind=0, short=False):
+    """Deterministic JSON: sorted keys; floats with 17 significant digits
+    (shortest round-trip repr inside "params", which are decimal literals)."""
+    if isinstance(o, float):
+        return repr(o) if short else format(o, '.17g')
+    if isinstance(o, (str, int)):
+        return json.dumps(o)
+    pad, pad2 = ' ' * ind, ' ' * (ind + 2)
+    if isinstance(o, list):
+        if all(isinstance(x, (int, float, str)) for x in o):
+            return '[' + ', '.join(encode(x, 0, short) for x in o) + ']'
+        return '[\n' + ',\n'.join(pad2 + encode(x, ind + 2, short) for x in o) + '\n' + pad + ']'
+    items = [f'{pad2}{json.dumps(k)}: {encode(o[k], ind + 2, short or k == "params")}' for k in sorted(o)]
+    return '{\n' + ',\n'.join(items) + '\n' + pad + '}'
+
+
+def main():
+    mpmath.mp.dps = DPS
+    models = {}
+    for make in MODELS:
+        M = make()
+        t0 = time.perf_counter()
+        f = derive(M)
+        t_derive = time.perf_counter() - t0
+        n, out, worst = len(M.q), [], 0
+        for q, u in states(M.name, n):
+            Ms, Fs, ke, pe, power, dE = f(*map(mpmath.mpf, q + u))
+            Mm, F = mat(Ms), mat(Fs)
+            worst = max(worst, check(M.name, Mm, F, ke, pe, power, dE, list(map(mpmath.mpf, u))))
+            out.append({'q': q, 'u': u, 'mass_matrix': [[f64(Mm[i, j]) for j in range(n)] for i in range(n)],
+                        'forcing': [f64(F[i]) for i in range(n)],
+                        'kinetic_energy': f64(ke), 'potential_energy': f64(pe)})
+        models[M.name] = {'coordinates': M.coords, 'params': M.params, 'states': out}
+        print(f'{M.name:20s} n={n}  derivation {t_derive:6.2f} s  '
+              f'(M symmetric+PD, |dE/dt - P_nc| <= {mpmath.nstr(worst, 2)})')
+    print('cross-check:')
+    cross_check_shared(models)
+    fixture = {'generated_by': 'tests/peers/sympy_models.py (sympy.physics.mechanics.KanesMethod)',
+               'sympy_version': sm.__version__, 'mpmath_version': mpmath.__version__, 'models': models}
+    with open(OUT, 'w') as fh:
+        fh.write(encode(fixture) + '\n')
+    print(f'wrote {os.path.relpath(OUT)}')
+
+
+if __name__ == '__main__':
+    main()
