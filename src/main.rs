@@ -1,1 +1,327 @@
-fn main(){}
+//! `mech`: check, derive and simulate `.mech` models from the command line.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand, ValueEnum};
+use mech::{output, plot, signal_spec, tape_model::TapeModel};
+use mech_codegen::Compiled;
+use mech_runtime::{Method, Model, SimOptions};
+
+#[derive(Parser)]
+#[command(name = "mech", version, about = "A Kane's-method compiler for flexure-based microrobots")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Validate a model and print its coordinates, bodies and degrees of freedom.
+    Check {
+        /// The `.mech` file.
+        model: PathBuf,
+    },
+    /// Derive the equations of motion and print generated code or equations.
+    Derive {
+        model: PathBuf,
+        /// What to print.
+        #[arg(long, value_enum, default_value_t = Emit::Equations)]
+        emit: Emit,
+        /// Write to this file instead of standard output.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Simulate a model and write the trajectory as CSV (and optionally a plot).
+    Simulate {
+        model: PathBuf,
+        /// End time, with a unit (`2 s`, `500 ms`) or in seconds.
+        #[arg(long)]
+        t_end: String,
+        /// Set a parameter: `--set m=12 g` (repeatable).
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        sets: Vec<String>,
+        /// Drive an input: `--input drive='sine(amplitude=1 mN, frequency=10 Hz)'` (repeatable).
+        #[arg(long = "input", value_name = "NAME=SIGNAL")]
+        inputs: Vec<String>,
+        /// CSV file for time, q, u and outputs.
+        #[arg(long)]
+        out: PathBuf,
+        /// Plot file (`.svg` or `.png`).
+        #[arg(long)]
+        plot: Option<PathBuf>,
+        /// Integrator.
+        #[arg(long, value_enum, default_value_t = Integrator::Dopri5)]
+        method: Integrator,
+        /// Relative tolerance (dopri5).
+        #[arg(long, default_value_t = 1e-9)]
+        rtol: f64,
+        /// Absolute tolerance (dopri5).
+        #[arg(long, default_value_t = 1e-12)]
+        atol: f64,
+        /// Step size for rk4, with a unit or in seconds.
+        #[arg(long, default_value = "0.1 ms")]
+        step: String,
+        /// Output sampling interval, with a unit or in seconds (default: t_end / 1000).
+        #[arg(long)]
+        dt_out: Option<String>,
+    },
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Emit {
+    /// Equations of motion as s-expressions, with operation counts.
+    Equations,
+    /// The generated Rust source.
+    Rust,
+    /// The tape (register instructions), with operation counts.
+    Tape,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Integrator {
+    /// Adaptive Dormand–Prince 5(4).
+    Dopri5,
+    /// Fixed-step classical Runge–Kutta.
+    Rk4,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Check { model } => check(&model),
+        Command::Derive { model, emit, out } => derive(&model, emit, out.as_deref()),
+        Command::Simulate { model, t_end, sets, inputs, out, plot, method, rtol, atol, step, dt_out } => {
+            let request = SimulateRequest { t_end, sets, inputs, out, plot, method, rtol, atol, step, dt_out };
+            simulate(&model, &request)
+        }
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(message) => {
+            eprintln!("{}", message.trim_end());
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn compile(path: &Path) -> Result<Compiled, String> {
+    Compiled::from_path(path).map_err(|errors| errors.to_string())
+}
+
+fn check(path: &Path) -> Result<(), String> {
+    let compiled = compile(path)?;
+    let model = &compiled.model;
+    println!("model `{}` ({})", model.name, path.display());
+    println!("  {} bodies, {} joints, {} degrees of freedom", model.bodies.len(), model.joints.len(), model.coordinates.len());
+    println!("\ncoordinates (q, with u = q̇):");
+    for (_, joint) in model.joints.iter() {
+        for &c in &joint.coordinates {
+            let coordinate = &model.coordinates[c];
+            let unit = if coordinate.dimension == mech_codegen::ir::Dimension::NONE { "rad" } else { "m" };
+            println!(
+                "  {:<16} {:?} joint `{}`, q0 = {} {unit}, u0 = {} {unit}/s",
+                coordinate.name, joint.kind, joint.name, coordinate.initial, coordinate.initial_speed
+            );
+        }
+    }
+    println!("\nbodies:");
+    for (_, body) in model.bodies.iter() {
+        let parent = model.joints.iter().find(|(_, j)| model.bodies[j.child].name == body.name);
+        let attached = parent.map_or("?".to_string(), |(_, joint)| {
+            let parent_name = joint.parent.map_or("newtonian", |b| model.bodies[b].name.as_str());
+            format!("child of `{parent_name}` by {:?} joint `{}`", joint.kind, joint.name)
+        });
+        println!("  {:<16} {attached}", body.name);
+    }
+    let list = |title: &str, items: Vec<String>| {
+        if !items.is_empty() {
+            println!("\n{title}: {}", items.join(", "));
+        }
+    };
+    list("parameters", model.params.iter().map(|(_, p)| format!("{} = {} {}", p.name, p.value, p.dimension)).collect());
+    list("inputs", model.inputs.iter().map(|(_, i)| format!("{} [{}]", i.name, i.dimension)).collect());
+    list("outputs", compiled.equations.output_names.clone());
+    Ok(())
+}
+
+fn derive(path: &Path, emit: Emit, out: Option<&Path>) -> Result<(), String> {
+    let compiled = compile(path)?;
+    let text = match emit {
+        Emit::Rust => {
+            let options = mech_codegen::RustOptions { source_name: path.display().to_string(), ..Default::default() };
+            compiled.rust(&options)
+        }
+        Emit::Tape => format_tape(&compiled),
+        Emit::Equations => format_equations(&compiled),
+    };
+    match out {
+        Some(file) => output::write_atomic(file, text.as_bytes()).map_err(|e| format!("cannot write {}: {e}", file.display())),
+        None => {
+            print!("{text}");
+            Ok(())
+        }
+    }
+}
+
+fn operation_counts(tape: &mech_codegen::Tape) -> String {
+    let (m, f, y) = (tape.mass_matrix.operation_count(), tape.forcing.operation_count(), tape.outputs.operation_count());
+    format!("operations: mass_matrix {m}, forcing {f}, outputs {y} (total {})\n", m + f + y)
+}
+
+fn format_equations(compiled: &Compiled) -> String {
+    let eqs = &compiled.equations;
+    let names: Vec<&str> = compiled.model.coordinates.iter().map(|(_, c)| c.name.as_str()).collect();
+    let mut text = format!("// M(q) u̇ = F for model `{}`; u = q̇ for q = [{}]\n", compiled.model.name, names.join(", "));
+    text.push_str(&format!("// {}", operation_counts(&compiled.tape())));
+    for r in 0..eqs.nu {
+        for s in r..eqs.nu {
+            text.push_str(&format!("M[{r},{s}] = {}\n", eqs.pool.sexpr(eqs.mass_matrix[r + eqs.nu * s])));
+        }
+    }
+    for (r, &f) in eqs.forcing.iter().enumerate() {
+        text.push_str(&format!("F[{r}] = {}\n", eqs.pool.sexpr(f)));
+    }
+    for (name, &y) in eqs.output_names.iter().zip(&eqs.outputs) {
+        text.push_str(&format!("{name} = {}\n", eqs.pool.sexpr(y)));
+    }
+    text
+}
+
+fn format_tape(compiled: &Compiled) -> String {
+    let tape = compiled.tape();
+    let mut text = format!("// tape of model `{}`; {}", compiled.model.name, operation_counts(&tape));
+    for (name, program) in [("mass_matrix", &tape.mass_matrix), ("forcing", &tape.forcing), ("outputs", &tape.outputs)] {
+        text.push_str(&format!("\n{name}:\n"));
+        for (i, op) in program.ops.iter().enumerate() {
+            text.push_str(&format!("  r{i} = {op:?}\n"));
+        }
+        let results: Vec<String> = program.results.iter().map(|r| format!("r{r}")).collect();
+        text.push_str(&format!("  results = [{}]\n", results.join(", ")));
+    }
+    text
+}
+
+struct SimulateRequest {
+    t_end: String,
+    sets: Vec<String>,
+    inputs: Vec<String>,
+    out: PathBuf,
+    plot: Option<PathBuf>,
+    method: Integrator,
+    rtol: f64,
+    atol: f64,
+    step: String,
+    dt_out: Option<String>,
+}
+
+/// A time given with a unit (`2 s`, `500 ms`) or as plain seconds.
+fn parse_time(what: &str, text: &str) -> Result<f64, String> {
+    let (value, dimension) = mech_codegen::front::units::parse_quantity(text).map_err(|e| format!("{what}: {e}"))?;
+    let seconds_ok = dimension == mech_codegen::ir::Dimension::TIME || dimension == mech_codegen::ir::Dimension::NONE;
+    if !seconds_ok || !value.is_finite() || value <= 0.0 {
+        return Err(format!("{what}: expected a positive time such as `2 s` or `500 ms`, got `{text}`"));
+    }
+    Ok(value)
+}
+
+fn simulate(path: &Path, request: &SimulateRequest) -> Result<(), String> {
+    let compiled = compile(path)?;
+    let mut model = TapeModel::new(&compiled);
+    for assignment in &request.sets {
+        let (name, value) = signal_spec::parse_assignment(assignment)?;
+        let index = model.param_index(&name).ok_or_else(|| {
+            let known: Vec<&str> = (0..model.nparams()).map(|i| model.param_name(i)).collect();
+            format!("--set: unknown parameter `{name}`; parameters of `{}`: {}", model.name(), known.join(", "))
+        })?;
+        let (si, dimension) = mech_codegen::front::units::parse_quantity(&value).map_err(|e| format!("--set {name}: {e}"))?;
+        let expected = compiled.model.params.iter().nth(index).map(|(_, p)| p.dimension).unwrap_or_default();
+        if dimension != expected {
+            return Err(format!("--set {name}: `{value}` has unit {dimension}, but `{name}` needs {expected}"));
+        }
+        model.set_param(index, si);
+    }
+
+    let mut signals = mech_runtime::default_signals(&model);
+    for assignment in &request.inputs {
+        let (name, spec) = signal_spec::parse_assignment(assignment)?;
+        let index = model.input_index(&name).ok_or_else(|| {
+            let known: Vec<&str> = (0..model.ninputs()).map(|i| model.input_name(i)).collect();
+            format!("--input: unknown input `{name}`; inputs of `{}`: {}", model.name(), if known.is_empty() { "none".to_string() } else { known.join(", ") })
+        })?;
+        let expected = compiled.model.inputs.iter().nth(index).map(|(_, i)| i.dimension).unwrap_or_default();
+        signals[index] = signal_spec::parse_signal(&spec, expected).map_err(|e| format!("--input {name}: {e}"))?;
+    }
+
+    let t_end = parse_time("--t-end", &request.t_end)?;
+    let dt_out = match &request.dt_out {
+        Some(text) => parse_time("--dt-out", text)?,
+        None => t_end / 1000.0,
+    };
+    let method = match request.method {
+        Integrator::Dopri5 => Method::Dopri5 { rtol: request.rtol, atol: request.atol, h_max: f64::INFINITY },
+        Integrator::Rk4 => Method::Rk4 { step: parse_time("--step", &request.step)? },
+    };
+    let options = SimOptions { t_end, output_interval: dt_out, method, ..SimOptions::default() };
+
+    let mut q0 = vec![0.0; model.nq()];
+    let mut u0 = vec![0.0; model.nu()];
+    model.initial_state(&mut q0, &mut u0);
+    let bar = indicatif::ProgressBar::new(1000);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("simulating {bar:40} {percent:>3}% t = {msg} [{elapsed} / ~{eta}]")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let mut progress = |t: f64| {
+        bar.set_position((1000.0 * t / t_end) as u64);
+        bar.set_message(format!("{t:.4} s"));
+    };
+    let trajectory = mech_runtime::simulate(&model, &q0, &u0, &signals, &options, &mut progress);
+    bar.finish_and_clear();
+    let trajectory = trajectory.map_err(|e| format!("simulation of `{}` failed: {e}", model.name()))?;
+
+    let coordinate_names: Vec<String> = (0..model.nq()).map(|i| model.coordinate_name(i).to_string()).collect();
+    let output_names: Vec<String> = (0..model.noutputs()).map(|i| model.output_name(i).to_string()).collect();
+    let mut header = vec!["t".to_string()];
+    header.extend(coordinate_names.iter().map(|n| format!("q_{n}")));
+    header.extend(coordinate_names.iter().map(|n| format!("u_{n}")));
+    header.extend(output_names.iter().cloned());
+    let rows: Vec<Vec<f64>> = (0..trajectory.times.len())
+        .map(|k| {
+            let mut row = vec![trajectory.times[k]];
+            row.extend(&trajectory.q[k]);
+            row.extend(&trajectory.u[k]);
+            row.extend(&trajectory.outputs[k]);
+            row
+        })
+        .collect();
+    output::write_csv(&request.out, &header, &rows).map_err(|e| format!("cannot write {}: {e}", request.out.display()))?;
+    println!(
+        "simulated `{}` to t = {t_end} s: {} samples written to {}",
+        model.name(),
+        trajectory.times.len(),
+        request.out.display()
+    );
+
+    if let Some(plot_path) = &request.plot {
+        let column = |values: &Vec<Vec<f64>>, i: usize| values.iter().map(|row| row[i]).collect::<Vec<f64>>();
+        let series = |names: &[String], values: &Vec<Vec<f64>>, prefix: &str| {
+            names
+                .iter()
+                .enumerate()
+                .map(|(i, n)| plot::Series { name: format!("{prefix}{n}"), values: column(values, i) })
+                .collect::<Vec<_>>()
+        };
+        let mut panels = vec![
+            plot::Panel { title: "coordinates".into(), y_label: "q".into(), series: series(&coordinate_names, &trajectory.q, "q_") },
+            plot::Panel { title: "speeds".into(), y_label: "u".into(), series: series(&coordinate_names, &trajectory.u, "u_") },
+        ];
+        if !output_names.is_empty() {
+            panels.push(plot::Panel { title: "outputs".into(), y_label: "y".into(), series: series(&output_names, &trajectory.outputs, "") });
+        }
+        let title = format!("{} — {}", model.name(), path.display());
+        plot::plot_time_series(plot_path, &title, &trajectory.times, &panels).map_err(|e| format!("cannot plot: {e}"))?;
+        println!("plot written to {}", plot_path.display());
+    }
+    Ok(())
+}

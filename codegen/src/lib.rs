@@ -1,5 +1,165 @@
 //! mech-codegen: the build-time compiler for `.mech` models.
+//!
+//! # Pipeline
+//! ```text
+//! .mech text ─front::parse─▶ AST ─front::lower─▶ ir::Model ─kane::derive─▶ Equations
+//!                                                               ├─back::rust::emit─▶ Rust source
+//!                                                               └─back::tape::Tape::new─▶ tape
+//! ```
+//! Each phase is a function from plain data to plain data; the front end collects every
+//! error of a phase into [`Errors`] (file, line, column, label, help).
+//!
+//! # Symbols
+//! `q` generalized coordinates, `u = q̇` generalized speeds, `M(q)` the mass matrix,
+//! `F(t, q, u, inputs)` the forcing, so that `M u̇ = F`. Kane's method gives
+//! `F_r + F_r* = 0` for each speed r (see [`kane`]). Internally every quantity is in SI units
+//! (kg, m, s, rad, A).
+//!
+//! # Embedding (build.rs)
+//! ```no_run
+//! // build.rs
+//! fn main() -> Result<(), mech_codegen::Errors> {
+//!     mech_codegen::compile_models(&["models/pendulum.mech"])
+//! }
+//! ```
+//! ```ignore
+//! // src/lib.rs
+//! pub mod pendulum { mech_runtime::include_model!("pendulum"); }
+//! ```
+//! [`compile_models`] writes `$OUT_DIR/<model>.rs` (only when its bytes change) and prints
+//! `cargo:rerun-if-changed` for every `.mech` file it reads. Note that any
+//! `rerun-if-changed` line replaces cargo's default of re-running when any package file
+//! changes; a build script that also depends on other files must list them too.
 
+pub mod back;
 pub mod diag;
+pub mod front;
 pub mod ir;
+pub mod kane;
 pub mod sym;
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+pub use back::rust::RustOptions;
+pub use back::tape::Tape;
+pub use diag::{Diagnostic, Errors, SourceFile};
+pub use kane::Equations;
+
+/// A model through the whole pipeline: its IR and its equations of motion.
+#[derive(Clone, Debug)]
+pub struct Compiled {
+    pub model: ir::Model,
+    pub equations: Equations,
+}
+
+impl Compiled {
+    /// Parses, lowers and derives a model from source text.
+    pub fn from_source(file: SourceFile) -> Result<Compiled, Errors> {
+        let model = front::load(Arc::new(file))?;
+        let equations = kane::derive(&model);
+        Ok(Compiled { model, equations })
+    }
+
+    /// Reads and compiles a `.mech` file; diagnostics show `path` as given.
+    pub fn from_path(path: impl AsRef<Path>) -> Result<Compiled, Errors> {
+        let path = path.as_ref();
+        let shown = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|error| Errors::io(&shown, &error))?;
+        Compiled::from_source(SourceFile::new(shown, text))
+    }
+
+    pub fn rust(&self, options: &RustOptions) -> String {
+        back::rust::emit(&self.model, &self.equations, options)
+    }
+
+    pub fn tape(&self) -> Tape {
+        Tape::new(&self.equations)
+    }
+}
+
+/// Compiles `.mech` files into `$OUT_DIR/<model>.rs` with default options.
+pub fn compile_models(paths: &[impl AsRef<Path>]) -> Result<(), Errors> {
+    Builder::new().compile(paths)
+}
+
+/// Options of [`compile_models`], prost-build style (`&mut self` setters).
+#[derive(Clone, Debug)]
+pub struct Builder {
+    out_dir: Option<PathBuf>,
+    rust: RustOptions,
+    emit_rerun_if_changed: bool,
+}
+
+impl Default for Builder {
+    fn default() -> Self {
+        Builder { out_dir: None, rust: RustOptions::default(), emit_rerun_if_changed: true }
+    }
+}
+
+impl Builder {
+    pub fn new() -> Builder {
+        Builder::default()
+    }
+
+    /// Where to write generated files (default: `$OUT_DIR`).
+    pub fn out_dir(&mut self, dir: impl Into<PathBuf>) -> &mut Self {
+        self.out_dir = Some(dir.into());
+        self
+    }
+
+    /// Path of the runtime crate in generated code (default `::mech_runtime`), for crates
+    /// that re-export it.
+    pub fn runtime_path(&mut self, path: impl Into<String>) -> &mut Self {
+        self.rust.runtime_path = path.into();
+        self
+    }
+
+    /// Longest generated function before it is split into parts (default 1000 statements).
+    pub fn max_statements_per_function(&mut self, statements: usize) -> &mut Self {
+        self.rust.max_statements = statements;
+        self
+    }
+
+    /// Print `cargo:rerun-if-changed=<file>` for each model (default true).
+    pub fn emit_rerun_if_changed(&mut self, emit: bool) -> &mut Self {
+        self.emit_rerun_if_changed = emit;
+        self
+    }
+
+    /// Compiles every file; stops at the first file with errors and returns all of its
+    /// diagnostics.
+    pub fn compile(&self, paths: &[impl AsRef<Path>]) -> Result<(), Errors> {
+        let out_dir = match &self.out_dir {
+            Some(dir) => dir.clone(),
+            None => std::env::var_os("OUT_DIR").map(PathBuf::from).ok_or_else(|| {
+                let error = std::io::Error::other("OUT_DIR is not set: call from build.rs or set Builder::out_dir");
+                Errors::io("OUT_DIR", &error)
+            })?,
+        };
+        for path in paths {
+            let path = path.as_ref();
+            if self.emit_rerun_if_changed {
+                println!("cargo:rerun-if-changed={}", path.display());
+            }
+            let compiled = Compiled::from_path(path)?;
+            let options = RustOptions { source_name: path.display().to_string(), ..self.rust.clone() };
+            let source = compiled.rust(&options);
+            let target = out_dir.join(format!("{}.rs", compiled.model.name));
+            write_if_changed(&target, source.as_bytes())
+                .map_err(|error| Errors::io(&target.display().to_string(), &error))?;
+        }
+        Ok(())
+    }
+}
+
+/// Writes `bytes` unless the file already holds them (so dependents are not rebuilt), via a
+/// temporary file and a rename so a reader never sees a half-written file.
+pub fn write_if_changed(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    if std::fs::read(path).is_ok_and(|existing| existing == bytes) {
+        return Ok(());
+    }
+    let temporary = path.with_extension("rs.tmp");
+    std::fs::write(&temporary, bytes)?;
+    std::fs::rename(&temporary, path)
+}

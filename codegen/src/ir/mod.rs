@@ -300,7 +300,8 @@ pub enum JointKind {
 pub struct Joint {
     pub name: String,
     pub kind: JointKind,
-    pub parent: Handle<Body>,
+    /// The parent body; `None` for the Newtonian frame.
+    pub parent: Option<Handle<Body>>,
     pub child: Handle<Body>,
     pub coordinates: Vec<Handle<Coordinate>>,
     pub span: Span,

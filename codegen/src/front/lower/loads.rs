@@ -1,0 +1,295 @@
+//! Gravity, forces, torques and outputs.
+//!
+//! Consumes: `gravity`, `force`, `torque` and `output` declarations.
+//! Produces: `model.gravity`, force/torque [`ir::Load`]s and [`ir::Output`]s. References are
+//! resolved first (collecting every error) and turned into handles once the tree is built.
+
+use crate::diag::{Diagnostic, Span};
+use crate::front::ast::{self, ExprKind, Ident};
+use crate::ir::{self, Dimension, Expr, Handle, JointKind, Vec3};
+
+use super::body::{FrameRef, PointRef};
+use super::expr::{unparen, Ctx, Expect};
+use super::names::Namespace;
+use super::Lowerer;
+
+pub enum PendingLoad {
+    Force { point: PointRef, frame: FrameRef, components: Vec3, span: Span },
+    Torque { body: usize, frame: FrameRef, components: Vec3, span: Span },
+}
+
+pub struct PendingOutput {
+    name: String,
+    docs: Vec<String>,
+    span: Span,
+    kind: PendingKind,
+}
+
+enum PendingKind {
+    Position(PointRef, FrameRef),
+    Velocity(PointRef, FrameRef),
+    Coordinate(usize),
+    Speed(usize),
+    KineticEnergy,
+    PotentialEnergy,
+    Expr(Expr),
+}
+
+impl Lowerer<'_> {
+    pub(super) fn lower_loads_and_outputs(&mut self, items: &[ast::Item]) {
+        let mut load_names = Namespace::default();
+        let mut output_names = Namespace::default();
+        let mut gravity: Option<Span> = None;
+        for item in items {
+            match item {
+                ast::Item::Gravity(decl) => {
+                    if let Some(previous) = gravity {
+                        let name = Ident { name: "gravity".to_string(), span: decl.span };
+                        self.error(super::names::redefinition(&name, previous, "the declaration"));
+                        continue;
+                    }
+                    gravity = Some(decl.span);
+                    self.lower_gravity(decl);
+                }
+                ast::Item::Force(decl) => {
+                    self.declare_in(&mut load_names, &decl.name, "the load");
+                    self.lower_force(decl);
+                }
+                ast::Item::Torque(decl) => {
+                    self.declare_in(&mut load_names, &decl.name, "the load");
+                    self.lower_torque(decl);
+                }
+                ast::Item::Output(decl) => {
+                    if self.declare_in(&mut output_names, &decl.name, "the output") {
+                        self.lower_output(decl);
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+
+    fn declare_in(&mut self, namespace: &mut Namespace, name: &Ident, what: &str) -> bool {
+        match namespace.declare(name, what) {
+            Ok(()) => true,
+            Err(diagnostic) => {
+                self.error(diagnostic);
+                false
+            }
+        }
+    }
+
+    fn lower_gravity(&mut self, decl: &ast::GravityDecl) {
+        let expect = Expect { dim: Dimension::ACCELERATION, what: "`gravity`", example: "[0, -9.81 m/s^2, 0]" };
+        self.model.gravity = self.lower_vector_as(&decl.value, Ctx::Static("gravity"), &expect);
+    }
+
+    fn lower_force(&mut self, decl: &ast::ForceDecl) {
+        let point = self.resolve_point(&decl.point);
+        let expect = Expect { dim: Dimension::FORCE, what: "a force", example: "[0, 1 mN, 0]" };
+        let components = self.lower_vector_as(&decl.value, Ctx::Dynamic, &expect);
+        let frame = self.frame_clause(decl.frame.as_ref());
+        if let (Some(point), Some(frame), Some(components)) = (point, frame, components) {
+            self.loads.push(PendingLoad::Force { point, frame, components, span: decl.span });
+        }
+    }
+
+    fn lower_torque(&mut self, decl: &ast::TorqueDecl) {
+        let body = match decl.body.segments.as_slice() {
+            [name] if name.name != "newtonian" => self.resolve_body(name),
+            _ => {
+                self.error(
+                    Diagnostic::error("E0213", "a torque acts on a body")
+                        .with_label(decl.body.span, "expected a body name")
+                        .with_help("write `torque NAME on BODY = [tx, ty, tz] in FRAME;`"),
+                );
+                None
+            }
+        };
+        let expect = Expect { dim: Dimension::TORQUE, what: "a torque", example: "[0, 0, 1 uN*m]" };
+        let components = self.lower_vector_as(&decl.value, Ctx::Dynamic, &expect);
+        let frame = self.frame_clause(decl.frame.as_ref());
+        if let (Some(body), Some(frame), Some(components)) = (body, frame, components) {
+            self.loads.push(PendingLoad::Torque { body, frame, components, span: decl.span });
+        }
+    }
+
+    /// `in FRAME`, defaulting to the Newtonian frame.
+    fn frame_clause(&mut self, path: Option<&ast::Path>) -> Option<FrameRef> {
+        match path {
+            Some(path) => self.resolve_frame(path, true),
+            None => Some(FrameRef::Owner(0)),
+        }
+    }
+
+    fn lower_output(&mut self, decl: &ast::OutputDecl) {
+        let value = unparen(&decl.value);
+        let kind = match &value.kind {
+            ExprKind::Call { function, args } if function.name == "position" || function.name == "velocity" => {
+                self.vector_output(function, args, value.span, decl.frame.as_ref())
+            }
+            ExprKind::Path(path) => self.path_output(path, decl),
+            _ => self.expr_output(decl),
+        };
+        if let Some(kind) = kind {
+            let output = PendingOutput { name: decl.name.name.clone(), docs: decl.docs.clone(), span: decl.span, kind };
+            self.outputs.push(output);
+        }
+    }
+
+    fn vector_output(&mut self, function: &Ident, args: &[ast::Expr], span: Span, frame: Option<&ast::Path>) -> Option<PendingKind> {
+        let [arg] = args else {
+            self.error(
+                Diagnostic::error("E0404", format!("`{}` takes 1 argument, found {}", function.name, args.len()))
+                    .with_label(span, format!("expected `{}(point)`", function.name)),
+            );
+            return None;
+        };
+        let ExprKind::Path(path) = &unparen(arg).kind else {
+            self.error(
+                Diagnostic::error("E0412", format!("expected a point in `{}`", function.name))
+                    .with_label(arg.span, "not a point")
+                    .with_help("write a point such as `arm.tip`, `arm.com` or `arm`"),
+            );
+            return None;
+        };
+        let point = self.resolve_point(path);
+        let frame = self.frame_clause(frame);
+        let (point, frame) = (point?, frame?);
+        Some(match function.name.as_str() {
+            "position" => PendingKind::Position(point, frame),
+            _ => PendingKind::Velocity(point, frame),
+        })
+    }
+
+    fn path_output(&mut self, path: &ast::Path, decl: &ast::OutputDecl) -> Option<PendingKind> {
+        let kind = match path.segments.as_slice() {
+            [name] if name.name == "kinetic_energy" => PendingKind::KineticEnergy,
+            [name] if name.name == "potential_energy" => PendingKind::PotentialEnergy,
+            [joint, which] if self.joint_index.contains_key(&joint.name) && (which.name == "q" || which.name == "u") => {
+                let j = self.joint_index[&joint.name];
+                if self.joints.get(j).and_then(|info| info.kind) == Some(JointKind::Weld) {
+                    self.error(
+                        Diagnostic::error("E0213", format!("weld joint `{}` has no coordinate", joint.name))
+                            .with_label(path.span, "a weld has no degree of freedom"),
+                    );
+                    return None;
+                }
+                if which.name == "q" {
+                    PendingKind::Coordinate(j)
+                } else {
+                    PendingKind::Speed(j)
+                }
+            }
+            _ => return self.expr_output(decl),
+        };
+        self.reject_frame_clause(decl)?;
+        Some(kind)
+    }
+
+    fn expr_output(&mut self, decl: &ast::OutputDecl) -> Option<PendingKind> {
+        let typed = self.lower_scalar(&decl.value, Ctx::Dynamic);
+        self.reject_frame_clause(decl)?;
+        Some(PendingKind::Expr(typed?.expr))
+    }
+
+    fn reject_frame_clause(&mut self, decl: &ast::OutputDecl) -> Option<()> {
+        let Some(frame) = &decl.frame else { return Some(()) };
+        self.error(
+            Diagnostic::error("E0403", "`in FRAME` is only allowed on vector outputs")
+                .with_label(frame.span, "this output is a scalar")
+                .with_help("only `position(point)` and `velocity(point)` have components in a frame"),
+        );
+        None
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // Handles
+    // -----------------------------------------------------------------------------------------
+
+    fn point_handle(&self, point: PointRef) -> Option<Handle<ir::Point>> {
+        match point {
+            PointRef::Origin(owner) => self.owners[owner].origin_point,
+            PointRef::Com(owner) => self.owners[owner].com_point,
+            PointRef::Named(owner, index) => self.owners[owner].point_handles.get(index).copied().flatten(),
+        }
+    }
+
+    fn frame_handle(&self, frame: FrameRef) -> Option<Handle<ir::Frame>> {
+        match frame {
+            FrameRef::Owner(owner) => self.owners[owner].frame,
+            FrameRef::Named(owner, index) => self.owners[owner].frame_handles.get(index).copied().flatten(),
+            FrameRef::Joint(joint) => self.joints.get(joint).and_then(|j| j.frame),
+        }
+    }
+
+    /// Records an internal error if a reference could not be mapped although no error explains it.
+    fn unresolved(&mut self, span: Span) {
+        if self.diagnostics.is_empty() {
+            self.error(
+                Diagnostic::error("E0100", "internal error: a reference was not resolved")
+                    .with_label(span, "here")
+                    .with_help("this is a bug in mech-codegen; please report it with the file"),
+            );
+        }
+    }
+
+    pub(super) fn build_loads(&mut self) {
+        for load in std::mem::take(&mut self.loads) {
+            let built = match &load {
+                PendingLoad::Force { point, frame, components, span } => {
+                    let handles = self.point_handle(*point).zip(self.frame_handle(*frame));
+                    handles.map(|(point, frame)| ir::Load::Force {
+                        point,
+                        force: ir::FrameVector { frame, components: components.clone() },
+                        span: *span,
+                    })
+                }
+                PendingLoad::Torque { body, frame, components, span } => {
+                    let handles = self.owners[*body].frame.zip(self.frame_handle(*frame));
+                    handles.map(|(body_frame, frame)| ir::Load::Torque {
+                        frame: body_frame,
+                        torque: ir::FrameVector { frame, components: components.clone() },
+                        span: *span,
+                    })
+                }
+            };
+            match built {
+                Some(load) => self.model.loads.push(load),
+                None => self.unresolved(load_span(&load)),
+            }
+        }
+    }
+
+    pub(super) fn build_outputs(&mut self) {
+        for output in std::mem::take(&mut self.outputs) {
+            let kind = match output.kind {
+                PendingKind::Position(point, frame) => self
+                    .point_handle(point)
+                    .zip(self.frame_handle(frame))
+                    .map(|(point, frame)| ir::OutputKind::Position { point, frame }),
+                PendingKind::Velocity(point, frame) => self
+                    .point_handle(point)
+                    .zip(self.frame_handle(frame))
+                    .map(|(point, frame)| ir::OutputKind::Velocity { point, frame }),
+                PendingKind::Coordinate(j) => self.joints.get(j).and_then(|j| j.coordinate).map(ir::OutputKind::Coordinate),
+                PendingKind::Speed(j) => self.joints.get(j).and_then(|j| j.coordinate).map(ir::OutputKind::Speed),
+                PendingKind::KineticEnergy => Some(ir::OutputKind::KineticEnergy),
+                PendingKind::PotentialEnergy => Some(ir::OutputKind::PotentialEnergy),
+                PendingKind::Expr(expr) => Some(ir::OutputKind::Expr(expr)),
+            };
+            match kind {
+                Some(kind) => {
+                    self.model.outputs.push(ir::Output { name: output.name, kind, docs: output.docs, span: output.span })
+                }
+                None => self.unresolved(output.span),
+            }
+        }
+    }
+}
+
+fn load_span(load: &PendingLoad) -> Span {
+    match load {
+        PendingLoad::Force { span, .. } | PendingLoad::Torque { span, .. } => *span,
+    }
+}

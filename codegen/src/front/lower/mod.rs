@@ -1,0 +1,232 @@
+//! AST → IR: resolves names, evaluates units, checks dimensions, orders the joint tree, and
+//! builds the [`ir::Model`].
+//!
+//! Consumes: an [`ast::File`] (from `front::parse`) and its source file (for the model name).
+//! Produces: an [`ir::Model`] that satisfies the invariants documented in `ir/mod.rs`, or every
+//! error of this phase, sorted by position.
+//!
+//! The work is split by topic: `expr` (scalar expressions, units, dimensions), `body` (bodies,
+//! points, frames, axes, rotations), `tree` (joints, tree order, frame building), `loads`
+//! (gravity, forces, torques, outputs) and `names` (namespaces and suggestions).
+
+mod body;
+mod expr;
+mod loads;
+mod names;
+mod tree;
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use crate::diag::{Diagnostic, Errors, SourceFile, Span};
+use crate::front::ast;
+use crate::ir::{self, Handle};
+
+use body::Owner;
+use expr::Typed;
+use loads::{PendingLoad, PendingOutput};
+use names::Namespace;
+use tree::JointInfo;
+
+/// Lowers a parsed file to the IR; the model name defaults to the file stem of `file.path`.
+pub fn lower(file: &Arc<SourceFile>, ast: &ast::File) -> Result<ir::Model, Errors> {
+    let name = match &ast.model {
+        Some(ident) => ident.name.clone(),
+        None => default_model_name(&file.path),
+    };
+    let mut lowerer = Lowerer::new(name, ast.docs.clone());
+    lowerer.run(ast);
+    lowerer.finish().map_err(|diagnostics| Errors::new(file.clone(), diagnostics))
+}
+
+/// The file stem of `path` as an identifier (`models/four-bar.mech` → `four_bar`).
+pub fn default_model_name(path: &str) -> String {
+    let file_name = path.rsplit(['/', '\\']).next().unwrap_or(path);
+    let stem = file_name.split('.').next().unwrap_or(file_name);
+    let mut name: String = stem.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
+    if name.is_empty() {
+        name.push_str("model");
+    }
+    if name.starts_with(|c: char| c.is_ascii_digit()) {
+        name.insert(0, '_');
+    }
+    name
+}
+
+/// What a value name refers to.
+#[derive(Clone, Copy, Debug)]
+enum Value {
+    Param(Handle<ir::Param>),
+    Input(Handle<ir::Input>),
+    Let(usize),
+}
+
+/// Names that may not be declared as params, lets or inputs.
+const RESERVED_VALUES: &[(&str, &str)] = &[
+    ("t", "the simulation time"),
+    ("pi", "the constant π"),
+    ("kinetic_energy", "the kinetic energy output"),
+    ("potential_energy", "the potential energy output"),
+];
+
+/// The state of one lowering: the model being built plus the symbol tables.
+struct Lowerer<'a> {
+    diagnostics: Vec<Diagnostic>,
+    model: ir::Model,
+    /// params, lets and inputs
+    value_names: Namespace,
+    values: BTreeMap<String, Value>,
+    /// Lowered `let` definitions in declaration order (`None` if it had an error).
+    lets: Vec<Option<Typed>>,
+    let_spans: Vec<Span>,
+    /// The `let` being lowered: it may only use lets declared before it.
+    current_let: Option<usize>,
+    /// Default values of the params, by handle index (for evaluating `q0`, `u0`, defaults).
+    param_values: Vec<f64>,
+    /// Bodies and joints share one namespace (each becomes a frame of that name).
+    structure_names: Namespace,
+    /// `owners[0]` is the Newtonian frame; the others are bodies in declaration order.
+    owners: Vec<Owner>,
+    bodies: BTreeMap<String, usize>,
+    joints: Vec<JointInfo<'a>>,
+    joint_index: BTreeMap<String, usize>,
+    loads: Vec<PendingLoad>,
+    outputs: Vec<PendingOutput>,
+}
+
+impl<'a> Lowerer<'a> {
+    fn new(name: String, docs: Vec<String>) -> Lowerer<'a> {
+        let mut model = ir::Model::new(name);
+        model.docs = docs;
+        Lowerer {
+            diagnostics: Vec::new(),
+            model,
+            value_names: Namespace::default(),
+            values: BTreeMap::new(),
+            lets: Vec::new(),
+            let_spans: Vec::new(),
+            current_let: None,
+            param_values: Vec::new(),
+            structure_names: Namespace::default(),
+            owners: vec![Owner::newtonian()],
+            bodies: BTreeMap::new(),
+            joints: Vec::new(),
+            joint_index: BTreeMap::new(),
+            loads: Vec::new(),
+            outputs: Vec::new(),
+        }
+    }
+
+    fn error(&mut self, diagnostic: Diagnostic) {
+        self.diagnostics.push(diagnostic);
+    }
+
+    /// All phases in dependency order; each collects its errors and goes on.
+    fn run(&mut self, file: &'a ast::File) {
+        self.lower_values(&file.items);
+        self.declare_structure(&file.items);
+        self.lower_owners(&file.items);
+        self.lower_joints(&file.items);
+        let order = self.tree_order();
+        self.build_tree(&order);
+        self.build_points();
+        self.build_bodies();
+        self.lower_loads_and_outputs(&file.items);
+        self.build_loads();
+        self.build_outputs();
+    }
+
+    fn finish(mut self) -> Result<ir::Model, Vec<Diagnostic>> {
+        if self.diagnostics.is_empty() {
+            return Ok(self.model);
+        }
+        self.diagnostics.sort_by_key(|d| d.labels.first().map(|l| l.span.start));
+        Err(self.diagnostics)
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // params, lets, inputs
+    // -----------------------------------------------------------------------------------------
+
+    /// Params and inputs first (their values are constants), then lets in declaration order.
+    fn lower_values(&mut self, items: &'a [ast::Item]) {
+        for item in items {
+            match item {
+                ast::Item::Param(decl) => self.lower_param(decl),
+                ast::Item::Input(decl) => self.lower_input(decl),
+                ast::Item::Let(decl) => self.declare_let(decl),
+                _ => {}
+            }
+        }
+        let lets = items.iter().filter_map(|item| if let ast::Item::Let(decl) = item { Some(decl) } else { None });
+        for (index, decl) in lets.enumerate() {
+            self.current_let = Some(index);
+            let value = self.lower_scalar(&decl.value, expr::Ctx::Dynamic);
+            self.lets[index] = value;
+        }
+        self.current_let = None;
+    }
+
+    /// Declares a value name; `false` if it clashes (the error is recorded).
+    fn declare_value(&mut self, name: &ast::Ident) -> bool {
+        if let Some((_, meaning)) = RESERVED_VALUES.iter().find(|(reserved, _)| *reserved == name.name) {
+            self.error(names::reserved(name, meaning));
+            return false;
+        }
+        match self.value_names.declare(name, "the name") {
+            Ok(()) => true,
+            Err(diagnostic) => {
+                self.error(diagnostic);
+                false
+            }
+        }
+    }
+
+    fn lower_param(&mut self, decl: &ast::ValueDecl) {
+        let declared = self.declare_value(&decl.name);
+        let ctx = expr::Ctx::Constant("a param value");
+        let (value, dimension) = match self.lower_constant(&decl.value, ctx) {
+            Some((number, dimension)) => (number.to_f64(), dimension),
+            None => (0.0, ir::Dimension::NONE),
+        };
+        let handle = self.model.params.append(ir::Param {
+            name: decl.name.name.clone(),
+            value,
+            dimension,
+            docs: decl.docs.clone(),
+            span: decl.name.span,
+        });
+        self.param_values.push(value);
+        if declared {
+            self.values.insert(decl.name.name.clone(), Value::Param(handle));
+        }
+    }
+
+    fn lower_input(&mut self, decl: &ast::ValueDecl) {
+        let declared = self.declare_value(&decl.name);
+        let ctx = expr::Ctx::Constant("an input's default value");
+        let (default, dimension) = match self.lower_constant(&decl.value, ctx) {
+            Some((number, dimension)) => (number.to_f64(), dimension),
+            None => (0.0, ir::Dimension::NONE),
+        };
+        let handle = self.model.inputs.append(ir::Input {
+            name: decl.name.name.clone(),
+            default,
+            dimension,
+            docs: decl.docs.clone(),
+            span: decl.name.span,
+        });
+        if declared {
+            self.values.insert(decl.name.name.clone(), Value::Input(handle));
+        }
+    }
+
+    fn declare_let(&mut self, decl: &ast::ValueDecl) {
+        let index = self.lets.len();
+        self.lets.push(None);
+        self.let_spans.push(decl.name.span);
+        if self.declare_value(&decl.name) {
+            self.values.insert(decl.name.name.clone(), Value::Let(index));
+        }
+    }
+}

@@ -1,0 +1,118 @@
+//! Namespaces, redefinition errors and "did you mean" suggestions.
+//!
+//! Consumes: declared identifiers and the names looked up.
+//! Produces: `E0210` redefinition and `E0212` reserved-name diagnostics, and help texts that
+//! list the candidates and suggest the closest one.
+
+use std::collections::BTreeMap;
+
+use crate::diag::{Diagnostic, Span};
+use crate::front::ast::Ident;
+
+/// Names declared in one namespace, with where they were declared (first declaration wins).
+#[derive(Default)]
+pub struct Namespace {
+    names: BTreeMap<String, Span>,
+    order: Vec<String>,
+}
+
+impl Namespace {
+    /// Declares `name`; on a clash returns the redefinition error.
+    pub fn declare(&mut self, name: &Ident, what: &str) -> Result<(), Diagnostic> {
+        if let Some(&previous) = self.names.get(&name.name) {
+            return Err(redefinition(name, previous, what));
+        }
+        self.names.insert(name.name.clone(), name.span);
+        self.order.push(name.name.clone());
+        Ok(())
+    }
+    /// Names in declaration order.
+    pub fn names(&self) -> impl Iterator<Item = &str> {
+        self.order.iter().map(String::as_str)
+    }
+}
+
+pub fn redefinition(name: &Ident, previous: Span, what: &str) -> Diagnostic {
+    Diagnostic::error("E0210", format!("{what} `{}` is defined more than once", name.name))
+        .with_label(name.span, "defined again here")
+        .with_label(previous, "first defined here")
+        .with_help("rename one of them")
+}
+
+pub fn reserved(name: &Ident, meaning: &str) -> Diagnostic {
+    Diagnostic::error("E0212", format!("`{}` is a reserved name", name.name))
+        .with_label(name.span, format!("`{}` already means {meaning}", name.name))
+        .with_help("choose another name")
+}
+
+/// An "unknown X" error with the candidates as a note and the closest one as help.
+pub fn unknown(code: &'static str, what: &str, plural: &str, name: &str, span: Span, candidates: &[&str]) -> Diagnostic {
+    let mut diagnostic =
+        Diagnostic::error(code, format!("unknown {what} `{name}`")).with_label(span, "not declared in this model");
+    diagnostic = match candidates.len() {
+        0 => diagnostic.with_note(format!("no {plural} are declared")),
+        _ => diagnostic.with_note(format!("{plural} in scope: {}", list(candidates))),
+    };
+    match closest(name, candidates) {
+        Some(best) => diagnostic.with_help(format!("did you mean `{best}`?")),
+        None => diagnostic,
+    }
+}
+
+/// Up to 12 names, comma separated.
+pub fn list(names: &[&str]) -> String {
+    const SHOWN: usize = 12;
+    let mut text = names.iter().take(SHOWN).copied().collect::<Vec<_>>().join(", ");
+    if names.len() > SHOWN {
+        text.push_str(&format!(", ... ({} more)", names.len() - SHOWN));
+    }
+    text
+}
+
+/// The candidate closest to `name` by edit distance, if it is close enough to be a typo.
+pub fn closest<'c>(name: &str, candidates: &[&'c str]) -> Option<&'c str> {
+    const LONGEST: usize = 64;
+    if name.chars().count() > LONGEST {
+        return None;
+    }
+    let limit = (name.chars().count() / 3).max(1);
+    candidates
+        .iter()
+        .filter(|c| c.chars().count() <= LONGEST && **c != name)
+        .map(|c| {
+            let distance = if c.eq_ignore_ascii_case(name) { 0 } else { edit_distance(name, c) };
+            (distance, *c)
+        })
+        .filter(|(distance, _)| *distance <= limit)
+        .min_by_key(|(distance, _)| *distance)
+        .map(|(_, c)| c)
+}
+
+/// Levenshtein distance over characters.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let substitution = diagonal + usize::from(ca != *cb);
+            diagonal = row[j + 1];
+            row[j + 1] = substitution.min(row[j] + 1).min(row[j + 1] + 1);
+        }
+    }
+    row[b.len()]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn suggests_close_names_only() {
+        assert_eq!(closest("forearm2", &["upper_arm", "forearm"]), Some("forearm"));
+        assert_eq!(closest("xyz", &["upper_arm", "forearm"]), None);
+        assert_eq!(closest("MN", &["mN", "kN"]), Some("mN"));
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
+    }
+}

@@ -1,0 +1,628 @@
+//! pest → typed AST. The only module that sees pest `Pair`s.
+//!
+//! Consumes: a [`SourceFile`] and the grammar `mech.pest`.
+//! Produces: an [`ast::File`] with byte spans, or one syntax diagnostic (pest stops at the
+//! first error). Also guards the recursion depth of everything downstream: bracket nesting is
+//! limited before pest runs, and expression depth while the AST is built.
+
+use pest::iterators::Pair;
+use pest::Parser as _;
+
+use super::ast::{self, BinaryOp, Expr, ExprKind, Ident};
+use crate::diag::{Diagnostic, SourceFile, Span};
+
+#[derive(pest_derive::Parser)]
+#[grammar = "front/mech.pest"]
+struct MechParser;
+
+/// Deepest bracket nesting accepted (pest and `lower` recurse on it).
+const MAX_BRACKET_DEPTH: usize = 64;
+/// Deepest expression tree accepted (each operator of a chain adds one level).
+const MAX_EXPR_DEPTH: usize = 256;
+
+type Result<T> = std::result::Result<T, Diagnostic>;
+
+/// Parses a whole `.mech` file.
+pub fn parse_file(file: &SourceFile) -> Result<ast::File> {
+    check_bracket_depth(&file.text)?;
+    let mut pairs = MechParser::parse(Rule::file, &file.text).map_err(|e| syntax_error(&file.text, e))?;
+    let root = pairs.next().ok_or_else(|| internal(Span::default()))?;
+    build_file(root)
+}
+
+/// Parses a standalone quantity such as `-10 mN` into its sign, literal and unit.
+pub fn parse_quantity_text(text: &str) -> std::result::Result<(bool, String, Option<ast::Unit>), String> {
+    check_bracket_depth(text).map_err(|d| d.message)?;
+    let pairs = MechParser::parse(Rule::quantity_text, text).map_err(|e| syntax_error(text, e).message)?;
+    let mut negative = false;
+    for pair in pairs.flatten() {
+        match pair.as_rule() {
+            Rule::neg_op => negative = true,
+            Rule::quantity => {
+                let (literal, unit) = build_quantity(pair).map_err(|d| d.message)?;
+                return Ok((negative, literal, unit));
+            }
+            _ => {}
+        }
+    }
+    Err("expected a number with an optional unit, such as `10 mN`".to_string())
+}
+
+// ---------------------------------------------------------------------------------------------
+// Declarations
+// ---------------------------------------------------------------------------------------------
+
+fn build_file(root: Pair<Rule>) -> Result<ast::File> {
+    let mut file = ast::File { docs: Vec::new(), model: None, items: Vec::new() };
+    for pair in root.into_inner() {
+        match pair.as_rule() {
+            Rule::inner_doc => file.docs.push(doc_text(pair.as_str())),
+            Rule::model_decl => {
+                for inner in pair.into_inner() {
+                    match inner.as_rule() {
+                        Rule::doc => file.docs.push(doc_text(inner.as_str())),
+                        Rule::ident => file.model = Some(ident(inner)),
+                        _ => {}
+                    }
+                }
+            }
+            Rule::item => file.items.push(build_item(pair)?),
+            _ => {}
+        }
+    }
+    Ok(file)
+}
+
+/// The text of a `///` or `//!` comment without the marker and one leading space.
+fn doc_text(comment: &str) -> String {
+    let body = comment.get(3..).unwrap_or("");
+    body.strip_prefix(' ').unwrap_or(body).trim_end().to_string()
+}
+
+fn build_item(pair: Pair<Rule>) -> Result<ast::Item> {
+    let span = span_of(&pair);
+    let mut docs = Vec::new();
+    for inner in pair.into_inner() {
+        let rule = inner.as_rule();
+        if rule == Rule::doc {
+            docs.push(doc_text(inner.as_str()));
+            continue;
+        }
+        let docs = std::mem::take(&mut docs);
+        return match rule {
+            Rule::param_decl => Ok(ast::Item::Param(value_decl(inner, docs)?)),
+            Rule::let_decl => Ok(ast::Item::Let(value_decl(inner, docs)?)),
+            Rule::input_decl => Ok(ast::Item::Input(value_decl(inner, docs)?)),
+            Rule::gravity_decl => gravity_decl(inner),
+            Rule::newtonian_decl => newtonian_decl(inner),
+            Rule::body_decl => body_decl(inner, docs),
+            Rule::joint_decl => joint_decl(inner, docs),
+            Rule::force_decl => force_decl(inner, docs),
+            Rule::torque_decl => torque_decl(inner, docs),
+            Rule::output_decl => output_decl(inner, docs),
+            _ => Err(internal(span)),
+        };
+    }
+    Err(internal(span))
+}
+
+/// The pairs of a declaration that carry content (names, expressions, blocks), in order.
+struct Parts<'i> {
+    pairs: std::vec::IntoIter<Pair<'i, Rule>>,
+    span: Span,
+}
+
+impl<'i> Parts<'i> {
+    fn of(pair: Pair<'i, Rule>) -> Parts<'i> {
+        let span = span_of(&pair);
+        let pairs: Vec<_> = pair.into_inner().filter(|p| !is_punctuation(p.as_rule())).collect();
+        Parts { pairs: pairs.into_iter(), span }
+    }
+    fn next(&mut self) -> Result<Pair<'i, Rule>> {
+        self.pairs.next().ok_or_else(|| internal(self.span))
+    }
+    fn ident(&mut self) -> Result<Ident> {
+        Ok(ident(self.next()?))
+    }
+    fn expr(&mut self) -> Result<Expr> {
+        expr(self.next()?)
+    }
+    /// The next pair if it has the given rule.
+    fn take(&mut self, rule: Rule) -> Option<Pair<'i, Rule>> {
+        if self.pairs.as_slice().first().is_some_and(|p| p.as_rule() == rule) {
+            self.pairs.next()
+        } else {
+            None
+        }
+    }
+    fn rest(self) -> std::vec::IntoIter<Pair<'i, Rule>> {
+        self.pairs
+    }
+}
+
+fn is_punctuation(rule: Rule) -> bool {
+    use Rule::*;
+    matches!(
+        rule,
+        semicolon
+            | assign
+            | comma
+            | dot
+            | lparen
+            | rparen
+            | lbracket
+            | rbracket
+            | lbrace
+            | rbrace
+            | kw_model
+            | kw_param
+            | kw_let
+            | kw_input
+            | kw_gravity
+            | kw_body
+            | kw_joint
+            | kw_force
+            | kw_torque
+            | kw_output
+            | kw_point
+            | kw_frame
+            | kw_on
+            | kw_in
+    )
+}
+
+fn value_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::ValueDecl> {
+    let mut parts = Parts::of(pair);
+    Ok(ast::ValueDecl { docs, name: parts.ident()?, value: parts.expr()?, span: parts.span })
+}
+
+fn gravity_decl(pair: Pair<Rule>) -> Result<ast::Item> {
+    let mut parts = Parts::of(pair);
+    Ok(ast::Item::Gravity(ast::GravityDecl { value: parts.expr()?, span: parts.span }))
+}
+
+fn newtonian_decl(pair: Pair<Rule>) -> Result<ast::Item> {
+    let mut parts = Parts::of(pair);
+    let keyword = span_of(&parts.next()?);
+    let span = parts.span;
+    let members = parts.rest().map(member).collect::<Result<_>>()?;
+    Ok(ast::Item::Newtonian(ast::NewtonianDecl { members, keyword, span }))
+}
+
+fn body_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
+    let mut parts = Parts::of(pair);
+    let name = parts.ident()?;
+    let span = parts.span;
+    let members = parts.rest().map(member).collect::<Result<_>>()?;
+    Ok(ast::Item::Body(ast::BodyDecl { docs, name, members, span }))
+}
+
+fn member(pair: Pair<Rule>) -> Result<ast::Member> {
+    let span = span_of(&pair);
+    let mut docs = Vec::new();
+    for inner in pair.into_inner() {
+        match inner.as_rule() {
+            Rule::doc => docs.push(doc_text(inner.as_str())),
+            Rule::field => return Ok(ast::Member::Field(field(inner)?)),
+            Rule::point_decl => {
+                let mut parts = Parts::of(inner);
+                let name = parts.ident()?;
+                let position = parts.expr()?;
+                return Ok(ast::Member::Point(ast::PointDecl { docs, name, position, span: parts.span }));
+            }
+            Rule::frame_decl => return Ok(ast::Member::Frame(frame_decl(inner, docs)?)),
+            _ => return Err(internal(span)),
+        }
+    }
+    Err(internal(span))
+}
+
+fn frame_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::FrameDecl> {
+    let mut parts = Parts::of(pair);
+    let name = parts.ident()?;
+    let span = parts.span;
+    let mut rotation = None;
+    let mut origin = None;
+    let mut after_at = false;
+    for inner in parts.rest() {
+        match inner.as_rule() {
+            Rule::kw_at => after_at = true,
+            Rule::expr if after_at => origin = Some(expr(inner)?),
+            Rule::expr => rotation = Some(expr(inner)?),
+            _ => return Err(internal(span)),
+        }
+    }
+    Ok(ast::FrameDecl { docs, name, rotation, origin, span })
+}
+
+fn field(pair: Pair<Rule>) -> Result<ast::Field> {
+    let mut parts = Parts::of(pair);
+    Ok(ast::Field { name: parts.ident()?, value: parts.expr()?, span: parts.span })
+}
+
+fn joint_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
+    let mut parts = Parts::of(pair);
+    let name = parts.ident()?;
+    let kind = parts.ident()?;
+    let parent = parts.ident()?;
+    let child = parts.ident()?;
+    let span = parts.span;
+    let mut fields = Vec::new();
+    if let Some(block) = parts.take(Rule::joint_block) {
+        for inner in block.into_inner() {
+            if inner.as_rule() == Rule::field {
+                fields.push(field(inner)?);
+            }
+        }
+    }
+    Ok(ast::Item::Joint(ast::JointDecl { docs, name, kind, parent, child, fields, span }))
+}
+
+fn force_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
+    let mut parts = Parts::of(pair);
+    let name = parts.ident()?;
+    parts.take(Rule::kw_at);
+    let point = path(parts.next()?);
+    let value = parts.expr()?;
+    let frame = parts.take(Rule::frame_clause).map(frame_clause).transpose()?;
+    Ok(ast::Item::Force(ast::ForceDecl { docs, name, point, value, frame, span: parts.span }))
+}
+
+fn torque_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
+    let mut parts = Parts::of(pair);
+    let name = parts.ident()?;
+    let body = path(parts.next()?);
+    let value = parts.expr()?;
+    let frame = parts.take(Rule::frame_clause).map(frame_clause).transpose()?;
+    Ok(ast::Item::Torque(ast::TorqueDecl { docs, name, body, value, frame, span: parts.span }))
+}
+
+fn output_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
+    let mut parts = Parts::of(pair);
+    let name = parts.ident()?;
+    let value = parts.expr()?;
+    let frame = parts.take(Rule::frame_clause).map(frame_clause).transpose()?;
+    Ok(ast::Item::Output(ast::OutputDecl { docs, name, value, frame, span: parts.span }))
+}
+
+fn frame_clause(pair: Pair<Rule>) -> Result<ast::Path> {
+    let mut parts = Parts::of(pair);
+    Ok(path(parts.next()?))
+}
+
+fn ident(pair: Pair<Rule>) -> Ident {
+    Ident { name: pair.as_str().to_string(), span: span_of(&pair) }
+}
+
+fn path(pair: Pair<Rule>) -> ast::Path {
+    let span = span_of(&pair);
+    let segments = pair.into_inner().filter(|p| p.as_rule() == Rule::ident).map(ident).collect();
+    ast::Path { segments, span }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Expressions
+// ---------------------------------------------------------------------------------------------
+
+/// Builds an expression, rejecting trees deeper than [`MAX_EXPR_DEPTH`].
+fn expr(pair: Pair<Rule>) -> Result<Expr> {
+    Ok(built(pair)?.0)
+}
+
+/// An expression and the depth of its tree.
+type Built = (Expr, usize);
+
+fn built(pair: Pair<Rule>) -> Result<Built> {
+    let span = span_of(&pair);
+    let result = match pair.as_rule() {
+        Rule::expr | Rule::term => binary_chain(pair)?,
+        Rule::factor | Rule::exponent => negation(pair)?,
+        Rule::power => power(pair)?,
+        Rule::quantity => {
+            let (literal, unit) = build_quantity(pair)?;
+            (Expr { kind: ExprKind::Quantity { literal, unit }, span }, 1)
+        }
+        Rule::path => (Expr { kind: ExprKind::Path(path(pair)), span }, 1),
+        Rule::paren => {
+            let (inner, depth) = built(Parts::of(pair).next()?)?;
+            (Expr { kind: ExprKind::Paren(Box::new(inner)), span }, depth + 1)
+        }
+        Rule::vector => {
+            let (items, depth) = built_list(Parts::of(pair).rest())?;
+            (Expr { kind: ExprKind::Vector(items), span }, depth + 1)
+        }
+        Rule::call => {
+            let mut parts = Parts::of(pair);
+            let function = parts.ident()?;
+            let (args, depth) = built_list(parts.rest())?;
+            (Expr { kind: ExprKind::Call { function, args }, span }, depth + 1)
+        }
+        _ => return Err(internal(span)),
+    };
+    if result.1 > MAX_EXPR_DEPTH {
+        return Err(too_deep(span));
+    }
+    Ok(result)
+}
+
+fn built_list<'i>(pairs: impl Iterator<Item = Pair<'i, Rule>>) -> Result<(Vec<Expr>, usize)> {
+    let mut items = Vec::new();
+    let mut depth = 0;
+    for pair in pairs {
+        let (item, d) = built(pair)?;
+        depth = depth.max(d);
+        items.push(item);
+    }
+    Ok((items, depth))
+}
+
+/// `a + b - c` or `a * b / c`: left associative.
+fn binary_chain(pair: Pair<Rule>) -> Result<Built> {
+    let span = span_of(&pair);
+    let mut inner = pair.into_inner();
+    let first = inner.next().ok_or_else(|| internal(span))?;
+    let (mut lhs, mut depth) = built(first)?;
+    while let Some(op) = inner.next() {
+        let op = match op.as_str() {
+            "+" => BinaryOp::Add,
+            "-" => BinaryOp::Sub,
+            "*" => BinaryOp::Mul,
+            _ => BinaryOp::Div,
+        };
+        let (rhs, d) = built(inner.next().ok_or_else(|| internal(span))?)?;
+        depth = depth.max(d) + 1;
+        if depth > MAX_EXPR_DEPTH {
+            return Err(too_deep(span));
+        }
+        let span = lhs.span.to(rhs.span);
+        lhs = Expr { kind: ExprKind::Binary { op, lhs: Box::new(lhs), rhs: Box::new(rhs) }, span };
+    }
+    Ok((lhs, depth))
+}
+
+/// Leading minus signs: an even number cancels, an odd number is one negation.
+fn negation(pair: Pair<Rule>) -> Result<Built> {
+    let span = span_of(&pair);
+    let mut minus_signs = 0usize;
+    let mut operand = None;
+    for inner in pair.into_inner() {
+        match inner.as_rule() {
+            Rule::neg_op => minus_signs += 1,
+            _ => operand = Some(built(inner)?),
+        }
+    }
+    let (operand, depth) = operand.ok_or_else(|| internal(span))?;
+    if minus_signs % 2 == 0 {
+        return Ok((Expr { span, ..operand }, depth));
+    }
+    Ok((Expr { kind: ExprKind::Neg(Box::new(operand)), span }, depth + 1))
+}
+
+/// `a ^ b ^ c`: right associative.
+fn power(pair: Pair<Rule>) -> Result<Built> {
+    let span = span_of(&pair);
+    let operands = pair.into_inner().filter(|p| p.as_rule() != Rule::pow_op).map(built).collect::<Result<Vec<_>>>()?;
+    let mut operands = operands.into_iter().rev();
+    let (mut result, mut depth) = operands.next().ok_or_else(|| internal(span))?;
+    for (base, d) in operands {
+        depth = depth.max(d) + 1;
+        if depth > MAX_EXPR_DEPTH {
+            return Err(too_deep(span));
+        }
+        let span = base.span.to(result.span);
+        result = Expr { kind: ExprKind::Binary { op: BinaryOp::Pow, lhs: Box::new(base), rhs: Box::new(result) }, span };
+    }
+    Ok((result, depth))
+}
+
+fn build_quantity(pair: Pair<Rule>) -> Result<(String, Option<ast::Unit>)> {
+    let span = span_of(&pair);
+    let mut literal = None;
+    let mut unit = None;
+    for inner in pair.into_inner() {
+        match inner.as_rule() {
+            Rule::number => literal = Some(inner.as_str().to_string()),
+            Rule::unit => unit = Some(build_unit(inner)),
+            _ => {}
+        }
+    }
+    Ok((literal.ok_or_else(|| internal(span))?, unit))
+}
+
+fn build_unit(pair: Pair<Rule>) -> ast::Unit {
+    let span = span_of(&pair);
+    let mut factors = Vec::new();
+    let mut divide = false;
+    for inner in pair.into_inner() {
+        match inner.as_rule() {
+            Rule::unit_op => divide = inner.as_str() == "/",
+            Rule::unit_factor => factors.push(build_unit_factor(inner, divide)),
+            _ => {}
+        }
+    }
+    ast::Unit { factors, span }
+}
+
+fn build_unit_factor(pair: Pair<Rule>, divide: bool) -> ast::UnitFactor {
+    let span = span_of(&pair);
+    let mut name = Ident { name: String::new(), span };
+    let mut exponent = None;
+    for inner in pair.into_inner() {
+        match inner.as_rule() {
+            Rule::unit_name => name = ident(inner),
+            Rule::unit_exponent => exponent = Some(inner.as_str().to_string()),
+            _ => {}
+        }
+    }
+    ast::UnitFactor { name, exponent, divide, span }
+}
+
+fn span_of(pair: &Pair<Rule>) -> Span {
+    let span = pair.as_span();
+    Span::new(span.start(), span.end())
+}
+
+fn internal(span: Span) -> Diagnostic {
+    Diagnostic::error("E0100", "internal error: unexpected syntax tree shape")
+        .with_label(span, "while reading this")
+        .with_help("this is a bug in mech-codegen; please report it with the file")
+}
+
+fn too_deep(span: Span) -> Diagnostic {
+    Diagnostic::error("E0103", "expression is nested too deeply")
+        .with_label(span, format!("more than {MAX_EXPR_DEPTH} levels of operators"))
+        .with_help("split it with `let` definitions")
+}
+
+// ---------------------------------------------------------------------------------------------
+// Syntax errors
+// ---------------------------------------------------------------------------------------------
+
+/// Rejects bracket nesting deeper than [`MAX_BRACKET_DEPTH`] (outside comments), so that
+/// neither pest nor the lowering can exhaust the stack.
+fn check_bracket_depth(text: &str) -> Result<()> {
+    let bytes = text.as_bytes();
+    let mut depth = 0usize;
+    let mut i = 0;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'/' if bytes.get(i + 1) == Some(&b'/') => {
+                while i < bytes.len() && bytes[i] != b'\n' {
+                    i += 1;
+                }
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'*') => {
+                i += 2;
+                while i < bytes.len() && !(bytes[i] == b'*' && bytes.get(i + 1) == Some(&b'/')) {
+                    i += 1;
+                }
+                i += 1;
+            }
+            b'(' | b'[' | b'{' => {
+                depth += 1;
+                if depth > MAX_BRACKET_DEPTH {
+                    return Err(Diagnostic::error("E0103", "brackets are nested too deeply")
+                        .with_label(Span::new(i, i + 1), format!("more than {MAX_BRACKET_DEPTH} levels"))
+                        .with_help("split the expression with `let` definitions"));
+                }
+            }
+            b')' | b']' | b'}' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+        i += 1;
+    }
+    Ok(())
+}
+
+fn syntax_error(text: &str, error: pest::error::Error<Rule>) -> Diagnostic {
+    let position = match error.location {
+        pest::error::InputLocation::Pos(p) => p,
+        pest::error::InputLocation::Span((start, _)) => start,
+    };
+    let expected = match &error.variant {
+        pest::error::ErrorVariant::ParsingError { positives, .. } => expected_phrases(positives),
+        pest::error::ErrorVariant::CustomError { .. } => Vec::new(),
+    };
+    let found = found_token(text, position);
+    if expected.is_empty() {
+        return Diagnostic::error("E0101", format!("unexpected {found}"))
+            .with_label(Span::new(position, position + 1), "not expected here");
+    }
+    let list = join_alternatives(&expected);
+    let wants_semicolon = expected.contains(&"`;`");
+    let at = if wants_semicolon { end_of_previous_token(text, position) } else { position };
+    let mut diagnostic = Diagnostic::error("E0101", format!("expected {list}, found {found}"))
+        .with_label(Span::new(at, at), format!("expected {list}"));
+    if let Some(help) = syntax_help(&expected) {
+        diagnostic = diagnostic.with_help(help);
+    }
+    diagnostic
+}
+
+fn syntax_help(expected: &[&str]) -> Option<&'static str> {
+    if expected.contains(&"`;`") {
+        Some("every declaration and field ends with `;`")
+    } else if expected.contains(&"an expression") {
+        Some("an expression is a number with an optional unit (`2.5 mm`), a name, a call such as `sin(x)`, or a vector `[x, y, z]`")
+    } else if expected.contains(&DECLARATION) {
+        Some("a model is a list of declarations: `param`, `let`, `input`, `gravity`, `newtonian`, `body`, `joint`, `force`, `torque`, `output`")
+    } else {
+        None
+    }
+}
+
+const DECLARATION: &str = "a declaration";
+
+/// Friendly names of the rules pest expected, deduplicated, in pest's order.
+fn expected_phrases(rules: &[Rule]) -> Vec<&'static str> {
+    let mut phrases = Vec::new();
+    for &rule in rules {
+        let phrase = describe(rule);
+        if !phrases.contains(&phrase) {
+            phrases.push(phrase);
+        }
+    }
+    phrases
+}
+
+/// What a rule is called in syntax errors.
+fn describe(rule: Rule) -> &'static str {
+    use Rule::*;
+    match rule {
+        semicolon => "`;`",
+        assign => "`=`",
+        comma => "`,`",
+        dot => "`.`",
+        lparen => "`(`",
+        rparen => "`)`",
+        lbracket => "`[`",
+        rbracket => "`]`",
+        lbrace | joint_block => "`{`",
+        rbrace => "`}`",
+        add_op | mul_op | pow_op | unit_op => "an operator",
+        expr | term | factor | power | exponent | quantity | number | call | path | paren | vector | neg_op => {
+            "an expression"
+        }
+        ident => "a name",
+        unit | unit_factor | unit_name => "a unit",
+        unit_exponent => "an integer exponent",
+        member | point_decl | frame_decl | field | kw_point | kw_frame => "a field, `point` or `frame`",
+        frame_clause | kw_in => "`in`",
+        kw_at => "`at`",
+        kw_on => "`on`",
+        EOI => "end of file",
+        _ => DECLARATION,
+    }
+}
+
+fn join_alternatives(phrases: &[&str]) -> String {
+    match phrases {
+        [] => String::new(),
+        [one] => one.to_string(),
+        [init @ .., last] => format!("{} or {last}", init.join(", ")),
+    }
+}
+
+/// Describes the token at `position`: a word, one character, or the end of the file.
+fn found_token(text: &str, position: usize) -> String {
+    let rest = text.get(position..).unwrap_or("");
+    let Some(first) = rest.chars().next() else {
+        return "end of file".to_string();
+    };
+    if first.is_alphanumeric() || first == '_' {
+        let word: String = rest.chars().take_while(|c| c.is_alphanumeric() || *c == '_' || *c == '.').collect();
+        let word: String = word.chars().take(30).collect();
+        return format!("`{word}`");
+    }
+    match first {
+        '\n' | '\r' => "a line break".to_string(),
+        c => format!("`{c}`"),
+    }
+}
+
+/// The byte offset just after the last non-whitespace character before `position`
+/// (where a missing `;` belongs).
+fn end_of_previous_token(text: &str, position: usize) -> usize {
+    let before = text.get(..position).unwrap_or(text);
+    before.trim_end().len()
+}

@@ -1,0 +1,16 @@
+//! mech: the command-line tool and analysis layer of the mech compiler.
+//!
+//! Runs any `.mech` model through the tape evaluator ([`tape_model`]), or the bundled models
+//! through the Rust code that `build.rs` generated for them ([`models`]).
+//!
+//! Symbols: `q` generalized coordinates, `u = q̇` generalized speeds, `M(q) u̇ = F`.
+
+pub mod output;
+pub mod plot;
+pub mod signal_spec;
+pub mod tape_model;
+
+/// The models of `models/`, compiled to Rust by `build.rs` through the public build API.
+pub mod models {
+    include!(concat!(env!("OUT_DIR"), "/bundled_models.rs"));
+}

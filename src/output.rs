@@ -1,0 +1,400 @@
+//! Files written and read by the command line: atomic writes and simple numeric CSV tables.
+//!
+//! Consumes: bytes to store (plots, reports), a header and rows of numbers to store as CSV
+//! (simulation results), and CSV files named on the command line (`--input x=csv(...)`).
+//! Produces: files that are either completely written or untouched (never half-written), and
+//! `(times, values)` columns read back from CSV with errors that name file, line and column.
+
+use std::fs;
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Writes `bytes` to `path` atomically: to a new temporary file in the same directory, flushed
+/// to disk, then renamed over `path`. If anything fails, `path` keeps its old contents (or stays
+/// absent) and the temporary file is removed. Missing parent directories are created. An
+/// existing target's permissions are kept.
+///
+/// Errors keep their [`io::ErrorKind`] and name the file.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
+    let context = |error: io::Error, what: &str, file: &Path| {
+        io::Error::new(
+            error.kind(),
+            format!("cannot {what} `{}`: {error}", file.display()),
+        )
+    };
+    let file_name = path.file_name().ok_or_else(|| {
+        io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!("cannot write `{}`: it does not name a file", path.display()),
+        )
+    })?;
+    let dir = match path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent,
+        _ => Path::new("."),
+    };
+    fs::create_dir_all(dir).map_err(|e| context(e, "create directory", dir))?;
+
+    let (temp_path, mut file) = create_temp_file(dir, file_name)
+        .map_err(|e| context(e, "create a temporary file in", dir))?;
+    let result = (|| {
+        file.write_all(bytes)?;
+        if let Ok(metadata) = fs::metadata(path) {
+            file.set_permissions(metadata.permissions())?;
+        }
+        file.sync_all()?;
+        drop(file);
+        fs::rename(&temp_path, path)
+    })();
+    if let Err(error) = result {
+        let _ = fs::remove_file(&temp_path);
+        return Err(context(error, "write", path));
+    }
+    // Make the rename itself durable (best effort: not every platform can sync a directory).
+    if let Ok(dir_handle) = fs::File::open(dir) {
+        let _ = dir_handle.sync_all();
+    }
+    Ok(())
+}
+
+/// Creates `dir/.NAME.tmp-PID-N` with a fresh `N`, never reusing an existing file.
+fn create_temp_file(dir: &Path, file_name: &std::ffi::OsStr) -> io::Result<(PathBuf, fs::File)> {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    loop {
+        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+        let mut name = std::ffi::OsString::from(".");
+        name.push(file_name);
+        name.push(format!(".tmp-{}-{n}", std::process::id()));
+        let temp_path = dir.join(name);
+        match fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&temp_path)
+        {
+            Ok(file) => return Ok((temp_path, file)),
+            Err(e) if e.kind() == io::ErrorKind::AlreadyExists => continue,
+            Err(e) => return Err(e),
+        }
+    }
+}
+
+/// Writes a numeric table as CSV (atomically, see [`write_atomic`]): one header row, then one
+/// row per entry of `rows`. Numbers are printed in the shortest form that reads back to the
+/// same `f64` (`1e-7`, `0.1`, `NaN`, `inf`). Every row must have one value per header field.
+pub fn write_csv(path: &Path, header: &[String], rows: &[Vec<f64>]) -> io::Result<()> {
+    if let Some((i, row)) = rows
+        .iter()
+        .enumerate()
+        .find(|(_, row)| row.len() != header.len())
+    {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!(
+                "cannot write `{}`: row {} has {} values but the header has {} columns",
+                path.display(),
+                i + 1,
+                row.len(),
+                header.len()
+            ),
+        ));
+    }
+    let mut writer = csv::Writer::from_writer(Vec::new());
+    let to_io = |e: csv::Error| io::Error::other(e.to_string());
+    writer.write_record(header).map_err(to_io)?;
+    for row in rows {
+        writer
+            .write_record(row.iter().map(|v| format!("{v:?}")))
+            .map_err(to_io)?;
+    }
+    let bytes = writer
+        .into_inner()
+        .map_err(|e| io::Error::other(e.to_string()))?;
+    write_atomic(path, &bytes)
+}
+
+/// A numeric CSV table: the header and the values column by column.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CsvTable {
+    /// Column names, trimmed, in file order (the first is time).
+    pub header: Vec<String>,
+    /// `columns[j][i]` is the value in data row `i`, column `j`.
+    pub columns: Vec<Vec<f64>>,
+}
+
+impl CsvTable {
+    /// Index of the column named `name` (exact match after trimming).
+    pub fn column_index(&self, name: &str) -> Option<usize> {
+        self.header.iter().position(|h| h == name.trim())
+    }
+}
+
+/// Reads a CSV file of numbers with a header row. Fields are trimmed; lines starting with `#`
+/// are comments; `NaN` and `inf` are accepted as numbers. Every row must have as many fields as
+/// the header, and there must be at least one column and one data row.
+///
+/// Errors are one line and name the file, and the line and column where applicable.
+pub fn read_csv_table(path: &Path) -> Result<CsvTable, String> {
+    let file = path.display();
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(true)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .comment(Some(b'#'))
+        .from_path(path)
+        .map_err(|e| format!("cannot read `{file}`: {}", csv_error_text(&e)))?;
+    let header: Vec<String> = reader
+        .headers()
+        .map_err(|e| format!("cannot read `{file}`: {}", csv_error_text(&e)))?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    if header.is_empty() || header.iter().all(String::is_empty) {
+        return Err(format!(
+            "`{file}` has no header row: the first line must name the columns, e.g. `t,voltage`"
+        ));
+    }
+    let mut columns = vec![Vec::new(); header.len()];
+    let mut record = csv::StringRecord::new();
+    loop {
+        match reader.read_record(&mut record) {
+            Ok(false) => break,
+            Ok(true) => {}
+            Err(e) => return Err(format!("cannot read `{file}`: {}", csv_error_text(&e))),
+        }
+        let line = record.position().map_or(0, |p| p.line());
+        if record.len() != header.len() {
+            return Err(format!(
+                "`{file}`, line {line}: {} fields, but the header has {} columns",
+                record.len(),
+                header.len()
+            ));
+        }
+        for (j, cell) in record.iter().enumerate() {
+            let value: f64 = cell.parse().map_err(|_| {
+                format!(
+                    "`{file}`, line {line}, column {} (`{}`): `{cell}` is not a number",
+                    j + 1,
+                    header[j]
+                )
+            })?;
+            columns[j].push(value);
+        }
+    }
+    if columns[0].is_empty() {
+        return Err(format!("`{file}` has a header but no data rows"));
+    }
+    Ok(CsvTable { header, columns })
+}
+
+/// Reads one column of a CSV file (see [`read_csv_table`]) together with the first column,
+/// which is time whatever its name: returns `(times, values)`.
+pub fn read_csv_column(path: &Path, column: &str) -> Result<(Vec<f64>, Vec<f64>), String> {
+    let mut table = read_csv_table(path)?;
+    let index = table.column_index(column).ok_or_else(|| {
+        format!(
+            "`{}` has no column `{column}`; its columns are {}",
+            path.display(),
+            quoted_list(&table.header)
+        )
+    })?;
+    let values = table.columns[index].clone();
+    let times = table.columns.swap_remove(0);
+    Ok((times, values))
+}
+
+/// `` `a`, `b`, `c` ``.
+pub(crate) fn quoted_list(names: &[String]) -> String {
+    names
+        .iter()
+        .map(|n| format!("`{n}`"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn csv_error_text(error: &csv::Error) -> String {
+    match error.kind() {
+        csv::ErrorKind::Io(e) => e.to_string(),
+        csv::ErrorKind::Utf8 { pos, .. } => match pos {
+            Some(p) => format!("line {}: not valid UTF-8", p.line()),
+            None => "not valid UTF-8".to_string(),
+        },
+        _ => error.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A fresh empty directory under the system temp dir (removed when dropped).
+    struct TempDir(PathBuf);
+    impl TempDir {
+        fn new(tag: &str) -> TempDir {
+            static N: AtomicU64 = AtomicU64::new(0);
+            let n = N.fetch_add(1, Ordering::Relaxed);
+            let dir = std::env::temp_dir()
+                .join(format!("mech-output-test-{tag}-{}-{n}", std::process::id()));
+            let _ = fs::remove_dir_all(&dir);
+            fs::create_dir_all(&dir).unwrap();
+            TempDir(dir)
+        }
+    }
+    impl Drop for TempDir {
+        fn drop(&mut self) {
+            let _ = fs::remove_dir_all(&self.0);
+        }
+    }
+
+    fn entries(dir: &Path) -> Vec<String> {
+        let mut names: Vec<String> = fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+
+    #[test]
+    fn write_atomic_creates_replaces_and_leaves_no_temp_files() {
+        let dir = TempDir::new("atomic");
+        let path = dir.0.join("sub/dir/out.txt");
+        write_atomic(&path, b"first").unwrap();
+        assert_eq!(fs::read(&path).unwrap(), b"first");
+        write_atomic(&path, b"second, longer").unwrap();
+        assert_eq!(fs::read(&path).unwrap(), b"second, longer");
+        assert_eq!(entries(&dir.0.join("sub/dir")), vec!["out.txt"]);
+    }
+
+    #[test]
+    fn write_atomic_failure_leaves_target_unchanged() {
+        let dir = TempDir::new("fail");
+        // The "directory" is a regular file: neither it nor a temp file inside can be created.
+        let blocker = dir.0.join("blocker");
+        fs::write(&blocker, b"keep").unwrap();
+        let error = write_atomic(&blocker.join("out.txt"), b"x").unwrap_err();
+        assert!(error.to_string().contains("blocker"), "{error}");
+        assert_eq!(fs::read(&blocker).unwrap(), b"keep");
+
+        // Renaming onto a non-empty directory fails: the directory is untouched, no temp left.
+        let target = dir.0.join("target");
+        fs::create_dir(&target).unwrap();
+        fs::write(target.join("inner"), b"inner").unwrap();
+        let error = write_atomic(&target, b"x").unwrap_err();
+        assert!(error.to_string().contains("target"), "{error}");
+        assert_eq!(fs::read(target.join("inner")).unwrap(), b"inner");
+        assert_eq!(entries(&dir.0), vec!["blocker", "target"]);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn write_atomic_into_readonly_directory_fails_cleanly() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = TempDir::new("readonly");
+        let path = dir.0.join("out.txt");
+        write_atomic(&path, b"old").unwrap();
+        fs::set_permissions(&dir.0, fs::Permissions::from_mode(0o555)).unwrap();
+        let result = write_atomic(&path, b"new");
+        fs::set_permissions(&dir.0, fs::Permissions::from_mode(0o755)).unwrap();
+        // Root ignores directory permissions; then the write simply succeeds.
+        match result {
+            Err(error) => {
+                assert_eq!(fs::read(&path).unwrap(), b"old");
+                assert!(
+                    error.to_string().contains(&*dir.0.to_string_lossy()),
+                    "{error}"
+                );
+            }
+            Ok(()) => assert_eq!(fs::read(&path).unwrap(), b"new"),
+        }
+        assert_eq!(entries(&dir.0), vec!["out.txt"]);
+    }
+
+    #[test]
+    fn csv_round_trip_is_exact() {
+        let dir = TempDir::new("roundtrip");
+        let path = dir.0.join("data.csv");
+        let header = vec!["t".to_string(), "q, rad".to_string(), "u".to_string()];
+        let rows = vec![
+            vec![0.0, 0.1, -1e-300],
+            vec![1.0 / 3.0, std::f64::consts::PI, 6.02e23],
+            vec![2.0, f64::NAN, f64::INFINITY],
+        ];
+        write_csv(&path, &header, &rows).unwrap();
+        let table = read_csv_table(&path).unwrap();
+        assert_eq!(table.header, header);
+        for (j, column) in table.columns.iter().enumerate() {
+            for (i, &value) in column.iter().enumerate() {
+                let expected = rows[i][j];
+                assert!(
+                    value.to_bits() == expected.to_bits() || (value.is_nan() && expected.is_nan()),
+                    "row {i} column {j}: {value} != {expected}"
+                );
+            }
+        }
+        let (t, u) = read_csv_column(&path, "u").unwrap();
+        assert_eq!(t, vec![0.0, 1.0 / 3.0, 2.0]);
+        assert_eq!(u[1], 6.02e23);
+    }
+
+    #[test]
+    fn write_csv_rejects_ragged_rows() {
+        let dir = TempDir::new("ragged-write");
+        let path = dir.0.join("data.csv");
+        let error = write_csv(&path, &["t".into(), "x".into()], &[vec![0.0]]).unwrap_err();
+        assert!(error.to_string().contains("row 1 has 1 values"), "{error}");
+        assert!(!path.exists());
+    }
+
+    #[test]
+    fn reads_trimmed_fields_and_comments() {
+        let dir = TempDir::new("read");
+        let path = dir.0.join("in.csv");
+        fs::write(&path, "# a comment\ntime , voltage\n0, 1.5\n 0.5 ,2e-3\n").unwrap();
+        let (t, v) = read_csv_column(&path, "voltage").unwrap();
+        assert_eq!(t, vec![0.0, 0.5]);
+        assert_eq!(v, vec![1.5, 2e-3]);
+    }
+
+    #[test]
+    fn read_errors_name_file_line_and_column() {
+        let dir = TempDir::new("errors");
+        let path = dir.0.join("in.csv");
+        let name = path.display().to_string();
+
+        fs::write(&path, "t,v\n0,1\n1,abc\n").unwrap();
+        let error = read_csv_column(&path, "v").unwrap_err();
+        assert_eq!(
+            error,
+            format!("`{name}`, line 3, column 2 (`v`): `abc` is not a number")
+        );
+
+        fs::write(&path, "t,v\n0,1\n1,2,3\n").unwrap();
+        let error = read_csv_column(&path, "v").unwrap_err();
+        assert_eq!(
+            error,
+            format!("`{name}`, line 3: 3 fields, but the header has 2 columns")
+        );
+
+        fs::write(&path, "t,v\n0,1\n").unwrap();
+        let error = read_csv_column(&path, "w").unwrap_err();
+        assert_eq!(
+            error,
+            format!("`{name}` has no column `w`; its columns are `t`, `v`")
+        );
+
+        fs::write(&path, "t,v\n").unwrap();
+        let error = read_csv_column(&path, "v").unwrap_err();
+        assert_eq!(error, format!("`{name}` has a header but no data rows"));
+
+        fs::write(&path, "").unwrap();
+        let error = read_csv_column(&path, "v").unwrap_err();
+        assert!(error.contains("has no header row"), "{error}");
+
+        let missing = dir.0.join("missing.csv");
+        let error = read_csv_column(&missing, "v").unwrap_err();
+        assert!(
+            error.starts_with(&format!("cannot read `{}`", missing.display())),
+            "{error}"
+        );
+    }
+}

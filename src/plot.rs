@@ -1,0 +1,837 @@
+//! Plots of simulation results and analyses, rendered headless (no system fonts needed).
+//!
+//! Consumes: sampled time series grouped into panels ([`plot_time_series`]) or `(x, y)` curves
+//! ([`plot_xy`], e.g. frequency responses and fits), and an output path whose extension picks
+//! the format (`.svg` or `.png`).
+//! Produces: the image file, written atomically through [`crate::output::write_atomic`].
+//!
+//! Text is drawn with DejaVu Sans, bundled from `assets/` and registered with plotters as
+//! `sans-serif` on first use. Non-finite samples (NaN, ±inf) are skipped: the line is broken
+//! there rather than drawn through them. Constant data gets a padded axis range.
+
+use std::fmt;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use plotters::coord::ranged1d::{Ranged, ValueFormatter};
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+/// DejaVu Sans 2.37 (Bitstream Vera licence, see `assets/DejaVuSans-LICENSE.txt`).
+static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+
+/// Image width in pixels.
+const WIDTH: u32 = 1000;
+/// Height of one panel of [`plot_time_series`] in pixels.
+const PANEL_HEIGHT: u32 = 260;
+/// Height reserved for the figure title in pixels.
+const TITLE_HEIGHT: u32 = 50;
+/// Height of a [`plot_xy`] figure in pixels.
+const XY_HEIGHT: u32 = 600;
+
+/// Line colours (Tableau 10), used in order and then repeated.
+const PALETTE: [RGBColor; 10] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+];
+
+/// One named sequence of samples, one value per time of the figure.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Series {
+    /// Legend entry (no entry if empty).
+    pub name: String,
+    /// Samples; NaN and ±inf are skipped.
+    pub values: Vec<f64>,
+}
+
+/// One panel of a [`plot_time_series`] figure: its own title, y axis and legend.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Panel {
+    /// Caption above the panel.
+    pub title: String,
+    /// Label of the y axis, with its unit, e.g. `"q [rad]"`.
+    pub y_label: String,
+    /// The lines in this panel.
+    pub series: Vec<Series>,
+}
+
+/// Why a plot could not be made. Displays as one line naming the output file.
+#[derive(Debug)]
+pub struct PlotError {
+    /// The output file asked for.
+    pub path: PathBuf,
+    /// What went wrong.
+    pub kind: PlotErrorKind,
+}
+
+/// The kinds of [`PlotError`].
+#[derive(Debug)]
+pub enum PlotErrorKind {
+    /// The extension is not `.svg` or `.png`.
+    UnsupportedFormat,
+    /// The data cannot be plotted (mismatched lengths, nothing to plot, ...).
+    InvalidData(String),
+    /// Plotters or the PNG encoder failed.
+    Render(String),
+    /// Writing the file failed (the message names the file).
+    Io(std::io::Error),
+}
+
+impl fmt::Display for PlotError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let path = self.path.display();
+        match &self.kind {
+            PlotErrorKind::UnsupportedFormat => write!(
+                f,
+                "cannot plot to `{path}`: unsupported file type; use a `.svg` or `.png` extension"
+            ),
+            PlotErrorKind::InvalidData(msg) => write!(f, "cannot plot to `{path}`: {msg}"),
+            PlotErrorKind::Render(msg) => {
+                write!(f, "cannot plot to `{path}`: rendering failed: {msg}")
+            }
+            PlotErrorKind::Io(error) => write!(f, "{error}"),
+        }
+    }
+}
+
+impl std::error::Error for PlotError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match &self.kind {
+            PlotErrorKind::Io(error) => Some(error),
+            _ => None,
+        }
+    }
+}
+
+/// Plots `panels` stacked vertically over a shared time axis `times` (seconds), each with its
+/// own y axis and legend, under the figure `title`. Every series must have one value per time.
+/// The format follows the extension of `path`: `.svg` or `.png` (case-insensitive).
+pub fn plot_time_series(
+    path: &Path,
+    title: &str,
+    times: &[f64],
+    panels: &[Panel],
+) -> Result<(), PlotError> {
+    let fail = |msg: String| PlotError {
+        path: path.to_path_buf(),
+        kind: PlotErrorKind::InvalidData(msg),
+    };
+    let format = Format::of(path)?;
+    if panels.is_empty() {
+        return Err(fail("nothing to plot (no panels)".into()));
+    }
+    for panel in panels {
+        for series in &panel.series {
+            if series.values.len() != times.len() {
+                return Err(fail(format!(
+                    "series `{}` of panel `{}` has {} values but there are {} times",
+                    series.name,
+                    panel.title,
+                    series.values.len(),
+                    times.len()
+                )));
+            }
+        }
+    }
+    let height = TITLE_HEIGHT + PANEL_HEIGHT * panels.len() as u32;
+    let figure = TimeSeriesFigure {
+        title,
+        times,
+        panels,
+    };
+    render(path, format, (WIDTH, height), &figure)
+}
+
+/// Plots `curves` given as `(name, xs, ys)` on one pair of axes, optionally with a logarithmic
+/// x axis (then only points with `x > 0` are drawn). Same formats and conventions as
+/// [`plot_time_series`].
+pub fn plot_xy(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    curves: &[(String, Vec<f64>, Vec<f64>)],
+    log_x: bool,
+) -> Result<(), PlotError> {
+    let fail = |msg: String| PlotError {
+        path: path.to_path_buf(),
+        kind: PlotErrorKind::InvalidData(msg),
+    };
+    let format = Format::of(path)?;
+    if curves.is_empty() {
+        return Err(fail("nothing to plot (no curves)".into()));
+    }
+    for (name, xs, ys) in curves {
+        if xs.len() != ys.len() {
+            return Err(fail(format!(
+                "curve `{name}` has {} x values but {} y values",
+                xs.len(),
+                ys.len()
+            )));
+        }
+    }
+    if log_x
+        && !curves
+            .iter()
+            .any(|(_, xs, _)| xs.iter().any(|&x| x > 0.0 && x.is_finite()))
+    {
+        return Err(fail(
+            "a logarithmic x axis needs some positive x values, but there are none".into(),
+        ));
+    }
+    let figure = XyFigure {
+        title,
+        x_label,
+        y_label,
+        curves,
+        log_x,
+    };
+    render(path, format, (WIDTH, XY_HEIGHT), &figure)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Rendering
+// ---------------------------------------------------------------------------------------------
+
+/// Output image formats.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Format {
+    Svg,
+    Png,
+}
+
+impl Format {
+    fn of(path: &Path) -> Result<Format, PlotError> {
+        let extension = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match extension.as_deref() {
+            Some("svg") => Ok(Format::Svg),
+            Some("png") => Ok(Format::Png),
+            _ => Err(PlotError {
+                path: path.to_path_buf(),
+                kind: PlotErrorKind::UnsupportedFormat,
+            }),
+        }
+    }
+}
+
+/// Something that draws itself onto any plotters backend.
+trait Figure {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String>;
+}
+
+/// Renders `figure` in memory in `format`, then writes it atomically to `path`.
+fn render(
+    path: &Path,
+    format: Format,
+    size: (u32, u32),
+    figure: &impl Figure,
+) -> Result<(), PlotError> {
+    let error = |kind| PlotError {
+        path: path.to_path_buf(),
+        kind,
+    };
+    register_fonts().map_err(|msg| error(PlotErrorKind::Render(msg)))?;
+    let bytes = match format {
+        Format::Svg => {
+            let mut svg = String::new();
+            {
+                let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+                figure
+                    .draw(&root)
+                    .map_err(|m| error(PlotErrorKind::Render(m)))?;
+                root.present()
+                    .map_err(|e| error(PlotErrorKind::Render(e.to_string())))?;
+            }
+            svg.into_bytes()
+        }
+        Format::Png => {
+            let mut pixels = vec![0u8; size.0 as usize * size.1 as usize * 3];
+            {
+                let root = BitMapBackend::with_buffer(&mut pixels, size).into_drawing_area();
+                figure
+                    .draw(&root)
+                    .map_err(|m| error(PlotErrorKind::Render(m)))?;
+                root.present()
+                    .map_err(|e| error(PlotErrorKind::Render(e.to_string())))?;
+            }
+            encode_png(&pixels, size).map_err(|m| error(PlotErrorKind::Render(m)))?
+        }
+    };
+    crate::output::write_atomic(path, &bytes).map_err(|e| error(PlotErrorKind::Io(e)))
+}
+
+/// Encodes 8-bit RGB pixels as a PNG file in memory.
+fn encode_png(pixels: &[u8], (width, height): (u32, u32)) -> Result<Vec<u8>, String> {
+    let mut bytes = Vec::new();
+    let mut encoder = png::Encoder::new(&mut bytes, width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
+    writer.write_image_data(pixels).map_err(|e| e.to_string())?;
+    writer.finish().map_err(|e| e.to_string())?;
+    Ok(bytes)
+}
+
+/// Registers the bundled font as `sans-serif` (all styles), once per process.
+fn register_fonts() -> Result<(), String> {
+    static REGISTERED: OnceLock<bool> = OnceLock::new();
+    let ok = *REGISTERED.get_or_init(|| {
+        [
+            FontStyle::Normal,
+            FontStyle::Bold,
+            FontStyle::Italic,
+            FontStyle::Oblique,
+        ]
+        .into_iter()
+        .all(|style| plotters::style::register_font("sans-serif", style, FONT).is_ok())
+    });
+    if ok {
+        Ok(())
+    } else {
+        Err("the bundled font could not be loaded".into())
+    }
+}
+
+struct TimeSeriesFigure<'a> {
+    title: &'a str,
+    times: &'a [f64],
+    panels: &'a [Panel],
+}
+
+impl Figure for TimeSeriesFigure<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
+        let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+        root.fill(&WHITE).map_err(e)?;
+        let (title_area, body) = root.split_vertically(TITLE_HEIGHT);
+        draw_title(&title_area, self.title)?;
+        let t_range = axis_range(self.times.iter().copied());
+        let areas = body.split_evenly((self.panels.len(), 1));
+        for (index, (area, panel)) in areas.iter().zip(self.panels).enumerate() {
+            let last = index + 1 == self.panels.len();
+            let values = panel.series.iter().flat_map(|s| s.values.iter().copied());
+            let y_range = axis_range(values);
+            let mut chart = ChartBuilder::on(area)
+                .caption(&panel.title, ("sans-serif", 17))
+                .margin(8)
+                .margin_right(25)
+                .x_label_area_size(if last { 50 } else { 30 })
+                .y_label_area_size(90)
+                .build_cartesian_2d(t_range.clone(), y_range.clone())
+                .map_err(e)?;
+            let x_format = |v: &f64| linear_tick(*v, &t_range);
+            let y_format = |v: &f64| linear_tick(*v, &y_range);
+            let mut mesh = chart.configure_mesh();
+            mesh.x_label_formatter(&x_format)
+                .y_label_formatter(&y_format)
+                .y_desc(panel.y_label.as_str())
+                .x_labels(10)
+                .y_labels(6)
+                .label_style(("sans-serif", 13))
+                .axis_desc_style(("sans-serif", 14));
+            if last {
+                mesh.x_desc("t [s]");
+            }
+            mesh.draw().map_err(e)?;
+            let curves = panel
+                .series
+                .iter()
+                .map(|s| (s.name.as_str(), self.times, s.values.as_slice()));
+            draw_curves(&mut chart, curves)?;
+        }
+        Ok(())
+    }
+}
+
+struct XyFigure<'a> {
+    title: &'a str,
+    x_label: &'a str,
+    y_label: &'a str,
+    curves: &'a [(String, Vec<f64>, Vec<f64>)],
+    log_x: bool,
+}
+
+impl Figure for XyFigure<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
+        let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+        root.fill(&WHITE).map_err(e)?;
+        let (title_area, body) = root.split_vertically(TITLE_HEIGHT);
+        draw_title(&title_area, self.title)?;
+        // With a log axis, points at x <= 0 cannot be drawn: leave them out of every range.
+        let visible = |x: f64| !self.log_x || x > 0.0;
+        let xs = self
+            .curves
+            .iter()
+            .flat_map(|(_, xs, _)| xs.iter().copied())
+            .filter(|&x| visible(x));
+        let ys = self.curves.iter().flat_map(|(_, xs, ys)| {
+            xs.iter()
+                .zip(ys)
+                .filter(|(&x, _)| visible(x))
+                .map(|(_, &y)| y)
+        });
+        let y_range = axis_range(ys);
+        let mut builder = ChartBuilder::on(&body);
+        builder
+            .margin(10)
+            .margin_right(30)
+            .x_label_area_size(50)
+            .y_label_area_size(90);
+        let curves = self
+            .curves
+            .iter()
+            .map(|(name, xs, ys)| (name.as_str(), xs.as_slice(), ys.as_slice()));
+        let y_format = |v: &f64| linear_tick(*v, &y_range);
+        if self.log_x {
+            let x_range = log_axis_range(xs);
+            let mut chart = builder
+                .build_cartesian_2d(x_range.log_scale(), y_range.clone())
+                .map_err(e)?;
+            let x_format = |v: &f64| significant(*v, 3);
+            configure_xy_mesh(&mut chart, self.x_label, self.y_label, &x_format, &y_format)?;
+            draw_curves(&mut chart, curves)
+        } else {
+            let x_range = axis_range(xs);
+            let mut chart = builder
+                .build_cartesian_2d(x_range.clone(), y_range.clone())
+                .map_err(e)?;
+            let x_format = |v: &f64| linear_tick(*v, &x_range);
+            configure_xy_mesh(&mut chart, self.x_label, self.y_label, &x_format, &y_format)?;
+            draw_curves(&mut chart, curves)
+        }
+    }
+}
+
+/// Draws the figure title centred in `area`.
+fn draw_title<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    title: &str,
+) -> Result<(), String> {
+    let (width, height) = area.dim_in_pixel();
+    let style = TextStyle::from(("sans-serif", 22).into_font())
+        .pos(Pos::new(HPos::Center, VPos::Center))
+        .color(&BLACK);
+    area.draw(&Text::new(
+        title.to_string(),
+        (width as i32 / 2, height as i32 / 2),
+        style,
+    ))
+    .map_err(|e| e.to_string())
+}
+
+fn configure_xy_mesh<'a, DB, X>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<X, RangedCoordf64>>,
+    x_label: &str,
+    y_label: &str,
+    x_format: &dyn Fn(&f64) -> String,
+    y_format: &dyn Fn(&f64) -> String,
+) -> Result<(), String>
+where
+    DB: DrawingBackend + 'a,
+    X: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    chart
+        .configure_mesh()
+        .x_desc(x_label)
+        .y_desc(y_label)
+        .x_label_formatter(x_format)
+        .y_label_formatter(y_format)
+        .x_labels(12)
+        .y_labels(10)
+        .label_style(("sans-serif", 13))
+        .axis_desc_style(("sans-serif", 15))
+        .draw()
+        .map_err(|e| e.to_string())
+}
+
+/// Draws each `(name, xs, ys)` curve in its palette colour, broken at non-finite points, and a
+/// legend for the named ones.
+fn draw_curves<'a, 'c, DB, X>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<X, RangedCoordf64>>,
+    curves: impl Iterator<Item = (&'c str, &'c [f64], &'c [f64])>,
+) -> Result<(), String>
+where
+    DB: DrawingBackend + 'a,
+    X: Ranged<ValueType = f64>,
+{
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    let x_range = chart.x_range();
+    let mut any_named = false;
+    for (index, (name, xs, ys)) in curves.enumerate() {
+        let color = PALETTE[index % PALETTE.len()];
+        let style = color.stroke_width(2);
+        // Points outside the x range (x <= 0 on a log axis) are dropped like non-finite ones.
+        let in_range = |x: f64| x >= x_range.start.min(x_range.end);
+        let segments = finite_segments(xs, ys, in_range);
+        let annotation = chart
+            .draw_series(
+                segments
+                    .into_iter()
+                    .map(move |segment| PathElement::new(segment, style)),
+            )
+            .map_err(e)?;
+        if !name.is_empty() {
+            any_named = true;
+            annotation
+                .label(name)
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], style));
+        }
+    }
+    if any_named {
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK.mix(0.4))
+            .label_font(("sans-serif", 13))
+            .draw()
+            .map_err(e)?;
+    }
+    Ok(())
+}
+
+/// Splits the points `(xs[i], ys[i])` into runs of consecutive finite points accepted by `keep`.
+/// A single isolated point becomes a tiny horizontal dash so it stays visible.
+fn finite_segments(xs: &[f64], ys: &[f64], keep: impl Fn(f64) -> bool) -> Vec<Vec<(f64, f64)>> {
+    let mut segments = Vec::new();
+    let mut current: Vec<(f64, f64)> = Vec::new();
+    for (&x, &y) in xs.iter().zip(ys) {
+        if x.is_finite() && y.is_finite() && keep(x) {
+            current.push((x, y));
+        } else if !current.is_empty() {
+            segments.push(std::mem::take(&mut current));
+        }
+    }
+    if !current.is_empty() {
+        segments.push(current);
+    }
+    for segment in &mut segments {
+        if segment.len() == 1 {
+            let point = segment[0];
+            segment.push(point);
+        }
+    }
+    segments
+}
+
+/// The axis range for `values`: their finite extent padded by 5 % on each side; a constant
+/// gets ±10 % of its magnitude (±1 around zero); no finite values gives `-1..1`.
+fn axis_range(values: impl Iterator<Item = f64>) -> Range<f64> {
+    let (lo, hi) = values
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+    if lo > hi {
+        return -1.0..1.0;
+    }
+    let span = hi - lo;
+    let pad = if span > 0.0 && span.is_finite() && span > 1e-12 * lo.abs().max(hi.abs()) {
+        0.05 * span
+    } else if lo == 0.0 && hi == 0.0 {
+        1.0
+    } else {
+        0.1 * lo.abs().max(hi.abs())
+    };
+    let (lo, hi) = (lo - pad, hi + pad);
+    if lo.is_finite() && hi.is_finite() {
+        lo..hi
+    } else {
+        f64::MIN / 2.0..f64::MAX / 2.0
+    }
+}
+
+/// The range of the positive finite `values` for a log axis, padded by a factor 1.1 at both
+/// ends (a factor 2 for a single value); `1..10` if there are none.
+fn log_axis_range(values: impl Iterator<Item = f64>) -> Range<f64> {
+    let (lo, hi) = values
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+    if lo > hi {
+        1.0..10.0
+    } else if lo == hi {
+        lo / 2.0..hi * 2.0
+    } else {
+        lo / 1.1..hi * 1.1
+    }
+}
+
+/// A tick label on a linear axis spanning `range`: as many decimals as the tick spacing
+/// needs, in scientific notation for very small or large magnitudes.
+fn linear_tick(value: f64, range: &Range<f64>) -> String {
+    let span = (range.end - range.start).abs();
+    let magnitude = range.start.abs().max(range.end.abs());
+    if !(span > 0.0 && span.is_finite()) {
+        return significant(value, 4);
+    }
+    // Ticks are about a tenth of the span apart; one more digit than that resolves them.
+    let step_exponent = (span / 10.0).log10().floor() as i32;
+    let value = if value.abs() < span * 1e-9 {
+        0.0
+    } else {
+        value
+    };
+    if (1e-3..1e5).contains(&magnitude) {
+        let decimals = (-step_exponent).clamp(0, 12) as usize;
+        format!("{value:.decimals$}")
+    } else {
+        if value == 0.0 {
+            return "0".into();
+        }
+        let digits = (value.abs().log10().floor() as i32 - step_exponent).clamp(0, 8) as usize;
+        format!("{value:.digits$e}")
+    }
+}
+
+/// `value` with at most `digits` significant digits, trailing zeros removed; scientific
+/// notation outside `1e-3 ≤ |value| < 1e5`.
+fn significant(value: f64, digits: usize) -> String {
+    if value == 0.0 || !value.is_finite() {
+        return format!("{value}");
+    }
+    let exponent = value.abs().log10().floor() as i32;
+    let trim = |s: String| {
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
+    };
+    if (-3..5).contains(&exponent) {
+        let decimals = (digits as i32 - 1 - exponent).max(0) as usize;
+        trim(format!("{value:.decimals$}"))
+    } else {
+        let formatted = format!("{value:.*e}", digits.saturating_sub(1));
+        let (mantissa, exp) = formatted.split_once('e').unwrap_or((&formatted, "0"));
+        format!("{}e{exp}", trim(mantissa.to_string()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::fs;
+
+    fn temp_dir(tag: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("mech-plot-test-{tag}-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    fn demo_panels(times: &[f64]) -> Vec<Panel> {
+        let sine: Vec<f64> = times.iter().map(|t| (6.0 * t).sin() * 1e-3).collect();
+        let cosine: Vec<f64> = times.iter().map(|t| (6.0 * t).cos() * 1e-3).collect();
+        let mut gappy: Vec<f64> = times.iter().map(|t| 2.0 * t - 1.0).collect();
+        gappy[10] = f64::NAN;
+        gappy[20] = f64::INFINITY;
+        vec![
+            Panel {
+                title: "Coordinates".into(),
+                y_label: "q [m]".into(),
+                series: vec![
+                    Series {
+                        name: "q1".into(),
+                        values: sine,
+                    },
+                    Series {
+                        name: "q2".into(),
+                        values: cosine,
+                    },
+                ],
+            },
+            Panel {
+                title: "Speeds".into(),
+                y_label: "u [m/s]".into(),
+                series: vec![
+                    Series {
+                        name: "u1 (gaps)".into(),
+                        values: gappy,
+                    },
+                    Series {
+                        name: "constant".into(),
+                        values: vec![0.25; times.len()],
+                    },
+                ],
+            },
+        ]
+    }
+
+    #[test]
+    fn renders_svg_and_png() {
+        let dir = temp_dir("render");
+        let times: Vec<f64> = (0..200).map(|i| i as f64 * 0.01).collect();
+        let panels = demo_panels(&times);
+
+        let svg = dir.join("out.svg");
+        plot_time_series(&svg, "Pendulum response", &times, &panels).unwrap();
+        let text = fs::read_to_string(&svg).unwrap();
+        assert!(text.starts_with("<svg"), "{}", &text[..40]);
+        for needle in [
+            "Pendulum response",
+            "Coordinates",
+            "u1 (gaps)",
+            "t [s]",
+            "q [m]",
+        ] {
+            assert!(text.contains(needle), "SVG lacks `{needle}`");
+        }
+
+        let png_path = dir.join("out.PNG");
+        plot_time_series(&png_path, "Pendulum response", &times, &panels).unwrap();
+        let bytes = fs::read(&png_path).unwrap();
+        assert!(bytes.starts_with(b"\x89PNG\r\n\x1a\n"));
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn renders_xy_with_log_axis() {
+        let dir = temp_dir("xy");
+        let f: Vec<f64> = (0..100).map(|i| 10f64.powf(i as f64 / 33.0)).collect();
+        let gain: Vec<f64> = f
+            .iter()
+            .map(|&f| {
+                -10.0 * ((1.0 - (f / 10.0).powi(2)).powi(2) + (0.2 * f / 10.0).powi(2)).log10()
+            })
+            .collect();
+        let mut with_zero = f.clone();
+        with_zero[0] = 0.0; // not drawable on a log axis: skipped
+        let curves = vec![
+            ("ζ = 0.1".to_string(), f.clone(), gain.clone()),
+            (
+                "shifted".to_string(),
+                with_zero,
+                gain.iter().map(|g| g - 3.0).collect(),
+            ),
+        ];
+        for name in ["bode.svg", "bode.png"] {
+            let path = dir.join(name);
+            plot_xy(
+                &path,
+                "Frequency response",
+                "f [Hz]",
+                "|G| [dB]",
+                &curves,
+                true,
+            )
+            .unwrap();
+            assert!(fs::metadata(&path).unwrap().len() > 1000);
+        }
+        plot_xy(&dir.join("lin.svg"), "Linear", "x", "y", &curves, false).unwrap();
+        let text = fs::read_to_string(dir.join("bode.svg")).unwrap();
+        assert!(text.contains("Frequency response") && text.contains("f [Hz]"));
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn degenerate_data_does_not_panic() {
+        let dir = temp_dir("degenerate");
+        let panels = |values: Vec<f64>| {
+            vec![Panel {
+                title: "p".into(),
+                y_label: "y".into(),
+                series: vec![Series {
+                    name: String::new(),
+                    values,
+                }],
+            }]
+        };
+        let path = dir.join("d.png");
+        plot_time_series(&path, "one", &[0.0], &panels(vec![1.0])).unwrap();
+        plot_time_series(&path, "nan", &[0.0, 1.0], &panels(vec![f64::NAN; 2])).unwrap();
+        plot_time_series(&path, "zero", &[0.0, 1.0], &panels(vec![0.0; 2])).unwrap();
+        plot_time_series(&path, "tiny", &[0.0, 1.0], &panels(vec![1e-9, 1e-9])).unwrap();
+        plot_time_series(&path, "huge", &[0.0, 1.0], &panels(vec![-1e300, 1e300])).unwrap();
+        plot_time_series(&path, "empty", &[], &panels(vec![])).unwrap();
+        let no_series = [Panel {
+            title: "none".into(),
+            y_label: "y".into(),
+            series: vec![],
+        }];
+        plot_time_series(&dir.join("n.svg"), "none", &[0.0, 1.0], &no_series).unwrap();
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn errors() {
+        let dir = temp_dir("errors");
+        let times = [0.0, 1.0];
+        let panels = demo_panels(&(0..30).map(f64::from).collect::<Vec<_>>());
+
+        let bad = dir.join("out.jpg");
+        let error = plot_time_series(&bad, "t", &times, &[]).unwrap_err();
+        assert!(matches!(error.kind, PlotErrorKind::UnsupportedFormat));
+        let message = error.to_string();
+        assert!(
+            message.contains("out.jpg") && message.contains("`.svg` or `.png`"),
+            "{message}"
+        );
+        assert!(plot_xy(&dir.join("noext"), "t", "x", "y", &[], false).is_err());
+
+        let error = plot_time_series(&dir.join("a.svg"), "t", &times, &panels).unwrap_err();
+        assert_eq!(
+            error.to_string(),
+            format!(
+                "cannot plot to `{}`: series `q1` of panel `Coordinates` has 30 values but there are 2 times",
+                dir.join("a.svg").display()
+            )
+        );
+        let error = plot_time_series(&dir.join("a.svg"), "t", &times, &[]).unwrap_err();
+        assert!(error.to_string().contains("no panels"));
+
+        let curves = [("c".to_string(), vec![-1.0, 0.0], vec![1.0, 2.0])];
+        let error = plot_xy(&dir.join("b.png"), "t", "x", "y", &curves, true).unwrap_err();
+        assert!(error.to_string().contains("positive x"), "{error}");
+        let ragged = [("c".to_string(), vec![1.0], vec![1.0, 2.0])];
+        let error = plot_xy(&dir.join("b.png"), "t", "x", "y", &ragged, false).unwrap_err();
+        assert!(error.to_string().contains("1 x values but 2 y values"));
+        assert!(
+            fs::read_dir(&dir).unwrap().next().is_none(),
+            "no files written"
+        );
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn tick_labels() {
+        assert_eq!(linear_tick(0.5, &(0.0..1.0)), "0.5");
+        assert_eq!(linear_tick(0.0, &(-1.0..1.0)), "0.0");
+        assert_eq!(linear_tick(200.0, &(0.0..1000.0)), "200");
+        assert_eq!(linear_tick(2e-6, &(0.0..1e-5)), "2e-6");
+        assert_eq!(linear_tick(-4e7, &(-5e7..5e7)), "-4e7");
+        assert_eq!(significant(1000.0, 3), "1000");
+        assert_eq!(significant(0.2, 3), "0.2");
+        assert_eq!(significant(1e6, 3), "1e6");
+        assert_eq!(significant(123456.0, 3), "1.23e5");
+    }
+
+    #[test]
+    fn segments_break_at_non_finite_points() {
+        let xs = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0];
+        let ys = [0.0, f64::NAN, 2.0, 3.0, f64::INFINITY, 5.0];
+        let segments = finite_segments(&xs, &ys, |_| true);
+        assert_eq!(
+            segments,
+            vec![
+                vec![(0.0, 0.0), (0.0, 0.0)],
+                vec![(2.0, 2.0), (3.0, 3.0)],
+                vec![(5.0, 5.0), (5.0, 5.0)],
+            ]
+        );
+    }
+}

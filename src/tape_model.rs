@@ -1,0 +1,122 @@
+//! A model run through the tape evaluator, so any `.mech` file can be simulated without
+//! compiling Rust.
+//!
+//! Consumes: a [`Compiled`] model (IR + equations). Produces: a [`TapeModel`] implementing
+//! [`mech_runtime::Model`], the same contract generated code implements.
+
+use std::cell::RefCell;
+
+use mech_codegen::back::tape::{Env, Tape};
+use mech_codegen::Compiled;
+
+/// The tape of a model with its names, defaults and current parameter values.
+#[derive(Clone, Debug)]
+pub struct TapeModel {
+    name: String,
+    tape: Tape,
+    coordinate_names: Vec<String>,
+    input_names: Vec<String>,
+    output_names: Vec<String>,
+    param_names: Vec<String>,
+    params: Vec<f64>,
+    input_defaults: Vec<f64>,
+    q0: Vec<f64>,
+    u0: Vec<f64>,
+    /// Registers reused across evaluations (the evaluator never allocates after warm-up).
+    registers: RefCell<Vec<f64>>,
+}
+
+impl TapeModel {
+    pub fn new(compiled: &Compiled) -> TapeModel {
+        let model = &compiled.model;
+        TapeModel {
+            name: model.name.clone(),
+            tape: compiled.tape(),
+            coordinate_names: model.coordinates.iter().map(|(_, c)| c.name.clone()).collect(),
+            input_names: model.inputs.iter().map(|(_, i)| i.name.clone()).collect(),
+            output_names: compiled.equations.output_names.clone(),
+            param_names: model.params.iter().map(|(_, p)| p.name.clone()).collect(),
+            params: model.params.iter().map(|(_, p)| p.value).collect(),
+            input_defaults: model.inputs.iter().map(|(_, i)| i.default).collect(),
+            q0: model.coordinates.iter().map(|(_, c)| c.initial).collect(),
+            u0: model.coordinates.iter().map(|(_, c)| c.initial_speed).collect(),
+            registers: RefCell::new(Vec::new()),
+        }
+    }
+
+    pub fn tape(&self) -> &Tape {
+        &self.tape
+    }
+
+    fn run(&self, program: &mech_codegen::back::tape::Program, env: &Env, out: &mut [f64]) {
+        program.eval(env, &mut self.registers.borrow_mut(), out);
+    }
+}
+
+fn name_at(names: &[String], i: usize) -> &str {
+    names.get(i).map_or("", String::as_str)
+}
+
+impl mech_runtime::Model for TapeModel {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn nq(&self) -> usize {
+        self.tape.nq
+    }
+    fn nu(&self) -> usize {
+        self.tape.nu
+    }
+    fn ninputs(&self) -> usize {
+        self.input_names.len()
+    }
+    fn noutputs(&self) -> usize {
+        self.output_names.len()
+    }
+    fn nparams(&self) -> usize {
+        self.params.len()
+    }
+    fn coordinate_name(&self, i: usize) -> &str {
+        name_at(&self.coordinate_names, i)
+    }
+    fn input_name(&self, i: usize) -> &str {
+        name_at(&self.input_names, i)
+    }
+    fn output_name(&self, i: usize) -> &str {
+        name_at(&self.output_names, i)
+    }
+    fn param_name(&self, i: usize) -> &str {
+        name_at(&self.param_names, i)
+    }
+    fn param(&self, i: usize) -> f64 {
+        self.params.get(i).copied().unwrap_or(f64::NAN)
+    }
+    fn set_param(&mut self, i: usize, value: f64) {
+        if let Some(slot) = self.params.get_mut(i) {
+            *slot = value;
+        }
+    }
+    fn input_default(&self, i: usize) -> f64 {
+        self.input_defaults.get(i).copied().unwrap_or(f64::NAN)
+    }
+    fn initial_state(&self, q: &mut [f64], u: &mut [f64]) {
+        for (slot, value) in q.iter_mut().zip(&self.q0) {
+            *slot = *value;
+        }
+        for (slot, value) in u.iter_mut().zip(&self.u0) {
+            *slot = *value;
+        }
+    }
+    fn mass_matrix(&self, t: f64, q: &[f64], inputs: &[f64], out: &mut [f64]) {
+        let env = Env { t, q, u: &[], params: &self.params, inputs };
+        self.run(&self.tape.mass_matrix, &env, out);
+    }
+    fn forcing(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]) {
+        let env = Env { t, q, u, params: &self.params, inputs };
+        self.run(&self.tape.forcing, &env, out);
+    }
+    fn outputs(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]) {
+        let env = Env { t, q, u, params: &self.params, inputs };
+        self.run(&self.tape.outputs, &env, out);
+    }
+}
