@@ -5,6 +5,7 @@
 //!
 //! Symbols: `q` generalized coordinates, `u = q̇` generalized speeds, `M(q) u̇ = F`.
 
+pub mod describe;
 pub mod output;
 pub mod plot;
 pub mod signal_spec;

@@ -4,12 +4,16 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
-use mech::{output, plot, signal_spec, tape_model::TapeModel};
+use mech::{describe, output, plot, signal_spec, tape_model::TapeModel};
 use mech_codegen::Compiled;
 use mech_runtime::{Method, Model, SimOptions};
 
 #[derive(Parser)]
-#[command(name = "mech", version, about = "A Kane's-method compiler for flexure-based microrobots")]
+#[command(
+    name = "mech",
+    version,
+    about = "A Kane's-method compiler for flexure-based microrobots"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -91,8 +95,31 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Check { model } => check(&model),
         Command::Derive { model, emit, out } => derive(&model, emit, out.as_deref()),
-        Command::Simulate { model, t_end, sets, inputs, out, plot, method, rtol, atol, step, dt_out } => {
-            let request = SimulateRequest { t_end, sets, inputs, out, plot, method, rtol, atol, step, dt_out };
+        Command::Simulate {
+            model,
+            t_end,
+            sets,
+            inputs,
+            out,
+            plot,
+            method,
+            rtol,
+            atol,
+            step,
+            dt_out,
+        } => {
+            let request = SimulateRequest {
+                t_end,
+                sets,
+                inputs,
+                out,
+                plot,
+                method,
+                rtol,
+                atol,
+                step,
+                dt_out,
+            };
             simulate(&model, &request)
         }
     };
@@ -113,24 +140,45 @@ fn check(path: &Path) -> Result<(), String> {
     let compiled = compile(path)?;
     let model = &compiled.model;
     println!("model `{}` ({})", model.name, path.display());
-    println!("  {} bodies, {} joints, {} degrees of freedom", model.bodies.len(), model.joints.len(), model.coordinates.len());
+    println!(
+        "  {} bodies, {} joints, {} degrees of freedom",
+        model.bodies.len(),
+        model.joints.len(),
+        model.coordinates.len()
+    );
     println!("\ncoordinates (q, with u = q̇):");
     for (_, joint) in model.joints.iter() {
         for &c in &joint.coordinates {
             let coordinate = &model.coordinates[c];
-            let unit = if coordinate.dimension == mech_codegen::ir::Dimension::NONE { "rad" } else { "m" };
+            let unit = if coordinate.dimension == mech_codegen::ir::Dimension::NONE {
+                "rad"
+            } else {
+                "m"
+            };
             println!(
                 "  {:<16} {:?} joint `{}`, q0 = {} {unit}, u0 = {} {unit}/s",
-                coordinate.name, joint.kind, joint.name, coordinate.initial, coordinate.initial_speed
+                coordinate.name,
+                joint.kind,
+                joint.name,
+                coordinate.initial,
+                coordinate.initial_speed
             );
         }
     }
     println!("\nbodies:");
     for (_, body) in model.bodies.iter() {
-        let parent = model.joints.iter().find(|(_, j)| model.bodies[j.child].name == body.name);
+        let parent = model
+            .joints
+            .iter()
+            .find(|(_, j)| model.bodies[j.child].name == body.name);
         let attached = parent.map_or("?".to_string(), |(_, joint)| {
-            let parent_name = joint.parent.map_or("newtonian", |b| model.bodies[b].name.as_str());
-            format!("child of `{parent_name}` by {:?} joint `{}`", joint.kind, joint.name)
+            let parent_name = joint
+                .parent
+                .map_or("newtonian", |b| model.bodies[b].name.as_str());
+            format!(
+                "child of `{parent_name}` by {:?} joint `{}`",
+                joint.kind, joint.name
+            )
         });
         println!("  {:<16} {attached}", body.name);
     }
@@ -139,8 +187,22 @@ fn check(path: &Path) -> Result<(), String> {
             println!("\n{title}: {}", items.join(", "));
         }
     };
-    list("parameters", model.params.iter().map(|(_, p)| format!("{} = {} {}", p.name, p.value, p.dimension)).collect());
-    list("inputs", model.inputs.iter().map(|(_, i)| format!("{} [{}]", i.name, i.dimension)).collect());
+    list(
+        "parameters",
+        model
+            .params
+            .iter()
+            .map(|(_, p)| format!("{} = {} {}", p.name, p.value, p.dimension))
+            .collect(),
+    );
+    list(
+        "inputs",
+        model
+            .inputs
+            .iter()
+            .map(|(_, i)| format!("{} [{}]", i.name, i.dimension))
+            .collect(),
+    );
     list("outputs", compiled.equations.output_names.clone());
     Ok(())
 }
@@ -149,57 +211,23 @@ fn derive(path: &Path, emit: Emit, out: Option<&Path>) -> Result<(), String> {
     let compiled = compile(path)?;
     let text = match emit {
         Emit::Rust => {
-            let options = mech_codegen::RustOptions { source_name: path.display().to_string(), ..Default::default() };
+            let options = mech_codegen::RustOptions {
+                source_name: path.display().to_string(),
+                ..Default::default()
+            };
             compiled.rust(&options)
         }
-        Emit::Tape => format_tape(&compiled),
-        Emit::Equations => format_equations(&compiled),
+        Emit::Tape => describe::tape_text(&compiled),
+        Emit::Equations => describe::equations_text(&compiled),
     };
     match out {
-        Some(file) => output::write_atomic(file, text.as_bytes()).map_err(|e| format!("cannot write {}: {e}", file.display())),
+        Some(file) => output::write_atomic(file, text.as_bytes())
+            .map_err(|e| format!("cannot write {}: {e}", file.display())),
         None => {
             print!("{text}");
             Ok(())
         }
     }
-}
-
-fn operation_counts(tape: &mech_codegen::Tape) -> String {
-    let (m, f, y) = (tape.mass_matrix.operation_count(), tape.forcing.operation_count(), tape.outputs.operation_count());
-    format!("operations: mass_matrix {m}, forcing {f}, outputs {y} (total {})\n", m + f + y)
-}
-
-fn format_equations(compiled: &Compiled) -> String {
-    let eqs = &compiled.equations;
-    let names: Vec<&str> = compiled.model.coordinates.iter().map(|(_, c)| c.name.as_str()).collect();
-    let mut text = format!("// M(q) u̇ = F for model `{}`; u = q̇ for q = [{}]\n", compiled.model.name, names.join(", "));
-    text.push_str(&format!("// {}", operation_counts(&compiled.tape())));
-    for r in 0..eqs.nu {
-        for s in r..eqs.nu {
-            text.push_str(&format!("M[{r},{s}] = {}\n", eqs.pool.sexpr(eqs.mass_matrix[r + eqs.nu * s])));
-        }
-    }
-    for (r, &f) in eqs.forcing.iter().enumerate() {
-        text.push_str(&format!("F[{r}] = {}\n", eqs.pool.sexpr(f)));
-    }
-    for (name, &y) in eqs.output_names.iter().zip(&eqs.outputs) {
-        text.push_str(&format!("{name} = {}\n", eqs.pool.sexpr(y)));
-    }
-    text
-}
-
-fn format_tape(compiled: &Compiled) -> String {
-    let tape = compiled.tape();
-    let mut text = format!("// tape of model `{}`; {}", compiled.model.name, operation_counts(&tape));
-    for (name, program) in [("mass_matrix", &tape.mass_matrix), ("forcing", &tape.forcing), ("outputs", &tape.outputs)] {
-        text.push_str(&format!("\n{name}:\n"));
-        for (i, op) in program.ops.iter().enumerate() {
-            text.push_str(&format!("  r{i} = {op:?}\n"));
-        }
-        let results: Vec<String> = program.results.iter().map(|r| format!("r{r}")).collect();
-        text.push_str(&format!("  results = [{}]\n", results.join(", ")));
-    }
-    text
 }
 
 struct SimulateRequest {
@@ -217,10 +245,14 @@ struct SimulateRequest {
 
 /// A time given with a unit (`2 s`, `500 ms`) or as plain seconds.
 fn parse_time(what: &str, text: &str) -> Result<f64, String> {
-    let (value, dimension) = mech_codegen::front::units::parse_quantity(text).map_err(|e| format!("{what}: {e}"))?;
-    let seconds_ok = dimension == mech_codegen::ir::Dimension::TIME || dimension == mech_codegen::ir::Dimension::NONE;
+    let (value, dimension) =
+        mech_codegen::front::units::parse_quantity(text).map_err(|e| format!("{what}: {e}"))?;
+    let seconds_ok = dimension == mech_codegen::ir::Dimension::TIME
+        || dimension == mech_codegen::ir::Dimension::NONE;
     if !seconds_ok || !value.is_finite() || value <= 0.0 {
-        return Err(format!("{what}: expected a positive time such as `2 s` or `500 ms`, got `{text}`"));
+        return Err(format!(
+            "{what}: expected a positive time such as `2 s` or `500 ms`, got `{text}`"
+        ));
     }
     Ok(value)
 }
@@ -232,12 +264,25 @@ fn simulate(path: &Path, request: &SimulateRequest) -> Result<(), String> {
         let (name, value) = signal_spec::parse_assignment(assignment)?;
         let index = model.param_index(&name).ok_or_else(|| {
             let known: Vec<&str> = (0..model.nparams()).map(|i| model.param_name(i)).collect();
-            format!("--set: unknown parameter `{name}`; parameters of `{}`: {}", model.name(), known.join(", "))
+            format!(
+                "--set: unknown parameter `{name}`; parameters of `{}`: {}",
+                model.name(),
+                known.join(", ")
+            )
         })?;
-        let (si, dimension) = mech_codegen::front::units::parse_quantity(&value).map_err(|e| format!("--set {name}: {e}"))?;
-        let expected = compiled.model.params.iter().nth(index).map(|(_, p)| p.dimension).unwrap_or_default();
+        let (si, dimension) = mech_codegen::front::units::parse_quantity(&value)
+            .map_err(|e| format!("--set {name}: {e}"))?;
+        let expected = compiled
+            .model
+            .params
+            .iter()
+            .nth(index)
+            .map(|(_, p)| p.dimension)
+            .unwrap_or_default();
         if dimension != expected {
-            return Err(format!("--set {name}: `{value}` has unit {dimension}, but `{name}` needs {expected}"));
+            return Err(format!(
+                "--set {name}: `{value}` has unit {dimension}, but `{name}` needs {expected}"
+            ));
         }
         model.set_param(index, si);
     }
@@ -247,10 +292,25 @@ fn simulate(path: &Path, request: &SimulateRequest) -> Result<(), String> {
         let (name, spec) = signal_spec::parse_assignment(assignment)?;
         let index = model.input_index(&name).ok_or_else(|| {
             let known: Vec<&str> = (0..model.ninputs()).map(|i| model.input_name(i)).collect();
-            format!("--input: unknown input `{name}`; inputs of `{}`: {}", model.name(), if known.is_empty() { "none".to_string() } else { known.join(", ") })
+            format!(
+                "--input: unknown input `{name}`; inputs of `{}`: {}",
+                model.name(),
+                if known.is_empty() {
+                    "none".to_string()
+                } else {
+                    known.join(", ")
+                }
+            )
         })?;
-        let expected = compiled.model.inputs.iter().nth(index).map(|(_, i)| i.dimension).unwrap_or_default();
-        signals[index] = signal_spec::parse_signal(&spec, expected).map_err(|e| format!("--input {name}: {e}"))?;
+        let expected = compiled
+            .model
+            .inputs
+            .iter()
+            .nth(index)
+            .map(|(_, i)| i.dimension)
+            .unwrap_or_default();
+        signals[index] = signal_spec::parse_signal(&spec, expected)
+            .map_err(|e| format!("--input {name}: {e}"))?;
     }
 
     let t_end = parse_time("--t-end", &request.t_end)?;
@@ -259,18 +319,31 @@ fn simulate(path: &Path, request: &SimulateRequest) -> Result<(), String> {
         None => t_end / 1000.0,
     };
     let method = match request.method {
-        Integrator::Dopri5 => Method::Dopri5 { rtol: request.rtol, atol: request.atol, h_max: f64::INFINITY },
-        Integrator::Rk4 => Method::Rk4 { step: parse_time("--step", &request.step)? },
+        Integrator::Dopri5 => Method::Dopri5 {
+            rtol: request.rtol,
+            atol: request.atol,
+            h_max: f64::INFINITY,
+        },
+        Integrator::Rk4 => Method::Rk4 {
+            step: parse_time("--step", &request.step)?,
+        },
     };
-    let options = SimOptions { t_end, output_interval: dt_out, method, ..SimOptions::default() };
+    let options = SimOptions {
+        t_end,
+        output_interval: dt_out,
+        method,
+        ..SimOptions::default()
+    };
 
     let mut q0 = vec![0.0; model.nq()];
     let mut u0 = vec![0.0; model.nu()];
     model.initial_state(&mut q0, &mut u0);
     let bar = indicatif::ProgressBar::new(1000);
     bar.set_style(
-        indicatif::ProgressStyle::with_template("simulating {bar:40} {percent:>3}% t = {msg} [{elapsed} / ~{eta}]")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        indicatif::ProgressStyle::with_template(
+            "simulating {bar:40} {percent:>3}% t = {msg} [{elapsed} / ~{eta}]",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     let mut progress = |t: f64| {
         bar.set_position((1000.0 * t / t_end) as u64);
@@ -278,10 +351,15 @@ fn simulate(path: &Path, request: &SimulateRequest) -> Result<(), String> {
     };
     let trajectory = mech_runtime::simulate(&model, &q0, &u0, &signals, &options, &mut progress);
     bar.finish_and_clear();
-    let trajectory = trajectory.map_err(|e| format!("simulation of `{}` failed: {e}", model.name()))?;
+    let trajectory =
+        trajectory.map_err(|e| format!("simulation of `{}` failed: {e}", model.name()))?;
 
-    let coordinate_names: Vec<String> = (0..model.nq()).map(|i| model.coordinate_name(i).to_string()).collect();
-    let output_names: Vec<String> = (0..model.noutputs()).map(|i| model.output_name(i).to_string()).collect();
+    let coordinate_names: Vec<String> = (0..model.nq())
+        .map(|i| model.coordinate_name(i).to_string())
+        .collect();
+    let output_names: Vec<String> = (0..model.noutputs())
+        .map(|i| model.output_name(i).to_string())
+        .collect();
     let mut header = vec!["t".to_string()];
     header.extend(coordinate_names.iter().map(|n| format!("q_{n}")));
     header.extend(coordinate_names.iter().map(|n| format!("u_{n}")));
@@ -295,7 +373,8 @@ fn simulate(path: &Path, request: &SimulateRequest) -> Result<(), String> {
             row
         })
         .collect();
-    output::write_csv(&request.out, &header, &rows).map_err(|e| format!("cannot write {}: {e}", request.out.display()))?;
+    output::write_csv(&request.out, &header, &rows)
+        .map_err(|e| format!("cannot write {}: {e}", request.out.display()))?;
     println!(
         "simulated `{}` to t = {t_end} s: {} samples written to {}",
         model.name(),
@@ -304,23 +383,41 @@ fn simulate(path: &Path, request: &SimulateRequest) -> Result<(), String> {
     );
 
     if let Some(plot_path) = &request.plot {
-        let column = |values: &Vec<Vec<f64>>, i: usize| values.iter().map(|row| row[i]).collect::<Vec<f64>>();
+        let column = |values: &Vec<Vec<f64>>, i: usize| {
+            values.iter().map(|row| row[i]).collect::<Vec<f64>>()
+        };
         let series = |names: &[String], values: &Vec<Vec<f64>>, prefix: &str| {
             names
                 .iter()
                 .enumerate()
-                .map(|(i, n)| plot::Series { name: format!("{prefix}{n}"), values: column(values, i) })
+                .map(|(i, n)| plot::Series {
+                    name: format!("{prefix}{n}"),
+                    values: column(values, i),
+                })
                 .collect::<Vec<_>>()
         };
         let mut panels = vec![
-            plot::Panel { title: "coordinates".into(), y_label: "q".into(), series: series(&coordinate_names, &trajectory.q, "q_") },
-            plot::Panel { title: "speeds".into(), y_label: "u".into(), series: series(&coordinate_names, &trajectory.u, "u_") },
+            plot::Panel {
+                title: "coordinates".into(),
+                y_label: "q".into(),
+                series: series(&coordinate_names, &trajectory.q, "q_"),
+            },
+            plot::Panel {
+                title: "speeds".into(),
+                y_label: "u".into(),
+                series: series(&coordinate_names, &trajectory.u, "u_"),
+            },
         ];
         if !output_names.is_empty() {
-            panels.push(plot::Panel { title: "outputs".into(), y_label: "y".into(), series: series(&output_names, &trajectory.outputs, "") });
+            panels.push(plot::Panel {
+                title: "outputs".into(),
+                y_label: "y".into(),
+                series: series(&output_names, &trajectory.outputs, ""),
+            });
         }
         let title = format!("{} — {}", model.name(), path.display());
-        plot::plot_time_series(plot_path, &title, &trajectory.times, &panels).map_err(|e| format!("cannot plot: {e}"))?;
+        plot::plot_time_series(plot_path, &title, &trajectory.times, &panels)
+            .map_err(|e| format!("cannot plot: {e}"))?;
         println!("plot written to {}", plot_path.display());
     }
     Ok(())

@@ -534,8 +534,7 @@ fn mentions_angle_unit(text: &str) -> bool {
 fn leading_number(text: &str) -> Option<&str> {
     text.char_indices()
         .map(|(i, c)| i + c.len_utf8())
-        .filter(|&end| text[..end].parse::<f64>().is_ok())
-        .next_back()
+        .rfind(|&end| text[..end].parse::<f64>().is_ok())
         .map(|end| &text[..end])
 }
 
@@ -582,7 +581,7 @@ fn unit_hint(dimension: Dimension) -> Option<String> {
 
 /// The candidate closest to `word` by edit distance, if it is close enough to be a typo.
 fn suggest<'a>(word: &str, candidates: &[&'a str]) -> Option<&'a str> {
-    let limit = ((word.chars().count() + 2) / 3).clamp(1, 3);
+    let limit = word.chars().count().div_ceil(3).clamp(1, 3);
     candidates
         .iter()
         .map(|&c| (edit_distance(word, c), c))

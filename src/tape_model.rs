@@ -32,14 +32,22 @@ impl TapeModel {
         TapeModel {
             name: model.name.clone(),
             tape: compiled.tape(),
-            coordinate_names: model.coordinates.iter().map(|(_, c)| c.name.clone()).collect(),
+            coordinate_names: model
+                .coordinates
+                .iter()
+                .map(|(_, c)| c.name.clone())
+                .collect(),
             input_names: model.inputs.iter().map(|(_, i)| i.name.clone()).collect(),
             output_names: compiled.equations.output_names.clone(),
             param_names: model.params.iter().map(|(_, p)| p.name.clone()).collect(),
             params: model.params.iter().map(|(_, p)| p.value).collect(),
             input_defaults: model.inputs.iter().map(|(_, i)| i.default).collect(),
             q0: model.coordinates.iter().map(|(_, c)| c.initial).collect(),
-            u0: model.coordinates.iter().map(|(_, c)| c.initial_speed).collect(),
+            u0: model
+                .coordinates
+                .iter()
+                .map(|(_, c)| c.initial_speed)
+                .collect(),
             registers: RefCell::new(Vec::new()),
         }
     }
@@ -108,15 +116,33 @@ impl mech_runtime::Model for TapeModel {
         }
     }
     fn mass_matrix(&self, t: f64, q: &[f64], inputs: &[f64], out: &mut [f64]) {
-        let env = Env { t, q, u: &[], params: &self.params, inputs };
+        let env = Env {
+            t,
+            q,
+            u: &[],
+            params: &self.params,
+            inputs,
+        };
         self.run(&self.tape.mass_matrix, &env, out);
     }
     fn forcing(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]) {
-        let env = Env { t, q, u, params: &self.params, inputs };
+        let env = Env {
+            t,
+            q,
+            u,
+            params: &self.params,
+            inputs,
+        };
         self.run(&self.tape.forcing, &env, out);
     }
     fn outputs(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]) {
-        let env = Env { t, q, u, params: &self.params, inputs };
+        let env = Env {
+            t,
+            q,
+            u,
+            params: &self.params,
+            inputs,
+        };
         self.run(&self.tape.outputs, &env, out);
     }
 }

@@ -8,7 +8,12 @@ mod common;
 use common::Rng;
 use mech_runtime::Model;
 
-fn evaluate(model: &dyn Model, q: &[f64], u: &[f64], inputs: &[f64]) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+fn evaluate(
+    model: &dyn Model,
+    q: &[f64],
+    u: &[f64],
+    inputs: &[f64],
+) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     let mut m = vec![0.0; model.nu() * model.nu()];
     let mut f = vec![0.0; model.nu()];
     let mut y = vec![0.0; model.noutputs()];
@@ -21,7 +26,10 @@ fn evaluate(model: &dyn Model, q: &[f64], u: &[f64], inputs: &[f64]) -> (Vec<f64
 fn assert_agree(what: &str, a: &[f64], b: &[f64]) {
     let scale = b.iter().fold(1e-300_f64, |s, x| s.max(x.abs()));
     for (i, (x, y)) in a.iter().zip(b).enumerate() {
-        assert!((x - y).abs() <= 1e-12 * scale, "{what}[{i}]: compiled {x} vs tape {y}");
+        assert!(
+            (x - y).abs() <= 1e-12 * scale,
+            "{what}[{i}]: compiled {x} vs tape {y}"
+        );
     }
 }
 
@@ -32,7 +40,11 @@ fn compiled_code_and_tape_agree_on_every_bundled_model() {
     for name in mech::models::NAMES {
         let tape = common::tape(name);
         let compiled = mech::models::compiled(name).unwrap();
-        assert_eq!((compiled.nq(), compiled.noutputs()), (tape.nq(), tape.noutputs()), "{name}");
+        assert_eq!(
+            (compiled.nq(), compiled.noutputs()),
+            (tape.nq(), tape.noutputs()),
+            "{name}"
+        );
         for _ in 0..20 {
             let q = rng.vector(tape.nq(), -1.0, 1.0);
             let u = rng.vector(tape.nu(), -1.0, 1.0);
@@ -47,15 +59,26 @@ fn compiled_code_and_tape_agree_on_every_bundled_model() {
 }
 
 fn emit(name: &str) -> String {
-    let options = mech_codegen::RustOptions { source_name: format!("models/{name}.mech"), ..Default::default() };
+    let options = mech_codegen::RustOptions {
+        source_name: format!("models/{name}.mech"),
+        ..Default::default()
+    };
     common::compile_bundled(name).rust(&options)
 }
 
 #[test]
 fn generating_twice_gives_identical_bytes() {
     for name in mech::models::NAMES {
-        assert_eq!(emit(name), emit(name), "{name}: Rust output differs between runs");
-        assert_eq!(common::compile_bundled(name).tape(), common::compile_bundled(name).tape(), "{name}: tape differs");
+        assert_eq!(
+            emit(name),
+            emit(name),
+            "{name}: Rust output differs between runs"
+        );
+        assert_eq!(
+            common::compile_bundled(name).tape(),
+            common::compile_bundled(name).tape(),
+            "{name}: tape differs"
+        );
     }
 }
 
@@ -77,8 +100,14 @@ fn long_functions_are_split_into_parts_that_agree() {
     // Splitting at 7 statements forces several parts and spilled temporaries; the emitted
     // code must still parse (emit() checks) and contain the part functions.
     let compiled = common::compile_bundled("triple_pendulum_3d");
-    let options = mech_codegen::RustOptions { max_statements: 7, ..Default::default() };
+    let options = mech_codegen::RustOptions {
+        max_statements: 7,
+        ..Default::default()
+    };
     let source = compiled.rust(&options);
-    assert!(source.contains("fn forcing_part1("), "expected split functions");
+    assert!(
+        source.contains("fn forcing_part1("),
+        "expected split functions"
+    );
     assert!(source.contains("spill["), "expected spilled temporaries");
 }

@@ -11,9 +11,22 @@ fn equations_are_exact() {
     let eqs = &mut compiled.equations;
     // Hash-consing: structurally equal expressions have the same id.
     let expected_m = eqs.pool.parse_sexpr("(* m (^ l 2))").unwrap();
-    let expected_f = eqs.pool.parse_sexpr("(+ (* -1 m g l (sin q_hinge)) (* -1 c u_hinge))").unwrap();
-    assert_eq!(eqs.mass_matrix[0], expected_m, "M = {}", eqs.pool.sexpr(eqs.mass_matrix[0]));
-    assert_eq!(eqs.forcing[0], expected_f, "F = {}", eqs.pool.sexpr(eqs.forcing[0]));
+    let expected_f = eqs
+        .pool
+        .parse_sexpr("(+ (* -1 m g l (sin q_hinge)) (* -1 c u_hinge))")
+        .unwrap();
+    assert_eq!(
+        eqs.mass_matrix[0],
+        expected_m,
+        "M = {}",
+        eqs.pool.sexpr(eqs.mass_matrix[0])
+    );
+    assert_eq!(
+        eqs.forcing[0],
+        expected_f,
+        "F = {}",
+        eqs.pool.sexpr(eqs.forcing[0])
+    );
 }
 
 /// Times of upward zero crossings of `angle`, by linear interpolation between samples.
@@ -37,11 +50,23 @@ fn simulated_period(amplitude: f64) -> f64 {
     let options = SimOptions {
         t_end: 4.5 * estimate * 1.6,
         output_interval: estimate / 4000.0,
-        method: Method::Dopri5 { rtol: 1e-12, atol: 1e-14, h_max: f64::INFINITY },
+        method: Method::Dopri5 {
+            rtol: 1e-12,
+            atol: 1e-14,
+            h_max: f64::INFINITY,
+        },
         ..SimOptions::default()
     };
     let signals = mech_runtime::default_signals(&model);
-    let run = mech_runtime::simulate(&model, &[amplitude], &[0.0], &signals, &options, &mut |_| {}).unwrap();
+    let run = mech_runtime::simulate(
+        &model,
+        &[amplitude],
+        &[0.0],
+        &signals,
+        &options,
+        &mut |_| {},
+    )
+    .unwrap();
     let angle: Vec<f64> = run.q.iter().map(|q| q[0]).collect();
     let crossings = upward_crossings(&run.times, &angle);
     assert!(crossings.len() >= 3, "too few periods simulated");
@@ -54,7 +79,10 @@ fn small_angle_period_is_two_pi_sqrt_l_over_g() {
     let exact = 2.0 * std::f64::consts::PI * (model.params.l / model.params.g).sqrt();
     // At 1 mrad the finite-amplitude correction θ0²/16 is 6e-8, below the 1e-6 tolerance.
     let period = simulated_period(1e-3);
-    assert!(((period - exact) / exact).abs() < 1e-6, "period {period} vs {exact}");
+    assert!(
+        ((period - exact) / exact).abs() < 1e-6,
+        "period {period} vs {exact}"
+    );
 }
 
 /// Complete elliptic integral of the first kind K(k) = π / (2 AGM(1, √(1 − k²))).
@@ -71,16 +99,24 @@ fn large_amplitude_period_matches_elliptic_integral() {
     let model = mech::models::pendulum::Pendulum::new();
     let amplitude = 2.5_f64;
     // T = 4 √(l/g) K(sin(θ0/2))
-    let exact = 4.0 * (model.params.l / model.params.g).sqrt() * elliptic_k((amplitude / 2.0).sin());
+    let exact =
+        4.0 * (model.params.l / model.params.g).sqrt() * elliptic_k((amplitude / 2.0).sin());
     let period = simulated_period(amplitude);
-    assert!(((period - exact) / exact).abs() < 1e-8, "period {period} vs {exact}");
+    assert!(
+        ((period - exact) / exact).abs() < 1e-8,
+        "period {period} vs {exact}"
+    );
 }
 
 #[test]
 fn tape_and_generated_code_simulate_the_same_swing() {
     let tape = common::tape("pendulum");
     let compiled = mech::models::pendulum::Pendulum::new();
-    let options = SimOptions { t_end: 0.5, output_interval: 0.01, ..SimOptions::default() };
+    let options = SimOptions {
+        t_end: 0.5,
+        output_interval: 0.01,
+        ..SimOptions::default()
+    };
     let signals = mech_runtime::default_signals(&tape);
     let mut q0 = [0.0];
     let mut u0 = [0.0];

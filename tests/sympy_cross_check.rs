@@ -17,13 +17,23 @@ fn fixture() -> Value {
 }
 
 fn numbers(value: &Value) -> Vec<f64> {
-    value.as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect()
+    value
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect()
 }
 
 fn check_model(name: &str) {
     let fixture = fixture();
     let reference = &fixture["models"][name];
-    let coordinates: Vec<&str> = reference["coordinates"].as_array().unwrap().iter().map(|c| c.as_str().unwrap()).collect();
+    let coordinates: Vec<&str> = reference["coordinates"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c.as_str().unwrap())
+        .collect();
     let tape = common::tape(name);
     let compiled = mech::models::compiled(name).unwrap();
     for model in [&tape as &dyn Model, compiled.as_ref()] {
@@ -37,18 +47,42 @@ fn check_model(name: &str) {
                 let row = numbers(row);
                 let floor = row.iter().fold(0.0_f64, |a, b| a.max(b.abs()));
                 for (c, expected) in row.iter().enumerate() {
-                    assert_close(&format!("{name} state {k} M[{r}][{c}]"), m[r][c], *expected, TOLERANCE, floor);
+                    assert_close(
+                        &format!("{name} state {k} M[{r}][{c}]"),
+                        m[r][c],
+                        *expected,
+                        TOLERANCE,
+                        floor,
+                    );
                 }
             }
             let expected_f = numbers(&state["forcing"]);
             let floor = expected_f.iter().fold(0.0_f64, |a, b| a.max(b.abs()));
             for (r, expected) in expected_f.iter().enumerate() {
-                assert_close(&format!("{name} state {k} F[{r}]"), f[r], *expected, TOLERANCE, floor);
+                assert_close(
+                    &format!("{name} state {k} F[{r}]"),
+                    f[r],
+                    *expected,
+                    TOLERANCE,
+                    floor,
+                );
             }
             let ke = state["kinetic_energy"].as_f64().unwrap();
             let pe = state["potential_energy"].as_f64().unwrap();
-            assert_close(&format!("{name} state {k} KE"), output(model, "ke", &q, &u), ke, TOLERANCE, 1.0);
-            assert_close(&format!("{name} state {k} PE"), output(model, "pe", &q, &u), pe, TOLERANCE, 1.0);
+            assert_close(
+                &format!("{name} state {k} KE"),
+                output(model, "ke", &q, &u),
+                ke,
+                TOLERANCE,
+                1.0,
+            );
+            assert_close(
+                &format!("{name} state {k} PE"),
+                output(model, "pe", &q, &u),
+                pe,
+                TOLERANCE,
+                1.0,
+            );
         }
     }
 }

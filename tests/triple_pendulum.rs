@@ -17,11 +17,20 @@ fn mass_matrix_is_symmetric_positive_definite_and_matches_kinetic_energy() {
         let m = mass_matrix(model.as_ref(), &q);
         let matrix = DMatrix::from_fn(3, 3, |r, c| m[r][c]);
         assert_eq!(matrix, matrix.transpose(), "M must be exactly symmetric");
-        assert!(matrix.clone().cholesky().is_some(), "M not positive definite at q = {q:?}");
+        assert!(
+            matrix.clone().cholesky().is_some(),
+            "M not positive definite at q = {q:?}"
+        );
         // KE = ½ uᵀ M u, computed independently from the body velocities.
         let u_vec = nalgebra::DVector::from_column_slice(&u);
         let quadratic = 0.5 * (u_vec.transpose() * &matrix * &u_vec)[0];
-        assert_close("KE vs ½uᵀMu", output(model.as_ref(), "ke", &q, &u), quadratic, 1e-13, 1e-3);
+        assert_close(
+            "KE vs ½uᵀMu",
+            output(model.as_ref(), "ke", &q, &u),
+            quadratic,
+            1e-13,
+            1e-3,
+        );
     }
 }
 
@@ -34,16 +43,33 @@ fn energy_is_conserved_over_ten_seconds() {
     let options = SimOptions {
         t_end: 10.0,
         output_interval: 0.01,
-        method: Method::Dopri5 { rtol: 1e-12, atol: 1e-14, h_max: f64::INFINITY },
+        method: Method::Dopri5 {
+            rtol: 1e-12,
+            atol: 1e-14,
+            h_max: f64::INFINITY,
+        },
         ..SimOptions::default()
     };
     let signals = mech_runtime::default_signals(&model);
     let run = mech_runtime::simulate(&model, &q0, &u0, &signals, &options, &mut |_| {}).unwrap();
-    let (ke, pe) = (model.output_index("ke").unwrap(), model.output_index("pe").unwrap());
+    let (ke, pe) = (
+        model.output_index("ke").unwrap(),
+        model.output_index("pe").unwrap(),
+    );
     let energy: Vec<f64> = run.outputs.iter().map(|y| y[ke] + y[pe]).collect();
     // Scale: the largest kinetic energy reached (E itself may be near zero).
     let scale = run.outputs.iter().map(|y| y[ke]).fold(0.0_f64, f64::max);
-    assert!(scale > 1.0, "the pendulum should swing vigorously (max KE {scale})");
-    let drift = energy.iter().map(|e| (e - energy[0]).abs()).fold(0.0_f64, f64::max);
-    assert!(drift / scale < 1e-8, "relative energy drift {:e}", drift / scale);
+    assert!(
+        scale > 1.0,
+        "the pendulum should swing vigorously (max KE {scale})"
+    );
+    let drift = energy
+        .iter()
+        .map(|e| (e - energy[0]).abs())
+        .fold(0.0_f64, f64::max);
+    assert!(
+        drift / scale < 1e-8,
+        "relative energy drift {:e}",
+        drift / scale
+    );
 }

@@ -28,11 +28,17 @@ pub struct Span {
 
 impl Span {
     pub fn new(start: usize, end: usize) -> Span {
-        Span { start: start as u32, end: end as u32 }
+        Span {
+            start: start as u32,
+            end: end as u32,
+        }
     }
     /// The smallest span covering both.
     pub fn to(self, other: Span) -> Span {
-        Span { start: self.start.min(other.start), end: self.end.max(other.end) }
+        Span {
+            start: self.start.min(other.start),
+            end: self.end.max(other.end),
+        }
     }
 }
 
@@ -46,7 +52,10 @@ pub struct SourceFile {
 
 impl SourceFile {
     pub fn new(path: impl Into<String>, text: impl Into<String>) -> SourceFile {
-        SourceFile { path: path.into(), text: text.into() }
+        SourceFile {
+            path: path.into(),
+            text: text.into(),
+        }
     }
 
     /// 1-based line and column (in characters) of a byte offset.
@@ -107,10 +116,16 @@ impl Diagnostic {
         }
     }
     pub fn warning(code: &'static str, message: impl Into<String>) -> Diagnostic {
-        Diagnostic { severity: Severity::Warning, ..Diagnostic::error(code, message) }
+        Diagnostic {
+            severity: Severity::Warning,
+            ..Diagnostic::error(code, message)
+        }
     }
     pub fn with_label(mut self, span: Span, message: impl Into<String>) -> Diagnostic {
-        self.labels.push(Label { span, message: message.into() });
+        self.labels.push(Label {
+            span,
+            message: message.into(),
+        });
         self
     }
     pub fn with_note(mut self, note: impl Into<String>) -> Diagnostic {
@@ -148,7 +163,11 @@ impl Diagnostic {
             let text = file.line_text(line);
             out.push_str(&format!("{line:>gutter$} │ {text}\n"));
             let (end_line, end_col) = file.line_col(label.span.end);
-            let width = if end_line == line { end_col.saturating_sub(col).max(1) } else { text.chars().count().saturating_sub(col - 1).max(1) };
+            let width = if end_line == line {
+                end_col.saturating_sub(col).max(1)
+            } else {
+                text.chars().count().saturating_sub(col - 1).max(1)
+            };
             let marker = if i == 0 { "^" } else { "-" };
             out.push_str(&format!(
                 "{pad} │ {}{} {}\n",
@@ -156,9 +175,6 @@ impl Diagnostic {
                 marker.repeat(width),
                 label.message
             ));
-        }
-        if self.labels.is_empty() {
-            out.push_str(&format!("{pad}┌─ {}\n", file.path));
         }
         for note in &self.notes {
             out.push_str(&format!("{pad} = note: {note}\n"));
@@ -184,8 +200,12 @@ impl Errors {
     /// An error that is not about a place in the file (unreadable file, I/O failure).
     pub fn io(path: &str, error: &std::io::Error) -> Errors {
         let file = Arc::new(SourceFile::new(path, ""));
-        let diagnostic = Diagnostic::error("E0001", format!("cannot read or write `{path}`: {error}"));
-        Errors { file, diagnostics: vec![diagnostic] }
+        let diagnostic =
+            Diagnostic::error("E0001", format!("cannot read or write `{path}`: {error}"));
+        Errors {
+            file,
+            diagnostics: vec![diagnostic],
+        }
     }
 }
 
@@ -197,7 +217,11 @@ impl fmt::Display for Errors {
             }
             f.write_str(&diagnostic.render(&self.file))?;
         }
-        let errors = self.diagnostics.iter().filter(|d| d.severity == Severity::Error).count();
+        let errors = self
+            .diagnostics
+            .iter()
+            .filter(|d| d.severity == Severity::Error)
+            .count();
         if errors > 1 {
             writeln!(f, "\n{errors} errors in {}", self.file.path)?;
         }

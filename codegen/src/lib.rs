@@ -93,7 +93,11 @@ pub struct Builder {
 
 impl Default for Builder {
     fn default() -> Self {
-        Builder { out_dir: None, rust: RustOptions::default(), emit_rerun_if_changed: true }
+        Builder {
+            out_dir: None,
+            rust: RustOptions::default(),
+            emit_rerun_if_changed: true,
+        }
     }
 }
 
@@ -132,10 +136,14 @@ impl Builder {
     pub fn compile(&self, paths: &[impl AsRef<Path>]) -> Result<(), Errors> {
         let out_dir = match &self.out_dir {
             Some(dir) => dir.clone(),
-            None => std::env::var_os("OUT_DIR").map(PathBuf::from).ok_or_else(|| {
-                let error = std::io::Error::other("OUT_DIR is not set: call from build.rs or set Builder::out_dir");
-                Errors::io("OUT_DIR", &error)
-            })?,
+            None => std::env::var_os("OUT_DIR")
+                .map(PathBuf::from)
+                .ok_or_else(|| {
+                    let error = std::io::Error::other(
+                        "OUT_DIR is not set: call from build.rs or set Builder::out_dir",
+                    );
+                    Errors::io("OUT_DIR", &error)
+                })?,
         };
         for path in paths {
             let path = path.as_ref();
@@ -143,7 +151,10 @@ impl Builder {
                 println!("cargo:rerun-if-changed={}", path.display());
             }
             let compiled = Compiled::from_path(path)?;
-            let options = RustOptions { source_name: path.display().to_string(), ..self.rust.clone() };
+            let options = RustOptions {
+                source_name: path.display().to_string(),
+                ..self.rust.clone()
+            };
             let source = compiled.rust(&options);
             let target = out_dir.join(format!("{}.rs", compiled.model.name));
             write_if_changed(&target, source.as_bytes())

@@ -14,7 +14,8 @@ pub fn compile_bundled(name: &str) -> Compiled {
 
 /// Compiles model text given inline.
 pub fn compile_text(name: &str, text: &str) -> Compiled {
-    Compiled::from_source(mech_codegen::SourceFile::new(format!("{name}.mech"), text)).unwrap_or_else(|e| panic!("{e}"))
+    Compiled::from_source(mech_codegen::SourceFile::new(format!("{name}.mech"), text))
+        .unwrap_or_else(|e| panic!("{e}"))
 }
 
 pub fn tape(name: &str) -> TapeModel {
@@ -25,27 +26,37 @@ pub fn tape(name: &str) -> TapeModel {
 pub fn mass_matrix(model: &dyn Model, q: &[f64]) -> Vec<Vec<f64>> {
     let n = model.nu();
     let mut m = vec![0.0; n * n];
-    let inputs: Vec<f64> = (0..model.ninputs()).map(|i| model.input_default(i)).collect();
+    let inputs: Vec<f64> = (0..model.ninputs())
+        .map(|i| model.input_default(i))
+        .collect();
     model.mass_matrix(0.0, q, &inputs, &mut m);
-    (0..n).map(|r| (0..n).map(|c| m[r + n * c]).collect()).collect()
+    (0..n)
+        .map(|r| (0..n).map(|c| m[r + n * c]).collect())
+        .collect()
 }
 
 pub fn forcing(model: &dyn Model, q: &[f64], u: &[f64]) -> Vec<f64> {
     let mut f = vec![0.0; model.nu()];
-    let inputs: Vec<f64> = (0..model.ninputs()).map(|i| model.input_default(i)).collect();
+    let inputs: Vec<f64> = (0..model.ninputs())
+        .map(|i| model.input_default(i))
+        .collect();
     model.forcing(0.0, q, u, &inputs, &mut f);
     f
 }
 
 pub fn outputs(model: &dyn Model, q: &[f64], u: &[f64]) -> Vec<f64> {
     let mut y = vec![0.0; model.noutputs()];
-    let inputs: Vec<f64> = (0..model.ninputs()).map(|i| model.input_default(i)).collect();
+    let inputs: Vec<f64> = (0..model.ninputs())
+        .map(|i| model.input_default(i))
+        .collect();
     model.outputs(0.0, q, u, &inputs, &mut y);
     y
 }
 
 pub fn output(model: &dyn Model, name: &str, q: &[f64], u: &[f64]) -> f64 {
-    let index = model.output_index(name).unwrap_or_else(|| panic!("model has no output `{name}`"));
+    let index = model
+        .output_index(name)
+        .unwrap_or_else(|| panic!("model has no output `{name}`"));
     outputs(model, q, u)[index]
 }
 
@@ -73,5 +84,10 @@ impl Rng {
 /// `|a − b| ≤ tol · scale` with `scale = max(|b|, floor)`.
 pub fn assert_close(what: &str, a: f64, b: f64, tol: f64, floor: f64) {
     let scale = b.abs().max(floor);
-    assert!((a - b).abs() <= tol * scale, "{what}: {a} vs {b} (difference {:e}, allowed {:e})", (a - b).abs(), tol * scale);
+    assert!(
+        (a - b).abs() <= tol * scale,
+        "{what}: {a} vs {b} (difference {:e}, allowed {:e})",
+        (a - b).abs(),
+        tol * scale
+    );
 }

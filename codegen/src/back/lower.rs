@@ -76,20 +76,35 @@ pub fn lower_node(pool: &ExprPool, id: ExprId) -> Lowered {
         Node::Number(n) => constant(n.to_f64()),
         Node::Symbol(s) => Lowered::Operand(Operand::Symbol(*s)),
         Node::Add { constant: k, terms } => {
-            let mut signed: Vec<(bool, Lowered)> =
-                terms.iter().map(|&(t, c)| scaled(pool, c, Lowered::Operand(operand(pool, t)))).collect();
+            let mut signed: Vec<(bool, Lowered)> = terms
+                .iter()
+                .map(|&(t, c)| scaled(pool, c, Lowered::Operand(operand(pool, t))))
+                .collect();
             if !k.is_zero() {
                 signed.push((k.is_negative(), constant(k.to_f64().abs())));
             }
             chain_sum(signed)
         }
-        Node::Mul { coefficient, factors } => {
-            let power = |&(base, e): &(ExprId, Number)| raise(Lowered::Operand(operand(pool, base)), e);
-            let numerator: Vec<Lowered> = factors.iter().filter(|f| !f.1.is_negative()).map(power).collect();
-            let denominator: Vec<Lowered> =
-                factors.iter().filter(|f| f.1.is_negative()).map(|&(b, e)| power(&(b, e.neg()))).collect();
+        Node::Mul {
+            coefficient,
+            factors,
+        } => {
+            let power =
+                |&(base, e): &(ExprId, Number)| raise(Lowered::Operand(operand(pool, base)), e);
+            let numerator: Vec<Lowered> = factors
+                .iter()
+                .filter(|f| !f.1.is_negative())
+                .map(power)
+                .collect();
+            let denominator: Vec<Lowered> = factors
+                .iter()
+                .filter(|f| f.1.is_negative())
+                .map(|&(b, e)| power(&(b, e.neg())))
+                .collect();
             let magnitude = coefficient.to_f64().abs();
-            let mut product = numerator.into_iter().reduce(|a, b| Lowered::binary(Binary::Mul, a, b));
+            let mut product = numerator
+                .into_iter()
+                .reduce(|a, b| Lowered::binary(Binary::Mul, a, b));
             if magnitude != 1.0 {
                 let c = constant(magnitude);
                 product = Some(match product {
@@ -98,7 +113,10 @@ pub fn lower_node(pool: &ExprPool, id: ExprId) -> Lowered {
                 });
             }
             let mut result = product.unwrap_or(constant(1.0));
-            if let Some(d) = denominator.into_iter().reduce(|a, b| Lowered::binary(Binary::Mul, a, b)) {
+            if let Some(d) = denominator
+                .into_iter()
+                .reduce(|a, b| Lowered::binary(Binary::Mul, a, b))
+            {
                 result = Lowered::binary(Binary::Div, result, d);
             }
             if coefficient.is_negative() {
@@ -106,10 +124,14 @@ pub fn lower_node(pool: &ExprPool, id: ExprId) -> Lowered {
             }
             result
         }
-        Node::Call(func, x) => Lowered::unary(Unary::Call(*func), Lowered::Operand(operand(pool, *x))),
-        Node::Atan2(y, x) => {
-            Lowered::binary(Binary::Atan2, Lowered::Operand(operand(pool, *y)), Lowered::Operand(operand(pool, *x)))
+        Node::Call(func, x) => {
+            Lowered::unary(Unary::Call(*func), Lowered::Operand(operand(pool, *x)))
         }
+        Node::Atan2(y, x) => Lowered::binary(
+            Binary::Atan2,
+            Lowered::Operand(operand(pool, *y)),
+            Lowered::Operand(operand(pool, *x)),
+        ),
     }
 }
 
@@ -120,7 +142,11 @@ fn constant(value: f64) -> Lowered {
 /// `c·x` as (is negative, |c|·x).
 fn scaled(_pool: &ExprPool, c: Number, x: Lowered) -> (bool, Lowered) {
     let magnitude = c.to_f64().abs();
-    let term = if magnitude == 1.0 { x } else { Lowered::binary(Binary::Mul, constant(magnitude), x) };
+    let term = if magnitude == 1.0 {
+        x
+    } else {
+        Lowered::binary(Binary::Mul, constant(magnitude), x)
+    };
     (c.is_negative(), term)
 }
 
@@ -131,8 +157,14 @@ fn chain_sum(mut signed: Vec<(bool, Lowered)>) -> Lowered {
         signed.insert(0, first);
     }
     let mut items = signed.into_iter();
-    let Some((negative, first)) = items.next() else { return constant(0.0) };
-    let mut acc = if negative { Lowered::unary(Unary::Neg, first) } else { first };
+    let Some((negative, first)) = items.next() else {
+        return constant(0.0);
+    };
+    let mut acc = if negative {
+        Lowered::unary(Unary::Neg, first)
+    } else {
+        first
+    };
     for (negative, term) in items {
         acc = Lowered::binary(if negative { Binary::Sub } else { Binary::Add }, acc, term);
     }
@@ -151,5 +183,8 @@ fn raise(x: Lowered, e: Number) -> Lowered {
 
 /// The nodes that need a register or a `let` to compute `roots`, operands first.
 pub fn schedule(pool: &ExprPool, roots: &[ExprId]) -> Vec<ExprId> {
-    pool.reachable(roots).into_iter().filter(|&id| !is_leaf(pool, id)).collect()
+    pool.reachable(roots)
+        .into_iter()
+        .filter(|&id| !is_leaf(pool, id))
+        .collect()
 }

@@ -35,7 +35,15 @@ pub enum Op {
 impl Op {
     /// Loads and constants cost nothing; everything else is one arithmetic operation.
     pub fn is_arithmetic(&self) -> bool {
-        !matches!(self, Op::Const(_) | Op::Coordinate(_) | Op::Speed(_) | Op::Param(_) | Op::Input(_) | Op::Time)
+        !matches!(
+            self,
+            Op::Const(_)
+                | Op::Coordinate(_)
+                | Op::Speed(_)
+                | Op::Param(_)
+                | Op::Input(_)
+                | Op::Time
+        )
     }
 }
 
@@ -64,8 +72,14 @@ impl Program {
             let register = builder.flatten(&lower_node(pool, id));
             builder.node_registers.insert(id, register);
         }
-        let results = roots.iter().map(|&root| builder.operand(operand(pool, root))).collect();
-        Program { ops: builder.ops, results }
+        let results = roots
+            .iter()
+            .map(|&root| builder.operand(operand(pool, root)))
+            .collect();
+        Program {
+            ops: builder.ops,
+            results,
+        }
     }
 
     /// Number of arithmetic operations (additions, multiplications, function calls, ...).

@@ -167,12 +167,22 @@ pub struct Expr {
 #[derive(Clone, Debug, PartialEq)]
 pub enum ExprKind {
     /// A number literal (its text, e.g. `2.5e-3`) with an optional unit.
-    Quantity { literal: String, unit: Option<Unit> },
+    Quantity {
+        literal: String,
+        unit: Option<Unit>,
+    },
     Path(Path),
     Vector(Vec<Expr>),
-    Call { function: Ident, args: Vec<Expr> },
+    Call {
+        function: Ident,
+        args: Vec<Expr>,
+    },
     Neg(Box<Expr>),
-    Binary { op: BinaryOp, lhs: Box<Expr>, rhs: Box<Expr> },
+    Binary {
+        op: BinaryOp,
+        lhs: Box<Expr>,
+        rhs: Box<Expr>,
+    },
     /// A parenthesized expression (kept so that spans and diagnostics follow the source).
     Paren(Box<Expr>),
 }

@@ -26,7 +26,8 @@ use crate::ir;
 
 /// Parses a file into its syntax tree (the only place that sees pest pairs).
 pub fn parse(file: &SourceFile) -> Result<ast::File, Errors> {
-    parse::parse_file(file).map_err(|diagnostic| Errors::new(Arc::new(file.clone()), vec![diagnostic]))
+    parse::parse_file(file)
+        .map_err(|diagnostic| Errors::new(Arc::new(file.clone()), vec![diagnostic]))
 }
 
 /// Resolves names, units, dimensions and the joint tree; reports every error found.
@@ -37,6 +38,7 @@ pub fn lower(file: &Arc<SourceFile>, ast: &ast::File) -> Result<ir::Model, Error
 
 /// Parses and lowers a file.
 pub fn load(file: Arc<SourceFile>) -> Result<ir::Model, Errors> {
-    let ast = parse::parse_file(&file).map_err(|diagnostic| Errors::new(file.clone(), vec![diagnostic]))?;
+    let ast = parse::parse_file(&file)
+        .map_err(|diagnostic| Errors::new(file.clone(), vec![diagnostic]))?;
     lower(&file, &ast)
 }

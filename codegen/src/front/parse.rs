@@ -25,15 +25,19 @@ type Result<T> = std::result::Result<T, Diagnostic>;
 /// Parses a whole `.mech` file.
 pub fn parse_file(file: &SourceFile) -> Result<ast::File> {
     check_bracket_depth(&file.text)?;
-    let mut pairs = MechParser::parse(Rule::file, &file.text).map_err(|e| syntax_error(&file.text, e))?;
+    let mut pairs =
+        MechParser::parse(Rule::file, &file.text).map_err(|e| syntax_error(&file.text, e))?;
     let root = pairs.next().ok_or_else(|| internal(Span::default()))?;
     build_file(root)
 }
 
 /// Parses a standalone quantity such as `-10 mN` into its sign, literal and unit.
-pub fn parse_quantity_text(text: &str) -> std::result::Result<(bool, String, Option<ast::Unit>), String> {
+pub fn parse_quantity_text(
+    text: &str,
+) -> std::result::Result<(bool, String, Option<ast::Unit>), String> {
     check_bracket_depth(text).map_err(|d| d.message)?;
-    let pairs = MechParser::parse(Rule::quantity_text, text).map_err(|e| syntax_error(text, e).message)?;
+    let pairs =
+        MechParser::parse(Rule::quantity_text, text).map_err(|e| syntax_error(text, e).message)?;
     let mut negative = false;
     for pair in pairs.flatten() {
         match pair.as_rule() {
@@ -53,7 +57,11 @@ pub fn parse_quantity_text(text: &str) -> std::result::Result<(bool, String, Opt
 // ---------------------------------------------------------------------------------------------
 
 fn build_file(root: Pair<Rule>) -> Result<ast::File> {
-    let mut file = ast::File { docs: Vec::new(), model: None, items: Vec::new() };
+    let mut file = ast::File {
+        docs: Vec::new(),
+        model: None,
+        items: Vec::new(),
+    };
     for pair in root.into_inner() {
         match pair.as_rule() {
             Rule::inner_doc => file.docs.push(doc_text(pair.as_str())),
@@ -76,7 +84,10 @@ fn build_file(root: Pair<Rule>) -> Result<ast::File> {
 /// The text of a `///` or `//!` comment without the marker and one leading space.
 fn doc_text(comment: &str) -> String {
     let body = comment.get(3..).unwrap_or("");
-    body.strip_prefix(' ').unwrap_or(body).trim_end().to_string()
+    body.strip_prefix(' ')
+        .unwrap_or(body)
+        .trim_end()
+        .to_string()
 }
 
 fn build_item(pair: Pair<Rule>) -> Result<ast::Item> {
@@ -115,8 +126,14 @@ struct Parts<'i> {
 impl<'i> Parts<'i> {
     fn of(pair: Pair<'i, Rule>) -> Parts<'i> {
         let span = span_of(&pair);
-        let pairs: Vec<_> = pair.into_inner().filter(|p| !is_punctuation(p.as_rule())).collect();
-        Parts { pairs: pairs.into_iter(), span }
+        let pairs: Vec<_> = pair
+            .into_inner()
+            .filter(|p| !is_punctuation(p.as_rule()))
+            .collect();
+        Parts {
+            pairs: pairs.into_iter(),
+            span,
+        }
     }
     fn next(&mut self) -> Result<Pair<'i, Rule>> {
         self.pairs.next().ok_or_else(|| internal(self.span))
@@ -129,7 +146,12 @@ impl<'i> Parts<'i> {
     }
     /// The next pair if it has the given rule.
     fn take(&mut self, rule: Rule) -> Option<Pair<'i, Rule>> {
-        if self.pairs.as_slice().first().is_some_and(|p| p.as_rule() == rule) {
+        if self
+            .pairs
+            .as_slice()
+            .first()
+            .is_some_and(|p| p.as_rule() == rule)
+        {
             self.pairs.next()
         } else {
             None
@@ -173,12 +195,20 @@ fn is_punctuation(rule: Rule) -> bool {
 
 fn value_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::ValueDecl> {
     let mut parts = Parts::of(pair);
-    Ok(ast::ValueDecl { docs, name: parts.ident()?, value: parts.expr()?, span: parts.span })
+    Ok(ast::ValueDecl {
+        docs,
+        name: parts.ident()?,
+        value: parts.expr()?,
+        span: parts.span,
+    })
 }
 
 fn gravity_decl(pair: Pair<Rule>) -> Result<ast::Item> {
     let mut parts = Parts::of(pair);
-    Ok(ast::Item::Gravity(ast::GravityDecl { value: parts.expr()?, span: parts.span }))
+    Ok(ast::Item::Gravity(ast::GravityDecl {
+        value: parts.expr()?,
+        span: parts.span,
+    }))
 }
 
 fn newtonian_decl(pair: Pair<Rule>) -> Result<ast::Item> {
@@ -186,7 +216,11 @@ fn newtonian_decl(pair: Pair<Rule>) -> Result<ast::Item> {
     let keyword = span_of(&parts.next()?);
     let span = parts.span;
     let members = parts.rest().map(member).collect::<Result<_>>()?;
-    Ok(ast::Item::Newtonian(ast::NewtonianDecl { members, keyword, span }))
+    Ok(ast::Item::Newtonian(ast::NewtonianDecl {
+        members,
+        keyword,
+        span,
+    }))
 }
 
 fn body_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
@@ -194,7 +228,12 @@ fn body_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
     let name = parts.ident()?;
     let span = parts.span;
     let members = parts.rest().map(member).collect::<Result<_>>()?;
-    Ok(ast::Item::Body(ast::BodyDecl { docs, name, members, span }))
+    Ok(ast::Item::Body(ast::BodyDecl {
+        docs,
+        name,
+        members,
+        span,
+    }))
 }
 
 fn member(pair: Pair<Rule>) -> Result<ast::Member> {
@@ -208,7 +247,12 @@ fn member(pair: Pair<Rule>) -> Result<ast::Member> {
                 let mut parts = Parts::of(inner);
                 let name = parts.ident()?;
                 let position = parts.expr()?;
-                return Ok(ast::Member::Point(ast::PointDecl { docs, name, position, span: parts.span }));
+                return Ok(ast::Member::Point(ast::PointDecl {
+                    docs,
+                    name,
+                    position,
+                    span: parts.span,
+                }));
             }
             Rule::frame_decl => return Ok(ast::Member::Frame(frame_decl(inner, docs)?)),
             _ => return Err(internal(span)),
@@ -232,12 +276,22 @@ fn frame_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::FrameDecl> {
             _ => return Err(internal(span)),
         }
     }
-    Ok(ast::FrameDecl { docs, name, rotation, origin, span })
+    Ok(ast::FrameDecl {
+        docs,
+        name,
+        rotation,
+        origin,
+        span,
+    })
 }
 
 fn field(pair: Pair<Rule>) -> Result<ast::Field> {
     let mut parts = Parts::of(pair);
-    Ok(ast::Field { name: parts.ident()?, value: parts.expr()?, span: parts.span })
+    Ok(ast::Field {
+        name: parts.ident()?,
+        value: parts.expr()?,
+        span: parts.span,
+    })
 }
 
 fn joint_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
@@ -255,7 +309,15 @@ fn joint_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
             }
         }
     }
-    Ok(ast::Item::Joint(ast::JointDecl { docs, name, kind, parent, child, fields, span }))
+    Ok(ast::Item::Joint(ast::JointDecl {
+        docs,
+        name,
+        kind,
+        parent,
+        child,
+        fields,
+        span,
+    }))
 }
 
 fn force_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
@@ -264,8 +326,18 @@ fn force_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
     parts.take(Rule::kw_at);
     let point = path(parts.next()?);
     let value = parts.expr()?;
-    let frame = parts.take(Rule::frame_clause).map(frame_clause).transpose()?;
-    Ok(ast::Item::Force(ast::ForceDecl { docs, name, point, value, frame, span: parts.span }))
+    let frame = parts
+        .take(Rule::frame_clause)
+        .map(frame_clause)
+        .transpose()?;
+    Ok(ast::Item::Force(ast::ForceDecl {
+        docs,
+        name,
+        point,
+        value,
+        frame,
+        span: parts.span,
+    }))
 }
 
 fn torque_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
@@ -273,16 +345,35 @@ fn torque_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
     let name = parts.ident()?;
     let body = path(parts.next()?);
     let value = parts.expr()?;
-    let frame = parts.take(Rule::frame_clause).map(frame_clause).transpose()?;
-    Ok(ast::Item::Torque(ast::TorqueDecl { docs, name, body, value, frame, span: parts.span }))
+    let frame = parts
+        .take(Rule::frame_clause)
+        .map(frame_clause)
+        .transpose()?;
+    Ok(ast::Item::Torque(ast::TorqueDecl {
+        docs,
+        name,
+        body,
+        value,
+        frame,
+        span: parts.span,
+    }))
 }
 
 fn output_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
     let mut parts = Parts::of(pair);
     let name = parts.ident()?;
     let value = parts.expr()?;
-    let frame = parts.take(Rule::frame_clause).map(frame_clause).transpose()?;
-    Ok(ast::Item::Output(ast::OutputDecl { docs, name, value, frame, span: parts.span }))
+    let frame = parts
+        .take(Rule::frame_clause)
+        .map(frame_clause)
+        .transpose()?;
+    Ok(ast::Item::Output(ast::OutputDecl {
+        docs,
+        name,
+        value,
+        frame,
+        span: parts.span,
+    }))
 }
 
 fn frame_clause(pair: Pair<Rule>) -> Result<ast::Path> {
@@ -291,12 +382,19 @@ fn frame_clause(pair: Pair<Rule>) -> Result<ast::Path> {
 }
 
 fn ident(pair: Pair<Rule>) -> Ident {
-    Ident { name: pair.as_str().to_string(), span: span_of(&pair) }
+    Ident {
+        name: pair.as_str().to_string(),
+        span: span_of(&pair),
+    }
 }
 
 fn path(pair: Pair<Rule>) -> ast::Path {
     let span = span_of(&pair);
-    let segments = pair.into_inner().filter(|p| p.as_rule() == Rule::ident).map(ident).collect();
+    let segments = pair
+        .into_inner()
+        .filter(|p| p.as_rule() == Rule::ident)
+        .map(ident)
+        .collect();
     ast::Path { segments, span }
 }
 
@@ -320,22 +418,52 @@ fn built(pair: Pair<Rule>) -> Result<Built> {
         Rule::power => power(pair)?,
         Rule::quantity => {
             let (literal, unit) = build_quantity(pair)?;
-            (Expr { kind: ExprKind::Quantity { literal, unit }, span }, 1)
+            (
+                Expr {
+                    kind: ExprKind::Quantity { literal, unit },
+                    span,
+                },
+                1,
+            )
         }
-        Rule::path => (Expr { kind: ExprKind::Path(path(pair)), span }, 1),
+        Rule::path => (
+            Expr {
+                kind: ExprKind::Path(path(pair)),
+                span,
+            },
+            1,
+        ),
         Rule::paren => {
             let (inner, depth) = built(Parts::of(pair).next()?)?;
-            (Expr { kind: ExprKind::Paren(Box::new(inner)), span }, depth + 1)
+            (
+                Expr {
+                    kind: ExprKind::Paren(Box::new(inner)),
+                    span,
+                },
+                depth + 1,
+            )
         }
         Rule::vector => {
             let (items, depth) = built_list(Parts::of(pair).rest())?;
-            (Expr { kind: ExprKind::Vector(items), span }, depth + 1)
+            (
+                Expr {
+                    kind: ExprKind::Vector(items),
+                    span,
+                },
+                depth + 1,
+            )
         }
         Rule::call => {
             let mut parts = Parts::of(pair);
             let function = parts.ident()?;
             let (args, depth) = built_list(parts.rest())?;
-            (Expr { kind: ExprKind::Call { function, args }, span }, depth + 1)
+            (
+                Expr {
+                    kind: ExprKind::Call { function, args },
+                    span,
+                },
+                depth + 1,
+            )
         }
         _ => return Err(internal(span)),
     };
@@ -375,7 +503,14 @@ fn binary_chain(pair: Pair<Rule>) -> Result<Built> {
             return Err(too_deep(span));
         }
         let span = lhs.span.to(rhs.span);
-        lhs = Expr { kind: ExprKind::Binary { op, lhs: Box::new(lhs), rhs: Box::new(rhs) }, span };
+        lhs = Expr {
+            kind: ExprKind::Binary {
+                op,
+                lhs: Box::new(lhs),
+                rhs: Box::new(rhs),
+            },
+            span,
+        };
     }
     Ok((lhs, depth))
 }
@@ -392,16 +527,32 @@ fn negation(pair: Pair<Rule>) -> Result<Built> {
         }
     }
     let (operand, depth) = operand.ok_or_else(|| internal(span))?;
-    if minus_signs % 2 == 0 {
-        return Ok((Expr { span, ..operand }, depth));
+    // The pair's span may end in whitespace; end it at the operand.
+    let span = Span {
+        start: span.start,
+        end: operand.span.end,
+    };
+    match minus_signs {
+        0 => Ok((operand, depth)),
+        n if n % 2 == 0 => Ok((Expr { span, ..operand }, depth)),
+        _ => Ok((
+            Expr {
+                kind: ExprKind::Neg(Box::new(operand)),
+                span,
+            },
+            depth + 1,
+        )),
     }
-    Ok((Expr { kind: ExprKind::Neg(Box::new(operand)), span }, depth + 1))
 }
 
 /// `a ^ b ^ c`: right associative.
 fn power(pair: Pair<Rule>) -> Result<Built> {
     let span = span_of(&pair);
-    let operands = pair.into_inner().filter(|p| p.as_rule() != Rule::pow_op).map(built).collect::<Result<Vec<_>>>()?;
+    let operands = pair
+        .into_inner()
+        .filter(|p| p.as_rule() != Rule::pow_op)
+        .map(built)
+        .collect::<Result<Vec<_>>>()?;
     let mut operands = operands.into_iter().rev();
     let (mut result, mut depth) = operands.next().ok_or_else(|| internal(span))?;
     for (base, d) in operands {
@@ -410,7 +561,14 @@ fn power(pair: Pair<Rule>) -> Result<Built> {
             return Err(too_deep(span));
         }
         let span = base.span.to(result.span);
-        result = Expr { kind: ExprKind::Binary { op: BinaryOp::Pow, lhs: Box::new(base), rhs: Box::new(result) }, span };
+        result = Expr {
+            kind: ExprKind::Binary {
+                op: BinaryOp::Pow,
+                lhs: Box::new(base),
+                rhs: Box::new(result),
+            },
+            span,
+        };
     }
     Ok((result, depth))
 }
@@ -445,7 +603,10 @@ fn build_unit(pair: Pair<Rule>) -> ast::Unit {
 
 fn build_unit_factor(pair: Pair<Rule>, divide: bool) -> ast::UnitFactor {
     let span = span_of(&pair);
-    let mut name = Ident { name: String::new(), span };
+    let mut name = Ident {
+        name: String::new(),
+        span,
+    };
     let mut exponent = None;
     for inner in pair.into_inner() {
         match inner.as_rule() {
@@ -454,7 +615,12 @@ fn build_unit_factor(pair: Pair<Rule>, divide: bool) -> ast::UnitFactor {
             _ => {}
         }
     }
-    ast::UnitFactor { name, exponent, divide, span }
+    ast::UnitFactor {
+        name,
+        exponent,
+        divide,
+        span,
+    }
 }
 
 fn span_of(pair: &Pair<Rule>) -> Span {
@@ -470,7 +636,10 @@ fn internal(span: Span) -> Diagnostic {
 
 fn too_deep(span: Span) -> Diagnostic {
     Diagnostic::error("E0103", "expression is nested too deeply")
-        .with_label(span, format!("more than {MAX_EXPR_DEPTH} levels of operators"))
+        .with_label(
+            span,
+            format!("more than {MAX_EXPR_DEPTH} levels of operators"),
+        )
         .with_help("split it with `let` definitions")
 }
 
@@ -502,7 +671,10 @@ fn check_bracket_depth(text: &str) -> Result<()> {
                 depth += 1;
                 if depth > MAX_BRACKET_DEPTH {
                     return Err(Diagnostic::error("E0103", "brackets are nested too deeply")
-                        .with_label(Span::new(i, i + 1), format!("more than {MAX_BRACKET_DEPTH} levels"))
+                        .with_label(
+                            Span::new(i, i + 1),
+                            format!("more than {MAX_BRACKET_DEPTH} levels"),
+                        )
                         .with_help("split the expression with `let` definitions"));
                 }
             }
@@ -530,9 +702,24 @@ fn syntax_error(text: &str, error: pest::error::Error<Rule>) -> Diagnostic {
     }
     let list = join_alternatives(&expected);
     let wants_semicolon = expected.contains(&"`;`");
-    let at = if wants_semicolon { end_of_previous_token(text, position) } else { position };
+    let at = if wants_semicolon {
+        end_of_previous_token(text, position)
+    } else {
+        position
+    };
     let mut diagnostic = Diagnostic::error("E0101", format!("expected {list}, found {found}"))
         .with_label(Span::new(at, at), format!("expected {list}"));
+    if let Some(keyword) = keyword_before(text, position).filter(|_| expected == ["`=`"]) {
+        let start = end_of_previous_token(text, position) - keyword.len();
+        return diagnostic
+            .with_label(
+                Span::new(start, start + keyword.len()),
+                "read as a field name",
+            )
+            .with_help(format!(
+                "`{keyword}` starts a declaration: is a `}}` missing before it?"
+            ));
+    }
     if let Some(help) = syntax_help(&expected) {
         diagnostic = diagnostic.with_help(help);
     }
@@ -580,13 +767,14 @@ fn describe(rule: Rule) -> &'static str {
         lbrace | joint_block => "`{`",
         rbrace => "`}`",
         add_op | mul_op | pow_op | unit_op => "an operator",
-        expr | term | factor | power | exponent | quantity | number | call | path | paren | vector | neg_op => {
-            "an expression"
-        }
+        expr | term | factor | power | exponent | quantity | number | call | path | paren
+        | vector | neg_op => "an expression",
         ident => "a name",
         unit | unit_factor | unit_name => "a unit",
         unit_exponent => "an integer exponent",
-        member | point_decl | frame_decl | field | kw_point | kw_frame => "a field, `point` or `frame`",
+        member | point_decl | frame_decl | field | kw_point | kw_frame => {
+            "a field, `point` or `frame`"
+        }
         frame_clause | kw_in => "`in`",
         kw_at => "`at`",
         kw_on => "`on`",
@@ -610,7 +798,10 @@ fn found_token(text: &str, position: usize) -> String {
         return "end of file".to_string();
     };
     if first.is_alphanumeric() || first == '_' {
-        let word: String = rest.chars().take_while(|c| c.is_alphanumeric() || *c == '_' || *c == '.').collect();
+        let word: String = rest
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_' || *c == '.')
+            .collect();
         let word: String = word.chars().take(30).collect();
         return format!("`{word}`");
     }
@@ -620,9 +811,31 @@ fn found_token(text: &str, position: usize) -> String {
     }
 }
 
+/// The top-level keyword right before `position`, if any (a field named `joint` means a `}`
+/// is missing).
+fn keyword_before(text: &str, position: usize) -> Option<&'static str> {
+    const KEYWORDS: [&str; 10] = [
+        "param",
+        "let",
+        "input",
+        "gravity",
+        "newtonian",
+        "body",
+        "joint",
+        "force",
+        "torque",
+        "output",
+    ];
+    let before = text.get(..position)?.trim_end();
+    KEYWORDS.into_iter().find(|k| {
+        before.ends_with(k)
+            && !before[..before.len() - k.len()]
+                .ends_with(|c: char| c.is_ascii_alphanumeric() || c == '_')
+    })
+}
+
 /// The byte offset just after the last non-whitespace character before `position`
 /// (where a missing `;` belongs).
 fn end_of_previous_token(text: &str, position: usize) -> usize {
-    let before = text.get(..position).unwrap_or(text);
-    before.trim_end().len()
+    text.get(..position).unwrap_or("").trim_end().len()
 }

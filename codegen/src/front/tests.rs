@@ -57,7 +57,10 @@ fn loads_a_pendulum() {
     assert_eq!(model.docs, vec!["A pendulum."]);
     assert_eq!(model.params.len(), 3);
     let (_, l) = model.params.iter().nth(1).unwrap();
-    assert_eq!((l.name.as_str(), l.value, l.dimension), ("l", 0.025, Dimension::LENGTH));
+    assert_eq!(
+        (l.name.as_str(), l.value, l.dimension),
+        ("l", 0.025, Dimension::LENGTH)
+    );
     let names: Vec<&str> = model.frames.iter().map(|(_, f)| f.name.as_str()).collect();
     assert_eq!(names, ["newtonian", "hinge", "arm"]);
     let points: Vec<&str> = model.points.iter().map(|(_, p)| p.name.as_str()).collect();
@@ -72,19 +75,30 @@ fn loads_a_pendulum() {
 
 #[test]
 fn model_name_defaults_to_the_file_stem() {
-    let file = SourceFile::new("models/four-bar.mech", "body b { mass = 1 g; } joint j = weld(newtonian, b);");
+    let file = SourceFile::new(
+        "models/four-bar.mech",
+        "body b { mass = 1 g; } joint j = weld(newtonian, b);",
+    );
     let model = load(Arc::new(file)).unwrap();
     assert_eq!(model.name, "four_bar");
 }
 
 #[test]
 fn parse_keeps_docs_and_spans() {
-    let file = SourceFile::new("t.mech", "//! Model docs.\n/// The mass.\nparam m = 10 g;\n");
+    let file = SourceFile::new(
+        "t.mech",
+        "//! Model docs.\n/// The mass.\nparam m = 10 g;\n",
+    );
     let ast = parse(&file).unwrap();
     assert_eq!(ast.docs, vec!["Model docs."]);
-    let super::ast::Item::Param(param) = &ast.items[0] else { panic!() };
+    let super::ast::Item::Param(param) = &ast.items[0] else {
+        panic!()
+    };
     assert_eq!(param.docs, vec!["The mass."]);
-    assert_eq!(&file.text[param.name.span.start as usize..param.name.span.end as usize], "m");
+    assert_eq!(
+        &file.text[param.name.span.start as usize..param.name.span.end as usize],
+        "m"
+    );
 }
 
 #[test]
@@ -99,18 +113,39 @@ fn pin_with_child_point_and_child_frame_builds_the_documented_frames() {
     );
     let frames: Vec<_> = model.frames.iter().map(|(_, f)| f).collect();
     let names: Vec<&str> = frames.iter().map(|f| f.name.as_str()).collect();
-    assert_eq!(names, ["newtonian", "newtonian.tilted", "j", "j.child", "arm", "arm.f"]);
+    assert_eq!(
+        names,
+        [
+            "newtonian",
+            "newtonian.tilted",
+            "j",
+            "j.child",
+            "arm",
+            "arm.f"
+        ]
+    );
     let joint = frames[2];
     assert_eq!(joint.parent, Some(Model::NEWTONIAN));
     assert_eq!(joint.origin, [Expr::zero(), rational(1, 500), Expr::zero()]);
     assert_eq!(joint.orientation.len(), 1);
-    let Motion::Revolute { axis, .. } = &joint.motion else { panic!("{:?}", joint.motion) };
+    let Motion::Revolute { axis, .. } = &joint.motion else {
+        panic!("{:?}", joint.motion)
+    };
     assert_eq!(axis, &[Expr::zero(), rational(3, 5), rational(4, 5)]);
     let child = frames[3];
     assert_eq!(child.motion, Motion::Fixed);
     let angles: Vec<&Expr> = child.orientation.iter().map(|r| &r.angle).collect();
-    assert_eq!(angles, [&Expr::Number(Number::int(-2)), &Expr::Number(Number::Float(-std::f64::consts::FRAC_PI_2))]);
-    assert_eq!(child.orientation[0].axis, [Expr::zero(), Expr::zero(), Expr::one()]);
+    assert_eq!(
+        angles,
+        [
+            &Expr::Number(Number::int(-2)),
+            &Expr::Number(Number::Float(-std::f64::consts::FRAC_PI_2))
+        ]
+    );
+    assert_eq!(
+        child.orientation[0].axis,
+        [Expr::zero(), Expr::zero(), Expr::one()]
+    );
     let arm = frames[4];
     assert_eq!(arm.parent.map(|h| h.index()), Some(3));
     assert_eq!(arm.origin, [Expr::zero(), rational(-1, 200), Expr::zero()]);
@@ -133,7 +168,11 @@ fn frames_are_appended_parents_first_whatever_the_declaration_order() {
             assert!(parent < handle, "{} before its parent", frame.name);
         }
     }
-    let names: Vec<&str> = model.coordinates.iter().map(|(_, c)| c.name.as_str()).collect();
+    let names: Vec<&str> = model
+        .coordinates
+        .iter()
+        .map(|(_, c)| c.name.as_str())
+        .collect();
     assert_eq!(names, ["shoulder", "elbow", "slide"]);
     let (_, slide) = model.coordinates.iter().nth(2).unwrap();
     assert_eq!((slide.dimension, slide.initial), (Dimension::LENGTH, 0.002));
@@ -154,7 +193,10 @@ fn springs_dampers_forces_and_lets() {
          output e = f * 2;",
     );
     assert_eq!(model.loads.len(), 4);
-    assert_eq!(model.inputs.iter().next().unwrap().1.dimension, Dimension::FORCE);
+    assert_eq!(
+        model.inputs.iter().next().unwrap().1.dimension,
+        Dimension::FORCE
+    );
 }
 
 #[test]
@@ -166,7 +208,9 @@ fn exponents_may_be_rational() {
          joint j = slider(newtonian, b) { axis = x; }
          output w = w * 1 s;",
     );
-    let OutputKind::Expr(Expr::Mul(w, _)) = &model.outputs[0].kind else { panic!("{:?}", model.outputs[0].kind) };
+    let OutputKind::Expr(Expr::Mul(w, _)) = &model.outputs[0].kind else {
+        panic!("{:?}", model.outputs[0].kind)
+    };
     assert!(matches!(**w, Expr::Pow(_, Number::Rational(1, 2))));
 }
 
@@ -176,12 +220,30 @@ fn exponents_may_be_rational() {
 
 #[test]
 fn units_are_exact_where_possible() {
-    assert_eq!(units::lookup("mm").unwrap().scale, Number::Rational(1, 1000));
+    assert_eq!(
+        units::lookup("mm").unwrap().scale,
+        Number::Rational(1, 1000)
+    );
     assert_eq!(units::lookup("kg").unwrap().scale, Number::ONE);
-    assert_eq!(units::lookup("µm").unwrap().scale, Number::Rational(1, 1_000_000));
-    assert_eq!(units::lookup("GPa").unwrap().scale, Number::int(1_000_000_000));
-    assert_eq!(units::lookup("kHz").unwrap().dimension, Dimension { time: -1, ..Dimension::NONE });
-    assert!(matches!(units::lookup("deg").unwrap().scale, Number::Float(_)));
+    assert_eq!(
+        units::lookup("µm").unwrap().scale,
+        Number::Rational(1, 1_000_000)
+    );
+    assert_eq!(
+        units::lookup("GPa").unwrap().scale,
+        Number::int(1_000_000_000)
+    );
+    assert_eq!(
+        units::lookup("kHz").unwrap().dimension,
+        Dimension {
+            time: -1,
+            ..Dimension::NONE
+        }
+    );
+    assert!(matches!(
+        units::lookup("deg").unwrap().scale,
+        Number::Float(_)
+    ));
     assert!(units::lookup("mdeg").is_none());
     assert!(units::lookup("x").is_none());
 }
@@ -190,14 +252,43 @@ fn units_are_exact_where_possible() {
 fn parse_quantity_gives_si_values() {
     assert_eq!(units::parse_quantity("10 mN"), Ok((0.01, Dimension::FORCE)));
     assert_eq!(units::parse_quantity("2.5"), Ok((2.5, Dimension::NONE)));
-    assert_eq!(units::parse_quantity("-1e-3 kg*m^2"), Ok((-1e-3, Dimension::INERTIA)));
-    assert_eq!(units::parse_quantity("0 uN*m/rad"), Ok((0.0, Dimension::TORQUE)));
-    assert_eq!(units::parse_quantity("3 N/m"), Ok((3.0, Dimension { mass: 1, time: -2, ..Dimension::NONE })));
+    assert_eq!(
+        units::parse_quantity("-1e-3 kg*m^2"),
+        Ok((-1e-3, Dimension::INERTIA))
+    );
+    assert_eq!(
+        units::parse_quantity("0 uN*m/rad"),
+        Ok((0.0, Dimension::TORQUE))
+    );
+    assert_eq!(
+        units::parse_quantity("3 N/m"),
+        Ok((
+            3.0,
+            Dimension {
+                mass: 1,
+                time: -2,
+                ..Dimension::NONE
+            }
+        ))
+    );
     let (deg, dim) = units::parse_quantity("30 deg").unwrap();
     assert!((deg - std::f64::consts::PI / 6.0).abs() < 1e-15 && dim == Dimension::NONE);
-    assert_eq!(units::parse_quantity("9.81 m/s^2").unwrap().1, Dimension::ACCELERATION);
-    assert_eq!(units::parse_quantity("1 V").unwrap().1, Dimension { mass: 1, length: 2, time: -3, current: -1 });
-    assert!(units::parse_quantity("2 furlongs").unwrap_err().contains("furlongs"));
+    assert_eq!(
+        units::parse_quantity("9.81 m/s^2").unwrap().1,
+        Dimension::ACCELERATION
+    );
+    assert_eq!(
+        units::parse_quantity("1 V").unwrap().1,
+        Dimension {
+            mass: 1,
+            length: 2,
+            time: -3,
+            current: -1
+        }
+    );
+    assert!(units::parse_quantity("2 furlongs")
+        .unwrap_err()
+        .contains("furlongs"));
     assert!(units::parse_quantity("1e999").is_err());
     assert!(units::parse_quantity("").is_err());
 }
@@ -206,8 +297,12 @@ fn parse_quantity_gives_si_values() {
 fn five_millimetres_is_one_two_hundredth_of_a_metre() {
     let param = model("param l = 5 mm;");
     assert_eq!(param.params.iter().next().unwrap().1.value, 0.005);
-    let with_com = model("body b { mass = 1 g; com = [5 mm, 0, 0]; } joint j = weld(newtonian, b);");
-    assert_eq!(with_com.bodies.iter().next().unwrap().1.center_of_mass[0], rational(1, 200));
+    let with_com =
+        model("body b { mass = 1 g; com = [5 mm, 0, 0]; } joint j = weld(newtonian, b);");
+    assert_eq!(
+        with_com.bodies.iter().next().unwrap().1.center_of_mass[0],
+        rational(1, 200)
+    );
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -219,13 +314,19 @@ fn adding_a_length_to_a_mass_is_an_error() {
     let errors = errors("param m = 1 kg; param l = 1 m; let x = m + l;");
     assert_eq!(errors.diagnostics.len(), 1);
     let diagnostic = &errors.diagnostics[0];
-    assert_eq!((diagnostic.code, diagnostic.message.as_str()), ("E0301", "cannot add kg and m"));
+    assert_eq!(
+        (diagnostic.code, diagnostic.message.as_str()),
+        ("E0301", "cannot add kg and m")
+    );
     assert_eq!(diagnostic.labels.len(), 2);
 }
 
 #[test]
 fn dimension_errors() {
-    assert_eq!(codes("body b { mass = 1 m; } joint j = weld(newtonian, b);"), ["E0302"]);
+    assert_eq!(
+        codes("body b { mass = 1 m; } joint j = weld(newtonian, b);"),
+        ["E0302"]
+    );
     assert_eq!(codes("param a = 1 m; let s = sin(a);"), ["E0303"]);
     assert_eq!(codes("param a = 1 m; let s = a^0.5;"), ["E0304"]);
     assert_eq!(codes("param a = 1 m; let s = a^(1 s);"), ["E0305"]);
@@ -242,13 +343,31 @@ fn every_error_of_the_phase_is_reported() {
 
 #[test]
 fn structure_errors() {
-    assert_eq!(codes("body a { mass = 1 g; } joint j = pin(newtonian, a) { axis = [0, 0, 0]; }"), ["E0405"]);
-    assert_eq!(codes("body a { mass = 1 g; } joint j = pin(newtonian, a);"), ["E0402"]);
-    assert_eq!(codes("body a { mass = 1 g; } joint j = weld(newtonian, a) { axis = z; }"), ["E0403"]);
-    assert_eq!(codes("body a { mass = 1 g; inertia = [1, 2, 3, 4]; } joint j = weld(newtonian, a);"), ["E0404"]);
+    assert_eq!(
+        codes("body a { mass = 1 g; } joint j = pin(newtonian, a) { axis = [0, 0, 0]; }"),
+        ["E0405"]
+    );
+    assert_eq!(
+        codes("body a { mass = 1 g; } joint j = pin(newtonian, a);"),
+        ["E0402"]
+    );
+    assert_eq!(
+        codes("body a { mass = 1 g; } joint j = weld(newtonian, a) { axis = z; }"),
+        ["E0403"]
+    );
+    assert_eq!(
+        codes("body a { mass = 1 g; inertia = [1, 2, 3, 4]; } joint j = weld(newtonian, a);"),
+        ["E0404"]
+    );
     assert_eq!(codes("body a { } joint j = weld(newtonian, a);"), ["E0402"]);
-    assert_eq!(codes("body a { mass = 1 g; } joint j = weld(a, a);"), ["E0408"]);
-    assert_eq!(codes("body a { mass = 1 g; } joint j = weld(a, newtonian);"), ["E0409"]);
+    assert_eq!(
+        codes("body a { mass = 1 g; } joint j = weld(a, a);"),
+        ["E0408"]
+    );
+    assert_eq!(
+        codes("body a { mass = 1 g; } joint j = weld(a, newtonian);"),
+        ["E0409"]
+    );
     let cycle = "body a { mass = 1 g; } body b { mass = 1 g; } joint j1 = weld(a, b); joint j2 = weld(b, a);";
     assert_eq!(codes(cycle), ["E0410"]);
     let loop_ = "body a { mass = 1 g; } body b { mass = 1 g; }
@@ -272,9 +391,16 @@ fn syntax_errors_name_what_was_expected() {
     let incomplete = errors("param l = 2 * ;");
     let d = &incomplete.diagnostics[0];
     assert_eq!(d.code, "E0101");
-    assert!(d.message.starts_with("expected an expression"), "{}", d.message);
+    assert!(
+        d.message.starts_with("expected an expression"),
+        "{}",
+        d.message
+    );
     let missing = errors("param l = 2\nparam m = 1;");
-    assert_eq!(missing.diagnostics[0].message, "expected `;` or an operator, found `param`");
+    assert_eq!(
+        missing.diagnostics[0].message,
+        "expected `;` or an operator, found `param`"
+    );
     assert_eq!(missing.diagnostics[0].labels[0].span.start, 11);
 }
 
@@ -299,6 +425,14 @@ fn huge_numbers_and_exponents_do_not_overflow() {
     assert_eq!(codes("param a = 1 m^99999999999999999999;"), ["E0304"]);
     assert_eq!(codes("param a = 2^99999999999;"), ["E0413"]);
     assert_eq!(codes("param a = 1 / 0;"), ["E0413"]);
-    assert!(load(Arc::new(SourceFile::new("t.mech", "param a = 1.5e-2147483648;"))).is_ok());
-    assert!(load(Arc::new(SourceFile::new("t.mech", "param a = 99999999999999999999999999999999999999999 mm;"))).is_ok());
+    assert!(load(Arc::new(SourceFile::new(
+        "t.mech",
+        "param a = 1.5e-2147483648;"
+    )))
+    .is_ok());
+    assert!(load(Arc::new(SourceFile::new(
+        "t.mech",
+        "param a = 99999999999999999999999999999999999999999 mm;"
+    )))
+    .is_ok());
 }

@@ -17,7 +17,12 @@ pub struct Unit {
 }
 
 const fn dim(mass: i8, length: i8, time: i8, current: i8) -> Dimension {
-    Dimension { mass, length, time, current }
+    Dimension {
+        mass,
+        length,
+        time,
+        current,
+    }
 }
 
 /// Base units (before prefixes): name, scale numerator/denominator, dimension.
@@ -57,14 +62,20 @@ const DEGREE: &str = "deg";
 /// Looks up a unit name such as `mm`, `kN`, `deg`, `µm`.
 pub fn lookup(name: &str) -> Option<Unit> {
     if name == DEGREE {
-        return Some(Unit { scale: Number::Float(std::f64::consts::PI / 180.0), dimension: Dimension::NONE });
+        return Some(Unit {
+            scale: Number::Float(std::f64::consts::PI / 180.0),
+            dimension: Dimension::NONE,
+        });
     }
     if let Some(unit) = base_unit(name) {
         return Some(unit);
     }
     PREFIXES.iter().find_map(|&(prefix, power)| {
         let base = base_unit(name.strip_prefix(prefix)?)?;
-        Some(Unit { scale: base.scale.mul(power_of_ten(power)), dimension: base.dimension })
+        Some(Unit {
+            scale: base.scale.mul(power_of_ten(power)),
+            dimension: base.dimension,
+        })
     })
 }
 
@@ -72,7 +83,10 @@ fn base_unit(name: &str) -> Option<Unit> {
     BASE_UNITS
         .iter()
         .find(|(base, ..)| *base == name)
-        .map(|&(_, num, den, dimension)| Unit { scale: Number::rational(num as i128, den as i128), dimension })
+        .map(|&(_, num, den, dimension)| Unit {
+            scale: Number::rational(num as i128, den as i128),
+            dimension,
+        })
 }
 
 fn power_of_ten(power: i32) -> Number {
@@ -118,7 +132,12 @@ pub fn dim_pow(a: Dimension, num: i64, den: i64) -> Option<Dimension> {
         }
         in_range(scaled / den as i128)
     };
-    Some(Dimension { mass: scale(a.mass)?, length: scale(a.length)?, time: scale(a.time)?, current: scale(a.current)? })
+    Some(Dimension {
+        mass: scale(a.mass)?,
+        length: scale(a.length)?,
+        time: scale(a.time)?,
+        current: scale(a.current)?,
+    })
 }
 
 fn dim_map2(a: Dimension, b: Dimension, f: impl Fn(i128, i128) -> i128) -> Option<Dimension> {
@@ -161,12 +180,19 @@ pub enum UnitError {
 
 /// Evaluates a unit expression such as `N*m/rad` to its SI scale and dimension.
 pub fn evaluate(unit: &ast::Unit) -> Result<Unit, UnitError> {
-    let mut total = Unit { scale: Number::ONE, dimension: Dimension::NONE };
+    let mut total = Unit {
+        scale: Number::ONE,
+        dimension: Dimension::NONE,
+    };
     for (index, factor) in unit.factors.iter().enumerate() {
         let base = lookup(&factor.name.name).ok_or(UnitError::Unknown(index))?;
         let exponent = match &factor.exponent {
             None => 1,
-            Some(text) => text.parse::<i64>().ok().filter(|e| e.abs() <= MAX_EXPONENT as i64).ok_or(UnitError::BadExponent(index))?,
+            Some(text) => text
+                .parse::<i64>()
+                .ok()
+                .filter(|e| e.abs() <= MAX_EXPONENT as i64)
+                .ok_or(UnitError::BadExponent(index))?,
         };
         let exponent = if factor.divide { -exponent } else { exponent };
         let dimension = dim_pow(base.dimension, exponent, 1).ok_or(UnitError::Overflow)?;
@@ -182,8 +208,12 @@ pub fn parse_literal(text: &str) -> Option<Number> {
     if !value.is_finite() {
         return None;
     }
-    let exponent_digits = text.find(['e', 'E']).map_or("", |i| text.get(i + 1..).unwrap_or(""));
-    let exponent_digits = exponent_digits.trim_start_matches(['+', '-']).trim_start_matches('0');
+    let exponent_digits = text
+        .find(['e', 'E'])
+        .map_or("", |i| text.get(i + 1..).unwrap_or(""));
+    let exponent_digits = exponent_digits
+        .trim_start_matches(['+', '-'])
+        .trim_start_matches('0');
     // Exponents beyond a few hundred overflow `Number::parse_decimal`'s arithmetic; such a
     // literal is a float (0 or out of range) anyway.
     if exponent_digits.len() > 3 || text.len() > 400 {
@@ -196,9 +226,13 @@ pub fn parse_literal(text: &str) -> Option<Number> {
 /// dimension (used by the command line for `--set name=value`).
 pub fn parse_quantity(text: &str) -> Result<(f64, Dimension), String> {
     let (negative, literal, unit) = super::parse::parse_quantity_text(text.trim())?;
-    let number = parse_literal(&literal).ok_or_else(|| format!("number `{literal}` is out of range"))?;
+    let number =
+        parse_literal(&literal).ok_or_else(|| format!("number `{literal}` is out of range"))?;
     let unit = match &unit {
-        None => Unit { scale: Number::ONE, dimension: Dimension::NONE },
+        None => Unit {
+            scale: Number::ONE,
+            dimension: Dimension::NONE,
+        },
         Some(unit) => evaluate(unit).map_err(|error| unit_error_message(unit, &error))?,
     };
     let value = number.mul(unit.scale).to_f64();
@@ -209,10 +243,18 @@ pub fn parse_quantity(text: &str) -> Result<(f64, Dimension), String> {
 }
 
 fn unit_error_message(unit: &ast::Unit, error: &UnitError) -> String {
-    let factor_name = |i: usize| unit.factors.get(i).map_or("", |f| f.name.name.as_str()).to_string();
+    let factor_name = |i: usize| {
+        unit.factors
+            .get(i)
+            .map_or("", |f| f.name.name.as_str())
+            .to_string()
+    };
     match error {
         UnitError::Unknown(i) => format!("unknown unit `{}`", factor_name(*i)),
-        UnitError::BadExponent(i) => format!("the exponent of `{}` must be an integer between -{MAX_EXPONENT} and {MAX_EXPONENT}", factor_name(*i)),
+        UnitError::BadExponent(i) => format!(
+            "the exponent of `{}` must be an integer between -{MAX_EXPONENT} and {MAX_EXPONENT}",
+            factor_name(*i)
+        ),
         UnitError::Overflow => "the unit's dimension is out of range".to_string(),
     }
 }

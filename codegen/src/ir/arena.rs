@@ -12,11 +12,17 @@ pub struct Handle<T> {
 
 impl<T> Handle<T> {
     pub fn new(index: usize) -> Handle<T> {
-        Handle { index: index as u32, marker: PhantomData }
+        Handle {
+            index: index as u32,
+            marker: PhantomData,
+        }
     }
     /// A handle usable in `const` items (e.g. the Newtonian frame, always index 0).
     pub const fn from_const(index: u32) -> Handle<T> {
-        Handle { index, marker: PhantomData }
+        Handle {
+            index,
+            marker: PhantomData,
+        }
     }
     pub fn index(self) -> usize {
         self.index as usize
@@ -83,7 +89,10 @@ impl<T> Arena<T> {
         self.items.is_empty()
     }
     pub fn iter(&self) -> impl ExactSizeIterator<Item = (Handle<T>, &T)> + '_ {
-        self.items.iter().enumerate().map(|(i, item)| (Handle::new(i), item))
+        self.items
+            .iter()
+            .enumerate()
+            .map(|(i, item)| (Handle::new(i), item))
     }
     pub fn handles(&self) -> impl ExactSizeIterator<Item = Handle<T>> {
         (0..self.items.len()).map(Handle::new)

@@ -34,19 +34,58 @@ pub struct Dimension {
     pub current: i8,
 }
 
+// Named like the arithmetic they mirror (dimension of a product, a quotient, a power).
+#[allow(clippy::should_implement_trait)]
 impl Dimension {
-    pub const NONE: Dimension = Dimension { mass: 0, length: 0, time: 0, current: 0 };
-    pub const MASS: Dimension = Dimension { mass: 1, ..Dimension::NONE };
-    pub const LENGTH: Dimension = Dimension { length: 1, ..Dimension::NONE };
-    pub const TIME: Dimension = Dimension { time: 1, ..Dimension::NONE };
-    pub const CURRENT: Dimension = Dimension { current: 1, ..Dimension::NONE };
+    pub const NONE: Dimension = Dimension {
+        mass: 0,
+        length: 0,
+        time: 0,
+        current: 0,
+    };
+    pub const MASS: Dimension = Dimension {
+        mass: 1,
+        ..Dimension::NONE
+    };
+    pub const LENGTH: Dimension = Dimension {
+        length: 1,
+        ..Dimension::NONE
+    };
+    pub const TIME: Dimension = Dimension {
+        time: 1,
+        ..Dimension::NONE
+    };
+    pub const CURRENT: Dimension = Dimension {
+        current: 1,
+        ..Dimension::NONE
+    };
     /// kg·m/s²
-    pub const FORCE: Dimension = Dimension { mass: 1, length: 1, time: -2, current: 0 };
+    pub const FORCE: Dimension = Dimension {
+        mass: 1,
+        length: 1,
+        time: -2,
+        current: 0,
+    };
     /// kg·m²/s² (also a torque, and a rotational stiffness N·m/rad)
-    pub const TORQUE: Dimension = Dimension { mass: 1, length: 2, time: -2, current: 0 };
+    pub const TORQUE: Dimension = Dimension {
+        mass: 1,
+        length: 2,
+        time: -2,
+        current: 0,
+    };
     /// kg·m²
-    pub const INERTIA: Dimension = Dimension { mass: 1, length: 2, time: 0, current: 0 };
-    pub const ACCELERATION: Dimension = Dimension { mass: 0, length: 1, time: -2, current: 0 };
+    pub const INERTIA: Dimension = Dimension {
+        mass: 1,
+        length: 2,
+        time: 0,
+        current: 0,
+    };
+    pub const ACCELERATION: Dimension = Dimension {
+        mass: 0,
+        length: 1,
+        time: -2,
+        current: 0,
+    };
 
     pub fn mul(self, other: Dimension) -> Dimension {
         Dimension {
@@ -72,18 +111,31 @@ impl Dimension {
 impl std::fmt::Display for Dimension {
     /// `kg*m/s^2`-style SI form; `1` for dimensionless.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let parts = [("kg", self.mass), ("m", self.length), ("s", self.time), ("A", self.current)];
+        let parts = [
+            ("kg", self.mass),
+            ("m", self.length),
+            ("s", self.time),
+            ("A", self.current),
+        ];
         let mut numerator = Vec::new();
         let mut denominator = Vec::new();
         for (unit, exponent) in parts {
-            let side = if exponent > 0 { &mut numerator } else { &mut denominator };
+            let side = if exponent > 0 {
+                &mut numerator
+            } else {
+                &mut denominator
+            };
             match exponent.abs() {
                 0 => {}
                 1 => side.push(unit.to_string()),
                 e => side.push(format!("{unit}^{e}")),
             }
         }
-        let top = if numerator.is_empty() { "1".to_string() } else { numerator.join("*") };
+        let top = if numerator.is_empty() {
+            "1".to_string()
+        } else {
+            numerator.join("*")
+        };
         match denominator.len() {
             0 => write!(f, "{top}"),
             _ => write!(f, "{top}/{}", denominator.join("/")),
@@ -218,16 +270,24 @@ pub enum Motion {
     Fixed,
     /// Rotation by `q` about the unit `axis` through the frame's origin (components in this
     /// frame, equal in the parent-side placement since the axis is invariant).
-    Revolute { axis: Vec3, coordinate: Handle<Coordinate> },
+    Revolute {
+        axis: Vec3,
+        coordinate: Handle<Coordinate>,
+    },
     /// Translation by `q` along the unit `axis` (components in this frame's placement).
-    Prismatic { axis: Vec3, coordinate: Handle<Coordinate> },
+    Prismatic {
+        axis: Vec3,
+        coordinate: Handle<Coordinate>,
+    },
 }
 
 impl Motion {
     pub fn coordinate(&self) -> Option<Handle<Coordinate>> {
         match self {
             Motion::Fixed => None,
-            Motion::Revolute { coordinate, .. } | Motion::Prismatic { coordinate, .. } => Some(*coordinate),
+            Motion::Revolute { coordinate, .. } | Motion::Prismatic { coordinate, .. } => {
+                Some(*coordinate)
+            }
         }
     }
 }
@@ -311,23 +371,46 @@ pub struct Joint {
 #[derive(Clone, Debug, PartialEq)]
 pub enum Load {
     /// A force applied at a point (acts on whatever the point's frame belongs to).
-    Force { point: Handle<Point>, force: FrameVector, span: Span },
+    Force {
+        point: Handle<Point>,
+        force: FrameVector,
+        span: Span,
+    },
     /// A couple applied to the body owning `frame`.
-    Torque { frame: Handle<Frame>, torque: FrameVector, span: Span },
+    Torque {
+        frame: Handle<Frame>,
+        torque: FrameVector,
+        span: Span,
+    },
     /// `−stiffness·(q − rest)` on one coordinate (joint spring); stores `½k(q−rest)²` of
     /// potential energy.
-    Spring { coordinate: Handle<Coordinate>, stiffness: Expr, rest: Expr, span: Span },
+    Spring {
+        coordinate: Handle<Coordinate>,
+        stiffness: Expr,
+        rest: Expr,
+        span: Span,
+    },
     /// `−damping·u` on one coordinate (joint damper).
-    Damper { coordinate: Handle<Coordinate>, damping: Expr, span: Span },
+    Damper {
+        coordinate: Handle<Coordinate>,
+        damping: Expr,
+        span: Span,
+    },
 }
 
 /// What an output measures. Vector outputs produce three scalar outputs `name.x|y|z`.
 #[derive(Clone, Debug, PartialEq)]
 pub enum OutputKind {
     /// Position of `point` relative to the origin of `frame`, components in `frame`.
-    Position { point: Handle<Point>, frame: Handle<Frame> },
+    Position {
+        point: Handle<Point>,
+        frame: Handle<Frame>,
+    },
     /// Velocity of `point` in the Newtonian frame, components in `frame`.
-    Velocity { point: Handle<Point>, frame: Handle<Frame> },
+    Velocity {
+        point: Handle<Point>,
+        frame: Handle<Frame>,
+    },
     Coordinate(Handle<Coordinate>),
     Speed(Handle<Coordinate>),
     KineticEnergy,
@@ -371,7 +454,10 @@ impl Model {
 
     /// A model with only the Newtonian frame.
     pub fn new(name: impl Into<String>) -> Model {
-        let mut model = Model { name: name.into(), ..Model::default() };
+        let mut model = Model {
+            name: name.into(),
+            ..Model::default()
+        };
         model.frames.append(Frame {
             name: "newtonian".to_string(),
             parent: None,

@@ -105,7 +105,11 @@ pub fn lower_expr(pool: &mut ExprPool, expr: &ir::Expr) -> ExprId {
 }
 
 pub fn lower_vec(pool: &mut ExprPool, v: &ir::Vec3) -> Vec3 {
-    [lower_expr(pool, &v[0]), lower_expr(pool, &v[1]), lower_expr(pool, &v[2])]
+    [
+        lower_expr(pool, &v[0]),
+        lower_expr(pool, &v[1]),
+        lower_expr(pool, &v[2]),
+    ]
 }
 
 /// `C_{p←F0}` of a constant orientation sequence `R(a₀,θ₀)·R(a₁,θ₁)·…`.
@@ -133,7 +137,10 @@ impl Kinematics {
             frames.push(kinematics);
         }
         let count = frames.len();
-        Kinematics { frames, to_newtonian: vec![None; count] }
+        Kinematics {
+            frames,
+            to_newtonian: vec![None; count],
+        }
     }
 
     /// `(C_{N←k}, r_O)`: orientation and origin position of frame k, both in N's basis.
@@ -158,16 +165,27 @@ impl Kinematics {
 
     /// Re-expresses `v` (components in `from`) in the basis of `to`, walking up to the
     /// common ancestor and down again, so only the DCMs on that path are used.
-    pub fn express(&self, pool: &mut ExprPool, v: Vec3, from: Handle<ir::Frame>, to: Handle<ir::Frame>) -> Vec3 {
+    pub fn express(
+        &self,
+        pool: &mut ExprPool,
+        v: Vec3,
+        from: Handle<ir::Frame>,
+        to: Handle<ir::Frame>,
+    ) -> Vec3 {
         let ancestors_of_to = self.ancestors(to);
         let mut v = v;
         let mut current = from;
         while !ancestors_of_to.contains(&current) {
             let kinematics = &self.frames[current.index()];
             v = vector::mat_vec(pool, &kinematics.to_parent, v);
-            current = kinematics.parent.expect("the root is an ancestor of every frame");
+            current = kinematics
+                .parent
+                .expect("the root is an ancestor of every frame");
         }
-        let position = ancestors_of_to.iter().position(|&f| f == current).unwrap_or(0);
+        let position = ancestors_of_to
+            .iter()
+            .position(|&f| f == current)
+            .unwrap_or(0);
         for &frame in ancestors_of_to[..position].iter().rev() {
             v = vector::mat_t_vec(pool, &self.frames[frame.index()].to_parent, v);
         }
@@ -185,18 +203,37 @@ impl Kinematics {
 
     /// Partial velocities of the point at `offset` (basis of `frame`) fixed in `frame`:
     /// `V_r + W_r × offset`.
-    pub fn point_partials(&self, pool: &mut ExprPool, frame: Handle<ir::Frame>, offset: Vec3) -> Partials {
+    pub fn point_partials(
+        &self,
+        pool: &mut ExprPool,
+        frame: Handle<ir::Frame>,
+        offset: Vec3,
+    ) -> Partials {
         let kinematics = &self.frames[frame.index()];
-        let rotational: Partials =
-            kinematics.partial_omega.iter().map(|&(r, w)| (r, vector::cross(pool, w, offset))).collect();
+        let rotational: Partials = kinematics
+            .partial_omega
+            .iter()
+            .map(|&(r, w)| (r, vector::cross(pool, w, offset)))
+            .collect();
         merge(pool, &kinematics.partial_velocity, &rotational)
     }
 
     /// Acceleration (u̇-free part) of the point at `offset` fixed in `frame`:
     /// `a_O + α × r + ω × (ω × r)`.
-    pub fn point_accel_rest(&self, pool: &mut ExprPool, frame: Handle<ir::Frame>, offset: Vec3) -> Vec3 {
+    pub fn point_accel_rest(
+        &self,
+        pool: &mut ExprPool,
+        frame: Handle<ir::Frame>,
+        offset: Vec3,
+    ) -> Vec3 {
         let kinematics = &self.frames[frame.index()];
-        accel_of_point(pool, kinematics.accel_rest, kinematics.alpha_rest, kinematics.omega, offset)
+        accel_of_point(
+            pool,
+            kinematics.accel_rest,
+            kinematics.alpha_rest,
+            kinematics.omega,
+            offset,
+        )
     }
 }
 
@@ -225,7 +262,10 @@ fn child(pool: &mut ExprPool, frame: &ir::Frame, parent: &FrameKinematics) -> Fr
     let placement = orientation(pool, &frame.orientation);
     let origin = lower_vec(pool, &frame.origin);
     let speed_symbol = |pool: &mut ExprPool, c: Handle<ir::Coordinate>| {
-        (pool.symbol(Symbol::Coordinate(c.index() as u32)), pool.symbol(Symbol::Speed(c.index() as u32)))
+        (
+            pool.symbol(Symbol::Coordinate(c.index() as u32)),
+            pool.symbol(Symbol::Speed(c.index() as u32)),
+        )
     };
 
     let (to_parent, offset, own_rotation, own_translation) = match &frame.motion {
@@ -243,7 +283,12 @@ fn child(pool: &mut ExprPool, frame: &ir::Frame, parent: &FrameKinematics) -> Fr
             let axis_in_parent = vector::mat_vec(pool, &placement, axis);
             let slide = vector::scale(pool, axis_in_parent, q);
             let offset = vector::add(pool, origin, slide);
-            (placement, offset, None, Some((coordinate.index(), axis, axis_in_parent, u)))
+            (
+                placement,
+                offset,
+                None,
+                Some((coordinate.index(), axis, axis_in_parent, u)),
+            )
         }
     };
     let c = to_parent;
@@ -251,7 +296,11 @@ fn child(pool: &mut ExprPool, frame: &ir::Frame, parent: &FrameKinematics) -> Fr
 
     // Angular velocity and its partials.
     let parent_omega_here = to_child(pool, parent.omega);
-    let mut partial_omega: Partials = parent.partial_omega.iter().map(|&(r, w)| (r, to_child(pool, w))).collect();
+    let mut partial_omega: Partials = parent
+        .partial_omega
+        .iter()
+        .map(|&(r, w)| (r, to_child(pool, w)))
+        .collect();
     let mut omega = parent_omega_here;
     let mut alpha_rest = to_child(pool, parent.alpha_rest);
     if let Some((r, axis, u)) = own_rotation {
@@ -263,12 +312,24 @@ fn child(pool: &mut ExprPool, frame: &ir::Frame, parent: &FrameKinematics) -> Fr
     }
 
     // Origin velocity partials: Cᵀ (V_p,r + W_p,r × d), plus the slide axis.
-    let lever: Partials = parent.partial_omega.iter().map(|&(r, w)| (r, vector::cross(pool, w, offset))).collect();
-    let mut partial_velocity: Partials =
-        merge(pool, &parent.partial_velocity, &lever).into_iter().map(|(r, v)| (r, to_child(pool, v))).collect();
+    let lever: Partials = parent
+        .partial_omega
+        .iter()
+        .map(|&(r, w)| (r, vector::cross(pool, w, offset)))
+        .collect();
+    let mut partial_velocity: Partials = merge(pool, &parent.partial_velocity, &lever)
+        .into_iter()
+        .map(|(r, v)| (r, to_child(pool, v)))
+        .collect();
 
     // Origin acceleration without u̇: Cᵀ (a_p + α_p × d + ω_p × (ω_p × d) + 2 ω_p × a_p u).
-    let mut accel = accel_of_point(pool, parent.accel_rest, parent.alpha_rest, parent.omega, offset);
+    let mut accel = accel_of_point(
+        pool,
+        parent.accel_rest,
+        parent.alpha_rest,
+        parent.omega,
+        offset,
+    );
     if let Some((r, axis, axis_in_parent, u)) = own_translation {
         partial_velocity.push((r, axis));
         let slide_rate = vector::scale(pool, axis_in_parent, u);

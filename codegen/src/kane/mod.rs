@@ -65,7 +65,10 @@ pub fn derive(model: &Model) -> Equations {
         mass_matrix[r + nu * s] = entry;
         mass_matrix[s + nu * r] = entry;
     }
-    let forcing: Vec<ExprId> = forcing_terms.iter().map(|terms| pool.add_all(terms)).collect();
+    let forcing: Vec<ExprId> = forcing_terms
+        .iter()
+        .map(|terms| pool.add_all(terms))
+        .collect();
 
     let mut outputs = Vec::new();
     let mut output_names = Vec::new();
@@ -75,7 +78,15 @@ pub fn derive(model: &Model) -> Equations {
             outputs.push(id);
         }
     }
-    Equations { pool, nq: nu, nu, mass_matrix, forcing, outputs, output_names }
+    Equations {
+        pool,
+        nq: nu,
+        nu,
+        mass_matrix,
+        forcing,
+        outputs,
+        output_names,
+    }
 }
 
 /// Display names: `q_<coordinate>`, `u_<coordinate>`, parameter and input names, `t`.
@@ -116,11 +127,20 @@ impl BodyTerms {
         let omega_partials = frame.partial_omega.clone();
         let zero = vector::zero(pool);
         let mut partials = Vec::new();
-        let all_speeds: std::collections::BTreeSet<usize> =
-            velocity_partials.iter().chain(&omega_partials).map(|&(r, _)| r).collect();
+        let all_speeds: std::collections::BTreeSet<usize> = velocity_partials
+            .iter()
+            .chain(&omega_partials)
+            .map(|&(r, _)| r)
+            .collect();
         for r in all_speeds {
-            let v = velocity_partials.iter().find(|p| p.0 == r).map_or(zero, |p| p.1);
-            let w = omega_partials.iter().find(|p| p.0 == r).map_or(zero, |p| p.1);
+            let v = velocity_partials
+                .iter()
+                .find(|p| p.0 == r)
+                .map_or(zero, |p| p.1);
+            let w = omega_partials
+                .iter()
+                .find(|p| p.0 == r)
+                .map_or(zero, |p| p.1);
             partials.push((r, v, w));
         }
 
@@ -131,19 +151,36 @@ impl BodyTerms {
         let i_omega = mat_vec3(pool, &inertia, frame.omega);
         let gyroscopic = vector::cross(pool, frame.omega, i_omega);
         let inertia_torque = vector::add(pool, i_alpha, gyroscopic);
-        BodyTerms { mass, inertia, partials, translational_force, inertia_torque }
+        BodyTerms {
+            mass,
+            inertia,
+            partials,
+            translational_force,
+            inertia_torque,
+        }
     }
 
     /// Adds `m v_r·v_s + ω_r·I ω_s` to `M_rs` and `v_r·m(g − a) − ω_r·(Iα + ω×Iω)` to `F_r`.
-    fn add_to(&self, pool: &mut ExprPool, mass: &mut BTreeMap<(usize, usize), Vec<ExprId>>, forcing: &mut [Vec<ExprId>]) {
-        let inertia_times: Vec<Vec3> = self.partials.iter().map(|&(_, _, w)| mat_vec3(pool, &self.inertia, w)).collect();
+    fn add_to(
+        &self,
+        pool: &mut ExprPool,
+        mass: &mut BTreeMap<(usize, usize), Vec<ExprId>>,
+        forcing: &mut [Vec<ExprId>],
+    ) {
+        let inertia_times: Vec<Vec3> = self
+            .partials
+            .iter()
+            .map(|&(_, _, w)| mat_vec3(pool, &self.inertia, w))
+            .collect();
         for (i, &(r, v_r, w_r)) in self.partials.iter().enumerate() {
             for (j, &(s, v_s, _)) in self.partials.iter().enumerate().skip(i) {
                 let translational = vector::dot(pool, v_r, v_s);
                 let translational = pool.mul(self.mass, translational);
                 let rotational = vector::dot(pool, w_r, inertia_times[j]);
                 let key = (r.min(s), r.max(s));
-                mass.entry(key).or_default().extend([translational, rotational]);
+                mass.entry(key)
+                    .or_default()
+                    .extend([translational, rotational]);
             }
             let active = vector::dot(pool, v_r, self.translational_force);
             let inertial = vector::dot(pool, w_r, self.inertia_torque);
@@ -155,8 +192,15 @@ impl BodyTerms {
 
 /// The symmetric inertia matrix from tensor entries.
 fn inertia_matrix(pool: &mut ExprPool, inertia: &ir::Inertia) -> [[ExprId; 3]; 3] {
-    let [xx, yy, zz, xy, yz, zx] =
-        [&inertia.xx, &inertia.yy, &inertia.zz, &inertia.xy, &inertia.yz, &inertia.zx].map(|e| lower_expr(pool, e));
+    let [xx, yy, zz, xy, yz, zx] = [
+        &inertia.xx,
+        &inertia.yy,
+        &inertia.zz,
+        &inertia.xy,
+        &inertia.yz,
+        &inertia.zx,
+    ]
+    .map(|e| lower_expr(pool, e));
     [[xx, xy, zx], [xy, yy, yz], [zx, yz, zz]]
 }
 
@@ -165,7 +209,13 @@ fn mat_vec3(pool: &mut ExprPool, m: &[[ExprId; 3]; 3], v: Vec3) -> Vec3 {
 }
 
 /// Contribution of one applied load to the generalized active forces `F_r`.
-fn add_load(pool: &mut ExprPool, kinematics: &Kinematics, model: &Model, load: &Load, forcing: &mut [Vec<ExprId>]) {
+fn add_load(
+    pool: &mut ExprPool,
+    kinematics: &Kinematics,
+    model: &Model,
+    load: &Load,
+    forcing: &mut [Vec<ExprId>],
+) {
     match load {
         Load::Force { point, force, .. } => {
             let point = &model.points[*point];
@@ -183,7 +233,12 @@ fn add_load(pool: &mut ExprPool, kinematics: &Kinematics, model: &Model, load: &
                 forcing[r].push(vector::dot(pool, t, w));
             }
         }
-        Load::Spring { coordinate, stiffness, rest, .. } => {
+        Load::Spring {
+            coordinate,
+            stiffness,
+            rest,
+            ..
+        } => {
             let k = lower_expr(pool, stiffness);
             let rest = lower_expr(pool, rest);
             let q = pool.symbol(Symbol::Coordinate(coordinate.index() as u32));
@@ -191,7 +246,11 @@ fn add_load(pool: &mut ExprPool, kinematics: &Kinematics, model: &Model, load: &
             let force = pool.mul(k, stretch);
             forcing[coordinate.index()].push(pool.neg(force));
         }
-        Load::Damper { coordinate, damping, .. } => {
+        Load::Damper {
+            coordinate,
+            damping,
+            ..
+        } => {
             let c = lower_expr(pool, damping);
             let u = pool.symbol(Symbol::Speed(coordinate.index() as u32));
             let force = pool.mul(c, u);
@@ -201,7 +260,12 @@ fn add_load(pool: &mut ExprPool, kinematics: &Kinematics, model: &Model, load: &
 }
 
 /// Scalar outputs of one declared output, with name suffixes (`""` or `.x`, `.y`, `.z`).
-fn lower_output(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Model, kind: &OutputKind) -> Vec<(&'static str, ExprId)> {
+fn lower_output(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    model: &Model,
+    kind: &OutputKind,
+) -> Vec<(&'static str, ExprId)> {
     let vector_output = |v: Vec3| vec![(".x", v[0]), (".y", v[1]), (".z", v[2])];
     match kind {
         OutputKind::Position { point, frame } => {
@@ -279,7 +343,13 @@ fn potential_energy(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Mo
         terms.push(pool.neg(work));
     }
     for load in &model.loads {
-        if let Load::Spring { coordinate, stiffness, rest, .. } = load {
+        if let Load::Spring {
+            coordinate,
+            stiffness,
+            rest,
+            ..
+        } = load
+        {
             let k = lower_expr(pool, stiffness);
             let rest = lower_expr(pool, rest);
             let q = pool.symbol(Symbol::Coordinate(coordinate.index() as u32));

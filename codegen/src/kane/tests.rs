@@ -35,7 +35,13 @@ fn coordinate(model: &mut Model, name: &str) -> Handle<Coordinate> {
     })
 }
 
-fn frame(model: &mut Model, name: &str, parent: Handle<Frame>, origin: [Expr; 3], motion: Motion) -> Handle<Frame> {
+fn frame(
+    model: &mut Model,
+    name: &str,
+    parent: Handle<Frame>,
+    origin: [Expr; 3],
+    motion: Motion,
+) -> Handle<Frame> {
     model.frames.append(Frame {
         name: name.to_string(),
         parent: Some(parent),
@@ -53,7 +59,14 @@ fn point_mass(model: &mut Model, name: &str, frame: Handle<Frame>, mass: Expr) {
         frame,
         mass,
         center_of_mass: zero3(),
-        inertia: Inertia { xx: zero(), yy: zero(), zz: zero(), xy: zero(), yz: zero(), zx: zero() },
+        inertia: Inertia {
+            xx: zero(),
+            yy: zero(),
+            zz: zero(),
+            xy: zero(),
+            yz: zero(),
+            zx: zero(),
+        },
         docs: Vec::new(),
         span: Span::default(),
     });
@@ -66,8 +79,23 @@ fn pendulum() -> Model {
     let l = param(&mut model, "l", 1.0);
     let g = param(&mut model, "g", 9.81);
     let q = coordinate(&mut model, "hinge");
-    let hinge = frame(&mut model, "hinge", Model::NEWTONIAN, zero3(), Motion::Revolute { axis: axis(2), coordinate: q });
-    let bob = frame(&mut model, "bob", hinge, [Expr::zero(), Expr::Neg(Box::new(l)), Expr::zero()], Motion::Fixed);
+    let hinge = frame(
+        &mut model,
+        "hinge",
+        Model::NEWTONIAN,
+        zero3(),
+        Motion::Revolute {
+            axis: axis(2),
+            coordinate: q,
+        },
+    );
+    let bob = frame(
+        &mut model,
+        "bob",
+        hinge,
+        [Expr::zero(), Expr::Neg(Box::new(l)), Expr::zero()],
+        Motion::Fixed,
+    );
     point_mass(&mut model, "bob", bob, m);
     model.gravity = Some([Expr::zero(), Expr::Neg(Box::new(g)), Expr::zero()]);
     model
@@ -79,8 +107,18 @@ fn simple_pendulum_is_exact() {
     // Hash-consing makes structural equality an id comparison.
     let expected_m = eqs.pool.parse_sexpr("(* m (^ l 2))").unwrap();
     let expected_f = eqs.pool.parse_sexpr("(* -1 m g l (sin q_hinge))").unwrap();
-    assert_eq!(eqs.mass_matrix[0], expected_m, "M = {}", eqs.pool.sexpr(eqs.mass_matrix[0]));
-    assert_eq!(eqs.forcing[0], expected_f, "F = {}", eqs.pool.sexpr(eqs.forcing[0]));
+    assert_eq!(
+        eqs.mass_matrix[0],
+        expected_m,
+        "M = {}",
+        eqs.pool.sexpr(eqs.mass_matrix[0])
+    );
+    assert_eq!(
+        eqs.forcing[0],
+        expected_f,
+        "F = {}",
+        eqs.pool.sexpr(eqs.forcing[0])
+    );
 }
 
 /// A cart (mass M) on a slider along x carrying a pendulum bob (mass m, length l):
@@ -94,10 +132,34 @@ fn cart_pendulum_matches_closed_form() {
     let g = param(&mut model, "g", 9.81);
     let x = coordinate(&mut model, "x");
     let theta = coordinate(&mut model, "theta");
-    let cart = frame(&mut model, "cart", Model::NEWTONIAN, zero3(), Motion::Prismatic { axis: axis(0), coordinate: x });
+    let cart = frame(
+        &mut model,
+        "cart",
+        Model::NEWTONIAN,
+        zero3(),
+        Motion::Prismatic {
+            axis: axis(0),
+            coordinate: x,
+        },
+    );
     point_mass(&mut model, "cart", cart, cart_mass);
-    let pin = frame(&mut model, "pin", cart, zero3(), Motion::Revolute { axis: axis(2), coordinate: theta });
-    let bob = frame(&mut model, "bob", pin, [Expr::zero(), Expr::Neg(Box::new(l)), Expr::zero()], Motion::Fixed);
+    let pin = frame(
+        &mut model,
+        "pin",
+        cart,
+        zero3(),
+        Motion::Revolute {
+            axis: axis(2),
+            coordinate: theta,
+        },
+    );
+    let bob = frame(
+        &mut model,
+        "bob",
+        pin,
+        [Expr::zero(), Expr::Neg(Box::new(l)), Expr::zero()],
+        Motion::Fixed,
+    );
     point_mass(&mut model, "bob", bob, m);
     model.gravity = Some([Expr::zero(), Expr::Neg(Box::new(g)), Expr::zero()]);
     let eqs = derive(&model);

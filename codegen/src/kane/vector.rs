@@ -19,11 +19,19 @@ pub fn identity(pool: &mut ExprPool) -> Mat3 {
 }
 
 pub fn add(pool: &mut ExprPool, a: Vec3, b: Vec3) -> Vec3 {
-    [pool.add(a[0], b[0]), pool.add(a[1], b[1]), pool.add(a[2], b[2])]
+    [
+        pool.add(a[0], b[0]),
+        pool.add(a[1], b[1]),
+        pool.add(a[2], b[2]),
+    ]
 }
 
 pub fn sub(pool: &mut ExprPool, a: Vec3, b: Vec3) -> Vec3 {
-    [pool.sub(a[0], b[0]), pool.sub(a[1], b[1]), pool.sub(a[2], b[2])]
+    [
+        pool.sub(a[0], b[0]),
+        pool.sub(a[1], b[1]),
+        pool.sub(a[2], b[2]),
+    ]
 }
 
 /// `s·a` for a scalar expression `s`.
@@ -32,11 +40,19 @@ pub fn scale(pool: &mut ExprPool, a: Vec3, s: ExprId) -> Vec3 {
 }
 
 pub fn scale_number(pool: &mut ExprPool, a: Vec3, c: Number) -> Vec3 {
-    [pool.scale(a[0], c), pool.scale(a[1], c), pool.scale(a[2], c)]
+    [
+        pool.scale(a[0], c),
+        pool.scale(a[1], c),
+        pool.scale(a[2], c),
+    ]
 }
 
 pub fn dot(pool: &mut ExprPool, a: Vec3, b: Vec3) -> ExprId {
-    let products = [pool.mul(a[0], b[0]), pool.mul(a[1], b[1]), pool.mul(a[2], b[2])];
+    let products = [
+        pool.mul(a[0], b[0]),
+        pool.mul(a[1], b[1]),
+        pool.mul(a[2], b[2]),
+    ];
     pool.add_all(&products)
 }
 
@@ -46,7 +62,11 @@ pub fn cross(pool: &mut ExprPool, a: Vec3, b: Vec3) -> Vec3 {
         let right = pool.mul(a[j], b[i]);
         pool.sub(left, right)
     };
-    [component(pool, 1, 2), component(pool, 2, 0), component(pool, 0, 1)]
+    [
+        component(pool, 1, 2),
+        component(pool, 2, 0),
+        component(pool, 0, 1),
+    ]
 }
 
 /// `C·v`.
@@ -57,7 +77,11 @@ pub fn mat_vec(pool: &mut ExprPool, c: &Mat3, v: Vec3) -> Vec3 {
 /// `Cᵀ·v` (for a DCM: the inverse map).
 pub fn mat_t_vec(pool: &mut ExprPool, c: &Mat3, v: Vec3) -> Vec3 {
     let column = |i: usize| [c[0][i], c[1][i], c[2][i]];
-    [dot(pool, column(0), v), dot(pool, column(1), v), dot(pool, column(2), v)]
+    [
+        dot(pool, column(0), v),
+        dot(pool, column(1), v),
+        dot(pool, column(2), v),
+    ]
 }
 
 /// `A·B`.

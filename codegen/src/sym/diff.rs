@@ -33,7 +33,12 @@ impl ExprPool {
         self.add_all(&terms)
     }
 
-    fn diff_memo(&mut self, id: ExprId, symbol: Symbol, memo: &mut HashMap<ExprId, ExprId>) -> ExprId {
+    fn diff_memo(
+        &mut self,
+        id: ExprId,
+        symbol: Symbol,
+        memo: &mut HashMap<ExprId, ExprId>,
+    ) -> ExprId {
         if let Some(&d) = memo.get(&id) {
             return d;
         }
@@ -53,7 +58,10 @@ impl ExprPool {
                 }
                 self.sum(&items)
             }
-            Node::Mul { coefficient, factors } => {
+            Node::Mul {
+                coefficient,
+                factors,
+            } => {
                 // Product rule: Σᵢ c·eᵢ·bᵢ^(eᵢ−1)·∂bᵢ·Π_{j≠i} bⱼ^eⱼ
                 let mut items = Vec::new();
                 for (i, &(base, exponent)) in factors.iter().enumerate() {

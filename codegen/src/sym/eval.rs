@@ -10,7 +10,9 @@ use super::Number;
 impl ExprPool {
     /// Ids of all nodes reachable from `roots`, ascending (operands before users).
     pub fn reachable(&self, roots: &[ExprId]) -> Vec<ExprId> {
-        let Some(max) = roots.iter().max() else { return Vec::new() };
+        let Some(max) = roots.iter().max() else {
+            return Vec::new();
+        };
         let mut seen = vec![false; max.index() + 1];
         let mut stack: Vec<ExprId> = roots.to_vec();
         while let Some(id) = stack.pop() {
@@ -19,7 +21,10 @@ impl ExprPool {
             }
             stack.extend(children(self.node(id)));
         }
-        (0..seen.len()).filter(|&i| seen[i]).map(|i| ExprId(i as u32)).collect()
+        (0..seen.len())
+            .filter(|&i| seen[i])
+            .map(|i| ExprId(i as u32))
+            .collect()
     }
 
     /// Evaluates `roots` with symbol values from `value_of`.
@@ -37,11 +42,16 @@ impl ExprPool {
             Node::Number(n) => n.to_f64(),
             Node::Symbol(s) => value_of(*s),
             Node::Add { constant, terms } => {
-                terms.iter().fold(constant.to_f64(), |acc, &(t, c)| acc + c.to_f64() * values[t.index()])
+                terms.iter().fold(constant.to_f64(), |acc, &(t, c)| {
+                    acc + c.to_f64() * values[t.index()]
+                })
             }
-            Node::Mul { coefficient, factors } => factors
-                .iter()
-                .fold(coefficient.to_f64(), |acc, &(b, e)| acc * power(values[b.index()], e)),
+            Node::Mul {
+                coefficient,
+                factors,
+            } => factors.iter().fold(coefficient.to_f64(), |acc, &(b, e)| {
+                acc * power(values[b.index()], e)
+            }),
             Node::Call(func, x) => func.apply(values[x.index()]),
             Node::Atan2(y, x) => values[y.index()].atan2(values[x.index()]),
         }

@@ -84,8 +84,14 @@ impl Func {
 pub enum Node {
     Number(Number),
     Symbol(Symbol),
-    Add { constant: Number, terms: Box<[(ExprId, Number)]> },
-    Mul { coefficient: Number, factors: Box<[(ExprId, Number)]> },
+    Add {
+        constant: Number,
+        terms: Box<[(ExprId, Number)]>,
+    },
+    Mul {
+        coefficient: Number,
+        factors: Box<[(ExprId, Number)]>,
+    },
     Call(Func, ExprId),
     Atan2(ExprId, ExprId),
 }
@@ -162,7 +168,10 @@ impl ExprPool {
         }
     }
     pub(crate) fn symbol_by_name(&self, name: &str) -> Option<Symbol> {
-        self.names.iter().find(|(_, n)| n.as_str() == name).map(|(s, _)| *s)
+        self.names
+            .iter()
+            .find(|(_, n)| n.as_str() == name)
+            .map(|(s, _)| *s)
     }
 
     pub fn as_number(&self, id: ExprId) -> Option<Number> {
@@ -214,7 +223,10 @@ impl ExprPool {
                     constant = constant.add(k.mul(c));
                     pending.extend(terms.iter().map(|&(t, tc)| (t, tc.mul(c))));
                 }
-                Node::Mul { coefficient, factors } if !coefficient.is_one() => {
+                Node::Mul {
+                    coefficient,
+                    factors,
+                } if !coefficient.is_one() => {
                     let (coefficient, factors) = (*coefficient, factors.clone());
                     let monomial = self.intern_mul(Number::ONE, factors);
                     collected.push((monomial, coefficient.mul(c)));
@@ -225,8 +237,12 @@ impl ExprPool {
         let terms = combine_like(collected, Number::add);
         if let Some((i, j, rest, c)) = self.pythagorean_pair(&terms) {
             // Rebuild without the pair; each rebuild removes one sin², so this terminates.
-            let mut items: Vec<(ExprId, Number)> =
-                terms.iter().enumerate().filter(|&(k, _)| k != i && k != j).map(|(_, &t)| t).collect();
+            let mut items: Vec<(ExprId, Number)> = terms
+                .iter()
+                .enumerate()
+                .filter(|&(k, _)| k != i && k != j)
+                .map(|(_, &t)| t)
+                .collect();
             items.push((rest, c));
             let k = self.number(constant);
             items.push((k, Number::ONE));
@@ -242,16 +258,27 @@ impl ExprPool {
                     _ => self.intern_mul(c, vec![(id, Number::ONE)].into()),
                 }
             }
-            _ => self.intern(Node::Add { constant, terms: terms.into() }),
+            _ => self.intern(Node::Add {
+                constant,
+                terms: terms.into(),
+            }),
         }
     }
 
     /// Finds terms `c·m·sin(x)²` and `c·m·cos(x)²` (same c and m): returns their positions,
     /// `m` and `c`, since the pair equals `c·m`.
-    fn pythagorean_pair(&mut self, terms: &[(ExprId, Number)]) -> Option<(usize, usize, ExprId, Number)> {
+    fn pythagorean_pair(
+        &mut self,
+        terms: &[(ExprId, Number)],
+    ) -> Option<(usize, usize, ExprId, Number)> {
         for (i, &(term, coefficient)) in terms.iter().enumerate() {
-            let Some((rest, cos_square)) = self.split_sin_square(term) else { continue };
-            if let Some(j) = terms.iter().position(|&(t, c)| t == cos_square && c == coefficient) {
+            let Some((rest, cos_square)) = self.split_sin_square(term) else {
+                continue;
+            };
+            if let Some(j) = terms
+                .iter()
+                .position(|&(t, c)| t == cos_square && c == coefficient)
+            {
                 return Some((i, j, rest, coefficient));
             }
         }
@@ -262,14 +289,21 @@ impl ExprPool {
     /// `cos(x)^2` in its place).
     fn split_sin_square(&mut self, term: ExprId) -> Option<(ExprId, ExprId)> {
         let factors: Vec<(ExprId, Number)> = match self.node(term) {
-            Node::Mul { coefficient, factors } if coefficient.is_one() => factors.to_vec(),
+            Node::Mul {
+                coefficient,
+                factors,
+            } if coefficient.is_one() => factors.to_vec(),
             _ => return None,
         };
         let two = Number::int(2);
-        let (position, argument) = factors.iter().enumerate().find_map(|(k, &(base, e))| match self.node(base) {
-            Node::Call(Func::Sin, x) if e == two => Some((k, *x)),
-            _ => None,
-        })?;
+        let (position, argument) =
+            factors
+                .iter()
+                .enumerate()
+                .find_map(|(k, &(base, e))| match self.node(base) {
+                    Node::Call(Func::Sin, x) if e == two => Some((k, *x)),
+                    _ => None,
+                })?;
         let mut rest = factors.clone();
         rest.remove(position);
         let cos = self.call(Func::Cos, argument);
@@ -315,9 +349,14 @@ impl ExprPool {
             match self.node(id) {
                 Node::Number(n) => match e.as_integer() {
                     Some(k) => coefficient = coefficient.mul(n.powi(k)),
-                    None => coefficient = coefficient.mul(Number::Float(n.to_f64().powf(e.to_f64()))),
+                    None => {
+                        coefficient = coefficient.mul(Number::Float(n.to_f64().powf(e.to_f64())))
+                    }
                 },
-                Node::Mul { coefficient: c, factors } if e.as_integer().is_some() => {
+                Node::Mul {
+                    coefficient: c,
+                    factors,
+                } if e.as_integer().is_some() => {
                     let k = e.as_integer().unwrap_or(1);
                     coefficient = coefficient.mul(c.powi(k));
                     pending.extend(factors.iter().map(|&(b, fe)| (b, fe.mul(e))));
@@ -356,7 +395,10 @@ impl ExprPool {
         if factors.len() == 1 && factors[0].1.is_one() && coefficient.is_one() {
             return factors[0].0;
         }
-        self.intern(Node::Mul { coefficient, factors })
+        self.intern(Node::Mul {
+            coefficient,
+            factors,
+        })
     }
 
     // ----- functions -----
@@ -400,7 +442,10 @@ impl ExprPool {
     /// If `x` is `−y` for a product with negative coefficient, returns `y`.
     fn negated(&mut self, x: ExprId) -> Option<ExprId> {
         match self.node(x) {
-            Node::Mul { coefficient, factors } if coefficient.is_negative() => {
+            Node::Mul {
+                coefficient,
+                factors,
+            } if coefficient.is_negative() => {
                 let (c, f) = (coefficient.neg(), factors.clone());
                 Some(self.product(c, &f))
             }
@@ -440,7 +485,10 @@ pub fn children(node: &Node) -> Vec<ExprId> {
 }
 
 /// Sorts by id and merges equal ids with `merge`, dropping zero results.
-fn combine_like(mut items: Vec<(ExprId, Number)>, merge: fn(Number, Number) -> Number) -> Vec<(ExprId, Number)> {
+fn combine_like(
+    mut items: Vec<(ExprId, Number)>,
+    merge: fn(Number, Number) -> Number,
+) -> Vec<(ExprId, Number)> {
     items.sort_by_key(|&(id, _)| id);
     let mut out: Vec<(ExprId, Number)> = Vec::with_capacity(items.len());
     for (id, value) in items {

@@ -46,6 +46,9 @@ fn gcd(mut a: i128, mut b: i128) -> i128 {
     a
 }
 
+// Named methods rather than only operator traits: they read like the arithmetic they do and
+// serve as function pointers (`combine_like(items, Number::add)`); the traits below delegate.
+#[allow(clippy::should_implement_trait)]
 impl Number {
     pub const ZERO: Number = Number::Rational(0, 1);
     pub const ONE: Number = Number::Rational(1, 1);
@@ -127,9 +130,10 @@ impl Number {
 
     pub fn add(self, other: Number) -> Number {
         match (self, other) {
-            (Number::Rational(a, b), Number::Rational(c, d)) => {
-                Number::rational(a as i128 * d as i128 + c as i128 * b as i128, b as i128 * d as i128)
-            }
+            (Number::Rational(a, b), Number::Rational(c, d)) => Number::rational(
+                a as i128 * d as i128 + c as i128 * b as i128,
+                b as i128 * d as i128,
+            ),
             _ => Number::Float(self.to_f64() + other.to_f64()),
         }
     }
@@ -162,7 +166,12 @@ impl Number {
         match self {
             Number::Rational(n, d) if exponent.unsigned_abs() <= 64 => {
                 let e = exponent.unsigned_abs() as u32;
-                let value = (|| Some(Number::rational((n as i128).checked_pow(e)?, (d as i128).checked_pow(e)?)))();
+                let value = (|| {
+                    Some(Number::rational(
+                        (n as i128).checked_pow(e)?,
+                        (d as i128).checked_pow(e)?,
+                    ))
+                })();
                 let value = value.unwrap_or(Number::Float(self.to_f64().powi(e as i32)));
                 if exponent < 0 {
                     value.recip()
@@ -172,6 +181,37 @@ impl Number {
             }
             _ => Number::Float(self.to_f64().powf(exponent as f64)),
         }
+    }
+}
+
+impl std::ops::Add for Number {
+    type Output = Number;
+    fn add(self, other: Number) -> Number {
+        Number::add(self, other)
+    }
+}
+impl std::ops::Sub for Number {
+    type Output = Number;
+    fn sub(self, other: Number) -> Number {
+        Number::sub(self, other)
+    }
+}
+impl std::ops::Mul for Number {
+    type Output = Number;
+    fn mul(self, other: Number) -> Number {
+        Number::mul(self, other)
+    }
+}
+impl std::ops::Div for Number {
+    type Output = Number;
+    fn div(self, other: Number) -> Number {
+        Number::div(self, other)
+    }
+}
+impl std::ops::Neg for Number {
+    type Output = Number;
+    fn neg(self) -> Number {
+        Number::neg(self)
     }
 }
 
@@ -193,9 +233,18 @@ mod tests {
     #[test]
     fn decimals_are_exact() {
         assert_eq!(Number::parse_decimal("0.5"), Some(Number::Rational(1, 2)));
-        assert_eq!(Number::parse_decimal("9.81"), Some(Number::Rational(981, 100)));
-        assert_eq!(Number::parse_decimal("2.5e-3"), Some(Number::Rational(1, 400)));
-        assert_eq!(Number::parse_decimal("12e2"), Some(Number::Rational(1200, 1)));
+        assert_eq!(
+            Number::parse_decimal("9.81"),
+            Some(Number::Rational(981, 100))
+        );
+        assert_eq!(
+            Number::parse_decimal("2.5e-3"),
+            Some(Number::Rational(1, 400))
+        );
+        assert_eq!(
+            Number::parse_decimal("12e2"),
+            Some(Number::Rational(1200, 1))
+        );
         assert_eq!(Number::parse_decimal("1e300"), Some(Number::Float(1e300)));
     }
 
@@ -204,7 +253,10 @@ mod tests {
         let third = Number::rational(1, 3);
         assert_eq!(third.add(third).add(third), Number::ONE);
         assert_eq!(Number::rational(2, 3).powi(-2), Number::rational(9, 4));
-        assert_eq!(Number::Float(0.5).add(Number::rational(1, 2)), Number::Float(1.0));
+        assert_eq!(
+            Number::Float(0.5).add(Number::rational(1, 2)),
+            Number::Float(1.0)
+        );
         assert_eq!(Number::rational(-4, -6), Number::Rational(2, 3));
     }
 }

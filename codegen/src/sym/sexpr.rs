@@ -45,7 +45,10 @@ impl ExprPool {
                 }
                 out.push(')');
             }
-            Node::Mul { coefficient, factors } if coefficient.is_one() && factors.len() == 1 => {
+            Node::Mul {
+                coefficient,
+                factors,
+            } if coefficient.is_one() && factors.len() == 1 => {
                 self.write_factors(id, out);
             }
             Node::Mul { coefficient, .. } => {
@@ -97,13 +100,19 @@ impl ExprPool {
         let mut position = 0;
         let id = self.parse_tokens(&tokens, &mut position)?;
         if position != tokens.len() {
-            return Err(format!("unexpected `{}` after the expression", tokens[position]));
+            return Err(format!(
+                "unexpected `{}` after the expression",
+                tokens[position]
+            ));
         }
         Ok(id)
     }
 
     fn parse_tokens(&mut self, tokens: &[String], position: &mut usize) -> Result<ExprId, String> {
-        let token = tokens.get(*position).ok_or("unexpected end of input")?.clone();
+        let token = tokens
+            .get(*position)
+            .ok_or("unexpected end of input")?
+            .clone();
         *position += 1;
         if token == ")" {
             return Err("unexpected `)`".to_string());
@@ -111,7 +120,10 @@ impl ExprPool {
         if token != "(" {
             return self.parse_atom(&token);
         }
-        let head = tokens.get(*position).ok_or("missing operator after `(`")?.clone();
+        let head = tokens
+            .get(*position)
+            .ok_or("missing operator after `(`")?
+            .clone();
         *position += 1;
         let mut args = Vec::new();
         while tokens.get(*position).map(String::as_str) != Some(")") {
@@ -128,7 +140,9 @@ impl ExprPool {
         if let Some(number) = parse_number(token) {
             return Ok(self.number(number));
         }
-        let symbol = self.symbol_by_name(token).unwrap_or_else(|| default_symbol(token, self));
+        let symbol = self
+            .symbol_by_name(token)
+            .unwrap_or_else(|| default_symbol(token, self));
         self.set_name(symbol, token);
         Ok(self.symbol(symbol))
     }
@@ -152,7 +166,9 @@ impl ExprPool {
             },
             "^" => match args {
                 [a, n] => {
-                    let e = self.as_number(*n).ok_or("the exponent of `^` must be a number")?;
+                    let e = self
+                        .as_number(*n)
+                        .ok_or("the exponent of `^` must be a number")?;
                     self.pow(*a, e)
                 }
                 _ => return Err("`^` takes two arguments".to_string()),
@@ -166,10 +182,17 @@ impl ExprPool {
                 _ => return Err("`atan2` takes two arguments".to_string()),
             },
             name => {
-                let func = [Func::Sin, Func::Cos, Func::Tan, Func::Exp, Func::Ln, Func::Abs]
-                    .into_iter()
-                    .find(|f| f.name() == name)
-                    .ok_or_else(|| format!("unknown operator `{name}`"))?;
+                let func = [
+                    Func::Sin,
+                    Func::Cos,
+                    Func::Tan,
+                    Func::Exp,
+                    Func::Ln,
+                    Func::Abs,
+                ]
+                .into_iter()
+                .find(|f| f.name() == name)
+                .ok_or_else(|| format!("unknown operator `{name}`"))?;
                 let x = unary(args)?;
                 self.call(func, x)
             }
@@ -178,7 +201,11 @@ impl ExprPool {
 }
 
 fn tokenize(text: &str) -> Vec<String> {
-    text.replace('(', " ( ").replace(')', " ) ").split_whitespace().map(str::to_string).collect()
+    text.replace('(', " ( ")
+        .replace(')', " ) ")
+        .split_whitespace()
+        .map(str::to_string)
+        .collect()
 }
 
 fn parse_number(token: &str) -> Option<Number> {
@@ -194,7 +221,10 @@ fn parse_number(token: &str) -> Option<Number> {
 
 /// `q3` → coordinate 3, `u3` → speed 3, `t` → time, anything else a new parameter.
 fn default_symbol(name: &str, pool: &ExprPool) -> Symbol {
-    let indexed = |prefix: &str| name.strip_prefix(prefix).and_then(|rest| rest.parse::<u32>().ok());
+    let indexed = |prefix: &str| {
+        name.strip_prefix(prefix)
+            .and_then(|rest| rest.parse::<u32>().ok())
+    };
     if let Some(i) = indexed("q") {
         Symbol::Coordinate(i)
     } else if let Some(i) = indexed("u") {
@@ -202,7 +232,9 @@ fn default_symbol(name: &str, pool: &ExprPool) -> Symbol {
     } else if name == "t" {
         Symbol::Time
     } else {
-        let used = (0..).find(|&i| pool.symbol_name(Symbol::Param(i)) == format!("p{i}")).unwrap_or(0);
+        let used = (0..)
+            .find(|&i| pool.symbol_name(Symbol::Param(i)) == format!("p{i}"))
+            .unwrap_or(0);
         Symbol::Param(used)
     }
 }

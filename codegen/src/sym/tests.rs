@@ -14,7 +14,9 @@ fn check_diff(input: &str, symbol: &str, expected: &str) {
     let mut pool = ExprPool::new();
     let id = pool.parse_sexpr(input).unwrap();
     let symbol_id = pool.parse_sexpr(symbol).unwrap();
-    let Node::Symbol(s) = *pool.node(symbol_id) else { panic!("{symbol} is not a symbol") };
+    let Node::Symbol(s) = *pool.node(symbol_id) else {
+        panic!("{symbol} is not a symbol")
+    };
     let d = pool.diff(id, s);
     assert_eq!(pool.sexpr(d), expected, "d/d{symbol} {input}");
 }
@@ -52,7 +54,10 @@ fn products_collect_powers() {
 fn pythagorean_identity() {
     check("(+ (^ (sin q0) 2) (^ (cos q0) 2))", "1");
     check("(+ (* m (^ (sin q0) 2)) (* m (^ (cos q0) 2)))", "m");
-    check("(+ x (* 3 l (^ (sin q0) 2)) (* 3 l (^ (cos q0) 2)))", "(+ x (* 3 l))");
+    check(
+        "(+ x (* 3 l (^ (sin q0) 2)) (* 3 l (^ (cos q0) 2)))",
+        "(+ x (* 3 l))",
+    );
 }
 
 #[test]
@@ -84,7 +89,9 @@ fn hash_consing_shares_equal_expressions() {
 #[test]
 fn evaluation_matches_closed_form() {
     let mut pool = ExprPool::new();
-    let e = pool.parse_sexpr("(+ (* 3 (^ q0 2)) (sqrt q0) (atan2 q0 1) (exp q0))").unwrap();
+    let e = pool
+        .parse_sexpr("(+ (* 3 (^ q0 2)) (sqrt q0) (atan2 q0 1) (exp q0))")
+        .unwrap();
     let q = 0.7_f64;
     let value = pool.eval(&[e], &|_| q)[0];
     let exact = 3.0 * q * q + q.sqrt() + q.atan2(1.0) + q.exp();
@@ -94,7 +101,11 @@ fn evaluation_matches_closed_form() {
 #[test]
 fn derivative_agrees_with_finite_difference() {
     let mut pool = ExprPool::new();
-    let e = pool.parse_sexpr("(* (sin (* 2 q0)) (^ (+ 1 (^ q0 2)) -1/2) (atan2 q0 (+ 2 q0)) (tan q0) (abs q0))").unwrap();
+    let e = pool
+        .parse_sexpr(
+            "(* (sin (* 2 q0)) (^ (+ 1 (^ q0 2)) -1/2) (atan2 q0 (+ 2 q0)) (tan q0) (abs q0))",
+        )
+        .unwrap();
     let d = pool.diff(e, Symbol::Coordinate(0));
     let at = |x: f64| pool.eval(&[e], &|_| x)[0];
     let x = 0.37;

@@ -119,8 +119,10 @@ impl<'a> Lowerer<'a> {
                 continue;
             }
             if let ast::Item::Body(body) = item {
-                self.bodies.insert(body.name.name.clone(), self.owners.len());
-                self.owners.push(Owner::new(body.name.name.clone(), body.name.span, None));
+                self.bodies
+                    .insert(body.name.name.clone(), self.owners.len());
+                self.owners
+                    .push(Owner::new(body.name.name.clone(), body.name.span, None));
             }
         }
     }
@@ -139,7 +141,10 @@ impl<'a> Lowerer<'a> {
                 }
                 ast::Item::Newtonian(block) => {
                     if let Some(previous) = newtonian_block {
-                        let keyword = Ident { name: "newtonian".to_string(), span: block.keyword };
+                        let keyword = Ident {
+                            name: "newtonian".to_string(),
+                            span: block.keyword,
+                        };
                         self.error(names::redefinition(&keyword, previous, "the block"));
                         continue;
                     }
@@ -156,8 +161,13 @@ impl<'a> Lowerer<'a> {
         let static_ctx = Ctx::Static("a body property");
         let mass = match fields.iter().find(|f| f.name.name == "mass") {
             Some(field) => {
-                let expect = Expect { dim: Dimension::MASS, what: "`mass`", example: "10 g" };
-                self.lower_scalar_as(&field.value, static_ctx, &expect).unwrap_or_else(Expr::zero)
+                let expect = Expect {
+                    dim: Dimension::MASS,
+                    what: "`mass`",
+                    example: "10 g",
+                };
+                self.lower_scalar_as(&field.value, static_ctx, &expect)
+                    .unwrap_or_else(Expr::zero)
             }
             None => {
                 self.error(
@@ -170,8 +180,13 @@ impl<'a> Lowerer<'a> {
         };
         let com = match fields.iter().find(|f| f.name.name == "com") {
             Some(field) => {
-                let expect = Expect { dim: LENGTH, what: "`com`", example: "[0, -5 mm, 0]" };
-                self.lower_vector_as(&field.value, static_ctx, &expect).unwrap_or_else(zeros)
+                let expect = Expect {
+                    dim: LENGTH,
+                    what: "`com`",
+                    example: "[0, -5 mm, 0]",
+                };
+                self.lower_vector_as(&field.value, static_ctx, &expect)
+                    .unwrap_or_else(zeros)
             }
             None => zeros(),
         };
@@ -179,7 +194,13 @@ impl<'a> Lowerer<'a> {
             Some(field) => self.inertia(&field.value).unwrap_or_else(zero_inertia),
             None => zero_inertia(),
         };
-        self.owners[owner].body = Some(BodyProps { mass, com, inertia, docs: body.docs.clone(), span: body.span });
+        self.owners[owner].body = Some(BodyProps {
+            mass,
+            com,
+            inertia,
+            docs: body.docs.clone(),
+            span: body.span,
+        });
     }
 
     /// `[Ixx, Iyy, Izz]` or `[Ixx, Iyy, Izz, Ixy, Iyz, Izx]`.
@@ -193,16 +214,34 @@ impl<'a> Lowerer<'a> {
             );
             return None;
         }
-        let expect = Expect { dim: Dimension::INERTIA, what: "`inertia`", example: "[1, 1, 2] * 1e-12 kg*m^2" };
+        let expect = Expect {
+            dim: Dimension::INERTIA,
+            what: "`inertia`",
+            example: "[1, 1, 2] * 1e-12 kg*m^2",
+        };
         let ctx = Ctx::Static("a body property");
-        let entries: Vec<Option<Expr>> = items.iter().map(|item| self.lower_scalar_as(item, ctx, &expect)).collect();
+        let entries: Vec<Option<Expr>> = items
+            .iter()
+            .map(|item| self.lower_scalar_as(item, ctx, &expect))
+            .collect();
         let mut entries = entries.into_iter().collect::<Option<Vec<_>>>()?.into_iter();
         let mut next = || entries.next().unwrap_or_else(Expr::zero);
-        Some(ir::Inertia { xx: next(), yy: next(), zz: next(), xy: next(), yz: next(), zx: next() })
+        Some(ir::Inertia {
+            xx: next(),
+            yy: next(),
+            zz: next(),
+            xy: next(),
+            yz: next(),
+            zx: next(),
+        })
     }
 
     /// Lowers points and frames; returns the fields (checked for duplicates and unknown names).
-    fn lower_members<'m>(&mut self, owner: usize, members: &'m [ast::Member]) -> Vec<&'m ast::Field> {
+    fn lower_members<'m>(
+        &mut self,
+        owner: usize,
+        members: &'m [ast::Member],
+    ) -> Vec<&'m ast::Field> {
         let mut fields: Vec<&ast::Field> = Vec::new();
         for member in members {
             match member {
@@ -221,26 +260,49 @@ impl<'a> Lowerer<'a> {
     fn check_body_field(&mut self, owner: usize, field: &ast::Field, seen: &[&ast::Field]) -> bool {
         if owner == 0 {
             self.error(
-                Diagnostic::error("E0209", format!("unknown field `{}` in the `newtonian` block", field.name.name))
-                    .with_label(field.name.span, "the Newtonian frame has no fields")
-                    .with_help("a `newtonian` block only holds `point` and `frame` declarations"),
+                Diagnostic::error(
+                    "E0209",
+                    format!(
+                        "unknown field `{}` in the `newtonian` block",
+                        field.name.name
+                    ),
+                )
+                .with_label(field.name.span, "the Newtonian frame has no fields")
+                .with_help("a `newtonian` block only holds `point` and `frame` declarations"),
             );
             return false;
         }
         if !BODY_FIELDS.contains(&field.name.name.as_str()) {
-            self.error(names::unknown("E0209", "field", "body fields", &field.name.name, field.name.span, &BODY_FIELDS));
+            self.error(names::unknown_labelled(
+                "E0209",
+                "field",
+                "fields of a body",
+                &field.name.name,
+                field.name.span,
+                &BODY_FIELDS,
+                "not a body field",
+            ));
             return false;
         }
         self.check_duplicate_field(field, seen)
     }
 
-    pub(super) fn check_duplicate_field(&mut self, field: &ast::Field, seen: &[&ast::Field]) -> bool {
-        let Some(previous) = seen.iter().find(|f| f.name.name == field.name.name) else { return true };
+    pub(super) fn check_duplicate_field(
+        &mut self,
+        field: &ast::Field,
+        seen: &[&ast::Field],
+    ) -> bool {
+        let Some(previous) = seen.iter().find(|f| f.name.name == field.name.name) else {
+            return true;
+        };
         self.error(
-            Diagnostic::error("E0211", format!("field `{}` is given more than once", field.name.name))
-                .with_label(field.name.span, "given again here")
-                .with_label(previous.name.span, "first given here")
-                .with_help("remove one of them"),
+            Diagnostic::error(
+                "E0211",
+                format!("field `{}` is given more than once", field.name.name),
+            )
+            .with_label(field.name.span, "given again here")
+            .with_label(previous.name.span, "first given here")
+            .with_help("remove one of them"),
         );
         false
     }
@@ -261,11 +323,19 @@ impl<'a> Lowerer<'a> {
 
     fn lower_point(&mut self, owner: usize, point: &ast::PointDecl) {
         let declared = self.declare_member(owner, &point.name, "the point or frame");
-        let expect = Expect { dim: LENGTH, what: "a point position", example: "[0, -25 mm, 0]" };
-        let position = self.lower_vector_as(&point.position, Ctx::Static("a point position"), &expect);
+        let expect = Expect {
+            dim: LENGTH,
+            what: "a point position",
+            example: "[0, -25 mm, 0]",
+        };
+        let position =
+            self.lower_vector_as(&point.position, Ctx::Static("a point position"), &expect);
         if declared {
             let position = position.unwrap_or_else(zeros);
-            self.owners[owner].points.push(PointInfo { name: point.name.clone(), position });
+            self.owners[owner].points.push(PointInfo {
+                name: point.name.clone(),
+                position,
+            });
         }
     }
 
@@ -277,13 +347,22 @@ impl<'a> Lowerer<'a> {
         };
         let origin = match &frame.origin {
             Some(e) => {
-                let expect = Expect { dim: LENGTH, what: "a frame origin", example: "[0, -25 mm, 0]" };
-                self.lower_vector_as(e, Ctx::Static("a frame origin"), &expect).unwrap_or_else(zeros)
+                let expect = Expect {
+                    dim: LENGTH,
+                    what: "a frame origin",
+                    example: "[0, -25 mm, 0]",
+                };
+                self.lower_vector_as(e, Ctx::Static("a frame origin"), &expect)
+                    .unwrap_or_else(zeros)
             }
             None => zeros(),
         };
         if declared {
-            self.owners[owner].frames.push(FrameInfo { name: frame.name.clone(), rotation, origin });
+            self.owners[owner].frames.push(FrameInfo {
+                name: frame.name.clone(),
+                rotation,
+                origin,
+            });
         }
     }
 
@@ -306,15 +385,25 @@ impl<'a> Lowerer<'a> {
         }
         let [axis, angle] = args.as_slice() else {
             self.error(
-                Diagnostic::error("E0404", format!("`rotate` takes 2 arguments, found {}", args.len()))
-                    .with_label(e.span, "expected `rotate(axis, angle)`"),
+                Diagnostic::error(
+                    "E0404",
+                    format!("`rotate` takes 2 arguments, found {}", args.len()),
+                )
+                .with_label(e.span, "expected `rotate(axis, angle)`"),
             );
             return None;
         };
         let axis = self.axis(axis, "a rotation axis");
-        let expect = Expect { dim: Dimension::NONE, what: "a rotation angle", example: "30 deg" };
+        let expect = Expect {
+            dim: Dimension::NONE,
+            what: "a rotation angle",
+            example: "30 deg",
+        };
         let angle = self.lower_scalar_as(angle, Ctx::Static("a rotation angle"), &expect);
-        Some(AxisAngle { axis: axis?, angle: angle? })
+        Some(AxisAngle {
+            axis: axis?,
+            angle: angle?,
+        })
     }
 
     /// `x`, `y`, `z`, `-x`, `-y`, `-z`, or a constant `[ax, ay, az]`, normalized.
@@ -327,12 +416,17 @@ impl<'a> Lowerer<'a> {
             self.error(
                 Diagnostic::error("E0412", format!("expected an axis for {what}"))
                     .with_label(e.span, "not an axis")
-                    .with_help("write `x`, `y`, `z`, `-x`, `-y`, `-z` or a constant vector `[ax, ay, az]`"),
+                    .with_help(
+                        "write `x`, `y`, `z`, `-x`, `-y`, `-z` or a constant vector `[ax, ay, az]`",
+                    ),
             );
             return None;
         }
         let items = self.vector_items(e, what, 3)?;
-        let components: Vec<Option<Number>> = items.iter().map(|item| self.axis_component(item, what)).collect();
+        let components: Vec<Option<Number>> = items
+            .iter()
+            .map(|item| self.axis_component(item, what))
+            .collect();
         let components: Vec<Number> = components.into_iter().collect::<Option<_>>()?;
         match normalize(&components) {
             Some(axis) => Some(axis),
@@ -352,9 +446,15 @@ impl<'a> Lowerer<'a> {
         let typed_dim_ok = dim == Dimension::NONE;
         if !typed_dim_ok {
             self.error(
-                Diagnostic::error("E0302", format!("{what} must be dimensionless, found {}", crate::front::units::describe(dim)))
-                    .with_label(e.span, "has a unit")
-                    .with_help("an axis is a direction: write plain numbers such as `[1, 1, 0]`"),
+                Diagnostic::error(
+                    "E0302",
+                    format!(
+                        "{what} must be dimensionless, found {}",
+                        crate::front::units::describe(dim)
+                    ),
+                )
+                .with_label(e.span, "has a unit")
+                .with_help("an axis is a direction: write plain numbers such as `[1, 1, 0]`"),
             );
             return None;
         }
@@ -398,7 +498,11 @@ impl<'a> Lowerer<'a> {
     }
 
     /// Resolves `newtonian`, `body`, `body.frame`, `newtonian.frame`, and (if allowed) a joint.
-    pub(super) fn resolve_frame(&mut self, path: &ast::Path, allow_joints: bool) -> Option<FrameRef> {
+    pub(super) fn resolve_frame(
+        &mut self,
+        path: &ast::Path,
+        allow_joints: bool,
+    ) -> Option<FrameRef> {
         match path.segments.as_slice() {
             [name] => {
                 if name.name == "newtonian" {
@@ -415,7 +519,14 @@ impl<'a> Lowerer<'a> {
                 if allow_joints {
                     candidates.extend(self.joints.iter().map(|j| j.decl.name.name.as_str()));
                 }
-                self.error(names::unknown("E0203", "frame", "frames", &name.name, name.span, &candidates));
+                self.error(names::unknown(
+                    "E0203",
+                    "frame",
+                    "frames in scope",
+                    &name.name,
+                    name.span,
+                    &candidates,
+                ));
                 None
             }
             [owner_name, frame] => {
@@ -440,8 +551,10 @@ impl<'a> Lowerer<'a> {
     fn unknown_member(&mut self, owner: usize, name: &Ident, path: &ast::Path, kind: &str) {
         let owner_name = self.owners[owner].name.clone();
         let full = format!("{owner_name}.{}", name.name);
-        let (is_point, is_frame) =
-            (self.owners[owner].point_named(&name.name).is_some(), self.owners[owner].frame_named(&name.name).is_some());
+        let (is_point, is_frame) = (
+            self.owners[owner].point_named(&name.name).is_some(),
+            self.owners[owner].frame_named(&name.name).is_some(),
+        );
         if is_point || is_frame {
             let actual = if is_point { "point" } else { "frame" };
             self.error(
@@ -451,16 +564,31 @@ impl<'a> Lowerer<'a> {
             return;
         }
         let (code, candidates): (&'static str, Vec<&str>) = if kind == "point" {
-            let mut points: Vec<&str> = self.owners[owner].points.iter().map(|p| p.name.name.as_str()).collect();
+            let mut points: Vec<&str> = self.owners[owner]
+                .points
+                .iter()
+                .map(|p| p.name.name.as_str())
+                .collect();
             if owner != 0 {
                 points.push("com");
             }
             ("E0202", points)
         } else {
-            ("E0203", self.owners[owner].frames.iter().map(|f| f.name.name.as_str()).collect())
+            (
+                "E0203",
+                self.owners[owner]
+                    .frames
+                    .iter()
+                    .map(|f| f.name.name.as_str())
+                    .collect(),
+            )
         };
         let plural = format!("{kind}s of `{owner_name}`");
-        self.error(names::unknown(code, kind, &plural, &full, name.span, &candidates));
+        let mut diagnostic = names::unknown(code, kind, &plural, &full, name.span, &candidates);
+        if let Some(best) = names::closest(&name.name, &candidates) {
+            diagnostic = diagnostic.with_help(format!("did you mean `{owner_name}.{best}`?"));
+        }
+        self.error(diagnostic);
     }
 
     /// `newtonian` or a body name → owner index.
@@ -476,10 +604,23 @@ impl<'a> Lowerer<'a> {
         if let Some(&owner) = self.bodies.get(&name.name) {
             return Some(owner);
         }
-        let candidates: Vec<&str> = self.owners.iter().skip(1).map(|o| o.name.as_str()).collect();
-        let mut diagnostic = names::unknown("E0201", "body", "bodies", &name.name, name.span, &candidates);
+        let candidates: Vec<&str> = self
+            .owners
+            .iter()
+            .skip(1)
+            .map(|o| o.name.as_str())
+            .collect();
+        let mut diagnostic = names::unknown(
+            "E0201",
+            "body",
+            "bodies in scope",
+            &name.name,
+            name.span,
+            &candidates,
+        );
         if self.joint_index.contains_key(&name.name) {
-            diagnostic = diagnostic.with_help(format!("`{}` is a joint; name a body here", name.name));
+            diagnostic =
+                diagnostic.with_help(format!("`{}` is a joint; name a body here", name.name));
         }
         self.error(diagnostic);
         None
@@ -489,7 +630,10 @@ impl<'a> Lowerer<'a> {
     pub(super) fn point_position(&self, point: PointRef) -> Vec3 {
         match point {
             PointRef::Origin(_) => zeros(),
-            PointRef::Com(owner) => self.owners[owner].body.as_ref().map_or_else(zeros, |b| b.com.clone()),
+            PointRef::Com(owner) => self.owners[owner]
+                .body
+                .as_ref()
+                .map_or_else(zeros, |b| b.com.clone()),
             PointRef::Named(owner, index) => self.owners[owner].points[index].position.clone(),
         }
     }
@@ -502,13 +646,24 @@ impl<'a> Lowerer<'a> {
 }
 
 fn zero_inertia() -> ir::Inertia {
-    ir::Inertia { xx: Expr::zero(), yy: Expr::zero(), zz: Expr::zero(), xy: Expr::zero(), yz: Expr::zero(), zx: Expr::zero() }
+    ir::Inertia {
+        xx: Expr::zero(),
+        yy: Expr::zero(),
+        zz: Expr::zero(),
+        xy: Expr::zero(),
+        yz: Expr::zero(),
+        zx: Expr::zero(),
+    }
 }
 
 /// Flattens `a * b * c` (through parentheses) into its factors, left to right.
 fn collect_product<'e>(e: &'e ast::Expr, out: &mut Vec<&'e ast::Expr>) {
     match &unparen(e).kind {
-        ExprKind::Binary { op: ast::BinaryOp::Mul, lhs, rhs } => {
+        ExprKind::Binary {
+            op: ast::BinaryOp::Mul,
+            lhs,
+            rhs,
+        } => {
             collect_product(lhs, out);
             collect_product(rhs, out);
         }
@@ -532,7 +687,9 @@ fn named_axis(e: &ast::Expr) -> Option<Vec3> {
         },
         _ => return None,
     };
-    let [name] = path.segments.as_slice() else { return None };
+    let [name] = path.segments.as_slice() else {
+        return None;
+    };
     let index = ["x", "y", "z"].iter().position(|axis| *axis == name.name)?;
     let mut axis = zeros();
     axis[index] = Expr::Number(Number::int(sign));
@@ -559,8 +716,13 @@ pub fn normalize(v: &[Number]) -> Option<Vec3> {
 }
 
 fn exact_sqrt(n: Number) -> Option<Number> {
-    let Number::Rational(num, den) = n else { return None };
-    Some(Number::rational(integer_sqrt(num)? as i128, integer_sqrt(den)? as i128))
+    let Number::Rational(num, den) = n else {
+        return None;
+    };
+    Some(Number::rational(
+        integer_sqrt(num)? as i128,
+        integer_sqrt(den)? as i128,
+    ))
 }
 
 fn integer_sqrt(n: i64) -> Option<i64> {

@@ -40,14 +40,26 @@ pub struct Typed {
 
 impl Typed {
     fn leaf(expr: Expr, dim: Dimension, varying: Option<Span>) -> Typed {
-        Typed { expr, dim, varying, size: 1, depth: 1 }
+        Typed {
+            expr,
+            dim,
+            varying,
+            size: 1,
+            depth: 1,
+        }
     }
     /// A node built from `parts`, inheriting their size, depth and time dependence.
     fn node(expr: Expr, dim: Dimension, parts: &[&Typed]) -> Typed {
         let size = parts.iter().map(|p| p.size).sum::<usize>() + 1;
         let depth = parts.iter().map(|p| p.depth).max().unwrap_or(0) + 1;
         let varying = parts.iter().find_map(|p| p.varying);
-        Typed { expr, dim, varying, size, depth }
+        Typed {
+            expr,
+            dim,
+            varying,
+            size,
+            depth,
+        }
     }
     /// A plain zero (`0`, `-0`, `0.0`) fits any dimension.
     pub fn is_plain_zero(&self) -> bool {
@@ -67,7 +79,9 @@ impl Lowerer<'_> {
     /// Lowers a scalar expression.
     pub(super) fn lower_scalar(&mut self, e: &ast::Expr, ctx: Ctx) -> Option<Typed> {
         let typed = match &e.kind {
-            ExprKind::Quantity { literal, unit } => self.quantity(literal, unit.as_ref(), e.span)?,
+            ExprKind::Quantity { literal, unit } => {
+                self.quantity(literal, unit.as_ref(), e.span)?
+            }
             ExprKind::Path(path) => self.path_value(path, ctx)?,
             ExprKind::Vector(_) => {
                 self.error(
@@ -89,15 +103,29 @@ impl Lowerer<'_> {
     }
 
     /// Lowers a scalar and checks its dimension against `expect`.
-    pub(super) fn lower_scalar_as(&mut self, e: &ast::Expr, ctx: Ctx, expect: &Expect) -> Option<Expr> {
+    pub(super) fn lower_scalar_as(
+        &mut self,
+        e: &ast::Expr,
+        ctx: Ctx,
+        expect: &Expect,
+    ) -> Option<Expr> {
         let typed = self.lower_scalar(e, ctx)?;
-        self.check_dimension(&typed, expect, e.span).then_some(typed.expr)
+        self.check_dimension(&typed, expect, e.span)
+            .then_some(typed.expr)
     }
 
     /// Lowers `[x, y, z]` with each component of the expected dimension.
-    pub(super) fn lower_vector_as(&mut self, e: &ast::Expr, ctx: Ctx, expect: &Expect) -> Option<ir::Vec3> {
+    pub(super) fn lower_vector_as(
+        &mut self,
+        e: &ast::Expr,
+        ctx: Ctx,
+        expect: &Expect,
+    ) -> Option<ir::Vec3> {
         let items = self.vector_items(e, expect.what, 3)?;
-        let components: Vec<Option<Expr>> = items.iter().map(|item| self.lower_scalar_as(item, ctx, expect)).collect();
+        let components: Vec<Option<Expr>> = items
+            .iter()
+            .map(|item| self.lower_scalar_as(item, ctx, expect))
+            .collect();
         let mut components = components.into_iter();
         let mut next = || components.next().flatten();
         Some([next()?, next()?, next()?])
@@ -105,7 +133,12 @@ impl Lowerer<'_> {
 
     /// The components of a vector expression, which must have `count` entries (`0` = any
     /// number). A vector may be scaled: `[1, 2, 3] * 1 mm`, `2 * v`, `[..] / 2`, `-[..]`.
-    pub(super) fn vector_items(&mut self, e: &ast::Expr, what: &str, count: usize) -> Option<Vec<ast::Expr>> {
+    pub(super) fn vector_items(
+        &mut self,
+        e: &ast::Expr,
+        what: &str,
+        count: usize,
+    ) -> Option<Vec<ast::Expr>> {
         let Some(items) = vector_components(e) else {
             self.error(
                 Diagnostic::error("E0411", format!("{what} must be a vector"))
@@ -116,9 +149,12 @@ impl Lowerer<'_> {
         };
         if count != 0 && items.len() != count {
             self.error(
-                Diagnostic::error("E0404", format!("{what} needs {count} components, found {}", items.len()))
-                    .with_label(e.span, format!("expected {count} components"))
-                    .with_help("a vector is written `[x, y, z]`"),
+                Diagnostic::error(
+                    "E0404",
+                    format!("{what} needs {count} components, found {}", items.len()),
+                )
+                .with_label(e.span, format!("expected {count} components"))
+                .with_help("a vector is written `[x, y, z]`"),
             );
             return None;
         }
@@ -126,7 +162,11 @@ impl Lowerer<'_> {
     }
 
     /// Lowers a constant expression (numbers, units, `pi`) and folds it to a number.
-    pub(super) fn lower_constant(&mut self, e: &ast::Expr, ctx: Ctx) -> Option<(Number, Dimension)> {
+    pub(super) fn lower_constant(
+        &mut self,
+        e: &ast::Expr,
+        ctx: Ctx,
+    ) -> Option<(Number, Dimension)> {
         let typed = self.lower_scalar(e, ctx)?;
         let number = fold(&typed.expr)?;
         if !number.to_f64().is_finite() {
@@ -154,14 +194,24 @@ impl Lowerer<'_> {
         }
         let found = describe(typed.dim);
         let help = if typed.dim == Dimension::NONE {
-            format!("a plain number is dimensionless; write its unit, e.g. `{}`", expect.example)
+            format!(
+                "plain numbers and angles are dimensionless; write a unit, for example `{}`",
+                expect.example
+            )
         } else {
-            format!("{} is measured in {}, e.g. `{}`", expect.what, describe(expect.dim), expect.example)
+            format!("for example `{}`", expect.example)
         };
         self.error(
-            Diagnostic::error("E0302", format!("{} must be {}, found {found}", expect.what, article(expect.dim)))
-                .with_label(span, format!("this is {found}"))
-                .with_help(help),
+            Diagnostic::error(
+                "E0302",
+                format!(
+                    "{} must be {}, found {found}",
+                    expect.what,
+                    article(expect.dim)
+                ),
+            )
+            .with_label(span, format!("this is {found}"))
+            .with_help(help),
         );
         false
     }
@@ -208,16 +258,28 @@ impl Lowerer<'_> {
     fn unit_error(&mut self, literal: &str, unit: &ast::Unit, error: UnitError) {
         let diagnostic = match error {
             UnitError::Unknown(index) => {
-                let Some(factor) = unit.factors.get(index) else { return };
+                let Some(factor) = unit.factors.get(index) else {
+                    return;
+                };
                 unknown_unit(literal, unit, factor)
             }
             UnitError::BadExponent(index) => {
                 let span = unit.factors.get(index).map_or(unit.span, |f| f.span);
-                Diagnostic::error("E0304", "unit exponent out of range")
-                    .with_label(span, format!("expected an integer between -{0} and {0}", units::MAX_EXPONENT))
+                Diagnostic::error("E0304", "unit exponent out of range").with_label(
+                    span,
+                    format!(
+                        "expected an integer between -{0} and {0}",
+                        units::MAX_EXPONENT
+                    ),
+                )
             }
-            UnitError::Overflow => Diagnostic::error("E0304", "dimension out of range")
-                .with_label(unit.span, format!("an exponent of kg, m, s or A exceeds {}", units::MAX_EXPONENT)),
+            UnitError::Overflow => Diagnostic::error("E0304", "dimension out of range").with_label(
+                unit.span,
+                format!(
+                    "an exponent of kg, m, s or A exceeds {}",
+                    units::MAX_EXPONENT
+                ),
+            ),
         };
         self.error(diagnostic);
     }
@@ -242,14 +304,22 @@ impl Lowerer<'_> {
                     self.error(not_constant(what, name, "a param"));
                     return None;
                 }
-                Some(Typed::leaf(Expr::Param(handle), self.model.params[handle].dimension, None))
+                Some(Typed::leaf(
+                    Expr::Param(handle),
+                    self.model.params[handle].dimension,
+                    None,
+                ))
             }
             Value::Input(handle) => {
                 if let Ctx::Constant(what) | Ctx::Static(what) = ctx {
                     self.error(varying(what, ctx, name, "an input", None));
                     return None;
                 }
-                Some(Typed::leaf(Expr::Input(handle), self.model.inputs[handle].dimension, Some(name.span)))
+                Some(Typed::leaf(
+                    Expr::Input(handle),
+                    self.model.inputs[handle].dimension,
+                    Some(name.span),
+                ))
             }
             Value::Let(index) => self.let_value(index, name, ctx),
         }
@@ -257,7 +327,10 @@ impl Lowerer<'_> {
 
     fn time(&mut self, span: Span, ctx: Ctx) -> Option<Typed> {
         if let Ctx::Constant(what) | Ctx::Static(what) = ctx {
-            let name = ast::Ident { name: "t".to_string(), span };
+            let name = ast::Ident {
+                name: "t".to_string(),
+                span,
+            };
             self.error(varying(what, ctx, &name, "the simulation time", None));
             return None;
         }
@@ -272,23 +345,39 @@ impl Lowerer<'_> {
         if self.current_let.is_some_and(|current| index >= current) {
             let definition = self.let_spans.get(index).copied().unwrap_or(name.span);
             self.error(
-                Diagnostic::error("E0214", format!("`{}` is used before its definition", name.name))
-                    .with_label(name.span, "used here")
-                    .with_label(definition, "defined here")
-                    .with_help("a `let` may only use `let`s declared above it; reorder the definitions"),
+                Diagnostic::error(
+                    "E0214",
+                    format!("`{}` is used before its definition", name.name),
+                )
+                .with_label(name.span, "used here")
+                .with_label(definition, "defined here")
+                .with_help(
+                    "a `let` may only use `let`s declared above it; reorder the definitions",
+                ),
             );
             return None;
         }
         let typed = self.lets.get(index)?.clone()?;
         if let (Ctx::Static(what), Some(source)) = (ctx, typed.varying) {
-            self.error(varying(what, ctx, name, "a `let` that depends on time or an input", Some(source)));
+            self.error(varying(
+                what,
+                ctx,
+                name,
+                "a `let` that depends on time or an input",
+                Some(source),
+            ));
             return None;
         }
         Some(typed)
     }
 
     fn not_a_number(&mut self, path: &ast::Path) {
-        let text = path.segments.iter().map(|s| s.name.as_str()).collect::<Vec<_>>().join(".");
+        let text = path
+            .segments
+            .iter()
+            .map(|s| s.name.as_str())
+            .collect::<Vec<_>>()
+            .join(".");
         let is_coordinate = matches!(path.segments.as_slice(), [joint, q] if self.joint_index.contains_key(&joint.name) && (q.name == "q" || q.name == "u"));
         let help = if is_coordinate {
             format!("coordinates and speeds can only be outputs on their own: `output x = {text};`")
@@ -305,27 +394,56 @@ impl Lowerer<'_> {
     fn unknown_value(&mut self, name: &ast::Ident) {
         let mut candidates: Vec<&str> = self.value_names.names().collect();
         candidates.extend(["t", "pi"]);
-        let mut diagnostic = names::unknown("E0204", "name", "params, lets and inputs", &name.name, name.span, &candidates);
+        let mut diagnostic = names::unknown(
+            "E0204",
+            "name",
+            "params, lets and inputs in scope",
+            &name.name,
+            name.span,
+            &candidates,
+        );
         if units::lookup(&name.name).is_some() && diagnostic.help.is_none() {
-            diagnostic = diagnostic.with_help(format!("`{0}` is a unit; a unit follows a number, as in `1 {0}`", name.name));
+            diagnostic = diagnostic.with_help(format!(
+                "`{0}` is a unit; a unit follows a number, as in `1 {0}`",
+                name.name
+            ));
         }
         self.error(diagnostic);
     }
 
-    fn call(&mut self, function: &ast::Ident, args: &[ast::Expr], span: Span, ctx: Ctx) -> Option<Typed> {
+    fn call(
+        &mut self,
+        function: &ast::Ident,
+        args: &[ast::Expr],
+        span: Span,
+        ctx: Ctx,
+    ) -> Option<Typed> {
         let Some(f) = function_named(&function.name) else {
             self.unknown_function(function);
             return None;
         };
         if args.len() != f.arity() {
-            let plural = if f.arity() == 1 { "argument" } else { "arguments" };
+            let plural = if f.arity() == 1 {
+                "argument"
+            } else {
+                "arguments"
+            };
             self.error(
-                Diagnostic::error("E0404", format!("`{}` takes {} {plural}, found {}", f.name(), f.arity(), args.len()))
-                    .with_label(span, format!("expected {} {plural}", f.arity())),
+                Diagnostic::error(
+                    "E0404",
+                    format!(
+                        "`{}` takes {} {plural}, found {}",
+                        f.name(),
+                        f.arity(),
+                        args.len()
+                    ),
+                )
+                .with_label(span, format!("expected {} {plural}", f.arity())),
             );
             return None;
         }
-        let lowered: Vec<Option<Typed>> = args.iter().map(|arg| self.lower_scalar(arg, ctx)).collect();
+        let lowered: Vec<Option<Typed>> =
+            args.iter().map(|arg| self.lower_scalar(arg, ctx)).collect();
         let lowered: Vec<Typed> = lowered.into_iter().collect::<Option<_>>()?;
         let dim = self.call_dimension(f, &lowered, args)?;
         let parts: Vec<&Typed> = lowered.iter().collect();
@@ -337,33 +455,56 @@ impl Lowerer<'_> {
 
     /// The dimension of a call's result; `sqrt` halves even exponents, `abs` keeps them,
     /// `atan2` takes two arguments of one dimension, the others need dimensionless arguments.
-    fn call_dimension(&mut self, f: Function, args: &[Typed], spans: &[ast::Expr]) -> Option<Dimension> {
+    fn call_dimension(
+        &mut self,
+        f: Function,
+        args: &[Typed],
+        spans: &[ast::Expr],
+    ) -> Option<Dimension> {
         let (first, first_span) = (args.first()?, spans.first()?.span);
         match f {
             Function::Abs => Some(first.dim),
             Function::Sqrt => {
                 let dim = dim_pow(first.dim, 1, 2);
                 if dim.is_none() {
-                    self.error(argument_error(f, first_span, &describe(first.dim), "the square root of this dimension is not a whole unit"));
+                    self.error(argument_error(
+                        f,
+                        first_span,
+                        &describe(first.dim),
+                        "the square root of this dimension is not a whole unit",
+                    ));
                 }
                 dim
             }
             Function::Atan2 => {
                 let second = args.get(1)?;
-                let same = first.dim == second.dim || first.is_plain_zero() || second.is_plain_zero();
+                let same =
+                    first.dim == second.dim || first.is_plain_zero() || second.is_plain_zero();
                 if !same {
                     let span = spans.get(1).map_or(first_span, |e| e.span);
                     self.error(
-                        Diagnostic::error("E0303", format!("the arguments of `atan2` must have one dimension, found {} and {}", describe(first.dim), describe(second.dim)))
-                            .with_label(first_span, describe(first.dim))
-                            .with_label(span, describe(second.dim)),
+                        Diagnostic::error(
+                            "E0303",
+                            format!(
+                                "the arguments of `atan2` must have one dimension, found {} and {}",
+                                describe(first.dim),
+                                describe(second.dim)
+                            ),
+                        )
+                        .with_label(first_span, describe(first.dim))
+                        .with_label(span, describe(second.dim)),
                     );
                     return None;
                 }
                 Some(Dimension::NONE)
             }
             _ if first.dim != Dimension::NONE => {
-                self.error(argument_error(f, first_span, &describe(first.dim), "angles are dimensionless (rad); divide by a reference value to get a ratio"));
+                self.error(argument_error(
+                    f,
+                    first_span,
+                    &describe(first.dim),
+                    "angles are dimensionless (rad); divide by a reference value to get a ratio",
+                ));
                 None
             }
             _ => Some(Dimension::NONE),
@@ -372,18 +513,35 @@ impl Lowerer<'_> {
 
     fn unknown_function(&mut self, function: &ast::Ident) {
         let candidates = ["sin", "cos", "tan", "sqrt", "exp", "ln", "abs", "atan2"];
-        let mut diagnostic = names::unknown("E0207", "function", "functions", &function.name, function.span, &candidates);
+        let mut diagnostic = names::unknown_labelled(
+            "E0207",
+            "function",
+            "functions",
+            &function.name,
+            function.span,
+            &candidates,
+            "not a known function",
+        );
         diagnostic = match function.name.as_str() {
-            "rotate" => diagnostic.with_help("`rotate(axis, angle)` is only used in `frame` declarations"),
-            "position" | "velocity" => {
-                diagnostic.with_help(format!("`{}(point)` is only used on its own in an `output`", function.name))
+            "rotate" => {
+                diagnostic.with_help("`rotate(axis, angle)` is only used in `frame` declarations")
             }
+            "position" | "velocity" => diagnostic.with_help(format!(
+                "`{}(point)` is only used on its own in an `output`",
+                function.name
+            )),
             _ => diagnostic,
         };
         self.error(diagnostic);
     }
 
-    fn binary(&mut self, op: BinaryOp, lhs: &ast::Expr, rhs: &ast::Expr, ctx: Ctx) -> Option<Typed> {
+    fn binary(
+        &mut self,
+        op: BinaryOp,
+        lhs: &ast::Expr,
+        rhs: &ast::Expr,
+        ctx: Ctx,
+    ) -> Option<Typed> {
         let span = lhs.span.to(rhs.span);
         if op == BinaryOp::Pow {
             return self.power(lhs, rhs, ctx);
@@ -406,7 +564,14 @@ impl Lowerer<'_> {
         Some(Typed::node(expr, dim, &[&a, &b]))
     }
 
-    fn sum_dimension(&mut self, op: BinaryOp, a: &Typed, b: &Typed, a_span: Span, b_span: Span) -> Option<Dimension> {
+    fn sum_dimension(
+        &mut self,
+        op: BinaryOp,
+        a: &Typed,
+        b: &Typed,
+        a_span: Span,
+        b_span: Span,
+    ) -> Option<Dimension> {
         if a.dim == b.dim || b.is_plain_zero() {
             return Some(a.dim);
         }
@@ -421,7 +586,10 @@ impl Lowerer<'_> {
         let help = if a.dim == Dimension::NONE || b.dim == Dimension::NONE {
             "a plain number is dimensionless; write its unit, e.g. `2 mm`".to_string()
         } else {
-            format!("both sides of `{}` must have the same dimension; check the units", op.symbol())
+            format!(
+                "both sides of `{}` must have the same dimension; check the units",
+                op.symbol()
+            )
         };
         self.error(
             Diagnostic::error("E0301", message)
@@ -444,10 +612,13 @@ impl Lowerer<'_> {
         };
         let Some(dim) = dim else {
             self.error(
-                Diagnostic::error("E0304", format!("`^ {exponent}` gives a non-integer or out-of-range dimension"))
-                    .with_label(lhs.span, format!("this is {}", describe(base.dim)))
-                    .with_label(rhs.span, "exponent")
-                    .with_help("the exponents of kg, m, s and A must stay whole numbers"),
+                Diagnostic::error(
+                    "E0304",
+                    format!("`^ {exponent}` gives a non-integer or out-of-range dimension"),
+                )
+                .with_label(lhs.span, format!("this is {}", describe(base.dim)))
+                .with_label(rhs.span, "exponent")
+                .with_help("the exponents of kg, m, s and A must stay whole numbers"),
             );
             return None;
         };
@@ -461,8 +632,11 @@ impl Lowerer<'_> {
         let (number, dim) = self.lower_constant(e, Ctx::Constant("an exponent"))?;
         if dim != Dimension::NONE {
             self.error(
-                Diagnostic::error("E0305", format!("an exponent must be dimensionless, found {}", describe(dim)))
-                    .with_label(e.span, "has a unit"),
+                Diagnostic::error(
+                    "E0305",
+                    format!("an exponent must be dimensionless, found {}", describe(dim)),
+                )
+                .with_label(e.span, "has a unit"),
             );
             return None;
         }
@@ -472,8 +646,13 @@ impl Lowerer<'_> {
     fn checked_dim(&mut self, dim: Option<Dimension>, span: Span) -> Option<Dimension> {
         if dim.is_none() {
             self.error(
-                Diagnostic::error("E0304", "dimension out of range")
-                    .with_label(span, format!("an exponent of kg, m, s or A exceeds {}", units::MAX_EXPONENT)),
+                Diagnostic::error("E0304", "dimension out of range").with_label(
+                    span,
+                    format!(
+                        "an exponent of kg, m, s or A exceeds {}",
+                        units::MAX_EXPONENT
+                    ),
+                ),
             );
         }
         dim
@@ -494,19 +673,43 @@ impl Lowerer<'_> {
 /// over them; `None` if `e` is not a vector.
 fn vector_components(e: &ast::Expr) -> Option<Vec<ast::Expr>> {
     let scaled = |items: Vec<ast::Expr>, f: &dyn Fn(ast::Expr) -> ExprKind| {
-        items.into_iter().map(|item| ast::Expr { span: item.span.to(e.span), kind: f(item) }).collect()
+        items
+            .into_iter()
+            .map(|item| ast::Expr {
+                span: item.span.to(e.span),
+                kind: f(item),
+            })
+            .collect()
     };
-    let binary = |op, lhs: ast::Expr, rhs: ast::Expr| ExprKind::Binary { op, lhs: Box::new(lhs), rhs: Box::new(rhs) };
+    let binary = |op, lhs: ast::Expr, rhs: ast::Expr| ExprKind::Binary {
+        op,
+        lhs: Box::new(lhs),
+        rhs: Box::new(rhs),
+    };
     match &unparen(e).kind {
         ExprKind::Vector(items) => Some(items.clone()),
-        ExprKind::Neg(inner) => Some(scaled(vector_components(inner)?, &|item| ExprKind::Neg(Box::new(item)))),
-        ExprKind::Binary { op: BinaryOp::Mul, lhs, rhs } => match vector_components(lhs) {
-            Some(items) => Some(scaled(items, &|item| binary(BinaryOp::Mul, item, (**rhs).clone()))),
-            None => Some(scaled(vector_components(rhs)?, &|item| binary(BinaryOp::Mul, (**lhs).clone(), item))),
+        ExprKind::Neg(inner) => Some(scaled(vector_components(inner)?, &|item| {
+            ExprKind::Neg(Box::new(item))
+        })),
+        ExprKind::Binary {
+            op: BinaryOp::Mul,
+            lhs,
+            rhs,
+        } => match vector_components(lhs) {
+            Some(items) => Some(scaled(items, &|item| {
+                binary(BinaryOp::Mul, item, (**rhs).clone())
+            })),
+            None => Some(scaled(vector_components(rhs)?, &|item| {
+                binary(BinaryOp::Mul, (**lhs).clone(), item)
+            })),
         },
-        ExprKind::Binary { op: BinaryOp::Div, lhs, rhs } => {
-            Some(scaled(vector_components(lhs)?, &|item| binary(BinaryOp::Div, item, (**rhs).clone())))
-        }
+        ExprKind::Binary {
+            op: BinaryOp::Div,
+            lhs,
+            rhs,
+        } => Some(scaled(vector_components(lhs)?, &|item| {
+            binary(BinaryOp::Div, item, (**rhs).clone())
+        })),
         _ => None,
     }
 }
@@ -545,12 +748,15 @@ fn unknown_unit(literal: &str, unit: &ast::Unit, factor: &ast::UnitFactor) -> Di
     let name = &factor.name.name;
     let all = units::all_unit_names();
     let candidates: Vec<&str> = all.iter().map(String::as_str).collect();
-    let mut diagnostic = Diagnostic::error("E0206", format!("unknown unit `{name}`")).with_label(factor.name.span, "not a unit");
+    let mut diagnostic = Diagnostic::error("E0206", format!("unknown unit `{name}`"))
+        .with_label(factor.name.span, "not a unit");
     if let Some(best) = names::closest(name, &candidates) {
         diagnostic = diagnostic.with_note(format!("did you mean `{best}`?"));
     }
     if unit.factors.len() == 1 && factor.exponent.is_none() {
-        diagnostic.with_help(format!("if you meant multiplication, write `{literal} * {name}`"))
+        diagnostic.with_help(format!(
+            "if you meant multiplication, write `{literal} * {name}`"
+        ))
     } else {
         diagnostic.with_help("units are m, g, s, Hz, N, J, W, Pa, V, A, C, F, rad and deg, with the prefixes G, M, k, c, m, u (µ), n, p")
     }
@@ -567,22 +773,33 @@ fn not_constant(what: &str, name: &ast::Ident, kind: &str) -> Diagnostic {
         .with_help(help)
 }
 
-fn varying(what: &str, ctx: Ctx, name: &ast::Ident, kind: &str, source: Option<Span>) -> Diagnostic {
+fn varying(
+    what: &str,
+    ctx: Ctx,
+    name: &ast::Ident,
+    kind: &str,
+    source: Option<Span>,
+) -> Diagnostic {
     if let Ctx::Constant(_) = ctx {
         return not_constant(what, name, kind);
     }
-    let mut diagnostic = Diagnostic::error("E0401", format!("{what} cannot depend on time or inputs"))
-        .with_label(name.span, format!("`{}` is {kind}", name.name));
+    let mut diagnostic =
+        Diagnostic::error("E0401", format!("{what} cannot depend on time or inputs"))
+            .with_label(name.span, format!("`{}` is {kind}", name.name));
     if let Some(source) = source {
         diagnostic = diagnostic.with_label(source, "varies with time here");
     }
-    diagnostic.with_help("only loads (`force`, `torque`), `let`s and `output`s may use inputs and `t`")
+    diagnostic
+        .with_help("only loads (`force`, `torque`), `let`s and `output`s may use inputs and `t`")
 }
 
 fn argument_error(f: Function, span: Span, found: &str, help: &str) -> Diagnostic {
-    Diagnostic::error("E0303", format!("invalid argument of `{}`: found {found}", f.name()))
-        .with_label(span, format!("this is {found}"))
-        .with_help(help.to_string())
+    Diagnostic::error(
+        "E0303",
+        format!("invalid argument of `{}`: found {found}", f.name()),
+    )
+    .with_label(span, format!("this is {found}"))
+    .with_help(help.to_string())
 }
 
 fn not_finite(span: Span) -> Diagnostic {
@@ -609,7 +826,9 @@ fn function_named(name: &str) -> Option<Function> {
 fn exponent_ratio(exponent: Number) -> Option<(i64, i64)> {
     match exponent {
         Number::Rational(num, den) => Some((num, den)),
-        Number::Float(x) if x.fract() == 0.0 && x.abs() <= units::MAX_EXPONENT as f64 => Some((x as i64, 1)),
+        Number::Float(x) if x.fract() == 0.0 && x.abs() <= units::MAX_EXPONENT as f64 => {
+            Some((x as i64, 1))
+        }
         Number::Float(_) => None,
     }
 }
@@ -670,7 +889,16 @@ pub fn pow(base: Expr, exponent: Number) -> Expr {
 }
 
 fn fold_call(f: Function, args: Vec<Expr>) -> Expr {
-    let values: Option<Vec<f64>> = args.iter().map(|a| if let Expr::Number(n) = a { Some(n.to_f64()) } else { None }).collect();
+    let values: Option<Vec<f64>> = args
+        .iter()
+        .map(|a| {
+            if let Expr::Number(n) = a {
+                Some(n.to_f64())
+            } else {
+                None
+            }
+        })
+        .collect();
     match values {
         Some(values) => Expr::Number(Number::Float(apply(f, &values))),
         None => Expr::Call(f, args),
@@ -709,7 +937,8 @@ pub fn fold(expr: &Expr) -> Option<Number> {
             _ => None,
         },
         Expr::Call(f, args) => {
-            let values: Option<Vec<f64>> = args.iter().map(|a| fold(a).map(Number::to_f64)).collect();
+            let values: Option<Vec<f64>> =
+                args.iter().map(|a| fold(a).map(Number::to_f64)).collect();
             float(apply(*f, &values?))
         }
     }

@@ -14,8 +14,18 @@ use super::names::Namespace;
 use super::Lowerer;
 
 pub enum PendingLoad {
-    Force { point: PointRef, frame: FrameRef, components: Vec3, span: Span },
-    Torque { body: usize, frame: FrameRef, components: Vec3, span: Span },
+    Force {
+        point: PointRef,
+        frame: FrameRef,
+        components: Vec3,
+        span: Span,
+    },
+    Torque {
+        body: usize,
+        frame: FrameRef,
+        components: Vec3,
+        span: Span,
+    },
 }
 
 pub struct PendingOutput {
@@ -44,8 +54,15 @@ impl Lowerer<'_> {
             match item {
                 ast::Item::Gravity(decl) => {
                     if let Some(previous) = gravity {
-                        let name = Ident { name: "gravity".to_string(), span: decl.span };
-                        self.error(super::names::redefinition(&name, previous, "the declaration"));
+                        let name = Ident {
+                            name: "gravity".to_string(),
+                            span: decl.span,
+                        };
+                        self.error(super::names::redefinition(
+                            &name,
+                            previous,
+                            "the declaration",
+                        ));
                         continue;
                     }
                     gravity = Some(decl.span);
@@ -80,17 +97,30 @@ impl Lowerer<'_> {
     }
 
     fn lower_gravity(&mut self, decl: &ast::GravityDecl) {
-        let expect = Expect { dim: Dimension::ACCELERATION, what: "`gravity`", example: "[0, -9.81 m/s^2, 0]" };
+        let expect = Expect {
+            dim: Dimension::ACCELERATION,
+            what: "`gravity`",
+            example: "[0, -9.81 m/s^2, 0]",
+        };
         self.model.gravity = self.lower_vector_as(&decl.value, Ctx::Static("gravity"), &expect);
     }
 
     fn lower_force(&mut self, decl: &ast::ForceDecl) {
         let point = self.resolve_point(&decl.point);
-        let expect = Expect { dim: Dimension::FORCE, what: "a force", example: "[0, 1 mN, 0]" };
+        let expect = Expect {
+            dim: Dimension::FORCE,
+            what: "a force",
+            example: "[0, 1 mN, 0]",
+        };
         let components = self.lower_vector_as(&decl.value, Ctx::Dynamic, &expect);
         let frame = self.frame_clause(decl.frame.as_ref());
         if let (Some(point), Some(frame), Some(components)) = (point, frame, components) {
-            self.loads.push(PendingLoad::Force { point, frame, components, span: decl.span });
+            self.loads.push(PendingLoad::Force {
+                point,
+                frame,
+                components,
+                span: decl.span,
+            });
         }
     }
 
@@ -106,11 +136,20 @@ impl Lowerer<'_> {
                 None
             }
         };
-        let expect = Expect { dim: Dimension::TORQUE, what: "a torque", example: "[0, 0, 1 uN*m]" };
+        let expect = Expect {
+            dim: Dimension::TORQUE,
+            what: "a torque",
+            example: "[0, 0, 1 uN*m]",
+        };
         let components = self.lower_vector_as(&decl.value, Ctx::Dynamic, &expect);
         let frame = self.frame_clause(decl.frame.as_ref());
         if let (Some(body), Some(frame), Some(components)) = (body, frame, components) {
-            self.loads.push(PendingLoad::Torque { body, frame, components, span: decl.span });
+            self.loads.push(PendingLoad::Torque {
+                body,
+                frame,
+                components,
+                span: decl.span,
+            });
         }
     }
 
@@ -125,23 +164,39 @@ impl Lowerer<'_> {
     fn lower_output(&mut self, decl: &ast::OutputDecl) {
         let value = unparen(&decl.value);
         let kind = match &value.kind {
-            ExprKind::Call { function, args } if function.name == "position" || function.name == "velocity" => {
+            ExprKind::Call { function, args }
+                if function.name == "position" || function.name == "velocity" =>
+            {
                 self.vector_output(function, args, value.span, decl.frame.as_ref())
             }
             ExprKind::Path(path) => self.path_output(path, decl),
             _ => self.expr_output(decl),
         };
         if let Some(kind) = kind {
-            let output = PendingOutput { name: decl.name.name.clone(), docs: decl.docs.clone(), span: decl.span, kind };
+            let output = PendingOutput {
+                name: decl.name.name.clone(),
+                docs: decl.docs.clone(),
+                span: decl.span,
+                kind,
+            };
             self.outputs.push(output);
         }
     }
 
-    fn vector_output(&mut self, function: &Ident, args: &[ast::Expr], span: Span, frame: Option<&ast::Path>) -> Option<PendingKind> {
+    fn vector_output(
+        &mut self,
+        function: &Ident,
+        args: &[ast::Expr],
+        span: Span,
+        frame: Option<&ast::Path>,
+    ) -> Option<PendingKind> {
         let [arg] = args else {
             self.error(
-                Diagnostic::error("E0404", format!("`{}` takes 1 argument, found {}", function.name, args.len()))
-                    .with_label(span, format!("expected `{}(point)`", function.name)),
+                Diagnostic::error(
+                    "E0404",
+                    format!("`{}` takes 1 argument, found {}", function.name, args.len()),
+                )
+                .with_label(span, format!("expected `{}(point)`", function.name)),
             );
             return None;
         };
@@ -166,12 +221,18 @@ impl Lowerer<'_> {
         let kind = match path.segments.as_slice() {
             [name] if name.name == "kinetic_energy" => PendingKind::KineticEnergy,
             [name] if name.name == "potential_energy" => PendingKind::PotentialEnergy,
-            [joint, which] if self.joint_index.contains_key(&joint.name) && (which.name == "q" || which.name == "u") => {
+            [joint, which]
+                if self.joint_index.contains_key(&joint.name)
+                    && (which.name == "q" || which.name == "u") =>
+            {
                 let j = self.joint_index[&joint.name];
                 if self.joints.get(j).and_then(|info| info.kind) == Some(JointKind::Weld) {
                     self.error(
-                        Diagnostic::error("E0213", format!("weld joint `{}` has no coordinate", joint.name))
-                            .with_label(path.span, "a weld has no degree of freedom"),
+                        Diagnostic::error(
+                            "E0213",
+                            format!("weld joint `{}` has no coordinate", joint.name),
+                        )
+                        .with_label(path.span, "a weld has no degree of freedom"),
                     );
                     return None;
                 }
@@ -194,11 +255,15 @@ impl Lowerer<'_> {
     }
 
     fn reject_frame_clause(&mut self, decl: &ast::OutputDecl) -> Option<()> {
-        let Some(frame) = &decl.frame else { return Some(()) };
+        let Some(frame) = &decl.frame else {
+            return Some(());
+        };
         self.error(
             Diagnostic::error("E0403", "`in FRAME` is only allowed on vector outputs")
                 .with_label(frame.span, "this output is a scalar")
-                .with_help("only `position(point)` and `velocity(point)` have components in a frame"),
+                .with_help(
+                    "only `position(point)` and `velocity(point)` have components in a frame",
+                ),
         );
         None
     }
@@ -211,14 +276,22 @@ impl Lowerer<'_> {
         match point {
             PointRef::Origin(owner) => self.owners[owner].origin_point,
             PointRef::Com(owner) => self.owners[owner].com_point,
-            PointRef::Named(owner, index) => self.owners[owner].point_handles.get(index).copied().flatten(),
+            PointRef::Named(owner, index) => self.owners[owner]
+                .point_handles
+                .get(index)
+                .copied()
+                .flatten(),
         }
     }
 
     fn frame_handle(&self, frame: FrameRef) -> Option<Handle<ir::Frame>> {
         match frame {
             FrameRef::Owner(owner) => self.owners[owner].frame,
-            FrameRef::Named(owner, index) => self.owners[owner].frame_handles.get(index).copied().flatten(),
+            FrameRef::Named(owner, index) => self.owners[owner]
+                .frame_handles
+                .get(index)
+                .copied()
+                .flatten(),
             FrameRef::Joint(joint) => self.joints.get(joint).and_then(|j| j.frame),
         }
     }
@@ -237,19 +310,35 @@ impl Lowerer<'_> {
     pub(super) fn build_loads(&mut self) {
         for load in std::mem::take(&mut self.loads) {
             let built = match &load {
-                PendingLoad::Force { point, frame, components, span } => {
+                PendingLoad::Force {
+                    point,
+                    frame,
+                    components,
+                    span,
+                } => {
                     let handles = self.point_handle(*point).zip(self.frame_handle(*frame));
                     handles.map(|(point, frame)| ir::Load::Force {
                         point,
-                        force: ir::FrameVector { frame, components: components.clone() },
+                        force: ir::FrameVector {
+                            frame,
+                            components: components.clone(),
+                        },
                         span: *span,
                     })
                 }
-                PendingLoad::Torque { body, frame, components, span } => {
+                PendingLoad::Torque {
+                    body,
+                    frame,
+                    components,
+                    span,
+                } => {
                     let handles = self.owners[*body].frame.zip(self.frame_handle(*frame));
                     handles.map(|(body_frame, frame)| ir::Load::Torque {
                         frame: body_frame,
-                        torque: ir::FrameVector { frame, components: components.clone() },
+                        torque: ir::FrameVector {
+                            frame,
+                            components: components.clone(),
+                        },
                         span: *span,
                     })
                 }
@@ -272,16 +361,27 @@ impl Lowerer<'_> {
                     .point_handle(point)
                     .zip(self.frame_handle(frame))
                     .map(|(point, frame)| ir::OutputKind::Velocity { point, frame }),
-                PendingKind::Coordinate(j) => self.joints.get(j).and_then(|j| j.coordinate).map(ir::OutputKind::Coordinate),
-                PendingKind::Speed(j) => self.joints.get(j).and_then(|j| j.coordinate).map(ir::OutputKind::Speed),
+                PendingKind::Coordinate(j) => self
+                    .joints
+                    .get(j)
+                    .and_then(|j| j.coordinate)
+                    .map(ir::OutputKind::Coordinate),
+                PendingKind::Speed(j) => self
+                    .joints
+                    .get(j)
+                    .and_then(|j| j.coordinate)
+                    .map(ir::OutputKind::Speed),
                 PendingKind::KineticEnergy => Some(ir::OutputKind::KineticEnergy),
                 PendingKind::PotentialEnergy => Some(ir::OutputKind::PotentialEnergy),
                 PendingKind::Expr(expr) => Some(ir::OutputKind::Expr(expr)),
             };
             match kind {
-                Some(kind) => {
-                    self.model.outputs.push(ir::Output { name: output.name, kind, docs: output.docs, span: output.span })
-                }
+                Some(kind) => self.model.outputs.push(ir::Output {
+                    name: output.name,
+                    kind,
+                    docs: output.docs,
+                    span: output.span,
+                }),
                 None => self.unresolved(output.span),
             }
         }

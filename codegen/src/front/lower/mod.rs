@@ -36,14 +36,19 @@ pub fn lower(file: &Arc<SourceFile>, ast: &ast::File) -> Result<ir::Model, Error
     };
     let mut lowerer = Lowerer::new(name, ast.docs.clone());
     lowerer.run(ast);
-    lowerer.finish().map_err(|diagnostics| Errors::new(file.clone(), diagnostics))
+    lowerer
+        .finish()
+        .map_err(|diagnostics| Errors::new(file.clone(), diagnostics))
 }
 
 /// The file stem of `path` as an identifier (`models/four-bar.mech` → `four_bar`).
 pub fn default_model_name(path: &str) -> String {
     let file_name = path.rsplit(['/', '\\']).next().unwrap_or(path);
     let stem = file_name.split('.').next().unwrap_or(file_name);
-    let mut name: String = stem.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
+    let mut name: String = stem
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect();
     if name.is_empty() {
         name.push_str("model");
     }
@@ -140,7 +145,8 @@ impl<'a> Lowerer<'a> {
         if self.diagnostics.is_empty() {
             return Ok(self.model);
         }
-        self.diagnostics.sort_by_key(|d| d.labels.first().map(|l| l.span.start));
+        self.diagnostics
+            .sort_by_key(|d| d.labels.first().map(|l| l.span.start));
         Err(self.diagnostics)
     }
 
@@ -158,7 +164,13 @@ impl<'a> Lowerer<'a> {
                 _ => {}
             }
         }
-        let lets = items.iter().filter_map(|item| if let ast::Item::Let(decl) = item { Some(decl) } else { None });
+        let lets = items.iter().filter_map(|item| {
+            if let ast::Item::Let(decl) = item {
+                Some(decl)
+            } else {
+                None
+            }
+        });
         for (index, decl) in lets.enumerate() {
             self.current_let = Some(index);
             let value = self.lower_scalar(&decl.value, expr::Ctx::Dynamic);
@@ -169,7 +181,10 @@ impl<'a> Lowerer<'a> {
 
     /// Declares a value name; `false` if it clashes (the error is recorded).
     fn declare_value(&mut self, name: &ast::Ident) -> bool {
-        if let Some((_, meaning)) = RESERVED_VALUES.iter().find(|(reserved, _)| *reserved == name.name) {
+        if let Some((_, meaning)) = RESERVED_VALUES
+            .iter()
+            .find(|(reserved, _)| *reserved == name.name)
+        {
             self.error(names::reserved(name, meaning));
             return false;
         }
@@ -198,7 +213,8 @@ impl<'a> Lowerer<'a> {
         });
         self.param_values.push(value);
         if declared {
-            self.values.insert(decl.name.name.clone(), Value::Param(handle));
+            self.values
+                .insert(decl.name.name.clone(), Value::Param(handle));
         }
     }
 
@@ -217,7 +233,8 @@ impl<'a> Lowerer<'a> {
             span: decl.name.span,
         });
         if declared {
-            self.values.insert(decl.name.name.clone(), Value::Input(handle));
+            self.values
+                .insert(decl.name.name.clone(), Value::Input(handle));
         }
     }
 
@@ -226,7 +243,8 @@ impl<'a> Lowerer<'a> {
         self.lets.push(None);
         self.let_spans.push(decl.name.span);
         if self.declare_value(&decl.name) {
-            self.values.insert(decl.name.name.clone(), Value::Let(index));
+            self.values
+                .insert(decl.name.name.clone(), Value::Let(index));
         }
     }
 }

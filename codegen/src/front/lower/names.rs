@@ -33,25 +33,59 @@ impl Namespace {
 }
 
 pub fn redefinition(name: &Ident, previous: Span, what: &str) -> Diagnostic {
-    Diagnostic::error("E0210", format!("{what} `{}` is defined more than once", name.name))
-        .with_label(name.span, "defined again here")
-        .with_label(previous, "first defined here")
-        .with_help("rename one of them")
+    Diagnostic::error(
+        "E0210",
+        format!("{what} `{}` is defined more than once", name.name),
+    )
+    .with_label(name.span, "defined again here")
+    .with_label(previous, "first defined here")
+    .with_help("rename one of them")
 }
 
 pub fn reserved(name: &Ident, meaning: &str) -> Diagnostic {
     Diagnostic::error("E0212", format!("`{}` is a reserved name", name.name))
-        .with_label(name.span, format!("`{}` already means {meaning}", name.name))
+        .with_label(
+            name.span,
+            format!("`{}` already means {meaning}", name.name),
+        )
         .with_help("choose another name")
 }
 
-/// An "unknown X" error with the candidates as a note and the closest one as help.
-pub fn unknown(code: &'static str, what: &str, plural: &str, name: &str, span: Span, candidates: &[&str]) -> Diagnostic {
+/// An "unknown X" error with the candidates as a note and the closest one as help;
+/// `plural` introduces the list ("bodies in scope", "joint kinds").
+pub fn unknown(
+    code: &'static str,
+    what: &str,
+    plural: &str,
+    name: &str,
+    span: Span,
+    candidates: &[&str],
+) -> Diagnostic {
+    unknown_labelled(
+        code,
+        what,
+        plural,
+        name,
+        span,
+        candidates,
+        "not declared in this model",
+    )
+}
+
+pub fn unknown_labelled(
+    code: &'static str,
+    what: &str,
+    plural: &str,
+    name: &str,
+    span: Span,
+    candidates: &[&str],
+    label: &str,
+) -> Diagnostic {
     let mut diagnostic =
-        Diagnostic::error(code, format!("unknown {what} `{name}`")).with_label(span, "not declared in this model");
+        Diagnostic::error(code, format!("unknown {what} `{name}`")).with_label(span, label);
     diagnostic = match candidates.len() {
-        0 => diagnostic.with_note(format!("no {plural} are declared")),
-        _ => diagnostic.with_note(format!("{plural} in scope: {}", list(candidates))),
+        0 => diagnostic.with_note(format!("{plural}: none")),
+        _ => diagnostic.with_note(format!("{plural}: {}", list(candidates))),
     };
     match closest(name, candidates) {
         Some(best) => diagnostic.with_help(format!("did you mean `{best}`?")),
@@ -62,7 +96,12 @@ pub fn unknown(code: &'static str, what: &str, plural: &str, name: &str, span: S
 /// Up to 12 names, comma separated.
 pub fn list(names: &[&str]) -> String {
     const SHOWN: usize = 12;
-    let mut text = names.iter().take(SHOWN).copied().collect::<Vec<_>>().join(", ");
+    let mut text = names
+        .iter()
+        .take(SHOWN)
+        .copied()
+        .collect::<Vec<_>>()
+        .join(", ");
     if names.len() > SHOWN {
         text.push_str(&format!(", ... ({} more)", names.len() - SHOWN));
     }
@@ -72,19 +111,27 @@ pub fn list(names: &[&str]) -> String {
 /// The candidate closest to `name` by edit distance, if it is close enough to be a typo.
 pub fn closest<'c>(name: &str, candidates: &[&'c str]) -> Option<&'c str> {
     const LONGEST: usize = 64;
-    if name.chars().count() > LONGEST {
+    let length = name.chars().count();
+    if length > LONGEST {
         return None;
     }
-    let limit = (name.chars().count() / 3).max(1);
+    // Short names only match up to case (`mn` → `mN`); longer ones allow a typo per 3 chars.
+    let limit = if length < 3 { 0 } else { (length / 3).max(1) };
+    let lower = name.to_lowercase();
     candidates
         .iter()
         .filter(|c| c.chars().count() <= LONGEST && **c != name)
         .map(|c| {
-            let distance = if c.eq_ignore_ascii_case(name) { 0 } else { edit_distance(name, c) };
-            (distance, *c)
+            (
+                (
+                    edit_distance(&lower, &c.to_lowercase()),
+                    edit_distance(name, c),
+                ),
+                *c,
+            )
         })
-        .filter(|(distance, _)| *distance <= limit)
-        .min_by_key(|(distance, _)| *distance)
+        .filter(|((folded, _), _)| *folded <= limit)
+        .min_by_key(|(key, _)| *key)
         .map(|(_, c)| c)
 }
 
@@ -110,7 +157,10 @@ mod tests {
 
     #[test]
     fn suggests_close_names_only() {
-        assert_eq!(closest("forearm2", &["upper_arm", "forearm"]), Some("forearm"));
+        assert_eq!(
+            closest("forearm2", &["upper_arm", "forearm"]),
+            Some("forearm")
+        );
         assert_eq!(closest("xyz", &["upper_arm", "forearm"]), None);
         assert_eq!(closest("MN", &["mN", "kN"]), Some("mN"));
         assert_eq!(edit_distance("kitten", "sitting"), 3);

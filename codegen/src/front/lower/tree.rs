@@ -36,8 +36,18 @@ pub struct JointInfo<'a> {
     pub frame: Option<Handle<ir::Frame>>,
 }
 
-const JOINT_FIELDS: [&str; 10] =
-    ["axis", "parent_point", "child_point", "parent_frame", "child_frame", "q0", "u0", "stiffness", "rest", "damping"];
+const JOINT_FIELDS: [&str; 10] = [
+    "axis",
+    "parent_point",
+    "child_point",
+    "parent_frame",
+    "child_frame",
+    "q0",
+    "u0",
+    "stiffness",
+    "rest",
+    "damping",
+];
 /// Fields that describe a degree of freedom, so a weld has none of them.
 const DOF_FIELDS: [&str; 6] = ["axis", "q0", "u0", "stiffness", "rest", "damping"];
 
@@ -61,15 +71,34 @@ fn joint_expect(field: &'static str, kind: JointKind) -> Expect<'static> {
         "stiffness" => "`stiffness`",
         _ => "`damping`",
     };
-    Expect { dim: Dimension { mass, length, time, current: 0 }, what, example }
+    Expect {
+        dim: Dimension {
+            mass,
+            length,
+            time,
+            current: 0,
+        },
+        what,
+        example,
+    }
 }
 
 impl<'a> Lowerer<'a> {
     pub(super) fn lower_joints(&mut self, items: &'a [ast::Item]) {
-        let decls: Vec<&'a ast::JointDecl> =
-            items.iter().filter_map(|item| if let ast::Item::Joint(j) = item { Some(j) } else { None }).collect();
+        let decls: Vec<&'a ast::JointDecl> = items
+            .iter()
+            .filter_map(|item| {
+                if let ast::Item::Joint(j) = item {
+                    Some(j)
+                } else {
+                    None
+                }
+            })
+            .collect();
         for (index, decl) in decls.iter().enumerate() {
-            self.joint_index.entry(decl.name.name.clone()).or_insert(index);
+            self.joint_index
+                .entry(decl.name.name.clone())
+                .or_insert(index);
         }
         for decl in decls {
             let info = self.lower_joint(decl);
@@ -84,10 +113,16 @@ impl<'a> Lowerer<'a> {
         if let (Some(p), Some(c)) = (parent, child) {
             if p == c {
                 self.error(
-                    Diagnostic::error("E0408", format!("joint `{}` connects `{}` to itself", decl.name.name, decl.parent.name))
-                        .with_label(decl.child.span, "the child")
-                        .with_label(decl.parent.span, "is also the parent")
-                        .with_help("a joint connects two different bodies: `pin(parent, child)`"),
+                    Diagnostic::error(
+                        "E0408",
+                        format!(
+                            "joint `{}` connects `{}` to itself",
+                            decl.name.name, decl.parent.name
+                        ),
+                    )
+                    .with_label(decl.child.span, "the child")
+                    .with_label(decl.parent.span, "is also the parent")
+                    .with_help("a joint connects two different bodies: `pin(parent, child)`"),
                 );
             }
         }
@@ -115,13 +150,20 @@ impl<'a> Lowerer<'a> {
             info.axis = axis;
         }
         if let Some(f) = field("parent_point") {
-            info.parent_point = self.joint_point(f, parent, "`parent_point`", "parent").unwrap_or_else(zeros);
+            info.parent_point = self
+                .joint_point(f, parent, "`parent_point`", "parent")
+                .unwrap_or_else(zeros);
         }
         if let Some(f) = field("child_point") {
-            info.child_point = self.joint_point(f, child, "`child_point`", "child").unwrap_or_else(zeros);
+            info.child_point = self
+                .joint_point(f, child, "`child_point`", "child")
+                .unwrap_or_else(zeros);
         }
         if let Some(f) = field("parent_frame") {
-            info.parent_frame = self.joint_frame(f, parent, "parent").flatten().unwrap_or_default();
+            info.parent_frame = self
+                .joint_frame(f, parent, "parent")
+                .flatten()
+                .unwrap_or_default();
         }
         if let Some(f) = field("child_frame") {
             info.child_frame = self.joint_frame(f, child, "child").flatten();
@@ -164,7 +206,15 @@ impl<'a> Lowerer<'a> {
             "weld" => return Some(JointKind::Weld),
             _ => {}
         }
-        let mut diagnostic = names::unknown("E0208", "joint kind", "joint kinds", &kind.name, kind.span, &["pin", "slider", "weld"]);
+        let mut diagnostic = names::unknown_labelled(
+            "E0208",
+            "joint kind",
+            "joint kinds",
+            &kind.name,
+            kind.span,
+            &["pin", "slider", "weld"],
+            "not a joint kind",
+        );
         let synonym = match kind.name.as_str() {
             "revolute" | "hinge" => Some("pin"),
             "prismatic" => Some("slider"),
@@ -172,7 +222,8 @@ impl<'a> Lowerer<'a> {
             _ => None,
         };
         if let Some(synonym) = synonym {
-            diagnostic = diagnostic.with_help(format!("a {} joint is called `{synonym}` here", kind.name));
+            diagnostic =
+                diagnostic.with_help(format!("a {} joint is called `{synonym}` here", kind.name));
         }
         self.error(diagnostic);
         None
@@ -181,9 +232,15 @@ impl<'a> Lowerer<'a> {
     fn joint_child(&mut self, decl: &ast::JointDecl) -> Option<usize> {
         if decl.child.name == "newtonian" {
             self.error(
-                Diagnostic::error("E0409", format!("the child of joint `{}` is `newtonian`", decl.name.name))
-                    .with_label(decl.child.span, "the Newtonian frame cannot be a child")
-                    .with_help(format!("the parent comes first: `{}({}, {})`", decl.kind.name, decl.child.name, decl.parent.name)),
+                Diagnostic::error(
+                    "E0409",
+                    format!("the child of joint `{}` is `newtonian`", decl.name.name),
+                )
+                .with_label(decl.child.span, "the Newtonian frame cannot be a child")
+                .with_help(format!(
+                    "the parent comes first: `{}({}, {})`",
+                    decl.kind.name, decl.child.name, decl.parent.name
+                )),
             );
             return None;
         }
@@ -191,12 +248,24 @@ impl<'a> Lowerer<'a> {
     }
 
     /// The fields of a joint that are known, not repeated, and allowed for its kind.
-    fn joint_fields<'f>(&mut self, decl: &'f ast::JointDecl, kind: Option<JointKind>) -> Vec<&'f ast::Field> {
+    fn joint_fields<'f>(
+        &mut self,
+        decl: &'f ast::JointDecl,
+        kind: Option<JointKind>,
+    ) -> Vec<&'f ast::Field> {
         let mut fields: Vec<&ast::Field> = Vec::new();
         for field in &decl.fields {
             let name = field.name.name.as_str();
             if !JOINT_FIELDS.contains(&name) {
-                self.error(names::unknown("E0209", "field", "joint fields", name, field.name.span, &JOINT_FIELDS));
+                self.error(names::unknown_labelled(
+                    "E0209",
+                    "field",
+                    "fields of a joint",
+                    name,
+                    field.name.span,
+                    &JOINT_FIELDS,
+                    "not a joint field",
+                ));
                 continue;
             }
             if !self.check_duplicate_field(field, &fields) {
@@ -215,14 +284,27 @@ impl<'a> Lowerer<'a> {
         fields
     }
 
-    fn joint_axis(&mut self, decl: &ast::JointDecl, kind: Option<JointKind>, field: Option<&ast::Field>) -> Option<Vec3> {
+    fn joint_axis(
+        &mut self,
+        decl: &ast::JointDecl,
+        kind: Option<JointKind>,
+        field: Option<&ast::Field>,
+    ) -> Option<Vec3> {
         match (kind, field) {
             (_, Some(field)) => self.axis(&field.value, "a joint axis"),
             (Some(JointKind::Pin | JointKind::Slider), None) => {
                 self.error(
-                    Diagnostic::error("E0402", format!("{} joint `{}` has no `axis`", decl.kind.name, decl.name.name))
-                        .with_label(decl.name.span, "missing `axis = ...;`")
-                        .with_help("add `axis = z;` (or `x`, `y`, `-z`, `[ax, ay, az]`), in the joint frame"),
+                    Diagnostic::error(
+                        "E0402",
+                        format!(
+                            "{} joint `{}` has no `axis`",
+                            decl.kind.name, decl.name.name
+                        ),
+                    )
+                    .with_label(decl.name.span, "missing `axis = ...;`")
+                    .with_help(
+                        "add `axis = z;` (or `x`, `y`, `-z`, `[ax, ay, az]`), in the joint frame",
+                    ),
                 );
                 None
             }
@@ -231,11 +313,21 @@ impl<'a> Lowerer<'a> {
     }
 
     /// `parent_point` / `child_point`: body-frame coordinates, or a point of that body.
-    fn joint_point(&mut self, field: &ast::Field, owner: Option<usize>, what: &str, side: &str) -> Option<Vec3> {
+    fn joint_point(
+        &mut self,
+        field: &ast::Field,
+        owner: Option<usize>,
+        what: &str,
+        side: &str,
+    ) -> Option<Vec3> {
         let value = unparen(&field.value);
         match &value.kind {
             _ if is_vector(value) => {
-                let expect = Expect { dim: Dimension::LENGTH, what, example: "[0, 5 mm, 0]" };
+                let expect = Expect {
+                    dim: Dimension::LENGTH,
+                    what,
+                    example: "[0, 5 mm, 0]",
+                };
                 self.lower_vector_as(value, Ctx::Static("a joint point"), &expect)
             }
             ExprKind::Path(path) => {
@@ -256,12 +348,20 @@ impl<'a> Lowerer<'a> {
     }
 
     /// `parent_frame` / `child_frame`: the body's own frame (`Some(None)`) or one of its frames.
-    fn joint_frame(&mut self, field: &ast::Field, owner: Option<usize>, side: &str) -> Option<Option<Vec<AxisAngle>>> {
+    fn joint_frame(
+        &mut self,
+        field: &ast::Field,
+        owner: Option<usize>,
+        side: &str,
+    ) -> Option<Option<Vec<AxisAngle>>> {
         let ExprKind::Path(path) = &unparen(&field.value).kind else {
             self.error(
-                Diagnostic::error("E0412", format!("expected a frame for `{}`", field.name.name))
-                    .with_label(field.value.span, "not a frame")
-                    .with_help("name a frame of that body, such as `base.tilted`, or the body itself"),
+                Diagnostic::error(
+                    "E0412",
+                    format!("expected a frame for `{}`", field.name.name),
+                )
+                .with_label(field.value.span, "not a frame")
+                .with_help("name a frame of that body, such as `base.tilted`, or the body itself"),
             );
             return None;
         };
@@ -279,15 +379,30 @@ impl<'a> Lowerer<'a> {
         }
     }
 
-    fn check_owner(&mut self, expected: usize, actual: usize, path: &ast::Path, kind: &str, side: &str) -> Option<()> {
+    fn check_owner(
+        &mut self,
+        expected: usize,
+        actual: usize,
+        path: &ast::Path,
+        kind: &str,
+        side: &str,
+    ) -> Option<()> {
         if expected == actual {
             return Some(());
         }
         let expected_name = self.owners[expected].name.clone();
         self.error(
-            Diagnostic::error("E0414", format!("this {kind} is not fixed in the joint's {side} `{expected_name}`"))
-                .with_label(path.span, format!("belongs to `{}`", self.owners[actual].name))
-                .with_help(format!("use a {kind} of `{expected_name}`, or coordinates in its body frame")),
+            Diagnostic::error(
+                "E0414",
+                format!("this {kind} is not fixed in the joint's {side} `{expected_name}`"),
+            )
+            .with_label(
+                path.span,
+                format!("belongs to `{}`", self.owners[actual].name),
+            )
+            .with_help(format!(
+                "use a {kind} of `{expected_name}`, or coordinates in its body frame"
+            )),
         );
         None
     }
@@ -316,7 +431,9 @@ impl<'a> Lowerer<'a> {
         reached[0] = true;
         let mut stack: Vec<usize> = children[0].iter().rev().copied().collect();
         while let Some(j) = stack.pop() {
-            let Some(child) = self.joints[j].child else { continue };
+            let Some(child) = self.joints[j].child else {
+                continue;
+            };
             if reached[child] {
                 continue;
             }
@@ -332,7 +449,9 @@ impl<'a> Lowerer<'a> {
     fn parent_joints(&mut self) -> Vec<Option<usize>> {
         let mut parent_joint: Vec<Option<usize>> = vec![None; self.owners.len()];
         for j in 0..self.joints.len() {
-            let (Some(parent), Some(child)) = (self.joints[j].parent, self.joints[j].child) else { continue };
+            let (Some(parent), Some(child)) = (self.joints[j].parent, self.joints[j].child) else {
+                continue;
+            };
             if parent == child {
                 continue;
             }
@@ -359,7 +478,10 @@ impl<'a> Lowerer<'a> {
 
     fn report_unreached(&mut self, reached: &[bool], parent_joint: &[Option<usize>]) {
         // A joint with an error already explains why its bodies are not in the tree.
-        let broken_joint = self.joints.iter().any(|j| j.parent.is_none() || j.child.is_none() || j.parent == j.child);
+        let broken_joint = self
+            .joints
+            .iter()
+            .any(|j| j.parent.is_none() || j.child.is_none() || j.parent == j.child);
         let mut reported = vec![false; self.owners.len()];
         for owner in 1..self.owners.len() {
             if reached[owner] || reported[owner] {
@@ -385,11 +507,18 @@ impl<'a> Lowerer<'a> {
     }
 
     /// Follows parent joints up from `start`; reports the cycle found, if any, once.
-    fn detached_cycle(&mut self, start: usize, parent_joint: &[Option<usize>], reported: &mut [bool]) {
+    fn detached_cycle(
+        &mut self,
+        start: usize,
+        parent_joint: &[Option<usize>],
+        reported: &mut [bool],
+    ) {
         let mut path = vec![start];
         let mut current = start;
         loop {
-            let Some(parent) = parent_joint[current].and_then(|j| self.joints[j].parent) else { return };
+            let Some(parent) = parent_joint[current].and_then(|j| self.joints[j].parent) else {
+                return;
+            };
             if reported[parent] || parent == 0 {
                 return;
             }
@@ -409,10 +538,16 @@ impl<'a> Lowerer<'a> {
     fn report_cycle(&mut self, cycle: &[usize], parent_joint: &[Option<usize>]) {
         let mut joints: Vec<usize> = cycle.iter().filter_map(|&o| parent_joint[o]).collect();
         joints.sort_unstable();
-        let joint_names: Vec<String> = joints.iter().map(|&j| format!("`{}`", self.joints[j].decl.name.name)).collect();
+        let joint_names: Vec<String> = joints
+            .iter()
+            .map(|&j| format!("`{}`", self.joints[j].decl.name.name))
+            .collect();
         let mut diagnostic = Diagnostic::error(
             "E0410",
-            format!("joints {} form a cycle that is not connected to newtonian", joint_names.join(", ")),
+            format!(
+                "joints {} form a cycle that is not connected to newtonian",
+                joint_names.join(", ")
+            ),
         );
         for &j in &joints {
             diagnostic = diagnostic.with_label(self.joints[j].decl.name.span, "part of the cycle");
@@ -434,7 +569,9 @@ impl<'a> Lowerer<'a> {
     }
 
     fn append_named_frames(&mut self, owner: usize) {
-        let Some(parent) = self.owners[owner].frame else { return };
+        let Some(parent) = self.owners[owner].frame else {
+            return;
+        };
         let prefix = self.owners[owner].name.clone();
         let mut handles = Vec::new();
         for info in &self.owners[owner].frames {
@@ -452,23 +589,37 @@ impl<'a> Lowerer<'a> {
 
     fn build_joint(&mut self, j: usize) {
         let info = &self.joints[j];
-        let (Some(p), Some(c)) = (info.parent, info.child) else { return };
-        let Some(parent_frame) = self.owners[p].frame else { return };
+        let (Some(p), Some(c)) = (info.parent, info.child) else {
+            return;
+        };
+        let Some(parent_frame) = self.owners[p].frame else {
+            return;
+        };
         let decl = info.decl;
         let kind = info.kind.unwrap_or(JointKind::Weld);
         let coordinate = match kind {
             JointKind::Weld => None,
             _ => Some(self.model.coordinates.append(ir::Coordinate {
                 name: decl.name.name.clone(),
-                dimension: if kind == JointKind::Slider { Dimension::LENGTH } else { Dimension::NONE },
+                dimension: if kind == JointKind::Slider {
+                    Dimension::LENGTH
+                } else {
+                    Dimension::NONE
+                },
                 initial: info.q0,
                 initial_speed: info.u0,
                 span: decl.name.span,
             })),
         };
         let motion = match (kind, coordinate) {
-            (JointKind::Pin, Some(coordinate)) => Motion::Revolute { axis: info.axis.clone(), coordinate },
-            (JointKind::Slider, Some(coordinate)) => Motion::Prismatic { axis: info.axis.clone(), coordinate },
+            (JointKind::Pin, Some(coordinate)) => Motion::Revolute {
+                axis: info.axis.clone(),
+                coordinate,
+            },
+            (JointKind::Slider, Some(coordinate)) => Motion::Prismatic {
+                axis: info.axis.clone(),
+                coordinate,
+            },
             _ => Motion::Fixed,
         };
         let joint_frame = self.model.frames.append(ir::Frame {
@@ -504,11 +655,19 @@ impl<'a> Lowerer<'a> {
         self.record_joint(j, kind, coordinate, joint_frame);
     }
 
-    fn record_joint(&mut self, j: usize, kind: JointKind, coordinate: Option<Handle<ir::Coordinate>>, frame: Handle<ir::Frame>) {
+    fn record_joint(
+        &mut self,
+        j: usize,
+        kind: JointKind,
+        coordinate: Option<Handle<ir::Coordinate>>,
+        frame: Handle<ir::Frame>,
+    ) {
         let info = &mut self.joints[j];
         info.coordinate = coordinate;
         info.frame = Some(frame);
-        let (Some(p), Some(c)) = (info.parent, info.child) else { return };
+        let (Some(p), Some(c)) = (info.parent, info.child) else {
+            return;
+        };
         self.model.joints.append(ir::Joint {
             name: info.decl.name.name.clone(),
             kind,
@@ -520,22 +679,43 @@ impl<'a> Lowerer<'a> {
         let Some(coordinate) = coordinate else { return };
         if let Some((stiffness, span)) = info.stiffness.clone() {
             let rest = info.rest.clone();
-            self.model.loads.push(ir::Load::Spring { coordinate, stiffness, rest, span });
+            self.model.loads.push(ir::Load::Spring {
+                coordinate,
+                stiffness,
+                rest,
+                span,
+            });
         }
         if let Some((damping, span)) = info.damping.clone() {
-            self.model.loads.push(ir::Load::Damper { coordinate, damping, span });
+            self.model.loads.push(ir::Load::Damper {
+                coordinate,
+                damping,
+                span,
+            });
         }
     }
 
     /// Points: newtonian's named points, then per body its origin, `com` and named points.
     pub(super) fn build_points(&mut self) {
         for owner in 0..self.owners.len() {
-            let Some(frame) = self.owners[owner].frame else { continue };
+            let Some(frame) = self.owners[owner].frame else {
+                continue;
+            };
             let name = self.owners[owner].name.clone();
             if let Some(body) = &self.owners[owner].body {
                 let (span, com) = (self.owners[owner].name_span, body.com.clone());
-                let origin = self.model.points.append(ir::Point { name: name.clone(), frame, position: zeros(), span });
-                let com = self.model.points.append(ir::Point { name: format!("{name}.com"), frame, position: com, span });
+                let origin = self.model.points.append(ir::Point {
+                    name: name.clone(),
+                    frame,
+                    position: zeros(),
+                    span,
+                });
+                let com = self.model.points.append(ir::Point {
+                    name: format!("{name}.com"),
+                    frame,
+                    position: com,
+                    span,
+                });
                 self.owners[owner].origin_point = Some(origin);
                 self.owners[owner].com_point = Some(com);
             }
@@ -554,11 +734,18 @@ impl<'a> Lowerer<'a> {
 
     /// Bodies in declaration order (only when every body is in the tree).
     pub(super) fn build_bodies(&mut self) {
-        if self.owners.iter().skip(1).any(|o| o.frame.is_none() || o.body.is_none()) {
+        if self
+            .owners
+            .iter()
+            .skip(1)
+            .any(|o| o.frame.is_none() || o.body.is_none())
+        {
             return;
         }
         for owner in &self.owners[1..] {
-            let (Some(frame), Some(body)) = (owner.frame, &owner.body) else { continue };
+            let (Some(frame), Some(body)) = (owner.frame, &owner.body) else {
+                continue;
+            };
             self.model.bodies.append(ir::Body {
                 name: owner.name.clone(),
                 frame,
@@ -574,5 +761,12 @@ impl<'a> Lowerer<'a> {
 
 /// The inverse of a body-fixed rotation sequence: reversed, with negated angles.
 fn inverse(rotation: &[AxisAngle]) -> Vec<AxisAngle> {
-    rotation.iter().rev().map(|r| AxisAngle { axis: r.axis.clone(), angle: neg(r.angle.clone()) }).collect()
+    rotation
+        .iter()
+        .rev()
+        .map(|r| AxisAngle {
+            axis: r.axis.clone(),
+            angle: neg(r.angle.clone()),
+        })
+        .collect()
 }
