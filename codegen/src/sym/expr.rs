@@ -96,17 +96,41 @@ pub enum Node {
     Atan2(ExprId, ExprId),
 }
 
+/// Bounds on the work simplification may do per constructed node. Larger models get less
+/// simplified (bigger) expressions, never a hang.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Limits {
+    /// Sums with more terms than this skip the `sin² + cos² = 1` pair search, which is
+    /// quadratic in the number of terms.
+    pub identity_search_terms: usize,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits { identity_search_terms: 48 }
+    }
+}
+
 /// Hash-consed expression storage with names for symbols (used by `Display` and emitters).
 #[derive(Clone, Debug, Default)]
 pub struct ExprPool {
     nodes: Vec<Node>,
     memo: HashMap<Node, ExprId>,
     names: HashMap<Symbol, String>,
+    limits: Limits,
 }
 
 impl ExprPool {
     pub fn new() -> ExprPool {
         ExprPool::default()
+    }
+
+    pub fn with_limits(limits: Limits) -> ExprPool {
+        ExprPool { limits, ..ExprPool::default() }
+    }
+
+    pub fn limits(&self) -> Limits {
+        self.limits
     }
 
     pub fn len(&self) -> usize {
@@ -271,6 +295,9 @@ impl ExprPool {
         &mut self,
         terms: &[(ExprId, Number)],
     ) -> Option<(usize, usize, ExprId, Number)> {
+        if terms.len() > self.limits.identity_search_terms {
+            return None;
+        }
         for (i, &(term, coefficient)) in terms.iter().enumerate() {
             let Some((rest, cos_square)) = self.split_sin_square(term) else {
                 continue;

@@ -13,5 +13,5 @@ mod sexpr;
 mod tests;
 
 pub use eval::power;
-pub use expr::{children, ExprId, ExprPool, Func, Node, Symbol};
+pub use expr::{children, ExprId, ExprPool, Func, Limits, Node, Symbol};
 pub use number::Number;
