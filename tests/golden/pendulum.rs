@@ -3,7 +3,7 @@
 
 /// A simple pendulum: a bob of mass `m` on a light rod of length `l`, pinned at the
 /// Newtonian origin and swinging in the x-y plane under gravity along -y.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Default)]
 pub struct Pendulum {
     /// Parameters, settable at run time (SI units).
     pub params: PendulumParams,
@@ -25,6 +25,7 @@ pub struct PendulumParams {
     /// Default 0 (SI units: kg*m^2/s).
     pub c: f64,
 }
+#[allow(clippy::derivable_impls)]
 impl ::core::default::Default for PendulumParams {
     fn default() -> Self {
         Self {
@@ -32,13 +33,6 @@ impl ::core::default::Default for PendulumParams {
             l: 0.025,
             g: 9.81,
             c: 0.0,
-        }
-    }
-}
-impl ::core::default::Default for Pendulum {
-    fn default() -> Self {
-        Self {
-            params: PendulumParams::default(),
         }
     }
 }
@@ -133,7 +127,7 @@ impl Pendulum {
         >::from_column_slice(&[q[0], x2, x3, 0.0, x4, x5])
     }
 }
-#[allow(unused_variables)]
+#[allow(clippy::all, unused_variables)]
 impl ::mech_runtime::__codegen::Model for Pendulum {
     fn name(&self) -> &str {
         "pendulum"

@@ -273,7 +273,7 @@ impl<'a> Emitter<'a> {
 
         quote! {
             #model_docs
-            #[derive(Clone, Debug, PartialEq)]
+            #[derive(Clone, Debug, PartialEq, Default)]
             pub struct #name {
                 /// Parameters, settable at run time (SI units).
                 pub params: #params,
@@ -286,15 +286,10 @@ impl<'a> Emitter<'a> {
                 #( #field_docs pub #fields: f64, )*
             }
 
+            #[allow(clippy::derivable_impls)]
             impl ::core::default::Default for #params {
                 fn default() -> Self {
                     Self { #( #fields: #defaults, )* }
-                }
-            }
-
-            impl ::core::default::Default for #name {
-                fn default() -> Self {
-                    Self { params: #params::default() }
                 }
             }
 
@@ -371,7 +366,7 @@ impl<'a> Emitter<'a> {
                 #(#output_parts)*
             }
 
-            #[allow(unused_variables)]
+            #[allow(clippy::all, unused_variables)]
             impl #rt::__codegen::Model for #name {
                 fn name(&self) -> &str { #model_name }
                 fn nq(&self) -> usize { #nq }
