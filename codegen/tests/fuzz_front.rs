@@ -49,10 +49,60 @@ fn load_bytes(bytes: &[u8]) {
 
 /// Tokens that make mutations reach deeper into the grammar than random bytes do.
 const TOKENS: &[&str] = &[
-    "(", ")", "[", "]", "{", "}", ";", ",", ".", "=", "^", "-", "*", "/", "+", "^-", " ", "\n", "µ", "θ",
-    "0", "1e999", "1e-99999", "99999999999999999999999", "0.5", "mm", "deg", "kg*m^2", "m^-100",
-    "newtonian", "arm", "hinge", "tip", "com", "q", "u", "t", "pi", "let", "param", "body", "joint",
-    "pin", "weld", "slider", "rotate(z, 1)", "position(arm)", "at", "in", "on", "///", "//", "/*", "*/",
+    "(",
+    ")",
+    "[",
+    "]",
+    "{",
+    "}",
+    ";",
+    ",",
+    ".",
+    "=",
+    "^",
+    "-",
+    "*",
+    "/",
+    "+",
+    "^-",
+    " ",
+    "\n",
+    "µ",
+    "θ",
+    "0",
+    "1e999",
+    "1e-99999",
+    "99999999999999999999999",
+    "0.5",
+    "mm",
+    "deg",
+    "kg*m^2",
+    "m^-100",
+    "newtonian",
+    "arm",
+    "hinge",
+    "tip",
+    "com",
+    "q",
+    "u",
+    "t",
+    "pi",
+    "let",
+    "param",
+    "body",
+    "joint",
+    "pin",
+    "weld",
+    "slider",
+    "rotate(z, 1)",
+    "position(arm)",
+    "at",
+    "in",
+    "on",
+    "///",
+    "//",
+    "/*",
+    "*/",
 ];
 
 fn mutation() -> impl Strategy<Value = (usize, usize, Vec<u8>)> {
@@ -64,7 +114,7 @@ fn mutation() -> impl Strategy<Value = (usize, usize, Vec<u8>)> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 5000, failure_persistence: None, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 256, failure_persistence: None, ..ProptestConfig::default() })]
 
     #[test]
     fn arbitrary_strings_do_not_panic(text in "\\PC{0,200}") {

@@ -38,7 +38,11 @@ fn render(path: &Path) -> String {
 fn diagnostics_match_the_golden_files() {
     let bless = std::env::var_os("MECH_BLESS").is_some_and(|v| v == "1");
     let files = ui_files();
-    assert!(files.len() >= 20, "expected the ui corpus, found {} files", files.len());
+    assert!(
+        files.len() >= 20,
+        "expected the ui corpus, found {} files",
+        files.len()
+    );
     let mut failures = Vec::new();
     for path in &files {
         let actual = render(path);
@@ -49,8 +53,16 @@ fn diagnostics_match_the_golden_files() {
         }
         let expected = std::fs::read_to_string(&golden).unwrap_or_default();
         if actual == "(loaded without errors)\n" || actual != expected {
-            failures.push(format!("── {} ──\nexpected:\n{expected}\nactual:\n{actual}", golden.display()));
+            failures.push(format!(
+                "── {} ──\nexpected:\n{expected}\nactual:\n{actual}",
+                golden.display()
+            ));
         }
     }
-    assert!(failures.is_empty(), "{} ui test(s) failed (MECH_BLESS=1 to update):\n{}", failures.len(), failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "{} ui test(s) failed (MECH_BLESS=1 to update):\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
 }

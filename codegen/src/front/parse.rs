@@ -695,6 +695,11 @@ fn syntax_error(text: &str, error: pest::error::Error<Rule>) -> Diagnostic {
         pest::error::ErrorVariant::ParsingError { positives, .. } => expected_phrases(positives),
         pest::error::ErrorVariant::CustomError { .. } => Vec::new(),
     };
+    if let Some(start) = unterminated_comment(text, position) {
+        return Diagnostic::error("E0101", "unterminated block comment")
+            .with_label(Span::new(start, start + 2), "this `/*` is never closed")
+            .with_help("close the comment with `*/` (block comments do not nest)");
+    }
     let found = found_token(text, position);
     if expected.is_empty() {
         return Diagnostic::error("E0101", format!("unexpected {found}"))
@@ -789,6 +794,15 @@ fn join_alternatives(phrases: &[&str]) -> String {
         [one] => one.to_string(),
         [init @ .., last] => format!("{} or {last}", init.join(", ")),
     }
+}
+
+/// The start of a `/*` at or just before `position` that has no closing `*/`.
+fn unterminated_comment(text: &str, position: usize) -> Option<usize> {
+    let start = [position.saturating_sub(1), position]
+        .into_iter()
+        .find(|&p| text.get(p..).is_some_and(|rest| rest.starts_with("/*")))?;
+    let rest = text.get(start + 2..)?;
+    (!rest.contains("*/")).then_some(start)
 }
 
 /// Describes the token at `position`: a word, one character, or the end of the file.

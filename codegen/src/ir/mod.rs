@@ -303,7 +303,7 @@ impl Motion {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
     /// Qualified name: `newtonian`, `arm` (a body's frame), `arm.tilted`, or
-    /// `hinge.joint` for frames created by joints.
+    /// `hinge` and `hinge.child` for frames created by joint `hinge`.
     pub name: String,
     pub parent: Option<Handle<Frame>>,
     pub origin: Vec3,

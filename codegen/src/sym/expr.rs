@@ -107,7 +107,9 @@ pub struct Limits {
 
 impl Default for Limits {
     fn default() -> Self {
-        Limits { identity_search_terms: 48 }
+        Limits {
+            identity_search_terms: 48,
+        }
     }
 }
 
@@ -126,7 +128,10 @@ impl ExprPool {
     }
 
     pub fn with_limits(limits: Limits) -> ExprPool {
-        ExprPool { limits, ..ExprPool::default() }
+        ExprPool {
+            limits,
+            ..ExprPool::default()
+        }
     }
 
     pub fn limits(&self) -> Limits {

@@ -126,7 +126,9 @@ fn parse_errors_are_reported() {
 #[test]
 fn identity_search_respects_its_limit() {
     let text = "(+ (^ (sin q0) 2) (^ (cos q0) 2) a b c)";
-    let mut limited = ExprPool::with_limits(Limits { identity_search_terms: 4 });
+    let mut limited = ExprPool::with_limits(Limits {
+        identity_search_terms: 4,
+    });
     let id = limited.parse_sexpr(text).unwrap();
     assert_eq!(limited.sexpr(id), "(+ (^ (sin q0) 2) (^ (cos q0) 2) a b c)");
     check(text, "(+ 1 a b c)");

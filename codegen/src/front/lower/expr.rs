@@ -378,7 +378,12 @@ impl Lowerer<'_> {
             .map(|s| s.name.as_str())
             .collect::<Vec<_>>()
             .join(".");
-        let is_coordinate = matches!(path.segments.as_slice(), [joint, q] if self.joint_index.contains_key(&joint.name) && (q.name == "q" || q.name == "u"));
+        let is_coordinate = match path.segments.as_slice() {
+            [joint, q] => {
+                self.joint_index.contains_key(&joint.name) && (q.name == "q" || q.name == "u")
+            }
+            _ => false,
+        };
         let help = if is_coordinate {
             format!("coordinates and speeds can only be outputs on their own: `output x = {text};`")
         } else {

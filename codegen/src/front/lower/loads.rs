@@ -76,10 +76,10 @@ impl Lowerer<'_> {
                     self.declare_in(&mut load_names, &decl.name, "the load");
                     self.lower_torque(decl);
                 }
-                ast::Item::Output(decl) => {
-                    if self.declare_in(&mut output_names, &decl.name, "the output") {
-                        self.lower_output(decl);
-                    }
+                ast::Item::Output(decl)
+                    if self.declare_in(&mut output_names, &decl.name, "the output") =>
+                {
+                    self.lower_output(decl);
                 }
                 _ => {}
             }

@@ -468,7 +468,10 @@ impl<'a> Lowerer<'a> {
         self.error(
             Diagnostic::error(
                 "E0406",
-                format!("cycle in the joint tree: body `{}` has two parent joints, `{}` and `{}`", b.child.name, a.name.name, b.name.name),
+                format!(
+                    "cycle in the joint tree: body `{}` has two parent joints, `{}` and `{}`",
+                    b.child.name, a.name.name, b.name.name
+                ),
             )
             .with_label(b.child.span, format!("second parent joint `{}`", b.name.name))
             .with_label(a.child.span, format!("first parent joint `{}`", a.name.name))
@@ -552,7 +555,9 @@ impl<'a> Lowerer<'a> {
         for &j in &joints {
             diagnostic = diagnostic.with_label(self.joints[j].decl.name.span, "part of the cycle");
         }
-        self.error(diagnostic.with_help("the joints must form a tree rooted at `newtonian`: connect one body to `newtonian` and remove one joint of the cycle"));
+        let help = "the joints must form a tree rooted at `newtonian`: \
+                    connect one body to `newtonian` and remove one joint of the cycle";
+        self.error(diagnostic.with_help(help));
     }
 
     // -----------------------------------------------------------------------------------------

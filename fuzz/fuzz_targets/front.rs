@@ -1,0 +1,20 @@
+//! Fuzz target: `front::load` must not panic on any input (it may return errors, whose
+//! rendering must not panic either).
+//!
+//! Consumes: arbitrary bytes from libFuzzer, decoded lossily as UTF-8.
+//! Produces: nothing; a panic, overflow or stack overflow is a finding.
+
+#![no_main]
+
+use std::sync::Arc;
+
+use libfuzzer_sys::fuzz_target;
+use mech_codegen::diag::SourceFile;
+use mech_codegen::front;
+
+fuzz_target!(|data: &[u8]| {
+    let text = String::from_utf8_lossy(data).into_owned();
+    if let Err(errors) = front::load(Arc::new(SourceFile::new("fuzz.mech", text))) {
+        let _ = errors.to_string();
+    }
+});
