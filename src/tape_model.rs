@@ -17,6 +17,7 @@ pub struct TapeModel {
     coordinate_names: Vec<String>,
     input_names: Vec<String>,
     output_names: Vec<String>,
+    constraint_names: Vec<String>,
     param_names: Vec<String>,
     params: Vec<f64>,
     input_defaults: Vec<f64>,
@@ -39,6 +40,7 @@ impl TapeModel {
                 .collect(),
             input_names: model.inputs.iter().map(|(_, i)| i.name.clone()).collect(),
             output_names: compiled.equations.output_names.clone(),
+            constraint_names: compiled.equations.constraints.names.clone(),
             param_names: model.params.iter().map(|(_, p)| p.name.clone()).collect(),
             params: model.params.iter().map(|(_, p)| p.value).collect(),
             input_defaults: model.inputs.iter().map(|(_, i)| i.default).collect(),
@@ -144,5 +146,41 @@ impl mech_runtime::Model for TapeModel {
             inputs,
         };
         self.run(&self.tape.outputs, &env, out);
+    }
+    fn nc(&self) -> usize {
+        self.tape.nc
+    }
+    fn constraint_name(&self, i: usize) -> &str {
+        name_at(&self.constraint_names, i)
+    }
+    fn constraints(&self, t: f64, q: &[f64], out: &mut [f64]) {
+        let env = Env {
+            t,
+            q,
+            u: &[],
+            params: &self.params,
+            inputs: &[],
+        };
+        self.run(&self.tape.constraints, &env, out);
+    }
+    fn constraint_jacobian(&self, t: f64, q: &[f64], out: &mut [f64]) {
+        let env = Env {
+            t,
+            q,
+            u: &[],
+            params: &self.params,
+            inputs: &[],
+        };
+        self.run(&self.tape.constraint_jacobian, &env, out);
+    }
+    fn constraint_bias(&self, t: f64, q: &[f64], u: &[f64], out: &mut [f64]) {
+        let env = Env {
+            t,
+            q,
+            u,
+            params: &self.params,
+            inputs: &[],
+        };
+        self.run(&self.tape.constraint_bias, &env, out);
     }
 }

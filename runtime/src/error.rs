@@ -49,6 +49,13 @@ pub enum RuntimeError {
     InvalidSignal(String),
     /// An option is out of range (e.g. a negative tolerance or an end time before the start).
     InvalidOptions(String),
+    /// The loop closures could not be closed: `row` is the constraint row with the largest
+    /// remaining residual (model units), `norm` the norm of all rows.
+    AssemblyFailed {
+        row: String,
+        residual: f64,
+        norm: f64,
+    },
     /// Dense output was requested outside the last step `[t_start, t_end]`.
     InterpolationOutOfRange {
         /// Requested time.
@@ -97,6 +104,16 @@ impl fmt::Display for RuntimeError {
             ),
             RuntimeError::InvalidSignal(msg) => write!(f, "invalid input signal: {msg}"),
             RuntimeError::InvalidOptions(msg) => write!(f, "invalid options: {msg}"),
+            RuntimeError::AssemblyFailed {
+                row,
+                residual,
+                norm,
+            } => write!(
+                f,
+                "cannot close the loops: row `{row}` is still {residual:e} away (|φ| = {norm:e}); \
+                 start from a configuration closer to a closed one (q0 of the joints), check \
+                 the loop's points, or free more coordinates"
+            ),
             RuntimeError::InterpolationOutOfRange { t, t_start, t_end } => write!(
                 f,
                 "cannot interpolate at t = {t}: dense output only covers the last step \

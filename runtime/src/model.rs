@@ -43,6 +43,22 @@ pub trait Model {
     /// Outputs `y(t, q, u, inputs)`.
     fn outputs(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]);
 
+    /// Number of loop-closure constraint rows `φ(q) = 0` (0 for tree models). Rows may be
+    /// redundant (rank-deficient `J`).
+    fn nc(&self) -> usize {
+        0
+    }
+    /// Name of constraint row `i`, e.g. `fb2.x` or `fb2.align1`.
+    fn constraint_name(&self, _i: usize) -> &str {
+        ""
+    }
+    /// `φ(q)`, length `nc`.
+    fn constraints(&self, _t: f64, _q: &[f64], _out: &mut [f64]) {}
+    /// `J(q) = ∂φ/∂q`, `nc × nq`, column-major.
+    fn constraint_jacobian(&self, _t: f64, _q: &[f64], _out: &mut [f64]) {}
+    /// `J̇(q, u) u`, so that `J u̇ + J̇u = 0` keeps `J u = 0`.
+    fn constraint_bias(&self, _t: f64, _q: &[f64], _u: &[f64], _out: &mut [f64]) {}
+
     /// Index of the parameter called `name`.
     fn param_index(&self, name: &str) -> Option<usize> {
         (0..self.nparams()).find(|&i| self.param_name(i) == name)

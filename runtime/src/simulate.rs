@@ -7,6 +7,7 @@
 //! pivoting. The inputs are evaluated from one [`Signal`] per model input, in the model's input
 //! order.
 
+use crate::constraints::ConstrainedSolver;
 use crate::integrate::{Dopri5, Dopri5Options, Ode, Rk4, Stats, Stepper};
 use crate::{Model, RuntimeError, Signal};
 use nalgebra::{Cholesky, DMatrix, DVector};
@@ -56,6 +57,10 @@ pub struct SimOptions {
     pub method: Method,
     /// Budget of integration steps, accepted and rejected (default `1_000_000`).
     pub max_steps: usize,
+    /// For models with loop closures: after every accepted step (and at every sample) the
+    /// state is projected back until `max |φ(q)| ≤ constraint_tolerance` (model units, SI;
+    /// default `1e-12`), and `J u = 0` (kinetic-energy-closest correction).
+    pub constraint_tolerance: f64,
 }
 
 impl Default for SimOptions {
@@ -66,6 +71,7 @@ impl Default for SimOptions {
             output_interval: 1e-3,
             method: Method::default(),
             max_steps: 1_000_000,
+            constraint_tolerance: 1e-12,
         }
     }
 }
@@ -276,6 +282,8 @@ pub struct ModelOde<'a, M: Model + ?Sized> {
     nq: usize,
     inputs: Vec<f64>,
     solver: AccelSolver,
+    /// Present for models with loop closures: `M u̇ = F + Jᵀλ`, `J u̇ = −J̇u`.
+    constrained: Option<ConstrainedSolver>,
 }
 
 impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
@@ -300,6 +308,7 @@ impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
             nq,
             inputs: vec![0.0; model.ninputs()],
             solver: AccelSolver::new(nu),
+            constrained: (model.nc() > 0).then(|| ConstrainedSolver::new(nq, model.nc())),
         })
     }
 
@@ -335,6 +344,11 @@ impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
         check_len("u", self.nq, u.len())?;
         check_len("inputs", self.inputs.len(), inputs.len())?;
         check_len("udot", self.nq, udot.len())?;
+        if let Some(constrained) = &mut self.constrained {
+            return constrained
+                .accelerations(self.model, t, q, u, inputs, udot)
+                .map(|_| ());
+        }
         match self.solver.solve(self.model, t, q, u, inputs, udot) {
             Solve::Ok => Ok(()),
             Solve::NonFinite => Err(RuntimeError::NonFiniteState { t }),
@@ -355,6 +369,13 @@ impl<M: Model + ?Sized> Ode for ModelOde<'_, M> {
         }
         let (qdot, udot) = dxdt.split_at_mut(self.nq);
         qdot.copy_from_slice(u);
+        if let Some(constrained) = &mut self.constrained {
+            // A non-finite derivative makes the adaptive integrator retry a smaller step.
+            return match constrained.accelerations(self.model, t, q, u, &self.inputs, udot) {
+                Ok(_) | Err(RuntimeError::NonFiniteState { .. }) => Ok(()),
+                Err(error) => Err(error),
+            };
+        }
         match self.solver.solve(self.model, t, q, u, &self.inputs, udot) {
             Solve::Ok | Solve::NonFinite => Ok(()),
             Solve::Singular => Err(RuntimeError::SingularMassMatrix { t }),
@@ -421,6 +442,7 @@ pub fn simulate<M: Model + ?Sized>(
         output_interval,
         method,
         max_steps,
+        constraint_tolerance,
     } = *options;
     if !(t_start.is_finite() && t_end.is_finite() && t_end >= t_start) {
         return Err(RuntimeError::InvalidOptions(format!(
@@ -446,11 +468,27 @@ pub fn simulate<M: Model + ?Sized>(
                 ..Dopri5Options::default()
             };
             let stepper = Dopri5::new(ode, t_start, &x0, t_end, opts)?;
-            run(stepper, model, signals, grid, max_steps, progress)
+            run(
+                stepper,
+                model,
+                signals,
+                grid,
+                max_steps,
+                constraint_tolerance,
+                progress,
+            )
         }
         Method::Rk4 { step } => {
             let stepper = Rk4::new(ode, t_start, &x0, t_end, step)?;
-            run(stepper, model, signals, grid, max_steps, progress)
+            run(
+                stepper,
+                model,
+                signals,
+                grid,
+                max_steps,
+                constraint_tolerance,
+                progress,
+            )
         }
     }
 }
@@ -462,9 +500,19 @@ fn run<M: Model + ?Sized, S: Stepper>(
     signals: &[Signal],
     grid: Vec<f64>,
     max_steps: usize,
+    constraint_tolerance: f64,
     progress: &mut dyn FnMut(f64),
 ) -> Result<Trajectory, RuntimeError> {
     let nq = model.nq();
+    let mut projector = (model.nc() > 0).then(|| ConstrainedSolver::new(nq, model.nc()));
+    let mut project = |t: f64, x: &mut [f64]| -> Result<(), RuntimeError> {
+        let Some(projector) = projector.as_mut() else {
+            return Ok(());
+        };
+        let inputs: Vec<f64> = signals.iter().map(|s| s.value(t)).collect();
+        let (q, u) = x.split_at_mut(nq);
+        projector.project(model, t, q, u, &inputs, constraint_tolerance)
+    };
     let mut traj = Trajectory {
         q: Vec::with_capacity(grid.len()),
         u: Vec::with_capacity(grid.len()),
@@ -494,9 +542,15 @@ fn run<M: Model + ?Sized, S: Stepper>(
             });
         }
         stepper.step()?;
+        if model.nc() > 0 {
+            let t = stepper.t();
+            project(t, stepper.state_mut())?;
+            stepper.reset()?;
+        }
         progress(stepper.t());
         while next < grid.len() && grid[next] <= stepper.t() {
             stepper.interpolate(grid[next], &mut x)?;
+            project(grid[next], &mut x)?;
             record(grid[next], &x, &mut traj);
             next += 1;
         }

@@ -145,6 +145,9 @@ enum Function {
     MassMatrix,
     Forcing,
     Outputs,
+    Constraints,
+    ConstraintJacobian,
+    ConstraintBias,
 }
 
 impl Function {
@@ -153,6 +156,9 @@ impl Function {
             Function::MassMatrix => "mass_matrix",
             Function::Forcing => "forcing",
             Function::Outputs => "outputs",
+            Function::Constraints => "constraints",
+            Function::ConstraintJacobian => "constraint_jacobian",
+            Function::ConstraintBias => "constraint_bias",
         }
     }
 }
@@ -268,6 +274,7 @@ impl<'a> Emitter<'a> {
             self.function_body(Function::MassMatrix, &self.equations.mass_matrix);
         let (forcing_parts, forcing_body) =
             self.function_body(Function::Forcing, &self.equations.forcing);
+        let (constraint_inherent, constraint_trait) = self.constraint_functions();
         let (output_parts, output_body) =
             self.function_body(Function::Outputs, &self.equations.outputs);
 
@@ -364,6 +371,7 @@ impl<'a> Emitter<'a> {
                 #(#mass_parts)*
                 #(#forcing_parts)*
                 #(#output_parts)*
+                #constraint_inherent
             }
 
             #[allow(clippy::all, unused_variables)]
@@ -417,8 +425,84 @@ impl<'a> Emitter<'a> {
                     let y = #name::outputs(self, t, &q, &u, &inputs);
                     for (slot, value) in out.iter_mut().zip(y.iter()) { *slot = *value; }
                 }
+                #constraint_trait
             }
         }
+    }
+
+    /// For models with loop closures: `NC`, `CONSTRAINT_NAMES`, `constraints` (φ),
+    /// `constraint_jacobian` (J) and `constraint_bias` (J̇u), inherent and in the trait.
+    fn constraint_functions(&self) -> (TokenStream, TokenStream) {
+        let rows = &self.equations.constraints;
+        if rows.residual.is_empty() {
+            return (TokenStream::new(), TokenStream::new());
+        }
+        let rt = &self.runtime;
+        let name = &self.struct_name;
+        let (nq, nu, ni, _, _) = self.sizes();
+        let nc = usize_literal(rows.residual.len());
+        let names = rows.names.clone();
+        let (phi_parts, phi_body) = self.function_body(Function::Constraints, &rows.residual);
+        let (jacobian_parts, jacobian_body) =
+            self.function_body(Function::ConstraintJacobian, &rows.jacobian);
+        let (bias_parts, bias_body) = self.function_body(Function::ConstraintBias, &rows.bias);
+        let zero_u = quote!(let u = &#rt::__codegen::SVector::<f64, #nu>::zeros(););
+        let zero_inputs = quote!(let inputs = &#rt::__codegen::SVector::<f64, #ni>::zeros(););
+        let inherent = quote! {
+            /// Number of loop-closure constraint rows (redundant rows included).
+            pub const NC: usize = #nc;
+            pub const CONSTRAINT_NAMES: [&'static str; #nc] = [#(#names),*];
+
+            /// Loop-closure residual `φ(q)`.
+            pub fn constraints(&self, t: f64, q: &#rt::__codegen::SVector<f64, #nq>) -> #rt::__codegen::SVector<f64, #nc> {
+                #zero_u
+                #zero_inputs
+                #phi_body
+            }
+
+            /// Constraint Jacobian `J(q) = ∂φ/∂q`.
+            pub fn constraint_jacobian(&self, t: f64, q: &#rt::__codegen::SVector<f64, #nq>) -> #rt::__codegen::SMatrix<f64, #nc, #nq> {
+                #zero_u
+                #zero_inputs
+                #jacobian_body
+            }
+
+            /// Acceleration bias `J̇(q, u) u`: `J u̇ + J̇u = 0` along constrained motion.
+            pub fn constraint_bias(
+                &self,
+                t: f64,
+                q: &#rt::__codegen::SVector<f64, #nq>,
+                u: &#rt::__codegen::SVector<f64, #nu>,
+            ) -> #rt::__codegen::SVector<f64, #nc> {
+                #zero_inputs
+                #bias_body
+            }
+
+            #(#phi_parts)*
+            #(#jacobian_parts)*
+            #(#bias_parts)*
+        };
+        let in_trait = quote! {
+            fn nc(&self) -> usize { #nc }
+            fn constraint_name(&self, i: usize) -> &str { Self::CONSTRAINT_NAMES.get(i).copied().unwrap_or("") }
+            fn constraints(&self, t: f64, q: &[f64], out: &mut [f64]) {
+                let q = #rt::__codegen::vector_from_slice::<#nq>(q);
+                let phi = #name::constraints(self, t, &q);
+                for (slot, value) in out.iter_mut().zip(phi.iter()) { *slot = *value; }
+            }
+            fn constraint_jacobian(&self, t: f64, q: &[f64], out: &mut [f64]) {
+                let q = #rt::__codegen::vector_from_slice::<#nq>(q);
+                let jacobian = #name::constraint_jacobian(self, t, &q);
+                for (slot, value) in out.iter_mut().zip(jacobian.iter()) { *slot = *value; }
+            }
+            fn constraint_bias(&self, t: f64, q: &[f64], u: &[f64], out: &mut [f64]) {
+                let q = #rt::__codegen::vector_from_slice::<#nq>(q);
+                let u = #rt::__codegen::vector_from_slice::<#nu>(u);
+                let bias = #name::constraint_bias(self, t, &q, &u);
+                for (slot, value) in out.iter_mut().zip(bias.iter()) { *slot = *value; }
+            }
+        };
+        (inherent, in_trait)
     }
 
     /// The statements computing `roots`, and the result construction. Returns extra part
@@ -523,9 +607,13 @@ impl<'a> Emitter<'a> {
             })
             .collect();
         let count = usize_literal(roots.len());
+        let nc = usize_literal(self.equations.nc());
         let construct = match function {
             Function::MassMatrix => {
                 quote!(#rt::__codegen::SMatrix::<f64, #nu, #nu>::from_column_slice(&[#(#results),*]))
+            }
+            Function::ConstraintJacobian => {
+                quote!(#rt::__codegen::SMatrix::<f64, #nc, #nq>::from_column_slice(&[#(#results),*]))
             }
             _ => {
                 quote!(#rt::__codegen::SVector::<f64, #count>::from_column_slice(&[#(#results),*]))

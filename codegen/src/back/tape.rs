@@ -209,6 +209,14 @@ pub struct Tape {
     pub mass_matrix: Program,
     pub forcing: Program,
     pub outputs: Program,
+    /// Number of loop-closure rows.
+    pub nc: usize,
+    /// `φ(q)`.
+    pub constraints: Program,
+    /// `J(q)`, column-major `nc × nq`.
+    pub constraint_jacobian: Program,
+    /// `J̇(q, u) u`.
+    pub constraint_bias: Program,
 }
 
 impl Tape {
@@ -219,6 +227,10 @@ impl Tape {
             mass_matrix: Program::compile(&equations.pool, &equations.mass_matrix),
             forcing: Program::compile(&equations.pool, &equations.forcing),
             outputs: Program::compile(&equations.pool, &equations.outputs),
+            nc: equations.nc(),
+            constraints: Program::compile(&equations.pool, &equations.constraints.residual),
+            constraint_jacobian: Program::compile(&equations.pool, &equations.constraints.jacobian),
+            constraint_bias: Program::compile(&equations.pool, &equations.constraints.bias),
         }
     }
 }

@@ -39,6 +39,8 @@ pub enum Item {
     Newtonian(NewtonianDecl),
     Body(BodyDecl),
     Joint(JointDecl),
+    /// `loop NAME = KIND(PARENT, CHILD) { fields }`: same shape as a joint.
+    Loop(JointDecl),
     Force(ForceDecl),
     Torque(TorqueDecl),
     Output(OutputDecl),

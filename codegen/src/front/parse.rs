@@ -107,7 +107,8 @@ fn build_item(pair: Pair<Rule>) -> Result<ast::Item> {
             Rule::gravity_decl => gravity_decl(inner),
             Rule::newtonian_decl => newtonian_decl(inner),
             Rule::body_decl => body_decl(inner, docs),
-            Rule::joint_decl => joint_decl(inner, docs),
+            Rule::joint_decl => Ok(ast::Item::Joint(joint_decl(inner, docs)?)),
+            Rule::loop_decl => Ok(ast::Item::Loop(joint_decl(inner, docs)?)),
             Rule::force_decl => force_decl(inner, docs),
             Rule::torque_decl => torque_decl(inner, docs),
             Rule::output_decl => output_decl(inner, docs),
@@ -183,6 +184,7 @@ fn is_punctuation(rule: Rule) -> bool {
             | kw_gravity
             | kw_body
             | kw_joint
+            | kw_loop
             | kw_force
             | kw_torque
             | kw_output
@@ -294,7 +296,8 @@ fn field(pair: Pair<Rule>) -> Result<ast::Field> {
     })
 }
 
-fn joint_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
+/// A `joint` or `loop` declaration (they have the same shape).
+fn joint_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::JointDecl> {
     let mut parts = Parts::of(pair);
     let name = parts.ident()?;
     let kind = parts.ident()?;
@@ -309,7 +312,7 @@ fn joint_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
             }
         }
     }
-    Ok(ast::Item::Joint(ast::JointDecl {
+    Ok(ast::JointDecl {
         docs,
         name,
         kind,
@@ -317,7 +320,7 @@ fn joint_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
         child,
         fields,
         span,
-    }))
+    })
 }
 
 fn force_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
@@ -828,7 +831,7 @@ fn found_token(text: &str, position: usize) -> String {
 /// The top-level keyword right before `position`, if any (a field named `joint` means a `}`
 /// is missing).
 fn keyword_before(text: &str, position: usize) -> Option<&'static str> {
-    const KEYWORDS: [&str; 10] = [
+    const KEYWORDS: [&str; 11] = [
         "param",
         "let",
         "input",
@@ -836,6 +839,7 @@ fn keyword_before(text: &str, position: usize) -> Option<&'static str> {
         "newtonian",
         "body",
         "joint",
+        "loop",
         "force",
         "torque",
         "output",

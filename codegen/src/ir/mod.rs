@@ -11,7 +11,7 @@
 //! - Each coordinate is driven by exactly one frame's motion; `u_i = q̇_i`.
 //! - All expressions are dimensionally consistent and in SI units (kg, m, s, rad, A).
 //! - Joint axes have unit length.
-//! - Loop closures (a later capability) are additional constraints between two points or
+//! - Loop closures (`Model::loops`) are additional constraints between two points or
 //!   frames of the tree; they never change the tree itself.
 //!
 //! Model transformations (adding a twist axis to a hinge, say) insert frames and coordinates;
@@ -367,6 +367,40 @@ pub struct Joint {
     pub span: Span,
 }
 
+/// What a loop closure holds together.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ClosureKind {
+    /// The points coincide: the listed components (0 = x, 1 = y, 2 = z) of
+    /// `child − parent`, in the basis of `frame`, are zero.
+    Coincident {
+        frame: Handle<Frame>,
+        components: Vec<usize>,
+    },
+    /// A revolute closure (URDF `loop_joint` of type continuous): the points coincide and the
+    /// unit `axis` (components in the parent interframe) stays aligned with the same axis in
+    /// the child interframe. The interframes are given relative to each point's frame and
+    /// coincide when the relative rotation about the axis is zero.
+    Revolute {
+        axis: Vec3,
+        parent_orientation: Vec<AxisAngle>,
+        child_orientation: Vec<AxisAngle>,
+    },
+    /// `|child − parent| = length`.
+    Distance { length: Expr },
+}
+
+/// An explicit loop closure: constraints `φ(q) = 0` between two points of the tree.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoopClosure {
+    pub name: String,
+    pub kind: ClosureKind,
+    /// Point on the parent side (fixed in the parent body's frame).
+    pub parent: Handle<Point>,
+    /// Point on the child side.
+    pub child: Handle<Point>,
+    pub span: Span,
+}
+
 /// Something that does work: contributes to the generalized active forces `F_r`.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Load {
@@ -393,6 +427,22 @@ pub enum Load {
     /// `−damping·u` on one coordinate (joint damper).
     Damper {
         coordinate: Handle<Coordinate>,
+        damping: Expr,
+        span: Span,
+    },
+    /// Torque `−stiffness·(θ − rest)` about the axis of revolute closure `loops[closure]`,
+    /// on the child (and the opposite on the parent); θ is the relative rotation of the
+    /// interframes about the axis. Stores `½k(θ − rest)²` of potential energy.
+    LoopSpring {
+        closure: usize,
+        stiffness: Expr,
+        rest: Expr,
+        span: Span,
+    },
+    /// Torque `−damping·(ω_child − ω_parent)·axis` about the axis of revolute closure
+    /// `loops[closure]`.
+    LoopDamper {
+        closure: usize,
         damping: Expr,
         span: Span,
     },
@@ -444,6 +494,8 @@ pub struct Model {
     pub points: Arena<Point>,
     pub joints: Arena<Joint>,
     pub loads: Vec<Load>,
+    /// Loop closures: the only connections that are not tree joints.
+    pub loops: Vec<LoopClosure>,
     /// Gravitational acceleration, components in the Newtonian frame.
     pub gravity: Option<Vec3>,
     pub outputs: Vec<Output>,

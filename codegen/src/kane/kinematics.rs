@@ -113,7 +113,7 @@ pub fn lower_vec(pool: &mut ExprPool, v: &ir::Vec3) -> Vec3 {
 }
 
 /// `C_{p←F0}` of a constant orientation sequence `R(a₀,θ₀)·R(a₁,θ₁)·…`.
-fn orientation(pool: &mut ExprPool, sequence: &[ir::AxisAngle]) -> Mat3 {
+pub(crate) fn orientation(pool: &mut ExprPool, sequence: &[ir::AxisAngle]) -> Mat3 {
     let mut dcm = vector::identity(pool);
     for step in sequence {
         let axis = lower_vec(pool, &step.axis);

@@ -13,6 +13,7 @@
 //! `M_rs = Σ_bodies m ∂v_G/∂u_r·∂v_G/∂u_s + ∂ω/∂u_r·I ∂ω/∂u_s` and
 //! `F_r = F_r + F_r*|_{u̇=0}` (SymPy's `forcing`). `M` is never inverted symbolically.
 
+pub mod constraints;
 mod kinematics;
 pub mod vector;
 
@@ -37,6 +38,15 @@ pub struct Equations {
     /// Scalar outputs in declaration order (vector outputs expanded to `.x`, `.y`, `.z`).
     pub outputs: Vec<ExprId>,
     pub output_names: Vec<String>,
+    /// Loop-closure rows: `φ(q)`, `J = ∂φ/∂q` (`nc × nq`, column-major) and `J̇u`.
+    pub constraints: constraints::Constraints,
+}
+
+impl Equations {
+    /// Number of constraint rows `NC` (redundant rows included).
+    pub fn nc(&self) -> usize {
+        self.constraints.residual.len()
+    }
 }
 
 /// Derives the equations of motion by Kane's method.
@@ -55,8 +65,9 @@ pub fn derive(model: &Model) -> Equations {
         body_terms.add_to(&mut pool, &mut mass_terms, &mut forcing_terms);
     }
     for load in &model.loads {
-        add_load(&mut pool, &kinematics, model, load, &mut forcing_terms);
+        add_load(&mut pool, &mut kinematics, model, load, &mut forcing_terms);
     }
+    let constraints = constraints::derive(&mut pool, &mut kinematics, model);
 
     let zero = pool.zero();
     let mut mass_matrix = vec![zero; nu * nu];
@@ -86,6 +97,7 @@ pub fn derive(model: &Model) -> Equations {
         forcing,
         outputs,
         output_names,
+        constraints,
     }
 }
 
@@ -211,7 +223,7 @@ fn mat_vec3(pool: &mut ExprPool, m: &[[ExprId; 3]; 3], v: Vec3) -> Vec3 {
 /// Contribution of one applied load to the generalized active forces `F_r`.
 fn add_load(
     pool: &mut ExprPool,
-    kinematics: &Kinematics,
+    kinematics: &mut Kinematics,
     model: &Model,
     load: &Load,
     forcing: &mut [Vec<ExprId>],
@@ -255,6 +267,37 @@ fn add_load(
             let u = pool.symbol(Symbol::Speed(coordinate.index() as u32));
             let force = pool.mul(c, u);
             forcing[coordinate.index()].push(pool.neg(force));
+        }
+        Load::LoopSpring {
+            closure,
+            stiffness,
+            rest,
+            ..
+        } => {
+            let torque = |pool: &mut ExprPool,
+                          _: &mut Kinematics,
+                          geometry: &constraints::RevoluteGeometry| {
+                let k = lower_expr(pool, stiffness);
+                let rest = lower_expr(pool, rest);
+                let angle = constraints::relative_angle(pool, geometry);
+                let stretch = pool.sub(angle, rest);
+                let moment = pool.mul(k, stretch);
+                pool.neg(moment)
+            };
+            constraints::closure_torque_forces(pool, kinematics, model, *closure, torque, forcing);
+        }
+        Load::LoopDamper {
+            closure, damping, ..
+        } => {
+            let torque = |pool: &mut ExprPool,
+                          kinematics: &mut Kinematics,
+                          geometry: &constraints::RevoluteGeometry| {
+                let c = lower_expr(pool, damping);
+                let rate = constraints::relative_rate(pool, kinematics, model, *closure, geometry);
+                let moment = pool.mul(c, rate);
+                pool.neg(moment)
+            };
+            constraints::closure_torque_forces(pool, kinematics, model, *closure, torque, forcing);
         }
     }
 }
@@ -343,21 +386,43 @@ fn potential_energy(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Mo
         terms.push(pool.neg(work));
     }
     for load in &model.loads {
-        if let Load::Spring {
-            coordinate,
-            stiffness,
-            rest,
-            ..
-        } = load
-        {
-            let k = lower_expr(pool, stiffness);
-            let rest = lower_expr(pool, rest);
-            let q = pool.symbol(Symbol::Coordinate(coordinate.index() as u32));
-            let stretch = pool.sub(q, rest);
-            let square = pool.pow(stretch, Number::int(2));
-            let energy = pool.mul(k, square);
-            terms.push(pool.scale(energy, Number::rational(1, 2)));
-        }
+        // ½ k (x − rest)² for joint springs (x = q) and closure springs (x = θ).
+        let (stiffness, rest, stretched) = match load {
+            Load::Spring {
+                coordinate,
+                stiffness,
+                rest,
+                ..
+            } => (
+                stiffness,
+                rest,
+                pool.symbol(Symbol::Coordinate(coordinate.index() as u32)),
+            ),
+            Load::LoopSpring {
+                closure,
+                stiffness,
+                rest,
+                ..
+            } => {
+                let Some(geometry) =
+                    constraints::closure_geometry(pool, kinematics, model, *closure)
+                else {
+                    continue;
+                };
+                (
+                    stiffness,
+                    rest,
+                    constraints::relative_angle(pool, &geometry),
+                )
+            }
+            _ => continue,
+        };
+        let k = lower_expr(pool, stiffness);
+        let rest = lower_expr(pool, rest);
+        let stretch = pool.sub(stretched, rest);
+        let square = pool.pow(stretch, Number::int(2));
+        let energy = pool.mul(k, square);
+        terms.push(pool.scale(energy, Number::rational(1, 2)));
     }
     pool.add_all(&terms)
 }

@@ -284,7 +284,7 @@ impl Lowerer<'_> {
         }
     }
 
-    fn frame_handle(&self, frame: FrameRef) -> Option<Handle<ir::Frame>> {
+    pub(super) fn frame_handle(&self, frame: FrameRef) -> Option<Handle<ir::Frame>> {
         match frame {
             FrameRef::Owner(owner) => self.owners[owner].frame,
             FrameRef::Named(owner, index) => self.owners[owner]

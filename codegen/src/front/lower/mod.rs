@@ -7,11 +7,13 @@
 //!
 //! The work is split by topic: `expr` (scalar expressions, units, dimensions), `body` (bodies,
 //! points, frames, axes, rotations), `tree` (joints, tree order, frame building), `loads`
-//! (gravity, forces, torques, outputs) and `names` (namespaces and suggestions).
+//! (gravity, forces, torques, outputs), `loops` (loop closures) and `names` (namespaces and
+//! suggestions).
 
 mod body;
 mod expr;
 mod loads;
+mod loops;
 mod names;
 mod tree;
 
@@ -136,6 +138,7 @@ impl<'a> Lowerer<'a> {
         self.build_tree(&order);
         self.build_points();
         self.build_bodies();
+        self.lower_loops(&file.items);
         self.lower_loads_and_outputs(&file.items);
         self.build_loads();
         self.build_outputs();

@@ -313,7 +313,7 @@ impl<'a> Lowerer<'a> {
     }
 
     /// `parent_point` / `child_point`: body-frame coordinates, or a point of that body.
-    fn joint_point(
+    pub(super) fn joint_point(
         &mut self,
         field: &ast::Field,
         owner: Option<usize>,
@@ -348,7 +348,7 @@ impl<'a> Lowerer<'a> {
     }
 
     /// `parent_frame` / `child_frame`: the body's own frame (`Some(None)`) or one of its frames.
-    fn joint_frame(
+    pub(super) fn joint_frame(
         &mut self,
         field: &ast::Field,
         owner: Option<usize>,
@@ -475,7 +475,7 @@ impl<'a> Lowerer<'a> {
             )
             .with_label(b.child.span, format!("second parent joint `{}`", b.name.name))
             .with_label(a.child.span, format!("first parent joint `{}`", a.name.name))
-            .with_help("every body has exactly one parent joint; closing a kinematic loop will be declared explicitly (a later version of the language)"),
+            .with_help(format!("every body has exactly one parent joint; close a kinematic loop with a `loop` declaration instead, e.g. `loop {} = revolute({}, {}) {{ axis = z; ... }}`", b.name.name, b.parent.name, b.child.name)),
         );
     }
 

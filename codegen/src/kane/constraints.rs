@@ -1,0 +1,283 @@
+//! Loop-closure constraints: `φ(q) = 0`, its Jacobian `J = ∂φ/∂q` and the acceleration bias
+//! `J̇u`, so that `J u = 0` and `J u̇ + J̇u = 0` along any motion (with `q̇ = u`).
+//!
+//! Consumes: `model.loops` and the tree kinematics. Produces: [`Constraints`] (root ids in
+//! the pool) and the generalized forces of closure springs and dampers.
+//!
+//! Rows per closure (all positions measured from the Newtonian origin):
+//! - coincident: the listed components of `r_C − r_P` in the basis of the named frame;
+//! - revolute: `r_C − r_P` in N (3 rows), then `a_P·e₁_C` and `a_P·e₂_C`, where `a_P` is
+//!   the axis in the parent interframe and `e₁, e₂ ⊥ a` are fixed in the child interframe
+//!   (zero exactly when the two axes are parallel);
+//! - distance: `|r_C − r_P| − length`.
+//!
+//! `J` and `J̇u = Σᵢ ∂(J u)/∂qᵢ uᵢ` are exact symbolic derivatives of `φ`.
+
+use super::kinematics::{self, lower_vec, orientation, Kinematics};
+use super::vector::{self, Mat3, Vec3};
+use crate::ir::{self, ClosureKind, Model};
+use crate::sym::{ExprId, ExprPool, Number, Symbol};
+
+/// The constraint rows of a model.
+#[derive(Clone, Debug, Default)]
+pub struct Constraints {
+    /// `φ(q)`, one entry per row.
+    pub residual: Vec<ExprId>,
+    /// `J(q) = ∂φ/∂q`, `rows × nq`, column-major.
+    pub jacobian: Vec<ExprId>,
+    /// `J̇(q, u) u`.
+    pub bias: Vec<ExprId>,
+    /// `<loop>.x`, `<loop>.align1`, `<loop>.distance`, ...
+    pub names: Vec<String>,
+}
+
+/// Orientation (`C_{N←F}`) of a loop's interframe and position of its point, in N.
+struct Side {
+    dcm: Mat3,
+    position: Vec3,
+}
+
+fn side(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    model: &Model,
+    point: ir::Handle<ir::Point>,
+    rotation: &[ir::AxisAngle],
+) -> Side {
+    let point = &model.points[point];
+    let (frame_dcm, origin) = kinematics.to_newtonian(pool, point.frame);
+    let offset = lower_vec(pool, &point.position);
+    let offset = vector::mat_vec(pool, &frame_dcm, offset);
+    let position = vector::add(pool, origin, offset);
+    let interframe = orientation(pool, rotation);
+    let dcm = vector::mat_mul(pool, &frame_dcm, &interframe);
+    Side { dcm, position }
+}
+
+/// Two unit vectors perpendicular to the unit `axis` and to each other (`e₂ = a × e₁`),
+/// built from the coordinate axis least aligned with `a`.
+pub fn perpendiculars(axis: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    let least = (0..3)
+        .min_by(|&i, &j| axis[i].abs().total_cmp(&axis[j].abs()))
+        .unwrap_or(0);
+    let mut helper = [0.0; 3];
+    helper[least] = 1.0;
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let e1 = cross(axis, helper);
+    let norm = (e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]).sqrt();
+    let e1 = [e1[0] / norm, e1[1] / norm, e1[2] / norm];
+    (e1, cross(axis, e1))
+}
+
+/// Numeric values of a constant vector (loop axes are constants after lowering).
+fn constant_vector(pool: &ExprPool, v: Vec3) -> [f64; 3] {
+    let value = |id| pool.as_number(id).map_or(f64::NAN, Number::to_f64);
+    [value(v[0]), value(v[1]), value(v[2])]
+}
+
+fn number_vector(pool: &mut ExprPool, v: [f64; 3]) -> Vec3 {
+    let number = |pool: &mut ExprPool, x: f64| if x == 0.0 { pool.zero() } else { pool.float(x) };
+    [number(pool, v[0]), number(pool, v[1]), number(pool, v[2])]
+}
+
+/// The revolute closure's axis in N (from the parent side) and the reference directions
+/// `e₁` fixed in each interframe, in N.
+pub(super) struct RevoluteGeometry {
+    pub axis: Vec3,
+    pub reference_parent: Vec3,
+    pub reference_child: Vec3,
+    pub perpendicular_child: Vec3,
+}
+
+fn revolute_geometry(
+    pool: &mut ExprPool,
+    parent: &Side,
+    child: &Side,
+    axis: &ir::Vec3,
+) -> RevoluteGeometry {
+    let axis_local = lower_vec(pool, axis);
+    let (e1, e2) = perpendiculars(constant_vector(pool, axis_local));
+    let (e1, e2) = (number_vector(pool, e1), number_vector(pool, e2));
+    RevoluteGeometry {
+        axis: vector::mat_vec(pool, &parent.dcm, axis_local),
+        reference_parent: vector::mat_vec(pool, &parent.dcm, e1),
+        reference_child: vector::mat_vec(pool, &child.dcm, e1),
+        perpendicular_child: vector::mat_vec(pool, &child.dcm, e2),
+    }
+}
+
+/// The geometry of closure `index` (revolute closures only).
+pub(super) fn closure_geometry(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    model: &Model,
+    index: usize,
+) -> Option<RevoluteGeometry> {
+    let closure = &model.loops[index];
+    let ClosureKind::Revolute {
+        axis,
+        parent_orientation,
+        child_orientation,
+    } = &closure.kind
+    else {
+        return None;
+    };
+    let parent = side(pool, kinematics, model, closure.parent, parent_orientation);
+    let child = side(pool, kinematics, model, closure.child, child_orientation);
+    Some(revolute_geometry(pool, &parent, &child, axis))
+}
+
+/// Relative rotation of a revolute closure about its axis:
+/// `θ = atan2((e₁_P × e₁_C)·a, e₁_P·e₁_C)`.
+pub(super) fn relative_angle(pool: &mut ExprPool, geometry: &RevoluteGeometry) -> ExprId {
+    let cross = vector::cross(pool, geometry.reference_parent, geometry.reference_child);
+    let sine = vector::dot(pool, cross, geometry.axis);
+    let cosine = vector::dot(pool, geometry.reference_parent, geometry.reference_child);
+    pool.atan2(sine, cosine)
+}
+
+/// Derives every constraint row of the model.
+pub fn derive(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Model) -> Constraints {
+    let mut residual = Vec::new();
+    let mut names = Vec::new();
+    for closure in &model.loops {
+        let no_rotation: &[ir::AxisAngle] = &[];
+        let (parent_rotation, child_rotation) = match &closure.kind {
+            ClosureKind::Revolute {
+                parent_orientation,
+                child_orientation,
+                ..
+            } => (&parent_orientation[..], &child_orientation[..]),
+            _ => (no_rotation, no_rotation),
+        };
+        let parent = side(pool, kinematics, model, closure.parent, parent_rotation);
+        let child = side(pool, kinematics, model, closure.child, child_rotation);
+        let gap = vector::sub(pool, child.position, parent.position);
+        match &closure.kind {
+            ClosureKind::Coincident { frame, components } => {
+                let (frame_dcm, _) = kinematics.to_newtonian(pool, *frame);
+                let local = vector::mat_t_vec(pool, &frame_dcm, gap);
+                for &c in components {
+                    residual.push(local[c]);
+                    names.push(format!("{}.{}", closure.name, ["x", "y", "z"][c]));
+                }
+            }
+            ClosureKind::Revolute { axis, .. } => {
+                for (c, &component) in gap.iter().enumerate() {
+                    residual.push(component);
+                    names.push(format!("{}.{}", closure.name, ["x", "y", "z"][c]));
+                }
+                let geometry = revolute_geometry(pool, &parent, &child, axis);
+                residual.push(vector::dot(pool, geometry.axis, geometry.reference_child));
+                residual.push(vector::dot(
+                    pool,
+                    geometry.axis,
+                    geometry.perpendicular_child,
+                ));
+                names.push(format!("{}.align1", closure.name));
+                names.push(format!("{}.align2", closure.name));
+            }
+            ClosureKind::Distance { length } => {
+                let length = kinematics::lower_expr(pool, length);
+                let square = vector::dot(pool, gap, gap);
+                let distance = pool.sqrt(square);
+                residual.push(pool.sub(distance, length));
+                names.push(format!("{}.distance", closure.name));
+            }
+        }
+    }
+
+    let nq = model.coordinates.len();
+    let rows = residual.len();
+    let zero = pool.zero();
+    let mut jacobian = vec![zero; rows * nq];
+    for (r, &phi) in residual.iter().enumerate() {
+        for j in 0..nq {
+            jacobian[r + rows * j] = pool.diff(phi, Symbol::Coordinate(j as u32));
+        }
+    }
+    let mut bias = Vec::with_capacity(rows);
+    for r in 0..rows {
+        let terms: Vec<ExprId> = (0..nq)
+            .map(|j| {
+                let u = pool.symbol(Symbol::Speed(j as u32));
+                pool.mul(jacobian[r + rows * j], u)
+            })
+            .collect();
+        let velocity = pool.add_all(&terms);
+        let rates: Vec<ExprId> = (0..nq)
+            .map(|i| {
+                let d = pool.diff(velocity, Symbol::Coordinate(i as u32));
+                let u = pool.symbol(Symbol::Speed(i as u32));
+                pool.mul(d, u)
+            })
+            .collect();
+        bias.push(pool.add_all(&rates));
+    }
+    Constraints {
+        residual,
+        jacobian,
+        bias,
+        names,
+    }
+}
+
+/// `−k(θ − rest)` or `−c ω_rel` about a revolute closure's axis, as generalized forces:
+/// the torque `T·a` on the child and `−T·a` on the parent give `Q_r = T a·(W_C,r − W_P,r)`.
+pub(super) fn closure_torque_forces(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    model: &Model,
+    closure: usize,
+    torque: impl FnOnce(&mut ExprPool, &mut Kinematics, &RevoluteGeometry) -> ExprId,
+    forcing: &mut [Vec<ExprId>],
+) {
+    let Some(geometry) = closure_geometry(pool, kinematics, model, closure) else {
+        return;
+    };
+    let magnitude = torque(pool, kinematics, &geometry);
+    let torque_vector = vector::scale(pool, geometry.axis, magnitude);
+    let loop_closure = &model.loops[closure];
+    let sides = [
+        (loop_closure.child, Number::ONE),
+        (loop_closure.parent, Number::MINUS_ONE),
+    ];
+    for (point, sign) in sides {
+        let frame = model.points[point].frame;
+        let local = kinematics.express(pool, torque_vector, Model::NEWTONIAN, frame);
+        for (r, w) in kinematics.frames[frame.index()].partial_omega.clone() {
+            let power = vector::dot(pool, local, w);
+            forcing[r].push(pool.scale(power, sign));
+        }
+    }
+}
+
+/// `(ω_C − ω_P)·a` of a revolute closure, in N.
+pub(super) fn relative_rate(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    model: &Model,
+    closure: usize,
+    geometry: &RevoluteGeometry,
+) -> ExprId {
+    let loop_closure = &model.loops[closure];
+    let mut rate = pool.zero();
+    for (point, sign) in [
+        (loop_closure.child, Number::ONE),
+        (loop_closure.parent, Number::MINUS_ONE),
+    ] {
+        let frame = model.points[point].frame;
+        let omega = kinematics.frames[frame.index()].omega;
+        let omega = kinematics.express(pool, omega, frame, Model::NEWTONIAN);
+        let along = vector::dot(pool, omega, geometry.axis);
+        let signed = pool.scale(along, sign);
+        rate = pool.add(rate, signed);
+    }
+    rate
+}

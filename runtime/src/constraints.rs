@@ -1,0 +1,353 @@
+//! Loop-closure constraints at run time: mobility, assembly, constrained accelerations and
+//! drift projection, all rank-revealing so that redundant rows (planar loops in 3D, the
+//! spherical five-bar) are normal rather than fatal.
+//!
+//! Consumes: a [`Model`] with `nc() > 0` (`φ(q)`, `J(q)`, `J̇u`). Produces: [`Mobility`]
+//! reports, assembled states, and `u̇` of `M u̇ = F + Jᵀλ`, `J u̇ = −J̇u`.
+//!
+//! Rank decisions use singular values relative to the largest one: a value below
+//! `RANK_TOLERANCE · σ₁` counts as zero.
+
+use std::fmt;
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::{Model, RuntimeError};
+
+/// Relative threshold on singular values for rank decisions.
+pub const RANK_TOLERANCE: f64 = 1e-9;
+
+/// Mobility of a constrained model at one configuration: `dof = nq − rank(J)`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mobility {
+    pub coordinates: usize,
+    pub rows: usize,
+    pub rank: usize,
+    /// Singular values of `J`, descending.
+    pub singular_values: Vec<f64>,
+    /// Values below this count as zero (`RANK_TOLERANCE · σ₁`).
+    pub threshold: f64,
+}
+
+impl Mobility {
+    /// Degrees of freedom.
+    pub fn dof(&self) -> usize {
+        self.coordinates - self.rank
+    }
+
+    /// The singular values within three decades of the threshold, on either side: the rank
+    /// decision is fragile if any exist (e.g. axes that nearly, but not exactly, meet).
+    pub fn near_threshold(&self) -> Vec<f64> {
+        self.singular_values
+            .iter()
+            .copied()
+            .filter(|&s| s > self.threshold * 1e-3 && s < self.threshold * 1e3)
+            .collect()
+    }
+}
+
+impl fmt::Display for Mobility {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let plural = if self.dof() == 1 { "" } else { "s" };
+        write!(
+            f,
+            "{} coordinates, {} constraint rows, rank {}: {} degree{plural} of freedom",
+            self.coordinates,
+            self.rows,
+            self.rank,
+            self.dof()
+        )
+    }
+}
+
+/// `J(q)` as a matrix.
+pub fn jacobian<M: Model + ?Sized>(model: &M, t: f64, q: &[f64]) -> DMatrix<f64> {
+    let mut j = DMatrix::zeros(model.nc(), model.nq());
+    model.constraint_jacobian(t, q, j.as_mut_slice());
+    j
+}
+
+/// `φ(q)` as a vector.
+pub fn residual<M: Model + ?Sized>(model: &M, t: f64, q: &[f64]) -> DVector<f64> {
+    let mut phi = DVector::zeros(model.nc());
+    model.constraints(t, q, phi.as_mut_slice());
+    phi
+}
+
+/// Rank of `J` at `q` from its singular values.
+pub fn mobility<M: Model + ?Sized>(model: &M, t: f64, q: &[f64]) -> Mobility {
+    let j = jacobian(model, t, q);
+    let mut singular_values: Vec<f64> = if j.is_empty() {
+        Vec::new()
+    } else {
+        j.singular_values().iter().copied().collect()
+    };
+    singular_values.sort_by(|a, b| b.total_cmp(a));
+    let threshold = singular_values.first().copied().unwrap_or(0.0) * RANK_TOLERANCE;
+    let rank = singular_values.iter().filter(|&&s| s > threshold).count();
+    Mobility {
+        coordinates: model.nq(),
+        rows: model.nc(),
+        rank,
+        singular_values,
+        threshold,
+    }
+}
+
+/// Least-squares minimum-norm solution of `A x = b`, treating singular values below
+/// `RANK_TOLERANCE · σ₁` as zero.
+pub fn solve_least_squares(a: &DMatrix<f64>, b: &DVector<f64>) -> DVector<f64> {
+    if a.is_empty() {
+        return DVector::zeros(a.ncols());
+    }
+    let svd = a.clone().svd(true, true);
+    let largest = svd.singular_values.max();
+    let threshold = largest * RANK_TOLERANCE;
+    match svd.solve(b, threshold.max(f64::MIN_POSITIVE)) {
+        Ok(x) => x,
+        Err(_) => DVector::zeros(a.ncols()),
+    }
+}
+
+/// Independent coordinates chosen by column pivoting on `J`: the `nq − rank` columns left
+/// when the best-conditioned set of `rank` columns is taken as dependent (Gram–Schmidt with
+/// largest-norm pivoting).
+pub fn choose_independent(j: &DMatrix<f64>) -> Vec<usize> {
+    let mut columns: Vec<DVector<f64>> = (0..j.ncols()).map(|c| j.column(c).into_owned()).collect();
+    let scale = columns.iter().map(|c| c.norm()).fold(0.0, f64::max);
+    let mut dependent = Vec::new();
+    loop {
+        let best = (0..columns.len())
+            .filter(|c| !dependent.contains(c))
+            .max_by(|&a, &b| columns[a].norm().total_cmp(&columns[b].norm()));
+        let Some(best) = best else { break };
+        let norm = columns[best].norm();
+        if norm <= scale * RANK_TOLERANCE.sqrt() || norm == 0.0 {
+            break;
+        }
+        let direction = &columns[best] / norm;
+        for c in 0..columns.len() {
+            let along = columns[c].dot(&direction);
+            columns[c] -= &direction * along;
+        }
+        dependent.push(best);
+    }
+    (0..j.ncols()).filter(|c| !dependent.contains(c)).collect()
+}
+
+/// Settings of [`assemble`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AssemblyOptions {
+    /// Converged when `max |φ| ≤ tolerance` (model units, SI).
+    pub tolerance: f64,
+    pub max_iterations: usize,
+}
+
+impl Default for AssemblyOptions {
+    fn default() -> Self {
+        AssemblyOptions {
+            tolerance: 1e-13,
+            max_iterations: 100,
+        }
+    }
+}
+
+/// Solves `φ(q) = 0` for the coordinates not listed in `fixed`, starting from `q` (updated
+/// in place): damped Newton steps `Δq_free = −J_free⁺ φ` (rank-revealing least squares),
+/// halved until `|φ|` decreases. Fails with the loop rows that remain open.
+pub fn assemble<M: Model + ?Sized>(
+    model: &M,
+    t: f64,
+    q: &mut [f64],
+    fixed: &[usize],
+    options: &AssemblyOptions,
+) -> Result<usize, RuntimeError> {
+    let free: Vec<usize> = (0..model.nq()).filter(|c| !fixed.contains(c)).collect();
+    let mut phi = residual(model, t, q);
+    for iteration in 0..options.max_iterations {
+        if phi.amax() <= options.tolerance {
+            return Ok(iteration);
+        }
+        let j = jacobian(model, t, q);
+        let j_free = j.select_columns(&free);
+        let step = solve_least_squares(&j_free, &(-&phi));
+        let mut scale = 1.0;
+        let before = phi.norm();
+        let mut trial = q.to_vec();
+        loop {
+            for (k, &c) in free.iter().enumerate() {
+                trial[c] = q[c] + scale * step[k];
+            }
+            let trial_phi = residual(model, t, &trial);
+            if trial_phi.norm() < before || scale < 1e-6 {
+                q.copy_from_slice(&trial);
+                phi = trial_phi;
+                break;
+            }
+            scale *= 0.5;
+        }
+        if scale < 1e-6 {
+            break;
+        }
+    }
+    if phi.amax() <= options.tolerance {
+        return Ok(options.max_iterations);
+    }
+    Err(assembly_error(model, &phi))
+}
+
+fn assembly_error<M: Model + ?Sized>(model: &M, phi: &DVector<f64>) -> RuntimeError {
+    let worst = (0..phi.len())
+        .max_by(|&a, &b| phi[a].abs().total_cmp(&phi[b].abs()))
+        .unwrap_or(0);
+    RuntimeError::AssemblyFailed {
+        row: model.constraint_name(worst).to_string(),
+        residual: phi[worst],
+        norm: phi.norm(),
+    }
+}
+
+/// Speeds consistent with `J u = 0`: keeps `u` of the `fixed` coordinates and solves the
+/// others by least squares (`J_free u_free = −J_fixed u_fixed`).
+pub fn assemble_speeds<M: Model + ?Sized>(
+    model: &M,
+    t: f64,
+    q: &[f64],
+    u: &mut [f64],
+    fixed: &[usize],
+) {
+    let j = jacobian(model, t, q);
+    let free: Vec<usize> = (0..model.nq()).filter(|c| !fixed.contains(c)).collect();
+    let mut rhs = DVector::zeros(model.nc());
+    for &c in fixed {
+        rhs -= j.column(c) * u[c];
+    }
+    let solution = solve_least_squares(&j.select_columns(&free), &rhs);
+    for (k, &c) in free.iter().enumerate() {
+        u[c] = solution[k];
+    }
+}
+
+/// Workspace for constrained dynamics and projection.
+#[derive(Clone, Debug)]
+pub struct ConstrainedSolver {
+    nq: usize,
+    nc: usize,
+    mass: DMatrix<f64>,
+    force: DVector<f64>,
+    jacobian: DMatrix<f64>,
+    bias: DVector<f64>,
+    phi: DVector<f64>,
+}
+
+impl ConstrainedSolver {
+    pub fn new(nq: usize, nc: usize) -> ConstrainedSolver {
+        ConstrainedSolver {
+            nq,
+            nc,
+            mass: DMatrix::zeros(nq, nq),
+            force: DVector::zeros(nq),
+            jacobian: DMatrix::zeros(nc, nq),
+            bias: DVector::zeros(nc),
+            phi: DVector::zeros(nc),
+        }
+    }
+
+    /// `X = M⁻¹ Y` by Cholesky, or LU if `M` is not positive definite; `None` if singular.
+    fn mass_solve(&self, y: &DMatrix<f64>) -> Option<DMatrix<f64>> {
+        if let Some(cholesky) = self.mass.clone().cholesky() {
+            return Some(cholesky.solve(y));
+        }
+        self.mass.clone().lu().solve(y)
+    }
+
+    /// `u̇` and the multipliers `λ` of `M u̇ = F + Jᵀλ`, `J u̇ = −J̇u`:
+    /// `λ = (J M⁻¹ Jᵀ)⁺ (−J̇u − J M⁻¹F)` (rank-revealing, so redundant rows get the
+    /// minimum-norm multipliers) and `u̇ = M⁻¹(F + Jᵀλ)`.
+    pub fn accelerations<M: Model + ?Sized>(
+        &mut self,
+        model: &M,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        inputs: &[f64],
+        udot: &mut [f64],
+    ) -> Result<DVector<f64>, RuntimeError> {
+        model.mass_matrix(t, q, inputs, self.mass.as_mut_slice());
+        model.forcing(t, q, u, inputs, self.force.as_mut_slice());
+        model.constraint_jacobian(t, q, self.jacobian.as_mut_slice());
+        model.constraint_bias(t, q, u, self.bias.as_mut_slice());
+        let finite = |s: &[f64]| s.iter().all(|v| v.is_finite());
+        if ![
+            self.mass.as_slice(),
+            self.force.as_slice(),
+            self.jacobian.as_slice(),
+            self.bias.as_slice(),
+        ]
+        .iter()
+        .all(|s| finite(s))
+        {
+            udot.fill(f64::NAN);
+            return Err(RuntimeError::NonFiniteState { t });
+        }
+        let mut rhs = DMatrix::zeros(self.nq, 1 + self.nc);
+        rhs.column_mut(0).copy_from(&self.force);
+        rhs.columns_mut(1, self.nc)
+            .copy_from(&self.jacobian.transpose());
+        let solved = self
+            .mass_solve(&rhs)
+            .ok_or(RuntimeError::SingularMassMatrix { t })?;
+        let free = solved.column(0).into_owned();
+        let m_inv_jt = solved.columns(1, self.nc).into_owned();
+        let coupling = &self.jacobian * &m_inv_jt;
+        let mismatch = -&self.bias - &self.jacobian * &free;
+        let lambda = solve_least_squares(&coupling, &mismatch);
+        let result = free + m_inv_jt * &lambda;
+        if !finite(result.as_slice()) {
+            udot.fill(f64::NAN);
+            return Err(RuntimeError::NonFiniteState { t });
+        }
+        udot.copy_from_slice(result.as_slice());
+        Ok(lambda)
+    }
+
+    /// Moves `q` back onto `φ(q) = 0` (minimum-norm Gauss–Newton) and `u` onto `J u = 0`
+    /// (the kinetic-energy-closest correction `Δu = −M⁻¹Jᵀ(J M⁻¹ Jᵀ)⁺ J u`).
+    pub fn project<M: Model + ?Sized>(
+        &mut self,
+        model: &M,
+        t: f64,
+        q: &mut [f64],
+        u: &mut [f64],
+        inputs: &[f64],
+        tolerance: f64,
+    ) -> Result<(), RuntimeError> {
+        for _ in 0..10 {
+            model.constraints(t, q, self.phi.as_mut_slice());
+            if self.phi.amax() <= tolerance {
+                break;
+            }
+            model.constraint_jacobian(t, q, self.jacobian.as_mut_slice());
+            let step = solve_least_squares(&self.jacobian, &(-&self.phi));
+            for (value, delta) in q.iter_mut().zip(step.iter()) {
+                *value += delta;
+            }
+        }
+        model.constraint_jacobian(t, q, self.jacobian.as_mut_slice());
+        model.mass_matrix(t, q, inputs, self.mass.as_mut_slice());
+        let velocity_error = &self.jacobian * DVector::from_column_slice(u);
+        if velocity_error.amax() == 0.0 {
+            return Ok(());
+        }
+        let m_inv_jt = self
+            .mass_solve(&self.jacobian.transpose())
+            .ok_or(RuntimeError::SingularMassMatrix { t })?;
+        let coupling = &self.jacobian * &m_inv_jt;
+        let multipliers = solve_least_squares(&coupling, &velocity_error);
+        let correction = m_inv_jt * multipliers;
+        for (value, delta) in u.iter_mut().zip(correction.iter()) {
+            *value -= delta;
+        }
+        Ok(())
+    }
+}
