@@ -1,0 +1,301 @@
+//! Closed kinematic loops against closed forms and SymPy: the four-bar of
+//! `../shared/peers/sympy_fourbar.py`, the slider-crank, an over-constrained (redundant)
+//! closure, `J` and `J̇u` against finite differences, and drift control over long runs.
+
+mod common;
+
+use common::Rng;
+use mech::tape_model::TapeModel;
+use mech_runtime::{
+    assemble, assemble_speeds, mobility, AssemblyOptions, Method, Model, SimOptions,
+};
+
+fn assembled(model: &dyn Model, fixed: &[usize]) -> (Vec<f64>, Vec<f64>) {
+    let mut q = vec![0.0; model.nq()];
+    let mut u = vec![0.0; model.nu()];
+    model.initial_state(&mut q, &mut u);
+    assemble(model, 0.0, &mut q, fixed, &AssemblyOptions::default()).unwrap();
+    assemble_speeds(model, 0.0, &q, &mut u, fixed);
+    (q, u)
+}
+
+fn tight(t_end: f64, output_interval: f64) -> SimOptions {
+    SimOptions {
+        t_end,
+        output_interval,
+        method: Method::Dopri5 {
+            rtol: 1e-11,
+            atol: 1e-12,
+            h_max: f64::INFINITY,
+        },
+        ..SimOptions::default()
+    }
+}
+
+/// Values printed by `sympy_fourbar.py` (SymPy KanesMethod with dependent coordinates,
+/// fsolve at xtol 1e-14), for q1 = 1 rad, u1 = 2 rad/s. Our coupler angle is relative to
+/// the crank, so its absolute angle is q1 + q2.
+#[test]
+fn four_bar_assembly_matches_sympy() {
+    let model = common::tape("four_bar");
+    let (q, u) = assembled(&model, &[0]);
+    let expected = [
+        (q[0] + q[1], 0.475489408807),
+        (q[2], 1.68958837975),
+        (u[0] + u[1], -0.543165183136),
+        (u[2], 0.534428998589),
+    ];
+    for (value, reference) in expected {
+        assert!((value - reference).abs() < 2e-12, "{value} vs {reference}");
+    }
+    assert_eq!(
+        mobility(&model, 0.0, &q).to_string(),
+        "3 coordinates, 2 constraint rows, rank 2: 1 degree of freedom"
+    );
+}
+
+/// After 1 s of free motion SymPy + SciPy DOP853 (rtol = atol = 1e-9) give q1 = 3.3500951900.
+#[test]
+fn four_bar_motion_matches_sympy_and_holds_the_loop() {
+    for model in [
+        Box::new(common::tape("four_bar")) as Box<dyn Model>,
+        mech::models::compiled("four_bar").unwrap(),
+    ] {
+        let (q, u) = assembled(model.as_ref(), &[0]);
+        let run =
+            mech_runtime::simulate(model.as_ref(), &q, &u, &[], &tight(1.0, 0.01), &mut |_| {})
+                .unwrap();
+        let q1 = run.q.last().unwrap()[0];
+        assert!((q1 - 3.3500951900).abs() < 5e-9, "q1(1 s) = {q1}");
+    }
+}
+
+fn max_abs(values: &[f64]) -> f64 {
+    values.iter().fold(0.0, |m, v| m.max(v.abs()))
+}
+
+/// Ten seconds of free motion: energy conserved, `|φ|` and `|J u|` below 1e-9 at every sample.
+#[test]
+fn four_bar_conserves_energy_and_controls_drift_over_ten_seconds() {
+    let model = mech::models::compiled("four_bar").unwrap();
+    let (q, u) = assembled(model.as_ref(), &[0]);
+    let run = mech_runtime::simulate(model.as_ref(), &q, &u, &[], &tight(10.0, 0.01), &mut |_| {})
+        .unwrap();
+    let (ke, pe) = (
+        model.output_index("ke").unwrap(),
+        model.output_index("pe").unwrap(),
+    );
+    let energy: Vec<f64> = run.outputs.iter().map(|y| y[ke] + y[pe]).collect();
+    let scale = run.outputs.iter().map(|y| y[ke]).fold(0.0, f64::max);
+    let drift = energy
+        .iter()
+        .map(|e| (e - energy[0]).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        drift / scale < 1e-8,
+        "relative energy drift {:e}",
+        drift / scale
+    );
+    let (nc, nq) = (model.nc(), model.nq());
+    for (q, u) in run.q.iter().zip(&run.u) {
+        let mut phi = vec![0.0; nc];
+        model.constraints(0.0, q, &mut phi);
+        let mut j = vec![0.0; nc * nq];
+        model.constraint_jacobian(0.0, q, &mut j);
+        let ju: Vec<f64> = (0..nc)
+            .map(|r| (0..nq).map(|c| j[r + nc * c] * u[c]).sum())
+            .collect();
+        assert!(
+            max_abs(&phi) < 1e-9 && max_abs(&ju) < 1e-9,
+            "|φ| = {:e}, |Ju| = {:e}",
+            max_abs(&phi),
+            max_abs(&ju)
+        );
+    }
+}
+
+/// Rocker and coupler angles from the circle-intersection solution, on the branch of the
+/// reference assembly, against assembly by continuation over a full crank turn.
+#[test]
+fn four_bar_positions_match_the_closed_form_over_a_crank_turn() {
+    let model = common::tape("four_bar");
+    let (l0, l1, l2, l3) = (3.0_f64, 1.0_f64, 2.5_f64, 2.0_f64);
+    let closed_form = |crank: f64, branch: f64| {
+        let (ax, ay) = (l1 * crank.cos(), l1 * crank.sin());
+        let (dx, dy) = (ax - l0, ay);
+        let d = (dx * dx + dy * dy).sqrt();
+        let beta = ((l3 * l3 + d * d - l2 * l2) / (2.0 * l3 * d)).acos();
+        let rocker = dy.atan2(dx) + branch * beta;
+        let (cx, cy) = (l0 + l3 * rocker.cos(), l3 * rocker.sin());
+        (rocker, (cy - ay).atan2(cx - ax))
+    };
+    let wrap = |a: f64| {
+        (a + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI) - std::f64::consts::PI
+    };
+    let (mut q, _) = assembled(&model, &[0]);
+    let branch = [1.0, -1.0]
+        .into_iter()
+        .find(|&b| (wrap(closed_form(q[0], b).0 - q[2])).abs() < 1e-9)
+        .expect("one branch matches");
+    for step in 0..=72 {
+        q[0] = 1.0 + step as f64 * std::f64::consts::TAU / 72.0;
+        assemble(&model, 0.0, &mut q, &[0], &AssemblyOptions::default()).unwrap();
+        let (rocker, coupler) = closed_form(q[0], branch);
+        assert!(
+            wrap(q[2] - rocker).abs() < 1e-10,
+            "rocker at crank {}: {} vs {rocker}",
+            q[0],
+            q[2]
+        );
+        assert!(
+            wrap(q[0] + q[1] - coupler).abs() < 1e-10,
+            "coupler at crank {}",
+            q[0]
+        );
+    }
+}
+
+/// x = r cos θ + √(L² − r² sin²θ) and its rate, over a crank turn.
+#[test]
+fn slider_crank_position_and_velocity_match_the_analytic_expressions() {
+    let model = common::tape("slider_crank");
+    let (r, rod) = (5e-3_f64, 15e-3_f64);
+    let slide = model.output_index("slider_x").unwrap();
+    let rate = model.output_index("slider_v").unwrap();
+    let (mut q, mut u) = assembled(&model, &[0]);
+    for step in 0..=48 {
+        let theta = step as f64 * std::f64::consts::TAU / 48.0;
+        let omega = 20.0;
+        q[0] = theta;
+        u[0] = omega;
+        assemble(&model, 0.0, &mut q, &[0], &AssemblyOptions::default()).unwrap();
+        assemble_speeds(&model, 0.0, &q, &mut u, &[0]);
+        let root = (rod * rod - r * r * theta.sin().powi(2)).sqrt();
+        let x = r * theta.cos() + root;
+        let v = -r * omega * theta.sin() - r * r * omega * theta.sin() * theta.cos() / root;
+        let y = common::outputs(&model, &q, &u);
+        // Assembly closes the loop to 1e-13 m.
+        assert!(
+            (y[slide] - x).abs() < 2e-13,
+            "x at θ = {theta}: {} vs {x}",
+            y[slide]
+        );
+        assert!(
+            (y[rate] - v).abs() < 1e-12,
+            "v at θ = {theta}: {} vs {v}",
+            y[rate]
+        );
+    }
+}
+
+/// The four-bar closed by a revolute closure in 3D: 3 position rows + 2 axis-alignment rows,
+/// of which only 2 are independent. The rank must be found, and the motion must be the same
+/// as with the minimal (x, y) closure.
+#[test]
+fn redundant_closure_reports_mobility_and_simulates() {
+    let source = std::fs::read_to_string(format!(
+        "{}/models/four_bar.mech",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let redundant = source.replace(
+        "loop tip = coincident(coupler, rocker) {",
+        "loop tip = revolute(coupler, rocker) {\n    axis = z;",
+    );
+    let redundant = redundant.replace("    components = [x, y];\n", "");
+    assert!(redundant.contains("revolute(coupler, rocker)"));
+    let model = TapeModel::new(&common::compile_text("four_bar_redundant", &redundant));
+    let (q, u) = assembled(&model, &[0]);
+    let report = mobility(&model, 0.0, &q);
+    assert_eq!(
+        report.to_string(),
+        "3 coordinates, 5 constraint rows, rank 2: 1 degree of freedom"
+    );
+    let run = mech_runtime::simulate(&model, &q, &u, &[], &tight(1.0, 0.01), &mut |_| {}).unwrap();
+    let q1 = run.q.last().unwrap()[0];
+    assert!((q1 - 3.3500951900).abs() < 5e-9, "q1(1 s) = {q1}");
+}
+
+/// `J` against central differences of `φ`, and `J̇u` against central differences of `J u`
+/// along `u`, at random states of every bundled model with loops.
+#[test]
+fn jacobian_and_bias_match_finite_differences() {
+    let mut rng = Rng::new(11);
+    let mut checked = 0;
+    for name in mech::models::NAMES {
+        let model = common::tape(name);
+        let (nq, nc) = (model.nq(), model.nc());
+        if nc == 0 {
+            continue;
+        }
+        checked += 1;
+        for _ in 0..5 {
+            let q = rng.vector(nq, -1.0, 1.0);
+            let u = rng.vector(nq, -1.0, 1.0);
+            let mut j = vec![0.0; nc * nq];
+            model.constraint_jacobian(0.0, &q, &mut j);
+            let h = 1e-6;
+            for c in 0..nq {
+                let (mut plus, mut minus) = (q.clone(), q.clone());
+                plus[c] += h;
+                minus[c] -= h;
+                let (mut phi_plus, mut phi_minus) = (vec![0.0; nc], vec![0.0; nc]);
+                model.constraints(0.0, &plus, &mut phi_plus);
+                model.constraints(0.0, &minus, &mut phi_minus);
+                for r in 0..nc {
+                    let fd = (phi_plus[r] - phi_minus[r]) / (2.0 * h);
+                    assert!(
+                        (fd - j[r + nc * c]).abs() < 1e-7,
+                        "{name}: J[{r},{c}] = {} vs {fd}",
+                        j[r + nc * c]
+                    );
+                }
+            }
+            let ju = |q: &[f64]| {
+                let mut j = vec![0.0; nc * nq];
+                model.constraint_jacobian(0.0, q, &mut j);
+                (0..nc)
+                    .map(|r| (0..nq).map(|c| j[r + nc * c] * u[c]).sum::<f64>())
+                    .collect::<Vec<f64>>()
+            };
+            let ahead: Vec<f64> = q.iter().zip(&u).map(|(q, u)| q + h * u).collect();
+            let behind: Vec<f64> = q.iter().zip(&u).map(|(q, u)| q - h * u).collect();
+            let (a, b) = (ju(&ahead), ju(&behind));
+            let mut bias = vec![0.0; nc];
+            model.constraint_bias(0.0, &q, &u, &mut bias);
+            for r in 0..nc {
+                let fd = (a[r] - b[r]) / (2.0 * h);
+                assert!(
+                    (fd - bias[r]).abs() < 1e-7,
+                    "{name}: J̇u[{r}] = {} vs {fd}",
+                    bias[r]
+                );
+            }
+        }
+    }
+    assert!(checked >= 2, "expected bundled loop models");
+}
+
+/// A loop that cannot close names the row and the residual.
+#[test]
+fn impossible_assembly_is_a_clear_error() {
+    let source = std::fs::read_to_string(format!(
+        "{}/models/four_bar.mech",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let too_short = source.replace(
+        "param coupler_length = 2.5 m;",
+        "param coupler_length = 0.5 m;",
+    );
+    let model = TapeModel::new(&common::compile_text("four_bar_open", &too_short));
+    let mut q = vec![0.0; 3];
+    let mut u = vec![0.0; 3];
+    model.initial_state(&mut q, &mut u);
+    let error = assemble(&model, 0.0, &mut q, &[0], &AssemblyOptions::default()).unwrap_err();
+    let message = error.to_string();
+    assert!(
+        message.contains("cannot close the loops: row `tip."),
+        "{message}"
+    );
+}
