@@ -6,8 +6,11 @@
 //! Symbols: `q` generalized coordinates, `u = q̇` generalized speeds, `M(q) u̇ = F`.
 
 pub mod describe;
+pub mod flexure_fit;
 pub mod output;
+pub mod physics;
 pub mod plot;
+pub mod session;
 pub mod signal_spec;
 pub mod tape_model;
 

@@ -4,7 +4,8 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
-use mech::{describe, output, plot, signal_spec, tape_model::TapeModel};
+use mech::session::{self, Session};
+use mech::{describe, output, plot};
 use mech_codegen::Compiled;
 use mech_runtime::{Method, Model, SimOptions};
 
@@ -69,7 +70,33 @@ enum Command {
         /// Output sampling interval, with a unit or in seconds (default: t_end / 1000).
         #[arg(long)]
         dt_out: Option<String>,
+        /// For models with loops: hold this coordinate (at VALUE, or its q0) while closing
+        /// the loops, e.g. `--independent crank_angle=1rad` (repeatable; default: chosen by
+        /// pivoting on the constraint Jacobian).
+        #[arg(long = "independent", value_name = "NAME[=VALUE]")]
+        independent: Vec<String>,
     },
+    /// Close the loops of a model: mobility, the singular values deciding it, and a
+    /// consistent state (CSV with --out).
+    Assemble {
+        model: PathBuf,
+        /// Set a parameter: `--set 'm=12 g'` (repeatable).
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        sets: Vec<String>,
+        /// Hold this coordinate (at VALUE, or its q0): `--independent crank_angle=1rad`.
+        #[arg(long = "independent", value_name = "NAME[=VALUE]")]
+        independent: Vec<String>,
+        /// CSV file for the assembled coordinates and speeds.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Flexure hinges: stiffness and damping (seed Eqs. 2, 5, 8) and the pendulum fit (Sec. IV).
+    Flexure {
+        #[command(subcommand)]
+        command: mech::flexure_fit::cli::FlexureCommand,
+    },
+    /// Piezo bending actuator: blocked force, free deflection, series stiffness, energy density.
+    Actuator(mech::flexure_fit::cli::ActuatorArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -90,7 +117,27 @@ enum Integrator {
     Rk4,
 }
 
+/// Restores the default SIGPIPE action, so `mech ... | head` ends quietly instead of
+/// panicking on a closed pipe (Rust ignores SIGPIPE by default).
+#[cfg(unix)]
+fn restore_default_sigpipe() {
+    unsafe extern "C" {
+        fn signal(signum: i32, handler: usize) -> usize;
+    }
+    const SIGPIPE: i32 = 13;
+    const SIG_DFL: usize = 0;
+    // SAFETY: setting a signal's disposition to SIG_DFL is async-signal-safe and has no
+    // preconditions; it runs before any other thread exists.
+    unsafe {
+        signal(SIGPIPE, SIG_DFL);
+    }
+}
+
+#[cfg(not(unix))]
+fn restore_default_sigpipe() {}
+
 fn main() -> ExitCode {
+    restore_default_sigpipe();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Check { model } => check(&model),
@@ -107,6 +154,7 @@ fn main() -> ExitCode {
             atol,
             step,
             dt_out,
+            independent,
         } => {
             let request = SimulateRequest {
                 t_end,
@@ -119,9 +167,18 @@ fn main() -> ExitCode {
                 atol,
                 step,
                 dt_out,
+                independent,
             };
             simulate(&model, &request)
         }
+        Command::Assemble {
+            model,
+            sets,
+            independent,
+            out,
+        } => assemble(&model, &sets, &independent, out.as_deref()),
+        Command::Flexure { command } => mech::flexure_fit::cli::flexure(command),
+        Command::Actuator(args) => mech::flexure_fit::cli::actuator(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -137,15 +194,31 @@ fn compile(path: &Path) -> Result<Compiled, String> {
 }
 
 fn check(path: &Path) -> Result<(), String> {
-    let compiled = compile(path)?;
+    let session = Session::open(path, &[], &[])?;
+    let compiled = &session.compiled;
     let model = &compiled.model;
     println!("model `{}` ({})", model.name, path.display());
-    println!(
-        "  {} bodies, {} joints, {} degrees of freedom",
-        model.bodies.len(),
-        model.joints.len(),
-        model.coordinates.len()
-    );
+    if model.loops.is_empty() {
+        println!(
+            "  {} bodies, {} joints, {} degrees of freedom",
+            model.bodies.len(),
+            model.joints.len(),
+            model.coordinates.len()
+        );
+    } else {
+        let state = session.assemble(&[])?;
+        let mobility = state
+            .mobility
+            .as_ref()
+            .map(ToString::to_string)
+            .unwrap_or_default();
+        println!(
+            "  {} bodies, {} joints, {} loops; at the assembled q0: {mobility}",
+            model.bodies.len(),
+            model.joints.len(),
+            model.loops.len()
+        );
+    }
     println!("\ncoordinates (q, with u = q̇):");
     for (_, joint) in model.joints.iter() {
         for &c in &joint.coordinates {
@@ -230,6 +303,28 @@ fn derive(path: &Path, emit: Emit, out: Option<&Path>) -> Result<(), String> {
     }
 }
 
+fn assemble(
+    path: &Path,
+    sets: &[String],
+    independent: &[String],
+    out: Option<&Path>,
+) -> Result<(), String> {
+    let session = Session::open(path, sets, &[])?;
+    let state = session.assemble(independent)?;
+    print!("{}", session::assembly_report(&session.model, &state));
+    if let Some(out) = out {
+        let model = &session.model;
+        let names: Vec<&str> = (0..model.nq()).map(|i| model.coordinate_name(i)).collect();
+        let mut header: Vec<String> = names.iter().map(|n| format!("q_{n}")).collect();
+        header.extend(names.iter().map(|n| format!("u_{n}")));
+        let row: Vec<f64> = state.q.iter().chain(&state.u).copied().collect();
+        output::write_csv(out, &header, &[row])
+            .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+        println!("\nwritten to {}", out.display());
+    }
+    Ok(())
+}
+
 struct SimulateRequest {
     t_end: String,
     sets: Vec<String>,
@@ -241,6 +336,7 @@ struct SimulateRequest {
     atol: f64,
     step: String,
     dt_out: Option<String>,
+    independent: Vec<String>,
 }
 
 /// A time given with a unit (`2 s`, `500 ms`) or as plain seconds.
@@ -258,61 +354,12 @@ fn parse_time(what: &str, text: &str) -> Result<f64, String> {
 }
 
 fn simulate(path: &Path, request: &SimulateRequest) -> Result<(), String> {
-    let compiled = compile(path)?;
-    let mut model = TapeModel::new(&compiled);
-    for assignment in &request.sets {
-        let (name, value) = signal_spec::parse_assignment(assignment)?;
-        let index = model.param_index(&name).ok_or_else(|| {
-            let known: Vec<&str> = (0..model.nparams()).map(|i| model.param_name(i)).collect();
-            format!(
-                "--set: unknown parameter `{name}`; parameters of `{}`: {}",
-                model.name(),
-                known.join(", ")
-            )
-        })?;
-        let (si, dimension) = mech_codegen::front::units::parse_quantity(&value)
-            .map_err(|e| format!("--set {name}: {e}"))?;
-        let expected = compiled
-            .model
-            .params
-            .iter()
-            .nth(index)
-            .map(|(_, p)| p.dimension)
-            .unwrap_or_default();
-        if dimension != expected {
-            return Err(format!(
-                "--set {name}: `{value}` has unit {dimension}, but `{name}` needs {expected}"
-            ));
-        }
-        model.set_param(index, si);
+    let session = Session::open(path, &request.sets, &request.inputs)?;
+    let state = session.assemble(&request.independent)?;
+    if let Some(mobility) = &state.mobility {
+        println!("assembled `{}`: {mobility}", session.model.name());
     }
-
-    let mut signals = mech_runtime::default_signals(&model);
-    for assignment in &request.inputs {
-        let (name, spec) = signal_spec::parse_assignment(assignment)?;
-        let index = model.input_index(&name).ok_or_else(|| {
-            let known: Vec<&str> = (0..model.ninputs()).map(|i| model.input_name(i)).collect();
-            format!(
-                "--input: unknown input `{name}`; inputs of `{}`: {}",
-                model.name(),
-                if known.is_empty() {
-                    "none".to_string()
-                } else {
-                    known.join(", ")
-                }
-            )
-        })?;
-        let expected = compiled
-            .model
-            .inputs
-            .iter()
-            .nth(index)
-            .map(|(_, i)| i.dimension)
-            .unwrap_or_default();
-        signals[index] = signal_spec::parse_signal(&spec, expected)
-            .map_err(|e| format!("--input {name}: {e}"))?;
-    }
-
+    let (model, signals) = (&session.model, &session.signals);
     let t_end = parse_time("--t-end", &request.t_end)?;
     let dt_out = match &request.dt_out {
         Some(text) => parse_time("--dt-out", text)?,
@@ -335,9 +382,7 @@ fn simulate(path: &Path, request: &SimulateRequest) -> Result<(), String> {
         ..SimOptions::default()
     };
 
-    let mut q0 = vec![0.0; model.nq()];
-    let mut u0 = vec![0.0; model.nu()];
-    model.initial_state(&mut q0, &mut u0);
+    let (q0, u0) = (&state.q, &state.u);
     let bar = indicatif::ProgressBar::new(1000);
     bar.set_style(
         indicatif::ProgressStyle::with_template(
@@ -349,7 +394,7 @@ fn simulate(path: &Path, request: &SimulateRequest) -> Result<(), String> {
         bar.set_position((1000.0 * t / t_end) as u64);
         bar.set_message(format!("{t:.4} s"));
     };
-    let trajectory = mech_runtime::simulate(&model, &q0, &u0, &signals, &options, &mut progress);
+    let trajectory = mech_runtime::simulate(model, q0, u0, signals, &options, &mut progress);
     bar.finish_and_clear();
     let trajectory =
         trajectory.map_err(|e| format!("simulation of `{}` failed: {e}", model.name()))?;

@@ -109,28 +109,27 @@ pub fn solve_least_squares(a: &DMatrix<f64>, b: &DVector<f64>) -> DVector<f64> {
     }
 }
 
-/// Independent coordinates chosen by column pivoting on `J`: the `nq − rank` columns left
-/// when the best-conditioned set of `rank` columns is taken as dependent (Gram–Schmidt with
-/// largest-norm pivoting).
+/// Independent coordinates for a model that names none: the coordinates declared first
+/// are kept (they are usually the drivers: a crank, an actuator), and the dependent ones are
+/// taken from the end of the list, each only if it adds a well-conditioned direction to the
+/// columns of `J` already taken (Gram–Schmidt with a relative threshold).
 pub fn choose_independent(j: &DMatrix<f64>) -> Vec<usize> {
-    let mut columns: Vec<DVector<f64>> = (0..j.ncols()).map(|c| j.column(c).into_owned()).collect();
-    let scale = columns.iter().map(|c| c.norm()).fold(0.0, f64::max);
+    let scale = (0..j.ncols())
+        .map(|c| j.column(c).norm())
+        .fold(0.0, f64::max);
+    let mut basis: Vec<DVector<f64>> = Vec::new();
     let mut dependent = Vec::new();
-    loop {
-        let best = (0..columns.len())
-            .filter(|c| !dependent.contains(c))
-            .max_by(|&a, &b| columns[a].norm().total_cmp(&columns[b].norm()));
-        let Some(best) = best else { break };
-        let norm = columns[best].norm();
-        if norm <= scale * RANK_TOLERANCE.sqrt() || norm == 0.0 {
-            break;
+    for c in (0..j.ncols()).rev() {
+        let mut column = j.column(c).into_owned();
+        for direction in &basis {
+            let along = column.dot(direction);
+            column -= direction * along;
         }
-        let direction = &columns[best] / norm;
-        for c in 0..columns.len() {
-            let along = columns[c].dot(&direction);
-            columns[c] -= &direction * along;
+        let norm = column.norm();
+        if norm > scale * 1e-6 {
+            basis.push(column / norm);
+            dependent.push(c);
         }
-        dependent.push(best);
     }
     (0..j.ncols()).filter(|c| !dependent.contains(c)).collect()
 }
