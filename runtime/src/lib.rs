@@ -14,21 +14,25 @@
 pub mod constraints;
 pub mod error;
 pub mod integrate;
+pub mod linearize;
 pub mod model;
 pub mod signal;
 pub mod simulate;
+pub mod statics;
 
 pub use constraints::{
     assemble, assemble_speeds, mobility, AssemblyOptions, ConstrainedSolver, Mobility,
 };
 pub use error::RuntimeError;
 pub use integrate::{Dopri5, Dopri5Options, Ode, Rk4, Stats, Stepper};
+pub use linearize::{linearize, Linearization, Mode};
 pub use model::Model;
 pub use nalgebra;
 pub use signal::{Signal, Table};
 pub use simulate::{
     accelerations, default_signals, simulate, Method, ModelOde, SimOptions, Trajectory,
 };
+pub use statics::{solve_statics, Equilibrium, Fixture, StaticsOptions};
 
 /// Includes the Rust code generated for a model by the build script: expands to
 /// `include!(concat!(env!("OUT_DIR"), "/", $name, ".rs"));`.

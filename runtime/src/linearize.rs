@@ -1,0 +1,317 @@
+//! Linearization about an operating point to minimal coordinates, normal modes, and the
+//! frequency response of the linear model.
+//!
+//! Consumes: a [`Model`], a consistent operating point (usually an equilibrium from
+//! [`solve_statics`](crate::solve_statics)) and the independent coordinates `z ⊂ q`.
+//! Produces: a [`Linearization`] `M δz̈ + C δż + K δz = B δin`, `δy = C_q δz + C_u δż + D δin`.
+//!
+//! The reduced dynamics `z̈ = f(z, ż, in)` close the loops for each `(z, ż)` (assembly, then
+//! `J u = 0` for the speeds) and solve the constrained accelerations, so constraint forces
+//! and geometric stiffness are included. Its derivatives are central differences refined by
+//! one Richardson step (error O(h⁴)). `M = Tᵀ M(q) T` with `T = ∂q/∂z` (exact, from the
+//! speed map); then `K = −M ∂f/∂z`, `C = −M ∂f/∂ż`, `B = M ∂f/∂in`.
+
+use nalgebra::{Complex, DMatrix, DVector};
+
+use crate::constraints::{assemble, assemble_speeds, AssemblyOptions, ConstrainedSolver};
+use crate::simulate::accelerations;
+use crate::{Model, RuntimeError};
+
+/// `M δz̈ + C δż + K δz = B δin` and `δy = C_q δz + C_u δż + D δin` about `q`, `inputs`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Linearization {
+    /// Indices (in the model's `q`) of the minimal coordinates `z`.
+    pub independent: Vec<usize>,
+    pub q: Vec<f64>,
+    pub inputs: Vec<f64>,
+    pub mass: DMatrix<f64>,
+    pub damping: DMatrix<f64>,
+    pub stiffness: DMatrix<f64>,
+    /// `B`: generalized force per unit input.
+    pub input: DMatrix<f64>,
+    pub output_position: DMatrix<f64>,
+    pub output_velocity: DMatrix<f64>,
+    pub output_input: DMatrix<f64>,
+}
+
+/// One undamped normal mode with its modal damping.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mode {
+    /// Undamped natural frequency ω_n in rad/s (from `K v = ω² M v`); negative for an
+    /// unstable mode (ω² < 0), whose growth rate is then `−natural_frequency`.
+    pub natural_frequency: f64,
+    /// Modal damping ratio `ζ = vᵀ C v / (2 ω_n vᵀ M v)`.
+    pub damping_ratio: f64,
+    /// Shape in the minimal coordinates, scaled to unit largest component.
+    pub shape: Vec<f64>,
+}
+
+impl Mode {
+    pub fn frequency_hz(&self) -> f64 {
+        self.natural_frequency / std::f64::consts::TAU
+    }
+}
+
+/// The reduced dynamics around an operating point.
+struct Reduced<'a, M: Model + ?Sized> {
+    model: &'a M,
+    t: f64,
+    q: Vec<f64>,
+    independent: &'a [usize],
+    solver: Option<ConstrainedSolver>,
+}
+
+impl<M: Model + ?Sized> Reduced<'_, M> {
+    /// `(q, u)` for minimal coordinates `z` and rates `zdot`.
+    fn state(&self, z: &[f64], zdot: &[f64]) -> Result<(Vec<f64>, Vec<f64>), RuntimeError> {
+        let mut q = self.q.clone();
+        let mut u = vec![0.0; q.len()];
+        for (k, &i) in self.independent.iter().enumerate() {
+            q[i] = z[k];
+            u[i] = zdot[k];
+        }
+        if self.model.nc() > 0 {
+            assemble(
+                self.model,
+                self.t,
+                &mut q,
+                self.independent,
+                &AssemblyOptions::default(),
+            )?;
+            assemble_speeds(self.model, self.t, &q, &mut u, self.independent);
+        }
+        Ok((q, u))
+    }
+
+    /// `z̈` and the outputs at `(z, ż, in)`.
+    fn evaluate(
+        &mut self,
+        z: &[f64],
+        zdot: &[f64],
+        inputs: &[f64],
+    ) -> Result<(Vec<f64>, Vec<f64>), RuntimeError> {
+        let (q, u) = self.state(z, zdot)?;
+        let mut udot = vec![0.0; q.len()];
+        match &mut self.solver {
+            Some(solver) => {
+                solver.accelerations(self.model, self.t, &q, &u, inputs, &mut udot)?;
+            }
+            None => accelerations(self.model, self.t, &q, &u, inputs, &mut udot)?,
+        }
+        let mut y = vec![0.0; self.model.noutputs()];
+        self.model.outputs(self.t, &q, &u, inputs, &mut y);
+        let zddot = self.independent.iter().map(|&i| udot[i]).collect();
+        Ok((zddot, y))
+    }
+}
+
+/// Central difference of `f` along one argument, with one Richardson refinement.
+fn derivative(
+    mut f: impl FnMut(f64) -> Result<Vec<f64>, RuntimeError>,
+    h: f64,
+) -> Result<Vec<f64>, RuntimeError> {
+    let mut central = |h: f64| -> Result<Vec<f64>, RuntimeError> {
+        let (plus, minus) = (f(h)?, f(-h)?);
+        Ok(plus
+            .iter()
+            .zip(&minus)
+            .map(|(a, b)| (a - b) / (2.0 * h))
+            .collect())
+    };
+    let (coarse, fine) = (central(h)?, central(h / 2.0)?);
+    Ok(coarse
+        .iter()
+        .zip(&fine)
+        .map(|(c, f)| (4.0 * f - c) / 3.0)
+        .collect())
+}
+
+fn step_for(value: f64) -> f64 {
+    1e-5 * value.abs().max(1e-3)
+}
+
+/// Linearizes `model` about `(q, u = 0, inputs)` in the minimal coordinates `independent`
+/// (all coordinates for a tree model). `q` must satisfy the loop closures.
+pub fn linearize<M: Model + ?Sized>(
+    model: &M,
+    t: f64,
+    q: &[f64],
+    inputs: &[f64],
+    independent: &[usize],
+) -> Result<Linearization, RuntimeError> {
+    let n = independent.len();
+    let (ni, ny) = (model.ninputs(), model.noutputs());
+    let solver = (model.nc() > 0).then(|| ConstrainedSolver::new(model.nq(), model.nc()));
+    let mut reduced = Reduced {
+        model,
+        t,
+        q: q.to_vec(),
+        independent,
+        solver,
+    };
+    let z0: Vec<f64> = independent.iter().map(|&i| q[i]).collect();
+    let zdot0 = vec![0.0; n];
+
+    // T = ∂q/∂z: the speed map is linear in ż, so its columns are exact.
+    let mut transform = DMatrix::zeros(model.nq(), n);
+    for k in 0..n {
+        let mut unit = vec![0.0; n];
+        unit[k] = 1.0;
+        let (_, u) = reduced.state(&z0, &unit)?;
+        transform.column_mut(k).copy_from_slice(&u);
+    }
+    let mut full_mass = DMatrix::zeros(model.nq(), model.nq());
+    model.mass_matrix(t, q, inputs, full_mass.as_mut_slice());
+    let mass = transform.transpose() * &full_mass * &transform;
+
+    let (mut a_z, mut a_zdot, mut a_in) = (
+        DMatrix::zeros(n, n),
+        DMatrix::zeros(n, n),
+        DMatrix::zeros(n, ni),
+    );
+    let (mut c_q, mut c_u, mut d) = (
+        DMatrix::zeros(ny, n),
+        DMatrix::zeros(ny, n),
+        DMatrix::zeros(ny, ni),
+    );
+    // Each column: derivative of [z̈; y] with respect to one argument.
+    let column =
+        |reduced: &mut Reduced<'_, M>, which: usize, k: usize| -> Result<Vec<f64>, RuntimeError> {
+            let base = [&z0, &zdot0, &inputs.to_vec()][which][k];
+            derivative(
+                |h| {
+                    let (mut z, mut zdot, mut input) = (z0.clone(), zdot0.clone(), inputs.to_vec());
+                    [&mut z, &mut zdot, &mut input][which][k] += h;
+                    let (zddot, y) = reduced.evaluate(&z, &zdot, &input)?;
+                    Ok(zddot.into_iter().chain(y).collect())
+                },
+                step_for(base),
+            )
+        };
+    for k in 0..n {
+        let dz = column(&mut reduced, 0, k)?;
+        a_z.column_mut(k).copy_from_slice(&dz[..n]);
+        c_q.column_mut(k).copy_from_slice(&dz[n..]);
+        let dzdot = column(&mut reduced, 1, k)?;
+        a_zdot.column_mut(k).copy_from_slice(&dzdot[..n]);
+        c_u.column_mut(k).copy_from_slice(&dzdot[n..]);
+    }
+    for k in 0..ni {
+        let din = column(&mut reduced, 2, k)?;
+        a_in.column_mut(k).copy_from_slice(&din[..n]);
+        d.column_mut(k).copy_from_slice(&din[n..]);
+    }
+    Ok(Linearization {
+        independent: independent.to_vec(),
+        q: q.to_vec(),
+        inputs: inputs.to_vec(),
+        stiffness: -(&mass * a_z),
+        damping: -(&mass * a_zdot),
+        input: &mass * a_in,
+        mass,
+        output_position: c_q,
+        output_velocity: c_u,
+        output_input: d,
+    })
+}
+
+impl Linearization {
+    /// First-order form `ẋ = A x + B in`, `y = C x + D in` with `x = [δz; δż]`.
+    pub fn state_space(&self) -> Option<(DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>)> {
+        let n = self.mass.nrows();
+        let lu = self.mass.clone().lu();
+        let minv_k = lu.solve(&self.stiffness)?;
+        let minv_c = lu.solve(&self.damping)?;
+        let minv_b = lu.solve(&self.input)?;
+        let mut a = DMatrix::zeros(2 * n, 2 * n);
+        a.view_mut((0, n), (n, n)).fill_with_identity();
+        a.view_mut((n, 0), (n, n)).copy_from(&(-minv_k));
+        a.view_mut((n, n), (n, n)).copy_from(&(-minv_c));
+        let mut b = DMatrix::zeros(2 * n, self.input.ncols());
+        b.view_mut((n, 0), (n, self.input.ncols()))
+            .copy_from(&minv_b);
+        let mut c = DMatrix::zeros(self.output_position.nrows(), 2 * n);
+        c.view_mut((0, 0), (c.nrows(), n))
+            .copy_from(&self.output_position);
+        c.view_mut((0, n), (c.nrows(), n))
+            .copy_from(&self.output_velocity);
+        Some((a, b, c, self.output_input.clone()))
+    }
+
+    /// Undamped normal modes `K v = ω² M v` (K symmetrized), lowest first, with modal
+    /// damping ratios. `None` if `M` is not positive definite.
+    pub fn modes(&self) -> Option<Vec<Mode>> {
+        let cholesky = self.mass.clone().cholesky()?;
+        let l = cholesky.l();
+        let l_inv = l.clone().try_inverse()?;
+        let k_sym = (&self.stiffness + self.stiffness.transpose()) * 0.5;
+        let s = &l_inv * k_sym * l_inv.transpose();
+        let s = (&s + s.transpose()) * 0.5;
+        let eigen = s.symmetric_eigen();
+        let mut modes: Vec<Mode> = (0..eigen.eigenvalues.len())
+            .map(|k| {
+                let omega_squared = eigen.eigenvalues[k];
+                let v = l_inv.transpose() * eigen.eigenvectors.column(k);
+                let largest =
+                    v.iter()
+                        .copied()
+                        .fold(0.0_f64, |m, x| if x.abs() > m.abs() { x } else { m });
+                let shape: Vec<f64> = v.iter().map(|x| x / largest).collect();
+                let shape_vector = DVector::from_column_slice(&shape);
+                let modal_mass = shape_vector.dot(&(&self.mass * &shape_vector));
+                let modal_damping = shape_vector.dot(&(&self.damping * &shape_vector));
+                let natural_frequency = omega_squared.abs().sqrt();
+                let damping_ratio = if natural_frequency > 0.0 {
+                    modal_damping / (2.0 * natural_frequency * modal_mass)
+                } else {
+                    f64::NAN
+                };
+                let signed = if omega_squared < 0.0 {
+                    -natural_frequency
+                } else {
+                    natural_frequency
+                };
+                Mode {
+                    natural_frequency: signed,
+                    damping_ratio,
+                    shape,
+                }
+            })
+            .collect();
+        modes.sort_by(|a, b| a.natural_frequency.total_cmp(&b.natural_frequency));
+        Some(modes)
+    }
+
+    /// `y/in` at angular frequency `omega` for one input and one output:
+    /// `(C_q + iω C_u)(K − ω²M + iωC + i K_h)⁻¹ B + D`, where `K_h` (optional) is a
+    /// hysteretic stiffness (`η k` of each lossy element), exact in the frequency domain.
+    pub fn frequency_response(
+        &self,
+        input: usize,
+        output: usize,
+        omega: f64,
+        hysteretic: Option<&DMatrix<f64>>,
+    ) -> Option<Complex<f64>> {
+        let n = self.mass.nrows();
+        let i = Complex::new(0.0, 1.0);
+        let dynamic = DMatrix::from_fn(n, n, |r, c| {
+            let mut value = Complex::new(
+                self.stiffness[(r, c)] - omega * omega * self.mass[(r, c)],
+                omega * self.damping[(r, c)],
+            );
+            if let Some(h) = hysteretic {
+                value += i * h[(r, c)];
+            }
+            value
+        });
+        let b = DVector::from_fn(n, |r, _| Complex::new(self.input[(r, input)], 0.0));
+        let x = dynamic.lu().solve(&b)?;
+        let mut y = Complex::new(self.output_input[(output, input)], 0.0);
+        for k in 0..n {
+            y += (Complex::new(self.output_position[(output, k)], 0.0)
+                + i * omega * self.output_velocity[(output, k)])
+                * x[k];
+        }
+        Some(y)
+    }
+}

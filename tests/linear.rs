@@ -1,0 +1,188 @@
+//! Statics, linearization and frequency response against closed forms and simulation.
+
+mod common;
+
+use mech::tape_model::TapeModel;
+use mech_runtime::{linearize, solve_statics, Fixture, Method, Model, SimOptions, StaticsOptions};
+use nalgebra::{Complex, Matrix2, Vector2};
+
+/// Two masses on a rail: the wall–m1 spring/damper (k1, c1) and the m1–m2 one (k2, c2);
+/// a force on m2; output: the position of m2.
+const TWO_MASS: &str = "
+model two_mass;
+param m1 = 2 kg;
+param m2 = 0.5 kg;
+param k1 = 300 N/m;
+param k2 = 120 N/m;
+param c1 = 1.5 N*s/m;
+param c2 = 0.4 N*s/m;
+input push = 0 N;
+body first { mass = m1; }
+body second { mass = m2; }
+joint x1 = slider(newtonian, first) { axis = x; stiffness = k1; damping = c1; }
+joint x21 = slider(first, second) { axis = x; stiffness = k2; damping = c2; }
+force drive at second = [push, 0, 0];
+output x2 = position(second) in newtonian;
+";
+
+#[test]
+fn two_mass_chain_frequency_response_matches_closed_form() {
+    let model = TapeModel::new(&common::compile_text("two_mass", TWO_MASS));
+    let (m1, m2, k1, k2, c1, c2) = (2.0, 0.5, 300.0, 120.0, 1.5, 0.4);
+    let linear = linearize(&model, 0.0, &[0.0, 0.0], &[0.0], &[0, 1]).unwrap();
+    let output = model.output_index("x2.x").unwrap();
+    for omega in [0.5, 5.0, 11.0, 13.9, 20.0, 31.6, 100.0] {
+        // In absolute coordinates (x1, x2): (K − ω²M + iωC) X = [0, 1].
+        let dynamic = Matrix2::new(
+            Complex::new(k1 + k2 - omega * omega * m1, omega * (c1 + c2)),
+            Complex::new(-k2, -omega * c2),
+            Complex::new(-k2, -omega * c2),
+            Complex::new(k2 - omega * omega * m2, omega * c2),
+        );
+        let x = dynamic
+            .lu()
+            .solve(&Vector2::new(
+                Complex::new(0.0, 0.0),
+                Complex::new(1.0, 0.0),
+            ))
+            .unwrap();
+        let ours = linear.frequency_response(0, output, omega, None).unwrap();
+        assert!(
+            (ours - x[1]).norm() < 1e-7 * x[1].norm(),
+            "ω = {omega}: {ours} vs {}",
+            x[1]
+        );
+    }
+    // Modes: the undamped natural frequencies of the same chain.
+    let modes = linear.modes().unwrap();
+    let (a, b, c) = (m1 * m2, -(m1 * k2 + m2 * (k1 + k2)), k1 * k2);
+    let roots = [
+        (-b - (b * b - 4.0 * a * c).sqrt()) / (2.0 * a),
+        (-b + (b * b - 4.0 * a * c).sqrt()) / (2.0 * a),
+    ];
+    for (mode, omega_squared) in modes.iter().zip(roots) {
+        let expected = omega_squared.sqrt();
+        assert!(
+            (mode.natural_frequency - expected).abs() < 1e-7 * expected,
+            "{} vs {expected}",
+            mode.natural_frequency
+        );
+    }
+}
+
+/// The four-bar hanging under gravity: the statics solution is an equilibrium (it stays at
+/// rest when simulated), and the small-oscillation frequency from linearization matches the
+/// one measured from a simulated free oscillation.
+#[test]
+fn four_bar_statics_and_small_oscillation_frequency() {
+    let model = common::tape("four_bar");
+    let mut q = vec![0.0; 3];
+    let mut u = vec![0.0; 3];
+    model.initial_state(&mut q, &mut u);
+    // Start with the crank hanging down, near the stable equilibrium (the upright one is
+    // an equilibrium too, an unstable one).
+    q[0] = -1.5;
+    mech_runtime::assemble(&model, 0.0, &mut q, &[0], &Default::default()).unwrap();
+    let equilibrium =
+        solve_statics(&model, 0.0, &mut q, &[], &[], &StaticsOptions::default()).unwrap();
+    assert!(equilibrium.constraint_residual < 1e-12);
+    let at_rest = vec![0.0; 3];
+    let options = SimOptions {
+        t_end: 2.0,
+        output_interval: 0.001,
+        method: Method::Dopri5 {
+            rtol: 1e-12,
+            atol: 1e-13,
+            h_max: f64::INFINITY,
+        },
+        ..SimOptions::default()
+    };
+    let still = mech_runtime::simulate(&model, &q, &at_rest, &[], &options, &mut |_| {}).unwrap();
+    let moved = still
+        .q
+        .iter()
+        .map(|s| (s[0] - q[0]).abs())
+        .fold(0.0, f64::max);
+    assert!(moved < 1e-9, "the equilibrium drifted by {moved} rad");
+
+    let linear = linearize(&model, 0.0, &q, &[], &[0]).unwrap();
+    let modes = linear.modes().unwrap();
+    assert_eq!(modes.len(), 1);
+    assert!(
+        modes[0].natural_frequency > 0.0,
+        "expected the stable equilibrium: {modes:?}"
+    );
+    let predicted = modes[0].natural_frequency;
+
+    // Free oscillation from a 1 mrad crank displacement (the frequency shifts by O(amplitude²)).
+    let mut start = q.clone();
+    start[0] += 1e-3;
+    mech_runtime::assemble(&model, 0.0, &mut start, &[0], &Default::default()).unwrap();
+    let period_estimate = std::f64::consts::TAU / predicted;
+    let long = SimOptions {
+        t_end: 6.0 * period_estimate,
+        output_interval: period_estimate / 2000.0,
+        ..options
+    };
+    let swing = mech_runtime::simulate(&model, &start, &at_rest, &[], &long, &mut |_| {}).unwrap();
+    let offset: Vec<f64> = swing.q.iter().map(|s| s[0] - q[0]).collect();
+    let mut crossings = Vec::new();
+    for k in 1..offset.len() {
+        if offset[k - 1] < 0.0 && offset[k] >= 0.0 {
+            let fraction = -offset[k - 1] / (offset[k] - offset[k - 1]);
+            crossings.push(swing.times[k - 1] + fraction * (swing.times[k] - swing.times[k - 1]));
+        }
+    }
+    assert!(crossings.len() >= 3, "too few oscillations");
+    let period = (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64;
+    let measured = std::f64::consts::TAU / period;
+    assert!(
+        (measured - predicted).abs() < 1e-4 * predicted,
+        "measured {measured} rad/s vs linearized {predicted} rad/s"
+    );
+}
+
+/// A pendulum bob held by a fixture at the bottom of its swing carries its weight: the
+/// fixture force is (0, m g, 0); held 90° out, it also carries nothing sideways.
+#[test]
+fn fixture_reaction_carries_the_weight() {
+    let model = common::tape("pendulum");
+    let (m, g, l) = (0.01, 9.81, 0.025);
+    let outputs = [
+        model.output_index("tip.x").unwrap(),
+        model.output_index("tip.y").unwrap(),
+        model.output_index("tip.z").unwrap(),
+    ];
+    for angle in [0.0_f64, 0.7, std::f64::consts::FRAC_PI_2] {
+        let target = [l * angle.sin(), -l * angle.cos(), 0.0];
+        let fixture = Fixture {
+            name: "hold".into(),
+            outputs,
+            target,
+            components: vec![0, 1],
+        };
+        let mut q = vec![angle + 0.05];
+        let equilibrium = solve_statics(
+            &model,
+            0.0,
+            &mut q,
+            &[],
+            &[fixture],
+            &StaticsOptions::default(),
+        )
+        .unwrap();
+        assert!(
+            (q[0] - angle).abs() < 1e-9,
+            "held at {} instead of {angle}",
+            q[0]
+        );
+        // Only the torque about the pivot is determined: the fixture force's component along
+        // the swing direction must balance gravity's: F·t = m g sin(angle) with t = (cos, sin).
+        let force = equilibrium.fixture_forces[0];
+        let tangential = force[0] * angle.cos() + force[1] * angle.sin();
+        assert!(
+            (tangential - m * g * angle.sin()).abs() < 1e-9,
+            "angle {angle}: {force:?}"
+        );
+    }
+}
