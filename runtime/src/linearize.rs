@@ -34,6 +34,15 @@ pub struct Linearization {
     pub output_input: DMatrix<f64>,
 }
 
+/// `ẋ = A x + B in`, `y = C x + D in`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StateSpace {
+    pub a: DMatrix<f64>,
+    pub b: DMatrix<f64>,
+    pub c: DMatrix<f64>,
+    pub d: DMatrix<f64>,
+}
+
 /// One undamped normal mode with its modal damping.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Mode {
@@ -217,7 +226,7 @@ pub fn linearize<M: Model + ?Sized>(
 
 impl Linearization {
     /// First-order form `ẋ = A x + B in`, `y = C x + D in` with `x = [δz; δż]`.
-    pub fn state_space(&self) -> Option<(DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>)> {
+    pub fn state_space(&self) -> Option<StateSpace> {
         let n = self.mass.nrows();
         let lu = self.mass.clone().lu();
         let minv_k = lu.solve(&self.stiffness)?;
@@ -235,7 +244,12 @@ impl Linearization {
             .copy_from(&self.output_position);
         c.view_mut((0, n), (c.nrows(), n))
             .copy_from(&self.output_velocity);
-        Some((a, b, c, self.output_input.clone()))
+        Some(StateSpace {
+            a,
+            b,
+            c,
+            d: self.output_input.clone(),
+        })
     }
 
     /// Undamped normal modes `K v = ω² M v` (K symmetrized), lowest first, with modal
