@@ -7,6 +7,8 @@
 
 pub mod describe;
 pub mod flexure_fit;
+pub mod frequency;
+pub mod linear_cli;
 pub mod output;
 pub mod physics;
 pub mod plot;

@@ -76,6 +76,14 @@ enum Command {
         #[arg(long = "independent", value_name = "NAME[=VALUE]")]
         independent: Vec<String>,
     },
+    /// Static equilibrium under the inputs and loads, with loop reactions and the forces
+    /// of fixtures (e.g. a foot held against a force sensor).
+    Statics(mech::linear_cli::StaticsArgs),
+    /// Linearize about the static equilibrium in minimal coordinates: M, C, K, B and the
+    /// normal modes.
+    Linearize(mech::linear_cli::LinearizeArgs),
+    /// Frequency response from an input to an output (Bode plot), with resonances and Q.
+    Bode(mech::linear_cli::BodeArgs),
     /// Close the loops of a model: mobility, the singular values deciding it, and a
     /// consistent state (CSV with --out).
     Assemble {
@@ -179,6 +187,9 @@ fn main() -> ExitCode {
         } => assemble(&model, &sets, &independent, out.as_deref()),
         Command::Flexure { command } => mech::flexure_fit::cli::flexure(command),
         Command::Actuator(args) => mech::flexure_fit::cli::actuator(&args),
+        Command::Statics(args) => mech::linear_cli::statics(&args),
+        Command::Linearize(args) => mech::linear_cli::linearize_command(&args),
+        Command::Bode(args) => mech::linear_cli::bode(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -366,52 +366,108 @@ struct XyFigure<'a> {
 
 impl Figure for XyFigure<'_> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
-        let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
-        root.fill(&WHITE).map_err(e)?;
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
         let (title_area, body) = root.split_vertically(TITLE_HEIGHT);
         draw_title(&title_area, self.title)?;
-        // With a log axis, points at x <= 0 cannot be drawn: leave them out of every range.
-        let visible = |x: f64| !self.log_x || x > 0.0;
-        let xs = self
-            .curves
+        draw_xy_panel(&body, self.x_label, self.y_label, self.curves, self.log_x)
+    }
+}
+
+/// A Bode plot: magnitude over phase, sharing a logarithmic frequency axis.
+struct BodeFigure<'a> {
+    title: &'a str,
+    magnitude: &'a [(String, Vec<f64>, Vec<f64>)],
+    phase: &'a [(String, Vec<f64>, Vec<f64>)],
+}
+
+impl Figure for BodeFigure<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let (title_area, body) = root.split_vertically(TITLE_HEIGHT);
+        draw_title(&title_area, self.title)?;
+        let (_, height) = body.dim_in_pixel();
+        let (top, bottom) = body.split_vertically(height / 2);
+        draw_xy_panel(&top, "f [Hz]", "magnitude [dB]", self.magnitude, true)?;
+        draw_xy_panel(&bottom, "f [Hz]", "phase [deg]", self.phase, true)
+    }
+}
+
+/// Plots a frequency response: `magnitude` (dB) and `phase` (degrees) curves `(name, f, value)`
+/// in two panels over a logarithmic frequency axis. Same formats as [`plot_time_series`].
+pub fn plot_bode(
+    path: &Path,
+    title: &str,
+    magnitude: &[(String, Vec<f64>, Vec<f64>)],
+    phase: &[(String, Vec<f64>, Vec<f64>)],
+) -> Result<(), PlotError> {
+    let format = Format::of(path)?;
+    let positive = |curves: &[(String, Vec<f64>, Vec<f64>)]| {
+        curves
             .iter()
-            .flat_map(|(_, xs, _)| xs.iter().copied())
-            .filter(|&x| visible(x));
-        let ys = self.curves.iter().flat_map(|(_, xs, ys)| {
-            xs.iter()
-                .zip(ys)
-                .filter(|(&x, _)| visible(x))
-                .map(|(_, &y)| y)
+            .any(|(_, f, _)| f.iter().any(|&x| x > 0.0 && x.is_finite()))
+    };
+    if !positive(magnitude) || !positive(phase) {
+        return Err(PlotError {
+            path: path.to_path_buf(),
+            kind: PlotErrorKind::InvalidData("a Bode plot needs positive frequencies".into()),
         });
-        let y_range = axis_range(ys);
-        let mut builder = ChartBuilder::on(&body);
-        builder
-            .margin(10)
-            .margin_right(30)
-            .x_label_area_size(50)
-            .y_label_area_size(90);
-        let curves = self
-            .curves
-            .iter()
-            .map(|(name, xs, ys)| (name.as_str(), xs.as_slice(), ys.as_slice()));
-        let y_format = |v: &f64| linear_tick(*v, &y_range);
-        if self.log_x {
-            let x_range = log_axis_range(xs);
-            let mut chart = builder
-                .build_cartesian_2d(x_range.log_scale(), y_range.clone())
-                .map_err(e)?;
-            let x_format = |v: &f64| significant(*v, 3);
-            configure_xy_mesh(&mut chart, self.x_label, self.y_label, &x_format, &y_format)?;
-            draw_curves(&mut chart, curves)
-        } else {
-            let x_range = axis_range(xs);
-            let mut chart = builder
-                .build_cartesian_2d(x_range.clone(), y_range.clone())
-                .map_err(e)?;
-            let x_format = |v: &f64| linear_tick(*v, &x_range);
-            configure_xy_mesh(&mut chart, self.x_label, self.y_label, &x_format, &y_format)?;
-            draw_curves(&mut chart, curves)
-        }
+    }
+    let figure = BodeFigure {
+        title,
+        magnitude,
+        phase,
+    };
+    render(path, format, (WIDTH, 2 * XY_HEIGHT - TITLE_HEIGHT), &figure)
+}
+
+/// One pair of axes with `curves`, optionally with a logarithmic x axis (points at x <= 0 are
+/// then left out).
+fn draw_xy_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    x_label: &str,
+    y_label: &str,
+    curves: &[(String, Vec<f64>, Vec<f64>)],
+    log_x: bool,
+) -> Result<(), String> {
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    let visible = |x: f64| !log_x || x > 0.0;
+    let xs = curves
+        .iter()
+        .flat_map(|(_, xs, _)| xs.iter().copied())
+        .filter(|&x| visible(x));
+    let ys = curves.iter().flat_map(|(_, xs, ys)| {
+        xs.iter()
+            .zip(ys)
+            .filter(|(&x, _)| visible(x))
+            .map(|(_, &y)| y)
+    });
+    let y_range = axis_range(ys);
+    let mut builder = ChartBuilder::on(area);
+    builder
+        .margin(10)
+        .margin_right(30)
+        .x_label_area_size(50)
+        .y_label_area_size(90);
+    let named = curves
+        .iter()
+        .map(|(name, xs, ys)| (name.as_str(), xs.as_slice(), ys.as_slice()));
+    let y_format = |v: &f64| linear_tick(*v, &y_range);
+    if log_x {
+        let x_range = log_axis_range(xs);
+        let mut chart = builder
+            .build_cartesian_2d(x_range.log_scale(), y_range.clone())
+            .map_err(e)?;
+        let x_format = |v: &f64| significant(*v, 3);
+        configure_xy_mesh(&mut chart, x_label, y_label, &x_format, &y_format)?;
+        draw_curves(&mut chart, named)
+    } else {
+        let x_range = axis_range(xs);
+        let mut chart = builder
+            .build_cartesian_2d(x_range.clone(), y_range.clone())
+            .map_err(e)?;
+        let x_format = |v: &f64| linear_tick(*v, &x_range);
+        configure_xy_mesh(&mut chart, x_label, y_label, &x_format, &y_format)?;
+        draw_curves(&mut chart, named)
     }
 }
 

@@ -27,7 +27,9 @@ pub struct Fixture {
     pub components: Vec<usize>,
 }
 
-/// An equilibrium and the forces holding it.
+/// An equilibrium and the forces holding it. Where several rows could carry the same load
+/// (redundant loops, a fixture along a direction the mechanism already holds), the reported
+/// multipliers are the minimum-norm ones.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Equilibrium {
     pub q: Vec<f64>,
@@ -211,6 +213,12 @@ pub fn solve_statics<M: Model + ?Sized>(
             }
             fraction *= 0.5;
         }
+    }
+    // Newton steps may leave λ with a component in the null space of Jᵀ (loads shared by
+    // redundant rows are statically indeterminate); report the minimum-norm multipliers.
+    if rows > 0 {
+        let j = problem.jacobian(q);
+        lambda = solve_least_squares(&j.transpose(), &(-problem.force(q)));
     }
     let mut fixture_forces = Vec::with_capacity(fixtures.len());
     let mut row = problem.nc;

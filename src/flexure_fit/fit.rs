@@ -1,0 +1,307 @@
+//! From analysed traces to flexure constants (seed Sec. IV.A–B): per trace the measured
+//! stiffness and damping (Eqs. 3–4), per specimen the mean over its trials, and across a set
+//! of uncastellated flexures the normalized fits for Young's modulus (Eq. 6) and the loss
+//! factor (Eq. 7); for castellated hinges of one thickness and length, the effective length
+//! and their own loss factor.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use super::rig::{Kind, Pendulum, Specimen};
+use super::trace::{analyze_trace, TraceAnalysis, TraceOptions};
+
+/// Options of the fits.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct FitOptions {
+    /// Trace analysis options.
+    pub trace: TraceOptions,
+    /// Use Eq. 4 literally (`k_m = I_p ω_n² − m g L_cm`), without the finite-amplitude
+    /// correction of the gravity stiffness (see [`measured_stiffness`]).
+    pub small_angle: bool,
+    /// Young's modulus for the castellated fits (Pa); default: the uncastellated fit's, or
+    /// Kapton's 2.56 GPa if there are no uncastellated specimens.
+    pub modulus: Option<f64>,
+}
+
+/// Eq. 3: `b_m = 2 ζ ω_n I_p` (= 2 σ I_p), N·m·s/rad.
+pub fn measured_damping(analysis: &TraceAnalysis, pendulum: &Pendulum) -> f64 {
+    2.0 * analysis.zeta * analysis.omega_n * pendulum.inertia
+}
+
+/// Eq. 4: `k_m = I_p ω_n² − m g L_cm`, N·m/rad. The hanging pendulum's gravity stiffness
+/// `m g L_cm` is subtracted: linearized, `I_p θ̈ + b θ̇ + (k + m g L_cm) θ = 0`.
+///
+/// Unless `small_angle`, the gravity term is multiplied by the trace's
+/// [`TraceAnalysis::gravity_softening`] `⟨2J₁(A)/A⟩ ≈ 1 − ⟨A²⟩/8`: at amplitude A the
+/// pendulum's `m g L_cm sin θ` is softer than `m g L_cm θ`, which lowers ω_d by up to 0.4 %
+/// of the gravity share at 15°. The flexure's own stiffness is linear.
+pub fn measured_stiffness(analysis: &TraceAnalysis, pendulum: &Pendulum, small_angle: bool) -> f64 {
+    let softening = if small_angle {
+        1.0
+    } else {
+        analysis.gravity_softening
+    };
+    pendulum.inertia * analysis.omega_n.powi(2) - pendulum.gravity_stiffness() * softening
+}
+
+/// One analysed trace.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TraceResult {
+    /// The CSV file.
+    pub file: PathBuf,
+    /// Frequency and decay.
+    pub analysis: TraceAnalysis,
+    /// Measured stiffness k_m (N·m/rad), Eq. 4.
+    pub stiffness: f64,
+    /// Measured damping b_m (N·m·s/rad), Eq. 3.
+    pub damping: f64,
+}
+
+/// One specimen: its traces and their means (the seed averages the trials of a flexure).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpecimenResult {
+    /// The specimen description.
+    pub specimen: Specimen,
+    /// Its traces.
+    pub traces: Vec<TraceResult>,
+    /// Mean k_m (N·m/rad).
+    pub stiffness: f64,
+    /// Mean b_m (N·m·s/rad).
+    pub damping: f64,
+    /// Mean ω_d (rad/s).
+    pub omega_d: f64,
+    /// Mean of b_m·ω_d (N·m).
+    pub damping_times_omega: f64,
+}
+
+impl SpecimenResult {
+    /// Eq. 6: `y = 12 l k_m / t³` (N/m = Pa·m), with the nominal length.
+    pub fn normalized_stiffness(&self) -> f64 {
+        let f = &self.specimen.flexure;
+        12.0 * f.length * self.stiffness / f.thickness.powi(3)
+    }
+
+    /// Eq. 7: `z = 12 l ω_d b_m / t³` (Pa·m), with the nominal length.
+    pub fn normalized_damping(&self) -> f64 {
+        let f = &self.specimen.flexure;
+        12.0 * f.length * self.damping_times_omega / f.thickness.powi(3)
+    }
+}
+
+/// A least squares line through the origin, `y = slope · x`, with
+/// `R² = 1 − Σ(y − slope·x)² / Σ(y − ȳ)²`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LineFit {
+    /// Fitted slope.
+    pub slope: f64,
+    /// Coefficient of determination.
+    pub r_squared: f64,
+    /// Number of points.
+    pub points: usize,
+}
+
+/// Fits `y = slope · x` by least squares.
+pub fn fit_through_origin(xs: &[f64], ys: &[f64]) -> LineFit {
+    let sxx: f64 = xs.iter().map(|x| x * x).sum();
+    let sxy: f64 = xs.iter().zip(ys).map(|(x, y)| x * y).sum();
+    let slope = sxy / sxx;
+    let n = ys.len() as f64;
+    let mean = ys.iter().sum::<f64>() / n;
+    let ss_tot: f64 = ys.iter().map(|y| (y - mean).powi(2)).sum();
+    let ss_res: f64 = xs
+        .iter()
+        .zip(ys)
+        .map(|(x, y)| (y - slope * x).powi(2))
+        .sum();
+    let r_squared = if ss_tot > 0.0 {
+        1.0 - ss_res / ss_tot
+    } else if ss_res == 0.0 {
+        1.0
+    } else {
+        f64::NAN
+    };
+    LineFit {
+        slope,
+        r_squared,
+        points: ys.len(),
+    }
+}
+
+/// The fits across uncastellated flexures (seed Fig. 5 a, b).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModulusFit {
+    /// Eq. 6 data against width: slope = Young's modulus (Pa).
+    pub stiffness_line: LineFit,
+    /// Eq. 7 data against width: slope = η E (Pa).
+    pub damping_line: LineFit,
+    /// Young's modulus (E_k)_m (Pa).
+    pub youngs_modulus: f64,
+    /// Loss factor η_m = slope of Eq. 7 / (E_k)_m.
+    pub loss_factor: f64,
+    /// Indices (into the specimen results) of the specimens used.
+    pub specimens: Vec<usize>,
+}
+
+/// The fits for castellated hinges of one thickness and nominal length (seed Fig. 5 c, d).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CastellatedFit {
+    /// Thickness t (m).
+    pub thickness: f64,
+    /// Nominal length l (m).
+    pub length: f64,
+    /// k_m against width: slope = E t³ / (12 l_eff) (N·m/rad per m).
+    pub stiffness_line: LineFit,
+    /// b_m ω_d against width: slope = η' E t³ / (12 l_eff) (N·m per m).
+    pub damping_line: LineFit,
+    /// Modulus used to convert the slope to a length (Pa).
+    pub youngs_modulus: f64,
+    /// Effective length l_eff = E t³ / (12 · slope) (m), Eq. 2.
+    pub effective_length: f64,
+    /// Loss factor η' = damping slope / stiffness slope, Eq. 5.
+    pub loss_factor: f64,
+    /// Indices of the specimens used.
+    pub specimens: Vec<usize>,
+}
+
+/// Everything `mech flexure fit` computes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitReport {
+    /// Per specimen (and per trace) results, in input order.
+    pub specimens: Vec<SpecimenResult>,
+    /// The uncastellated fit, if there are at least two uncastellated specimens.
+    pub uncastellated: Option<ModulusFit>,
+    /// One fit per (thickness, length) group of castellated specimens with ≥ 2 members.
+    pub castellated: Vec<CastellatedFit>,
+}
+
+/// Analyses one trace of `specimen`.
+pub fn analyze_specimen_trace(
+    times: &[f64],
+    angles: &[f64],
+    pendulum: &Pendulum,
+    file: PathBuf,
+    options: &FitOptions,
+) -> Result<TraceResult, String> {
+    let analysis = analyze_trace(times, angles, &options.trace)
+        .map_err(|e| format!("`{}`: {e}", file.display()))?;
+    Ok(TraceResult {
+        stiffness: measured_stiffness(&analysis, pendulum, options.small_angle),
+        damping: measured_damping(&analysis, pendulum),
+        file,
+        analysis,
+    })
+}
+
+/// Averages a specimen's trace results.
+pub fn specimen_result(specimen: Specimen, traces: Vec<TraceResult>) -> SpecimenResult {
+    let n = traces.len() as f64;
+    let mean = |f: &dyn Fn(&TraceResult) -> f64| traces.iter().map(f).sum::<f64>() / n;
+    SpecimenResult {
+        stiffness: mean(&|t| t.stiffness),
+        damping: mean(&|t| t.damping),
+        omega_d: mean(&|t| t.analysis.omega_d),
+        damping_times_omega: mean(&|t| t.damping * t.analysis.omega_d),
+        specimen,
+        traces,
+    }
+}
+
+/// Reads and analyses every trace of `specimens` and fits across them.
+pub fn fit_specimens(specimens: Vec<Specimen>, options: &FitOptions) -> Result<FitReport, String> {
+    let mut results = Vec::new();
+    for specimen in specimens {
+        let mut traces = Vec::new();
+        for file in &specimen.traces {
+            let (times, angles) = super::rig::read_trace(&specimen, file)?;
+            traces.push(analyze_specimen_trace(
+                &times,
+                &angles,
+                &specimen.pendulum,
+                file.clone(),
+                options,
+            )?);
+        }
+        results.push(specimen_result(specimen, traces));
+    }
+    Ok(fit_results(results, options))
+}
+
+/// The fits across already analysed specimens.
+pub fn fit_results(specimens: Vec<SpecimenResult>, options: &FitOptions) -> FitReport {
+    let unc: Vec<usize> = (0..specimens.len())
+        .filter(|&i| specimens[i].specimen.flexure.kind == Kind::Uncastellated)
+        .collect();
+    let uncastellated = (unc.len() >= 2).then(|| {
+        let widths: Vec<f64> = unc
+            .iter()
+            .map(|&i| specimens[i].specimen.flexure.width)
+            .collect();
+        let ys: Vec<f64> = unc
+            .iter()
+            .map(|&i| specimens[i].normalized_stiffness())
+            .collect();
+        let zs: Vec<f64> = unc
+            .iter()
+            .map(|&i| specimens[i].normalized_damping())
+            .collect();
+        let stiffness_line = fit_through_origin(&widths, &ys);
+        let damping_line = fit_through_origin(&widths, &zs);
+        ModulusFit {
+            youngs_modulus: stiffness_line.slope,
+            loss_factor: damping_line.slope / stiffness_line.slope,
+            stiffness_line,
+            damping_line,
+            specimens: unc,
+        }
+    });
+    let modulus = options
+        .modulus
+        .or(uncastellated.as_ref().map(|f| f.youngs_modulus))
+        .unwrap_or(crate::physics::Material::KAPTON_HN.youngs_modulus);
+
+    // Group castellated hinges by (thickness, length), to 1 nm.
+    let mut groups: BTreeMap<(i64, i64), Vec<usize>> = BTreeMap::new();
+    for (i, s) in specimens.iter().enumerate() {
+        let f = &s.specimen.flexure;
+        if f.kind == Kind::Castellated {
+            let key = (
+                (f.thickness * 1e9).round() as i64,
+                (f.length * 1e9).round() as i64,
+            );
+            groups.entry(key).or_default().push(i);
+        }
+    }
+    let castellated = groups
+        .into_values()
+        .filter(|members| members.len() >= 2)
+        .map(|members| {
+            let f = specimens[members[0]].specimen.flexure;
+            let widths: Vec<f64> = members
+                .iter()
+                .map(|&i| specimens[i].specimen.flexure.width)
+                .collect();
+            let ks: Vec<f64> = members.iter().map(|&i| specimens[i].stiffness).collect();
+            let bws: Vec<f64> = members
+                .iter()
+                .map(|&i| specimens[i].damping_times_omega)
+                .collect();
+            let stiffness_line = fit_through_origin(&widths, &ks);
+            let damping_line = fit_through_origin(&widths, &bws);
+            CastellatedFit {
+                thickness: f.thickness,
+                length: f.length,
+                youngs_modulus: modulus,
+                effective_length: modulus * f.thickness.powi(3) / (12.0 * stiffness_line.slope),
+                loss_factor: damping_line.slope / stiffness_line.slope,
+                stiffness_line,
+                damping_line,
+                specimens: members,
+            }
+        })
+        .collect();
+    FitReport {
+        specimens,
+        uncastellated,
+        castellated,
+    }
+}

@@ -1,0 +1,21 @@
+//! The flexure characterization experiment of the seed paper (Sec. IV.A–B), on measured or
+//! simulated data: a physical pendulum hangs from the flexure under test and rings down; each
+//! decay trace gives the flexure's stiffness and damping, and a set of flexures gives Young's
+//! modulus and the loss factor (uncastellated) or the effective length and loss factor
+//! (castellated hinges).
+//!
+//! - [`trace`]: one trace → ω_d (zero crossings), σ (log of the peaks), ω_n, ζ;
+//! - [`rig`]: the specimen description (flexure geometry, pendulum, trace files) in TOML;
+//! - [`fit`]: Eqs. 3–4 per trace, means per specimen, Eqs. 6–7 and the castellated fits;
+//! - [`report`]: tables, CSV and plots;
+//! - [`cli`]: the `mech flexure ...` and `mech actuator` commands.
+
+pub mod cli;
+pub mod fit;
+pub mod report;
+pub mod rig;
+pub mod trace;
+
+pub use fit::{fit_specimens, FitOptions, FitReport};
+pub use rig::{Pendulum, Specimen};
+pub use trace::{analyze_trace, TraceAnalysis, TraceError, TraceOptions};

@@ -1,0 +1,394 @@
+//! Presentation of a [`FitReport`]: readable tables for the terminal, CSV files, and plots of
+//! each fit in the manner of the seed's Fig. 5 (data points and the fitted line through the
+//! origin).
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use super::fit::{FitReport, LineFit};
+use super::rig::Kind;
+use crate::output;
+use crate::plot;
+
+fn file_name(path: &Path) -> String {
+    path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
+}
+
+fn kind_name(kind: Kind) -> &'static str {
+    match kind {
+        Kind::Uncastellated => "uncastellated",
+        Kind::Castellated => "castellated",
+    }
+}
+
+/// The report as text: per-trace table, per-specimen table, and the fits.
+pub fn text_report(report: &FitReport) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "per trace (Eqs. 3, 4):");
+    let _ = writeln!(
+        s,
+        "  {:<10} {:<22} {:>9} {:>8} {:>8} {:>13} {:>15} {:>5} {:>5} {:>8}",
+        "specimen",
+        "trace",
+        "f_d [Hz]",
+        "σ [1/s]",
+        "ζ",
+        "k_m[µN·m/rad]",
+        "b_m[nN·m·s/rad]",
+        "cross",
+        "peaks",
+        "noise[°]"
+    );
+    for sr in &report.specimens {
+        for t in &sr.traces {
+            let a = &t.analysis;
+            let _ = writeln!(
+                s,
+                "  {:<10} {:<22} {:>9.4} {:>8.4} {:>8.5} {:>13.4} {:>15.4} {:>5} {:>5} {:>8.4}",
+                sr.specimen.name,
+                file_name(&t.file),
+                a.omega_d / std::f64::consts::TAU,
+                a.sigma,
+                a.zeta,
+                t.stiffness * 1e6,
+                t.damping * 1e9,
+                a.crossings.len(),
+                a.peaks.len(),
+                a.noise.to_degrees()
+            );
+        }
+    }
+    let _ = writeln!(
+        s,
+        "\nper flexure (mean of its traces; Eqs. 6, 7 with the nominal length):"
+    );
+    let _ = writeln!(
+        s,
+        "  {:<10} {:<13} {:>7} {:>7} {:>8} {:>13} {:>14} {:>11} {:>11}",
+        "specimen",
+        "kind",
+        "w [mm]",
+        "t [µm]",
+        "l [µm]",
+        "k_m[µN·m/rad]",
+        "b_m·ω_d [µN·m]",
+        "y [GPa·mm]",
+        "z [GPa·mm]"
+    );
+    for sr in &report.specimens {
+        let f = &sr.specimen.flexure;
+        let _ = writeln!(
+            s,
+            "  {:<10} {:<13} {:>7.3} {:>7.2} {:>8.1} {:>13.4} {:>14.4} {:>11.4} {:>11.5}",
+            sr.specimen.name,
+            kind_name(f.kind),
+            f.width * 1e3,
+            f.thickness * 1e6,
+            f.length * 1e6,
+            sr.stiffness * 1e6,
+            sr.damping_times_omega * 1e6,
+            sr.normalized_stiffness() * 1e-6,
+            sr.normalized_damping() * 1e-6
+        );
+    }
+    match &report.uncastellated {
+        Some(fit) => {
+            let _ = writeln!(
+                s,
+                "\nuncastellated flexures (n = {}):\n  Eq. 6  y = E·w:    E = {:.4} GPa   R² = {:.4}\n  \
+                 Eq. 7  z = η·E·w:  η = {:.4}       R² = {:.4}",
+                fit.specimens.len(),
+                fit.youngs_modulus * 1e-9,
+                fit.stiffness_line.r_squared,
+                fit.loss_factor,
+                fit.damping_line.r_squared
+            );
+        }
+        None => {
+            let _ = writeln!(s, "\nuncastellated flexures: fewer than 2, no modulus fit");
+        }
+    }
+    for fit in &report.castellated {
+        let _ = writeln!(
+            s,
+            "\ncastellated hinges, t = {:.1} µm, l = {:.0} µm (n = {}; E = {:.4} GPa):\n  \
+             k_m = {:.4} µN·m/rad per mm of width   R² = {:.4}   → l_eff = {:.2} µm (Eq. 2)\n  \
+             b_m·ω_d = {:.4} µN·m per mm            R² = {:.4}   → η' = {:.4} (Eq. 5)",
+            fit.thickness * 1e6,
+            fit.length * 1e6,
+            fit.specimens.len(),
+            fit.youngs_modulus * 1e-9,
+            fit.stiffness_line.slope * 1e3,
+            fit.stiffness_line.r_squared,
+            fit.effective_length * 1e6,
+            fit.damping_line.slope * 1e3,
+            fit.damping_line.r_squared,
+            fit.loss_factor
+        );
+    }
+    s
+}
+
+fn write_text_csv(path: &Path, header: &[&str], rows: &[Vec<String>]) -> Result<(), String> {
+    let mut writer = csv::Writer::from_writer(Vec::new());
+    let fail = |e: String| format!("cannot write `{}`: {e}", path.display());
+    writer
+        .write_record(header)
+        .map_err(|e| fail(e.to_string()))?;
+    for row in rows {
+        writer.write_record(row).map_err(|e| fail(e.to_string()))?;
+    }
+    let bytes = writer.into_inner().map_err(|e| fail(e.to_string()))?;
+    output::write_atomic(path, &bytes).map_err(|e| e.to_string())
+}
+
+/// Writes `traces.csv` (one row per trace) and `flexures.csv` (one row per specimen, with the
+/// normalized values) into `dir`, in SI units. Returns the files written.
+pub fn write_csvs(report: &FitReport, dir: &Path) -> Result<Vec<PathBuf>, String> {
+    let num = |v: f64| format!("{v:?}");
+    let mut trace_rows = Vec::new();
+    for sr in &report.specimens {
+        for t in &sr.traces {
+            let a = &t.analysis;
+            trace_rows.push(vec![
+                sr.specimen.name.clone(),
+                t.file.display().to_string(),
+                num(a.omega_d),
+                num(a.sigma),
+                num(a.omega_n),
+                num(a.zeta),
+                num(t.stiffness),
+                num(t.damping),
+                a.crossings.len().to_string(),
+                a.peaks.len().to_string(),
+                num(a.noise),
+                num(a.log_fit_r2),
+                num(a.gravity_softening),
+            ]);
+        }
+    }
+    let traces = dir.join("traces.csv");
+    write_text_csv(
+        &traces,
+        &[
+            "specimen",
+            "trace",
+            "omega_d",
+            "sigma",
+            "omega_n",
+            "zeta",
+            "k_m",
+            "b_m",
+            "crossings",
+            "peaks",
+            "noise",
+            "log_fit_r2",
+            "gravity_softening",
+        ],
+        &trace_rows,
+    )?;
+    let specimen_rows: Vec<Vec<String>> = report
+        .specimens
+        .iter()
+        .map(|sr| {
+            let f = &sr.specimen.flexure;
+            vec![
+                sr.specimen.name.clone(),
+                kind_name(f.kind).to_string(),
+                num(f.width),
+                num(f.thickness),
+                num(f.length),
+                sr.traces.len().to_string(),
+                num(sr.stiffness),
+                num(sr.damping),
+                num(sr.omega_d),
+                num(sr.damping_times_omega),
+                num(sr.normalized_stiffness()),
+                num(sr.normalized_damping()),
+            ]
+        })
+        .collect();
+    let flexures = dir.join("flexures.csv");
+    write_text_csv(
+        &flexures,
+        &[
+            "specimen",
+            "kind",
+            "width",
+            "thickness",
+            "length",
+            "traces",
+            "k_m",
+            "b_m",
+            "omega_d",
+            "b_m_omega_d",
+            "y",
+            "z",
+        ],
+        &specimen_rows,
+    )?;
+    Ok(vec![traces, flexures])
+}
+
+/// Cross markers at `(xs, ys)` as one curve broken by NaN (the plot module skips non-finite
+/// points), sized to 1.2 % of the data span.
+fn markers(xs: &[f64], ys: &[f64], line_ys: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let span = |v: &mut dyn Iterator<Item = f64>| {
+        let (lo, hi) = v.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+            (lo.min(x), hi.max(x))
+        });
+        (hi - lo).max(hi.abs() * 1e-3).max(f64::MIN_POSITIVE)
+    };
+    let dx = 0.012 * span(&mut xs.iter().copied().chain(std::iter::once(0.0)));
+    let dy = 0.012
+        * span(
+            &mut ys
+                .iter()
+                .chain(line_ys)
+                .copied()
+                .chain(std::iter::once(0.0)),
+        );
+    let (mut px, mut py) = (Vec::new(), Vec::new());
+    for (&x, &y) in xs.iter().zip(ys) {
+        px.extend([x - dx, x + dx, f64::NAN, x - dx, x + dx, f64::NAN]);
+        py.extend([y - dy, y + dy, f64::NAN, y + dy, y - dy, f64::NAN]);
+    }
+    (px, py)
+}
+
+/// One Fig. 5-style panel: data against width (mm) and the fitted line through the origin.
+#[allow(clippy::too_many_arguments)]
+fn fit_plot(
+    path: &Path,
+    title: &str,
+    y_label: &str,
+    widths_mm: &[f64],
+    values: &[f64],
+    fit: &LineFit,
+    fit_label: &str,
+) -> Result<(), String> {
+    let w_max = widths_mm.iter().fold(0.0_f64, |m, &w| m.max(w)) * 1.05;
+    let line_x = vec![0.0, w_max];
+    let line_y: Vec<f64> = line_x.iter().map(|x| fit.slope * x).collect();
+    let (mx, my) = markers(widths_mm, values, &line_y);
+    // The line first, so that the markers are drawn on top of it.
+    let curves = vec![
+        (
+            format!("{fit_label}, R² = {:.3}", fit.r_squared),
+            line_x,
+            line_y,
+        ),
+        (format!("measured (n = {})", fit.points), mx, my),
+    ];
+    plot::plot_xy(path, title, "width w [mm]", y_label, &curves, false).map_err(|e| e.to_string())
+}
+
+/// Writes the plots of every fit into `dir` with extension `extension` (`svg` or `png`).
+pub fn write_plots(
+    report: &FitReport,
+    dir: &Path,
+    extension: &str,
+) -> Result<Vec<PathBuf>, String> {
+    let mut written = Vec::new();
+    if let Some(fit) = &report.uncastellated {
+        let widths: Vec<f64> = fit
+            .specimens
+            .iter()
+            .map(|&i| report.specimens[i].specimen.flexure.width * 1e3)
+            .collect();
+        // y in GPa·mm against w in mm: the slope reads directly in GPa.
+        let ys: Vec<f64> = fit
+            .specimens
+            .iter()
+            .map(|&i| report.specimens[i].normalized_stiffness() * 1e-6)
+            .collect();
+        let zs: Vec<f64> = fit
+            .specimens
+            .iter()
+            .map(|&i| report.specimens[i].normalized_damping() * 1e-6)
+            .collect();
+        let mut line = fit.stiffness_line;
+        line.slope *= 1e-9;
+        let path = dir.join(format!("fit_modulus.{extension}"));
+        fit_plot(
+            &path,
+            "Uncastellated flexures: stiffness (Eq. 6)",
+            "y = 12 l k_m / t³ [GPa·mm]",
+            &widths,
+            &ys,
+            &line,
+            &format!("y = E·w, E = {:.3} GPa", fit.youngs_modulus * 1e-9),
+        )?;
+        written.push(path);
+        let mut line = fit.damping_line;
+        line.slope *= 1e-9;
+        let path = dir.join(format!("fit_loss_factor.{extension}"));
+        fit_plot(
+            &path,
+            "Uncastellated flexures: damping (Eq. 7)",
+            "z = 12 l ω_d b_m / t³ [GPa·mm]",
+            &widths,
+            &zs,
+            &line,
+            &format!("z = η·E·w, η = {:.4}", fit.loss_factor),
+        )?;
+        written.push(path);
+    }
+    for (n, fit) in report.castellated.iter().enumerate() {
+        let suffix = if report.castellated.len() > 1 {
+            format!("_{}", n + 1)
+        } else {
+            String::new()
+        };
+        let widths: Vec<f64> = fit
+            .specimens
+            .iter()
+            .map(|&i| report.specimens[i].specimen.flexure.width * 1e3)
+            .collect();
+        let ks: Vec<f64> = fit
+            .specimens
+            .iter()
+            .map(|&i| report.specimens[i].stiffness * 1e6)
+            .collect();
+        let bws: Vec<f64> = fit
+            .specimens
+            .iter()
+            .map(|&i| report.specimens[i].damping_times_omega * 1e6)
+            .collect();
+        let group = format!(
+            "t = {:.0} µm, l = {:.0} µm",
+            fit.thickness * 1e6,
+            fit.length * 1e6
+        );
+        let mut line = fit.stiffness_line;
+        line.slope *= 1e3; // µN·m/rad per mm
+        let path = dir.join(format!("fit_castellated_stiffness{suffix}.{extension}"));
+        fit_plot(
+            &path,
+            &format!("Castellated hinges ({group}): stiffness"),
+            "k_m [µN·m/rad]",
+            &widths,
+            &ks,
+            &line,
+            &format!("l_eff = {:.1} µm", fit.effective_length * 1e6),
+        )?;
+        written.push(path);
+        let mut line = fit.damping_line;
+        line.slope *= 1e3;
+        let path = dir.join(format!("fit_castellated_damping{suffix}.{extension}"));
+        fit_plot(
+            &path,
+            &format!("Castellated hinges ({group}): damping"),
+            "b_m·ω_d [µN·m]",
+            &widths,
+            &bws,
+            &line,
+            &format!("η' = {:.4}", fit.loss_factor),
+        )?;
+        written.push(path);
+    }
+    Ok(written)
+}

@@ -1,0 +1,321 @@
+//! The description of one specimen of the flexure characterization experiment, read from a
+//! small TOML file: the flexure's geometry, the pendulum hanging from it, and the decay
+//! traces (CSV files) recorded with it.
+//!
+//! ```toml
+//! name = "U07"                    # optional; default: the file stem
+//! traces = ["u07_a.csv", "u07_b.csv"]   # relative to this file; columns: time [s], angle
+//! angle_unit = "deg"              # "rad" (default) or "deg"
+//! angle_column = "angle"          # optional; default: the second column
+//!
+//! [flexure]
+//! kind = "uncastellated"          # or "castellated"
+//! width = "2 mm"
+//! thickness = "25 um"
+//! length = "500 um"               # nominal length l
+//! castellation_length = "100 um"  # castellated hinges only (optional)
+//!
+//! [pendulum]
+//! mass = "0.2 g"                  # m
+//! inertia = "2.4e-9 kg*m^2"       # I_p, about the pivot (the flexure's centre)
+//! com_distance = "3 mm"           # L_cm, pivot to centre of mass
+//! gravity = "9.81 m/s^2"          # optional, default 9.81 m/s²
+//! ```
+//!
+//! Quantities are strings with a unit (any unit of the `.mech` language) or plain numbers in SI.
+
+use std::path::{Path, PathBuf};
+
+use mech_codegen::ir::Dimension;
+use serde::Deserialize;
+
+/// The pendulum of the rig (seed Sec. IV.A, Eqs. 3–4).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pendulum {
+    /// Mass m (kg).
+    pub mass: f64,
+    /// Inertia about the pivot I_p (kg·m²).
+    pub inertia: f64,
+    /// Pivot to centre of mass L_cm (m), positive below the pivot (hanging).
+    pub com_distance: f64,
+    /// Gravitational acceleration g (m/s²).
+    pub gravity: f64,
+}
+
+impl Pendulum {
+    /// Gravity stiffness of the hanging pendulum at small angles, `m g L_cm` (N·m/rad).
+    pub fn gravity_stiffness(&self) -> f64 {
+        self.mass * self.gravity * self.com_distance
+    }
+}
+
+/// Geometry class of the flexure under test.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Kind {
+    /// Plain rectangular flexure.
+    Uncastellated,
+    /// (Mirrored-)castellated hinge.
+    Castellated,
+}
+
+/// Geometry of the flexure under test (m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FlexureGeometry {
+    /// Geometry class.
+    pub kind: Kind,
+    /// Width w.
+    pub width: f64,
+    /// Thickness t.
+    pub thickness: f64,
+    /// Nominal length l.
+    pub length: f64,
+    /// Castellation length l_c (NaN if not given).
+    pub castellation_length: f64,
+}
+
+/// One specimen: a flexure, its pendulum, and its traces.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Specimen {
+    /// Name for tables and plots.
+    pub name: String,
+    /// The file it was read from.
+    pub source: PathBuf,
+    /// The flexure.
+    pub flexure: FlexureGeometry,
+    /// The pendulum.
+    pub pendulum: Pendulum,
+    /// Trace files (resolved against the TOML's directory).
+    pub traces: Vec<PathBuf>,
+    /// Factor from the CSV's angle unit to radians.
+    pub angle_scale: f64,
+    /// Column of the angle (None: the second column).
+    pub angle_column: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SpecimenFile {
+    name: Option<String>,
+    traces: Vec<String>,
+    angle_unit: Option<String>,
+    angle_column: Option<String>,
+    flexure: FlexureFile,
+    pendulum: PendulumFile,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FlexureFile {
+    kind: Option<String>,
+    width: Quantity,
+    thickness: Quantity,
+    length: Quantity,
+    castellation_length: Option<Quantity>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PendulumFile {
+    mass: Quantity,
+    inertia: Quantity,
+    com_distance: Quantity,
+    gravity: Option<Quantity>,
+}
+
+/// A TOML quantity: a number in SI, or a string with a unit.
+#[derive(Deserialize, Clone)]
+#[serde(untagged)]
+enum Quantity {
+    Number(f64),
+    Text(String),
+}
+
+/// Parses `text` (`2 mm`, `25 um`, `0.2 g`) as a quantity of dimension `expected` and returns
+/// its SI value. A bare number is accepted only for dimensionless quantities unless
+/// `bare_is_si`.
+pub fn parse_si(
+    what: &str,
+    text: &str,
+    expected: Dimension,
+    bare_is_si: bool,
+) -> Result<f64, String> {
+    let (value, dimension) =
+        mech_codegen::front::units::parse_quantity(text).map_err(|e| format!("{what}: {e}"))?;
+    if dimension == expected || (bare_is_si && dimension == Dimension::NONE) {
+        if !value.is_finite() {
+            return Err(format!("{what}: `{text}` is not finite"));
+        }
+        return Ok(value);
+    }
+    if dimension == Dimension::NONE {
+        return Err(format!(
+            "{what}: `{text}` has no unit; write it with a unit of {expected} (e.g. `2 mm`, `25 um`)"
+        ));
+    }
+    Err(format!(
+        "{what}: `{text}` has unit {dimension}, but {what} needs {expected}"
+    ))
+}
+
+fn quantity(what: &str, q: &Quantity, expected: Dimension) -> Result<f64, String> {
+    let value = match q {
+        Quantity::Number(v) => *v,
+        Quantity::Text(text) => parse_si(what, text, expected, true)?,
+    };
+    if !(value.is_finite() && value > 0.0) {
+        return Err(format!("{what} must be positive, got {value}"));
+    }
+    Ok(value)
+}
+
+/// Dimension of pressure / Young's modulus (Pa).
+pub fn pressure() -> Dimension {
+    Dimension::FORCE.div(Dimension::LENGTH.powi(2))
+}
+
+/// Reads a specimen description. Errors name the file.
+pub fn read_specimen(path: &Path) -> Result<Specimen, String> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
+    parse_specimen(path, &text)
+}
+
+/// Parses a specimen description given as text; `path` names it and anchors relative trace
+/// paths.
+pub fn parse_specimen(path: &Path, text: &str) -> Result<Specimen, String> {
+    let file = path.display();
+    let raw: SpecimenFile = toml::from_str(text).map_err(|e| format!("`{file}`: {e}"))?;
+    let ctx = |e: String| format!("`{file}`: {e}");
+    let kind = match raw
+        .flexure
+        .kind
+        .as_deref()
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
+        None | Some("uncastellated") => Kind::Uncastellated,
+        Some("castellated") | Some("mirrored-castellated") => Kind::Castellated,
+        Some(other) => {
+            return Err(ctx(format!(
+                "flexure.kind `{other}`: expected `uncastellated` or `castellated`"
+            )))
+        }
+    };
+    let l = Dimension::LENGTH;
+    let flexure = FlexureGeometry {
+        kind,
+        width: quantity("flexure.width", &raw.flexure.width, l).map_err(ctx)?,
+        thickness: quantity("flexure.thickness", &raw.flexure.thickness, l).map_err(ctx)?,
+        length: quantity("flexure.length", &raw.flexure.length, l).map_err(ctx)?,
+        castellation_length: match &raw.flexure.castellation_length {
+            Some(q) => quantity("flexure.castellation_length", q, l).map_err(ctx)?,
+            None => f64::NAN,
+        },
+    };
+    let p = &raw.pendulum;
+    let pendulum = Pendulum {
+        mass: quantity("pendulum.mass", &p.mass, Dimension::MASS).map_err(ctx)?,
+        inertia: quantity("pendulum.inertia", &p.inertia, Dimension::INERTIA).map_err(ctx)?,
+        com_distance: quantity("pendulum.com_distance", &p.com_distance, l).map_err(ctx)?,
+        gravity: match &p.gravity {
+            Some(q) => quantity("pendulum.gravity", q, Dimension::ACCELERATION).map_err(ctx)?,
+            None => 9.81,
+        },
+    };
+    let point_mass_inertia = pendulum.mass * pendulum.com_distance.powi(2);
+    if pendulum.inertia < point_mass_inertia * (1.0 - 1e-9) {
+        return Err(ctx(format!(
+            "pendulum.inertia {:e} kg·m² is less than m·L_cm² = {:e} kg·m²: I_p must be the \
+             inertia about the pivot, not about the centre of mass",
+            pendulum.inertia, point_mass_inertia
+        )));
+    }
+    let angle_scale = match raw.angle_unit.as_deref() {
+        None | Some("rad") => 1.0,
+        Some("deg") => std::f64::consts::PI / 180.0,
+        Some(other) => {
+            return Err(ctx(format!(
+                "angle_unit `{other}`: expected `rad` or `deg`"
+            )))
+        }
+    };
+    if raw.traces.is_empty() {
+        return Err(ctx("`traces` is empty: list at least one CSV file".into()));
+    }
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let traces = raw.traces.iter().map(|t| dir.join(t)).collect();
+    let name = raw.name.unwrap_or_else(|| {
+        path.file_stem()
+            .map_or("specimen".into(), |s| s.to_string_lossy().into_owned())
+    });
+    Ok(Specimen {
+        name,
+        source: path.to_path_buf(),
+        flexure,
+        pendulum,
+        traces,
+        angle_scale,
+        angle_column: raw.angle_column,
+    })
+}
+
+/// Expands the command line's DATA arguments: `.toml` files as given, directories to the
+/// `.toml` files they contain (sorted).
+pub fn specimen_files(arguments: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
+    let mut files = Vec::new();
+    for argument in arguments {
+        if argument.is_dir() {
+            let mut found: Vec<PathBuf> = std::fs::read_dir(argument)
+                .map_err(|e| format!("cannot read directory `{}`: {e}", argument.display()))?
+                .filter_map(|entry| entry.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+                .collect();
+            if found.is_empty() {
+                return Err(format!(
+                    "directory `{}` contains no `.toml` specimen files",
+                    argument.display()
+                ));
+            }
+            found.sort();
+            files.extend(found);
+        } else if argument.extension().is_some_and(|e| e == "toml") {
+            files.push(argument.clone());
+        } else {
+            return Err(format!(
+                "`{}`: expected a `.toml` specimen file (naming its CSV traces) or a directory \
+                 of them; see docs/flexure-and-actuator.md",
+                argument.display()
+            ));
+        }
+    }
+    Ok(files)
+}
+
+/// Reads the angle trace `path` of `specimen`: `(times s, angles rad)`.
+pub fn read_trace(specimen: &Specimen, path: &Path) -> Result<(Vec<f64>, Vec<f64>), String> {
+    let table = crate::output::read_csv_table(path)?;
+    let index = match &specimen.angle_column {
+        Some(column) => table.column_index(column).ok_or_else(|| {
+            format!(
+                "`{}` has no column `{column}`; its columns are {}",
+                path.display(),
+                table.header.join(", ")
+            )
+        })?,
+        None => {
+            if table.columns.len() < 2 {
+                return Err(format!(
+                    "`{}` needs two columns, time [s] and angle",
+                    path.display()
+                ));
+            }
+            1
+        }
+    };
+    let times = table.columns[0].clone();
+    let angles = table.columns[index]
+        .iter()
+        .map(|a| a * specimen.angle_scale)
+        .collect();
+    Ok((times, angles))
+}

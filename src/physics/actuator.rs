@@ -1,0 +1,331 @@
+//! Piezoelectric bending actuators (seed Sec. II–III): a force source `F_b(V)`, linear in
+//! the drive voltage, in parallel with a series stiffness `k_a = F_b / δ_f`, so that the tip
+//! force at deflection δ is `F = F_b(V) − k_a δ`. The pair `(F_b, δ_f)` is given at a rated
+//! voltage, or computed from a symmetric tapered bimorph's geometry by the closed form of
+//! Wood, Steltz & Fearing (2005) with the refinements of Jafferis, Smith & Wood (2015).
+//!
+//! Units: N, m, V, kg; energy density in J/kg.
+
+/// Energy density of Eq. 1: `D_u = δ_f F_b / (2 m_a)` (J/kg): the area under the linear
+/// force–deflection curve per unit actuator mass (a quarter of the convention of the
+/// earlier papers, see seed Sec. III).
+pub fn energy_density(free_deflection: f64, blocked_force: f64, mass: f64) -> f64 {
+    free_deflection * blocked_force / (2.0 * mass)
+}
+
+/// A linear actuator model: blocked force and free deflection at `rated_voltage`, both
+/// proportional to the voltage (seed Sec. III: linear in 50–225 V).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Actuator {
+    /// Blocked force F_b at the rated voltage (N, peak one-way).
+    pub blocked_force: f64,
+    /// Free deflection δ_f at the rated voltage (m, peak one-way).
+    pub free_deflection: f64,
+    /// Voltage at which `blocked_force` and `free_deflection` hold (V).
+    pub rated_voltage: f64,
+    /// Actuator mass m_a (kg); NaN if unknown (then `energy_density` is NaN).
+    pub mass: f64,
+}
+
+impl Actuator {
+    /// Series stiffness `k_a = F_b / δ_f` (N/m), independent of voltage.
+    pub fn stiffness(&self) -> f64 {
+        self.blocked_force / self.free_deflection
+    }
+
+    /// Blocked force at drive voltage `voltage` (N): `F_b · V / V_rated`.
+    pub fn blocked_force_at(&self, voltage: f64) -> f64 {
+        self.blocked_force * voltage / self.rated_voltage
+    }
+
+    /// Free deflection at drive voltage `voltage` (m).
+    pub fn free_deflection_at(&self, voltage: f64) -> f64 {
+        self.free_deflection * voltage / self.rated_voltage
+    }
+
+    /// Tip force at voltage `voltage` and tip deflection `deflection`: `F_b(V) − k_a δ` (N).
+    pub fn tip_force(&self, voltage: f64, deflection: f64) -> f64 {
+        self.blocked_force_at(voltage) - self.stiffness() * deflection
+    }
+
+    /// Energy density at the rated voltage, Eq. 1 (J/kg).
+    pub fn energy_density(&self) -> f64 {
+        energy_density(self.free_deflection, self.blocked_force, self.mass)
+    }
+
+    /// The same actuator re-rated at `voltage`.
+    pub fn at_voltage(&self, voltage: f64) -> Actuator {
+        Actuator {
+            blocked_force: self.blocked_force_at(voltage),
+            free_deflection: self.free_deflection_at(voltage),
+            rated_voltage: voltage,
+            mass: self.mass,
+        }
+    }
+
+    /// Checks that the constants are finite and positive (the mass may be NaN: unknown).
+    pub fn validate(&self) -> Result<(), String> {
+        for (what, value) in [
+            ("blocked force", self.blocked_force),
+            ("free deflection", self.free_deflection),
+            ("rated voltage", self.rated_voltage),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(format!(
+                    "actuator {what} must be positive and finite, got {value}"
+                ));
+            }
+        }
+        if !(self.mass.is_nan() || (self.mass.is_finite() && self.mass > 0.0)) {
+            return Err(format!("actuator mass must be positive, got {}", self.mass));
+        }
+        Ok(())
+    }
+}
+
+/// Effective material coefficients of the bimorph closed form.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PiezoCoefficients {
+    /// Effective f31 = d31·E_p for the blocked force (Pa·m/V).
+    pub f31_blocked: f64,
+    /// Effective f31 for the free deflection (Pa·m/V).
+    pub f31_free: f64,
+    /// PZT modulus E_p (Pa).
+    pub pzt_modulus: f64,
+    /// Core (carbon fibre) modulus E_cf (Pa).
+    pub core_modulus: f64,
+}
+
+impl PiezoCoefficients {
+    /// Coefficients used for HAMR-VI's actuators (Jafferis, Smith & Wood 2015, as collected in
+    /// the project's reference notes): f31 = 24 Pa·m/V (blocked force), 32 Pa·m/V (free
+    /// deflection), E_p = 40 GPa, E_cf = 340 GPa.
+    pub const HAMR_VI: PiezoCoefficients = PiezoCoefficients {
+        f31_blocked: 24.0,
+        f31_free: 32.0,
+        pzt_modulus: 40e9,
+        core_modulus: 340e9,
+    };
+}
+
+/// A symmetric tapered bimorph: two PZT plates of thickness `t_p` on a carbon-fibre core
+/// `t_cf`, active length `L`, rigid extension `l_ext`, nominal width `w_nom`, width ratio
+/// `w_r` (base `w_r·w_nom`, tip `(2 − w_r)·w_nom`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bimorph {
+    /// PZT plate thickness t_p (m).
+    pub pzt_thickness: f64,
+    /// Core thickness t_cf (m).
+    pub core_thickness: f64,
+    /// Active (PZT) length L (m).
+    pub length: f64,
+    /// Rigid extension length l_ext (m).
+    pub extension_length: f64,
+    /// Nominal width w_nom (m).
+    pub nominal_width: f64,
+    /// Width ratio w_r (0 < w_r < 2).
+    pub width_ratio: f64,
+    /// Material coefficients.
+    pub coefficients: PiezoCoefficients,
+}
+
+impl Bimorph {
+    /// Seed Table I, "new geometry": t_p = 135 µm, t_cf = 55 µm, L = 9.2 mm, l_ext = 1 mm,
+    /// w_nom = 3.5 mm, w_r = 1.5, with the HAMR-VI coefficients.
+    pub const SEED_NEW_GEOMETRY: Bimorph = Bimorph {
+        pzt_thickness: 135e-6,
+        core_thickness: 55e-6,
+        length: 9.2e-3,
+        extension_length: 1.0e-3,
+        nominal_width: 3.5e-3,
+        width_ratio: 1.5,
+        coefficients: PiezoCoefficients::HAMR_VI,
+    };
+
+    /// Seed Table I, "old geometry": t_p = 135 µm, t_cf = 110 µm, L = 8.8 mm, l_ext = 0.8 mm,
+    /// w_nom = 4.2 mm, w_r = 1.5, with the HAMR-VI coefficients.
+    pub const SEED_OLD_GEOMETRY: Bimorph = Bimorph {
+        pzt_thickness: 135e-6,
+        core_thickness: 110e-6,
+        length: 8.8e-3,
+        extension_length: 0.8e-3,
+        nominal_width: 4.2e-3,
+        width_ratio: 1.5,
+        coefficients: PiezoCoefficients::HAMR_VI,
+    };
+
+    /// Checks that the geometry is positive and finite and `0 < w_r < 2`.
+    pub fn validate(&self) -> Result<(), String> {
+        let c = &self.coefficients;
+        for (what, value) in [
+            ("PZT thickness", self.pzt_thickness),
+            ("core thickness", self.core_thickness),
+            ("length", self.length),
+            ("nominal width", self.nominal_width),
+            ("f31 (blocked force)", c.f31_blocked),
+            ("f31 (free deflection)", c.f31_free),
+            ("PZT modulus", c.pzt_modulus),
+            ("core modulus", c.core_modulus),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(format!(
+                    "bimorph {what} must be positive and finite, got {value}"
+                ));
+            }
+        }
+        if !(self.extension_length.is_finite() && self.extension_length >= 0.0) {
+            return Err(format!(
+                "bimorph extension length must be finite and ≥ 0, got {}",
+                self.extension_length
+            ));
+        }
+        if !(self.width_ratio > 0.0 && self.width_ratio < 2.0) {
+            return Err(format!(
+                "bimorph width ratio must lie in (0, 2) (the tip width is (2 − w_r)·w_nom), got {}",
+                self.width_ratio
+            ));
+        }
+        Ok(())
+    }
+
+    /// Extension ratio l_r = l_ext / L.
+    pub fn extension_ratio(&self) -> f64 {
+        self.extension_length / self.length
+    }
+
+    /// Flexural rigidity per unit width (N·m):
+    /// `D = ⅓ E_p t_p (1.5 t_cf² + 3 t_cf t_p + 2 t_p²) + E_cf t_cf³ / 12`.
+    pub fn rigidity_per_width(&self) -> f64 {
+        let (tp, tcf) = (self.pzt_thickness, self.core_thickness);
+        let c = &self.coefficients;
+        c.pzt_modulus * tp * (1.5 * tcf * tcf + 3.0 * tcf * tp + 2.0 * tp * tp) / 3.0
+            + c.core_modulus * tcf.powi(3) / 12.0
+    }
+
+    /// Geometry factor GF of the taper and extension (→ 1 for w_r → 1 and l_r = 0):
+    /// `8(1 − w_r)³(1 + 2l_r) / [−6(w_r − 1)(−3 + 4l_r(w_r − 1) + 2w_r)
+    ///  + 3(−2 + 2l_r(w_r − 1) + w_r)² ln((2 − w_r)/w_r)]`.
+    ///
+    /// Near `w_r = 1` the expression is 0/0; its limit there is
+    /// `4(1 + 2l_r) / (3(1 + 2l_r)² + 1)`, and within 0.01 of 1 the value is interpolated
+    /// linearly between that limit and the formula at `1 ± 0.01` (error below 1e-5).
+    pub fn geometry_factor(&self) -> f64 {
+        let lr = self.extension_ratio();
+        let formula = |wr: f64| {
+            let numerator = 8.0 * (1.0 - wr).powi(3) * (1.0 + 2.0 * lr);
+            let denominator = -6.0 * (wr - 1.0) * (-3.0 + 4.0 * lr * (wr - 1.0) + 2.0 * wr)
+                + 3.0 * (-2.0 + 2.0 * lr * (wr - 1.0) + wr).powi(2) * ((2.0 - wr) / wr).ln();
+            numerator / denominator
+        };
+        let wr = self.width_ratio;
+        let e = wr - 1.0;
+        const BAND: f64 = 0.01;
+        if e.abs() >= BAND {
+            return formula(wr);
+        }
+        let a = 1.0 + 2.0 * lr;
+        let limit = 4.0 * a / (3.0 * a * a + 1.0);
+        let edge = formula(1.0 + BAND.copysign(e));
+        limit + (edge - limit) * e.abs() / BAND
+    }
+
+    /// Free deflection at drive amplitude `voltage` (m):
+    /// `δ_f = ¼ (1 + 2l_r) f31 (V/t_p) t_p (t_p + t_cf) L² / D`.
+    pub fn free_deflection(&self, voltage: f64) -> f64 {
+        let (tp, tcf, l) = (self.pzt_thickness, self.core_thickness, self.length);
+        0.25 * (1.0 + 2.0 * self.extension_ratio())
+            * self.coefficients.f31_free
+            * (voltage / tp)
+            * tp
+            * (tp + tcf)
+            * l
+            * l
+            / self.rigidity_per_width()
+    }
+
+    /// Blocked force at drive amplitude `voltage` (N):
+    /// `F_b = ¾ f31 V w_nom (t_p + t_cf) GF / L`.
+    pub fn blocked_force(&self, voltage: f64) -> f64 {
+        0.75 * self.coefficients.f31_blocked
+            * voltage
+            * self.nominal_width
+            * (self.pzt_thickness + self.core_thickness)
+            * self.geometry_factor()
+            / self.length
+    }
+
+    /// The linear actuator model at `voltage`, with mass `mass` (kg, NaN if unknown).
+    pub fn actuator(&self, voltage: f64, mass: f64) -> Actuator {
+        Actuator {
+            blocked_force: self.blocked_force(voltage),
+            free_deflection: self.free_deflection(voltage),
+            rated_voltage: voltage,
+            mass,
+        }
+    }
+}
+
+/// One row of the seed's Table II ("Summary of actuator performance metrics"), peak one-way
+/// values at 225 V.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TableIIRow {
+    /// Actuator as named in the table.
+    pub name: &'static str,
+    /// Mass m_a (kg).
+    pub mass: f64,
+    /// Free deflection δ_f (m).
+    pub free_deflection: f64,
+    /// Blocked force F_b (N).
+    pub blocked_force: f64,
+    /// Energy density as printed (J/kg).
+    pub energy_density: f64,
+}
+
+/// The seed's Table II, transcribed (mg, µm, mN in the paper; SI here).
+pub const SEED_TABLE_II: [TableIIRow; 5] = [
+    TableIIRow {
+        name: "PNP from [13]",
+        mass: 96e-6,
+        free_deflection: 200e-6,
+        blocked_force: 0.200,
+        energy_density: 0.21,
+    },
+    TableIIRow {
+        name: "PNP 'a'",
+        mass: 100e-6,
+        free_deflection: 234e-6,
+        blocked_force: 0.259,
+        energy_density: 0.32,
+    },
+    TableIIRow {
+        name: "PS 'a'",
+        mass: 100e-6,
+        free_deflection: 247e-6,
+        blocked_force: 0.270,
+        energy_density: 0.35,
+    },
+    TableIIRow {
+        name: "PS 'b'",
+        mass: 109e-6,
+        free_deflection: 219e-6,
+        blocked_force: 0.500,
+        energy_density: 0.5,
+    },
+    TableIIRow {
+        name: "Model from [16]",
+        mass: 109e-6,
+        free_deflection: 184e-6,
+        blocked_force: 0.549,
+        energy_density: 0.46,
+    },
+];
+
+/// Seed Table I, model values (from [16]) at 225 V: old geometry δ_f = 184 µm, F_b = 549 mN;
+/// new geometry δ_f = 300 µm, F_b = 320 mN. Pairs `(δ_f m, F_b N)`.
+pub const SEED_TABLE_I_MODEL: [(&str, f64, f64); 2] = [
+    ("old geometry", 184e-6, 0.549),
+    ("new geometry", 300e-6, 0.320),
+];
+
+/// Drive amplitude of the seed's actuator measurements (V): 225 V.
+pub const SEED_DRIVE_VOLTAGE: f64 = 225.0;

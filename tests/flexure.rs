@@ -1,0 +1,710 @@
+//! The flexure characterization experiment (seed Sec. IV) on synthetic data: decay traces of
+//! the pendulum rig `models/flexure_rig.mech`, simulated with the project's own tape model and
+//! integrator for 25 uncastellated flexures spanning the seed's ranges (w 0.8–6 mm,
+//! l 30 µm–2 mm, t 7.5–50 µm) and 7 castellated hinges, with Gaussian angle noise; the fits
+//! must recover the modulus, the loss factors, each trace's stiffness and l_eff.
+//! Plus the flexure formulas (Eqs. 2, 5, 8), Table III, and errors on bad traces.
+
+use std::f64::consts::{PI, TAU};
+use std::path::PathBuf;
+
+use mech::flexure_fit::fit::{
+    analyze_specimen_trace, fit_results, specimen_result, FitOptions, SpecimenResult,
+};
+use mech::flexure_fit::rig::{FlexureGeometry, Kind, Pendulum, Specimen};
+use mech::flexure_fit::{analyze_trace, TraceError, TraceOptions};
+use mech::physics::flexure::{bending_stiffness, twist_ratio, SEED_TABLE_III};
+use mech::physics::{Flexure, Material};
+use mech::tape_model::TapeModel;
+use mech_runtime::{Method, Model, SimOptions};
+
+/// The "true" material of the synthetic experiment.
+const E_TRUE: f64 = 2.56e9;
+const ETA_TRUE: f64 = 0.05;
+/// Castellated family: seed Sec. IV.B.
+const ETA_CASTELLATED: f64 = 0.08;
+const L_EFF_TRUE: f64 = 66e-6;
+/// Angle noise: 0.05° standard deviation.
+const NOISE: f64 = 0.05 * PI / 180.0;
+
+/// Deterministic Gaussian noise: SplitMix64 and Box–Muller.
+struct Rng(u64);
+
+impl Rng {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    fn uniform(&mut self) -> f64 {
+        ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+    fn gaussian(&mut self) -> f64 {
+        let (u1, u2) = (self.uniform(), self.uniform());
+        (-2.0 * u1.ln()).sqrt() * (TAU * u2).cos()
+    }
+}
+
+/// Pendulums of the rig, from light to heavy: a bob on a light arm (mass m, centre of mass
+/// L_cm below the pivot, a rod of length 2 L_cm for the inertia about the centre of mass).
+fn rigs() -> Vec<Pendulum> {
+    [
+        (0.05e-3, 2e-3),
+        (0.2e-3, 3e-3),
+        (1e-3, 5e-3),
+        (5e-3, 8e-3),
+        (20e-3, 12e-3),
+    ]
+    .into_iter()
+    .map(|(m, l): (f64, f64)| Pendulum {
+        mass: m,
+        inertia: m * l * l + m * (2.0 * l).powi(2) / 12.0,
+        com_distance: l,
+        gravity: 9.81,
+    })
+    .collect()
+}
+
+/// The rig for a flexure of stiffness `k`: gravity stiffness closest to k/2 (in log), as an
+/// experimenter would swap pendulums so that the flexure dominates.
+fn choose_rig(k: f64) -> Pendulum {
+    rigs()
+        .into_iter()
+        .min_by(|a, b| {
+            let da = (a.gravity_stiffness() / (0.5 * k)).ln().abs();
+            let db = (b.gravity_stiffness() / (0.5 * k)).ln().abs();
+            da.total_cmp(&db)
+        })
+        .unwrap()
+}
+
+/// Damped frequency of the linearized rig, and the damping `b = kη/ω_d` at that frequency
+/// (Eq. 5 with the seed's ω = ω_d), found by fixed-point iteration.
+fn damping_at_own_frequency(k: f64, eta: f64, rig: &Pendulum) -> (f64, f64) {
+    let omega_n = ((k + rig.gravity_stiffness()) / rig.inertia).sqrt();
+    let mut omega_d = omega_n;
+    let mut b = 0.0;
+    for _ in 0..50 {
+        b = k * eta / omega_d;
+        let zeta = b / (2.0 * rig.inertia * omega_n);
+        omega_d = omega_n * (1.0 - zeta * zeta).sqrt();
+    }
+    (omega_d, b)
+}
+
+fn rig_model() -> TapeModel {
+    let path = format!("{}/models/flexure_rig.mech", env!("CARGO_MANIFEST_DIR"));
+    let compiled = mech_codegen::Compiled::from_path(&path).unwrap_or_else(|e| panic!("{e}"));
+    TapeModel::new(&compiled)
+}
+
+fn set(model: &mut TapeModel, name: &str, value: f64) {
+    let index = model
+        .param_index(name)
+        .unwrap_or_else(|| panic!("rig has no parameter `{name}`"));
+    model.set_param(index, value);
+}
+
+/// One synthetic specimen: true stiffness, and its traces.
+struct Synthetic {
+    specimen: Specimen,
+    k_true: f64,
+    traces: Vec<(Vec<f64>, Vec<f64>)>,
+}
+
+/// Simulates the rig for a flexure (w, t, l_eq) where `l_eq` is the length entering Eq. 2,
+/// released from each of `angles`, `t_end_decays` e-folding times long, with noise.
+#[allow(clippy::too_many_arguments)]
+fn simulate_specimen(
+    model: &mut TapeModel,
+    name: &str,
+    geometry: FlexureGeometry,
+    l_eq: f64,
+    eta: f64,
+    angles: &[f64],
+    t_end_decays: f64,
+    rng: &mut Rng,
+) -> Synthetic {
+    let k = bending_stiffness(E_TRUE, geometry.width, geometry.thickness, l_eq);
+    let rig = choose_rig(k);
+    let (omega_d, b) = damping_at_own_frequency(k, eta, &rig);
+    for (p, v) in [
+        ("m", rig.mass),
+        ("I_p", rig.inertia),
+        ("L_cm", rig.com_distance),
+        ("g", rig.gravity),
+        ("E", E_TRUE),
+        ("w", geometry.width),
+        ("h", geometry.thickness),
+        ("l", l_eq),
+        ("eta", eta),
+        ("omega_ref", omega_d),
+    ] {
+        set(model, p, v);
+    }
+    // The model's own outputs confirm Eqs. 2 and 5.
+    let mut y = vec![0.0; model.noutputs()];
+    model.outputs(0.0, &[0.0], &[0.0], &[], &mut y);
+    let out = |n: &str| y[model.output_index(n).unwrap()];
+    assert!((out("stiffness") - k).abs() <= 1e-12 * k);
+    assert!((out("damping") - b).abs() <= 1e-12 * b);
+
+    let sigma = b / (2.0 * rig.inertia);
+    let period = TAU / omega_d;
+    let options = SimOptions {
+        t_end: t_end_decays / sigma,
+        output_interval: (1e-3_f64).min(period / 40.0),
+        method: Method::Dopri5 {
+            rtol: 1e-10,
+            atol: 1e-13,
+            h_max: f64::INFINITY,
+        },
+        max_steps: 5_000_000,
+        ..SimOptions::default()
+    };
+    let signals = mech_runtime::default_signals(model);
+    let traces = angles
+        .iter()
+        .map(|&theta0| {
+            let run =
+                mech_runtime::simulate(model, &[theta0], &[0.0], &signals, &options, &mut |_| {})
+                    .unwrap_or_else(|e| panic!("{name}: {e}"));
+            let angle_index = model.output_index("angle").unwrap();
+            let noisy: Vec<f64> = run
+                .outputs
+                .iter()
+                .map(|o| o[angle_index] + NOISE * rng.gaussian())
+                .collect();
+            (run.times, noisy)
+        })
+        .collect();
+    Synthetic {
+        specimen: Specimen {
+            name: name.to_string(),
+            source: PathBuf::from(format!("{name}.toml")),
+            flexure: geometry,
+            pendulum: rig,
+            traces: Vec::new(),
+            angle_scale: 1.0,
+            angle_column: None,
+        },
+        k_true: k,
+        traces,
+    }
+}
+
+/// The 25 uncastellated geometries (w mm, l µm, t µm), spanning the seed's ranges.
+const GEOMETRIES: [(f64, f64, f64); 25] = [
+    (0.8, 30.0, 7.5),
+    (2.0, 30.0, 7.5),
+    (4.0, 50.0, 7.5),
+    (6.0, 40.0, 7.5),
+    (3.0, 100.0, 7.5),
+    (1.0, 50.0, 12.0),
+    (2.5, 200.0, 12.0),
+    (6.0, 500.0, 12.0),
+    (4.0, 100.0, 12.0),
+    (1.5, 30.0, 12.0),
+    (5.0, 1000.0, 12.0),
+    (2.0, 1000.0, 25.0),
+    (6.0, 2000.0, 25.0),
+    (1.0, 100.0, 25.0),
+    (3.0, 300.0, 25.0),
+    (5.0, 60.0, 25.0),
+    (0.8, 30.0, 25.0),
+    (4.5, 700.0, 25.0),
+    (0.8, 2000.0, 50.0),
+    (2.0, 500.0, 50.0),
+    (4.0, 1000.0, 50.0),
+    (6.0, 200.0, 50.0),
+    (1.2, 60.0, 50.0),
+    (3.0, 30.0, 50.0),
+    (6.0, 30.0, 50.0),
+];
+
+/// Release angle of trial `j` of specimen `i`: 5°–15°.
+fn release_angles(i: usize) -> [f64; 2] {
+    let a = 5.0 + 10.0 * (i as f64) / 24.0;
+    let b = 15.0 - 10.0 * (i as f64) / 24.0;
+    [a.to_radians(), b.to_radians()]
+}
+
+fn analyse(synthetic: &Synthetic, options: &FitOptions) -> SpecimenResult {
+    let traces = synthetic
+        .traces
+        .iter()
+        .enumerate()
+        .map(|(j, (t, a))| {
+            analyze_specimen_trace(
+                t,
+                a,
+                &synthetic.specimen.pendulum,
+                PathBuf::from(format!("{}_{j}.csv", synthetic.specimen.name)),
+                options,
+            )
+            .unwrap_or_else(|e| panic!("{e}"))
+        })
+        .collect();
+    specimen_result(synthetic.specimen.clone(), traces)
+}
+
+fn uncastellated_set(rng: &mut Rng) -> Vec<Synthetic> {
+    let mut model = rig_model();
+    GEOMETRIES
+        .iter()
+        .enumerate()
+        .map(|(i, &(w, l, t))| {
+            let geometry = FlexureGeometry {
+                kind: Kind::Uncastellated,
+                width: w * 1e-3,
+                thickness: t * 1e-6,
+                length: l * 1e-6,
+                castellation_length: f64::NAN,
+            };
+            simulate_specimen(
+                &mut model,
+                &format!("U{:02}", i + 1),
+                geometry,
+                geometry.length,
+                ETA_TRUE,
+                &release_angles(i),
+                6.0,
+                rng,
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn pendulum_fit_recovers_modulus_loss_factor_and_stiffness() {
+    let mut rng = Rng(20_150_928);
+    let set = uncastellated_set(&mut rng);
+    let frequencies: Vec<f64> = set
+        .iter()
+        .map(|s| {
+            let (omega_d, _) = damping_at_own_frequency(s.k_true, ETA_TRUE, &s.specimen.pendulum);
+            omega_d / TAU
+        })
+        .collect();
+    let (f_lo, f_hi) = frequencies
+        .iter()
+        .fold((f64::INFINITY, 0.0_f64), |(lo, hi), &f| {
+            (lo.min(f), hi.max(f))
+        });
+    println!("rig frequencies {f_lo:.2}–{f_hi:.2} Hz");
+    assert!(
+        f_lo > 2.0 && f_hi < 60.0,
+        "rig frequencies {f_lo}–{f_hi} Hz"
+    );
+
+    for small_angle in [false, true] {
+        let options = FitOptions {
+            small_angle,
+            ..FitOptions::default()
+        };
+        let results: Vec<SpecimenResult> = set.iter().map(|s| analyse(s, &options)).collect();
+        let mut worst_k = 0.0_f64;
+        for (s, r) in set.iter().zip(&results) {
+            for t in &r.traces {
+                let error = (t.stiffness - s.k_true) / s.k_true;
+                worst_k = worst_k.max(error.abs());
+                if !small_angle {
+                    assert!(
+                        error.abs() < 0.01,
+                        "{}: k_m {} vs {} ({:+.3} %)",
+                        s.specimen.name,
+                        t.stiffness,
+                        s.k_true,
+                        100.0 * error
+                    );
+                    assert!(t.analysis.crossings.len() >= 10);
+                }
+            }
+        }
+        let report = fit_results(results, &options);
+        let fit = report.uncastellated.expect("25 uncastellated specimens");
+        let e_error = (fit.youngs_modulus - E_TRUE) / E_TRUE;
+        let eta_error = (fit.loss_factor - ETA_TRUE) / ETA_TRUE;
+        println!(
+            "{}: E = {:.5} GPa ({:+.4} %), η = {:.5} ({:+.3} %), R² = {:.6} / {:.6}, \
+             worst per-trace k_m error {:.4} %",
+            if small_angle {
+                "Eq. 4 literal"
+            } else {
+                "finite-amplitude gravity"
+            },
+            fit.youngs_modulus * 1e-9,
+            100.0 * e_error,
+            fit.loss_factor,
+            100.0 * eta_error,
+            fit.stiffness_line.r_squared,
+            fit.damping_line.r_squared,
+            100.0 * worst_k
+        );
+        if !small_angle {
+            assert!(e_error.abs() < 0.01, "E error {e_error}");
+            assert!(eta_error.abs() < 0.05, "η error {eta_error}");
+            assert!(fit.stiffness_line.r_squared > 0.99);
+            assert!(fit.damping_line.r_squared > 0.99);
+            // A careful analysis does much better than the required 1 % / 5 %.
+            assert!(worst_k < 2e-3, "worst k_m error {worst_k}");
+            assert!(eta_error.abs() < 0.01, "η error {eta_error}");
+        }
+    }
+}
+
+#[test]
+fn castellated_fit_recovers_effective_length_and_loss_factor() {
+    let mut rng = Rng(66);
+    let mut model = rig_model();
+    // The widths of seed Table III, 25 µm thick, 120 µm long, 100 µm castellations.
+    let set: Vec<Synthetic> = SEED_TABLE_III
+        .iter()
+        .enumerate()
+        .map(|(i, row)| {
+            let geometry = FlexureGeometry {
+                kind: Kind::Castellated,
+                width: row.width,
+                thickness: 25e-6,
+                length: 120e-6,
+                castellation_length: 100e-6,
+            };
+            simulate_specimen(
+                &mut model,
+                &format!("C{}", i + 1),
+                geometry,
+                L_EFF_TRUE,
+                ETA_CASTELLATED,
+                &[
+                    (6.0 + 1.3 * i as f64).to_radians(),
+                    (14.0 - i as f64).to_radians(),
+                ],
+                6.0,
+                &mut rng,
+            )
+        })
+        .collect();
+    let options = FitOptions {
+        modulus: Some(E_TRUE),
+        ..FitOptions::default()
+    };
+    let results: Vec<SpecimenResult> = set.iter().map(|s| analyse(s, &options)).collect();
+    for (s, r) in set.iter().zip(&results) {
+        for t in &r.traces {
+            assert!(((t.stiffness - s.k_true) / s.k_true).abs() < 0.01);
+        }
+    }
+    let report = fit_results(results, &options);
+    assert!(report.uncastellated.is_none());
+    assert_eq!(report.castellated.len(), 1);
+    let fit = &report.castellated[0];
+    let l_error = (fit.effective_length - L_EFF_TRUE) / L_EFF_TRUE;
+    let eta_error = (fit.loss_factor - ETA_CASTELLATED) / ETA_CASTELLATED;
+    println!(
+        "castellated: l_eff = {:.3} µm ({:+.4} %), η' = {:.5} ({:+.3} %), R² = {:.6} / {:.6}",
+        fit.effective_length * 1e6,
+        100.0 * l_error,
+        fit.loss_factor,
+        100.0 * eta_error,
+        fit.stiffness_line.r_squared,
+        fit.damping_line.r_squared
+    );
+    assert!(l_error.abs() < 0.02, "l_eff error {l_error}");
+    assert!(eta_error.abs() < 0.05, "η' error {eta_error}");
+    assert!(fit.stiffness_line.r_squared > 0.99 && fit.damping_line.r_squared > 0.99);
+}
+
+#[test]
+fn a_long_noisy_tail_does_not_bias_the_frequency() {
+    // The same flexure recorded for 6 and for 20 e-folding times: the longer trace ends in
+    // many noise-only "crossings", which must not change ω_d or σ.
+    let geometry = FlexureGeometry {
+        kind: Kind::Uncastellated,
+        width: 2e-3,
+        thickness: 25e-6,
+        length: 500e-6,
+        castellation_length: f64::NAN,
+    };
+    let mut model = rig_model();
+    let mut run = |decays: f64| {
+        let mut rng = Rng(7);
+        let s = simulate_specimen(
+            &mut model,
+            "tail",
+            geometry,
+            geometry.length,
+            ETA_TRUE,
+            &[10f64.to_radians()],
+            decays,
+            &mut rng,
+        );
+        let (t, a) = &s.traces[0];
+        (analyze_trace(t, a, &TraceOptions::default()).unwrap(), s)
+    };
+    let (short, s) = run(6.0);
+    let (long, _) = run(20.0);
+    let (omega_d, b) = damping_at_own_frequency(s.k_true, ETA_TRUE, &s.specimen.pendulum);
+    let sigma = b / (2.0 * s.specimen.pendulum.inertia);
+    for a in [&short, &long] {
+        assert!(
+            ((a.omega_d - omega_d) / omega_d).abs() < 2e-4,
+            "ω_d {} vs {omega_d}",
+            a.omega_d
+        );
+        assert!(
+            ((a.sigma - sigma) / sigma).abs() < 0.01,
+            "σ {} vs {sigma}",
+            a.sigma
+        );
+    }
+    assert!((long.omega_d - short.omega_d).abs() < 1e-4 * omega_d);
+    // The noise estimate is right to 10 %.
+    assert!(
+        ((long.noise - NOISE) / NOISE).abs() < 0.1,
+        "noise {}",
+        long.noise
+    );
+}
+
+#[test]
+fn gravity_stiffens_the_hanging_rig() {
+    // Linearized, the rig obeys I_p θ̈ + b θ̇ + (k + m g L_cm) θ = 0: at 0.5° the simulated
+    // frequency must match ω_n = √((k + m g L_cm)/I_p) (not k − m g L_cm).
+    let mut model = rig_model();
+    set(&mut model, "eta", 0.0);
+    let idx = |n: &str| model.param_index(n).unwrap();
+    let p = |n: &str| model.param(idx(n));
+    let k = bending_stiffness(p("E"), p("w"), p("h"), p("l"));
+    let omega = ((k + p("m") * p("g") * p("L_cm")) / p("I_p")).sqrt();
+    let options = SimOptions {
+        t_end: 20.0 * TAU / omega,
+        output_interval: TAU / omega / 200.0,
+        method: Method::Dopri5 {
+            rtol: 1e-11,
+            atol: 1e-14,
+            h_max: f64::INFINITY,
+        },
+        ..SimOptions::default()
+    };
+    let signals = mech_runtime::default_signals(&model);
+    let run = mech_runtime::simulate(
+        &model,
+        &[0.5f64.to_radians()],
+        &[0.0],
+        &signals,
+        &options,
+        &mut |_| {},
+    )
+    .unwrap();
+    let angle: Vec<f64> = run.q.iter().map(|q| q[0]).collect();
+    let mut up = Vec::new();
+    for i in 1..angle.len() {
+        if angle[i - 1] < 0.0 && angle[i] >= 0.0 {
+            let f = -angle[i - 1] / (angle[i] - angle[i - 1]);
+            up.push(run.times[i - 1] + f * (run.times[i] - run.times[i - 1]));
+        }
+    }
+    let period = (up[up.len() - 1] - up[0]) / (up.len() - 1) as f64;
+    assert!(((TAU / period - omega) / omega).abs() < 1e-4);
+}
+
+fn damped_sine(n: usize, sigma: f64) -> (Vec<f64>, Vec<f64>) {
+    let times: Vec<f64> = (0..n).map(|i| i as f64 * 1e-3).collect();
+    let angles = times
+        .iter()
+        .map(|t| 0.1 * (-sigma * t).exp() * (TAU * 10.0 * t).cos())
+        .collect();
+    (times, angles)
+}
+
+#[test]
+fn bad_traces_get_clear_errors() {
+    let options = TraceOptions::default();
+    let (t, a) = damped_sine(10, 1.0);
+    let e = analyze_trace(&t, &a, &options).unwrap_err();
+    assert!(matches!(e, TraceError::TooShort { samples: 10, .. }), "{e}");
+    assert!(e.to_string().contains("too short"));
+
+    let (mut t, a) = damped_sine(2000, 1.0);
+    t[100] = t[98];
+    let e = analyze_trace(&t, &a, &options).unwrap_err();
+    assert_eq!(e, TraceError::TimeNotIncreasing { index: 100 });
+    assert!(e.to_string().contains("data row 101"), "{e}");
+
+    let (t, mut a) = damped_sine(2000, 1.0);
+    a[500] = f64::NAN;
+    let e = analyze_trace(&t, &a, &options).unwrap_err();
+    assert_eq!(
+        e,
+        TraceError::NonFinite {
+            index: 500,
+            what: "angle"
+        }
+    );
+    assert!(e.to_string().contains("not a finite number"));
+
+    let (t, a) = damped_sine(2000, 0.0);
+    let e = analyze_trace(&t, &a, &options).unwrap_err();
+    assert!(matches!(e, TraceError::NoDecay { .. }), "{e}");
+    assert!(e.to_string().contains("does not decay"));
+
+    // Growing oscillation.
+    let (t, a) = damped_sine(2000, -1.0);
+    assert!(matches!(
+        analyze_trace(&t, &a, &options),
+        Err(TraceError::NoDecay { .. })
+    ));
+
+    // Only one and a half cycles.
+    let (t, a) = damped_sine(150, 1.0);
+    let e = analyze_trace(&t, &a, &options).unwrap_err();
+    assert!(matches!(e, TraceError::TooFewCrossings { .. }), "{e}");
+
+    // Noise only.
+    let mut rng = Rng(3);
+    let t: Vec<f64> = (0..2000).map(|i| i as f64 * 1e-3).collect();
+    let a: Vec<f64> = t.iter().map(|_| 1e-3 * rng.gaussian()).collect();
+    assert!(analyze_trace(&t, &a, &options).is_err());
+
+    let e = analyze_trace(&t, &a[..1999], &options).unwrap_err();
+    assert!(matches!(e, TraceError::LengthMismatch { .. }));
+}
+
+#[test]
+fn clean_damped_sine_is_analysed_exactly() {
+    // θ = A e^{−σt} cos(ω_d t): zero crossings are exactly π/ω_d apart.
+    let (t, a) = damped_sine(3000, 1.5);
+    let r = analyze_trace(&t, &a, &TraceOptions::default()).unwrap();
+    assert!(
+        (r.omega_d - TAU * 10.0).abs() < 1e-6 * TAU * 10.0,
+        "{}",
+        r.omega_d
+    );
+    assert!((r.sigma - 1.5).abs() < 1e-4, "{}", r.sigma);
+    assert!((r.omega_n - (1.5f64.powi(2) + (TAU * 10.0).powi(2)).sqrt()).abs() < 1e-4);
+}
+
+#[test]
+fn flexure_formulas() {
+    let kapton = Material::by_name("Kapton").unwrap();
+    assert_eq!(kapton, Material::KAPTON_HN);
+    assert_eq!(kapton.youngs_modulus, 2.56e9);
+    assert_eq!(
+        Material::by_name("kapton-datasheet")
+            .unwrap()
+            .youngs_modulus,
+        2.5e9
+    );
+    let f = Flexure::uncastellated(&kapton, 2e-3, 25e-6, 500e-6);
+    let k = 2.56e9 * 2e-3 * (25e-6_f64).powi(3) / (12.0 * 500e-6);
+    assert!((f.stiffness() - k).abs() < 1e-15 * k.abs().max(1.0));
+    assert!((f.damping(40.0) - k * 0.05 / 40.0).abs() < 1e-18);
+    let c = f.complex_stiffness();
+    assert_eq!((c.re, c.im), (f.stiffness(), 0.05 * f.stiffness()));
+    assert!((twist_ratio(0.34) - 2.0 / 1.34).abs() < 1e-15);
+    assert!((f.twist_stiffness() / f.stiffness() - 1.4925).abs() < 1e-4);
+    // Overridable: a stiffer film.
+    let stiff = Material {
+        youngs_modulus: 3e9,
+        ..Material::KAPTON_HN
+    };
+    assert!(Flexure::uncastellated(&stiff, 2e-3, 25e-6, 500e-6).stiffness() > f.stiffness());
+    // Castellated: l − l_c ≤ l_eff ≤ l.
+    assert!(Flexure::castellated(&kapton, 1e-3, 25e-6, 120e-6, 100e-6, 66e-6, 0.08).is_ok());
+    let e = Flexure::castellated(&kapton, 1e-3, 25e-6, 120e-6, 100e-6, 130e-6, 0.08).unwrap_err();
+    assert!(e.contains("outside"), "{e}");
+    assert!(Flexure::uncastellated(&kapton, -1e-3, 25e-6, 1e-4)
+        .validate()
+        .is_err());
+}
+
+#[test]
+fn table_iii_beside_eq_2() {
+    // Eq. 2 with l_eff = 66 µm, E = 2.56 GPa, t = 25 µm: 50.505 µN·m/rad per mm of width.
+    let mut worst = 0.0_f64;
+    for row in SEED_TABLE_III {
+        let f = Flexure::hamr_castellated(row.width);
+        let k = f.stiffness();
+        assert!((k / row.width - 2.56e9 * 25e-6_f64.powi(3) / (12.0 * 66e-6)).abs() < 1e-9);
+        assert!((f.damping_times_omega() - 0.08 * k).abs() < 1e-18);
+        worst = worst.max(((row.stiffness - k) / k).abs());
+    }
+    // The table scatters around Eq. 2: L2 lists 31.9 where Eq. 2 gives 40.4, 21 % below it
+    // (Eq. 2 is 27 % above the listed value). Reproduced as published, nothing tuned.
+    assert!(worst > 0.2 && worst < 0.28, "worst {worst}");
+    let text = mech::flexure_fit::cli::seed_table_iii();
+    assert!(text.contains("L2") && text.contains("40.4"), "{text}");
+}
+
+#[test]
+fn specimen_files_are_read_and_checked() {
+    use mech::flexure_fit::rig::parse_specimen;
+    let path = std::path::Path::new("/data/u01.toml");
+    let text = r#"
+        name = "U01"
+        traces = ["u01_a.csv"]
+        angle_unit = "deg"
+        [flexure]
+        width = "2 mm"
+        thickness = "25 um"
+        length = 5e-4
+        [pendulum]
+        mass = "0.2 g"
+        inertia = "2.4e-9 kg*m^2"
+        com_distance = "3 mm"
+    "#;
+    let s = parse_specimen(path, text).unwrap();
+    assert_eq!(s.name, "U01");
+    assert_eq!(s.traces, vec![PathBuf::from("/data/u01_a.csv")]);
+    assert!((s.flexure.width - 2e-3).abs() < 1e-15 && s.flexure.length == 5e-4);
+    assert!((s.angle_scale - PI / 180.0).abs() < 1e-15);
+    assert_eq!(s.pendulum.gravity, 9.81);
+
+    let bad_unit = text.replace("\"3 mm\"", "\"3 g\"");
+    let e = parse_specimen(path, &bad_unit).unwrap_err();
+    assert!(
+        e.contains("pendulum.com_distance") && e.contains("u01.toml"),
+        "{e}"
+    );
+    let inertia_about_com = text.replace("2.4e-9", "1e-9");
+    let e = parse_specimen(path, &inertia_about_com).unwrap_err();
+    assert!(e.contains("about the pivot"), "{e}");
+    let typo = text.replace("com_distance", "com_distanse");
+    assert!(parse_specimen(path, &typo).is_err());
+}
+
+#[test]
+fn example_data_fit_end_to_end() {
+    // The small example set under examples/flexure_data/ goes through the whole pipeline:
+    // TOML + CSV → tables, CSV files and plots.
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("examples/flexure_data");
+    let files = mech::flexure_fit::rig::specimen_files(std::slice::from_ref(&dir)).unwrap();
+    assert!(files.len() >= 3);
+    let specimens = files
+        .iter()
+        .map(|f| mech::flexure_fit::rig::read_specimen(f).unwrap())
+        .collect();
+    let report = mech::flexure_fit::fit_specimens(specimens, &FitOptions::default()).unwrap();
+    let fit = report.uncastellated.as_ref().unwrap();
+    assert!(
+        ((fit.youngs_modulus - E_TRUE) / E_TRUE).abs() < 0.01,
+        "{}",
+        fit.youngs_modulus
+    );
+    assert!(
+        ((fit.loss_factor - ETA_TRUE) / ETA_TRUE).abs() < 0.05,
+        "{}",
+        fit.loss_factor
+    );
+    let out = std::env::temp_dir().join(format!("mech_flexure_fit_{}", std::process::id()));
+    let written = mech::flexure_fit::report::write_csvs(&report, &out).unwrap();
+    let plots = mech::flexure_fit::report::write_plots(&report, &out, "svg").unwrap();
+    for f in written.iter().chain(&plots) {
+        assert!(std::fs::metadata(f).unwrap().len() > 100, "{}", f.display());
+    }
+    let text = mech::flexure_fit::report::text_report(&report);
+    assert!(text.contains("Eq. 6") && text.contains("R²"), "{text}");
+    let _ = std::fs::remove_dir_all(&out);
+}
