@@ -2,32 +2,14 @@
 
 mod common;
 
-use mech::tape_model::TapeModel;
 use mech_runtime::{linearize, solve_statics, Fixture, Method, Model, SimOptions, StaticsOptions};
 use nalgebra::{Complex, Matrix2, Vector2};
 
-/// Two masses on a rail: the wall–m1 spring/damper (k1, c1) and the m1–m2 one (k2, c2);
-/// a force on m2; output: the position of m2.
-const TWO_MASS: &str = "
-model two_mass;
-param m1 = 2 kg;
-param m2 = 0.5 kg;
-param k1 = 300 N/m;
-param k2 = 120 N/m;
-param c1 = 1.5 N*s/m;
-param c2 = 0.4 N*s/m;
-input push = 0 N;
-body first { mass = m1; }
-body second { mass = m2; }
-joint x1 = slider(newtonian, first) { axis = x; stiffness = k1; damping = c1; }
-joint x21 = slider(first, second) { axis = x; stiffness = k2; damping = c2; }
-force drive at second = [push, 0, 0];
-output x2 = position(second) in newtonian;
-";
-
+/// `models/two_mass_chain.mech`: the wall–m1 spring/damper (k1, c1) and the m1–m2 one (k2,
+/// c2); a force on m2; output: the position of m2.
 #[test]
 fn two_mass_chain_frequency_response_matches_closed_form() {
-    let model = TapeModel::new(&common::compile_text("two_mass", TWO_MASS));
+    let model = common::tape("two_mass_chain");
     let (m1, m2, k1, k2, c1, c2) = (2.0, 0.5, 300.0, 120.0, 1.5, 0.4);
     let linear = linearize(&model, 0.0, &[0.0, 0.0], &[0.0], &[0, 1]).unwrap();
     let output = model.output_index("x2.x").unwrap();
