@@ -208,15 +208,19 @@ def main():
       'repetitions folded):')
     w('')
     w('```bash')
-    seen = set()
+    folded = {}  # command with N replaced -> (first command, [N, ...])
     for c in commands:
-        key = c
-        for n in ['1', '2', '4', '8', '12', '16', '32']:
-            key = key.replace(f' {n} ', ' N ')
-        if key in seen:
-            continue
-        seen.add(key)
-        w(c)
+        key = re.sub(r'(chain\.py|_native) (\d+)', r'\1 N', c)
+        match = re.search(r'(?:chain\.py|_native) (\d+)', c)
+        first, ns = folded.setdefault(key, (c, []))
+        if match:
+            ns.append(int(match.group(1)))
+    for first, ns in folded.values():
+        if len(ns) > 1:
+            counts = {n: ns.count(n) for n in dict.fromkeys(ns)}
+            w(f'{first}   # N = ' + ', '.join(f'{n}' + (f' (x{k})' if k > 1 else '') for n, k in counts.items()))
+        else:
+            w(first)
     w('```')
     w('')
     w('## Machine')
@@ -503,6 +507,10 @@ def analyse(mech, sympy_ops, sympy_derive, pin, pin_cpp, mech_eval):
             sd = sympy_derive(n)
             values[f'sympy_s_{n}'] = fmt(sd)
             values[f'speedup_{n}'] = fmt(ratio(sd, r['derive_s']['median']))
+            # The idle-machine SymPy time quoted in ../shared/peers/RESULTS.md (13.4 s at N = 8),
+            # for a load-independent second ratio.
+            if n == 8:
+                values['speedup_ref_8'] = fmt(ratio(13.4, r['derive_s']['median']))
             values[f'udot_ratio_{n}'] = fmt(ratio(e['udot_ns']['median'], chol * 1e3 if chol else None))
         with open(path) as f:
             text = f.read()

@@ -12,7 +12,7 @@ use std::fmt;
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::{Model, RuntimeError};
+use crate::{dense, Model, RuntimeError};
 
 /// Relative threshold on singular values for rank decisions.
 pub const RANK_TOLERANCE: f64 = 1e-9;
@@ -227,7 +227,9 @@ pub fn assemble_speeds<M: Model + ?Sized>(
     }
 }
 
-/// Workspace for constrained dynamics and projection.
+/// Workspace for constrained dynamics and projection. [`accelerations`](Self::accelerations)
+/// allocates nothing: `M` by Cholesky, `J M⁻¹ Jᵀ` by a diagonally pivoted Cholesky that
+/// drops redundant rows (`u̇` is unique even where `λ` is not).
 #[derive(Clone, Debug)]
 pub struct ConstrainedSolver {
     nq: usize,
@@ -237,6 +239,14 @@ pub struct ConstrainedSolver {
     jacobian: DMatrix<f64>,
     bias: DVector<f64>,
     phi: DVector<f64>,
+    /// `M⁻¹ Jᵀ`, `nq × nc`.
+    m_inv_jt: Vec<f64>,
+    /// `J M⁻¹ Jᵀ` and then its pivoted factor, `nc × nc`.
+    coupling: Vec<f64>,
+    mismatch: Vec<f64>,
+    multipliers: Vec<f64>,
+    order: Vec<usize>,
+    work: Vec<f64>,
 }
 
 impl ConstrainedSolver {
@@ -249,20 +259,23 @@ impl ConstrainedSolver {
             jacobian: DMatrix::zeros(nc, nq),
             bias: DVector::zeros(nc),
             phi: DVector::zeros(nc),
+            m_inv_jt: vec![0.0; nq * nc],
+            coupling: vec![0.0; nc * nc],
+            mismatch: vec![0.0; nc],
+            multipliers: vec![0.0; nc],
+            order: vec![0; nc],
+            work: vec![0.0; nc],
         }
     }
 
-    /// `X = M⁻¹ Y` by Cholesky, or LU if `M` is not positive definite; `None` if singular.
-    fn mass_solve(&self, y: &DMatrix<f64>) -> Option<DMatrix<f64>> {
-        if let Some(cholesky) = self.mass.clone().cholesky() {
-            return Some(cholesky.solve(y));
-        }
-        self.mass.clone().lu().solve(y)
+    /// Multipliers `λ` of the last [`accelerations`](Self::accelerations) call (zero on rows
+    /// found redundant).
+    pub fn multipliers(&self) -> &[f64] {
+        &self.multipliers
     }
 
-    /// `u̇` and the multipliers `λ` of `M u̇ = F + Jᵀλ`, `J u̇ = −J̇u`:
-    /// `λ = (J M⁻¹ Jᵀ)⁺ (−J̇u − J M⁻¹F)` (rank-revealing, so redundant rows get the
-    /// minimum-norm multipliers) and `u̇ = M⁻¹(F + Jᵀλ)`.
+    /// `u̇` of `M u̇ = F + Jᵀλ`, `J u̇ = −J̇u`: with `a₀ = M⁻¹F` and `Y = M⁻¹Jᵀ`,
+    /// `(J Y) λ = −J̇u − J a₀` (pivoted Cholesky, rank-revealing) and `u̇ = a₀ + Y λ`.
     pub fn accelerations<M: Model + ?Sized>(
         &mut self,
         model: &M,
@@ -271,47 +284,110 @@ impl ConstrainedSolver {
         u: &[f64],
         inputs: &[f64],
         udot: &mut [f64],
-    ) -> Result<DVector<f64>, RuntimeError> {
+    ) -> Result<(), RuntimeError> {
+        let (n, nc) = (self.nq, self.nc);
         model.mass_matrix(t, q, inputs, self.mass.as_mut_slice());
         model.forcing(t, q, u, inputs, self.force.as_mut_slice());
         model.constraint_jacobian(t, q, self.jacobian.as_mut_slice());
         model.constraint_bias(t, q, u, self.bias.as_mut_slice());
         let finite = |s: &[f64]| s.iter().all(|v| v.is_finite());
-        if ![
+        let inputs_finite = [
             self.mass.as_slice(),
             self.force.as_slice(),
             self.jacobian.as_slice(),
             self.bias.as_slice(),
         ]
         .iter()
-        .all(|s| finite(s))
-        {
+        .all(|s| finite(s));
+        if !inputs_finite {
             udot.fill(f64::NAN);
             return Err(RuntimeError::NonFiniteState { t });
         }
-        let mut rhs = DMatrix::zeros(self.nq, 1 + self.nc);
-        rhs.column_mut(0).copy_from(&self.force);
-        rhs.columns_mut(1, self.nc)
-            .copy_from(&self.jacobian.transpose());
-        let solved = self
-            .mass_solve(&rhs)
-            .ok_or(RuntimeError::SingularMassMatrix { t })?;
-        let free = solved.column(0).into_owned();
-        let m_inv_jt = solved.columns(1, self.nc).into_owned();
-        let coupling = &self.jacobian * &m_inv_jt;
-        let mismatch = -&self.bias - &self.jacobian * &free;
-        let lambda = solve_least_squares(&coupling, &mismatch);
-        let result = free + m_inv_jt * &lambda;
-        if !finite(result.as_slice()) {
+        let mass = self.mass.as_mut_slice();
+        if !dense::cholesky(mass, n) {
+            return Err(RuntimeError::SingularMassMatrix { t });
+        }
+        // a₀ = M⁻¹ F, into udot.
+        udot.copy_from_slice(self.force.as_slice());
+        dense::cholesky_solve(mass, n, udot);
+        // Y = M⁻¹ Jᵀ, column r = M⁻¹ (row r of J).
+        let jacobian = self.jacobian.as_slice();
+        for r in 0..nc {
+            let column = &mut self.m_inv_jt[r * n..(r + 1) * n];
+            for (c, value) in column.iter_mut().enumerate() {
+                *value = jacobian[r + nc * c];
+            }
+            dense::cholesky_solve(mass, n, column);
+        }
+        // J Y (symmetric; the lower triangle is what the factorization reads) and the
+        // right-hand side −J̇u − J a₀.
+        for r in 0..nc {
+            for s in 0..=r {
+                let y = &self.m_inv_jt[s * n..(s + 1) * n];
+                self.coupling[r + nc * s] = (0..n).map(|c| jacobian[r + nc * c] * y[c]).sum();
+            }
+            let j_a0: f64 = (0..n).map(|c| jacobian[r + nc * c] * udot[c]).sum();
+            self.mismatch[r] = -self.bias[r] - j_a0;
+        }
+        // J M⁻¹ Jᵀ squares J's singular values, and round-off leaves ~1e-16 relative on its
+        // null directions, so pivots below 1e-12 of the largest count as redundant.
+        let rank = dense::pivoted_cholesky(&mut self.coupling, nc, 1e-12, &mut self.order);
+        dense::pivoted_solve(
+            &self.coupling,
+            nc,
+            rank,
+            &self.order,
+            &self.mismatch,
+            &mut self.multipliers,
+            &mut self.work,
+        );
+        for r in 0..nc {
+            let lambda = self.multipliers[r];
+            for (value, y) in udot.iter_mut().zip(&self.m_inv_jt[r * n..(r + 1) * n]) {
+                *value += y * lambda;
+            }
+        }
+        if !finite(udot) {
             udot.fill(f64::NAN);
             return Err(RuntimeError::NonFiniteState { t });
         }
-        udot.copy_from_slice(result.as_slice());
-        Ok(lambda)
+        Ok(())
     }
 
-    /// Moves `q` back onto `φ(q) = 0` (minimum-norm Gauss–Newton) and `u` onto `J u = 0`
-    /// (the kinetic-energy-closest correction `Δu = −M⁻¹Jᵀ(J M⁻¹ Jᵀ)⁺ J u`).
+    /// Solves `(J W Jᵀ) x = rhs` (pivoted Cholesky) for `W = I` (`weighted` false) or
+    /// `W = M⁻¹` (with `m_inv_jt` holding `M⁻¹Jᵀ`), leaving `x` in `multipliers`.
+    fn solve_coupled(&mut self, weighted: bool, rhs: &[f64]) {
+        let (n, nc) = (self.nq, self.nc);
+        let jacobian = self.jacobian.as_slice();
+        for r in 0..nc {
+            for s in 0..=r {
+                self.coupling[r + nc * s] = (0..n)
+                    .map(|c| {
+                        jacobian[r + nc * c]
+                            * if weighted {
+                                self.m_inv_jt[s * n + c]
+                            } else {
+                                jacobian[s + nc * c]
+                            }
+                    })
+                    .sum();
+            }
+        }
+        let rank = dense::pivoted_cholesky(&mut self.coupling, nc, 1e-12, &mut self.order);
+        dense::pivoted_solve(
+            &self.coupling,
+            nc,
+            rank,
+            &self.order,
+            rhs,
+            &mut self.multipliers,
+            &mut self.work,
+        );
+    }
+
+    /// Moves `q` back onto `φ(q) = 0` (minimum-norm Gauss–Newton, `Δq = −Jᵀ(J Jᵀ)⁺φ`) and
+    /// `u` onto `J u = 0` (the kinetic-energy-closest correction `Δu = −M⁻¹Jᵀ(J M⁻¹ Jᵀ)⁺ J u`).
+    /// Allocates nothing.
     pub fn project<M: Model + ?Sized>(
         &mut self,
         model: &M,
@@ -321,31 +397,52 @@ impl ConstrainedSolver {
         inputs: &[f64],
         tolerance: f64,
     ) -> Result<(), RuntimeError> {
+        let (n, nc) = (self.nq, self.nc);
         for _ in 0..10 {
             model.constraints(t, q, self.phi.as_mut_slice());
             if self.phi.amax() <= tolerance {
                 break;
             }
             model.constraint_jacobian(t, q, self.jacobian.as_mut_slice());
-            let step = solve_least_squares(&self.jacobian, &(-&self.phi));
-            for (value, delta) in q.iter_mut().zip(step.iter()) {
-                *value += delta;
+            self.mismatch.copy_from_slice(self.phi.as_slice());
+            let rhs = std::mem::take(&mut self.mismatch);
+            self.solve_coupled(false, &rhs);
+            self.mismatch = rhs;
+            let jacobian = self.jacobian.as_slice();
+            for (c, value) in q.iter_mut().enumerate() {
+                *value -= (0..nc)
+                    .map(|r| jacobian[r + nc * c] * self.multipliers[r])
+                    .sum::<f64>();
             }
         }
         model.constraint_jacobian(t, q, self.jacobian.as_mut_slice());
-        model.mass_matrix(t, q, inputs, self.mass.as_mut_slice());
-        let velocity_error = &self.jacobian * DVector::from_column_slice(u);
-        if velocity_error.amax() == 0.0 {
+        let jacobian = self.jacobian.as_slice();
+        for r in 0..nc {
+            self.mismatch[r] = (0..n).map(|c| jacobian[r + nc * c] * u[c]).sum();
+        }
+        if self.mismatch.iter().all(|&v| v == 0.0) {
             return Ok(());
         }
-        let m_inv_jt = self
-            .mass_solve(&self.jacobian.transpose())
-            .ok_or(RuntimeError::SingularMassMatrix { t })?;
-        let coupling = &self.jacobian * &m_inv_jt;
-        let multipliers = solve_least_squares(&coupling, &velocity_error);
-        let correction = m_inv_jt * multipliers;
-        for (value, delta) in u.iter_mut().zip(correction.iter()) {
-            *value -= delta;
+        model.mass_matrix(t, q, inputs, self.mass.as_mut_slice());
+        let mass = self.mass.as_mut_slice();
+        if !dense::cholesky(mass, n) {
+            return Err(RuntimeError::SingularMassMatrix { t });
+        }
+        for r in 0..nc {
+            let column = &mut self.m_inv_jt[r * n..(r + 1) * n];
+            for (c, value) in column.iter_mut().enumerate() {
+                *value = jacobian[r + nc * c];
+            }
+            dense::cholesky_solve(mass, n, column);
+        }
+        let rhs = std::mem::take(&mut self.mismatch);
+        self.solve_coupled(true, &rhs);
+        self.mismatch = rhs;
+        for r in 0..nc {
+            let lambda = self.multipliers[r];
+            for (value, y) in u.iter_mut().zip(&self.m_inv_jt[r * n..(r + 1) * n]) {
+                *value -= y * lambda;
+            }
         }
         Ok(())
     }

@@ -345,9 +345,7 @@ impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
         check_len("inputs", self.inputs.len(), inputs.len())?;
         check_len("udot", self.nq, udot.len())?;
         if let Some(constrained) = &mut self.constrained {
-            return constrained
-                .accelerations(self.model, t, q, u, inputs, udot)
-                .map(|_| ());
+            return constrained.accelerations(self.model, t, q, u, inputs, udot);
         }
         match self.solver.solve(self.model, t, q, u, inputs, udot) {
             Solve::Ok => Ok(()),

@@ -2,7 +2,9 @@
 """Independent SymPy reference for mech: derives each model below with
 sympy.physics.mechanics.KanesMethod and writes M(q), forcing F(q, u) (with
 M u' = F, q' = u), kinetic and potential energy at fixed pseudo-random states
-to tests/peers/fixture.json.  Model definitions and conventions: README.md.
+to tests/peers/fixture.json.  For the loop models (four_bar, slider_crank: open tree plus
+coincident closures) also phi(q), J = dphi/dq and J'u.  Model definitions and conventions:
+README.md.
 
 Regenerate (from the repository root):
     python3 -m venv .venv && .venv/bin/pip install sympy==1.14.0
@@ -44,6 +46,8 @@ class Model:
         self.q, self.u, self.coords = [], [], []
         self.bodies, self.loads, self.nc_loads = [], [], []
         self.joints, self.pe, self.params = {}, sm.S(0), {'g': float(G_ACC)}
+        self.up = self.N.z             # gravity acts along -up
+        self.loops, self.loop_names = [], []   # closure rows phi_k(q) (vectors . N axes)
 
     def point(self, name, base, offset):
         p = base.locatenew(name, offset)
@@ -76,8 +80,8 @@ class Model:
     def body(self, name, frame, origin, m, com, I):
         G = self.point(f'G_{name}', origin, self.vec(frame, com))
         self.bodies.append(me.RigidBody(name, G, frame, R(m), (me.inertia(frame, *map(R, I)), G)))
-        self.loads.append((G, -R(m) * R(G_ACC) * self.N.z))
-        self.pe += R(m) * R(G_ACC) * G.pos_from(self.O).dot(self.N.z)
+        self.loads.append((G, -R(m) * R(G_ACC) * self.up))
+        self.pe += R(m) * R(G_ACC) * G.pos_from(self.O).dot(self.up)
         self.params.update({f'{name}.mass': m, f'{name}.com': list(com), f'{name}.inertia': list(I)})
         return G
 
@@ -109,6 +113,13 @@ class Model:
     def external(self, key, target, vector, value):
         self.loads.append((target, vector)), self.nc_loads.append((target, vector))
         self.params[key] = value
+
+    def coincident(self, name, parent_pt, child_pt, components):
+        """Loop rows: the listed N components of r(child_pt) - r(parent_pt), in order."""
+        r = child_pt.pos_from(self.O) - parent_pt.pos_from(self.O)
+        for c in components:
+            self.loops.append((r, getattr(self.N, c)))
+            self.loop_names.append(f'{name}.{c}')
 
 
 # ---------------------------------------------------------------- models
@@ -181,9 +192,62 @@ def mixed_chain():
     return M
 
 
+# Loop models: transcriptions of models/four_bar.mech and models/slider_crank.mech (default
+# parameter values, SI).  The tree is derived open (all coordinates independent); the loop
+# closure only enters through phi(q), J and J'u.
+FOUR_BAR = dict(ground=3.0, crank_length=1.0, coupler_length=2.5, rocker_length=2.0, m=1.0)
+
+
+def rod_inertia(m, l, axes):
+    """Uniform slender rod along x about its centre: m l^2 / 12 on `axes` (exact)."""
+    i = R(m) * R(l) ** 2 / 12
+    return [i if k in axes else 0 for k in 'xyz'] + [0, 0, 0]
+
+
+def four_bar():
+    p = FOUR_BAR
+    M = Model('four_bar')
+    M.up = M.N.y
+    A = M.pin('crank_angle', M.N, M.O, M.N.z, 'A')
+    M.body('crank', A, M.O, p['m'], (p['crank_length'] / 2, 0, 0), rod_inertia(p['m'], p['crank_length'], 'z'))
+    Bo = M.point('Bo', M.O, R(p['crank_length']) * A.x)
+    B = M.pin('coupler_angle', A, Bo, A.z, 'B')
+    M.body('coupler', B, Bo, p['m'], (p['coupler_length'] / 2, 0, 0), rod_inertia(p['m'], p['coupler_length'], 'z'))
+    Co = M.point('Co', M.O, R(p['ground']) * M.N.x)
+    C = M.pin('rocker_angle', M.N, Co, M.N.z, 'C')
+    M.body('rocker', C, Co, p['m'], (p['rocker_length'] / 2, 0, 0), rod_inertia(p['m'], p['rocker_length'], 'z'))
+    M.coincident('tip', M.point('Bt', Bo, R(p['coupler_length']) * B.x),
+                 M.point('Ct', Co, R(p['rocker_length']) * C.x), 'xy')
+    M.params = {'g': float(G_ACC), 'gravity': [0, -float(G_ACC), 0], **p,
+                'inertia': 'slender rods: m l^2/12 about com z', 'loop tip': 'coincident x, y in N'}
+    return M
+
+
+SLIDER_CRANK = dict(r=0.005, rod=0.015, m_crank=0.002, m_rod=0.001, m_slider=0.003, c_slider=0.0)
+
+
+def slider_crank():
+    p = SLIDER_CRANK
+    M = Model('slider_crank')
+    M.up = M.N.y
+    A = M.pin('crank_angle', M.N, M.O, M.N.z, 'A')
+    M.body('crank', A, M.O, p['m_crank'], (p['r'] / 2, 0, 0), rod_inertia(p['m_crank'], p['r'], 'yz'))
+    Bo = M.point('Bo', M.O, R(p['r']) * A.x)
+    B = M.pin('rod_angle', A, Bo, A.z, 'B')
+    M.body('connecting_rod', B, Bo, p['m_rod'], (p['rod'] / 2, 0, 0), rod_inertia(p['m_rod'], p['rod'], 'yz'))
+    S, So = M.slider('slide', M.N, M.O, me.Vector(0), M.N.x, 'S')
+    M.body('slider', S, So, p['m_slider'], (0, 0, 0), (0, 0, 0, 0, 0, 0))
+    M.damper('slide', p['c_slider'])
+    M.coincident('wrist', M.point('Bt', Bo, R(p['rod']) * B.x), So, 'xy')
+    M.params = {'g': float(G_ACC), 'gravity': [0, -float(G_ACC), 0], **p,
+                'inertia': 'crank, rod: m l^2/12 about com y and z; slider: 0',
+                'loop wrist': 'coincident x, y in N'}
+    return M
+
+
 MODELS = [lambda: chain(1), lambda: chain(2), lambda: chain(4),
           lambda: pendulum_3d(2, 'double_pendulum_3d'), lambda: pendulum_3d(3, 'triple_pendulum_3d'),
-          cart_pendulum, mixed_chain]
+          cart_pendulum, mixed_chain, four_bar, slider_crank]
 
 
 # ---------------------------------------------------------------- evaluation
@@ -198,7 +262,18 @@ def derive(M):
     dE = [E.diff(s) for s in M.q + M.u]
     exprs = [kane.mass_matrix.xreplace(qd), kane.forcing.xreplace(qd), ke, M.pe, power, dE]
     args = M.q + M.u
-    for e in exprs[:5]:   # only q, u may remain (no q', no unsubstituted symbols)
+    if M.loops:
+        q, u = sm.Matrix(M.q), sm.Matrix(M.u)
+        phi = sm.Matrix([r.dot(e) for r, e in M.loops])
+        J = phi.jacobian(q)
+        Jdu = (J * u).jacobian(q) * u                      # J'u = sum_i d(J u)/dq_i u_i
+        # independent route for J'u: the second time derivative of the closure vector in N
+        # (SymPy vector kinematics), with q'' = 0 and q' = u
+        qdd = {qi.diff(t, 2): 0 for qi in M.q}
+        acc = sm.Matrix([r.dt(M.N).dt(M.N).dot(e) for r, e in M.loops]).xreplace(qdd).xreplace(qd)
+        vel = sm.Matrix([r.dt(M.N).dot(e) for r, e in M.loops]).xreplace(qd)   # = J u
+        exprs += [phi, J, Jdu, acc - Jdu, vel - J * u]
+    for e in exprs[:5] + exprs[6:9]:   # only q, u may remain (no q', no unsubstituted symbols)
         e = sm.sympify(e)
         assert e.free_symbols <= {t} and me.find_dynamicsymbols(e) <= set(args), e
     return sm.lambdify(args, exprs, modules='mpmath')
@@ -284,13 +359,23 @@ def main():
         t_derive = time.perf_counter() - t0
         n, out, worst = len(M.q), [], 0
         for q, u in states(M.name, n):
-            Ms, Fs, ke, pe, power, dE = f(*map(mpmath.mpf, q + u))
+            Ms, Fs, ke, pe, power, dE, *loop = f(*map(mpmath.mpf, q + u))
             Mm, F = mat(Ms), mat(Fs)
             worst = max(worst, check(M.name, Mm, F, ke, pe, power, dE, list(map(mpmath.mpf, u))))
             out.append({'q': q, 'u': u, 'mass_matrix': [[f64(Mm[i, j]) for j in range(n)] for i in range(n)],
                         'forcing': [f64(F[i]) for i in range(n)],
                         'kinetic_energy': f64(ke), 'potential_energy': f64(pe)})
+            if loop:
+                phi, J, Jdu, acc_err, vel_err = map(mat, loop)
+                nc = len(M.loops)
+                for e in (acc_err, vel_err):   # vector kinematics agree with d/dt of phi
+                    assert max(abs(x) for x in e) <= mpmath.mpf(10) ** (-DPS + 10), f'{M.name}: {e}'
+                out[-1].update({'constraints': [f64(phi[i]) for i in range(nc)],
+                                'constraint_jacobian': [[f64(J[i, j]) for j in range(n)] for i in range(nc)],
+                                'constraint_bias': [f64(Jdu[i]) for i in range(nc)]})
         models[M.name] = {'coordinates': M.coords, 'params': M.params, 'states': out}
+        if M.loops:
+            models[M.name]['constraint_names'] = M.loop_names
         print(f'{M.name:20s} n={n}  derivation {t_derive:6.2f} s  '
               f'(M symmetric+PD, |dE/dt - P_nc| <= {mpmath.nstr(worst, 2)})')
     print('cross-check:')
