@@ -157,7 +157,15 @@ impl Session {
             fixed.push(index);
         }
         if fixed.is_empty() {
+            // J has its generic rank only on the constraint manifold: close the loops first
+            // (minimum-norm), choose there, then hold the chosen coordinates at their q0.
+            let written = q.clone();
+            assemble(model, 0.0, &mut q, &[], &AssemblyOptions::default())
+                .map_err(|e| e.to_string())?;
             fixed = choose_independent(&jacobian(model, 0.0, &q));
+            for &i in &fixed {
+                q[i] = written[i];
+            }
         }
         let iterations = assemble(model, 0.0, &mut q, &fixed, &AssemblyOptions::default())
             .map_err(|e| e.to_string())?;

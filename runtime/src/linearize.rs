@@ -255,6 +255,9 @@ impl Linearization {
     /// Undamped normal modes `K v = ω² M v` (K symmetrized), lowest first, with modal
     /// damping ratios. `None` if `M` is not positive definite.
     pub fn modes(&self) -> Option<Vec<Mode>> {
+        if self.mass.is_empty() {
+            return Some(Vec::new());
+        }
         let cholesky = self.mass.clone().cholesky()?;
         let l = cholesky.l();
         let l_inv = l.clone().try_inverse()?;
