@@ -14,7 +14,8 @@ pub fn cholesky(a: &mut [f64], n: usize) -> bool {
         for k in 0..j {
             diagonal -= a[j + n * k] * a[j + n * k];
         }
-        if !(diagonal > scale * 1e-14) {
+        // NaN counts as not positive.
+        if diagonal.is_nan() || diagonal <= scale * 1e-14 {
             return false;
         }
         let pivot = diagonal.sqrt();
@@ -67,7 +68,7 @@ pub fn pivoted_cholesky(
         let (best, value) = (j..n)
             .map(|i| (i, a[i + n * i]))
             .fold((j, f64::NEG_INFINITY), |m, c| if c.1 > m.1 { c } else { m });
-        if !(value > threshold) || value <= 0.0 {
+        if value.is_nan() || value <= threshold || value <= 0.0 {
             return j;
         }
         if best != j {
