@@ -4,8 +4,8 @@
 //! Consumes: a [`Linearization`], or sampled input/output records. Produces: [`Response`]
 //! points (frequency, complex gain) and [`Resonance`]s (peak frequency, gain, quality factor).
 
-use mech_runtime::nalgebra::{Complex, DMatrix};
-use mech_runtime::Linearization;
+use mech_runtime::nalgebra::Complex;
+use mech_runtime::{FlexureDamping, Linearization};
 
 /// One point of a frequency response.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -33,19 +33,19 @@ pub fn log_space(from: f64, to: f64, count: usize) -> Vec<f64> {
 }
 
 /// The linear model's response from input `input` to output `output` at `frequencies` (Hz),
-/// with an optional hysteretic stiffness `K_h` (complex stiffness `K + i K_h`).
+/// with the flexures' losses as chosen by `damping`.
 pub fn linear_response(
     linear: &Linearization,
     input: usize,
     output: usize,
     frequencies: &[f64],
-    hysteretic: Option<&DMatrix<f64>>,
+    damping: FlexureDamping,
 ) -> Option<Vec<Point>> {
     frequencies
         .iter()
         .map(|&f| {
             let gain =
-                linear.frequency_response(input, output, std::f64::consts::TAU * f, hysteretic)?;
+                linear.frequency_response(input, output, std::f64::consts::TAU * f, damping)?;
             Some(Point {
                 frequency_hz: f,
                 gain,

@@ -74,6 +74,10 @@ pub struct BodeArgs {
     /// Number of log-spaced frequencies.
     #[arg(long, default_value_t = 400)]
     pub points: usize,
+    /// How flexure losses enter: `hysteretic` (complex stiffness k(1 + iη), exact at every
+    /// frequency) or `viscous` (the time-domain dampers b = kη/ω_ref, as a simulation sees them).
+    #[arg(long, value_enum, default_value_t = Damping::Hysteretic)]
+    pub damping: Damping,
     /// Also simulate a linear chirp from `from` to `to` and overlay its swept-sine estimate.
     #[arg(long)]
     pub chirp: bool,
@@ -86,6 +90,13 @@ pub struct BodeArgs {
     /// Bode plot (`.svg` or `.png`): magnitude and phase panels.
     #[arg(long)]
     pub plot: Option<PathBuf>,
+}
+
+/// `--damping` of `mech bode`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Damping {
+    Hysteretic,
+    Viscous,
 }
 
 /// Opens the model with constant inputs, and returns it with the input values.
@@ -379,10 +390,21 @@ pub fn bode(args: &BodeArgs) -> Result<(), String> {
     }
     let linear = linear_model(&session, &args.common, &inputs)?;
     let frequencies = frequency::log_space(from, to, args.points);
-    let response = frequency::linear_response(&linear, input, output, &frequencies, None)
+    let damping = match args.damping {
+        Damping::Hysteretic => mech_runtime::FlexureDamping::Hysteretic,
+        Damping::Viscous => mech_runtime::FlexureDamping::Viscous,
+    };
+    let response = frequency::linear_response(&linear, input, output, &frequencies, damping)
         .ok_or("the linear model is singular at some frequency")?;
+    let losses = if model.nflexures() == 0 {
+        "no flexures"
+    } else if args.damping == Damping::Hysteretic {
+        "flexure losses as complex stiffness k(1 + iη)"
+    } else {
+        "flexure losses as viscous dampers b = kη/ω_ref"
+    };
     let mut text = format!(
-        "frequency response of `{}` from `{}` to `{}`, {from} – {to} Hz\n",
+        "frequency response of `{}` from `{}` to `{}`, {from} – {to} Hz ({losses})\n",
         model.name(),
         args.drive,
         args.output

@@ -18,6 +18,7 @@ pub struct TapeModel {
     input_names: Vec<String>,
     output_names: Vec<String>,
     constraint_names: Vec<String>,
+    flexure_names: Vec<String>,
     param_names: Vec<String>,
     params: Vec<f64>,
     input_defaults: Vec<f64>,
@@ -41,6 +42,7 @@ impl TapeModel {
             input_names: model.inputs.iter().map(|(_, i)| i.name.clone()).collect(),
             output_names: compiled.equations.output_names.clone(),
             constraint_names: compiled.equations.constraints.names.clone(),
+            flexure_names: compiled.equations.flexures.names.clone(),
             param_names: model.params.iter().map(|(_, p)| p.name.clone()).collect(),
             params: model.params.iter().map(|(_, p)| p.value).collect(),
             input_defaults: model.inputs.iter().map(|(_, i)| i.default).collect(),
@@ -182,5 +184,21 @@ impl mech_runtime::Model for TapeModel {
             inputs: &[],
         };
         self.run(&self.tape.constraint_bias, &env, out);
+    }
+    fn nflexures(&self) -> usize {
+        self.tape.nflexures
+    }
+    fn flexure_name(&self, i: usize) -> &str {
+        name_at(&self.flexure_names, i)
+    }
+    fn flexures(&self, t: f64, q: &[f64], out: &mut [f64]) {
+        let env = Env {
+            t,
+            q,
+            u: &[],
+            params: &self.params,
+            inputs: &[],
+        };
+        self.run(&self.tape.flexures, &env, out);
     }
 }

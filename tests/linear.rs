@@ -2,7 +2,9 @@
 
 mod common;
 
-use mech_runtime::{linearize, solve_statics, Fixture, Method, Model, SimOptions, StaticsOptions};
+use mech_runtime::{
+    linearize, solve_statics, Fixture, FlexureDamping, Method, Model, SimOptions, StaticsOptions,
+};
 use nalgebra::{Complex, Matrix2, Vector2};
 
 /// `models/two_mass_chain.mech`: the wall–m1 spring/damper (k1, c1) and the m1–m2 one (k2,
@@ -28,7 +30,9 @@ fn two_mass_chain_frequency_response_matches_closed_form() {
                 Complex::new(1.0, 0.0),
             ))
             .unwrap();
-        let ours = linear.frequency_response(0, output, omega, None).unwrap();
+        let ours = linear
+            .frequency_response(0, output, omega, FlexureDamping::Viscous)
+            .unwrap();
         assert!(
             (ours - x[1]).norm() < 1e-7 * x[1].norm(),
             "ω = {omega}: {ours} vs {}",
@@ -167,4 +171,121 @@ fn fixture_reaction_carries_the_weight() {
             "angle {angle}: {force:?}"
         );
     }
+}
+
+/// A pendulum hanging from a flexure, driven by a torque: with the loss as complex stiffness
+/// the response is exactly `1 / (k(1 + iη) + m g L − I_p ω²)`; with the time-domain damper it
+/// is `1 / (k + m g L − I_p ω² + i ω k η/ω_ref)`.
+#[test]
+fn flexure_losses_as_complex_stiffness_or_viscous_damper() {
+    let source = "
+        param m = 2 g;
+        param arm = 20 mm;
+        input torque = 0 N*m;
+        gravity = [0, -9.81 m/s^2, 0];
+        body bob { mass = m; com = [0, -arm, 0]; inertia = [0 kg*m^2, 0 kg*m^2, 1e-8 kg*m^2]; }
+        joint hinge = pin(newtonian, bob) { axis = z; }
+        flexure hinge_flexure on hinge {
+            width = 2 mm; thickness = 25 um; length = 500 um;
+            loss_factor = 0.08; reference_frequency = 10 Hz;
+        }
+        torque drive on bob = [0, 0, torque];
+        output angle = hinge.q;
+    ";
+    let model = mech::tape_model::TapeModel::new(&common::compile_text("flexure_pendulum", source));
+    assert_eq!(
+        (model.nflexures(), model.flexure_name(0)),
+        (1, "hinge_flexure")
+    );
+    let (m, arm, g, inertia) = (2e-3, 20e-3, 9.81, 1e-8);
+    // Eq. 2 with the built-in Kapton modulus, 2.56 GPa.
+    let k = 2.56e9 * 2e-3 * 25e-6_f64.powi(3) / (12.0 * 500e-6);
+    let (eta, omega_ref) = (0.08, std::f64::consts::TAU * 10.0);
+    let pivot_inertia = inertia + m * arm * arm;
+    let linear = linearize(&model, 0.0, &[0.0], &[0.0], &[0]).unwrap();
+    let output = model.output_index("angle").unwrap();
+    for omega in [1.0, 30.0, 62.0, 70.0, 300.0] {
+        let static_stiffness = k + m * g * arm - pivot_inertia * omega * omega;
+        let hysteretic = Complex::new(1.0, 0.0) / Complex::new(static_stiffness, k * eta);
+        let viscous =
+            Complex::new(1.0, 0.0) / Complex::new(static_stiffness, omega * k * eta / omega_ref);
+        let ours = linear
+            .frequency_response(0, output, omega, FlexureDamping::Hysteretic)
+            .unwrap();
+        assert!(
+            (ours - hysteretic).norm() < 1e-7 * hysteretic.norm(),
+            "ω = {omega}: {ours} vs {hysteretic}"
+        );
+        let ours = linear
+            .frequency_response(0, output, omega, FlexureDamping::Viscous)
+            .unwrap();
+        assert!(
+            (ours - viscous).norm() < 1e-7 * viscous.norm(),
+            "ω = {omega}: {ours} vs {viscous}"
+        );
+    }
+}
+
+/// A piezo actuator along a slider: free, it deflects δ_f·V/V_rated; held by a fixture at
+/// zero, it pushes with F_b·V/V_rated (Doshi et al. §III: force source in parallel with
+/// k_a = F_b/δ_f).
+#[test]
+fn actuator_free_deflection_and_blocked_force() {
+    let source = "
+        input drive = 0 V;
+        body tip { mass = 1 mg; }
+        joint slide = slider(newtonian, tip) { axis = y; }
+        actuator lift on slide {
+            blocked_force = 320 mN; free_deflection = 300 um; rated_voltage = 225 V;
+            voltage = drive;
+        }
+        output tip = position(tip) in newtonian;
+    ";
+    let model = mech::tape_model::TapeModel::new(&common::compile_text("actuator", source));
+    let volts = 150.0;
+    let mut q = vec![0.0];
+    solve_statics(
+        &model,
+        0.0,
+        &mut q,
+        &[volts],
+        &[],
+        &StaticsOptions::default(),
+    )
+    .unwrap();
+    // Statics converges to 1e-10 of the initial force imbalance.
+    let free = 300e-6 * volts / 225.0;
+    assert!(
+        (q[0] - free).abs() < 1e-10 * free,
+        "free deflection {}",
+        q[0]
+    );
+    let outputs = [
+        model.output_index("tip.x").unwrap(),
+        model.output_index("tip.y").unwrap(),
+        model.output_index("tip.z").unwrap(),
+    ];
+    let hold = Fixture {
+        name: "wall".into(),
+        outputs,
+        target: [0.0; 3],
+        components: vec![1],
+    };
+    let mut q = vec![0.0];
+    let held = solve_statics(
+        &model,
+        0.0,
+        &mut q,
+        &[volts],
+        &[hold],
+        &StaticsOptions::default(),
+    )
+    .unwrap();
+    // The fixture holds the tip against the actuator's force.
+    let blocked = -held.fixture_forces[0][1];
+    let expected = 0.320 * volts / 225.0;
+    assert!(
+        (blocked - expected).abs() < 1e-10 * expected,
+        "blocked force {blocked}"
+    );
 }

@@ -26,7 +26,7 @@ pub use constraints::{
 };
 pub use error::RuntimeError;
 pub use integrate::{Dopri5, Dopri5Options, Ode, Rk4, Stats, Stepper};
-pub use linearize::{linearize, Linearization, Mode, StateSpace};
+pub use linearize::{linearize, FlexureDamping, Linearization, Mode, StateSpace};
 pub use model::Model;
 pub use nalgebra;
 pub use signal::{Signal, Table};

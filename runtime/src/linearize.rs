@@ -32,6 +32,23 @@ pub struct Linearization {
     pub output_position: DMatrix<f64>,
     pub output_velocity: DMatrix<f64>,
     pub output_input: DMatrix<f64>,
+    /// `G = ∂θ/∂z`: each flexure's bending angle per unit minimal coordinate (`nflexures × n`).
+    pub flexure_gradient: DMatrix<f64>,
+    /// Each flexure's stiffness `k`, time-domain damping `b` and loss factor `η` at the
+    /// operating point.
+    pub flexure_stiffness: Vec<f64>,
+    pub flexure_damping: Vec<f64>,
+    pub flexure_loss: Vec<f64>,
+}
+
+/// How flexure losses enter a frequency response.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FlexureDamping {
+    /// As the time-domain viscous dampers `b = kη/ω_ref` (already in `C`).
+    Viscous,
+    /// As the complex stiffness `k(1 + iη)`, exact at every frequency: `C − Gᵀ diag(b) G`
+    /// and `+ i Gᵀ diag(ηk) G`.
+    Hysteretic,
 }
 
 /// `ẋ = A x + B in`, `y = C x + D in`.
@@ -210,7 +227,30 @@ pub fn linearize<M: Model + ?Sized>(
         a_in.column_mut(k).copy_from_slice(&din[..n]);
         d.column_mut(k).copy_from_slice(&din[n..]);
     }
+    // Flexure angles along z: G = ∂θ/∂z by the same central differences.
+    let nf = model.nflexures();
+    let mut values = vec![0.0; 4 * nf];
+    model.flexures(t, q, &mut values);
+    let mut gradient = DMatrix::zeros(nf, n);
+    for k in 0..n {
+        let column = derivative(
+            |h| {
+                let mut z = z0.clone();
+                z[k] += h;
+                let (q, _) = reduced.state(&z, &zdot0)?;
+                let mut out = vec![0.0; 4 * nf];
+                model.flexures(t, &q, &mut out);
+                Ok(out[..nf].to_vec())
+            },
+            step_for(z0[k]),
+        )?;
+        gradient.column_mut(k).copy_from_slice(&column);
+    }
     Ok(Linearization {
+        flexure_gradient: gradient,
+        flexure_stiffness: values[nf..2 * nf].to_vec(),
+        flexure_damping: values[2 * nf..3 * nf].to_vec(),
+        flexure_loss: values[3 * nf..].to_vec(),
         independent: independent.to_vec(),
         q: q.to_vec(),
         inputs: inputs.to_vec(),
@@ -299,27 +339,48 @@ impl Linearization {
         Some(modes)
     }
 
+    /// `Gᵀ diag(w) G` over the flexures.
+    fn flexure_matrix(&self, weights: impl Fn(usize) -> f64) -> DMatrix<f64> {
+        let g = &self.flexure_gradient;
+        let mut weighted = g.clone();
+        for f in 0..g.nrows() {
+            weighted.row_mut(f).scale_mut(weights(f));
+        }
+        g.transpose() * weighted
+    }
+
+    /// The flexures' hysteretic stiffness `K_h = Gᵀ diag(η k) G`.
+    pub fn hysteretic_stiffness(&self) -> DMatrix<f64> {
+        self.flexure_matrix(|f| self.flexure_loss[f] * self.flexure_stiffness[f])
+    }
+
     /// `y/in` at angular frequency `omega` for one input and one output:
-    /// `(C_q + iω C_u)(K − ω²M + iωC + i K_h)⁻¹ B + D`, where `K_h` (optional) is a
-    /// hysteretic stiffness (`η k` of each lossy element), exact in the frequency domain.
+    /// `(C_q + iω C_u)(K − ω²M + iωC)⁻¹ B + D`, with the flexures' losses as chosen by
+    /// `damping` (viscous as in the time domain, or the exact complex stiffness).
     pub fn frequency_response(
         &self,
         input: usize,
         output: usize,
         omega: f64,
-        hysteretic: Option<&DMatrix<f64>>,
+        damping: FlexureDamping,
     ) -> Option<Complex<f64>> {
+        let (viscous, hysteretic) = match damping {
+            FlexureDamping::Viscous => (
+                self.damping.clone(),
+                DMatrix::zeros(self.mass.nrows(), self.mass.ncols()),
+            ),
+            FlexureDamping::Hysteretic => (
+                &self.damping - self.flexure_matrix(|f| self.flexure_damping[f]),
+                self.hysteretic_stiffness(),
+            ),
+        };
         let n = self.mass.nrows();
         let i = Complex::new(0.0, 1.0);
         let dynamic = DMatrix::from_fn(n, n, |r, c| {
-            let mut value = Complex::new(
+            Complex::new(
                 self.stiffness[(r, c)] - omega * omega * self.mass[(r, c)],
-                omega * self.damping[(r, c)],
-            );
-            if let Some(h) = hysteretic {
-                value += i * h[(r, c)];
-            }
-            value
+                omega * viscous[(r, c)] + hysteretic[(r, c)],
+            )
         });
         let b = DVector::from_fn(n, |r, _| Complex::new(self.input[(r, input)], 0.0));
         let x = dynamic.lu().solve(&b)?;

@@ -59,6 +59,19 @@ pub trait Model {
     /// `J̇(q, u) u`, so that `J u̇ + J̇u = 0` keeps `J u = 0`.
     fn constraint_bias(&self, _t: f64, _q: &[f64], _u: &[f64], _out: &mut [f64]) {}
 
+    /// Number of flexures (compliant hinges with a loss factor).
+    fn nflexures(&self) -> usize {
+        0
+    }
+    /// Name of flexure `i`.
+    fn flexure_name(&self, _i: usize) -> &str {
+        ""
+    }
+    /// `[θ…, k…, b…, η…]` (length `4·nflexures`): each flexure's bending angle, stiffness,
+    /// time-domain damping `kη/ω_ref` and loss factor `η`. Frequency-domain analyses replace
+    /// the damping `b` by the complex stiffness `k(1 + iη)`.
+    fn flexures(&self, _t: f64, _q: &[f64], _out: &mut [f64]) {}
+
     /// Index of the parameter called `name`.
     fn param_index(&self, name: &str) -> Option<usize> {
         (0..self.nparams()).find(|&i| self.param_name(i) == name)

@@ -148,6 +148,7 @@ enum Function {
     Constraints,
     ConstraintJacobian,
     ConstraintBias,
+    Flexures,
 }
 
 impl Function {
@@ -159,6 +160,7 @@ impl Function {
             Function::Constraints => "constraints",
             Function::ConstraintJacobian => "constraint_jacobian",
             Function::ConstraintBias => "constraint_bias",
+            Function::Flexures => "flexures",
         }
     }
 }
@@ -275,6 +277,7 @@ impl<'a> Emitter<'a> {
         let (forcing_parts, forcing_body) =
             self.function_body(Function::Forcing, &self.equations.forcing);
         let (constraint_inherent, constraint_trait) = self.constraint_functions();
+        let (flexure_inherent, flexure_trait) = self.flexure_functions();
         let (output_parts, output_body) =
             self.function_body(Function::Outputs, &self.equations.outputs);
 
@@ -372,6 +375,7 @@ impl<'a> Emitter<'a> {
                 #(#forcing_parts)*
                 #(#output_parts)*
                 #constraint_inherent
+                #flexure_inherent
             }
 
             #[allow(clippy::all, unused_variables)]
@@ -426,8 +430,50 @@ impl<'a> Emitter<'a> {
                     for (slot, value) in out.iter_mut().zip(y.iter()) { *slot = *value; }
                 }
                 #constraint_trait
+                #flexure_trait
             }
         }
+    }
+
+    /// For models with flexures: `NFLEXURES`, `FLEXURE_NAMES` and `flexures` (`[θ…, k…, b…,
+    /// η…]`), inherent and in the trait.
+    fn flexure_functions(&self) -> (TokenStream, TokenStream) {
+        let rows = &self.equations.flexures;
+        if rows.names.is_empty() {
+            return (TokenStream::new(), TokenStream::new());
+        }
+        let rt = &self.runtime;
+        let name = &self.struct_name;
+        let (nq, nu, ni, _, _) = self.sizes();
+        let count = usize_literal(rows.names.len());
+        let total = usize_literal(4 * rows.names.len());
+        let names = rows.names.clone();
+        let (parts, body) = self.function_body(Function::Flexures, &rows.all());
+        let inherent = quote! {
+            /// Number of flexures.
+            pub const NFLEXURES: usize = #count;
+            pub const FLEXURE_NAMES: [&'static str; #count] = [#(#names),*];
+
+            /// `[θ…, k…, b…, η…]`: each flexure's angle, stiffness, time-domain damping and
+            /// loss factor.
+            pub fn flexures(&self, t: f64, q: &#rt::__codegen::SVector<f64, #nq>) -> #rt::__codegen::SVector<f64, #total> {
+                let u = &#rt::__codegen::SVector::<f64, #nu>::zeros();
+                let inputs = &#rt::__codegen::SVector::<f64, #ni>::zeros();
+                #body
+            }
+
+            #(#parts)*
+        };
+        let in_trait = quote! {
+            fn nflexures(&self) -> usize { #count }
+            fn flexure_name(&self, i: usize) -> &str { Self::FLEXURE_NAMES.get(i).copied().unwrap_or("") }
+            fn flexures(&self, t: f64, q: &[f64], out: &mut [f64]) {
+                let q = #rt::__codegen::vector_from_slice::<#nq>(q);
+                let values = #name::flexures(self, t, &q);
+                for (slot, value) in out.iter_mut().zip(values.iter()) { *slot = *value; }
+            }
+        };
+        (inherent, in_trait)
     }
 
     /// For models with loop closures: `NC`, `CONSTRAINT_NAMES`, `constraints` (φ),

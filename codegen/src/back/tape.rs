@@ -217,6 +217,10 @@ pub struct Tape {
     pub constraint_jacobian: Program,
     /// `J̇(q, u) u`.
     pub constraint_bias: Program,
+    /// Number of flexures.
+    pub nflexures: usize,
+    /// `[θ…, k…, b…, η…]` of the flexures.
+    pub flexures: Program,
 }
 
 impl Tape {
@@ -231,6 +235,8 @@ impl Tape {
             constraints: Program::compile(&equations.pool, &equations.constraints.residual),
             constraint_jacobian: Program::compile(&equations.pool, &equations.constraints.jacobian),
             constraint_bias: Program::compile(&equations.pool, &equations.constraints.bias),
+            nflexures: equations.flexures.names.len(),
+            flexures: Program::compile(&equations.pool, &equations.flexures.all()),
         }
     }
 }

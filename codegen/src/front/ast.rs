@@ -41,6 +41,12 @@ pub enum Item {
     Joint(JointDecl),
     /// `loop NAME = KIND(PARENT, CHILD) { fields }`: same shape as a joint.
     Loop(JointDecl),
+    /// `material NAME { fields }` (no target).
+    Material(ElementDecl),
+    /// `flexure NAME on TARGET { fields }`.
+    Flexure(ElementDecl),
+    /// `actuator NAME on TARGET { fields }`.
+    Actuator(ElementDecl),
     Force(ForceDecl),
     Torque(TorqueDecl),
     Output(OutputDecl),
@@ -123,6 +129,17 @@ pub struct JointDecl {
     pub kind: Ident,
     pub parent: Ident,
     pub child: Ident,
+    pub fields: Vec<Field>,
+    pub span: Span,
+}
+
+/// A named block of fields, optionally attached to a joint or loop:
+/// `material NAME { ... }`, `flexure NAME on TARGET { ... }`, `actuator NAME on TARGET { ... }`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ElementDecl {
+    pub docs: Vec<String>,
+    pub name: Ident,
+    pub target: Option<Ident>,
     pub fields: Vec<Field>,
     pub span: Span,
 }

@@ -109,6 +109,9 @@ fn build_item(pair: Pair<Rule>) -> Result<ast::Item> {
             Rule::body_decl => body_decl(inner, docs),
             Rule::joint_decl => Ok(ast::Item::Joint(joint_decl(inner, docs)?)),
             Rule::loop_decl => Ok(ast::Item::Loop(joint_decl(inner, docs)?)),
+            Rule::material_decl => Ok(ast::Item::Material(element_decl(inner, docs, false)?)),
+            Rule::flexure_decl => Ok(ast::Item::Flexure(element_decl(inner, docs, true)?)),
+            Rule::actuator_decl => Ok(ast::Item::Actuator(element_decl(inner, docs, true)?)),
             Rule::force_decl => force_decl(inner, docs),
             Rule::torque_decl => torque_decl(inner, docs),
             Rule::output_decl => output_decl(inner, docs),
@@ -185,6 +188,9 @@ fn is_punctuation(rule: Rule) -> bool {
             | kw_body
             | kw_joint
             | kw_loop
+            | kw_material
+            | kw_flexure
+            | kw_actuator
             | kw_force
             | kw_torque
             | kw_output
@@ -293,6 +299,33 @@ fn field(pair: Pair<Rule>) -> Result<ast::Field> {
         name: parts.ident()?,
         value: parts.expr()?,
         span: parts.span,
+    })
+}
+
+/// `material NAME { .. }` or `flexure|actuator NAME on TARGET { .. }`.
+fn element_decl(pair: Pair<Rule>, docs: Vec<String>, has_target: bool) -> Result<ast::ElementDecl> {
+    let mut parts = Parts::of(pair);
+    let name = parts.ident()?;
+    let target = if has_target {
+        Some(parts.ident()?)
+    } else {
+        None
+    };
+    let span = parts.span;
+    let mut fields = Vec::new();
+    if let Some(block) = parts.take(Rule::joint_block) {
+        for inner in block.into_inner() {
+            if inner.as_rule() == Rule::field {
+                fields.push(field(inner)?);
+            }
+        }
+    }
+    Ok(ast::ElementDecl {
+        docs,
+        name,
+        target,
+        fields,
+        span,
     })
 }
 
@@ -831,7 +864,7 @@ fn found_token(text: &str, position: usize) -> String {
 /// The top-level keyword right before `position`, if any (a field named `joint` means a `}`
 /// is missing).
 fn keyword_before(text: &str, position: usize) -> Option<&'static str> {
-    const KEYWORDS: [&str; 11] = [
+    const KEYWORDS: [&str; 14] = [
         "param",
         "let",
         "input",
@@ -840,6 +873,9 @@ fn keyword_before(text: &str, position: usize) -> Option<&'static str> {
         "body",
         "joint",
         "loop",
+        "material",
+        "flexure",
+        "actuator",
         "force",
         "torque",
         "output",

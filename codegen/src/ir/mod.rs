@@ -446,6 +446,36 @@ pub enum Load {
         damping: Expr,
         span: Span,
     },
+    /// A generalized force acting directly on one coordinate (an actuator's force source).
+    GeneralizedForce {
+        coordinate: Handle<Coordinate>,
+        force: Expr,
+        span: Span,
+    },
+}
+
+/// The angle a flexure bends through.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FlexureAngle {
+    /// The coordinate of a pin joint.
+    Coordinate(Handle<Coordinate>),
+    /// The relative rotation of revolute loop `loops[index]` about its axis.
+    Loop(usize),
+}
+
+/// A compliant hinge (Doshi et al. Eqs. 2, 5): bending stiffness `k`, loss factor `η`.
+/// Its spring and its time-domain damper `b = kη/ω_ref` are also in `Model::loads`; this
+/// record lets frequency-domain analyses use the complex stiffness `k(1 + iη)` instead.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Flexure {
+    pub name: String,
+    pub angle: FlexureAngle,
+    /// Bending stiffness, N·m/rad.
+    pub stiffness: Expr,
+    pub loss_factor: Expr,
+    /// Viscous equivalent used in the time domain, `k η / ω_ref`, N·m·s/rad.
+    pub damping: Expr,
+    pub span: Span,
 }
 
 /// What an output measures. Vector outputs produce three scalar outputs `name.x|y|z`.
@@ -496,6 +526,8 @@ pub struct Model {
     pub loads: Vec<Load>,
     /// Loop closures: the only connections that are not tree joints.
     pub loops: Vec<LoopClosure>,
+    /// Flexures (their springs and dampers are also in `loads`).
+    pub flexures: Vec<Flexure>,
     /// Gravitational acceleration, components in the Newtonian frame.
     pub gravity: Option<Vec3>,
     pub outputs: Vec<Output>,

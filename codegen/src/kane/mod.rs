@@ -40,6 +40,58 @@ pub struct Equations {
     pub output_names: Vec<String>,
     /// Loop-closure rows: `φ(q)`, `J = ∂φ/∂q` (`nc × nq`, column-major) and `J̇u`.
     pub constraints: constraints::Constraints,
+    /// Flexures: their angles `θ(q)`, stiffness `k`, time-domain damping `b` and loss factor
+    /// `η`, for frequency-domain analyses (complex stiffness `k(1 + iη)`).
+    pub flexures: FlexureRows,
+}
+
+/// Per-flexure expressions, in `Model::flexures` order.
+#[derive(Clone, Debug, Default)]
+pub struct FlexureRows {
+    pub names: Vec<String>,
+    pub angles: Vec<ExprId>,
+    pub stiffness: Vec<ExprId>,
+    pub damping: Vec<ExprId>,
+    pub loss_factor: Vec<ExprId>,
+}
+
+impl FlexureRows {
+    /// `[θ…, k…, b…, η…]`, the layout of the generated `flexures` function.
+    pub fn all(&self) -> Vec<ExprId> {
+        [
+            &self.angles,
+            &self.stiffness,
+            &self.damping,
+            &self.loss_factor,
+        ]
+        .into_iter()
+        .flatten()
+        .copied()
+        .collect()
+    }
+}
+
+/// The angle, stiffness, damping and loss factor of every flexure.
+fn flexure_rows(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Model) -> FlexureRows {
+    let mut rows = FlexureRows::default();
+    for flexure in &model.flexures {
+        let angle = match flexure.angle {
+            ir::FlexureAngle::Coordinate(c) => pool.symbol(Symbol::Coordinate(c.index() as u32)),
+            ir::FlexureAngle::Loop(closure) => {
+                match constraints::closure_geometry(pool, kinematics, model, closure) {
+                    Some(geometry) => constraints::relative_angle(pool, &geometry),
+                    None => pool.zero(),
+                }
+            }
+        };
+        rows.names.push(flexure.name.clone());
+        rows.angles.push(angle);
+        rows.stiffness.push(lower_expr(pool, &flexure.stiffness));
+        rows.damping.push(lower_expr(pool, &flexure.damping));
+        rows.loss_factor
+            .push(lower_expr(pool, &flexure.loss_factor));
+    }
+    rows
 }
 
 impl Equations {
@@ -68,6 +120,7 @@ pub fn derive(model: &Model) -> Equations {
         add_load(&mut pool, &mut kinematics, model, load, &mut forcing_terms);
     }
     let constraints = constraints::derive(&mut pool, &mut kinematics, model);
+    let flexures = flexure_rows(&mut pool, &mut kinematics, model);
 
     let zero = pool.zero();
     let mut mass_matrix = vec![zero; nu * nu];
@@ -98,6 +151,7 @@ pub fn derive(model: &Model) -> Equations {
         outputs,
         output_names,
         constraints,
+        flexures,
     }
 }
 
@@ -267,6 +321,11 @@ fn add_load(
             let u = pool.symbol(Symbol::Speed(coordinate.index() as u32));
             let force = pool.mul(c, u);
             forcing[coordinate.index()].push(pool.neg(force));
+        }
+        Load::GeneralizedForce {
+            coordinate, force, ..
+        } => {
+            forcing[coordinate.index()].push(lower_expr(pool, force));
         }
         Load::LoopSpring {
             closure,

@@ -11,6 +11,7 @@
 //! suggestions).
 
 mod body;
+mod elements;
 mod expr;
 mod loads;
 mod loops;
@@ -139,6 +140,7 @@ impl<'a> Lowerer<'a> {
         self.build_points();
         self.build_bodies();
         self.lower_loops(&file.items);
+        self.lower_elements(&file.items);
         self.lower_loads_and_outputs(&file.items);
         self.build_loads();
         self.build_outputs();

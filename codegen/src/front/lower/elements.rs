@@ -1,0 +1,495 @@
+//! Physical elements: materials, flexure hinges and piezoelectric actuators.
+//!
+//! Consumes: `material`, `flexure` and `actuator` declarations, after joints and loops.
+//! Produces: springs, dampers and generalized forces in `model.loads`, flexure records in
+//! `model.flexures`, and `E02xx`/`E03xx`/`E04xx` errors.
+//!
+//! Physics (Doshi et al., "Model driven design for flexure-based microrobots"):
+//! - flexure bending stiffness `k = E w t³ / (12 l)` (Eq. 2), with `effective_length`
+//!   replacing `length` for castellated hinges; time-domain damping `b = k η / ω_ref`
+//!   (Eq. 5) with `ω_ref = 2π · reference_frequency`;
+//! - actuator: a force source `F_b · V / V_rated` in parallel with the series stiffness
+//!   `k_a = F_b / δ_f` along a slider.
+
+use std::collections::BTreeMap;
+
+use crate::diag::{Diagnostic, Span};
+use crate::front::ast::{self, Ident};
+use crate::ir::{self, ClosureKind, Dimension, Expr, FlexureAngle, JointKind};
+use crate::sym::Number;
+
+use super::expr::{Ctx, Expect};
+use super::{names, Lowerer};
+
+/// A material's properties as expressions (params allowed).
+#[derive(Clone, Debug)]
+pub struct Material {
+    pub modulus: Option<Expr>,
+    pub poisson: Option<Expr>,
+    pub density: Option<Expr>,
+    pub loss_factor: Option<Expr>,
+}
+
+fn number(text: &str) -> Expr {
+    Expr::Number(Number::parse_decimal(text).unwrap_or(Number::ZERO))
+}
+
+/// Materials every model knows. Kapton HN: E = 2.56 GPa as measured by Doshi et al. (§IV.B;
+/// the datasheet gives 2.5 GPa), ν = 0.34, ρ = 1.42 g/cm³ (DuPont datasheet), η = 0.05 for
+/// uncastellated hinges (§IV.B; castellated HAMR hinges measured η' = 0.08).
+fn builtin_materials() -> BTreeMap<String, Material> {
+    let kapton = Material {
+        modulus: Some(number("2.56e9")),
+        poisson: Some(number("0.34")),
+        density: Some(number("1420")),
+        loss_factor: Some(number("0.05")),
+    };
+    BTreeMap::from([("kapton".to_string(), kapton)])
+}
+
+const MATERIAL_FIELDS: [&str; 4] = ["modulus", "poisson", "density", "loss_factor"];
+const FLEXURE_FIELDS: [&str; 9] = [
+    "material",
+    "width",
+    "thickness",
+    "length",
+    "effective_length",
+    "stiffness",
+    "loss_factor",
+    "reference_frequency",
+    "rest",
+];
+const ACTUATOR_FIELDS: [&str; 4] = [
+    "blocked_force",
+    "free_deflection",
+    "rated_voltage",
+    "voltage",
+];
+
+const PRESSURE: Dimension = Dimension {
+    mass: 1,
+    length: -1,
+    time: -2,
+    current: 0,
+};
+const DENSITY: Dimension = Dimension {
+    mass: 1,
+    length: -3,
+    time: 0,
+    current: 0,
+};
+const FREQUENCY: Dimension = Dimension {
+    mass: 0,
+    length: 0,
+    time: -1,
+    current: 0,
+};
+const VOLTAGE: Dimension = Dimension {
+    mass: 1,
+    length: 2,
+    time: -3,
+    current: -1,
+};
+
+/// The dimension and an example for each element field.
+fn expect(field: &'static str) -> Expect<'static> {
+    let (dim, example) = match field {
+        "modulus" => (PRESSURE, "2.5 GPa"),
+        "poisson" | "loss_factor" => (Dimension::NONE, "0.05"),
+        "density" => (DENSITY, "1420 kg/m^3"),
+        "width" | "thickness" | "length" | "effective_length" | "free_deflection" => {
+            (Dimension::LENGTH, "25 um")
+        }
+        "stiffness" => (Dimension::TORQUE, "0.1 uN*m/rad"),
+        "reference_frequency" => (FREQUENCY, "40 Hz"),
+        "rest" => (Dimension::NONE, "0 deg"),
+        "blocked_force" => (Dimension::FORCE, "320 mN"),
+        _ => (VOLTAGE, "225 V"),
+    };
+    Expect {
+        dim,
+        what: field,
+        example,
+    }
+}
+
+fn mul(a: Expr, b: Expr) -> Expr {
+    Expr::Mul(Box::new(a), Box::new(b))
+}
+fn div(a: Expr, b: Expr) -> Expr {
+    Expr::Div(Box::new(a), Box::new(b))
+}
+
+impl<'a> Lowerer<'a> {
+    /// Lowers materials, then flexures and actuators (call after joints and loops).
+    pub(super) fn lower_elements(&mut self, items: &'a [ast::Item]) {
+        let mut materials = builtin_materials();
+        let mut element_names = names::Namespace::default();
+        for item in items {
+            let (ast::Item::Material(decl) | ast::Item::Flexure(decl) | ast::Item::Actuator(decl)) =
+                item
+            else {
+                continue;
+            };
+            if let Err(diagnostic) = element_names.declare(&decl.name, "the name") {
+                self.error(diagnostic);
+            }
+            match item {
+                ast::Item::Material(decl) => {
+                    let base = materials.get(&decl.name.name).cloned();
+                    let material = self.lower_material(decl, base);
+                    materials.insert(decl.name.name.clone(), material);
+                }
+                ast::Item::Flexure(decl) => self.lower_flexure(decl, &materials),
+                ast::Item::Actuator(decl) => self.lower_actuator(decl),
+                _ => {}
+            }
+        }
+    }
+
+    /// The known, non-repeated fields of an element.
+    fn element_fields<'f>(
+        &mut self,
+        decl: &'f ast::ElementDecl,
+        allowed: &[&str],
+        what: &str,
+    ) -> Vec<&'f ast::Field> {
+        let mut fields: Vec<&ast::Field> = Vec::new();
+        for field in &decl.fields {
+            let name = field.name.name.as_str();
+            if !allowed.contains(&name) {
+                let list = format!("fields of a {what}");
+                self.error(names::unknown_labelled(
+                    "E0209",
+                    "field",
+                    &list,
+                    name,
+                    field.name.span,
+                    allowed,
+                    &format!("not a {what} field"),
+                ));
+                continue;
+            }
+            if self.check_duplicate_field(field, &fields) {
+                fields.push(field);
+            }
+        }
+        fields
+    }
+
+    /// A scalar field checked against its dimension (params allowed, or inputs with `dynamic`).
+    fn element_scalar(
+        &mut self,
+        fields: &[&ast::Field],
+        name: &'static str,
+        dynamic: bool,
+    ) -> Option<(Expr, Span)> {
+        let field = fields.iter().find(|f| f.name.name == name)?;
+        let ctx = if dynamic {
+            Ctx::Dynamic
+        } else {
+            Ctx::Static("an element property")
+        };
+        let expr = self.lower_scalar_as(&field.value, ctx, &expect(name))?;
+        Some((expr, field.value.span))
+    }
+
+    fn lower_material(&mut self, decl: &ast::ElementDecl, base: Option<Material>) -> Material {
+        let fields = self.element_fields(decl, &MATERIAL_FIELDS, "material");
+        let mut material = base.unwrap_or(Material {
+            modulus: None,
+            poisson: None,
+            density: None,
+            loss_factor: None,
+        });
+        let set = |this: &mut Self, name: &'static str, slot: &mut Option<Expr>| {
+            if let Some((expr, _)) = this.element_scalar(&fields, name, false) {
+                *slot = Some(expr);
+            }
+        };
+        set(self, "modulus", &mut material.modulus);
+        set(self, "poisson", &mut material.poisson);
+        set(self, "density", &mut material.density);
+        set(self, "loss_factor", &mut material.loss_factor);
+        material
+    }
+
+    fn missing(&mut self, decl: &ast::ElementDecl, what: &str, message: &str, help: &str) {
+        self.error(
+            Diagnostic::error("E0402", format!("{what} `{}` {message}", decl.name.name))
+                .with_label(decl.name.span, "declared here")
+                .with_help(help.to_string()),
+        );
+    }
+
+    /// The angle a flexure acts on: a pin joint's coordinate or a revolute loop's rotation.
+    fn flexure_angle(&mut self, target: &Ident) -> Option<FlexureAngle> {
+        if let Some(&j) = self.joint_index.get(&target.name) {
+            let info = &self.joints[j];
+            return match (info.kind, info.coordinate) {
+                (Some(JointKind::Pin), Some(coordinate)) => {
+                    Some(FlexureAngle::Coordinate(coordinate))
+                }
+                (Some(JointKind::Pin), None) => None,
+                _ => {
+                    self.error(
+                        Diagnostic::error(
+                            "E0213",
+                            format!(
+                                "a flexure needs a pin joint, but `{}` is not one",
+                                target.name
+                            ),
+                        )
+                        .with_label(target.span, "not a pin joint")
+                        .with_help("put flexures on `pin` joints or on `revolute` loops"),
+                    );
+                    None
+                }
+            };
+        }
+        if let Some(index) = self.model.loops.iter().position(|l| l.name == target.name) {
+            if matches!(self.model.loops[index].kind, ClosureKind::Revolute { .. }) {
+                return Some(FlexureAngle::Loop(index));
+            }
+            self.error(
+                Diagnostic::error(
+                    "E0213",
+                    format!(
+                        "a flexure needs a revolute loop, but `{}` is not one",
+                        target.name
+                    ),
+                )
+                .with_label(target.span, "not a revolute loop")
+                .with_help("declare the closure as `loop NAME = revolute(...) { axis = ...; }`"),
+            );
+            return None;
+        }
+        let mut candidates: Vec<&str> = self.joint_index.keys().map(String::as_str).collect();
+        candidates.extend(self.model.loops.iter().map(|l| l.name.as_str()));
+        let candidates: Vec<String> = candidates.iter().map(|s| s.to_string()).collect();
+        let candidates: Vec<&str> = candidates.iter().map(String::as_str).collect();
+        self.error(names::unknown_labelled(
+            "E0201",
+            "joint or loop",
+            "joints and loops",
+            &target.name,
+            target.span,
+            &candidates,
+            "no joint or loop of that name",
+        ));
+        None
+    }
+
+    fn lower_flexure(&mut self, decl: &ast::ElementDecl, materials: &BTreeMap<String, Material>) {
+        let fields = self.element_fields(decl, &FLEXURE_FIELDS, "flexure");
+        let angle = decl
+            .target
+            .as_ref()
+            .and_then(|target| self.flexure_angle(target));
+        let material_name = fields.iter().find(|f| f.name.name == "material");
+        let material = match material_name {
+            None => materials.get("kapton").cloned(),
+            Some(field) => match &super::expr::unparen(&field.value).kind {
+                ast::ExprKind::Path(path) if path.segments.len() == 1 => {
+                    let name = &path.segments[0];
+                    let found = materials.get(&name.name).cloned();
+                    if found.is_none() {
+                        let known: Vec<&str> = materials.keys().map(String::as_str).collect();
+                        self.error(names::unknown_labelled(
+                            "E0204",
+                            "material",
+                            "materials",
+                            &name.name,
+                            name.span,
+                            &known,
+                            "not a material",
+                        ));
+                    }
+                    found
+                }
+                _ => {
+                    self.error(
+                        Diagnostic::error("E0412", "expected a material name")
+                            .with_label(field.value.span, "not a material")
+                            .with_help("write e.g. `material = kapton;`"),
+                    );
+                    None
+                }
+            },
+        };
+        // A misspelled material is reported once; what it would have supplied is not.
+        let unknown_material = material_name.is_some() && material.is_none();
+        let stiffness = match self.element_scalar(&fields, "stiffness", false) {
+            Some((k, _)) => Some(k),
+            None if unknown_material => None,
+            None => self.geometric_stiffness(decl, &fields, material.as_ref()),
+        };
+        let loss_factor = self
+            .element_scalar(&fields, "loss_factor", false)
+            .map(|(e, _)| e)
+            .or_else(|| material.as_ref().and_then(|m| m.loss_factor.clone()));
+        let Some(loss_factor) = loss_factor else {
+            if !unknown_material {
+                self.missing(
+                    decl,
+                    "flexure",
+                    "has no `loss_factor`",
+                    "give `loss_factor = 0.08;` (or use a material that has one)",
+                );
+            }
+            return;
+        };
+        let frequency = self.element_scalar(&fields, "reference_frequency", false);
+        if frequency.is_none() {
+            self.missing(
+                decl,
+                "flexure",
+                "has no `reference_frequency`",
+                "the time-domain damping b = kη/ω_ref needs the frequency it represents, e.g. the drive frequency: `reference_frequency = 40 Hz;`",
+            );
+        }
+        let rest = self
+            .element_scalar(&fields, "rest", false)
+            .map_or_else(Expr::zero, |(e, _)| e);
+        let (Some(angle), Some(stiffness), Some((frequency, _))) = (angle, stiffness, frequency)
+        else {
+            return;
+        };
+        // b = k η / ω_ref, ω_ref = 2π f_ref
+        let omega = mul(mul(Expr::Number(Number::int(2)), Expr::Pi), frequency);
+        let damping = div(mul(stiffness.clone(), loss_factor.clone()), omega);
+        let span = decl.span;
+        match angle {
+            FlexureAngle::Coordinate(coordinate) => {
+                self.model.loads.push(ir::Load::Spring {
+                    coordinate,
+                    stiffness: stiffness.clone(),
+                    rest,
+                    span,
+                });
+                self.model.loads.push(ir::Load::Damper {
+                    coordinate,
+                    damping: damping.clone(),
+                    span,
+                });
+            }
+            FlexureAngle::Loop(closure) => {
+                self.model.loads.push(ir::Load::LoopSpring {
+                    closure,
+                    stiffness: stiffness.clone(),
+                    rest,
+                    span,
+                });
+                self.model.loads.push(ir::Load::LoopDamper {
+                    closure,
+                    damping: damping.clone(),
+                    span,
+                });
+            }
+        }
+        self.model.flexures.push(ir::Flexure {
+            name: decl.name.name.clone(),
+            angle,
+            stiffness,
+            loss_factor,
+            damping,
+            span,
+        });
+    }
+
+    /// `E w t³ / (12 l)` (Eq. 2), with `effective_length` for castellated hinges.
+    fn geometric_stiffness(
+        &mut self,
+        decl: &ast::ElementDecl,
+        fields: &[&ast::Field],
+        material: Option<&Material>,
+    ) -> Option<Expr> {
+        let width = self.element_scalar(fields, "width", false);
+        let thickness = self.element_scalar(fields, "thickness", false);
+        let length = self
+            .element_scalar(fields, "effective_length", false)
+            .or_else(|| self.element_scalar(fields, "length", false));
+        let (Some((width, _)), Some((thickness, _)), Some((length, _))) =
+            (width, thickness, length)
+        else {
+            self.missing(
+                decl,
+                "flexure",
+                "needs either `stiffness` or `width`, `thickness` and `length` (or `effective_length`)",
+                "e.g. `width = 1.23 mm; thickness = 25 um; effective_length = 66 um;`, or `stiffness = 65.4 uN*m/rad;`",
+            );
+            return None;
+        };
+        let Some(modulus) = material.and_then(|m| m.modulus.clone()) else {
+            self.missing(
+                decl,
+                "flexure",
+                "has a material without `modulus`",
+                "give the material a `modulus = 2.5 GPa;`",
+            );
+            return None;
+        };
+        let cube = Expr::Pow(Box::new(thickness), Number::int(3));
+        Some(div(
+            mul(mul(modulus, width), cube),
+            mul(Expr::Number(Number::int(12)), length),
+        ))
+    }
+
+    fn lower_actuator(&mut self, decl: &ast::ElementDecl) {
+        let fields = self.element_fields(decl, &ACTUATOR_FIELDS, "actuator");
+        let coordinate = decl.target.as_ref().and_then(|target| {
+            let joint = self.joint_index.get(&target.name).map(|&j| (self.joints[j].kind, self.joints[j].coordinate));
+            match joint {
+                Some((Some(JointKind::Slider), coordinate)) => coordinate,
+                _ => {
+                    self.error(
+                        Diagnostic::error("E0213", format!("an actuator acts along a slider joint, but `{}` is not one", target.name))
+                            .with_label(target.span, "not a slider joint")
+                            .with_help("declare `joint NAME = slider(parent, child) { axis = ...; }` and put the actuator on it"),
+                    );
+                    None
+                }
+            }
+        });
+        let blocked = self.element_scalar(&fields, "blocked_force", false);
+        let deflection = self.element_scalar(&fields, "free_deflection", false);
+        let rated = self.element_scalar(&fields, "rated_voltage", false);
+        let voltage = self.element_scalar(&fields, "voltage", true);
+        for (value, name) in [
+            (blocked.is_some(), "blocked_force"),
+            (deflection.is_some(), "free_deflection"),
+            (rated.is_some(), "rated_voltage"),
+            (voltage.is_some(), "voltage"),
+        ] {
+            if !value && !fields.iter().any(|f| f.name.name == name) {
+                self.missing(decl, "actuator", &format!("has no `{name}`"), "an actuator needs `blocked_force`, `free_deflection` and `rated_voltage` (F_b and δ_f at that voltage) and its drive `voltage` (usually an input)");
+            }
+        }
+        let (
+            Some(coordinate),
+            Some((blocked, _)),
+            Some((deflection, _)),
+            Some((rated, _)),
+            Some((voltage, _)),
+        ) = (coordinate, blocked, deflection, rated, voltage)
+        else {
+            return;
+        };
+        let span = decl.span;
+        // Series stiffness k_a = F_b/δ_f, and the force source F_b·V/V_rated.
+        let stiffness = div(blocked.clone(), deflection);
+        self.model.loads.push(ir::Load::Spring {
+            coordinate,
+            stiffness,
+            rest: Expr::zero(),
+            span,
+        });
+        let force = div(mul(blocked, voltage), rated);
+        self.model.loads.push(ir::Load::GeneralizedForce {
+            coordinate,
+            force,
+            span,
+        });
+    }
+}
