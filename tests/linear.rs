@@ -289,3 +289,40 @@ fn actuator_free_deflection_and_blocked_force() {
         "blocked force {blocked}"
     );
 }
+
+/// A flexure with `twist_axis` gains a twist coordinate with stiffness 2k/(1 + ν) (Doshi et
+/// al. Eq. 8): linearized without gravity, K = diag(k, 2k/(1 + ν)).
+#[test]
+fn flexure_twist_adds_a_degree_of_freedom_with_eq_8_stiffness() {
+    let source = "
+        body paddle { mass = 1 g; com = [0, -5 mm, 0]; inertia = [1e-9 kg*m^2, 1e-9 kg*m^2, 1e-9 kg*m^2]; }
+        joint hinge = pin(newtonian, paddle) { axis = z; }
+        flexure hinge_flexure on hinge {
+            width = 1 mm; thickness = 25 um; length = 100 um;
+            reference_frequency = 40 Hz; twist_axis = y;
+        }
+        output tip = position(paddle.com) in newtonian;
+    ";
+    let model = mech::tape_model::TapeModel::new(&common::compile_text("twisting_flexure", source));
+    assert_eq!(model.nq(), 2);
+    assert_eq!(
+        (model.coordinate_name(0), model.coordinate_name(1)),
+        ("hinge", "hinge_flexure_twist")
+    );
+    let linear = linearize(&model, 0.0, &[0.0, 0.0], &[], &[0, 1]).unwrap();
+    let k = 2.56e9 * 1e-3 * 25e-6_f64.powi(3) / (12.0 * 100e-6);
+    let twist = 2.0 * k / (1.0 + 0.34);
+    let stiffness = &linear.stiffness;
+    assert!(
+        (stiffness[(0, 0)] - k).abs() < 1e-6 * k,
+        "bending {}",
+        stiffness[(0, 0)]
+    );
+    assert!(
+        (stiffness[(1, 1)] - twist).abs() < 1e-6 * twist,
+        "twist {}",
+        stiffness[(1, 1)]
+    );
+    assert!(stiffness[(0, 1)].abs() < 1e-6 * k && stiffness[(1, 0)].abs() < 1e-6 * k);
+    assert_eq!(model.nflexures(), 2);
+}

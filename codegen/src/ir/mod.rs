@@ -18,6 +18,7 @@
 //! since derivation only ever walks frames in arena order, the result must keep parents first.
 
 pub mod arena;
+pub mod transform;
 
 pub use arena::{Arena, Handle};
 

@@ -8,6 +8,8 @@
 //! - flexure bending stiffness `k = E w t³ / (12 l)` (Eq. 2), with `effective_length`
 //!   replacing `length` for castellated hinges; time-domain damping `b = k η / ω_ref`
 //!   (Eq. 5) with `ω_ref = 2π · reference_frequency`;
+//! - `twist_axis`: the hinge also twists about its length axis, a new coordinate with the
+//!   twist stiffness `2k/(1 + ν)` (Eq. 8) and damping `2b/(1 + ν)`;
 //! - actuator: a force source `F_b · V / V_rated` in parallel with the series stiffness
 //!   `k_a = F_b / δ_f` along a slider.
 
@@ -48,7 +50,7 @@ fn builtin_materials() -> BTreeMap<String, Material> {
 }
 
 const MATERIAL_FIELDS: [&str; 4] = ["modulus", "poisson", "density", "loss_factor"];
-const FLEXURE_FIELDS: [&str; 9] = [
+const FLEXURE_FIELDS: [&str; 10] = [
     "material",
     "width",
     "thickness",
@@ -58,6 +60,7 @@ const FLEXURE_FIELDS: [&str; 9] = [
     "loss_factor",
     "reference_frequency",
     "rest",
+    "twist_axis",
 ];
 const ACTUATOR_FIELDS: [&str; 4] = [
     "blocked_force",
@@ -387,6 +390,17 @@ impl<'a> Lowerer<'a> {
                 });
             }
         }
+        if let Some(field) = fields.iter().find(|f| f.name.name == "twist_axis") {
+            self.twist(
+                decl,
+                field,
+                angle,
+                material.as_ref(),
+                &stiffness,
+                &damping,
+                &loss_factor,
+            );
+        }
         self.model.flexures.push(ir::Flexure {
             name: decl.name.name.clone(),
             angle,
@@ -394,6 +408,68 @@ impl<'a> Lowerer<'a> {
             loss_factor,
             damping,
             span,
+        });
+    }
+
+    /// Records a twist degree of freedom for `apply_twists`: stiffness and damping scaled by
+    /// `2/(1 + ν)` (Eq. 8).
+    #[allow(clippy::too_many_arguments)]
+    fn twist(
+        &mut self,
+        decl: &ast::ElementDecl,
+        field: &ast::Field,
+        angle: FlexureAngle,
+        material: Option<&Material>,
+        stiffness: &Expr,
+        damping: &Expr,
+        loss_factor: &Expr,
+    ) {
+        let FlexureAngle::Coordinate(coordinate) = angle else {
+            self.error(
+                Diagnostic::error(
+                    "E0403",
+                    "`twist_axis` is only allowed on a flexure of a pin joint",
+                )
+                .with_label(field.name.span, "this flexure is on a loop")
+                .with_help(
+                    "a twisting loop closure is a later capability; put the flexure on a pin joint",
+                ),
+            );
+            return;
+        };
+        let Some(axis) = self.axis(&field.value, "a twist axis") else {
+            return;
+        };
+        let Some(poisson) = material.and_then(|m| m.poisson.clone()) else {
+            self.missing(
+                decl,
+                "flexure",
+                "twists but its material has no `poisson`",
+                "give the material a Poisson ratio: `poisson = 0.34;`",
+            );
+            return;
+        };
+        let Some(frame) = self
+            .joints
+            .iter()
+            .find(|j| j.coordinate == Some(coordinate))
+            .and_then(|j| j.frame)
+        else {
+            return;
+        };
+        // 2/(1 + ν)
+        let ratio = div(
+            Expr::Number(Number::int(2)),
+            Expr::Add(Box::new(Expr::one()), Box::new(poisson)),
+        );
+        self.twists.push(super::PendingTwist {
+            frame,
+            name: format!("{}_twist", decl.name.name),
+            axis,
+            stiffness: mul(ratio.clone(), stiffness.clone()),
+            damping: mul(ratio, damping.clone()),
+            loss_factor: loss_factor.clone(),
+            span: decl.span,
         });
     }
 

@@ -100,6 +100,21 @@ struct Lowerer<'a> {
     joint_index: BTreeMap<String, usize>,
     loads: Vec<PendingLoad>,
     outputs: Vec<PendingOutput>,
+    /// Twist degrees of freedom of flexures, inserted into the tree once everything else
+    /// refers to frames (the insertion renumbers them).
+    twists: Vec<PendingTwist>,
+}
+
+/// A flexure's twist degree of freedom, waiting for [`Lowerer::apply_twists`].
+struct PendingTwist {
+    /// The pin joint's frame: the twist frame goes right below it.
+    frame: Handle<ir::Frame>,
+    name: String,
+    axis: ir::Vec3,
+    stiffness: ir::Expr,
+    damping: ir::Expr,
+    loss_factor: ir::Expr,
+    span: crate::diag::Span,
 }
 
 impl<'a> Lowerer<'a> {
@@ -122,6 +137,7 @@ impl<'a> Lowerer<'a> {
             joint_index: BTreeMap::new(),
             loads: Vec::new(),
             outputs: Vec::new(),
+            twists: Vec::new(),
         }
     }
 
@@ -144,6 +160,47 @@ impl<'a> Lowerer<'a> {
         self.lower_loads_and_outputs(&file.items);
         self.build_loads();
         self.build_outputs();
+        self.apply_twists();
+    }
+
+    /// Inserts each flexure twist as a revolute frame below its pin joint's frame, with its
+    /// spring, damper and flexure record. Frames after it are renumbered.
+    fn apply_twists(&mut self) {
+        if !self.diagnostics.is_empty() {
+            return;
+        }
+        // Later frames first, so earlier insertions do not move the frames still to process.
+        let mut twists = std::mem::take(&mut self.twists);
+        twists.sort_by_key(|t| std::cmp::Reverse(t.frame));
+        for twist in twists {
+            let (_, coordinate) = ir::transform::insert_revolute_below(
+                &mut self.model,
+                twist.frame,
+                &twist.name,
+                twist.axis,
+                twist.span,
+            );
+            let span = twist.span;
+            self.model.loads.push(ir::Load::Spring {
+                coordinate,
+                stiffness: twist.stiffness.clone(),
+                rest: ir::Expr::zero(),
+                span,
+            });
+            self.model.loads.push(ir::Load::Damper {
+                coordinate,
+                damping: twist.damping.clone(),
+                span,
+            });
+            self.model.flexures.push(ir::Flexure {
+                name: twist.name,
+                angle: ir::FlexureAngle::Coordinate(coordinate),
+                stiffness: twist.stiffness,
+                loss_factor: twist.loss_factor,
+                damping: twist.damping,
+                span,
+            });
+        }
     }
 
     fn finish(mut self) -> Result<ir::Model, Vec<Diagnostic>> {
