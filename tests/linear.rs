@@ -326,3 +326,70 @@ fn flexure_twist_adds_a_degree_of_freedom_with_eq_8_stiffness() {
     assert!(stiffness[(0, 1)].abs() < 1e-6 * k && stiffness[(1, 0)].abs() < 1e-6 * k);
     assert_eq!(model.nflexures(), 2);
 }
+
+/// An actuator given by its bimorph geometry (Table I "new geometry" with the HAMR-VI
+/// coefficients) behaves like the closed form of `mech::physics` (the CLI's implementation):
+/// free deflection and blocked force at 225 V.
+#[test]
+fn bimorph_actuator_matches_the_closed_form() {
+    let source = "
+        input drive = 0 V;
+        body tip { mass = 1 mg; }
+        joint slide = slider(newtonian, tip) { axis = y; }
+        actuator lift on slide {
+            pzt_thickness = 135 um; core_thickness = 55 um; length = 9.2 mm; extension = 1 mm;
+            nominal_width = 3.5 mm; width_ratio = 1.5;
+            f31_blocked = 24 Pa*m/V; f31_free = 32 Pa*m/V; pzt_modulus = 40 GPa; core_modulus = 340 GPa;
+            voltage = drive;
+        }
+        output tip = position(tip) in newtonian;
+    ";
+    let model = mech::tape_model::TapeModel::new(&common::compile_text("bimorph", source));
+    let bimorph = mech::physics::actuator::Bimorph::SEED_NEW_GEOMETRY;
+    let volts = 225.0;
+    let mut q = vec![0.0];
+    solve_statics(
+        &model,
+        0.0,
+        &mut q,
+        &[volts],
+        &[],
+        &StaticsOptions::default(),
+    )
+    .unwrap();
+    let free = bimorph.free_deflection(volts);
+    assert!(
+        (q[0] - free).abs() < 1e-9 * free,
+        "free deflection {} vs {free}",
+        q[0]
+    );
+    let outputs = [
+        model.output_index("tip.x").unwrap(),
+        model.output_index("tip.y").unwrap(),
+        model.output_index("tip.z").unwrap(),
+    ];
+    let hold = Fixture {
+        name: "wall".into(),
+        outputs,
+        target: [0.0; 3],
+        components: vec![1],
+    };
+    let mut q = vec![0.0];
+    let held = solve_statics(
+        &model,
+        0.0,
+        &mut q,
+        &[volts],
+        &[hold],
+        &StaticsOptions::default(),
+    )
+    .unwrap();
+    let blocked = bimorph.blocked_force(volts);
+    assert!(
+        (-held.fixture_forces[0][1] - blocked).abs() < 1e-9 * blocked,
+        "blocked force {:?} vs {blocked}",
+        held.fixture_forces[0]
+    );
+    // Doshi et al. Table I "new geometry" model row: 300 µm and 320 mN (within 10%).
+    assert!((free / 300e-6 - 1.0).abs() < 0.1 && (blocked / 0.320 - 1.0).abs() < 0.1);
+}

@@ -62,11 +62,19 @@ const FLEXURE_FIELDS: [&str; 10] = [
     "rest",
     "twist_axis",
 ];
-const ACTUATOR_FIELDS: [&str; 4] = [
-    "blocked_force",
-    "free_deflection",
-    "rated_voltage",
-    "voltage",
+/// An actuator is given by (F_b, δ_f) at a rated voltage, or by its bimorph geometry.
+const RATED_FIELDS: [&str; 3] = ["blocked_force", "free_deflection", "rated_voltage"];
+const BIMORPH_FIELDS: [&str; 10] = [
+    "pzt_thickness",
+    "core_thickness",
+    "length",
+    "extension",
+    "nominal_width",
+    "width_ratio",
+    "f31_blocked",
+    "f31_free",
+    "pzt_modulus",
+    "core_modulus",
 ];
 
 const PRESSURE: Dimension = Dimension {
@@ -93,6 +101,13 @@ const VOLTAGE: Dimension = Dimension {
     time: -3,
     current: -1,
 };
+/// Pa·m/V: an effective piezoelectric coefficient f31 = d31·E.
+const PIEZO_COEFFICIENT: Dimension = Dimension {
+    mass: 0,
+    length: -2,
+    time: 1,
+    current: 1,
+};
 
 /// The dimension and an example for each element field.
 fn expect(field: &'static str) -> Expect<'static> {
@@ -100,14 +115,19 @@ fn expect(field: &'static str) -> Expect<'static> {
         "modulus" => (PRESSURE, "2.5 GPa"),
         "poisson" | "loss_factor" => (Dimension::NONE, "0.05"),
         "density" => (DENSITY, "1420 kg/m^3"),
-        "width" | "thickness" | "length" | "effective_length" | "free_deflection" => {
+        "width" | "thickness" | "length" | "effective_length" | "free_deflection"
+        | "pzt_thickness" | "core_thickness" | "extension" | "nominal_width" => {
             (Dimension::LENGTH, "25 um")
         }
+        "width_ratio" => (Dimension::NONE, "1.5"),
+        "f31_blocked" | "f31_free" => (PIEZO_COEFFICIENT, "24 Pa*m/V"),
+        "pzt_modulus" | "core_modulus" => (PRESSURE, "40 GPa"),
         "stiffness" => (Dimension::TORQUE, "0.1 uN*m/rad"),
         "reference_frequency" => (FREQUENCY, "40 Hz"),
         "rest" => (Dimension::NONE, "0 deg"),
         "blocked_force" => (Dimension::FORCE, "320 mN"),
-        _ => (VOLTAGE, "225 V"),
+        "rated_voltage" | "voltage" => (VOLTAGE, "225 V"),
+        _ => (Dimension::NONE, "1"),
     };
     Expect {
         dim,
@@ -513,59 +533,225 @@ impl<'a> Lowerer<'a> {
     }
 
     fn lower_actuator(&mut self, decl: &ast::ElementDecl) {
-        let fields = self.element_fields(decl, &ACTUATOR_FIELDS, "actuator");
-        let coordinate = decl.target.as_ref().and_then(|target| {
-            let joint = self.joint_index.get(&target.name).map(|&j| (self.joints[j].kind, self.joints[j].coordinate));
-            match joint {
-                Some((Some(JointKind::Slider), coordinate)) => coordinate,
-                _ => {
-                    self.error(
-                        Diagnostic::error("E0213", format!("an actuator acts along a slider joint, but `{}` is not one", target.name))
-                            .with_label(target.span, "not a slider joint")
-                            .with_help("declare `joint NAME = slider(parent, child) { axis = ...; }` and put the actuator on it"),
-                    );
-                    None
-                }
-            }
-        });
-        let blocked = self.element_scalar(&fields, "blocked_force", false);
-        let deflection = self.element_scalar(&fields, "free_deflection", false);
-        let rated = self.element_scalar(&fields, "rated_voltage", false);
+        let allowed: Vec<&str> = RATED_FIELDS
+            .iter()
+            .chain(&BIMORPH_FIELDS)
+            .chain(&["voltage"])
+            .copied()
+            .collect();
+        let fields = self.element_fields(decl, &allowed, "actuator");
+        let coordinate = decl
+            .target
+            .as_ref()
+            .and_then(|target| self.slider_coordinate(target));
         let voltage = self.element_scalar(&fields, "voltage", true);
-        for (value, name) in [
-            (blocked.is_some(), "blocked_force"),
-            (deflection.is_some(), "free_deflection"),
-            (rated.is_some(), "rated_voltage"),
-            (voltage.is_some(), "voltage"),
-        ] {
-            if !value && !fields.iter().any(|f| f.name.name == name) {
-                self.missing(decl, "actuator", &format!("has no `{name}`"), "an actuator needs `blocked_force`, `free_deflection` and `rated_voltage` (F_b and δ_f at that voltage) and its drive `voltage` (usually an input)");
-            }
+        if voltage.is_none() && !fields.iter().any(|f| f.name.name == "voltage") {
+            self.missing(
+                decl,
+                "actuator",
+                "has no `voltage`",
+                "give its drive voltage, usually an input: `voltage = drive;`",
+            );
         }
-        let (
-            Some(coordinate),
-            Some((blocked, _)),
-            Some((deflection, _)),
-            Some((rated, _)),
-            Some((voltage, _)),
-        ) = (coordinate, blocked, deflection, rated, voltage)
+        let uses = |names: &[&str]| fields.iter().any(|f| names.contains(&f.name.name.as_str()));
+        // Per volt: the blocked force F_b/V and the free deflection δ_f/V.
+        let per_volt = match (uses(&RATED_FIELDS), uses(&BIMORPH_FIELDS)) {
+            (true, true) => {
+                self.missing(decl, "actuator", "mixes the two forms", "give either `blocked_force`, `free_deflection`, `rated_voltage`, or the bimorph geometry, not both");
+                None
+            }
+            (false, true) => self.bimorph_per_volt(decl, &fields),
+            _ => self.rated_per_volt(decl, &fields),
+        };
+        let (Some(coordinate), Some((force_per_volt, deflection_per_volt)), Some((voltage, _))) =
+            (coordinate, per_volt, voltage)
         else {
             return;
         };
         let span = decl.span;
-        // Series stiffness k_a = F_b/δ_f, and the force source F_b·V/V_rated.
-        let stiffness = div(blocked.clone(), deflection);
+        // Series stiffness k_a = F_b/δ_f (the same at every voltage), and the force source
+        // F_b(V) = (F_b/V)·V.
+        let stiffness = div(force_per_volt.clone(), deflection_per_volt);
         self.model.loads.push(ir::Load::Spring {
             coordinate,
             stiffness,
             rest: Expr::zero(),
             span,
         });
-        let force = div(mul(blocked, voltage), rated);
         self.model.loads.push(ir::Load::GeneralizedForce {
             coordinate,
-            force,
+            force: mul(force_per_volt, voltage),
             span,
         });
+    }
+
+    fn slider_coordinate(&mut self, target: &Ident) -> Option<ir::Handle<ir::Coordinate>> {
+        let joint = self
+            .joint_index
+            .get(&target.name)
+            .map(|&j| (self.joints[j].kind, self.joints[j].coordinate));
+        match joint {
+            Some((Some(JointKind::Slider), coordinate)) => coordinate,
+            _ => {
+                self.error(
+                    Diagnostic::error("E0213", format!("an actuator acts along a slider joint, but `{}` is not one", target.name))
+                        .with_label(target.span, "not a slider joint")
+                        .with_help("declare `joint NAME = slider(parent, child) { axis = ...; }` and put the actuator on it"),
+                );
+                None
+            }
+        }
+    }
+
+    /// `(F_b/V_rated, δ_f/V_rated)` of the rated form.
+    fn rated_per_volt(
+        &mut self,
+        decl: &ast::ElementDecl,
+        fields: &[&ast::Field],
+    ) -> Option<(Expr, Expr)> {
+        let mut values = Vec::new();
+        for name in RATED_FIELDS {
+            match self.element_scalar(fields, name, false) {
+                Some((value, _)) => values.push(value),
+                None if !fields.iter().any(|f| f.name.name == name) => {
+                    self.missing(decl, "actuator", &format!("has no `{name}`"), "give `blocked_force`, `free_deflection` and `rated_voltage` (F_b and δ_f at that voltage), or the bimorph geometry");
+                }
+                None => {}
+            }
+        }
+        let [blocked, deflection, rated] = <[Expr; 3]>::try_from(values).ok()?;
+        Some((div(blocked, rated.clone()), div(deflection, rated)))
+    }
+
+    /// `(F_b/V, δ_f/V)` of a tapered symmetric bimorph (Wood, Steltz & Fearing 2005; Jafferis,
+    /// Smith & Wood 2015), with `l_r = extension/length`:
+    /// `D = ⅓E_p t_p(1.5t_cf² + 3t_cf t_p + 2t_p²) + E_cf t_cf³/12`,
+    /// `δ_f/V = ¼(1 + 2l_r) f31_free (t_p + t_cf) L² / D`,
+    /// `F_b/V = ¾ f31_blocked w_nom (t_p + t_cf) GF / L`, with the geometry factor GF of the
+    /// taper (its limit `4(1 + 2l_r)/(3(1 + 2l_r)² + 1)` when `width_ratio` is within 0.01 of
+    /// 1 at the parameters' defaults, where the closed form is 0/0).
+    fn bimorph_per_volt(
+        &mut self,
+        decl: &ast::ElementDecl,
+        fields: &[&ast::Field],
+    ) -> Option<(Expr, Expr)> {
+        let mut values = BTreeMap::new();
+        for name in BIMORPH_FIELDS {
+            match self.element_scalar(fields, name, false) {
+                Some((value, span)) => {
+                    values.insert(name, (value, span));
+                }
+                None if !fields.iter().any(|f| f.name.name == name) => {
+                    self.missing(decl, "actuator", &format!("has no `{name}`"), "a bimorph needs pzt_thickness, core_thickness, length, extension, nominal_width, width_ratio, f31_blocked, f31_free, pzt_modulus and core_modulus");
+                }
+                None => {}
+            }
+        }
+        if values.len() != BIMORPH_FIELDS.len() {
+            return None;
+        }
+        let get = |name: &str| values[name].0.clone();
+        let (tp, tcf, length, extension, width, wr) = (
+            get("pzt_thickness"),
+            get("core_thickness"),
+            get("length"),
+            get("extension"),
+            get("nominal_width"),
+            get("width_ratio"),
+        );
+        let n = |text: &str| number(text);
+        let add = |a: Expr, b: Expr| Expr::Add(Box::new(a), Box::new(b));
+        let sub = |a: Expr, b: Expr| Expr::Sub(Box::new(a), Box::new(b));
+        let square = |a: Expr| Expr::Pow(Box::new(a), Number::int(2));
+        let lr = div(extension, length.clone());
+        let one_plus_2lr = add(n("1"), mul(n("2"), lr.clone()));
+        let total = add(tp.clone(), tcf.clone());
+        // D = ⅓ E_p t_p (1.5 t_cf² + 3 t_cf t_p + 2 t_p²) + E_cf t_cf³ / 12
+        let bracket = add(
+            add(
+                mul(n("1.5"), square(tcf.clone())),
+                mul(mul(n("3"), tcf.clone()), tp.clone()),
+            ),
+            mul(n("2"), square(tp.clone())),
+        );
+        let rigidity = add(
+            div(mul(mul(get("pzt_modulus"), tp), bracket), n("3")),
+            div(
+                mul(
+                    get("core_modulus"),
+                    Expr::Pow(Box::new(tcf), Number::int(3)),
+                ),
+                n("12"),
+            ),
+        );
+        let deflection = div(
+            mul(
+                mul(
+                    mul(mul(n("0.25"), one_plus_2lr.clone()), get("f31_free")),
+                    total.clone(),
+                ),
+                square(length.clone()),
+            ),
+            rigidity,
+        );
+        let (wr_value, wr_span) = (
+            self.evaluate(&wr, values["width_ratio"].1),
+            values["width_ratio"].1,
+        );
+        if !(wr_value > 0.0 && wr_value < 2.0) {
+            self.error(
+                Diagnostic::error(
+                    "E0302",
+                    format!("`width_ratio` must lie between 0 and 2, found {wr_value}"),
+                )
+                .with_label(wr_span, "the tip width (2 − w_r)·w_nom must be positive")
+                .with_help(
+                    "a width ratio of 1.5 means a base 1.5× and a tip 0.5× the nominal width",
+                ),
+            );
+            return None;
+        }
+        let geometry_factor = if (wr_value - 1.0).abs() < 0.01 {
+            div(
+                mul(n("4"), one_plus_2lr.clone()),
+                add(mul(n("3"), square(one_plus_2lr)), n("1")),
+            )
+        } else {
+            let wr_minus_1 = sub(wr.clone(), n("1"));
+            let numerator = mul(
+                mul(
+                    n("8"),
+                    Expr::Pow(Box::new(sub(n("1"), wr.clone())), Number::int(3)),
+                ),
+                one_plus_2lr,
+            );
+            let first = mul(
+                mul(n("-6"), wr_minus_1.clone()),
+                add(
+                    add(n("-3"), mul(mul(n("4"), lr.clone()), wr_minus_1.clone())),
+                    mul(n("2"), wr.clone()),
+                ),
+            );
+            let log = Expr::Call(
+                ir::Function::Ln,
+                vec![div(sub(n("2"), wr.clone()), wr.clone())],
+            );
+            let second = mul(
+                mul(
+                    n("3"),
+                    square(add(add(n("-2"), mul(mul(n("2"), lr), wr_minus_1)), wr)),
+                ),
+                log,
+            );
+            div(numerator, add(first, second))
+        };
+        let force = div(
+            mul(
+                mul(mul(mul(n("0.75"), get("f31_blocked")), width), total),
+                geometry_factor,
+            ),
+            length,
+        );
+        Some((force, deflection))
     }
 }
