@@ -393,3 +393,77 @@ fn bimorph_actuator_matches_the_closed_form() {
     // Doshi et al. Table I "new geometry" model row: 300 µm and 320 mN (within 10%).
     assert!((free / 300e-6 - 1.0).abs() < 0.1 && (blocked / 0.320 - 1.0).abs() < 0.1);
 }
+
+/// The time-domain alternative: a simulated chirp turned into a swept-sine estimate agrees
+/// with the linearization's exact response, and both give the same resonance and Q.
+#[test]
+fn chirp_estimate_agrees_with_the_linear_response() {
+    let source = "
+        input push = 0 N;
+        body mass { mass = 1 kg; }
+        joint x = slider(newtonian, mass) { axis = x; stiffness = 3947.8 N/m; damping = 6.2832 N*s/m; }
+        force drive at mass = [push, 0, 0];
+        output x = x.q;
+    ";
+    // f_n = √(k/m)/2π = 10 Hz, ζ = c/(2√(km)) = 0.05, Q ≈ 1/(2ζ) = 10.
+    let model = mech::tape_model::TapeModel::new(&common::compile_text("oscillator", source));
+    let output = model.output_index("x").unwrap();
+    let linear = linearize(&model, 0.0, &[0.0], &[0.0], &[0]).unwrap();
+    let frequencies = mech::frequency::log_space(4.0, 30.0, 200);
+    let exact =
+        mech::frequency::linear_response(&linear, 0, output, &frequencies, FlexureDamping::Viscous)
+            .unwrap();
+
+    let (f0, f1, duration) = (2.0, 40.0, 40.0);
+    let chirp = mech_runtime::Signal::Chirp {
+        amplitude: 1.0,
+        f0_hz: f0,
+        f1_hz: f1,
+        duration,
+        offset: 0.0,
+    };
+    let options = SimOptions {
+        t_end: duration,
+        output_interval: 1.0 / 800.0,
+        method: Method::Dopri5 {
+            rtol: 1e-8,
+            atol: 1e-12,
+            h_max: 1.0 / 800.0,
+        },
+        ..SimOptions::default()
+    };
+    let run =
+        mech_runtime::simulate(&model, &[0.0], &[0.0], &[chirp], &options, &mut |_| {}).unwrap();
+    let input: Vec<f64> = run.inputs.iter().map(|u| u[0]).collect();
+    let response: Vec<f64> = run.outputs.iter().map(|y| y[output]).collect();
+    let estimate = mech::frequency::chirp_estimate(&run.times, &input, &response, &frequencies);
+    for (a, b) in exact.iter().zip(&estimate) {
+        assert!(
+            (a.magnitude_db() - b.magnitude_db()).abs() < 1.0,
+            "{} Hz: {} dB vs {} dB",
+            a.frequency_hz,
+            a.magnitude_db(),
+            b.magnitude_db()
+        );
+    }
+    let (peak, measured) = (
+        mech::frequency::resonances(&exact)[0],
+        mech::frequency::resonances(&estimate)[0],
+    );
+    assert!(
+        (peak.frequency_hz - 10.0 * (1.0 - 2.0 * 0.05_f64.powi(2)).sqrt()).abs() < 0.01,
+        "{peak:?}"
+    );
+    assert!(
+        (measured.frequency_hz / peak.frequency_hz - 1.0).abs() < 0.02,
+        "{measured:?} vs {peak:?}"
+    );
+    let (q_exact, q_chirp) = (
+        peak.quality_factor.unwrap(),
+        measured.quality_factor.unwrap(),
+    );
+    assert!(
+        (q_exact - 10.0).abs() < 0.3 && (q_chirp / q_exact - 1.0).abs() < 0.15,
+        "Q {q_exact} vs {q_chirp}"
+    );
+}
