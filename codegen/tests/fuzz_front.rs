@@ -1,4 +1,5 @@
-//! Robustness: `front::load` never panics, whatever the input.
+//! Robustness: `front::load` (and, for models that load, derivation and the tape) never
+//! panics, whatever the input.
 //!
 //! Consumes: arbitrary strings, and byte-level mutations and splices of a valid model.
 //! Produces: proptest cases (a few hundred, so the test runs in seconds in debug builds).
@@ -34,6 +35,18 @@ joint hinge = pin(newtonian, arm) {
 }
 force push at arm.tip = [drive * sin(2 * pi * t / 1 s), 0, 0] in newtonian;
 torque twist on arm = [0, 0, 1 uN*m] in arm;
+input drive_v = 0 V;
+body arm2 { mass = m; com = [0, -l/2, 0]; inertia = [I_c, 0, I_c]; }
+joint elbow = pin(arm, arm2) { axis = z; parent_point = arm.tip; }
+body cart { mass = m; }
+joint rail = slider(newtonian, cart) { axis = x; }
+loop close = revolute(arm2, cart) { axis = z; parent_point = [0, -l, 0]; stiffness = k; }
+loop reach = distance(arm, cart) { length = 2 * l; }
+loop touch = coincident(arm2, newtonian) { components = [x, y]; }
+material kapton { loss_factor = 0.08; }
+flexure fl on elbow { width = 1 mm; thickness = 25 um; length = 100 um; reference_frequency = 40 Hz; twist_axis = y; }
+flexure fc on close { stiffness = 1 uN*m/rad; reference_frequency = 40 Hz; }
+actuator act on rail { blocked_force = 320 mN; free_deflection = 300 um; rated_voltage = 225 V; voltage = drive_v; }
 output tip = position(arm.tip) in newtonian;
 output angle = hinge.q;
 output ke = kinetic_energy;
@@ -42,13 +55,29 @@ output ke = kinetic_energy;
 /// Loads `bytes` (lossily decoded) and renders any errors; panics are the failures.
 fn load_bytes(bytes: &[u8]) {
     let text = String::from_utf8_lossy(bytes).into_owned();
-    if let Err(errors) = front::load(Arc::new(SourceFile::new("fuzz.mech", text))) {
-        let _ = errors.to_string();
+    match front::load(Arc::new(SourceFile::new("fuzz.mech", text))) {
+        // A model that loads must also derive and lower to a tape without panicking.
+        Ok(model) => {
+            let equations = mech_codegen::kane::derive(&model);
+            let _ = mech_codegen::Tape::new(&equations);
+        }
+        Err(errors) => {
+            let _ = errors.to_string();
+        }
     }
 }
 
 /// Tokens that make mutations reach deeper into the grammar than random bytes do.
 const TOKENS: &[&str] = &[
+    "loop",
+    "coincident",
+    "revolute",
+    "distance",
+    "material",
+    "flexure",
+    "actuator",
+    "on",
+    "twist_axis",
     "(",
     ")",
     "[",
