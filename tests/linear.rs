@@ -226,6 +226,44 @@ fn flexure_losses_as_complex_stiffness_or_viscous_damper() {
     }
 }
 
+/// Free deflection (statics with no load) and blocked force (statics with the slider held at
+/// zero by a fixture on the `tip` output) of an actuator model driven at `volts`.
+fn free_and_blocked(model: &dyn Model, volts: f64) -> (f64, f64) {
+    let mut q = vec![0.0];
+    solve_statics(
+        model,
+        0.0,
+        &mut q,
+        &[volts],
+        &[],
+        &StaticsOptions::default(),
+    )
+    .unwrap();
+    let outputs = [
+        model.output_index("tip.x").unwrap(),
+        model.output_index("tip.y").unwrap(),
+        model.output_index("tip.z").unwrap(),
+    ];
+    let hold = Fixture {
+        name: "wall".into(),
+        outputs,
+        target: [0.0; 3],
+        components: vec![1],
+    };
+    let mut held_q = vec![0.0];
+    let held = solve_statics(
+        model,
+        0.0,
+        &mut held_q,
+        &[volts],
+        &[hold],
+        &StaticsOptions::default(),
+    )
+    .unwrap();
+    // The fixture holds the tip against the actuator's force.
+    (q[0], -held.fixture_forces[0][1])
+}
+
 /// A piezo actuator along a slider: free, it deflects δ_f·V/V_rated; held by a fixture at
 /// zero, it pushes with F_b·V/V_rated (Doshi et al. §III: force source in parallel with
 /// k_a = F_b/δ_f).
@@ -243,49 +281,15 @@ fn actuator_free_deflection_and_blocked_force() {
     ";
     let model = mech::tape_model::TapeModel::new(&common::compile_text("actuator", source));
     let volts = 150.0;
-    let mut q = vec![0.0];
-    solve_statics(
-        &model,
-        0.0,
-        &mut q,
-        &[volts],
-        &[],
-        &StaticsOptions::default(),
-    )
-    .unwrap();
+    let (free, blocked) = free_and_blocked(&model, volts);
     // Statics converges to 1e-10 of the initial force imbalance.
-    let free = 300e-6 * volts / 225.0;
+    let (expected_free, expected_blocked) = (300e-6 * volts / 225.0, 0.320 * volts / 225.0);
     assert!(
-        (q[0] - free).abs() < 1e-10 * free,
-        "free deflection {}",
-        q[0]
+        (free - expected_free).abs() < 1e-10 * expected_free,
+        "free deflection {free}"
     );
-    let outputs = [
-        model.output_index("tip.x").unwrap(),
-        model.output_index("tip.y").unwrap(),
-        model.output_index("tip.z").unwrap(),
-    ];
-    let hold = Fixture {
-        name: "wall".into(),
-        outputs,
-        target: [0.0; 3],
-        components: vec![1],
-    };
-    let mut q = vec![0.0];
-    let held = solve_statics(
-        &model,
-        0.0,
-        &mut q,
-        &[volts],
-        &[hold],
-        &StaticsOptions::default(),
-    )
-    .unwrap();
-    // The fixture holds the tip against the actuator's force.
-    let blocked = -held.fixture_forces[0][1];
-    let expected = 0.320 * volts / 225.0;
     assert!(
-        (blocked - expected).abs() < 1e-10 * expected,
+        (blocked - expected_blocked).abs() < 1e-10 * expected_blocked,
         "blocked force {blocked}"
     );
 }
@@ -347,48 +351,16 @@ fn bimorph_actuator_matches_the_closed_form() {
     let model = mech::tape_model::TapeModel::new(&common::compile_text("bimorph", source));
     let bimorph = mech::physics::actuator::Bimorph::SEED_NEW_GEOMETRY;
     let volts = 225.0;
-    let mut q = vec![0.0];
-    solve_statics(
-        &model,
-        0.0,
-        &mut q,
-        &[volts],
-        &[],
-        &StaticsOptions::default(),
-    )
-    .unwrap();
-    let free = bimorph.free_deflection(volts);
+    let (free, blocked) = free_and_blocked(&model, volts);
+    let (expected_free, expected_blocked) =
+        (bimorph.free_deflection(volts), bimorph.blocked_force(volts));
     assert!(
-        (q[0] - free).abs() < 1e-9 * free,
-        "free deflection {} vs {free}",
-        q[0]
+        (free - expected_free).abs() < 1e-9 * expected_free,
+        "free deflection {free} vs {expected_free}"
     );
-    let outputs = [
-        model.output_index("tip.x").unwrap(),
-        model.output_index("tip.y").unwrap(),
-        model.output_index("tip.z").unwrap(),
-    ];
-    let hold = Fixture {
-        name: "wall".into(),
-        outputs,
-        target: [0.0; 3],
-        components: vec![1],
-    };
-    let mut q = vec![0.0];
-    let held = solve_statics(
-        &model,
-        0.0,
-        &mut q,
-        &[volts],
-        &[hold],
-        &StaticsOptions::default(),
-    )
-    .unwrap();
-    let blocked = bimorph.blocked_force(volts);
     assert!(
-        (-held.fixture_forces[0][1] - blocked).abs() < 1e-9 * blocked,
-        "blocked force {:?} vs {blocked}",
-        held.fixture_forces[0]
+        (blocked - expected_blocked).abs() < 1e-9 * expected_blocked,
+        "blocked force {blocked} vs {expected_blocked}"
     );
     // Doshi et al. Table I "new geometry" model row: 300 µm and 320 mN (within 10%).
     assert!((free / 300e-6 - 1.0).abs() < 0.1 && (blocked / 0.320 - 1.0).abs() < 0.1);

@@ -302,6 +302,18 @@ fn field(pair: Pair<Rule>) -> Result<ast::Field> {
     })
 }
 
+/// The fields of an optional `{ field; ... }` block (of a joint, loop or element).
+fn block_fields(parts: &mut Parts) -> Result<Vec<ast::Field>> {
+    let Some(block) = parts.take(Rule::joint_block) else {
+        return Ok(Vec::new());
+    };
+    block
+        .into_inner()
+        .filter(|inner| inner.as_rule() == Rule::field)
+        .map(field)
+        .collect()
+}
+
 /// `material NAME { .. }` or `flexure|actuator NAME on TARGET { .. }`.
 fn element_decl(pair: Pair<Rule>, docs: Vec<String>, has_target: bool) -> Result<ast::ElementDecl> {
     let mut parts = Parts::of(pair);
@@ -312,14 +324,7 @@ fn element_decl(pair: Pair<Rule>, docs: Vec<String>, has_target: bool) -> Result
         None
     };
     let span = parts.span;
-    let mut fields = Vec::new();
-    if let Some(block) = parts.take(Rule::joint_block) {
-        for inner in block.into_inner() {
-            if inner.as_rule() == Rule::field {
-                fields.push(field(inner)?);
-            }
-        }
-    }
+    let fields = block_fields(&mut parts)?;
     Ok(ast::ElementDecl {
         docs,
         name,
@@ -337,14 +342,7 @@ fn joint_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::JointDecl> {
     let parent = parts.ident()?;
     let child = parts.ident()?;
     let span = parts.span;
-    let mut fields = Vec::new();
-    if let Some(block) = parts.take(Rule::joint_block) {
-        for inner in block.into_inner() {
-            if inner.as_rule() == Rule::field {
-                fields.push(field(inner)?);
-            }
-        }
-    }
+    let fields = block_fields(&mut parts)?;
     Ok(ast::JointDecl {
         docs,
         name,

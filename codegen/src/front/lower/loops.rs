@@ -73,22 +73,7 @@ impl<'a> Lowerer<'a> {
         let kind = self.loop_kind(&decl.kind);
         let parent = self.resolve_owner(&decl.parent);
         let child = self.resolve_owner(&decl.child);
-        if let (Some(p), Some(c)) = (parent, child) {
-            if p == c {
-                self.error(
-                    Diagnostic::error(
-                        "E0408",
-                        format!(
-                            "loop `{}` connects `{}` to itself",
-                            decl.name.name, decl.parent.name
-                        ),
-                    )
-                    .with_label(decl.child.span, "the child")
-                    .with_label(decl.parent.span, "is also the parent")
-                    .with_help("a loop closes a chain between two different bodies"),
-                );
-            }
-        }
+        self.check_distinct_ends("loop", decl, parent, child);
         let fields = self.loop_field_list(decl, kind);
         let field = |name: &str| fields.iter().copied().find(|f| f.name.name == name);
 

@@ -110,22 +110,7 @@ impl<'a> Lowerer<'a> {
         let kind = self.joint_kind(&decl.kind);
         let parent = self.resolve_owner(&decl.parent);
         let child = self.joint_child(decl);
-        if let (Some(p), Some(c)) = (parent, child) {
-            if p == c {
-                self.error(
-                    Diagnostic::error(
-                        "E0408",
-                        format!(
-                            "joint `{}` connects `{}` to itself",
-                            decl.name.name, decl.parent.name
-                        ),
-                    )
-                    .with_label(decl.child.span, "the child")
-                    .with_label(decl.parent.span, "is also the parent")
-                    .with_help("a joint connects two different bodies: `pin(parent, child)`"),
-                );
-            }
-        }
+        self.check_distinct_ends("joint", decl, parent, child);
         let fields = self.joint_fields(decl, kind);
         let field = |name: &str| fields.iter().copied().find(|f| f.name.name == name);
         let mut info = JointInfo {
@@ -197,6 +182,34 @@ impl<'a> Lowerer<'a> {
         if let Some((rest, _)) = scalar(self, "rest") {
             info.rest = rest;
         }
+    }
+
+    /// E0408 when a joint or loop connects a body to itself.
+    pub(super) fn check_distinct_ends(
+        &mut self,
+        what: &str,
+        decl: &ast::JointDecl,
+        parent: Option<usize>,
+        child: Option<usize>,
+    ) {
+        if parent.is_none() || parent != child {
+            return;
+        }
+        self.error(
+            Diagnostic::error(
+                "E0408",
+                format!(
+                    "{what} `{}` connects `{}` to itself",
+                    decl.name.name, decl.parent.name
+                ),
+            )
+            .with_label(decl.child.span, "the child")
+            .with_label(decl.parent.span, "is also the parent")
+            .with_help(format!(
+                "a {what} connects two different bodies: `{}(parent, child)`",
+                decl.kind.name
+            )),
+        );
     }
 
     fn joint_kind(&mut self, kind: &ast::Ident) -> Option<JointKind> {
