@@ -4,13 +4,14 @@
 /// A simple pendulum: a bob of mass `m` on a light rod of length `l`, pinned at the
 /// Newtonian origin and swinging in the x-y plane under gravity along -y.
 #[derive(Clone, Debug, PartialEq, Default)]
+#[allow(clippy::all)]
 pub struct Pendulum {
     /// Parameters, settable at run time (SI units).
     pub params: PendulumParams,
 }
 /// Parameters of [`Pendulum`], in SI units; defaults from the model.
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[allow(non_snake_case)]
+#[allow(non_snake_case, clippy::all)]
 pub struct PendulumParams {
     /// Bob mass.
     /// Default 0.01 (SI units: kg).

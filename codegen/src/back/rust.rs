@@ -284,6 +284,7 @@ impl<'a> Emitter<'a> {
         quote! {
             #model_docs
             #[derive(Clone, Debug, PartialEq, Default)]
+            #[allow(clippy::all)]
             pub struct #name {
                 /// Parameters, settable at run time (SI units).
                 pub params: #params,
@@ -291,7 +292,7 @@ impl<'a> Emitter<'a> {
 
             #[doc = #params_doc]
             #[derive(Clone, Copy, Debug, PartialEq)]
-            #[allow(non_snake_case)]
+            #[allow(non_snake_case, clippy::all)]
             pub struct #params {
                 #( #field_docs pub #fields: f64, )*
             }
