@@ -1,0 +1,306 @@
+//! The HAMR leg models (`models/hamr_vi.mech`, `models/hamr_v2.mech`) against the reference
+//! geometry (shared `reference/README.md`) and the seed paper: loop closure and mobility at
+//! the zero configuration, the small-motion transmission ratios from the model's own
+//! kinematics (seed Sec. II: `T_l* = l_o/l_i`; HAMR-VI `T_l* = 22.4`, HAMR-V2.0 `30.8`), the
+//! decoupling of lift and swing by the spherical five-bar, the quasi-static response to the
+//! drive voltages and the normal modes.
+
+use mech::tape_model::TapeModel;
+use mech_codegen::Compiled;
+use mech_runtime::{
+    assemble, assemble_speeds, linearize, mobility, solve_statics, AssemblyOptions, Model,
+    StaticsOptions,
+};
+
+fn source_path(name: &str) -> String {
+    format!("{}/models/{name}.mech", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn load(name: &str) -> TapeModel {
+    let compiled = Compiled::from_path(source_path(name)).unwrap_or_else(|e| panic!("{e}"));
+    TapeModel::new(&compiled)
+}
+
+fn coordinate(model: &dyn Model, name: &str) -> usize {
+    (0..model.nq())
+        .find(|&i| model.coordinate_name(i) == name)
+        .unwrap_or_else(|| panic!("no coordinate `{name}`"))
+}
+
+/// The two actuator coordinates, held independent: `[swing, lift]`.
+fn actuators(model: &dyn Model) -> [usize; 2] {
+    [coordinate(model, "qsact"), coordinate(model, "qlact")]
+}
+
+fn foot(model: &dyn Model, q: &[f64], inputs: &[f64]) -> [f64; 3] {
+    let mut y = vec![0.0; model.noutputs()];
+    model.outputs(0.0, q, &vec![0.0; model.nu()], inputs, &mut y);
+    ["foot.x", "foot.y", "foot.z"].map(|name| y[model.output_index(name).unwrap()])
+}
+
+/// The loops closed with the actuators at `swing`, `lift` (m), from the zero configuration.
+fn assembled(model: &dyn Model, swing: f64, lift: f64) -> Vec<f64> {
+    let mut q = vec![0.0; model.nq()];
+    let mut u = vec![0.0; model.nu()];
+    model.initial_state(&mut q, &mut u);
+    let fixed = actuators(model);
+    q[fixed[0]] = swing;
+    q[fixed[1]] = lift;
+    assemble(model, 0.0, &mut q, &fixed, &AssemblyOptions::default()).unwrap();
+    q
+}
+
+/// Foot displacement per actuator displacement at the zero configuration by central
+/// differences of the assembled foot position: `t[component][actuator]`, actuator 0 = swing,
+/// 1 = lift, components x, y, z in the chassis frame.
+fn transmission(model: &dyn Model) -> [[f64; 2]; 3] {
+    let h = 1e-6;
+    let inputs = vec![0.0; model.ninputs()];
+    let mut t = [[0.0; 2]; 3];
+    for actuator in 0..2 {
+        let at = |s: f64| {
+            let (swing, lift) = if actuator == 0 { (s, 0.0) } else { (0.0, s) };
+            foot(model, &assembled(model, swing, lift), &inputs)
+        };
+        let (plus, minus) = (at(h), at(-h));
+        for (row, (p, m)) in t.iter_mut().zip(plus.iter().zip(&minus)) {
+            row[actuator] = (p - m) / (2.0 * h);
+        }
+    }
+    t
+}
+
+fn print_transmission(name: &str, t: &[[f64; 2]; 3]) {
+    println!("{name}: foot displacement per actuator displacement (swing, lift):");
+    for (c, row) in ["x", "y", "z"].iter().zip(t) {
+        println!("  foot {c}: {:+10.5} {:+10.5}", row[0], row[1]);
+    }
+}
+
+/// `|a/b − 1| < tolerance`.
+fn close(a: f64, b: f64, tolerance: f64) -> bool {
+    (a / b - 1.0).abs() < tolerance
+}
+
+#[test]
+fn hamr_vi_closes_at_zero_with_two_degrees_of_freedom() {
+    let model = load("hamr_vi");
+    assert_eq!((model.nq(), model.nc(), model.nflexures()), (8, 15, 9));
+    let q = assembled(&model, 0.0, 0.0);
+    // All link frames are parallel to the chassis at q = 0 and the loops close there.
+    let largest = q.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    assert!(largest < 1e-10, "assembly moved q by {largest:e}");
+    // The foot at rest: (12.75466, 17.37, −12.54) mm in the chassis (reference notes).
+    let rest = foot(&model, &q, &[0.0, 0.0]);
+    for (value, expected) in rest.iter().zip([12.754659815390e-3, 17.37e-3, -12.54e-3]) {
+        assert!((value - expected).abs() < 1e-12, "foot {rest:?}");
+    }
+
+    let m = mobility(&model, 0.0, &q);
+    println!("{m}");
+    println!(
+        "singular values of J (SI: m/m, m/rad, rad/rad): {:?}, threshold {:e}",
+        m.singular_values, m.threshold
+    );
+    assert_eq!((m.coordinates, m.rows, m.rank, m.dof()), (8, 15, 6, 2));
+    assert!(m.near_threshold().is_empty(), "{:?}", m.near_threshold());
+    // The rank gap: σ₆ (smallest nonzero) against σ₇ (largest zero), relative to σ₁.
+    let s = &m.singular_values;
+    let (smallest, spurious) = (s[5] / s[0], s[6] / s[0]);
+    println!(
+        "σ₆/σ₁ = {smallest:e}, σ₇/σ₁ = {spurious:e}, σ₆/threshold = {:e}",
+        s[5] / m.threshold
+    );
+    assert!(
+        s[5] > 1e5 * m.threshold,
+        "σ₆ = {:e} too close to the threshold",
+        s[5]
+    );
+    // Rank 6 at any relative tolerance from 1e-12 to 1e-3.
+    assert!(smallest > 1e-3 && spurious < 1e-12, "{s:?}");
+
+    // Away from zero too: both actuators deflected by 60 µm.
+    let q = assembled(&model, 60e-6, -60e-6);
+    let m = mobility(&model, 0.0, &q);
+    assert_eq!((m.rank, m.dof()), (6, 2), "{m}: {:?}", m.singular_values);
+    let mut u = vec![0.0; model.nu()];
+    let fixed = actuators(&model);
+    u[fixed[0]] = 1e-3;
+    u[fixed[1]] = -2e-3;
+    assemble_speeds(&model, 0.0, &q, &mut u, &fixed);
+    let mut j = vec![0.0; model.nc() * model.nq()];
+    model.constraint_jacobian(0.0, &q, &mut j);
+    let ju = (0..model.nc())
+        .map(|r| {
+            (0..model.nq())
+                .map(|c| j[r + model.nc() * c] * u[c])
+                .sum::<f64>()
+        })
+        .fold(0.0_f64, |m, v| m.max(v.abs()));
+    assert!(ju < 1e-14, "|J u| = {ju:e}");
+}
+
+/// The published fb2 loop points (FL_scaled.urdf, 1.44e-7 mm off the fb2 axis) against the
+/// ones moved onto the axis: the published ones leave a spurious singular value far below
+/// the rest, so that the rank depends on the tolerance; the moved ones leave none.
+#[test]
+fn hamr_vi_fb2_fix_removes_the_fragile_singular_value() {
+    let text = std::fs::read_to_string(source_path("hamr_vi")).unwrap();
+    let published = text
+        .replace(
+            "[-2.05236486487, 5.98079552649, 0] * 1 mm",
+            "[-2.05236472111, 5.98079552649, 0] * 1 mm",
+        )
+        .replace(
+            "[0, 5.98079552649, 1.65] * 1 mm",
+            "[0, 5.98079552649, 1.64999985615] * 1 mm",
+        );
+    assert_ne!(published, text);
+    let compiled = Compiled::from_source(mech_codegen::SourceFile::new("hamr_vi.mech", published))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let model = TapeModel::new(&compiled);
+    let q = vec![0.0; model.nq()];
+    let m = mobility(&model, 0.0, &q);
+    let s = &m.singular_values;
+    println!("published fb2 points: {m}; singular values {s:?}");
+    let mut phi = vec![0.0; model.nc()];
+    model.constraints(0.0, &q, &mut phi);
+    let open = phi.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    println!("published fb2 points: max |φ(0)| = {open:e} m");
+    assert!(open > 1e-10 && open < 2e-10, "{phi:?}");
+    // The 6 structural values are unchanged; a 7th appears, many decades below them.
+    let fixed = mobility(&load("hamr_vi"), 0.0, &q);
+    for (published, moved) in s.iter().zip(&fixed.singular_values).take(6) {
+        assert!(close(*published, *moved, 1e-6));
+    }
+    assert!(
+        s[6] > 1e3 * fixed.singular_values[6] && s[6] < 1e-6 * s[5],
+        "σ₇ = {:e} (fixed model: {:e})",
+        s[6],
+        fixed.singular_values[6]
+    );
+}
+
+#[test]
+fn hamr_vi_small_motion_transmission_ratios() {
+    let model = load("hamr_vi");
+    let t = transmission(&model);
+    print_transmission("HAMR-VI", &t);
+    let [x, y, z] = t;
+    let (swing, lift) = (0, 1);
+    // T_l* = l_o/l_i: the foot hangs l_o = 13.0 mm below the lift axis (x through the SFB
+    // centre), so the full lift-plane lever moves it laterally (y); l_i = 0.58 mm.
+    let t_l_star = y[lift];
+    println!(
+        "T_l* = {t_l_star:.4} (13.0/0.58 = {:.4}); lift -> z {:.4}; swing -> x {:.4}",
+        13.0 / 0.58,
+        z[lift],
+        x[swing]
+    );
+    assert!(close(t_l_star, 22.4, 0.01), "T_l* = {t_l_star}");
+    assert!(close(t_l_star, 13.0 / 0.58, 1e-4), "T_l* = {t_l_star}");
+    // Lift -> foot z: s_o/l_i = 7.58/0.58 ≈ 13.1 (the seed's T_l = 12).
+    assert!(close(z[lift], 13.1, 0.01), "lift -> z {}", z[lift]);
+    assert!(close(z[lift], 7.58 / 0.58, 1e-4));
+    // Swing (+y) -> foot x (backwards): 7.58/0.53 ≈ 14.3 (the seed's T_s = 13).
+    assert!(close(-x[swing], 14.3, 0.01), "swing -> x {}", x[swing]);
+    assert!(close(-x[swing], 7.58 / 0.53, 1e-4));
+    // The five-bar decouples lift and swing: off-diagonal terms of the (x, z) Jacobian.
+    let coupling = [
+        (x[lift] / z[lift]).abs(),
+        (z[swing] / x[swing]).abs(),
+        (y[swing] / x[swing]).abs(),
+    ];
+    println!("cross-coupling lift -> x, swing -> z, swing -> y: {coupling:?}");
+    assert!(coupling.iter().all(|&c| c < 0.05), "{coupling:?}");
+}
+
+#[test]
+fn hamr_vi_quasi_static_response_and_modes() {
+    let model = load("hamr_vi");
+    let (v_lift, v_swing) = (
+        model.input_index("v_lift").unwrap(),
+        model.input_index("v_swing").unwrap(),
+    );
+    let equilibrium = |volts_lift: f64, volts_swing: f64| {
+        let mut q = assembled(&model, 0.0, 0.0);
+        let mut inputs = vec![0.0; model.ninputs()];
+        inputs[v_lift] = volts_lift;
+        inputs[v_swing] = volts_swing;
+        let eq = solve_statics(
+            &model,
+            0.0,
+            &mut q,
+            &inputs,
+            &[],
+            &StaticsOptions::default(),
+        )
+        .unwrap();
+        assert!(eq.constraint_residual < 1e-12);
+        (q.clone(), foot(&model, &q, &inputs))
+    };
+    let [sact, lact] = actuators(&model);
+    let (q0, rest) = equilibrium(0.0, 0.0);
+    println!(
+        "rest under gravity: foot {:?} mm, actuators (swing, lift) {:.4} µm, {:.4} µm",
+        rest.map(|v| v * 1e3),
+        q0[sact] * 1e6,
+        q0[lact] * 1e6
+    );
+    for (name, volts) in [("lift", [225.0, 0.0]), ("swing", [0.0, 225.0])] {
+        let (q, at) = equilibrium(volts[0], volts[1]);
+        let d: Vec<f64> = at.iter().zip(&rest).map(|(a, b)| (a - b) * 1e3).collect();
+        println!(
+            "{name} at 225 V: foot moves {d:.4?} mm; actuators (swing, lift) {:.2} µm, {:.2} µm",
+            (q[sact] - q0[sact]) * 1e6,
+            (q[lact] - q0[lact]) * 1e6
+        );
+    }
+    // Decoupling under a small drive (10 V): lift moves the foot up, swing moves it back.
+    let (_, lift) = equilibrium(10.0, 0.0);
+    let (_, swing) = equilibrium(0.0, 10.0);
+    let dl: Vec<f64> = lift.iter().zip(&rest).map(|(a, b)| a - b).collect();
+    let ds: Vec<f64> = swing.iter().zip(&rest).map(|(a, b)| a - b).collect();
+    assert!(dl[2] > 0.0 && (dl[0] / dl[2]).abs() < 0.05, "lift {dl:?}");
+    assert!(ds[0] < 0.0 && (ds[2] / ds[0]).abs() < 0.05, "swing {ds:?}");
+
+    let linear = linearize(&model, 0.0, &q0, &[0.0, 0.0], &[sact, lact]).unwrap();
+    let modes = linear.modes().unwrap();
+    for mode in &modes {
+        println!(
+            "mode {:.3} Hz, ζ = {:.4}, shape (swing, lift) {:?}",
+            mode.frequency_hz(),
+            mode.damping_ratio,
+            mode.shape
+        );
+    }
+    assert_eq!(modes.len(), 2);
+    for mode in &modes {
+        assert!(mode.frequency_hz() > 30.0 && mode.frequency_hz() < 300.0);
+        assert!(mode.damping_ratio > 0.0 && mode.damping_ratio < 0.1);
+    }
+}
+
+#[test]
+fn hamr_v2_transmission_ratio_and_mobility() {
+    let model = load("hamr_v2");
+    let q = assembled(&model, 0.0, 0.0);
+    let m = mobility(&model, 0.0, &q);
+    println!("HAMR-V2.0: {m}; singular values {:?}", m.singular_values);
+    assert_eq!((m.rank, m.dof()), (6, 2));
+    assert!(m.near_threshold().is_empty());
+    let t = transmission(&model);
+    print_transmission("HAMR-V2.0", &t);
+    let [x, y, z] = t;
+    let (swing, lift) = (0, 1);
+    assert!(close(y[lift], 30.8, 0.01), "T_l* = {}", y[lift]);
+    // Lift -> z: 7.58 mm / (13.0 mm / 30.8) = 17.96 (the seed's T_l = 16.5).
+    assert!(close(z[lift], 7.58 * 30.8 / 13.0, 1e-3), "{}", z[lift]);
+    // Swing -> x: 7.58 mm / (0.53 mm · 13 / 20.5) = 22.55 (the seed's T_s = 20.5).
+    assert!(
+        close(-x[swing], 7.58 * 20.5 / (0.53 * 13.0), 1e-3),
+        "{}",
+        x[swing]
+    );
+    assert!((x[lift] / z[lift]).abs() < 0.05 && (z[swing] / x[swing]).abs() < 0.05);
+}
