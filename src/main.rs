@@ -229,6 +229,11 @@ fn check(path: &Path) -> Result<(), String> {
             model.joints.len(),
             model.loops.len()
         );
+        // The singular values that decide the rank, and any warning about them.
+        let report = session::assembly_report(&session.model, &state);
+        for line in report.lines().skip(1).take_while(|line| !line.is_empty()) {
+            println!("  {line}");
+        }
     }
     println!("\ncoordinates (q, with u = q̇):");
     for (_, joint) in model.joints.iter() {

@@ -439,3 +439,25 @@ fn chirp_estimate_agrees_with_the_linear_response() {
         "Q {q_exact} vs {q_chirp}"
     );
 }
+
+/// An actuator's `rest` offsets its tip: free deflection δ_f·V/V_rated + rest.
+#[test]
+fn actuator_rest_offsets_the_free_deflection() {
+    let source = "
+        input drive = 0 V;
+        body tip { mass = 1 mg; }
+        joint slide = slider(newtonian, tip) { axis = y; }
+        actuator lift on slide {
+            blocked_force = 270 mN; free_deflection = 247 um; rated_voltage = 225 V;
+            voltage = drive; rest = -50 um;
+        }
+        output tip = position(tip) in newtonian;
+    ";
+    let model = mech::tape_model::TapeModel::new(&common::compile_text("preloaded", source));
+    let (free, _) = free_and_blocked(&model, 100.0);
+    let expected = 247e-6 * 100.0 / 225.0 - 50e-6;
+    assert!(
+        (free - expected).abs() < 1e-10 * expected.abs(),
+        "{free} vs {expected}"
+    );
+}

@@ -536,7 +536,7 @@ impl<'a> Lowerer<'a> {
         let allowed: Vec<&str> = RATED_FIELDS
             .iter()
             .chain(&BIMORPH_FIELDS)
-            .chain(&["voltage"])
+            .chain(&["voltage", "rest"])
             .copied()
             .collect();
         let fields = self.element_fields(decl, &allowed, "actuator");
@@ -568,6 +568,19 @@ impl<'a> Lowerer<'a> {
         else {
             return;
         };
+        // `rest`: where the tip sits at zero voltage (a preload offsets it), a length.
+        let rest_expect = Expect {
+            dim: Dimension::LENGTH,
+            what: "rest",
+            example: "-50 um",
+        };
+        let rest = fields
+            .iter()
+            .find(|f| f.name.name == "rest")
+            .and_then(|f| {
+                self.lower_scalar_as(&f.value, Ctx::Static("an element property"), &rest_expect)
+            })
+            .unwrap_or_else(Expr::zero);
         let span = decl.span;
         // Series stiffness k_a = F_b/δ_f (the same at every voltage), and the force source
         // F_b(V) = (F_b/V)·V.
@@ -575,7 +588,7 @@ impl<'a> Lowerer<'a> {
         self.model.loads.push(ir::Load::Spring {
             coordinate,
             stiffness,
-            rest: Expr::zero(),
+            rest,
             span,
         });
         self.model.loads.push(ir::Load::GeneralizedForce {
