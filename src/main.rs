@@ -105,6 +105,10 @@ enum Command {
     },
     /// Piezo bending actuator: blocked force, free deflection, series stiffness, energy density.
     Actuator(mech::flexure_fit::cli::ActuatorArgs),
+    /// Run one experiment file (`experiments/*.toml`): CSV, plots and tables.
+    Experiment(mech::experiments::report::ExperimentArgs),
+    /// Run every experiment in `experiments/` and write an HTML and Markdown report.
+    Report(mech::experiments::report::ReportArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -190,6 +194,8 @@ fn main() -> ExitCode {
         Command::Statics(args) => mech::linear_cli::statics(&args),
         Command::Linearize(args) => mech::linear_cli::linearize_command(&args),
         Command::Bode(args) => mech::linear_cli::bode(&args),
+        Command::Experiment(args) => mech::experiments::report::experiment_command(&args),
+        Command::Report(args) => mech::experiments::report::report_command(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,413 @@
+//! Experiment 5, dynamic regime (seed Sec. VI, Fig. 10): frequency responses from drive
+//! voltage to foot displacement, lift and swing, from the linearized model (hysteretic and
+//! viscous flexure losses) and from a simulated linear chirp; resonances and quality factors.
+
+use std::path::{Path, PathBuf};
+
+use mech_codegen::ir::Dimension;
+use serde::Deserialize;
+
+use super::leg::Leg;
+use super::{csv, positive, quantity, ModelSpec, Outcome, Table, FREQUENCY};
+use crate::frequency::{self, Point};
+use crate::plot;
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Spec {
+    pub title: String,
+    pub model: PathBuf,
+    #[serde(default)]
+    pub set: Vec<String>,
+    #[serde(default = "super::default_independent")]
+    pub independent: Vec<String>,
+    /// Lowest and highest frequency (`1 Hz`, `150 Hz`).
+    pub from: String,
+    pub to: String,
+    /// Log-spaced frequencies of the linear response.
+    #[serde(default = "default_points")]
+    pub points: usize,
+    /// Input → output pairs, e.g. `{ name = "lift", input = "v_lift", output = "foot.z" }`.
+    pub channel: Vec<Channel>,
+    /// A simulated linear chirp (time domain, viscous flexure dampers), if given.
+    pub chirp: Option<Chirp>,
+    #[serde(default)]
+    pub notes: Vec<String>,
+}
+
+fn default_points() -> usize {
+    300
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Channel {
+    pub name: String,
+    pub input: String,
+    pub output: String,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Chirp {
+    /// Amplitude in the input's unit (`50 V`; the paper uses 50–60 V).
+    pub amplitude: String,
+    /// Length of the sweep (`2 s`).
+    pub duration: String,
+    /// Lowest frequency of the chirp estimate shown and searched for resonances (default
+    /// `5 Hz`): near the sweep's start the record holds too few cycles.
+    pub analysis_from: Option<String>,
+}
+
+impl Chirp {
+    pub fn cost(&self) -> f64 {
+        quantity("chirp.duration", &self.duration, Dimension::TIME).unwrap_or(1.0) * 5.0
+    }
+}
+
+impl Spec {
+    pub fn check(&self) -> Result<(), String> {
+        let from = positive("from", &self.from, FREQUENCY)?;
+        let to = positive("to", &self.to, FREQUENCY)?;
+        if to <= from {
+            return Err(format!(
+                "key `to`: {to} Hz must be above `from` ({from} Hz)"
+            ));
+        }
+        if self.channel.is_empty() {
+            return Err(
+                "key `channel`: give at least one [[channel]] (name, input, output)".into(),
+            );
+        }
+        if let Some(chirp) = &self.chirp {
+            positive("chirp.amplitude", &chirp.amplitude, super::VOLTAGE)?;
+            positive("chirp.duration", &chirp.duration, Dimension::TIME)?;
+        }
+        Ok(())
+    }
+}
+
+fn q_text(q: Option<f64>) -> String {
+    q.map_or("n/a".into(), |q| format!("{q:.1}"))
+}
+
+pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
+    let from = positive("from", &spec.from, FREQUENCY)?;
+    let to = positive("to", &spec.to, FREQUENCY)?;
+    let model_spec = ModelSpec {
+        model: spec.model.clone(),
+        set: spec.set.clone(),
+        independent: spec.independent.clone(),
+    };
+    let leg = Leg::open(&model_spec)?;
+    let model = leg.model();
+    let rest_inputs = leg.inputs(0.0, 0.0);
+    let rest_q = leg.equilibrium(&leg.q0, &rest_inputs, &[])?.q;
+    let linear = mech_runtime::linearize(model, 0.0, &rest_q, &rest_inputs, &leg.independent)
+        .map_err(|e| format!("linearization failed: {e}"))?;
+    let modes = linear
+        .modes()
+        .ok_or("the reduced mass matrix is not positive definite")?;
+    let frequencies = frequency::log_space(from, to, spec.points);
+    let name = model.name().to_string();
+
+    let mut outcome = Outcome {
+        method: format!(
+            "Linearized about the rest equilibrium under gravity (minimal coordinates: the \
+             actuators), H = foot displacement / drive voltage, {from}–{to} Hz: with the \
+             flexure losses as complex stiffness k(1 + iη) (exact at every frequency) and as \
+             the time-domain viscous dampers b = kη/ω_ref (ω_ref = 2π·40 Hz). {}",
+            match &spec.chirp {
+                Some(c) => format!(
+                    "Chirp: the nonlinear model simulated (DOPRI5) from rest under a linear chirp \
+                     of {} from {from} to {to} Hz over {}, one input at a time; H estimated by \
+                     single-bin Fourier transforms of the whole record (rectangular window; viscous \
+                     losses, as in the time domain). Magnitudes in dB re 1 µm/V.",
+                    c.amplitude, c.duration
+                ),
+                None => "Magnitudes in dB re 1 µm/V.".into(),
+            }
+        ),
+        ..Outcome::default()
+    };
+    let mut modes_table = Table::new(
+        &format!("{name}: normal modes of the linearized model"),
+        &[
+            "mode",
+            "f [Hz]",
+            "ζ (viscous)",
+            "Q ≈ 1/(2ζ)",
+            "shape (qsact, qlact)",
+        ],
+    );
+    for (k, mode) in modes.iter().enumerate() {
+        modes_table.row(vec![
+            format!("{}", k + 1),
+            format!("{:.1}", mode.frequency_hz()),
+            format!("{:.4}", mode.damping_ratio),
+            format!("{:.1}", 1.0 / (2.0 * mode.damping_ratio)),
+            format!(
+                "[{}]",
+                mode.shape
+                    .iter()
+                    .map(|x| format!("{x:+.3}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        ]);
+        outcome
+            .values
+            .insert(format!("mode{}_hz", k + 1), mode.frequency_hz());
+    }
+
+    // Chirps in parallel, one per channel.
+    let chirp = match &spec.chirp {
+        Some(c) => Some((
+            positive("chirp.amplitude", &c.amplitude, super::VOLTAGE)?,
+            positive("chirp.duration", &c.duration, Dimension::TIME)?,
+            match &c.analysis_from {
+                Some(t) => positive("chirp.analysis_from", t, FREQUENCY)?,
+                None => 5.0,
+            },
+        )),
+        None => None,
+    };
+    let mut indices = Vec::new();
+    for channel in &spec.channel {
+        let input = model.input_index(&channel.input).ok_or_else(|| {
+            format!(
+                "channel `{}`: unknown input `{}`",
+                channel.name, channel.input
+            )
+        })?;
+        let output = model.output_index(&channel.output).ok_or_else(|| {
+            format!(
+                "channel `{}`: unknown output `{}`",
+                channel.name, channel.output
+            )
+        })?;
+        indices.push((input, output));
+    }
+    let estimates = match chirp {
+        Some((amplitude, duration, analysis_from)) => {
+            super::parallel(indices.clone(), super::threads(), |(input, output)| {
+                let leg = Leg::open(&model_spec)?;
+                let mut estimate = chirp_estimate(
+                    &leg,
+                    &rest_q,
+                    input,
+                    output,
+                    amplitude,
+                    from,
+                    to,
+                    duration,
+                    &frequencies,
+                )?;
+                // Blank the start of the sweep (NaN: not drawn, not searched).
+                for point in estimate
+                    .iter_mut()
+                    .filter(|p| p.frequency_hz < analysis_from)
+                {
+                    point.gain = mech_runtime::nalgebra::Complex::new(f64::NAN, f64::NAN);
+                }
+                Ok(Some(estimate))
+            })
+            .into_iter()
+            .collect::<Result<Vec<_>, String>>()?
+        }
+        None => vec![None; spec.channel.len()],
+    };
+
+    let mut table = Table::new(
+        &format!("{name}: resonances and quality factors, {from}–{to} Hz"),
+        &[
+            "channel",
+            "source",
+            "f_r [Hz]",
+            "Q (−3 dB)",
+            "gain at f_r [µm/V]",
+            "lowest-f gain [µm/V]",
+        ],
+    );
+    for ((channel, &(input, output)), estimate) in spec.channel.iter().zip(&indices).zip(estimates)
+    {
+        let hysteretic = frequency::linear_response(
+            &linear,
+            input,
+            output,
+            &frequencies,
+            mech_runtime::FlexureDamping::Hysteretic,
+        )
+        .ok_or("the linear model is singular at some frequency")?;
+        let viscous = frequency::linear_response(
+            &linear,
+            input,
+            output,
+            &frequencies,
+            mech_runtime::FlexureDamping::Viscous,
+        )
+        .ok_or("the linear model is singular at some frequency")?;
+        let mut sources: Vec<(&str, Vec<Point>)> = vec![
+            ("linear, hysteretic", hysteretic),
+            ("linear, viscous", viscous),
+        ];
+        if let Some(e) = estimate {
+            sources.push(("chirp simulation", e));
+        }
+        for (k, (source, response)) in sources.iter().enumerate() {
+            let peak = frequency::resonances(response).into_iter().next();
+            let low = response
+                .iter()
+                .map(|p| p.gain.norm())
+                .find(|g| g.is_finite())
+                .unwrap_or(f64::NAN);
+            if let Some(r) = peak {
+                let key = ["hysteretic", "viscous", "chirp"][k];
+                outcome.values.insert(
+                    format!("{}_{key}_resonance_hz", channel.name),
+                    r.frequency_hz,
+                );
+                if let Some(q) = r.quality_factor {
+                    outcome
+                        .values
+                        .insert(format!("{}_{key}_q", channel.name), q);
+                }
+            }
+            table.row(vec![
+                channel.name.clone(),
+                source.to_string(),
+                peak.map_or("–".into(), |r| format!("{:.1}", r.frequency_hz)),
+                q_text(peak.and_then(|r| r.quality_factor)),
+                peak.map_or("–".into(), |r| format!("{:.2}", r.peak_magnitude * 1e6)),
+                format!("{:.2}", low * 1e6),
+            ]);
+        }
+        let db = |p: &Point| 20.0 * (p.gain.norm() * 1e6).log10();
+        let f: Vec<f64> = frequencies.clone();
+        let magnitude: Vec<(String, Vec<f64>, Vec<f64>)> = sources
+            .iter()
+            .map(|(s, r)| (s.to_string(), f.clone(), r.iter().map(db).collect()))
+            .collect();
+        let phase: Vec<(String, Vec<f64>, Vec<f64>)> = sources
+            .iter()
+            .map(|(s, r)| {
+                (
+                    s.to_string(),
+                    f.clone(),
+                    r.iter().map(Point::phase_deg).collect(),
+                )
+            })
+            .collect();
+        let rows: Vec<Vec<f64>> = (0..f.len())
+            .map(|k| {
+                let mut row = vec![f[k]];
+                for (_, r) in &sources {
+                    row.extend([r[k].gain.norm(), r[k].phase_deg()]);
+                }
+                row
+            })
+            .collect();
+        let mut header = vec!["frequency_hz".to_string()];
+        for (s, _) in &sources {
+            let s = s.replace([',', ' '], "_").replace("__", "_");
+            header.extend([format!("{s}_magnitude_m_per_v"), format!("{s}_phase_deg")]);
+        }
+        let header: Vec<&str> = header.iter().map(String::as_str).collect();
+        csv(
+            &mut outcome,
+            dir,
+            &format!("bode_{}.csv", channel.name),
+            &header,
+            &rows,
+        )?;
+        let path = dir.join(format!("bode_{}.svg", channel.name));
+        plot::plot_bode(
+            &path,
+            &format!(
+                "{name}: {} → {} (dB re 1 µm/V)",
+                channel.input, channel.output
+            ),
+            &magnitude,
+            &phase,
+        )
+        .map_err(|e| e.to_string())?;
+        outcome.plots.push(path);
+    }
+    outcome.tables.push(table);
+    outcome.tables.push(modes_table);
+    outcome.notes = spec.notes.clone();
+    Ok(outcome)
+}
+
+/// Simulates a chirp on `input` from the rest equilibrium and estimates `H(f)`.
+#[allow(clippy::too_many_arguments)]
+fn chirp_estimate(
+    leg: &Leg,
+    rest_q: &[f64],
+    input: usize,
+    output: usize,
+    amplitude: f64,
+    from: f64,
+    to: f64,
+    duration: f64,
+    frequencies: &[f64],
+) -> Result<Vec<Point>, String> {
+    let model = leg.model();
+    let mut signals = leg.session.signals.clone();
+    signals[input] = mech_runtime::Signal::Chirp {
+        amplitude,
+        f0_hz: from,
+        f1_hz: to,
+        duration,
+        offset: 0.0,
+    };
+    let options = mech_runtime::SimOptions {
+        t_end: duration,
+        output_interval: 1.0 / (20.0 * to),
+        method: mech_runtime::Method::Dopri5 {
+            rtol: 1e-7,
+            atol: 1e-12,
+            h_max: 1.0 / (20.0 * to),
+        },
+        ..mech_runtime::SimOptions::default()
+    };
+    let u0 = vec![0.0; model.nu()];
+    let run = mech_runtime::simulate(model, rest_q, &u0, &signals, &options, &mut |_| {})
+        .map_err(|e| format!("chirp simulation failed: {e}"))?;
+    let u: Vec<f64> = run.inputs.iter().map(|x| x[input]).collect();
+    let y: Vec<f64> = run.outputs.iter().map(|x| x[output]).collect();
+    Ok(rectangular_estimate(&run.times, &u, &y, frequencies))
+}
+
+/// `H(f) = Y(f)/U(f)` from single-bin Fourier transforms of the whole record with a
+/// rectangular window (trapezoid rule; the output's mean removed). Unlike a Hann window over
+/// the record, this keeps the start of a linear chirp, where its low frequencies are.
+pub fn rectangular_estimate(
+    times: &[f64],
+    input: &[f64],
+    output: &[f64],
+    frequencies: &[f64],
+) -> Vec<Point> {
+    use mech_runtime::nalgebra::Complex;
+    let n = times.len();
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let (mu, my) = (mean(input), mean(output));
+    frequencies
+        .iter()
+        .map(|&f| {
+            let omega = std::f64::consts::TAU * f;
+            let (mut su, mut sy) = (Complex::new(0.0, 0.0), Complex::new(0.0, 0.0));
+            for k in 1..n {
+                let dt = times[k] - times[k - 1];
+                let term =
+                    |v: &[f64], m: f64, j: usize| Complex::from_polar(v[j] - m, -omega * times[j]);
+                su += (term(input, mu, k) + term(input, mu, k - 1)) * (0.5 * dt);
+                sy += (term(output, my, k) + term(output, my, k - 1)) * (0.5 * dt);
+            }
+            Point {
+                frequency_hz: f,
+                gain: sy / su,
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,201 @@
+//! Experiment 4, HAMR-V2.0 against HAMR-VI (seed Table IV): free deflection, blocked force,
+//! `F·d` and `F·d/(F_b δ_f)` of both legs, lift and swing, and the increase of the work done
+//! by the foot (the paper reports 266 %).
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use super::force::{actuator_work, check_paper, PaperRow};
+use super::leg::{force_deflection, Dof, Leg};
+use super::{csv, positive, ModelSpec, Outcome, Table, VOLTAGE};
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Spec {
+    pub title: String,
+    /// Peak drive voltage of the model inputs (`225 V`).
+    pub voltage: String,
+    /// The paper's reported increase of the work done by the foot, percent (266).
+    pub paper_work_increase_percent: Option<f64>,
+    /// Exactly two robots: the old design first, the new one second.
+    pub robot: Vec<Robot>,
+    #[serde(default)]
+    pub notes: Vec<String>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Robot {
+    pub name: String,
+    pub model: PathBuf,
+    #[serde(default)]
+    pub set: Vec<String>,
+    #[serde(default = "super::default_independent")]
+    pub independent: Vec<String>,
+    /// Seed Table IV values, per degree of freedom.
+    #[serde(default)]
+    pub paper: BTreeMap<String, PaperRow>,
+}
+
+impl Spec {
+    pub fn check(&self) -> Result<(), String> {
+        positive("voltage", &self.voltage, VOLTAGE)?;
+        if self.robot.len() != 2 {
+            return Err(format!(
+                "key `robot`: expected exactly two [[robot]] tables (old, new), got {}",
+                self.robot.len()
+            ));
+        }
+        for (k, robot) in self.robot.iter().enumerate() {
+            check_paper(&robot.paper, &format!("robot[{k}]."))?;
+        }
+        Ok(())
+    }
+}
+
+pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
+    let voltage = positive("voltage", &spec.voltage, VOLTAGE)?;
+    let mut outcome = Outcome {
+        method: format!(
+            "For each robot and degree of freedom, at {voltage} V: the free deflection d of the \
+             foot along the test axis (lift: z, swing: x; one way from rest) and the blocked \
+             force F (foot held at its rest position along that axis, frictionless), as in \
+             experiment 2 without off-axis load; F·d and F·d/(F_b δ_f) with the model's \
+             actuator F_b and δ_f, as in Table IV."
+        ),
+        ..Outcome::default()
+    };
+    let mut table = Table::new(
+        "Model against the paper's Table IV (measured mean ± s.d., n = 2)",
+        &[
+            "robot",
+            "DOF",
+            "d model [mm]",
+            "d paper",
+            "F model [mN]",
+            "F paper",
+            "F·d model [µJ]",
+            "F·d paper",
+            "F·d/(F_b δ_f) model",
+            "paper",
+        ],
+    );
+    let mut work = [[0.0; 2]; 2];
+    let mut paper_work = [[f64::NAN; 2]; 2];
+    let mut rows = Vec::new();
+    let results = super::parallel(
+        spec.robot.iter().collect(),
+        2,
+        |robot| -> Result<_, String> {
+            let leg = Leg::open(&ModelSpec {
+                model: robot.model.clone(),
+                set: robot.set.clone(),
+                independent: robot.independent.clone(),
+            })?;
+            let fbdf = actuator_work(&leg)?;
+            let tests = [Dof::Lift, Dof::Swing]
+                .map(|dof| force_deflection(&leg, dof, dof.axis(), voltage, None, 0.0));
+            Ok((fbdf, tests))
+        },
+    );
+    for (r, (robot, result)) in spec.robot.iter().zip(results).enumerate() {
+        let (fbdf, tests) = result.map_err(|e| format!("robot `{}`: {e}", robot.name))?;
+        for (k, (dof, test)) in [Dof::Lift, Dof::Swing].iter().zip(tests).enumerate() {
+            let test = test.map_err(|e| format!("robot `{}` {}: {e}", robot.name, dof.name()))?;
+            let paper = robot
+                .paper
+                .get(dof.name())
+                .map(|p| p.parse(dof.name()))
+                .transpose()?;
+            let (d, f, w) = (test.free_deflection, test.blocked_force(), test.work());
+            work[r][k] = w;
+            let show = |value: Option<(f64, f64)>, scale: f64, digits: usize| {
+                value.map_or("–".to_string(), |(m, s)| {
+                    format!("{:.*} ± {:.*}", digits, m * scale, digits, s * scale)
+                })
+            };
+            if let Some(p) = &paper {
+                paper_work[r][k] = p.work.0;
+            }
+            table.row(vec![
+                robot.name.clone(),
+                dof.name().into(),
+                format!("{:.2}", d * 1e3),
+                show(paper.map(|p| p.d), 1e3, 1),
+                format!("{:.1}", f * 1e3),
+                show(paper.map(|p| p.force), 1e3, 1),
+                format!("{:.1}", w * 1e6),
+                show(paper.map(|p| p.work), 1e6, 1),
+                format!("{:.2}", w / fbdf),
+                show(paper.map(|p| p.normalized), 1.0, 2),
+            ]);
+            let key = format!("{}_{}", if r == 0 { "old" } else { "new" }, dof.name());
+            for (name, value) in [
+                ("free_deflection", d),
+                ("blocked_force", f),
+                ("work", w),
+                ("normalized", w / fbdf),
+            ] {
+                outcome.values.insert(format!("{key}_{name}"), value);
+            }
+            rows.push(vec![r as f64, k as f64, d, f, w, w / fbdf]);
+        }
+    }
+    csv(
+        &mut outcome,
+        dir,
+        "compare.csv",
+        &[
+            "robot",
+            "dof_lift0_swing1",
+            "free_deflection",
+            "blocked_force",
+            "work",
+            "normalized",
+        ],
+        &rows,
+    )?;
+    outcome.tables.push(table);
+
+    let total = |w: [f64; 2]| w[0] + w[1];
+    let model_ratio = total(work[1]) / total(work[0]);
+    let table_ratio = total(paper_work[1]) / total(paper_work[0]);
+    outcome.values.insert("work_ratio".into(), model_ratio);
+    let mut increase = Table::new(
+        &format!(
+            "Work done by the foot, {} against {} (lift + swing F·d)",
+            spec.robot[1].name, spec.robot[0].name
+        ),
+        &["", "old [µJ]", "new [µJ]", "ratio new/old", "increase"],
+    );
+    increase.row(vec![
+        "model".into(),
+        format!("{:.1}", total(work[0]) * 1e6),
+        format!("{:.1}", total(work[1]) * 1e6),
+        format!("{model_ratio:.2}"),
+        format!("{:.0} %", 100.0 * (model_ratio - 1.0)),
+    ]);
+    if table_ratio.is_finite() {
+        increase.row(vec![
+            "paper, from Table IV".into(),
+            format!("{:.1}", total(paper_work[0]) * 1e6),
+            format!("{:.1}", total(paper_work[1]) * 1e6),
+            format!("{table_ratio:.2}"),
+            format!("{:.0} %", 100.0 * (table_ratio - 1.0)),
+        ]);
+    }
+    if let Some(p) = spec.paper_work_increase_percent {
+        increase.row(vec![
+            "paper, reported (abstract)".into(),
+            "–".into(),
+            "–".into(),
+            format!("{:.2}", 1.0 + p / 100.0),
+            format!("{p:.0} % (model {:.0} %)", 100.0 * (model_ratio - 1.0)),
+        ]);
+    }
+    outcome.tables.push(increase);
+    outcome.notes = spec.notes.clone();
+    Ok(outcome)
+}

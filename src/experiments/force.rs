@@ -1,0 +1,347 @@
+//! Experiment 2, force/deflection (seed Fig. 6 a, b, f, g; Sec. V.A, Fig. 7): the foot
+//! pushed against a force sensor at increasing distances (127 µm steps) until no force; the
+//! on-axis force at each distance with the off-axis (y) force, optionally with the paper's
+//! ~30 % off-axis load; blocked force and free deflection; `F·d` and `F·d/(F_b δ_f)`.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use mech_codegen::ir::Dimension;
+use serde::Deserialize;
+
+use super::leg::{force_deflection, Dof, ForceDeflection, Leg, AXES};
+use super::{csv, paper_value, percent_diff, positive, ModelSpec, Outcome, Table, ENERGY, VOLTAGE};
+use crate::plot;
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Spec {
+    pub title: String,
+    pub model: PathBuf,
+    #[serde(default)]
+    pub set: Vec<String>,
+    #[serde(default = "super::default_independent")]
+    pub independent: Vec<String>,
+    /// Peak drive voltage of the model input (`225 V`).
+    pub voltage: String,
+    /// Step of the sensor position (`127 um`).
+    pub sensor_step: String,
+    /// Degrees of freedom tested (`["lift", "swing"]`); lift pushes along z, swing along x.
+    #[serde(default = "default_dofs")]
+    pub dofs: Vec<Dof>,
+    /// If set, the test is repeated with this fraction of the on-axis force applied along y.
+    pub off_axis_fraction: Option<f64>,
+    /// The paper's measured values for this robot (Table IV), per degree of freedom.
+    #[serde(default)]
+    pub paper: BTreeMap<String, PaperRow>,
+    #[serde(default)]
+    pub notes: Vec<String>,
+}
+
+/// One row of the paper's Table IV: `"2.2 +- 0.1 mm"` etc.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PaperRow {
+    /// Maximum one-way foot displacement.
+    pub d: String,
+    /// Maximum force.
+    pub force: String,
+    /// `F·d`.
+    pub work: String,
+    /// `F·d/(F_b δ_f)`, e.g. `"0.38 +- 0.04"`.
+    pub normalized: String,
+}
+
+/// A parsed [`PaperRow`], SI means and spreads.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Paper {
+    pub d: (f64, f64),
+    pub force: (f64, f64),
+    pub work: (f64, f64),
+    pub normalized: (f64, f64),
+}
+
+impl PaperRow {
+    pub fn parse(&self, key: &str) -> Result<Paper, String> {
+        Ok(Paper {
+            d: paper_value(&format!("{key}.d"), &self.d, Dimension::LENGTH)?,
+            force: paper_value(&format!("{key}.force"), &self.force, Dimension::FORCE)?,
+            work: paper_value(&format!("{key}.work"), &self.work, ENERGY)?,
+            normalized: paper_value(
+                &format!("{key}.normalized"),
+                &self.normalized,
+                Dimension::NONE,
+            )?,
+        })
+    }
+}
+
+pub(crate) fn check_paper(paper: &BTreeMap<String, PaperRow>, prefix: &str) -> Result<(), String> {
+    for (key, row) in paper {
+        if key != "lift" && key != "swing" {
+            return Err(format!(
+                "key `{prefix}paper.{key}`: expected `lift` or `swing`"
+            ));
+        }
+        row.parse(&format!("{prefix}paper.{key}"))?;
+    }
+    Ok(())
+}
+
+fn default_dofs() -> Vec<Dof> {
+    vec![Dof::Lift, Dof::Swing]
+}
+
+impl Spec {
+    pub fn check(&self) -> Result<(), String> {
+        positive("voltage", &self.voltage, VOLTAGE)?;
+        positive("sensor_step", &self.sensor_step, Dimension::LENGTH)?;
+        if let Some(c) = self.off_axis_fraction {
+            if !(0.0..=2.0).contains(&c) {
+                return Err(format!(
+                    "key `off_axis_fraction`: expected a fraction between 0 and 2, got {c}"
+                ));
+            }
+        }
+        check_paper(&self.paper, "")
+    }
+}
+
+/// `F_b δ_f` of the model's actuator (parameters `F_b`, `delta_f`).
+pub(crate) fn actuator_work(leg: &Leg) -> Result<f64, String> {
+    match (leg.param("F_b"), leg.param("delta_f")) {
+        (Some(f), Some(d)) => Ok(f * d),
+        _ => Err(format!(
+            "model `{}` has no parameters `F_b` and `delta_f` (the actuator's blocked force and free deflection)",
+            leg.model().name()
+        )),
+    }
+}
+
+pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
+    let voltage = positive("voltage", &spec.voltage, VOLTAGE)?;
+    let step = positive("sensor_step", &spec.sensor_step, Dimension::LENGTH)?;
+    let leg = Leg::open(&ModelSpec {
+        model: spec.model.clone(),
+        set: spec.set.clone(),
+        independent: spec.independent.clone(),
+    })?;
+    let fbdf = actuator_work(&leg)?;
+    let model_name = leg.model().name().to_string();
+    let mut outcome = Outcome {
+        method: format!(
+            "Static equilibria of `{}` at {voltage} V on one actuator, the foot against a \
+             frictionless plane sensor normal to the test axis (lift: z, swing: x) held by a \
+             fixture at 0, {:.0} µm, … from the foot's rest position along its free motion, \
+             until the free foot no longer reaches it. Force = the fixture's reaction on the \
+             sensor. Blocked force = force at distance 0; free deflection = the foot's one-way \
+             displacement at {voltage} V; F·d as in Table IV. {}",
+            spec.model.display(),
+            step * 1e6,
+            match spec.off_axis_fraction {
+                Some(c) => format!(
+                    "Repeated with an off-axis load: the sensor also pushes the foot along y \
+                     with {:.0} % of the on-axis force, opposing the foot's free y motion \
+                     (the paper's ~30 %, Sec. V.A; direction assumed).",
+                    c * 100.0
+                ),
+                None => String::new(),
+            }
+        ),
+        ..Outcome::default()
+    };
+    let mut summary = Table::new(
+        &format!("{model_name}: blocked force, free deflection and work at the foot"),
+        &[
+            "DOF",
+            "load",
+            "F_b foot [mN]",
+            "F_y [mN]",
+            "δ_free [mm]",
+            "F·d [µJ]",
+            "F·d/(F_b δ_f)",
+        ],
+    );
+    let mut curves = Vec::new();
+    for &dof in &spec.dofs {
+        let axis = dof.axis();
+        let mut cases = vec![(
+            "on-axis only",
+            force_deflection(&leg, dof, axis, voltage, Some(step), 0.0)?,
+        )];
+        if let Some(c) = spec.off_axis_fraction {
+            if c > 0.0 {
+                let label = if (c - 0.3).abs() < 1e-12 {
+                    "30 % off-axis"
+                } else {
+                    "off-axis"
+                };
+                cases.push((
+                    label,
+                    force_deflection(&leg, dof, axis, voltage, Some(step), c)?,
+                ));
+            }
+        }
+        let mut points = Table::new(
+            &format!(
+                "{model_name} {}: force on the sensor along {} against sensor distance",
+                dof.name(),
+                AXES[axis]
+            ),
+            &[
+                "distance [µm]",
+                "F [mN]",
+                "F_y [mN]",
+                "F, off-axis load [mN]",
+                "F_y, off-axis load [mN]",
+            ],
+        );
+        for (k, p) in cases[0].1.points.iter().enumerate() {
+            let loaded = cases.get(1).and_then(|(_, t)| t.points.get(k));
+            points.row(vec![
+                format!("{:.0}", p.distance * 1e6),
+                format!("{:.2}", p.force * 1e3),
+                format!("{:+.2}", p.force_y * 1e3),
+                loaded.map_or("–".into(), |l| format!("{:.2}", l.force * 1e3)),
+                loaded.map_or("–".into(), |l| format!("{:+.2}", l.force_y * 1e3)),
+            ]);
+        }
+        for (label, test) in &cases {
+            record(&mut outcome, &mut summary, dof, label, test, fbdf);
+            let tag = if test.off_axis_fraction > 0.0 {
+                "_offaxis"
+            } else {
+                ""
+            };
+            let rows: Vec<Vec<f64>> = test
+                .points
+                .iter()
+                .map(|p| vec![p.distance, p.force, p.force_y, p.foot_y])
+                .chain(std::iter::once(vec![
+                    test.free_deflection,
+                    0.0,
+                    0.0,
+                    test.free[1] - test.rest[1],
+                ]))
+                .collect();
+            csv(
+                &mut outcome,
+                dir,
+                &format!("force_{}{tag}.csv", dof.name()),
+                &["distance", "force", "force_y", "foot_dy"],
+                &rows,
+            )?;
+            let (xs, ys): (Vec<f64>, Vec<f64>) =
+                rows.iter().map(|r| (r[0] * 1e3, r[1] * 1e3)).unzip();
+            curves.push((format!("{} ({label})", dof.name()), xs, ys));
+        }
+        outcome.tables.push(points);
+    }
+    outcome.tables.insert(0, summary);
+    if !spec.paper.is_empty() {
+        outcome
+            .tables
+            .push(paper_table(&model_name, &spec.paper, &outcome)?);
+    }
+    let path = dir.join("force_deflection.svg");
+    plot::plot_xy(
+        &path,
+        &format!("{model_name}: force on the sensor against its distance at {voltage} V"),
+        "sensor distance from the foot's rest position [mm]",
+        "on-axis force [mN]",
+        &curves,
+        false,
+    )
+    .map_err(|e| e.to_string())?;
+    outcome.plots.push(path);
+    outcome.notes = spec.notes.clone();
+    Ok(outcome)
+}
+
+/// Adds a summary row and the key values `{dof}[_offaxis]_{blocked_force, free_deflection,
+/// work, normalized, blocked_force_y}`.
+fn record(
+    outcome: &mut Outcome,
+    table: &mut Table,
+    dof: Dof,
+    label: &str,
+    test: &ForceDeflection,
+    fbdf: f64,
+) {
+    let blocked = test.points.first().copied();
+    let force_y = blocked.map_or(0.0, |p| p.force_y);
+    let tag = if test.off_axis_fraction > 0.0 {
+        "_offaxis"
+    } else {
+        ""
+    };
+    let name = dof.name();
+    for (key, value) in [
+        ("blocked_force", test.blocked_force()),
+        ("blocked_force_y", force_y),
+        ("free_deflection", test.free_deflection),
+        ("work", test.work()),
+        ("normalized", test.work() / fbdf),
+        ("points", test.points.len() as f64),
+    ] {
+        outcome.values.insert(format!("{name}{tag}_{key}"), value);
+    }
+    table.row(vec![
+        name.to_string(),
+        label.to_string(),
+        format!("{:.2}", test.blocked_force() * 1e3),
+        format!("{:+.2}", force_y * 1e3),
+        format!("{:.3}", test.free_deflection * 1e3),
+        format!("{:.1}", test.work() * 1e6),
+        format!("{:.3}", test.work() / fbdf),
+    ]);
+}
+
+/// Model (on-axis load only) beside the paper's Table IV values.
+fn paper_table(
+    model_name: &str,
+    paper: &BTreeMap<String, PaperRow>,
+    outcome: &Outcome,
+) -> Result<Table, String> {
+    let mut table = Table::new(
+        &format!("{model_name}: model against the paper's measurements (seed Table IV, mean ± s.d., n = 2)"),
+        &["DOF", "quantity", "model", "paper", "model vs paper"],
+    );
+    for (dof, row) in paper {
+        let p = row.parse(&format!("paper.{dof}"))?;
+        let value = |key: &str| {
+            outcome
+                .values
+                .get(&format!("{dof}_{key}"))
+                .copied()
+                .unwrap_or(f64::NAN)
+        };
+        for (label, model, (mean, sd), scale, digits) in [
+            (
+                "d (free deflection) [mm]",
+                value("free_deflection"),
+                p.d,
+                1e3,
+                2,
+            ),
+            (
+                "F (blocked force) [mN]",
+                value("blocked_force"),
+                p.force,
+                1e3,
+                1,
+            ),
+            ("F·d [µJ]", value("work"), p.work, 1e6, 1),
+            ("F·d/(F_b δ_f)", value("normalized"), p.normalized, 1.0, 2),
+        ] {
+            table.row(vec![
+                dof.clone(),
+                label.to_string(),
+                format!("{:.*}", digits, model * scale),
+                format!("{:.*} ± {:.*}", digits, mean * scale, digits, sd * scale),
+                percent_diff(model, mean),
+            ]);
+        }
+    }
+    Ok(table)
+}

@@ -1,0 +1,450 @@
+//! One HAMR leg as the experiments drive it: the model with its two drive voltages, the
+//! foot position output, static equilibria (optionally with the foot against a sensor) and
+//! the force/deflection procedure of the paper (seed Sec. V.A, Fig. 7).
+
+use mech_runtime::{
+    assemble, solve_statics, AssemblyOptions, Equilibrium, Fixture, Model, StaticsOptions,
+};
+use serde::Deserialize;
+
+use super::ModelSpec;
+use crate::session::Session;
+
+/// A degree of freedom of the leg.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Dof {
+    Lift,
+    Swing,
+}
+
+impl Dof {
+    pub fn name(self) -> &'static str {
+        match self {
+            Dof::Lift => "lift",
+            Dof::Swing => "swing",
+        }
+    }
+    /// The drive input.
+    pub fn input(self) -> &'static str {
+        match self {
+            Dof::Lift => "v_lift",
+            Dof::Swing => "v_swing",
+        }
+    }
+    /// The actuator coordinate.
+    pub fn actuator(self) -> &'static str {
+        match self {
+            Dof::Lift => "qlact",
+            Dof::Swing => "qsact",
+        }
+    }
+    /// The on-axis direction of the paper's force tests: z for lift, x for swing (Sec. V.A).
+    pub fn axis(self) -> usize {
+        match self {
+            Dof::Lift => 2,
+            Dof::Swing => 0,
+        }
+    }
+}
+
+pub const AXES: [&str; 3] = ["x", "y", "z"];
+
+/// An opened leg model.
+pub struct Leg {
+    pub session: Session,
+    pub independent: Vec<usize>,
+    pub v_lift: usize,
+    pub v_swing: usize,
+    /// Output indices of foot.x, foot.y, foot.z.
+    pub foot: [usize; 3],
+    /// The assembled initial state (loops closed, no load).
+    pub q0: Vec<f64>,
+}
+
+impl Leg {
+    pub fn open(spec: &ModelSpec) -> Result<Leg, String> {
+        let session = Session::open(&spec.model, &spec.set, &[])
+            .map_err(|e| format!("model `{}`: {e}", spec.model.display()))?;
+        let model = &session.model;
+        let input = |name: &str| {
+            model.input_index(name).ok_or_else(|| {
+                format!(
+                    "model `{}` has no input `{name}` (a HAMR leg needs v_lift and v_swing)",
+                    spec.model.display()
+                )
+            })
+        };
+        let (v_lift, v_swing) = (input("v_lift")?, input("v_swing")?);
+        let mut foot = [0; 3];
+        for (slot, axis) in foot.iter_mut().zip(AXES) {
+            *slot = model.output_index(&format!("foot.{axis}")).ok_or_else(|| {
+                format!(
+                    "model `{}` has no position output `foot`",
+                    spec.model.display()
+                )
+            })?;
+        }
+        let state = session.assemble(&spec.independent)?;
+        Ok(Leg {
+            independent: state.independent.clone(),
+            q0: state.q,
+            session,
+            v_lift,
+            v_swing,
+            foot,
+        })
+    }
+
+    pub fn model(&self) -> &dyn Model {
+        &self.session.model
+    }
+
+    /// A model parameter's value (SI), if the model has it.
+    pub fn param(&self, name: &str) -> Option<f64> {
+        let model = &self.session.model;
+        model.param_index(name).map(|i| model.param(i))
+    }
+
+    pub fn inputs(&self, lift: f64, swing: f64) -> Vec<f64> {
+        let mut inputs: Vec<f64> = self.session.signals.iter().map(|s| s.value(0.0)).collect();
+        inputs[self.v_lift] = lift;
+        inputs[self.v_swing] = swing;
+        inputs
+    }
+
+    pub fn drive(&self, dof: Dof, volts: f64) -> Vec<f64> {
+        match dof {
+            Dof::Lift => self.inputs(volts, 0.0),
+            Dof::Swing => self.inputs(0.0, volts),
+        }
+    }
+
+    pub fn foot_at(&self, q: &[f64], inputs: &[f64]) -> [f64; 3] {
+        let model = self.model();
+        let mut y = vec![0.0; model.noutputs()];
+        model.outputs(0.0, q, &vec![0.0; model.nu()], inputs, &mut y);
+        self.foot.map(|i| y[i])
+    }
+
+    /// The static equilibrium nearest `start` under `inputs` and `fixtures` (at most one, on
+    /// the foot): the runtime's KKT Newton (`solve_statics`), and if that does not converge,
+    /// Newton on the reduced equilibrium in the independent coordinates
+    /// ([`Leg::reduced_equilibrium`]).
+    pub fn equilibrium(
+        &self,
+        start: &[f64],
+        inputs: &[f64],
+        fixtures: &[Fixture],
+    ) -> Result<Equilibrium, String> {
+        let mut q = start.to_vec();
+        let result = solve_statics(
+            self.model(),
+            0.0,
+            &mut q,
+            inputs,
+            fixtures,
+            &StaticsOptions::default(),
+        )
+        .map_err(|e| format!("statics of `{}`: {e}", self.model().name()));
+        match result {
+            Err(e) if fixtures.len() <= 1 => {
+                let (q, force) = self
+                    .reduced_equilibrium(start, inputs, fixtures.first(), 0.0)
+                    .map_err(|r| format!("{e}; reduced Newton: {r}"))?;
+                Ok(Equilibrium {
+                    q,
+                    loop_multipliers: Vec::new(),
+                    fixture_forces: if fixtures.is_empty() {
+                        Vec::new()
+                    } else {
+                        vec![force]
+                    },
+                    force_residual: 0.0,
+                    constraint_residual: 0.0,
+                    iterations: 0,
+                })
+            }
+            other => other,
+        }
+    }
+
+    /// Closes the loops with the independent coordinates at `z` (`q` updated) and returns the
+    /// generalized forces `Tᵀ F(q, 0, inputs)` along `z` (`T = ∂q/∂z` from the speed map)
+    /// and the foot position.
+    fn reduced_force(
+        &self,
+        q: &mut [f64],
+        z: &[f64],
+        inputs: &[f64],
+    ) -> Result<(Vec<f64>, [f64; 3]), String> {
+        let model = self.model();
+        for (&i, &value) in self.independent.iter().zip(z) {
+            q[i] = value;
+        }
+        assemble(
+            model,
+            0.0,
+            q,
+            &self.independent,
+            &AssemblyOptions::default(),
+        )
+        .map_err(|e| e.to_string())?;
+        let mut f = vec![0.0; model.nu()];
+        model.forcing(0.0, q, &vec![0.0; model.nu()], inputs, &mut f);
+        let generalized = self
+            .independent
+            .iter()
+            .map(|&i| {
+                let mut u = vec![0.0; model.nu()];
+                u[i] = 1.0;
+                mech_runtime::assemble_speeds(model, 0.0, q, &mut u, &self.independent);
+                u.iter().zip(&f).map(|(a, b)| a * b).sum()
+            })
+            .collect();
+        Ok((generalized, self.foot_at(q, inputs)))
+    }
+
+    /// The residual of the reduced equilibrium `Tᵀ F + Gᵀ μ = 0`, `foot_c − target_c = 0`
+    /// with `G = ∂foot_c/∂z` (central differences) for the held components `c`.
+    fn reduced_residual(
+        &self,
+        q: &mut [f64],
+        z: &[f64],
+        mu: &[f64],
+        inputs: &[f64],
+        fixture: Option<&Fixture>,
+        load_y: f64,
+    ) -> Result<Vec<f64>, String> {
+        let (mut r, foot) = self.reduced_force(q, z, inputs)?;
+        if let Some(fixture) = fixture {
+            // An applied force on the foot along y, `load_y` times the first multiplier.
+            let applied_y = load_y * mu.first().copied().unwrap_or(0.0);
+            let h = 1e-8;
+            for k in 0..z.len() {
+                let mut scratch = q.to_vec();
+                let (mut plus, mut minus) = (z.to_vec(), z.to_vec());
+                plus[k] += h;
+                minus[k] -= h;
+                let a = self.reduced_force(&mut scratch, &plus, inputs)?.1;
+                let b = self.reduced_force(&mut scratch, &minus, inputs)?.1;
+                for (m, &c) in mu.iter().zip(&fixture.components) {
+                    r[k] += m * (a[c] - b[c]) / (2.0 * h);
+                }
+                r[k] += applied_y * (a[1] - b[1]) / (2.0 * h);
+            }
+            for &c in &fixture.components {
+                r.push(foot[c] - fixture.target[c]);
+            }
+        }
+        Ok(r)
+    }
+
+    /// Static equilibrium by Newton on the reduced equations in the independent coordinates
+    /// (loops closed at every step; Jacobian by central differences), with an optional foot
+    /// fixture and, with it, an applied y force on the foot of `load_y` times the fixture's
+    /// first force component. Returns `q` and the fixture's force on the foot (Newtonian
+    /// components).
+    pub fn reduced_equilibrium(
+        &self,
+        start: &[f64],
+        inputs: &[f64],
+        fixture: Option<&Fixture>,
+        load_y: f64,
+    ) -> Result<(Vec<f64>, [f64; 3]), String> {
+        use mech_runtime::nalgebra::{DMatrix, DVector};
+        let n = self.independent.len();
+        let m = fixture.map_or(0, |f| f.components.len());
+        let mut q = start.to_vec();
+        let mut x: Vec<f64> = self.independent.iter().map(|&i| q[i]).collect();
+        x.extend(std::iter::repeat_n(0.0, m));
+        let residual = |q: &mut [f64], x: &[f64]| {
+            self.reduced_residual(q, &x[..n], &x[n..], inputs, fixture, load_y)
+        };
+        for _ in 0..100 {
+            let r = DVector::from_vec(residual(&mut q, &x)?);
+            let mut jac = DMatrix::zeros(n + m, n + m);
+            for c in 0..n + m {
+                let h = if c < n { 1e-7 } else { 1e-3 };
+                let (mut plus, mut minus) = (x.clone(), x.clone());
+                plus[c] += h;
+                minus[c] -= h;
+                let mut scratch = q.clone();
+                let a = residual(&mut scratch, &plus)?;
+                let b = residual(&mut scratch, &minus)?;
+                for row in 0..n + m {
+                    jac[(row, c)] = (a[row] - b[row]) / (2.0 * h);
+                }
+            }
+            let mut step = jac.lu().solve(&(-r)).ok_or("singular reduced stiffness")?;
+            // Damped: at most 20 µm of actuator motion per iteration.
+            let largest = step.rows(0, n).amax();
+            if largest > 2e-5 {
+                step *= 2e-5 / largest;
+            }
+            for (xk, s) in x.iter_mut().zip(step.iter()) {
+                *xk += s;
+            }
+            if step.rows(0, n).amax() < 1e-12 {
+                residual(&mut q, &x)?;
+                let mut force = [0.0; 3];
+                if let Some(fixture) = fixture {
+                    for (k, &c) in fixture.components.iter().enumerate() {
+                        force[c] = x[n + k];
+                    }
+                }
+                return Ok((q, force));
+            }
+        }
+        Err("no convergence in 100 iterations".into())
+    }
+
+    /// A fixture holding the listed foot components at `target`.
+    pub fn fixture(&self, target: [f64; 3], components: Vec<usize>) -> Fixture {
+        Fixture {
+            name: "foot".into(),
+            outputs: self.foot,
+            target,
+            components,
+        }
+    }
+
+    /// Small-motion ratio of foot displacement along `axis` to the actuator's displacement,
+    /// from the loop kinematics at `q` (central differences of the assembled foot position).
+    pub fn kinematic_ratio(&self, q: &[f64], dof: Dof, axis: usize) -> Result<f64, String> {
+        let actuator = self.session.coordinate_index(dof.actuator())?;
+        let h = 1e-7;
+        let inputs = self.inputs(0.0, 0.0);
+        let at = |delta: f64| -> Result<f64, String> {
+            let mut q = q.to_vec();
+            q[actuator] += delta;
+            assemble(
+                self.model(),
+                0.0,
+                &mut q,
+                &self.independent,
+                &AssemblyOptions::default(),
+            )
+            .map_err(|e| e.to_string())?;
+            Ok(self.foot_at(&q, &inputs)[axis])
+        };
+        Ok((at(h)? - at(-h)?) / (2.0 * h))
+    }
+}
+
+/// One sensor position of a force/deflection test.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SensorPoint {
+    /// Distance of the sensor from the foot's rest position along the motion (m, ≥ 0).
+    pub distance: f64,
+    /// Force of the foot on the sensor along the motion direction (N, ≥ 0 when pushing).
+    pub force: f64,
+    /// Force of the foot on the sensor along y (N).
+    pub force_y: f64,
+    /// The foot's y displacement from rest (m).
+    pub foot_y: f64,
+}
+
+/// A force/deflection test of one degree of freedom at one voltage.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ForceDeflection {
+    pub dof: Dof,
+    pub axis: usize,
+    pub voltage: f64,
+    /// The foot at rest (no drive) and free at `voltage` (m, chassis frame).
+    pub rest: [f64; 3],
+    pub free: [f64; 3],
+    /// Free deflection along the axis, one way, from rest (m, ≥ 0; `direction` gives the sign).
+    pub free_deflection: f64,
+    /// +1 or −1: the direction of the foot's free motion along the axis.
+    pub direction: f64,
+    /// The sensor at increasing distances, from 0 until the free foot no longer reaches it.
+    pub points: Vec<SensorPoint>,
+    /// Fraction of the on-axis force applied along y (opposing the free foot's y motion).
+    pub off_axis_fraction: f64,
+}
+
+impl ForceDeflection {
+    /// The blocked force: the on-axis force with the sensor at the foot's rest position.
+    pub fn blocked_force(&self) -> f64 {
+        self.points.first().map_or(0.0, |p| p.force)
+    }
+    /// `F·d` of Table IV: blocked force times free deflection (J).
+    pub fn work(&self) -> f64 {
+        self.blocked_force() * self.free_deflection
+    }
+}
+
+/// The paper's force/deflection test (seed Sec. V.A, Fig. 7): the leg driven at `voltage`
+/// on `dof` pushes against a sensor (a frictionless plane normal to `axis`) placed at
+/// distances `0, step, 2·step, …` from the foot's rest position along its motion, until
+/// the free foot no longer reaches it. `step = None`: only the blocked point (distance 0).
+/// With `off_axis_fraction = c > 0` the sensor also pushes on the foot along y with `c`
+/// times the on-axis force, opposing the free foot's y motion (the paper's ~30 % off-axis
+/// load), found by holding the foot's y where the y reaction has that value.
+pub fn force_deflection(
+    leg: &Leg,
+    dof: Dof,
+    axis: usize,
+    voltage: f64,
+    step: Option<f64>,
+    off_axis_fraction: f64,
+) -> Result<ForceDeflection, String> {
+    if off_axis_fraction != 0.0 && axis == 1 {
+        return Err("an off-axis (y) load needs an on-axis direction x or z".into());
+    }
+    let rest_inputs = leg.inputs(0.0, 0.0);
+    let rest_q = leg.equilibrium(&leg.q0, &rest_inputs, &[])?.q;
+    let rest = leg.foot_at(&rest_q, &rest_inputs);
+    let inputs = leg.drive(dof, voltage);
+    let free_q = leg.equilibrium(&rest_q, &inputs, &[])?.q;
+    let free = leg.foot_at(&free_q, &inputs);
+    let signed = free[axis] - rest[axis];
+    let direction = if signed < 0.0 { -1.0 } else { 1.0 };
+    let free_deflection = signed.abs();
+    let y_direction = if free[1] < rest[1] { -1.0 } else { 1.0 };
+
+    let mut points = Vec::new();
+    let mut q = rest_q.clone();
+    let mut k = 0usize;
+    loop {
+        let distance = step.map_or(0.0, |s| k as f64 * s);
+        if k > 0 && (step.is_none() || distance >= free_deflection) {
+            break;
+        }
+        let mut target = rest;
+        target[axis] = rest[axis] + direction * distance;
+        // The sensor pushes the foot along y with c·F, opposing the free y motion: with the
+        // fixture's force on the foot μ along the axis, F = −μ·direction, so the applied y force
+        // is y_direction·c·direction·μ.
+        let load_y = y_direction * off_axis_fraction * direction;
+        let fixture = leg.fixture(target, vec![axis]);
+        let (solved, f) = leg.reduced_equilibrium(&q, &inputs, Some(&fixture), load_y)?;
+        let foot = leg.foot_at(&solved, &inputs);
+        let force = -f[axis] * direction;
+        // The sensor's y force on the foot is the applied one; the foot's on the sensor, minus it.
+        let point = SensorPoint {
+            distance,
+            force,
+            force_y: -load_y * f[axis],
+            foot_y: foot[1] - rest[1],
+        };
+        q = solved;
+        points.push(point);
+        k += 1;
+        if points.len() > 1000 {
+            return Err("more than 1000 sensor positions: is the step too small?".into());
+        }
+    }
+    Ok(ForceDeflection {
+        dof,
+        axis,
+        voltage,
+        rest,
+        free,
+        free_deflection,
+        direction,
+        points,
+        off_axis_fraction,
+    })
+}

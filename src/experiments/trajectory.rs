@@ -1,0 +1,223 @@
+//! Experiment 1, quasi-static foot trajectory (seed Fig. 6 c–e, h–j): sinusoidal drive of the
+//! lift alone, the swing alone, and both 90° out of phase; the foot's path in the sagittal
+//! (x–z) and frontal (y–z) planes. Quasi-static: a static equilibrium at each drive phase
+//! (continuation from the previous one), valid far below the first resonance.
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use super::leg::Leg;
+use super::{csv, positive, ModelSpec, Outcome, Table, FREQUENCY, VOLTAGE};
+use crate::plot;
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Spec {
+    pub title: String,
+    pub model: PathBuf,
+    #[serde(default)]
+    pub set: Vec<String>,
+    #[serde(default = "super::default_independent")]
+    pub independent: Vec<String>,
+    /// Amplitude of the model's drive input (`225 V`: the paper's 225 V peak-to-peak drive
+    /// moves a bimorph tip ± its peak one-way deflection, i.e. ±V_rated in the model).
+    pub amplitude: String,
+    /// Drive frequency (`1 Hz`; only the time axis of the CSV depends on it).
+    pub frequency: String,
+    /// Phase of the swing drive ahead of the lift drive when both run, degrees.
+    #[serde(default = "default_phase")]
+    pub phase_deg: f64,
+    /// Equilibria per cycle (a multiple of 4 hits the peaks exactly).
+    #[serde(default = "default_points")]
+    pub points: usize,
+    /// Notes on the comparison with the paper, printed in the report.
+    #[serde(default)]
+    pub notes: Vec<String>,
+}
+
+fn default_phase() -> f64 {
+    90.0
+}
+fn default_points() -> usize {
+    72
+}
+
+impl Spec {
+    pub fn check(&self) -> Result<(), String> {
+        positive("amplitude", &self.amplitude, VOLTAGE)?;
+        positive("frequency", &self.frequency, FREQUENCY)?;
+        if self.points < 4 {
+            return Err("key `points`: expected at least 4 equilibria per cycle".into());
+        }
+        Ok(())
+    }
+    fn leg(&self) -> ModelSpec {
+        ModelSpec {
+            model: self.model.clone(),
+            set: self.set.clone(),
+            independent: self.independent.clone(),
+        }
+    }
+}
+
+/// One drive case: which actuators run.
+const CASES: [(&str, bool, bool); 3] = [
+    ("lift", true, false),
+    ("swing", false, true),
+    ("both", true, true),
+];
+
+pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
+    let amplitude = positive("amplitude", &spec.amplitude, VOLTAGE)?;
+    let frequency = positive("frequency", &spec.frequency, FREQUENCY)?;
+    let leg = Leg::open(&spec.leg())?;
+    let rest_inputs = leg.inputs(0.0, 0.0);
+    let rest_q = leg.equilibrium(&leg.q0, &rest_inputs, &[])?.q;
+    let rest = leg.foot_at(&rest_q, &rest_inputs);
+
+    let mut outcome = Outcome {
+        method: format!(
+            "Quasi-static: {} static equilibria per cycle of a {frequency} Hz sinusoid of \
+             amplitude {amplitude} V on the model's drive inputs (the paper's 225 V \
+             peak-to-peak drive, which moves each actuator tip ± its peak one-way \
+             deflection), continuation from the previous phase; no time integration, since \
+             the drive is far below the first resonance. Model `{}`{}. Foot displacement \
+             from its rest position under gravity, chassis frame (x forward, y lateral, z up).",
+            spec.points,
+            spec.model.display(),
+            if spec.set.is_empty() {
+                String::new()
+            } else {
+                format!(" with {}", spec.set.join(", "))
+            }
+        ),
+        ..Outcome::default()
+    };
+    let mut table = Table::new(
+        "Foot trajectory: peak-to-peak range and the foot at the peak drive (mm)",
+        &[
+            "drive",
+            "Δx p-p",
+            "Δy p-p",
+            "Δz p-p",
+            "foot at +peak (x, y, z)",
+        ],
+    );
+    let mut sagittal = Vec::new();
+    let mut frontal = Vec::new();
+    let phase = spec.phase_deg.to_radians();
+    for (name, lift_on, swing_on) in CASES {
+        let mut q = rest_q.clone();
+        let mut rows = Vec::new();
+        let (mut xs, mut ys, mut zs) = (Vec::new(), Vec::new(), Vec::new());
+        let mut at_peak = [0.0; 3];
+        for k in 0..=spec.points {
+            let t = k as f64 / (spec.points as f64 * frequency);
+            let angle = std::f64::consts::TAU * frequency * t;
+            let lift = if lift_on {
+                amplitude * angle.sin()
+            } else {
+                0.0
+            };
+            let swing = match (lift_on, swing_on) {
+                (true, true) => amplitude * (angle + phase).sin(),
+                (false, true) => amplitude * angle.sin(),
+                _ => 0.0,
+            };
+            let inputs = leg.inputs(lift, swing);
+            q = leg
+                .equilibrium(&q, &inputs, &[])
+                .map_err(|e| {
+                    format!("{name} drive, v_lift = {lift:.1} V, v_swing = {swing:.1} V: {e}")
+                })?
+                .q;
+            let foot = leg.foot_at(&q, &inputs);
+            let d = [0, 1, 2].map(|i| foot[i] - rest[i]);
+            if 4 * k == spec.points {
+                at_peak = d;
+            }
+            rows.push(vec![
+                t, lift, swing, foot[0], foot[1], foot[2], d[0], d[1], d[2],
+            ]);
+            xs.push(d[0] * 1e3);
+            ys.push(d[1] * 1e3);
+            zs.push(d[2] * 1e3);
+        }
+        csv(
+            &mut outcome,
+            dir,
+            &format!("trajectory_{name}.csv"),
+            &[
+                "t", "v_lift", "v_swing", "foot_x", "foot_y", "foot_z", "dx", "dy", "dz",
+            ],
+            &rows,
+        )?;
+        let range = |v: &[f64]| {
+            let (lo, hi) = v
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                    (a.min(x), b.max(x))
+                });
+            hi - lo
+        };
+        let ranges = [range(&xs), range(&ys), range(&zs)];
+        for (axis, r) in ["x", "y", "z"].iter().zip(ranges) {
+            outcome.values.insert(format!("{name}_pp_{axis}"), r * 1e-3);
+        }
+        for (axis, v) in ["x", "y", "z"].iter().zip(at_peak) {
+            outcome.values.insert(format!("{name}_peak_d{axis}"), v);
+        }
+        table.row(vec![
+            name.to_string(),
+            format!("{:.3}", ranges[0]),
+            format!("{:.3}", ranges[1]),
+            format!("{:.3}", ranges[2]),
+            format!(
+                "({:+.3}, {:+.3}, {:+.3})",
+                at_peak[0] * 1e3,
+                at_peak[1] * 1e3,
+                at_peak[2] * 1e3
+            ),
+        ]);
+        let label = format!(
+            "{name} ({})",
+            match name {
+                "both" => format!("swing {:+.0}° ahead", spec.phase_deg),
+                _ => "alone".into(),
+            }
+        );
+        sagittal.push((label.clone(), xs.clone(), zs.clone()));
+        frontal.push((label, ys, zs));
+    }
+    outcome.tables.push(table);
+    let model_name = leg.model().name().to_string();
+    for (file, title, x_label, curves) in [
+        (
+            "sagittal.svg",
+            "sagittal plane (x–z)",
+            "foot Δx [mm] (forward)",
+            &sagittal,
+        ),
+        (
+            "frontal.svg",
+            "frontal plane (y–z)",
+            "foot Δy [mm] (lateral)",
+            &frontal,
+        ),
+    ] {
+        let path = dir.join(file);
+        plot::plot_xy(
+            &path,
+            &format!("{model_name}: quasi-static foot trajectory, {title}"),
+            x_label,
+            "foot Δz [mm] (up)",
+            curves,
+            false,
+        )
+        .map_err(|e| e.to_string())?;
+        outcome.plots.push(path);
+    }
+    outcome.notes = spec.notes.clone();
+    Ok(outcome)
+}
