@@ -304,3 +304,51 @@ fn hamr_v2_transmission_ratio_and_mobility() {
     );
     assert!((x[lift] / z[lift]).abs() < 0.05 && (z[swing] / x[swing]).abs() < 0.05);
 }
+
+/// Both actuators at full voltage: plain Newton stalls from the rest position, load
+/// continuation inside `solve_statics` reaches the equilibrium, and the actuators deflect
+/// less than their free deflection (the transmission's flexures resist).
+#[test]
+fn statics_at_full_voltage_converges_by_continuation() {
+    let path = format!("{}/models/hamr_vi.mech", env!("CARGO_MANIFEST_DIR"));
+    let model =
+        mech::tape_model::TapeModel::new(&mech_codegen::Compiled::from_path(&path).unwrap());
+    let independent: Vec<usize> = ["qsact", "qlact"]
+        .iter()
+        .map(|n| {
+            (0..model.nq())
+                .find(|&i| model.coordinate_name(i) == *n)
+                .unwrap()
+        })
+        .collect();
+    let mut q = vec![0.0; model.nq()];
+    let mut u = vec![0.0; model.nu()];
+    model.initial_state(&mut q, &mut u);
+    mech_runtime::assemble(
+        &model,
+        0.0,
+        &mut q,
+        &independent,
+        &mech_runtime::AssemblyOptions::default(),
+    )
+    .unwrap();
+    let inputs = [225.0, 225.0];
+    let equilibrium = mech_runtime::solve_statics(
+        &model,
+        0.0,
+        &mut q,
+        &inputs,
+        &[],
+        &mech_runtime::StaticsOptions::default(),
+    )
+    .unwrap();
+    assert!(equilibrium.constraint_residual < 1e-12);
+    for &i in &independent {
+        assert!(
+            q[i] > 0.0 && q[i] < 300e-6,
+            "{} = {}",
+            model.coordinate_name(i),
+            q[i]
+        );
+    }
+}

@@ -145,7 +145,44 @@ impl<M: Model + ?Sized> Problem<'_, M> {
 }
 
 /// Solves for a static equilibrium near `q` (updated in place).
+///
+/// If Newton does not converge from `q` (large loads on a stiff, strongly nonlinear
+/// mechanism), the inputs are ramped up from zero in 4, then 16, then 64 equal steps, each
+/// solved from the previous equilibrium (load continuation).
 pub fn solve_statics<M: Model + ?Sized>(
+    model: &M,
+    t: f64,
+    q: &mut [f64],
+    inputs: &[f64],
+    fixtures: &[Fixture],
+    options: &StaticsOptions,
+) -> Result<Equilibrium, RuntimeError> {
+    let start = q.to_vec();
+    let first = newton(model, t, q, inputs, fixtures, options);
+    if first.is_ok() || inputs.iter().all(|&x| x == 0.0) {
+        return first;
+    }
+    for steps in [4, 16, 64] {
+        q.copy_from_slice(&start);
+        let mut result = first.clone();
+        for k in 1..=steps {
+            let fraction = k as f64 / steps as f64;
+            let ramped: Vec<f64> = inputs.iter().map(|x| x * fraction).collect();
+            result = newton(model, t, q, &ramped, fixtures, options);
+            if result.is_err() {
+                break;
+            }
+        }
+        if result.is_ok() {
+            return result;
+        }
+    }
+    q.copy_from_slice(&start);
+    first
+}
+
+/// Damped Newton on the KKT system from `q` (see the module docs).
+fn newton<M: Model + ?Sized>(
     model: &M,
     t: f64,
     q: &mut [f64],
