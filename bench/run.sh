@@ -3,7 +3,8 @@
 #
 #     bench/run.sh
 #
-# Measures mech, SymPy and Pinocchio on the N-link 3D chain in one run and writes
+# Measures mech, SymPy and Pinocchio on the N-link 3D chain, and mech and SymPy/PyDy + SciPy
+# on the two loop models (four-bar, spherical five-bar), in one run and writes
 # docs/benchmarks.md from the results. Steps:
 #   1. a venv for the peers in bench/.venv (pip install -r ../shared/peers/requirements.txt),
 #      and the native Pinocchio benchmark built from ../shared/peers/native (optional);
@@ -11,15 +12,21 @@
 #   3. SymPy (`peers/sympy_chain.py`), N = 1, 2, 4, 8 (and one N = 12 attempt);
 #   4. Pinocchio, C++ (`peers/native/pinocchio_bench.cpp`) and Python (`peers/pinocchio_chain.py`),
 #      N = 1, 2, 4, 8, 16, 32;
-#   5. mech (`cargo run --release -p mech-bench`), N = 1, 2, 4, 8, 16, 32; then paired rounds
-#      at N = 4, Pinocchio C++ and mech alternating, for the u̇ target;
+#   4b. SymPy/PyDy + SciPy on the loop models: `peers/sympy_fourbar.py` and
+#      `bench/sympy_fivebar.py` (KanesMethod with dependent speeds, solve_ivp at 1e-9);
+#   5. mech (`cargo run --release -p mech-bench`), N = 1, 2, 4, 8, 16, 32 and the loop models;
+#      then paired rounds at N = 4, Pinocchio C++ and mech alternating, for the u̇ target, and
+#      paired rounds on the four-bar, SymPy + SciPy and `mech-bench --loops-only` alternating,
+#      for the loop targets;
 #   6. bench/summarize.py: docs/benchmarks.md.
 # ../shared/peers is only read: every result goes to bench/results/ (JSON lines), and every
 # command run is logged in bench/results/commands.txt.
 #
 # Environment: PEERS (default ../shared/peers), SYMPY_REPS (default 3), SYMPY_N12 (1: try
 # N = 12 once with a 180 s cap, the default; 0: skip), PIN_REPS (default 7), PAIRED_ROUNDS
-# (default 5), SKIP_SUMMARY=1.
+# (default 5), LOOP_REPS (SymPy loop-model processes, default 3), LOOP_ROUNDS (paired
+# four-bar rounds, default 5), SKIP_CHAIN_PEERS=1 (reuse the chain peers' results of an
+# earlier run: steps 3 and 4 skipped), SKIP_SUMMARY=1.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 PEERS=${PEERS:-../shared/peers}
@@ -32,7 +39,12 @@ PY=$VENV/bin/python
 SIZES="1 2 4 8 16 32"
 
 mkdir -p $R/bin
-rm -f $R/sympy_chain.jsonl $R/pinocchio_py.jsonl $R/pinocchio_cpp.jsonl $R/mech.jsonl $R/load.jsonl $R/commands.txt
+SKIP_CHAIN_PEERS=${SKIP_CHAIN_PEERS:-0}
+LOOP_REPS=${LOOP_REPS:-3}
+if [ "$SKIP_CHAIN_PEERS" != 1 ]; then
+  rm -f $R/sympy_chain.jsonl $R/pinocchio_py.jsonl $R/pinocchio_cpp.jsonl
+fi
+rm -f $R/mech.jsonl $R/load.jsonl $R/commands.txt $R/sympy_fourbar.jsonl $R/sympy_fivebar.jsonl
 : > $R/commands.txt
 
 # Logs and runs a command; a failure is recorded, not fatal.
@@ -69,6 +81,10 @@ echo "== 2. cargo build --release -p mech-bench" >&2
 load build
 run cargo build --release -p mech-bench || exit 1
 
+if [ "$SKIP_CHAIN_PEERS" = 1 ]; then
+  echo "== 3, 4. chain peers skipped (SKIP_CHAIN_PEERS=1): earlier results kept" >&2
+  echo "# steps 3 and 4 skipped (SKIP_CHAIN_PEERS=1): chain peers' results from an earlier run" >> $R/commands.txt
+else
 echo "== 3. SymPy" >&2
 load sympy
 for N in 1 2 4 8; do
@@ -98,6 +114,18 @@ for N in $SIZES; do
   run timeout 900 $PY $PEERS/pinocchio_chain.py $N --reps "$PIN_REPS" >> $R/pinocchio_py.jsonl \
     || failed pinocchio_chain $N $? >> $R/pinocchio_py.jsonl
 done
+fi
+
+echo "== 4b. SymPy/PyDy + SciPy on the loop models" >&2
+load sympy_loops
+for r in $(seq 1 "$LOOP_REPS"); do
+  echo "   sympy four-bar run $r" >&2
+  run timeout 600 $PY $PEERS/sympy_fourbar.py --reps 5 >> $R/sympy_fourbar.jsonl \
+    || failed sympy_fourbar 0 $? >> $R/sympy_fourbar.jsonl
+  echo "   sympy five-bar run $r" >&2
+  run timeout 900 $PY bench/sympy_fivebar.py --reps 5 >> $R/sympy_fivebar.jsonl \
+    || failed sympy_fivebar 0 $? >> $R/sympy_fivebar.jsonl
+done
 
 echo "== 5. mech" >&2
 load mech
@@ -116,6 +144,19 @@ if [ -x $NATIVE ]; then
   done
   rm -f $R/paired_mech_round.jsonl
 fi
+
+# The loop targets compare 1 s of four-bar motion (and one u̇) with SymPy + SciPy: alternate
+# the SymPy peer (numeric part only, no PyDy) and `mech-bench --loops-only`.
+echo "== 5c. paired rounds on the four-bar: SymPy + SciPy, mech" >&2
+load paired_loops
+rm -f $R/paired_sympy_fourbar.jsonl $R/paired_mech_loops.jsonl
+for r in $(seq 1 "${LOOP_ROUNDS:-5}"); do
+  run timeout 600 $PY $PEERS/sympy_fourbar.py --reps 5 --no-pydy >> $R/paired_sympy_fourbar.jsonl \
+    || failed sympy_fourbar 0 $? >> $R/paired_sympy_fourbar.jsonl
+  run target/release/mech-bench --loops-only --out $R/paired_mech_round.jsonl > /dev/null \
+    && grep '"record":"loop"' $R/paired_mech_round.jsonl >> $R/paired_mech_loops.jsonl
+done
+rm -f $R/paired_mech_round.jsonl
 load end
 
 if [ "${SKIP_SUMMARY:-0}" != 1 ]; then

@@ -4,9 +4,12 @@
 //! * [`chain_source`]: the `.mech` text of the N-link chain (the models `build.rs` compiles).
 //! * [`chains`]: the chains compiled to Rust at build time (dogfooding `mech_codegen::Builder`).
 //! * [`cholesky_solve`]: an allocation-free in-place Cholesky solve for `M u̇ = F`.
+//! * [`loops`]: the four-bar and the spherical five-bar (assembly, constrained `u̇`, 1 s of
+//!   motion).
 //! * [`timing`]: medians of batched tight loops, and of repeated one-shot runs.
 
 pub mod chains;
+pub mod loops;
 pub mod source;
 pub mod timing;
 

@@ -3,8 +3,12 @@
 //! (plus a first `meta` line) to the results file. `bench/run.sh` runs it beside the peers
 //! and turns everything into `docs/benchmarks.md`.
 //!
+//! Then the two loop models (four-bar, spherical five-bar: assembly, constrained `u̇`, 1 s of
+//! motion; one `loop` line each), unless `--no-loops` or `--eval-only`.
+//!
 //! ```text
-//! cargo run --release -p mech-bench -- [--out FILE] [--sizes 1,2,4] [--quick]
+//! cargo run --release -p mech-bench -- [--out FILE] [--sizes 1,2,4] [--quick] [--eval-only]
+//!     [--loops-only] [--no-loops]
 //! ```
 
 use std::fmt::Write as _;
@@ -13,7 +17,7 @@ use std::io::Write as _;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use mech_bench::timing::{per_call_ns, per_run_s, Summary};
+use mech_bench::timing::{num, per_call_ns, per_run_s, summary_json, Summary};
 use mech_bench::{
     bench_speeds, chain_source, chain_source_per_link, cholesky_solve, param_values, SIZES,
 };
@@ -32,6 +36,10 @@ struct Config {
     budget: Duration,
     /// Only the evaluation timings of the generated code (for the paired rounds of run.sh).
     eval_only: bool,
+    /// Measure the loop models (four-bar, spherical five-bar); `--no-loops` turns it off.
+    loops: bool,
+    /// Only the loop models, no chains (for the paired rounds of run.sh).
+    loops_only: bool,
 }
 
 impl Config {
@@ -45,6 +53,8 @@ impl Config {
             max_runs: 41,
             budget: Duration::from_secs(3),
             eval_only: false,
+            loops: true,
+            loops_only: false,
         };
         let mut args = std::env::args().skip(1);
         while let Some(arg) = args.next() {
@@ -68,9 +78,17 @@ impl Config {
                     config.max_runs = 2;
                     config.budget = Duration::ZERO;
                 }
-                "--eval-only" => config.eval_only = true,
+                "--eval-only" => {
+                    config.eval_only = true;
+                    config.loops = false;
+                }
+                "--loops-only" => config.loops_only = true,
+                "--no-loops" => config.loops = false,
                 "-h" | "--help" => {
-                    println!("usage: mech-bench [--out FILE] [--sizes 1,2,4,...] [--quick] [--eval-only]");
+                    println!(
+                        "usage: mech-bench [--out FILE] [--sizes 1,2,4,...] [--quick] [--eval-only] \
+                         [--loops-only] [--no-loops]"
+                    );
                     std::process::exit(0);
                 }
                 other => return Err(format!("unknown argument {other:?} (try --help)")),
@@ -395,25 +413,6 @@ fn measure(n: usize, config: &Config) -> Record {
 
 // ---- output ----
 
-fn num(x: f64) -> String {
-    if x.is_finite() {
-        format!("{x:e}")
-    } else {
-        "null".to_string()
-    }
-}
-
-fn summary_json(s: &Summary) -> String {
-    format!(
-        "{{\"median\":{},\"min\":{},\"max\":{},\"samples\":{},\"calls_per_sample\":{}}}",
-        num(s.median),
-        num(s.min),
-        num(s.max),
-        s.samples,
-        s.calls_per_sample
-    )
-}
-
 fn list_json(values: &[f64]) -> String {
     format!(
         "[{}]",
@@ -512,7 +511,12 @@ fn main() {
         "tape u̇ ns",
         "path"
     );
-    for &n in &config.sizes {
+    let sizes: &[usize] = if config.loops_only {
+        &[]
+    } else {
+        &config.sizes
+    };
+    for &n in sizes {
         if config.eval_only {
             let Some(e) = measure_generated(n, &config) else {
                 eprintln!("mech-bench: chain{n} was not compiled to Rust");
@@ -555,6 +559,29 @@ fn main() {
             e.path
         );
         writeln!(file, "{}", record_json(&r)).expect("write results");
+    }
+    if config.loops || config.loops_only {
+        let loop_config = mech_bench::loops::LoopConfig {
+            batches: config.batches,
+            batch_time: config.batch_time,
+            min_runs: if config.min_runs > 1 { 21 } else { 1 },
+            max_runs: if config.max_runs > 2 { 201 } else { 2 },
+            budget: config.budget,
+        };
+        for r in mech_bench::loops::measure_loops(&loop_config) {
+            println!(
+                "{}: assemble {:.2} µs, u̇ {:.1} ns, 1 s of motion {:.1} µs ({} steps, {} rhs), \
+                 q1(1 s) = {:.10}",
+                r.model,
+                r.assemble.median * 1e-3,
+                r.udot.median,
+                r.motion.wall.median * 1e6,
+                r.motion.stats.accepted_steps,
+                r.motion.stats.rhs_evaluations,
+                r.motion.q_final[0]
+            );
+            writeln!(file, "{}", mech_bench::loops::loop_json(&r)).expect("write results");
+        }
     }
     writeln!(
         file,

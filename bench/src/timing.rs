@@ -88,3 +88,24 @@ pub fn per_run_s<T>(
         drop(result);
     }
 }
+
+/// A JSON number (`null` when not finite).
+pub fn num(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x:e}")
+    } else {
+        "null".to_string()
+    }
+}
+
+/// A [`Summary`] as a JSON object.
+pub fn summary_json(s: &Summary) -> String {
+    format!(
+        "{{\"median\":{},\"min\":{},\"max\":{},\"samples\":{},\"calls_per_sample\":{}}}",
+        num(s.median),
+        num(s.min),
+        num(s.max),
+        s.samples,
+        s.calls_per_sample
+    )
+}

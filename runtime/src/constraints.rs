@@ -228,26 +228,39 @@ pub fn assemble_speeds<M: Model + ?Sized>(
 }
 
 /// Workspace for constrained dynamics and projection. [`accelerations`](Self::accelerations)
-/// allocates nothing: `M` by Cholesky, `J M⁻¹ Jᵀ` by a diagonally pivoted Cholesky that
+/// and [`project`](Self::project) allocate nothing: `M = L Lᵀ` by Cholesky, then
+/// `Z = L⁻¹ Jᵀ` by forward substitution, so that `J M⁻¹ Jᵀ = Zᵀ Z` (a Gram matrix, symmetric
+/// positive semidefinite by construction) is factored by a diagonally pivoted Cholesky that
 /// drops redundant rows (`u̇` is unique even where `λ` is not).
 #[derive(Clone, Debug)]
 pub struct ConstrainedSolver {
     nq: usize,
     nc: usize,
+    /// `M`, then its Cholesky factor `L` (lower triangle).
     mass: DMatrix<f64>,
     force: DVector<f64>,
     jacobian: DMatrix<f64>,
     bias: DVector<f64>,
     phi: DVector<f64>,
-    /// `M⁻¹ Jᵀ`, `nq × nc`.
-    m_inv_jt: Vec<f64>,
-    /// `J M⁻¹ Jᵀ` and then its pivoted factor, `nc × nc`.
+    /// `Z = L⁻¹ Jᵀ`, `nq × nc` column-major: column r is `L⁻¹` (row r of J).
+    scaled: Vec<f64>,
+    /// `Zᵀ Z = J M⁻¹ Jᵀ` (or `J Jᵀ`), then its pivoted factor, `nc × nc`.
     coupling: Vec<f64>,
     mismatch: Vec<f64>,
     multipliers: Vec<f64>,
     order: Vec<usize>,
     work: Vec<f64>,
 }
+
+/// Whether every value is finite (no early exit: branch-free, and these slices are short).
+fn all_finite(s: &[f64]) -> bool {
+    s.iter().fold(true, |ok, v| ok & v.is_finite())
+}
+
+/// Relative pivot threshold of the pivoted Cholesky of `J M⁻¹ Jᵀ` and `J Jᵀ`: these square
+/// J's singular values, and round-off leaves ~1e-16 relative on their null directions, so
+/// pivots below 1e-12 of the largest count as redundant.
+const PIVOT_TOLERANCE: f64 = 1e-12;
 
 impl ConstrainedSolver {
     pub fn new(nq: usize, nc: usize) -> ConstrainedSolver {
@@ -259,7 +272,7 @@ impl ConstrainedSolver {
             jacobian: DMatrix::zeros(nc, nq),
             bias: DVector::zeros(nc),
             phi: DVector::zeros(nc),
-            m_inv_jt: vec![0.0; nq * nc],
+            scaled: vec![0.0; nq * nc],
             coupling: vec![0.0; nc * nc],
             mismatch: vec![0.0; nc],
             multipliers: vec![0.0; nc],
@@ -274,8 +287,37 @@ impl ConstrainedSolver {
         &self.multipliers
     }
 
-    /// `u̇` of `M u̇ = F + Jᵀλ`, `J u̇ = −J̇u`: with `a₀ = M⁻¹F` and `Y = M⁻¹Jᵀ`,
-    /// `(J Y) λ = −J̇u − J a₀` (pivoted Cholesky, rank-revealing) and `u̇ = a₀ + Y λ`.
+    /// `Z = L⁻¹ Jᵀ` from the factor in `mass` and the Jacobian in `jacobian`.
+    fn scale_jacobian(&mut self) {
+        let (n, nc) = (self.nq, self.nc);
+        let jacobian = self.jacobian.as_slice();
+        for c in 0..n {
+            for r in 0..nc {
+                self.scaled[c + n * r] = jacobian[r + nc * c];
+            }
+        }
+        dense::forward_substitute_columns(self.mass.as_slice(), n, &mut self.scaled, nc);
+    }
+
+    /// Factors `coupling` (pivoted) and solves it for `mismatch` into `multipliers`.
+    fn solve_coupling(&mut self) {
+        let nc = self.nc;
+        let rank =
+            dense::pivoted_cholesky(&mut self.coupling, nc, PIVOT_TOLERANCE, &mut self.order);
+        dense::pivoted_solve(
+            &self.coupling,
+            nc,
+            rank,
+            &self.order,
+            &self.mismatch,
+            &mut self.multipliers,
+            &mut self.work,
+        );
+    }
+
+    /// `u̇` of `M u̇ = F + Jᵀλ`, `J u̇ = −J̇u`: with `M = L Lᵀ`, `w = L⁻¹F` and `Z = L⁻¹Jᵀ`,
+    /// `(Zᵀ Z) λ = −J̇u − Zᵀ w` (that is `(J M⁻¹ Jᵀ) λ = −J̇u − J M⁻¹F`; pivoted Cholesky,
+    /// rank-revealing) and `u̇ = L⁻ᵀ (w + Z λ)`.
     pub fn accelerations<M: Model + ?Sized>(
         &mut self,
         model: &M,
@@ -290,104 +332,49 @@ impl ConstrainedSolver {
         model.forcing(t, q, u, inputs, self.force.as_mut_slice());
         model.constraint_jacobian(t, q, self.jacobian.as_mut_slice());
         model.constraint_bias(t, q, u, self.bias.as_mut_slice());
-        let finite = |s: &[f64]| s.iter().all(|v| v.is_finite());
-        let inputs_finite = [
-            self.mass.as_slice(),
-            self.force.as_slice(),
-            self.jacobian.as_slice(),
-            self.bias.as_slice(),
-        ]
-        .iter()
-        .all(|s| finite(s));
-        if !inputs_finite {
-            udot.fill(f64::NAN);
-            return Err(RuntimeError::NonFiniteState { t });
-        }
-        let mass = self.mass.as_mut_slice();
-        if !dense::cholesky(mass, n) {
+        // Non-finite inputs are found where they surface, not by scanning all of them first:
+        // a NaN or infinity in (the lower triangle of) M fails the factorization, and one in
+        // F, J or J̇u reaches the right-hand side `−J̇u − Zᵀw` or `u̇` (0·∞ and 0·NaN are NaN).
+        if !dense::cholesky(self.mass.as_mut_slice(), n) {
+            // Rare path: M again (the failed factorization overwrote part of it).
+            model.mass_matrix(t, q, inputs, self.mass.as_mut_slice());
+            let inputs_finite = all_finite(self.mass.as_slice())
+                && all_finite(self.force.as_slice())
+                && all_finite(self.jacobian.as_slice())
+                && all_finite(self.bias.as_slice());
+            if !inputs_finite {
+                udot.fill(f64::NAN);
+                return Err(RuntimeError::NonFiniteState { t });
+            }
             return Err(RuntimeError::SingularMassMatrix { t });
         }
-        // a₀ = M⁻¹ F, into udot.
+        // w = L⁻¹ F, into udot.
+        let udot = &mut udot[..n];
         udot.copy_from_slice(self.force.as_slice());
-        dense::cholesky_solve(mass, n, udot);
-        // Y = M⁻¹ Jᵀ, column r = M⁻¹ (row r of J).
-        let jacobian = self.jacobian.as_slice();
-        for r in 0..nc {
-            let column = &mut self.m_inv_jt[r * n..(r + 1) * n];
-            for (c, value) in column.iter_mut().enumerate() {
-                *value = jacobian[r + nc * c];
-            }
-            dense::cholesky_solve(mass, n, column);
+        dense::forward_substitute(self.mass.as_slice(), n, udot);
+        self.scale_jacobian();
+        dense::gram_lower(&self.scaled, n, nc, &mut self.coupling);
+        // Right-hand side −J̇u − J M⁻¹F = −J̇u − Zᵀ w.
+        dense::transpose_times(&self.scaled, n, nc, udot, &mut self.mismatch);
+        for (m, b) in self.mismatch.iter_mut().zip(self.bias.as_slice()) {
+            *m = -b - *m;
         }
-        // J Y (symmetric; the lower triangle is what the factorization reads) and the
-        // right-hand side −J̇u − J a₀.
-        for r in 0..nc {
-            for s in 0..=r {
-                let y = &self.m_inv_jt[s * n..(s + 1) * n];
-                self.coupling[r + nc * s] = (0..n).map(|c| jacobian[r + nc * c] * y[c]).sum();
-            }
-            let j_a0: f64 = (0..n).map(|c| jacobian[r + nc * c] * udot[c]).sum();
-            self.mismatch[r] = -self.bias[r] - j_a0;
-        }
-        // J M⁻¹ Jᵀ squares J's singular values, and round-off leaves ~1e-16 relative on its
-        // null directions, so pivots below 1e-12 of the largest count as redundant.
-        let rank = dense::pivoted_cholesky(&mut self.coupling, nc, 1e-12, &mut self.order);
-        dense::pivoted_solve(
-            &self.coupling,
-            nc,
-            rank,
-            &self.order,
-            &self.mismatch,
-            &mut self.multipliers,
-            &mut self.work,
-        );
-        for r in 0..nc {
-            let lambda = self.multipliers[r];
-            for (value, y) in udot.iter_mut().zip(&self.m_inv_jt[r * n..(r + 1) * n]) {
-                *value += y * lambda;
-            }
-        }
-        if !finite(udot) {
+        let mismatch_finite = all_finite(&self.mismatch);
+        self.solve_coupling();
+        // u̇ = L⁻ᵀ (w + Z λ).
+        dense::add_times(&self.scaled, n, nc, &self.multipliers, udot);
+        dense::back_substitute(self.mass.as_slice(), n, udot);
+        if !(mismatch_finite && all_finite(udot)) {
             udot.fill(f64::NAN);
             return Err(RuntimeError::NonFiniteState { t });
         }
         Ok(())
     }
 
-    /// Solves `(J W Jᵀ) x = rhs` (pivoted Cholesky) for `W = I` (`weighted` false) or
-    /// `W = M⁻¹` (with `m_inv_jt` holding `M⁻¹Jᵀ`), leaving `x` in `multipliers`.
-    fn solve_coupled(&mut self, weighted: bool, rhs: &[f64]) {
-        let (n, nc) = (self.nq, self.nc);
-        let jacobian = self.jacobian.as_slice();
-        for r in 0..nc {
-            for s in 0..=r {
-                self.coupling[r + nc * s] = (0..n)
-                    .map(|c| {
-                        jacobian[r + nc * c]
-                            * if weighted {
-                                self.m_inv_jt[s * n + c]
-                            } else {
-                                jacobian[s + nc * c]
-                            }
-                    })
-                    .sum();
-            }
-        }
-        let rank = dense::pivoted_cholesky(&mut self.coupling, nc, 1e-12, &mut self.order);
-        dense::pivoted_solve(
-            &self.coupling,
-            nc,
-            rank,
-            &self.order,
-            rhs,
-            &mut self.multipliers,
-            &mut self.work,
-        );
-    }
-
-    /// Moves `q` back onto `φ(q) = 0` (minimum-norm Gauss–Newton, `Δq = −Jᵀ(J Jᵀ)⁺φ`) and
-    /// `u` onto `J u = 0` (the kinetic-energy-closest correction `Δu = −M⁻¹Jᵀ(J M⁻¹ Jᵀ)⁺ J u`).
-    /// Allocates nothing.
+    /// Moves `q` back onto `φ(q) = 0` (minimum-norm Gauss–Newton, `Δq = −Jᵀ(J Jᵀ)⁺φ`, until
+    /// `max |φ| ≤ tolerance`, at most 10 steps) and then, unless `max |J u|` is already within
+    /// `tolerance`, `u` onto `J u = 0` (the kinetic-energy-closest correction
+    /// `Δu = −M⁻¹Jᵀ(J M⁻¹ Jᵀ)⁺ J u`). Allocates nothing.
     pub fn project<M: Model + ?Sized>(
         &mut self,
         model: &M,
@@ -397,53 +384,65 @@ impl ConstrainedSolver {
         inputs: &[f64],
         tolerance: f64,
     ) -> Result<(), RuntimeError> {
+        self.project_state(model, t, q, u, inputs, tolerance)
+            .map(|_| ())
+    }
+
+    /// [`project`](Self::project), returning whether `q` or `u` was changed (a state already
+    /// within tolerance is left bit for bit as it was).
+    pub fn project_state<M: Model + ?Sized>(
+        &mut self,
+        model: &M,
+        t: f64,
+        q: &mut [f64],
+        u: &mut [f64],
+        inputs: &[f64],
+        tolerance: f64,
+    ) -> Result<bool, RuntimeError> {
         let (n, nc) = (self.nq, self.nc);
+        let mut changed = false;
         for _ in 0..10 {
             model.constraints(t, q, self.phi.as_mut_slice());
             if self.phi.amax() <= tolerance {
                 break;
             }
             model.constraint_jacobian(t, q, self.jacobian.as_mut_slice());
+            dense::outer_gram_lower(self.jacobian.as_slice(), nc, n, &mut self.coupling);
             self.mismatch.copy_from_slice(self.phi.as_slice());
-            let rhs = std::mem::take(&mut self.mismatch);
-            self.solve_coupled(false, &rhs);
-            self.mismatch = rhs;
-            let jacobian = self.jacobian.as_slice();
+            self.solve_coupling();
+            // Δq = −Jᵀ x: J (nc × nq, column-major) is Jᵀ stored as an nc-by-nq Z.
             for (c, value) in q.iter_mut().enumerate() {
-                *value -= (0..nc)
-                    .map(|r| jacobian[r + nc * c] * self.multipliers[r])
+                let column = &self.jacobian.as_slice()[nc * c..nc * (c + 1)];
+                *value -= column
+                    .iter()
+                    .zip(&self.multipliers)
+                    .map(|(j, x)| j * x)
                     .sum::<f64>();
             }
+            changed = true;
         }
         model.constraint_jacobian(t, q, self.jacobian.as_mut_slice());
-        let jacobian = self.jacobian.as_slice();
-        for r in 0..nc {
-            self.mismatch[r] = (0..n).map(|c| jacobian[r + nc * c] * u[c]).sum();
-        }
-        if self.mismatch.iter().all(|&v| v == 0.0) {
-            return Ok(());
+        self.mismatch.fill(0.0);
+        // J u = (Jᵀ)ᵀ u; column-major J is Jᵀ row by row, so accumulate column by column.
+        dense::add_times(self.jacobian.as_slice(), nc, n, u, &mut self.mismatch);
+        if self.mismatch.iter().all(|v| v.abs() <= tolerance) {
+            return Ok(changed);
         }
         model.mass_matrix(t, q, inputs, self.mass.as_mut_slice());
-        let mass = self.mass.as_mut_slice();
-        if !dense::cholesky(mass, n) {
+        if !dense::cholesky(self.mass.as_mut_slice(), n) {
             return Err(RuntimeError::SingularMassMatrix { t });
         }
-        for r in 0..nc {
-            let column = &mut self.m_inv_jt[r * n..(r + 1) * n];
-            for (c, value) in column.iter_mut().enumerate() {
-                *value = jacobian[r + nc * c];
-            }
-            dense::cholesky_solve(mass, n, column);
+        self.scale_jacobian();
+        dense::gram_lower(&self.scaled, n, nc, &mut self.coupling);
+        self.solve_coupling();
+        // Δu = −M⁻¹Jᵀλ = −L⁻ᵀ (Z λ), built in `force` (scratch here).
+        let correction = self.force.as_mut_slice();
+        correction.fill(0.0);
+        dense::add_times(&self.scaled, n, nc, &self.multipliers, correction);
+        dense::back_substitute(self.mass.as_slice(), n, correction);
+        for (value, delta) in u.iter_mut().zip(correction.iter()) {
+            *value -= delta;
         }
-        let rhs = std::mem::take(&mut self.mismatch);
-        self.solve_coupled(true, &rhs);
-        self.mismatch = rhs;
-        for r in 0..nc {
-            let lambda = self.multipliers[r];
-            for (value, y) in u.iter_mut().zip(&self.m_inv_jt[r * n..(r + 1) * n]) {
-                *value -= y * lambda;
-            }
-        }
-        Ok(())
+        Ok(true)
     }
 }

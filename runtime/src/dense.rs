@@ -1,51 +1,249 @@
 //! Small dense linear algebra on column-major slices, without allocation: Cholesky for the
 //! mass matrix and a diagonally pivoted Cholesky that reveals the rank of a positive
-//! semidefinite matrix (`J M⁻¹ Jᵀ` with redundant constraint rows).
+//! semidefinite matrix (`J M⁻¹ Jᵀ` with redundant constraint rows), plus the products the
+//! constrained solver needs (`Zᵀ Z`, `Zᵀ w`, `Z λ`).
 //!
-//! Matrices are `n × n`, column-major (`a[i + n*j]` is row i, column j), like the `Model`
-//! trait's outputs.
+//! Matrices are `n × n` (or `n × m`), column-major (`a[i + n*j]` is row i, column j), like the
+//! `Model` trait's outputs.
+//!
+//! Multibody models are small (a few coordinates, a few loop rows), where loop and
+//! bounds-check overhead costs more than the arithmetic. So every kernel is written once,
+//! generic over a [`Dim`], and the public functions dispatch: sizes 1 to [`UNROLLED`] get a
+//! copy with the size known at compile time (loops fully unrolled, no bounds checks), larger
+//! ones the same code with the size at run time.
 
-/// Cholesky factorization `A = L Lᵀ` in place (the lower triangle receives `L`). Returns
-/// false if a pivot is not positive relative to the diagonal (`A` not positive definite).
-pub fn cholesky(a: &mut [f64], n: usize) -> bool {
-    let scale = (0..n).map(|i| a[i + n * i].abs()).fold(0.0, f64::max);
-    for j in 0..n {
-        let mut diagonal = a[j + n * j];
-        for k in 0..j {
-            diagonal -= a[j + n * k] * a[j + n * k];
+/// Sizes up to this one are compiled with the size known (fully unrolled kernels).
+pub const UNROLLED: usize = 6;
+
+/// A dimension: known at compile time ([`Fixed`]) or at run time ([`Dynamic`]).
+trait Dim: Copy {
+    fn get(self) -> usize;
+}
+
+#[derive(Clone, Copy)]
+struct Fixed<const N: usize>;
+
+impl<const N: usize> Dim for Fixed<N> {
+    #[inline(always)]
+    fn get(self) -> usize {
+        N
+    }
+}
+
+#[derive(Clone, Copy)]
+struct Dynamic(usize);
+
+impl Dim for Dynamic {
+    #[inline(always)]
+    fn get(self) -> usize {
+        self.0
+    }
+}
+
+/// Runs `$body` with `$d` bound to a [`Dim`] of value `$n`: `Fixed` up to [`UNROLLED`].
+macro_rules! by_size {
+    ($n:expr, |$d:ident| $body:expr) => {
+        match $n {
+            1 => {
+                let $d = Fixed::<1>;
+                $body
+            }
+            2 => {
+                let $d = Fixed::<2>;
+                $body
+            }
+            3 => {
+                let $d = Fixed::<3>;
+                $body
+            }
+            4 => {
+                let $d = Fixed::<4>;
+                $body
+            }
+            5 => {
+                let $d = Fixed::<5>;
+                $body
+            }
+            6 => {
+                let $d = Fixed::<6>;
+                $body
+            }
+            n => {
+                let $d = Dynamic(n);
+                $body
+            }
         }
-        // NaN counts as not positive.
-        if diagonal.is_nan() || diagonal <= scale * 1e-14 {
+    };
+}
+
+/// Cholesky factorization `A = L Lᵀ` in place (the lower triangle receives `L`; the strict
+/// upper triangle is left as it was). Returns false if a pivot is not positive relative to the
+/// diagonal (`A` not positive definite).
+pub fn cholesky(a: &mut [f64], n: usize) -> bool {
+    by_size!(n, |d| cholesky_in(a, d))
+}
+
+#[inline(always)]
+fn cholesky_in<D: Dim>(a: &mut [f64], d: D) -> bool {
+    let n = d.get();
+    let a = &mut a[..n * n];
+    let mut scale = 0.0;
+    for i in 0..n {
+        scale = f64::max(scale, a[i + n * i].abs());
+    }
+    let floor = scale * 1e-14;
+    // Right-looking: column j of L, then the trailing lower triangle.
+    for j in 0..n {
+        // The Schur-complement diagonal; NaN counts as not positive.
+        let diagonal = a[j + n * j];
+        if diagonal.is_nan() || diagonal <= floor {
             return false;
         }
         let pivot = diagonal.sqrt();
         a[j + n * j] = pivot;
         for i in j + 1..n {
-            let mut value = a[i + n * j];
-            for k in 0..j {
-                value -= a[i + n * k] * a[j + n * k];
+            a[i + n * j] /= pivot;
+        }
+        for c in j + 1..n {
+            let l_cj = a[c + n * j];
+            for i in c..n {
+                a[i + n * c] -= a[i + n * j] * l_cj;
             }
-            a[i + n * j] = value / pivot;
         }
     }
     true
 }
 
+/// Solves `L y = b` in place (forward substitution), with `L` from [`cholesky`].
+pub fn forward_substitute(l: &[f64], n: usize, b: &mut [f64]) {
+    by_size!(n, |d| forward_in(l, d, b))
+}
+
+#[inline(always)]
+fn forward_in<D: Dim>(l: &[f64], d: D, b: &mut [f64]) {
+    let n = d.get();
+    let (l, b) = (&l[..n * n], &mut b[..n]);
+    for j in 0..n {
+        let y = b[j] / l[j + n * j];
+        b[j] = y;
+        for i in j + 1..n {
+            b[i] -= l[i + n * j] * y;
+        }
+    }
+}
+
+/// Solves `Lᵀ x = y` in place (back substitution), with `L` from [`cholesky`].
+pub fn back_substitute(l: &[f64], n: usize, b: &mut [f64]) {
+    by_size!(n, |d| back_in(l, d, b))
+}
+
+#[inline(always)]
+fn back_in<D: Dim>(l: &[f64], d: D, b: &mut [f64]) {
+    let n = d.get();
+    let (l, b) = (&l[..n * n], &mut b[..n]);
+    for j in (0..n).rev() {
+        let mut value = b[j];
+        for i in j + 1..n {
+            value -= l[i + n * j] * b[i];
+        }
+        b[j] = value / l[j + n * j];
+    }
+}
+
 /// Solves `L Lᵀ x = b` in place, with `L` from [`cholesky`].
 pub fn cholesky_solve(l: &[f64], n: usize, b: &mut [f64]) {
-    for i in 0..n {
-        let mut value = b[i];
-        for k in 0..i {
-            value -= l[i + n * k] * b[k];
-        }
-        b[i] = value / l[i + n * i];
+    by_size!(n, |d| {
+        forward_in(l, d, b);
+        back_in(l, d, b);
+    })
+}
+
+/// Solves `L Y = B` in place for the `m` columns of the `n × m` matrix `b`.
+pub fn forward_substitute_columns(l: &[f64], n: usize, b: &mut [f64], m: usize) {
+    if n == 0 {
+        return;
     }
-    for i in (0..n).rev() {
-        let mut value = b[i];
-        for k in i + 1..n {
-            value -= l[k + n * i] * b[k];
+    by_size!(n, |d| {
+        for column in b[..n * m].chunks_exact_mut(n) {
+            forward_in(l, d, column);
         }
-        b[i] = value / l[i + n * i];
+    })
+}
+
+/// The lower triangle of `Zᵀ Z` (`m × m`) into `out`, for the `n × m` matrix `z`.
+pub fn gram_lower(z: &[f64], n: usize, m: usize, out: &mut [f64]) {
+    by_size!(n, |dn| by_size!(m, |dm| gram_in(z, dn, dm, out)))
+}
+
+#[inline(always)]
+fn gram_in<D: Dim, E: Dim>(z: &[f64], dn: D, dm: E, out: &mut [f64]) {
+    let (n, m) = (dn.get(), dm.get());
+    let (z, out) = (&z[..n * m], &mut out[..m * m]);
+    for r in 0..m {
+        for s in 0..=r {
+            let mut sum = 0.0;
+            for k in 0..n {
+                sum += z[k + n * r] * z[k + n * s];
+            }
+            out[r + m * s] = sum;
+        }
+    }
+}
+
+/// The lower triangle of `A Aᵀ` (`m × m`) into `out`, for the `m × n` matrix `a`.
+pub fn outer_gram_lower(a: &[f64], m: usize, n: usize, out: &mut [f64]) {
+    by_size!(m, |dm| by_size!(n, |dn| outer_gram_in(a, dm, dn, out)))
+}
+
+#[inline(always)]
+fn outer_gram_in<D: Dim, E: Dim>(a: &[f64], dm: D, dn: E, out: &mut [f64]) {
+    let (m, n) = (dm.get(), dn.get());
+    let (a, out) = (&a[..m * n], &mut out[..m * m]);
+    for r in 0..m {
+        for s in 0..=r {
+            let mut sum = 0.0;
+            for c in 0..n {
+                sum += a[r + m * c] * a[s + m * c];
+            }
+            out[r + m * s] = sum;
+        }
+    }
+}
+
+/// `out = Zᵀ w` (length `m`) for the `n × m` matrix `z`.
+pub fn transpose_times(z: &[f64], n: usize, m: usize, w: &[f64], out: &mut [f64]) {
+    by_size!(n, |dn| by_size!(m, |dm| transpose_times_in(
+        z, dn, dm, w, out
+    )))
+}
+
+#[inline(always)]
+fn transpose_times_in<D: Dim, E: Dim>(z: &[f64], dn: D, dm: E, w: &[f64], out: &mut [f64]) {
+    let (n, m) = (dn.get(), dm.get());
+    let (z, w, out) = (&z[..n * m], &w[..n], &mut out[..m]);
+    for r in 0..m {
+        let mut sum = 0.0;
+        for k in 0..n {
+            sum += z[k + n * r] * w[k];
+        }
+        out[r] = sum;
+    }
+}
+
+/// `out += Z x` (length `n`) for the `n × m` matrix `z`.
+pub fn add_times(z: &[f64], n: usize, m: usize, x: &[f64], out: &mut [f64]) {
+    by_size!(n, |dn| by_size!(m, |dm| add_times_in(z, dn, dm, x, out)))
+}
+
+#[inline(always)]
+fn add_times_in<D: Dim, E: Dim>(z: &[f64], dn: D, dm: E, x: &[f64], out: &mut [f64]) {
+    let (n, m) = (dn.get(), dm.get());
+    let (z, x, out) = (&z[..n * m], &x[..m], &mut out[..n]);
+    for r in 0..m {
+        let x_r = x[r];
+        for k in 0..n {
+            out[k] += z[k + n * r] * x_r;
+        }
     }
 }
 
@@ -59,15 +257,33 @@ pub fn pivoted_cholesky(
     relative_tolerance: f64,
     order: &mut [usize],
 ) -> usize {
-    for (i, slot) in order.iter_mut().enumerate().take(n) {
+    by_size!(n, |d| pivoted_cholesky_in(a, d, relative_tolerance, order))
+}
+
+#[inline(always)]
+fn pivoted_cholesky_in<D: Dim>(
+    a: &mut [f64],
+    d: D,
+    relative_tolerance: f64,
+    order: &mut [usize],
+) -> usize {
+    let n = d.get();
+    let (a, order) = (&mut a[..n * n], &mut order[..n]);
+    let mut largest = 0.0;
+    for (i, slot) in order.iter_mut().enumerate() {
         *slot = i;
+        largest = f64::max(largest, a[i + n * i]);
     }
-    let threshold = (0..n).map(|i| a[i + n * i]).fold(0.0, f64::max) * relative_tolerance;
+    let threshold = largest * relative_tolerance;
     for j in 0..n {
         // Pivot: the largest remaining diagonal (Schur complement diagonal).
-        let (best, value) = (j..n)
-            .map(|i| (i, a[i + n * i]))
-            .fold((j, f64::NEG_INFINITY), |m, c| if c.1 > m.1 { c } else { m });
+        let (mut best, mut value) = (j, f64::NEG_INFINITY);
+        for i in j..n {
+            let candidate = a[i + n * i];
+            if candidate > value {
+                (best, value) = (i, candidate);
+            }
+        }
         if value.is_nan() || value <= threshold || value <= 0.0 {
             return j;
         }
@@ -119,6 +335,23 @@ pub fn pivoted_solve(
     x: &mut [f64],
     work: &mut [f64],
 ) {
+    by_size!(n, |d| pivoted_solve_in(l, d, rank, order, b, x, work))
+}
+
+#[inline(always)]
+fn pivoted_solve_in<D: Dim>(
+    l: &[f64],
+    d: D,
+    rank: usize,
+    order: &[usize],
+    b: &[f64],
+    x: &mut [f64],
+    work: &mut [f64],
+) {
+    let n = d.get();
+    let rank = rank.min(n);
+    let (l, order, x, work) = (&l[..n * n], &order[..n], &mut x[..n], &mut work[..n]);
+    // L y = P b, then Lᵀ z = y, on the first `rank` pivots.
     for i in 0..rank {
         let mut value = b[order[i]];
         for k in 0..i {
@@ -133,7 +366,7 @@ pub fn pivoted_solve(
         }
         work[i] = value / l[i + n * i];
     }
-    x.iter_mut().for_each(|v| *v = 0.0);
+    x.fill(0.0);
     for i in 0..rank {
         x[order[i]] = work[i];
     }
@@ -192,6 +425,76 @@ mod tests {
         for i in 0..3 {
             let ax: f64 = (0..3).map(|k| original[i + 3 * k] * x[k]).sum();
             assert!((ax - b[i]).abs() < 1e-12, "{ax} vs {}", b[i]);
+        }
+    }
+
+    /// The unrolled sizes (1 to `UNROLLED`) and the run-time-size code agree, and solve.
+    #[test]
+    fn every_size_solves_and_the_products_agree() {
+        let mut seed = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for n in 1..=UNROLLED + 3 {
+            let m = 1 + n % 4;
+            // A = B Bᵀ + n I, symmetric positive definite.
+            let b: Vec<f64> = (0..n * n).map(|_| next()).collect();
+            let mut a = vec![0.0; n * n];
+            for i in 0..n {
+                for j in 0..n {
+                    a[i + n * j] = (0..n).map(|k| b[i + n * k] * b[j + n * k]).sum::<f64>()
+                        + if i == j { n as f64 } else { 0.0 };
+                }
+            }
+            let original = a.clone();
+            assert!(cholesky(&mut a, n));
+            let rhs: Vec<f64> = (0..n).map(|_| next()).collect();
+            let mut x = rhs.clone();
+            cholesky_solve(&a, n, &mut x);
+            for i in 0..n {
+                let ax: f64 = (0..n).map(|j| original[i + n * j] * x[j]).sum();
+                assert!((ax - rhs[i]).abs() < 1e-12, "n = {n}: {ax} vs {}", rhs[i]);
+            }
+            // Z = L⁻¹ C column by column; ZᵀZ = Cᵀ A⁻¹ C; Zᵀw and Z x against plain loops.
+            let c: Vec<f64> = (0..n * m).map(|_| next()).collect();
+            let mut z = c.clone();
+            forward_substitute_columns(&a, n, &mut z, m);
+            let mut gram = vec![0.0; m * m];
+            gram_lower(&z, n, m, &mut gram);
+            for r in 0..m {
+                let mut y: Vec<f64> = c[n * r..n * (r + 1)].to_vec();
+                cholesky_solve(&a, n, &mut y);
+                for s in 0..=r {
+                    let expected: f64 = (0..n).map(|k| c[k + n * s] * y[k]).sum();
+                    assert!((gram[r + m * s] - expected).abs() < 1e-12, "n = {n}, gram");
+                }
+            }
+            let w: Vec<f64> = (0..n).map(|_| next()).collect();
+            let mut zw = vec![0.0; m];
+            transpose_times(&z, n, m, &w, &mut zw);
+            let lambda: Vec<f64> = (0..m).map(|_| next()).collect();
+            let mut zl = vec![0.5; n];
+            add_times(&z, n, m, &lambda, &mut zl);
+            for r in 0..m {
+                let expected: f64 = (0..n).map(|k| z[k + n * r] * w[k]).sum();
+                assert!((zw[r] - expected).abs() < 1e-14);
+            }
+            for k in 0..n {
+                let expected: f64 = 0.5 + (0..m).map(|r| z[k + n * r] * lambda[r]).sum::<f64>();
+                assert!((zl[k] - expected).abs() < 1e-14);
+            }
+            let mut outer = vec![0.0; m * m];
+            // C read as an m × n matrix: (C Cᵀ) over its rows.
+            outer_gram_lower(&c, m, n, &mut outer);
+            for r in 0..m {
+                for s in 0..=r {
+                    let expected: f64 = (0..n).map(|k| c[r + m * k] * c[s + m * k]).sum();
+                    assert!((outer[r + m * s] - expected).abs() < 1e-14);
+                }
+            }
         }
     }
 }

@@ -59,7 +59,9 @@ pub struct SimOptions {
     pub max_steps: usize,
     /// For models with loop closures: after every accepted step (and at every sample) the
     /// state is projected back until `max |φ(q)| ≤ constraint_tolerance` (model units, SI;
-    /// default `1e-12`), and `J u = 0` (kinetic-energy-closest correction).
+    /// default `1e-12`) and, when `max |J u|` exceeds the same number (per second), onto
+    /// `J u = 0` (kinetic-energy-closest correction). A state already within both is left as
+    /// it is (and the integrator keeps its derivative there).
     pub constraint_tolerance: f64,
 }
 
@@ -503,13 +505,18 @@ fn run<M: Model + ?Sized, S: Stepper>(
 ) -> Result<Trajectory, RuntimeError> {
     let nq = model.nq();
     let mut projector = (model.nc() > 0).then(|| ConstrainedSolver::new(nq, model.nc()));
-    let mut project = |t: f64, x: &mut [f64]| -> Result<(), RuntimeError> {
+    let mut project_inputs = vec![0.0; signals.len()];
+    // Projects `x` in place; returns whether it changed (a state already within tolerance is
+    // left bit for bit as it was).
+    let mut project = |t: f64, x: &mut [f64]| -> Result<bool, RuntimeError> {
         let Some(projector) = projector.as_mut() else {
-            return Ok(());
+            return Ok(false);
         };
-        let inputs: Vec<f64> = signals.iter().map(|s| s.value(t)).collect();
+        for (v, s) in project_inputs.iter_mut().zip(signals) {
+            *v = s.value(t);
+        }
         let (q, u) = x.split_at_mut(nq);
-        projector.project(model, t, q, u, &inputs, constraint_tolerance)
+        projector.project_state(model, t, q, u, &project_inputs, constraint_tolerance)
     };
     let mut traj = Trajectory {
         q: Vec::with_capacity(grid.len()),
@@ -519,6 +526,9 @@ fn run<M: Model + ?Sized, S: Stepper>(
         ..Trajectory::default()
     };
     let mut x = vec![0.0; 2 * nq];
+    // The projected state after a step, written back (which makes the stepper re-evaluate its
+    // derivative there) only when the projection moved it.
+    let mut projected = vec![0.0; 2 * nq];
     let record = |t: f64, x: &[f64], traj: &mut Trajectory| {
         let (q, u) = x.split_at(nq);
         let inputs: Vec<f64> = signals.iter().map(|s| s.value(t)).collect();
@@ -542,8 +552,11 @@ fn run<M: Model + ?Sized, S: Stepper>(
         stepper.step()?;
         if model.nc() > 0 {
             let t = stepper.t();
-            project(t, stepper.state_mut())?;
-            stepper.reset()?;
+            projected.copy_from_slice(stepper.state());
+            if project(t, &mut projected)? {
+                stepper.state_mut().copy_from_slice(&projected);
+                stepper.reset()?;
+            }
         }
         progress(stepper.t());
         while next < grid.len() && grid[next] <= stepper.t() {
