@@ -111,3 +111,36 @@ fn long_functions_are_split_into_parts_that_agree() {
     );
     assert!(source.contains("spill["), "expected spilled temporaries");
 }
+
+/// The fused `constrained_terms` of generated code equals the four separate functions of the
+/// tape, for every bundled model with loops.
+#[test]
+fn fused_constrained_terms_agree_with_the_separate_functions() {
+    let mut rng = Rng::new(77);
+    for name in mech::models::NAMES {
+        let tape = common::tape(name);
+        if tape.nc() == 0 {
+            continue;
+        }
+        let compiled = mech::models::compiled(name).unwrap();
+        let (n, nc) = (tape.nq(), tape.nc());
+        let q = rng.vector(n, -1.0, 1.0);
+        let u = rng.vector(n, -1.0, 1.0);
+        let inputs = rng.vector(tape.ninputs(), -1.0, 1.0);
+        let (mut m, mut f, mut j, mut b) = (
+            vec![0.0; n * n],
+            vec![0.0; n],
+            vec![0.0; nc * n],
+            vec![0.0; nc],
+        );
+        compiled.constrained_terms(0.0, &q, &u, &inputs, &mut m, &mut f, &mut j, &mut b);
+        let (m2, f2, _) = evaluate(&tape, &q, &u, &inputs);
+        let (mut j2, mut b2) = (vec![0.0; nc * n], vec![0.0; nc]);
+        tape.constraint_jacobian(0.0, &q, &mut j2);
+        tape.constraint_bias(0.0, &q, &u, &mut b2);
+        assert_agree(&format!("{name} M"), &m, &m2);
+        assert_agree(&format!("{name} F"), &f, &f2);
+        assert_agree(&format!("{name} J"), &j, &j2);
+        assert_agree(&format!("{name} J̇u"), &b, &b2);
+    }
+}

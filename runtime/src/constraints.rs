@@ -328,10 +328,16 @@ impl ConstrainedSolver {
         udot: &mut [f64],
     ) -> Result<(), RuntimeError> {
         let (n, nc) = (self.nq, self.nc);
-        model.mass_matrix(t, q, inputs, self.mass.as_mut_slice());
-        model.forcing(t, q, u, inputs, self.force.as_mut_slice());
-        model.constraint_jacobian(t, q, self.jacobian.as_mut_slice());
-        model.constraint_bias(t, q, u, self.bias.as_mut_slice());
+        model.constrained_terms(
+            t,
+            q,
+            u,
+            inputs,
+            self.mass.as_mut_slice(),
+            self.force.as_mut_slice(),
+            self.jacobian.as_mut_slice(),
+            self.bias.as_mut_slice(),
+        );
         // Non-finite inputs are found where they surface, not by scanning all of them first:
         // a NaN or infinity in (the lower triangle of) M fails the factorization, and one in
         // F, J or J̇u reaches the right-hand side `−J̇u − Zᵀw` or `u̇` (0·∞ and 0·NaN are NaN).

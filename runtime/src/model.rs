@@ -59,6 +59,27 @@ pub trait Model {
     /// `J̇(q, u) u`, so that `J u̇ + J̇u = 0` keeps `J u = 0`.
     fn constraint_bias(&self, _t: f64, _q: &[f64], _u: &[f64], _out: &mut [f64]) {}
 
+    /// `M`, `F`, `J` and `J̇u` in one call (matrices column-major), for constrained dynamics.
+    /// Generated code overrides it with one pass that shares subexpressions between the four
+    /// (the sines and cosines of the coordinates, above all).
+    #[allow(clippy::too_many_arguments)]
+    fn constrained_terms(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        inputs: &[f64],
+        mass: &mut [f64],
+        forcing: &mut [f64],
+        jacobian: &mut [f64],
+        bias: &mut [f64],
+    ) {
+        self.mass_matrix(t, q, inputs, mass);
+        self.forcing(t, q, u, inputs, forcing);
+        self.constraint_jacobian(t, q, jacobian);
+        self.constraint_bias(t, q, u, bias);
+    }
+
     /// Number of flexures (compliant hinges with a loss factor).
     fn nflexures(&self) -> usize {
         0

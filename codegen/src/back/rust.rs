@@ -149,6 +149,7 @@ enum Function {
     ConstraintJacobian,
     ConstraintBias,
     Flexures,
+    ConstrainedTerms,
 }
 
 impl Function {
@@ -161,6 +162,7 @@ impl Function {
             Function::ConstraintJacobian => "constraint_jacobian",
             Function::ConstraintBias => "constraint_bias",
             Function::Flexures => "flexures",
+            Function::ConstrainedTerms => "constrained_terms",
         }
     }
 }
@@ -493,6 +495,23 @@ impl<'a> Emitter<'a> {
         let (jacobian_parts, jacobian_body) =
             self.function_body(Function::ConstraintJacobian, &rows.jacobian);
         let (bias_parts, bias_body) = self.function_body(Function::ConstraintBias, &rows.bias);
+        let fused: Vec<ExprId> = [
+            &self.equations.mass_matrix,
+            &self.equations.forcing,
+            &rows.jacobian,
+            &rows.bias,
+        ]
+        .into_iter()
+        .flatten()
+        .copied()
+        .collect();
+        let fused_count = usize_literal(fused.len());
+        let (fused_parts, fused_body) = self.function_body(Function::ConstrainedTerms, &fused);
+        let (mass_len, forcing_len, jacobian_len) = (
+            usize_literal(self.equations.mass_matrix.len()),
+            usize_literal(self.equations.forcing.len()),
+            usize_literal(rows.jacobian.len()),
+        );
         let zero_u = quote!(let u = &#rt::__codegen::SVector::<f64, #nu>::zeros(););
         let zero_inputs = quote!(let inputs = &#rt::__codegen::SVector::<f64, #ni>::zeros(););
         let inherent = quote! {
@@ -528,6 +547,20 @@ impl<'a> Emitter<'a> {
             #(#phi_parts)*
             #(#jacobian_parts)*
             #(#bias_parts)*
+
+            /// `[M (column-major), F, J (column-major), J̇u]` in one pass, sharing
+            /// subexpressions between them.
+            pub fn constrained_terms(
+                &self,
+                t: f64,
+                q: &#rt::__codegen::SVector<f64, #nq>,
+                u: &#rt::__codegen::SVector<f64, #nu>,
+                inputs: &#rt::__codegen::SVector<f64, #ni>,
+            ) -> #rt::__codegen::SVector<f64, #fused_count> {
+                #fused_body
+            }
+
+            #(#fused_parts)*
         };
         let in_trait = quote! {
             fn nc(&self) -> usize { #nc }
@@ -547,6 +580,30 @@ impl<'a> Emitter<'a> {
                 let u = #rt::__codegen::vector_from_slice::<#nu>(u);
                 let bias = #name::constraint_bias(self, t, &q, &u);
                 for (slot, value) in out.iter_mut().zip(bias.iter()) { *slot = *value; }
+            }
+            fn constrained_terms(
+                &self,
+                t: f64,
+                q: &[f64],
+                u: &[f64],
+                inputs: &[f64],
+                mass: &mut [f64],
+                forcing: &mut [f64],
+                jacobian: &mut [f64],
+                bias: &mut [f64],
+            ) {
+                let q = #rt::__codegen::vector_from_slice::<#nq>(q);
+                let u = #rt::__codegen::vector_from_slice::<#nu>(u);
+                let inputs = #rt::__codegen::vector_from_slice::<#ni>(inputs);
+                let all = #name::constrained_terms(self, t, &q, &u, &inputs);
+                let values = all.as_slice();
+                let (m, rest) = values.split_at(#mass_len);
+                let (f, rest) = rest.split_at(#forcing_len);
+                let (j, b) = rest.split_at(#jacobian_len);
+                for (slot, value) in mass.iter_mut().zip(m) { *slot = *value; }
+                for (slot, value) in forcing.iter_mut().zip(f) { *slot = *value; }
+                for (slot, value) in jacobian.iter_mut().zip(j) { *slot = *value; }
+                for (slot, value) in bias.iter_mut().zip(b) { *slot = *value; }
             }
         };
         (inherent, in_trait)
