@@ -118,8 +118,10 @@ pub fn resonances(points: &[Point]) -> Vec<Resonance> {
 }
 
 /// Swept-sine estimate from a chirp record: `H(f) = Y(f) / U(f)` with single-bin Fourier
-/// transforms of the input and output records (trapezoid rule, Hann window), evaluated at
-/// each analysis frequency. Both records share `times`; the output's mean is removed.
+/// transforms of the whole input and output records (trapezoid rule, rectangular window),
+/// evaluated at each analysis frequency; both means are removed. No taper: in a swept sine
+/// each frequency lives at one time of the record, and a window over the whole record would
+/// suppress the sweep's start and end, where its lowest and highest frequencies are.
 pub fn chirp_estimate(
     times: &[f64],
     input: &[f64],
@@ -127,22 +129,13 @@ pub fn chirp_estimate(
     frequencies: &[f64],
 ) -> Vec<Point> {
     let n = times.len();
-    if n < 2 {
-        return Vec::new();
-    }
-    let (start, span) = (times[0], times[n - 1] - times[0]);
-    let window: Vec<f64> = times
-        .iter()
-        .map(|t| 0.5 - 0.5 * (std::f64::consts::TAU * (t - start) / span).cos())
-        .collect();
-    let mean = |values: &[f64]| values.iter().sum::<f64>() / values.len() as f64;
+    let mean = |values: &[f64]| values.iter().sum::<f64>() / values.len().max(1) as f64;
     let (input_mean, output_mean) = (mean(input), mean(output));
     let transform = |values: &[f64], offset: f64, omega: f64| {
         let mut sum = Complex::new(0.0, 0.0);
         for k in 1..n {
             let dt = times[k] - times[k - 1];
-            let term =
-                |j: usize| Complex::from_polar((values[j] - offset) * window[j], -omega * times[j]);
+            let term = |j: usize| Complex::from_polar(values[j] - offset, -omega * times[j]);
             sum += (term(k) + term(k - 1)) * (0.5 * dt);
         }
         sum

@@ -376,38 +376,5 @@ fn chirp_estimate(
         .map_err(|e| format!("chirp simulation failed: {e}"))?;
     let u: Vec<f64> = run.inputs.iter().map(|x| x[input]).collect();
     let y: Vec<f64> = run.outputs.iter().map(|x| x[output]).collect();
-    Ok(rectangular_estimate(&run.times, &u, &y, frequencies))
-}
-
-/// `H(f) = Y(f)/U(f)` from single-bin Fourier transforms of the whole record with a
-/// rectangular window (trapezoid rule; the output's mean removed). Unlike a Hann window over
-/// the record, this keeps the start of a linear chirp, where its low frequencies are.
-pub fn rectangular_estimate(
-    times: &[f64],
-    input: &[f64],
-    output: &[f64],
-    frequencies: &[f64],
-) -> Vec<Point> {
-    use mech_runtime::nalgebra::Complex;
-    let n = times.len();
-    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
-    let (mu, my) = (mean(input), mean(output));
-    frequencies
-        .iter()
-        .map(|&f| {
-            let omega = std::f64::consts::TAU * f;
-            let (mut su, mut sy) = (Complex::new(0.0, 0.0), Complex::new(0.0, 0.0));
-            for k in 1..n {
-                let dt = times[k] - times[k - 1];
-                let term =
-                    |v: &[f64], m: f64, j: usize| Complex::from_polar(v[j] - m, -omega * times[j]);
-                su += (term(input, mu, k) + term(input, mu, k - 1)) * (0.5 * dt);
-                sy += (term(output, my, k) + term(output, my, k - 1)) * (0.5 * dt);
-            }
-            Point {
-                frequency_hz: f,
-                gain: sy / su,
-            }
-        })
-        .collect()
+    Ok(frequency::chirp_estimate(&run.times, &u, &y, frequencies))
 }
