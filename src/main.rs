@@ -125,6 +125,8 @@ enum Emit {
 enum Integrator {
     /// Adaptive Dormand–Prince 5(4).
     Dopri5,
+    /// Adaptive Dormand–Prince 8(5,3): fewer evaluations at tight tolerances.
+    Dop853,
     /// Fixed-step classical Runge–Kutta.
     Rk4,
 }
@@ -389,6 +391,11 @@ fn simulate(path: &Path, request: &SimulateRequest) -> Result<(), String> {
     };
     let method = match request.method {
         Integrator::Dopri5 => Method::Dopri5 {
+            rtol: request.rtol,
+            atol: request.atol,
+            h_max: f64::INFINITY,
+        },
+        Integrator::Dop853 => Method::Dop853 {
             rtol: request.rtol,
             atol: request.atol,
             h_max: f64::INFINITY,

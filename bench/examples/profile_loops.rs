@@ -3,7 +3,7 @@
 //! ```text
 //! cargo build --release -p mech-bench --example profile_loops
 //! valgrind --tool=callgrind target/release/examples/profile_loops udot 100000 four_bar
-//! valgrind --tool=callgrind target/release/examples/profile_loops sim 200 four_bar
+//! valgrind --tool=callgrind target/release/examples/profile_loops sim 200 four_bar   # DOP853; sim5: DOPRI5
 //! target/release/examples/profile_loops dump 1 spherical_five_bar   # M, F, J, J̇u, u̇, λ as JSON
 //! ```
 use mech_bench::loops::{assembled, four_bar::FourBar, spherical_five_bar::SphericalFiveBar};
@@ -23,15 +23,24 @@ fn run<M: Model>(model: &M, fixed: &[usize], what: &str, n: usize) {
                 black_box(&udot);
             }
         }
-        "sim" => {
-            let options = SimOptions {
-                t_end: 1.0,
-                output_interval: 1.0,
-                method: Method::Dopri5 {
+        "sim" | "sim5" => {
+            let method = if what == "sim" {
+                Method::Dop853 {
                     rtol: 1e-9,
                     atol: 1e-9,
                     h_max: f64::INFINITY,
-                },
+                }
+            } else {
+                Method::Dopri5 {
+                    rtol: 1e-9,
+                    atol: 1e-9,
+                    h_max: f64::INFINITY,
+                }
+            };
+            let options = SimOptions {
+                t_end: 1.0,
+                output_interval: 1.0,
+                method,
                 ..SimOptions::default()
             };
             let mut stats = None;
@@ -56,7 +65,7 @@ fn run<M: Model>(model: &M, fixed: &[usize], what: &str, n: usize) {
                 .unwrap();
             println!("{{\"M\":{m:?},\"F\":{f:?},\"J\":{j:?},\"b\":{b:?},\"udot\":{udot:?},\"lambda\":{:?}}}", solver.multipliers());
         }
-        _ => panic!("usage: profile_loops udot|sim|dump N four_bar|spherical_five_bar"),
+        _ => panic!("usage: profile_loops udot|sim|sim5|dump N four_bar|spherical_five_bar"),
     }
 }
 

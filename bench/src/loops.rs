@@ -2,13 +2,14 @@
 //! compiled to Rust by `build.rs` (the same generated code as `mech::models`), and what
 //! `docs/benchmarks.md` measures on them beside SymPy/PyDy + SciPy: assembly, one constrained
 //! `u̇` (`ConstrainedSolver::accelerations`) and 1 s of motion through
-//! `mech_runtime::simulate` (DOPRI5, projection after every accepted step).
+//! `mech_runtime::simulate` (DOP853 as the peers' `solve_ivp`, and DOPRI5; projection after
+//! every accepted step).
 
 use std::hint::black_box;
 use std::time::Duration;
 
 use mech_runtime::{
-    assemble, assemble_speeds, AssemblyOptions, ConstrainedSolver, Dopri5, Dopri5Options, Method,
+    assemble, assemble_speeds, AdaptiveOptions, AssemblyOptions, ConstrainedSolver, Dop853, Method,
     Model, ModelOde, SimOptions, Stats, Stepper,
 };
 
@@ -84,11 +85,14 @@ pub struct LoopRecord {
     /// `ConstrainedSolver::project` from the assembled state with `q` and `u` nudged off the
     /// manifold by 1e-9 (one Newton step and a velocity projection), ns per call.
     pub project: Summary,
-    /// 1 s through `simulate`, samples at 0 and 1 s only (as `solve_ivp` without `t_eval`).
+    /// 1 s through `simulate` with DOP853, samples at 0 and 1 s only (as `solve_ivp` without
+    /// `t_eval`).
     pub motion: Motion,
-    /// The same with the default 1 kHz output grid (dense output + projection per sample).
+    /// The same with DOPRI5.
+    pub motion_dopri5: Motion,
+    /// DOP853 with the default 1 kHz output grid (dense output + projection per sample).
     pub motion_1khz: Motion,
-    /// DOPRI5 on `ModelOde` stepped directly, no projection (what the SymPy peers do).
+    /// DOP853 on `ModelOde` stepped directly, no projection (what the SymPy peers do).
     pub motion_unprojected: Motion,
 }
 
@@ -108,16 +112,26 @@ pub fn assembled<M: Model>(model: &M, fixed: &[usize]) -> (Vec<f64>, Vec<f64>, u
     (q, u, iterations)
 }
 
-fn sim_options(output_interval: f64) -> SimOptions {
+/// DOP853, as the SymPy peers' `solve_ivp(method="DOP853")`: the headline comparison.
+const DOP853: Method = Method::Dop853 {
+    rtol: TOLERANCE,
+    atol: TOLERANCE,
+    h_max: f64::INFINITY,
+};
+
+/// DOPRI5 at the same tolerance, for comparison.
+const DOPRI5: Method = Method::Dopri5 {
+    rtol: TOLERANCE,
+    atol: TOLERANCE,
+    h_max: f64::INFINITY,
+};
+
+fn sim_options(output_interval: f64, method: Method) -> SimOptions {
     SimOptions {
         t_start: 0.0,
         t_end: 1.0,
         output_interval,
-        method: Method::Dopri5 {
-            rtol: TOLERANCE,
-            atol: TOLERANCE,
-            h_max: f64::INFINITY,
-        },
+        method,
         ..SimOptions::default()
     }
 }
@@ -163,9 +177,10 @@ fn motion<M: Model>(
     q0: &[f64],
     u0: &[f64],
     output_interval: f64,
+    method: Method,
     config: &LoopConfig,
 ) -> Motion {
-    let options = sim_options(output_interval);
+    let options = sim_options(output_interval, method);
     let run = || {
         mech_runtime::simulate(model, q0, u0, &[], &options, &mut |_| {})
             .unwrap_or_else(|e| panic!("{}: simulate failed: {e}", model.name()))
@@ -180,14 +195,10 @@ fn motion<M: Model>(
 
 fn motion_unprojected<M: Model>(model: &M, q0: &[f64], u0: &[f64], config: &LoopConfig) -> Motion {
     let x0: Vec<f64> = q0.iter().chain(u0).copied().collect();
-    let options = Dopri5Options {
-        rtol: TOLERANCE,
-        atol: TOLERANCE,
-        ..Dopri5Options::default()
-    };
+    let options = AdaptiveOptions::dop853().with_tolerances(TOLERANCE, TOLERANCE);
     let run = || {
         let ode = ModelOde::new(model, &[]).expect("an ODE");
-        let mut stepper = Dopri5::new(ode, 0.0, &x0, 1.0, options).expect("a stepper");
+        let mut stepper = Dop853::new(ode, 0.0, &x0, 1.0, options).expect("a stepper");
         while !stepper.is_finished() {
             stepper.step().expect("a step");
         }
@@ -325,8 +336,9 @@ pub fn measure_loop<M: Model>(
         udot: udot_time,
         udot_value,
         project,
-        motion: motion(model, &q, &u, 1.0, config),
-        motion_1khz: motion(model, &q, &u, 1e-3, config),
+        motion: motion(model, &q, &u, 1.0, DOP853, config),
+        motion_dopri5: motion(model, &q, &u, 1.0, DOPRI5, config),
+        motion_1khz: motion(model, &q, &u, 1e-3, DOP853, config),
         motion_unprojected: motion_unprojected(model, &q, &u, config),
     }
 }
@@ -379,7 +391,7 @@ pub fn loop_json(r: &LoopRecord) -> String {
          \"q0\":{},\"q\":{},\"u\":{},\"assemble_ns\":{},\"assemble_iterations\":{},\
          \"assemble_speeds_ns\":{},\"mass_matrix_ns\":{},\"forcing_ns\":{},\"jacobian_ns\":{},\
          \"bias_ns\":{},\"constraints_ns\":{},\"udot_ns\":{},\"udot\":{},\"project_ns\":{},\
-         \"sim1s\":{},\"sim1s_1khz\":{},\"sim1s_unprojected\":{}}}",
+         \"sim1s\":{},\"sim1s_dopri5\":{},\"sim1s_1khz\":{},\"sim1s_unprojected\":{}}}",
         r.model,
         r.nq,
         r.nc,
@@ -404,6 +416,7 @@ pub fn loop_json(r: &LoopRecord) -> String {
         list(&r.udot_value),
         summary_json(&r.project),
         motion_json(&r.motion),
+        motion_json(&r.motion_dopri5),
         motion_json(&r.motion_1khz),
         motion_json(&r.motion_unprojected)
     )

@@ -3,7 +3,7 @@
 // Reference values are copied verbatim from their sources.
 #![allow(clippy::excessive_precision)]
 
-use mech_runtime::integrate::{Dopri5, Dopri5Options, Ode, Rk4, Stepper};
+use mech_runtime::integrate::{AdaptiveOptions, Dop853, Dopri5, Ode, Rk4, Stepper};
 use mech_runtime::RuntimeError;
 
 /// y' = -y, y(0) = 1.
@@ -66,8 +66,8 @@ impl Ode for BlowUp {
     }
 }
 
-fn tol(rtol: f64, atol: f64) -> Dopri5Options {
-    Dopri5Options {
+fn tol(rtol: f64, atol: f64) -> AdaptiveOptions {
+    AdaptiveOptions {
         rtol,
         atol,
         ..Default::default()
@@ -153,7 +153,7 @@ fn dopri5_dense_output_matches_exact_solution() {
 /// and 21 rejected steps, and the final state below. Our transcription must take the same steps.
 #[test]
 fn dopri5_reproduces_hairer_fortran_on_arenstorf() {
-    let opts = Dopri5Options {
+    let opts = AdaptiveOptions {
         h_init: Some(1e-4),
         ..tol(1e-7, 1e-7)
     };
@@ -294,7 +294,7 @@ fn dopri5_blow_up_is_an_error_not_a_hang() {
 
 #[test]
 fn dopri5_step_budget_and_h_min() {
-    let opts = Dopri5Options {
+    let opts = AdaptiveOptions {
         max_steps: 10,
         ..tol(1e-10, 1e-10)
     };
@@ -309,7 +309,7 @@ fn dopri5_step_budget_and_h_min() {
         "{err:?}"
     );
 
-    let opts = Dopri5Options {
+    let opts = AdaptiveOptions {
         h_min: 1.0,
         ..tol(1e-10, 1e-10)
     };
@@ -326,11 +326,11 @@ fn dopri5_rejects_bad_options_and_inputs() {
         tol(-1.0, 1e-6),
         tol(1e-6, 0.0),
         tol(f64::NAN, 1e-6),
-        Dopri5Options {
+        AdaptiveOptions {
             h_max: 0.0,
             ..Default::default()
         },
-        Dopri5Options {
+        AdaptiveOptions {
             h_init: Some(-1.0),
             ..Default::default()
         },
@@ -341,7 +341,7 @@ fn dopri5_rejects_bad_options_and_inputs() {
         ));
     }
     assert!(matches!(
-        Dopri5::new(Decay, 0.0, &[1.0, 2.0], 1.0, Dopri5Options::default()),
+        Dopri5::new(Decay, 0.0, &[1.0, 2.0], 1.0, AdaptiveOptions::default()),
         Err(RuntimeError::LengthMismatch {
             expected: 1,
             found: 2,
@@ -349,11 +349,11 @@ fn dopri5_rejects_bad_options_and_inputs() {
         })
     ));
     assert!(matches!(
-        Dopri5::new(Decay, 1.0, &[1.0], 0.0, Dopri5Options::default()),
+        Dopri5::new(Decay, 1.0, &[1.0], 0.0, AdaptiveOptions::default()),
         Err(RuntimeError::InvalidOptions(_))
     ));
     assert!(matches!(
-        Dopri5::new(Decay, 0.0, &[f64::NAN], 1.0, Dopri5Options::default()),
+        Dopri5::new(Decay, 0.0, &[f64::NAN], 1.0, AdaptiveOptions::default()),
         Err(RuntimeError::NonFiniteState { t: 0.0 })
     ));
 }
@@ -425,4 +425,107 @@ fn rk4_non_finite_state_is_an_error() {
         matches!(err, RuntimeError::NonFiniteState { .. }),
         "{err:?}"
     );
+}
+
+/// Van der Pol's equation `y1' = y2`, `y2' = ((1 − y1²) y2 − y1)/ε` with ε = 1e-3.
+struct VanDerPol;
+impl Ode for VanDerPol {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&mut self, _t: f64, y: &[f64], f: &mut [f64]) -> Result<(), RuntimeError> {
+        f[0] = y[1];
+        f[1] = ((1.0 - y[0] * y[0]) * y[1] - y[0]) / 1e-3;
+        Ok(())
+    }
+}
+
+/// Hairer's DOP853 (Fortran) on van der Pol (ε = 1e-3, y(0) = (2, 0), t ∈ [0, 2]) with
+/// rtol = atol = 1e-9 and a first step of 1e-6 (driver `examples/dop853_vdp.f` of
+/// github.com/cpmech/hwode, output `russell_ode/data/logs/fortran_dop853_van_der_pol.txt` of
+/// github.com/cpmech/russell): 1348 accepted and 121 rejected steps, the dense output at
+/// t = 0.1, 0.2, … and the final state below. Our transcription must take the same steps.
+#[test]
+fn dop853_reproduces_hairer_fortran_on_van_der_pol() {
+    let opts = AdaptiveOptions {
+        h_init: Some(1e-6),
+        ..AdaptiveOptions::dop853().with_tolerances(1e-9, 1e-9)
+    };
+    let mut s = Dop853::new(VanDerPol, 0.0, &[2.0, 0.0], 2.0, opts).unwrap();
+    // (t, accepted steps so far, y) as printed by the Fortran SOLOUT (a selection).
+    let fortran_dense: [(f64, usize, [f64; 2]); 5] = [
+        (0.1, 75, [1.931611417501184E+00, -7.070951240604973E-01]),
+        (0.8, 525, [1.102733648413240E+00, -4.482889108091831E+00]),
+        (0.9, 631, [-1.959570969570627E+00, 6.898639929483857E-01]),
+        (1.6, 1085, [-1.227570508060995E+00, 2.379082947865465E+00]),
+        (1.9, 1298, [1.843292936171062E+00, -7.685214701753735E-01]),
+    ];
+    let mut out = [0.0; 2];
+    let mut next = 0;
+    while !s.is_finished() {
+        s.step().unwrap();
+        while next < fortran_dense.len() && fortran_dense[next].0 <= s.t() {
+            let (t, steps, want) = fortran_dense[next];
+            assert_eq!(s.stats().accepted_steps, steps, "accepted steps at t = {t}");
+            s.interpolate(t, &mut out).unwrap();
+            for i in 0..2 {
+                assert!(
+                    (out[i] - want[i]).abs() < 1e-12 * want[i].abs().max(1.0),
+                    "y{i}({t}) = {:.15e}, Fortran {:.15e}",
+                    out[i],
+                    want[i]
+                );
+            }
+            next += 1;
+        }
+    }
+    assert_eq!(next, fortran_dense.len());
+    let stats = s.stats();
+    assert_eq!((stats.accepted_steps, stats.rejected_steps), (1348, 121));
+    let want = [1.763234540172087E+00, -8.356886819301910E-01];
+    for (i, (got, want)) in s.state().iter().zip(want).enumerate() {
+        assert!(
+            (got - want).abs() < 1e-12,
+            "y{i}(2) = {got:.15e}, Fortran {want:.15e}"
+        );
+    }
+    // 11 evaluations per trial step, 1 per accepted step (FSAL), 3 per interpolated step.
+    assert_eq!(
+        stats.rhs_evaluations,
+        1 + 11 * (1348 + 121) + 1348 + 3 * fortran_dense.len()
+    );
+}
+
+/// DOP853 is 8th order: on the harmonic oscillator, tightening the tolerance by 10⁴ shrinks
+/// the global error by about 10⁴ while the step count grows by about 10^(4/8) = 3.2; its
+/// dense output is accurate to the tolerance everywhere.
+#[test]
+fn dop853_converges_and_interpolates() {
+    let run = |tol: f64| {
+        let opts = AdaptiveOptions::dop853().with_tolerances(tol, tol);
+        let mut s = Dop853::new(Oscillator, 0.0, &[1.0, 0.0], 20.0, opts).unwrap();
+        let (mut worst_dense, mut out) = (0.0f64, [0.0; 2]);
+        while !s.is_finished() {
+            s.step().unwrap();
+            let (a, b) = (s.t_prev(), s.t());
+            for k in 1..4 {
+                let t = a + (b - a) * k as f64 / 4.0;
+                s.interpolate(t, &mut out).unwrap();
+                worst_dense = worst_dense.max((out[0] - t.cos()).abs());
+            }
+        }
+        let error = (s.state()[0] - 20f64.cos()).abs();
+        (error, s.stats().accepted_steps, worst_dense)
+    };
+    let (e1, n1, d1) = run(1e-7);
+    let (e2, n2, d2) = run(1e-11);
+    assert!(e1 < 1e-6 && e2 < 1e-10, "errors {e1:e}, {e2:e}");
+    let error_ratio = e1 / e2;
+    assert!(
+        (1e3..1e5).contains(&error_ratio),
+        "error ratio {error_ratio}"
+    );
+    let step_ratio = n2 as f64 / n1 as f64;
+    assert!((2.0..5.0).contains(&step_ratio), "step ratio {step_ratio}");
+    assert!(d1 < 1e-6 && d2 < 1e-10, "dense errors {d1:e}, {d2:e}");
 }

@@ -1,6 +1,6 @@
 //! Stepping a model never allocates: all working storage is allocated up front.
 
-use mech_runtime::{Dopri5, Dopri5Options, Model, ModelOde, Rk4, Signal, Stepper};
+use mech_runtime::{AdaptiveOptions, Dopri5, Model, ModelOde, Rk4, Signal, Stepper};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
@@ -106,7 +106,7 @@ fn stepping_does_not_allocate() {
         let x0 = [0.5, -0.2, 0.0, 0.0];
 
         let ode = ModelOde::new(&model, &signals).unwrap();
-        let mut dopri = Dopri5::new(ode, 0.0, &x0, 3.0, Dopri5Options::default()).unwrap();
+        let mut dopri = Dopri5::new(ode, 0.0, &x0, 3.0, AdaptiveOptions::default()).unwrap();
         let mut out = [0.0; 4];
         let n = allocations(|| {
             while !dopri.is_finished() {
