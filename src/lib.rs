@@ -6,6 +6,7 @@
 //! Symbols: `q` generalized coordinates, `u = q̇` generalized speeds, `M(q) u̇ = F`.
 
 pub mod describe;
+pub mod diagnose;
 pub mod experiments;
 pub mod flexure_fit;
 pub mod frequency;

@@ -1,0 +1,19 @@
+//! Foundations of `mech diagnose` and `mech fit` (design notes §7: measured data → cause →
+//! extension → gain). Each part is plain data in, plain data out:
+//!
+//! - [`data`]: a measured-data CSV file (columns `name [unit]`) → columns in SI units, each
+//!   with its physical dimension, or every problem of the file with its line and column;
+//! - [`lm`]: residual function + parameters (bounds, scales) → Levenberg–Marquardt fit with
+//!   covariance, standard errors, identifiability flags, and information criteria (AIC, AICc,
+//!   BIC) for comparing model forms.
+//!
+//! The file format and the fitting method are documented in `docs/diagnose.md`.
+
+pub mod data;
+pub mod lm;
+
+pub use data::{Column, DataError, DataErrors, MeasuredData};
+pub use lm::{
+    information_criteria, levenberg_marquardt, Difference, FitResult, InformationCriteria, LmError,
+    LmOptions, NoiseModel, Parameter, ParameterStatus, StopReason,
+};
