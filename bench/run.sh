@@ -18,6 +18,7 @@
 #      then paired rounds at N = 4, Pinocchio C++ and mech alternating, for the u̇ target, and
 #      paired rounds on the four-bar, SymPy + SciPy and `mech-bench --loops-only` alternating,
 #      for the loop targets;
+#   5d. the HAMR leg: `cargo run --release --example hamr_performance` (a Markdown table);
 #   6. bench/summarize.py: docs/benchmarks.md.
 # ../shared/peers is only read: every result goes to bench/results/ (JSON lines), and every
 # command run is logged in bench/results/commands.txt.
@@ -157,6 +158,11 @@ for r in $(seq 1 "${LOOP_ROUNDS:-5}"); do
     && grep '"record":"loop"' $R/paired_mech_round.jsonl >> $R/paired_mech_loops.jsonl
 done
 rm -f $R/paired_mech_round.jsonl
+
+# The HAMR leg (issue 6): derivation, u̇, 1 s at 1 Hz, chirp, Bode.
+echo "== 5d. HAMR leg" >&2
+load hamr
+run cargo run --release -q --example hamr_performance > $R/hamr.md || failed hamr_performance 0 $? >> $R/hamr.md
 load end
 
 if [ "${SKIP_SUMMARY:-0}" != 1 ]; then

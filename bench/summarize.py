@@ -491,6 +491,7 @@ def main():
     L.extend(analysis)
     w('')
     L.extend(loop_sections(loops, paired_loops, sympy_loops, paired_sympy_fourbar, loop_targets))
+    L.extend(hamr_section(R))
     with open(a.out, 'w') as f:
         f.write('\n'.join(L).rstrip('\n') + '\n')
     print(f'wrote {a.out}')
@@ -808,6 +809,28 @@ def loop_sections(loops, paired_loops, sympy_loops, paired_sympy_fourbar, target
         text = re.sub(r'<!--.*?-->\s*', '', text, flags=re.S)
         L.append(text.format_map(Missing(values)).rstrip('\n'))
         w('')
+    return L
+
+
+def hamr_section(R):
+    """Section 9: the HAMR leg (`examples/hamr_performance.rs`, its Markdown table as printed)
+    and the hand-written interpretation in bench/analysis_hamr.md."""
+    L = ['', '## 9. The HAMR leg (issue 6): derivation, u̇, motion, chirp, Bode', '']
+    table = os.path.join(R, 'hamr.md')
+    if not os.path.exists(table):
+        L.append('Not measured in this run (`bench/results/hamr.md` missing).')
+        return L
+    L.append('`cargo run --release --example hamr_performance` (run by `bench/run.sh` after the loop '
+             'rounds), both bundled legs, generated Rust for the dynamics and the tape model only for '
+             'the statics that pick the starting state. Medians of repeated runs within ~1.5 s per row.')
+    L.append('')
+    with open(table) as f:
+        L.extend(line.rstrip('\n') for line in f if line.startswith('|'))
+    L.append('')
+    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'analysis_hamr.md')
+    if os.path.exists(path):
+        with open(path) as f:
+            L.append(re.sub(r'<!--.*?-->\s*', '', f.read(), flags=re.S).rstrip('\n'))
     return L
 
 
