@@ -19,7 +19,7 @@ use mech::experiments::leg::Leg;
 use mech::experiments::ModelSpec;
 use mech_codegen::{Compiled, RustOptions};
 use mech_runtime::{
-    ConstrainedSolver, FlexureDamping, Method, Model, SimOptions, Signal, Trajectory,
+    ConstrainedSolver, FlexureDamping, Method, Model, Signal, SimOptions, Trajectory,
 };
 
 /// Median wall time of `work` over at least `min_runs` runs and at least `budget`.
@@ -76,8 +76,15 @@ fn simulate(
         method,
         ..SimOptions::default()
     };
-    mech_runtime::simulate(model, q0, &vec![0.0; model.nu()], signals, &options, &mut |_| {})
-        .unwrap_or_else(|e| panic!("{}: simulation failed: {e}", model.name()))
+    mech_runtime::simulate(
+        model,
+        q0,
+        &vec![0.0; model.nu()],
+        signals,
+        &options,
+        &mut |_| {},
+    )
+    .unwrap_or_else(|e| panic!("{}: simulation failed: {e}", model.name()))
 }
 
 fn main() {
@@ -126,11 +133,21 @@ fn main() {
         let (udot_time, _) = median_time(1000, Duration::from_millis(300), || {
             for _ in 0..100 {
                 solver
-                    .accelerations(model.as_ref(), 0.0, black_box(&q0), &u0, &start_inputs, &mut udot)
+                    .accelerations(
+                        model.as_ref(),
+                        0.0,
+                        black_box(&q0),
+                        &u0,
+                        &start_inputs,
+                        &mut udot,
+                    )
                     .expect("u̇");
             }
         });
-        row("one constrained u̇ (generated Rust)", seconds(udot_time / 100.0));
+        row(
+            "one constrained u̇ (generated Rust)",
+            seconds(udot_time / 100.0),
+        );
 
         for (label, method) in [
             (
@@ -232,14 +249,9 @@ fn main() {
 
         let frequencies = mech::frequency::log_space(1.0, 150.0, 300);
         let (wall, _) = median_time(3, budget, || {
-            let linear = mech_runtime::linearize(
-                model.as_ref(),
-                0.0,
-                &rest,
-                &rest_inputs,
-                &leg.independent,
-            )
-            .expect("linearization");
+            let linear =
+                mech_runtime::linearize(model.as_ref(), 0.0, &rest, &rest_inputs, &leg.independent)
+                    .expect("linearization");
             let mut points = 0;
             for (input, output) in [(leg.v_lift, leg.foot[2]), (leg.v_swing, leg.foot[0])] {
                 for damping in [FlexureDamping::Hysteretic, FlexureDamping::Viscous] {
