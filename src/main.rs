@@ -109,6 +109,9 @@ enum Command {
     Experiment(mech::experiments::report::ExperimentArgs),
     /// Run every experiment in `experiments/` and write an HTML and Markdown report.
     Report(mech::experiments::report::ReportArgs),
+    /// Fit model parameters to measured data (Levenberg–Marquardt, standard errors), with the
+    /// residual before and after; see docs/diagnose.md.
+    Fit(mech::diagnose::command::FitArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -198,6 +201,7 @@ fn main() -> ExitCode {
         Command::Bode(args) => mech::linear_cli::bode(&args),
         Command::Experiment(args) => mech::experiments::report::experiment_command(&args),
         Command::Report(args) => mech::experiments::report::report_command(&args),
+        Command::Fit(args) => mech::diagnose::command::fit_command(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

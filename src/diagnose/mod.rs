@@ -5,11 +5,18 @@
 //!   with its physical dimension, or every problem of the file with its line and column;
 //! - [`lm`]: residual function + parameters (bounds, scales) → Levenberg–Marquardt fit with
 //!   covariance, standard errors, identifiability flags, and information criteria (AIC, AICc,
-//!   BIC) for comparing model forms.
+//!   BIC) for comparing model forms;
+//! - [`experiment`]: a diagnosis experiment file + data → the measured values and, for any
+//!   parameter values, the model's prediction of them;
+//! - [`fit`]: experiment + data + parameters to fit → fitted values, standard errors and the
+//!   residual before and after (`mech fit`, wired up in [`command`]).
 //!
 //! The file format and the fitting method are documented in `docs/diagnose.md`.
 
+pub mod command;
 pub mod data;
+pub mod experiment;
+pub mod fit;
 pub mod lm;
 
 pub use data::{Column, DataError, DataErrors, MeasuredData};

@@ -52,7 +52,7 @@ pub struct ModelSpec {
     pub independent: Vec<String>,
 }
 
-fn default_independent() -> Vec<String> {
+pub(crate) fn default_independent() -> Vec<String> {
     vec!["qsact".into(), "qlact".into()]
 }
 

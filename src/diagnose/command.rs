@@ -1,0 +1,173 @@
+//! `mech fit`: the command around [`super::fit`] — load the experiment file and the data,
+//! fit, print the table, and write `fit.json` (the same facts for scripts), `fit.csv`
+//! (measured, before, after per value) and one plot per measured series to the output folder.
+
+use std::path::PathBuf;
+
+use clap::Args;
+use serde_json::json;
+
+use super::data::MeasuredData;
+use super::experiment::{self, Experiment};
+use super::fit::{fit, parameters, FitReport, FitRequest};
+use crate::experiments::leg::Leg;
+use crate::{output, plot};
+
+#[derive(Args, Clone, Debug)]
+pub struct FitArgs {
+    /// The diagnosis experiment file (TOML, see docs/diagnose.md).
+    #[arg(long)]
+    pub experiment: PathBuf,
+    /// The measured data (CSV with `name [unit]` headers).
+    #[arg(long)]
+    pub data: PathBuf,
+    /// A parameter to fit: `NAME` (bounds ×/÷ 10 of a positive value) or `NAME=LO..HI UNIT`.
+    /// Repeat for several.
+    #[arg(long = "fit", required = true)]
+    pub fit: Vec<String>,
+    /// Output folder for fit.json, fit.csv and the plots.
+    #[arg(long, default_value = "out/fit")]
+    pub out_dir: PathBuf,
+}
+
+pub fn fit_command(args: &FitArgs) -> Result<(), String> {
+    let experiment = experiment::load(&args.experiment)?;
+    let data = MeasuredData::load(&args.data).map_err(|e| e.to_string())?;
+    let mut leg = Leg::open(&experiment.model_spec())?;
+    let requests = args
+        .fit
+        .iter()
+        .map(|text| FitRequest::parse(text))
+        .collect::<Result<Vec<_>, _>>()?;
+    let fitted = parameters(&leg, &requests)?;
+    println!(
+        "{}: {} rows of `{}`, fitting {}",
+        experiment.title(),
+        data.rows,
+        args.data.display(),
+        requests
+            .iter()
+            .map(|(r, _)| r.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    let report = fit(&experiment, &data, &mut leg, &fitted)
+        .map_err(|e| format!("fit to `{}`: {e}", args.data.display()))?;
+    println!("\n{}", report.result);
+    println!("residual RMS per series (SI units; ln|H| relative):");
+    for s in &report.residuals {
+        println!(
+            "  {:<10} before {:.4e}  after {:.4e}  ({:+.1} %)",
+            s.series,
+            s.before,
+            s.after,
+            100.0 * (s.after / s.before - 1.0)
+        );
+    }
+    write_outputs(args, &experiment, &report)
+}
+
+fn write_outputs(
+    args: &FitArgs,
+    experiment: &Experiment,
+    report: &FitReport,
+) -> Result<(), String> {
+    let dir = &args.out_dir;
+    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let r = &report.result;
+    let summary = json!({
+        "experiment": experiment.title(),
+        "data": args.data.display().to_string(),
+        "converged": r.converged,
+        "reason": format!("{:?}", r.reason),
+        "parameters": r.names.iter().enumerate().map(|(k, name)| json!({
+            "name": name,
+            "value": r.params[k],
+            "standard_error": finite_or_null(r.standard_errors[k]),
+            "status": format!("{:?}", r.status[k]),
+        })).collect::<Vec<_>>(),
+        "cost": r.cost,
+        "degrees_of_freedom": r.degrees_of_freedom,
+        "residual_rms": report.residuals.iter().map(|s| json!({
+            "series": s.series, "before": s.before, "after": s.after,
+        })).collect::<Vec<_>>(),
+    });
+    let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
+    let json_path = dir.join("fit.json");
+    output::write_atomic(&json_path, text.as_bytes())
+        .map_err(|e| format!("cannot write {}: {e}", json_path.display()))?;
+
+    let obs = &report.observations;
+    let mut series_names: Vec<&String> = Vec::new();
+    for s in &obs.series {
+        if !series_names.contains(&s) {
+            series_names.push(s);
+        }
+    }
+    let rows: Vec<Vec<f64>> = (0..obs.values.len())
+        .map(|k| {
+            let series = series_names
+                .iter()
+                .position(|s| **s == obs.series[k])
+                .unwrap_or(0);
+            vec![
+                series as f64,
+                obs.abscissa[k],
+                obs.values[k],
+                report.before[k],
+                report.after[k],
+            ]
+        })
+        .collect();
+    let header: Vec<String> = ["series", "abscissa", "measured", "before", "after"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    let csv_path = dir.join("fit.csv");
+    output::write_csv(&csv_path, &header, &rows)
+        .map_err(|e| format!("cannot write {}: {e}", csv_path.display()))?;
+
+    let log_x = matches!(experiment, Experiment::FrequencyResponse(_));
+    for name in series_names {
+        let pick = |values: &[f64]| -> (Vec<f64>, Vec<f64>) {
+            (0..values.len())
+                .filter(|&k| &obs.series[k] == name)
+                .map(|k| (obs.abscissa[k], values[k]))
+                .unzip()
+        };
+        let curves: Vec<(String, Vec<f64>, Vec<f64>)> = [
+            ("measured", &obs.values),
+            ("model before", &report.before),
+            ("model after fit", &report.after),
+        ]
+        .into_iter()
+        .map(|(label, values)| {
+            let (x, y) = pick(values);
+            (label.to_string(), x, y)
+        })
+        .collect();
+        let file = name.replace(['|', '.'], "_");
+        let path = dir.join(format!("fit_{file}.svg"));
+        let x_label = if log_x { "frequency [Hz]" } else { "data row" };
+        plot::plot_xy(
+            &path,
+            &format!("{}: {name}", experiment.title()),
+            x_label,
+            name,
+            &curves,
+            log_x,
+        )
+        .map_err(|e| e.to_string())?;
+        println!("wrote {}", path.display());
+    }
+    println!("wrote {} and {}", json_path.display(), csv_path.display());
+    Ok(())
+}
+
+fn finite_or_null(x: f64) -> serde_json::Value {
+    if x.is_finite() {
+        json!(x)
+    } else {
+        serde_json::Value::Null
+    }
+}

@@ -1,0 +1,354 @@
+//! What measured data came from, and the model's prediction of the same measurements.
+//!
+//! Consumes: a diagnosis experiment file (TOML, `docs/diagnose.md` §"Experiment files") and
+//! the [`MeasuredData`] it describes. Produces: an [`Observations`] (the measured values in
+//! one flat vector, with their noise σ and labels) and, for any parameter values of the
+//! model, the predicted values in the same order ([`Experiment::predict`]) — the two sides of
+//! every residual that `fit` and `diagnose` minimize.
+//!
+//! Kinds:
+//! - `quasi_static`: each row holds the drive voltages (columns named as the model's inputs;
+//!   a missing input column means 0 V) and measured outputs (columns named as the model's
+//!   outputs, e.g. `foot.x`); the model's static equilibrium under each row's inputs
+//!   (continuation from the previous row) predicts them. The paper's 1 Hz trajectories.
+//! - `frequency_response`: columns `frequency [Hz]`, `gain [m/V]` (magnitude of output over
+//!   input, any unit of that dimension) and `phase [deg]`; the model linearized about its rest
+//!   equilibrium predicts them, with the flexure losses as complex stiffness (hysteretic,
+//!   default) or viscous dampers. Gain residuals are taken on `ln |H|`, so σ is relative.
+
+use std::path::{Path, PathBuf};
+
+use mech_codegen::ir::Dimension;
+use mech_runtime::FlexureDamping;
+use serde::Deserialize;
+
+use super::data::MeasuredData;
+use crate::experiments::leg::Leg;
+use crate::experiments::ModelSpec;
+
+/// One diagnosis experiment file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Experiment {
+    QuasiStatic(QuasiStatic),
+    FrequencyResponse(FrequencyResponse),
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct QuasiStatic {
+    pub title: String,
+    pub model: PathBuf,
+    #[serde(default)]
+    pub set: Vec<String>,
+    #[serde(default = "crate::experiments::default_independent")]
+    pub independent: Vec<String>,
+    /// The measured outputs (model output names = data column names).
+    pub outputs: Vec<String>,
+    /// Measurement noise (one standard deviation) of each output, e.g. `"5 um"`; omitted: the
+    /// noise is estimated from the fit's residual.
+    #[serde(default)]
+    pub noise: Vec<String>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrequencyResponse {
+    pub title: String,
+    pub model: PathBuf,
+    #[serde(default)]
+    pub set: Vec<String>,
+    #[serde(default = "crate::experiments::default_independent")]
+    pub independent: Vec<String>,
+    /// Model input and output of the transfer function, e.g. `v_lift` → `foot.z`.
+    pub input: String,
+    pub output: String,
+    /// `hysteretic` (complex stiffness k(1 + iη), default) or `viscous`.
+    #[serde(default)]
+    pub damping: Damping,
+    /// Relative noise of the gain (e.g. `"5 %"`) and noise of the phase (e.g. `"3 deg"`).
+    #[serde(default)]
+    pub gain_noise: Option<String>,
+    #[serde(default)]
+    pub phase_noise: Option<String>,
+}
+
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Damping {
+    #[default]
+    Hysteretic,
+    Viscous,
+}
+
+/// The measured side of the residual: one flat vector of values, their σ (if known) and a
+/// label per value (`foot.x @ line 12`) for reports.
+#[derive(Debug, Clone, Default)]
+pub struct Observations {
+    pub values: Vec<f64>,
+    /// One σ per value; `None` when the experiment file gives no noise.
+    pub sigma: Option<Vec<f64>>,
+    /// The series each value belongs to (an output name, `ln|H|` or `phase`).
+    pub series: Vec<String>,
+    /// The abscissa of each value (row index for quasi-static data, frequency in Hz).
+    pub abscissa: Vec<f64>,
+}
+
+/// Reads and checks a diagnosis experiment file.
+pub fn load(path: &Path) -> Result<Experiment, String> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("cannot read experiment `{}`: {e}", path.display()))?;
+    let experiment: Experiment = toml::from_str(&text).map_err(|e| {
+        format!(
+            "experiment `{}`: {}",
+            path.display(),
+            e.to_string().trim_end()
+        )
+    })?;
+    experiment
+        .check()
+        .map_err(|e| format!("experiment `{}`: {e}", path.display()))?;
+    Ok(experiment)
+}
+
+impl Experiment {
+    pub fn title(&self) -> &str {
+        match self {
+            Experiment::QuasiStatic(e) => &e.title,
+            Experiment::FrequencyResponse(e) => &e.title,
+        }
+    }
+
+    /// The model and its settings.
+    pub fn model_spec(&self) -> ModelSpec {
+        let (model, set, independent) = match self {
+            Experiment::QuasiStatic(e) => (&e.model, &e.set, &e.independent),
+            Experiment::FrequencyResponse(e) => (&e.model, &e.set, &e.independent),
+        };
+        ModelSpec {
+            model: model.clone(),
+            set: set.clone(),
+            independent: independent.clone(),
+        }
+    }
+
+    fn check(&self) -> Result<(), String> {
+        match self {
+            Experiment::QuasiStatic(e) => {
+                if e.outputs.is_empty() {
+                    return Err("key `outputs`: name at least one measured output".into());
+                }
+                if !e.noise.is_empty() && e.noise.len() != e.outputs.len() {
+                    return Err(format!(
+                        "key `noise`: {} values for {} outputs (give one per output, or none)",
+                        e.noise.len(),
+                        e.outputs.len()
+                    ));
+                }
+                for text in &e.noise {
+                    noise_value("noise", text)?;
+                }
+            }
+            Experiment::FrequencyResponse(e) => {
+                if let Some(text) = &e.gain_noise {
+                    noise_value("gain_noise", text)?;
+                }
+                if let Some(text) = &e.phase_noise {
+                    noise_value("phase_noise", text)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The measured values this experiment compares, in the order of [`Experiment::predict`].
+    /// Errors name the data file and the column.
+    pub fn observations(&self, leg: &Leg, data: &MeasuredData) -> Result<Observations, String> {
+        let model = leg.model();
+        let mut obs = Observations::default();
+        match self {
+            Experiment::QuasiStatic(e) => {
+                let mut sigma = Vec::new();
+                for (k, name) in e.outputs.iter().enumerate() {
+                    model.output_index(name).ok_or_else(|| {
+                        format!("key `outputs`: the model has no output `{name}`")
+                    })?;
+                    let values = data
+                        .require(name, Dimension::LENGTH)
+                        .map_err(|e| e.to_string())?;
+                    let noise = match e.noise.get(k) {
+                        Some(text) => Some(noise_value("noise", text)?),
+                        None => None,
+                    };
+                    for (row, &v) in values.iter().enumerate() {
+                        obs.values.push(v);
+                        obs.series.push(name.clone());
+                        obs.abscissa.push(row as f64);
+                        sigma.push(noise.unwrap_or(f64::NAN));
+                    }
+                }
+                obs.sigma = (!e.noise.is_empty()).then_some(sigma);
+            }
+            Experiment::FrequencyResponse(e) => {
+                model
+                    .input_index(&e.input)
+                    .ok_or_else(|| format!("key `input`: the model has no input `{}`", e.input))?;
+                model.output_index(&e.output).ok_or_else(|| {
+                    format!("key `output`: the model has no output `{}`", e.output)
+                })?;
+                let frequency = data
+                    .require("frequency", crate::experiments::FREQUENCY)
+                    .map_err(|e| e.to_string())?;
+                let gain = data.require("gain", GAIN).map_err(|e| e.to_string())?;
+                let phase = data
+                    .require("phase", Dimension::NONE)
+                    .map_err(|e| e.to_string())?;
+                if let Some(bad) = gain.iter().position(|&g| g <= 0.0) {
+                    return Err(format!(
+                        "`{}`, line {}: the gain must be positive (a magnitude)",
+                        data.path.display(),
+                        data.lines.get(bad).copied().unwrap_or(0)
+                    ));
+                }
+                let gain_sigma = match &e.gain_noise {
+                    Some(t) => Some(noise_value("gain_noise", t)?),
+                    None => None,
+                };
+                let phase_sigma = match &e.phase_noise {
+                    Some(t) => Some(noise_value("phase_noise", t)?),
+                    None => None,
+                };
+                let mut sigma = Vec::new();
+                for (&f, &g) in frequency.iter().zip(gain) {
+                    obs.values.push(g.ln());
+                    obs.series.push("ln|H|".into());
+                    obs.abscissa.push(f);
+                    // A relative gain noise σ_g is σ_g on ln|H| to first order.
+                    sigma.push(gain_sigma.unwrap_or(f64::NAN));
+                }
+                for (&f, &p) in frequency.iter().zip(phase) {
+                    obs.values.push(p);
+                    obs.series.push("phase".into());
+                    obs.abscissa.push(f);
+                    sigma.push(phase_sigma.unwrap_or(f64::NAN));
+                }
+                obs.sigma = (gain_sigma.is_some() && phase_sigma.is_some()).then_some(sigma);
+            }
+        }
+        Ok(obs)
+    }
+
+    /// The model's prediction of [`Experiment::observations`] with the leg's current
+    /// parameter values. `data` supplies the drive (quasi-static) or the frequencies.
+    pub fn predict(
+        &self,
+        leg: &Leg,
+        data: &MeasuredData,
+        measured: &Observations,
+    ) -> Result<Vec<f64>, String> {
+        let model = leg.model();
+        match self {
+            Experiment::QuasiStatic(e) => {
+                let rows = data.rows;
+                let column = |name: &str| data.column(name);
+                let v_lift = column(model.input_name(leg.v_lift));
+                let v_swing = column(model.input_name(leg.v_swing));
+                let outputs: Vec<usize> = e
+                    .outputs
+                    .iter()
+                    .map(|name| model.output_index(name).expect("checked by observations"))
+                    .collect();
+                let mut per_output = vec![Vec::with_capacity(rows); outputs.len()];
+                let mut q = leg.q0.clone();
+                let mut y = vec![0.0; model.noutputs()];
+                let u = vec![0.0; model.nu()];
+                for row in 0..rows {
+                    let inputs = leg.inputs(
+                        v_lift.map_or(0.0, |c| c[row]),
+                        v_swing.map_or(0.0, |c| c[row]),
+                    );
+                    q = leg
+                        .equilibrium(&q, &inputs, &[])
+                        .map_err(|e| {
+                            format!("line {}: {e}", data.lines.get(row).copied().unwrap_or(0))
+                        })?
+                        .q;
+                    model.outputs(0.0, &q, &u, &inputs, &mut y);
+                    for (series, &o) in per_output.iter_mut().zip(&outputs) {
+                        series.push(y[o]);
+                    }
+                }
+                Ok(per_output.concat())
+            }
+            Experiment::FrequencyResponse(e) => {
+                let (input, output) = (
+                    model.input_index(&e.input).expect("checked"),
+                    model.output_index(&e.output).expect("checked"),
+                );
+                let rest_inputs = leg.inputs(0.0, 0.0);
+                let rest = leg.equilibrium(&leg.q0, &rest_inputs, &[])?.q;
+                let linear =
+                    mech_runtime::linearize(model, 0.0, &rest, &rest_inputs, &leg.independent)
+                        .map_err(|e| format!("linearization failed: {e}"))?;
+                let damping = match e.damping {
+                    Damping::Hysteretic => FlexureDamping::Hysteretic,
+                    Damping::Viscous => FlexureDamping::Viscous,
+                };
+                let n = measured.values.len() / 2;
+                let mut ln_gain = Vec::with_capacity(n);
+                let mut phase = Vec::with_capacity(n);
+                for (k, &f) in measured.abscissa[..n].iter().enumerate() {
+                    let h = linear
+                        .frequency_response(input, output, 2.0 * std::f64::consts::PI * f, damping)
+                        .ok_or_else(|| format!("the linear model is singular at {f} Hz"))?;
+                    ln_gain.push(h.norm().ln());
+                    // The measured phase picks the branch: model phase within ±π of it.
+                    let measured_phase = measured.values[n + k];
+                    phase.push(wrap_near(h.arg(), measured_phase));
+                }
+                ln_gain.extend(phase);
+                Ok(ln_gain)
+            }
+        }
+    }
+}
+
+/// A gain of foot position per drive voltage, m/V = A·s³·kg⁻¹·m⁻¹.
+const GAIN: Dimension = Dimension {
+    mass: -1,
+    length: -1,
+    time: 3,
+    current: 1,
+};
+
+/// `angle + 2πk` closest to `reference`.
+fn wrap_near(angle: f64, reference: f64) -> f64 {
+    let two_pi = 2.0 * std::f64::consts::PI;
+    angle + two_pi * ((reference - angle) / two_pi).round()
+}
+
+/// A noise level: a quantity (`5 um`, `3 deg`) or a percentage (`5 %`), as an SI number.
+fn noise_value(key: &str, text: &str) -> Result<f64, String> {
+    let text = text.trim();
+    if let Some(percent) = text.strip_suffix('%') {
+        let value: f64 = percent
+            .trim()
+            .parse()
+            .map_err(|_| format!("key `{key}`: `{text}` is not a percentage"))?;
+        if value > 0.0 && value.is_finite() {
+            return Ok(value / 100.0);
+        }
+        return Err(format!(
+            "key `{key}`: expected a positive noise, got `{text}`"
+        ));
+    }
+    let (value, _) = mech_codegen::front::units::parse_quantity(text)
+        .map_err(|e| format!("key `{key}`: `{text}`: {e}"))?;
+    if value > 0.0 && value.is_finite() {
+        Ok(value)
+    } else {
+        Err(format!(
+            "key `{key}`: expected a positive noise, got `{text}`"
+        ))
+    }
+}

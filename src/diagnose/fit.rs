@@ -1,0 +1,222 @@
+//! `mech fit`: the parameters a user allows, fitted to measured data.
+//!
+//! Consumes: an opened leg (the model), a diagnosis [`Experiment`], its [`MeasuredData`] and
+//! the parameters to fit ([`FitRequest`]: a name and optional bounds). Produces: a
+//! [`FitReport`] — the Levenberg–Marquardt result (values, standard errors, status), the
+//! residual before and after per measured series, and both predictions for plots.
+//!
+//! The residual is `(predicted − measured)/σ` when the experiment file gives the noise σ
+//! (then the covariance is `(JᵀJ)⁻¹` and χ²/dof near 1 means the model explains the data to
+//! the noise), and `predicted − measured` otherwise (covariance scaled by the residual
+//! variance).
+
+use mech_codegen::ir::Dimension;
+use mech_runtime::Model;
+
+use super::data::MeasuredData;
+use super::experiment::{Experiment, Observations};
+use super::lm::{levenberg_marquardt, Difference, FitResult, LmOptions, Parameter};
+use crate::experiments::leg::Leg;
+
+/// A parameter to fit: `NAME` (bounds: a factor of 10 either side of a positive value, none
+/// otherwise) or `NAME=LO..HI` with units (`k_s3=10..100 uN*m/rad`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitRequest {
+    pub name: String,
+    pub bounds: Option<(f64, f64)>,
+}
+
+impl FitRequest {
+    /// Parses `NAME` or `NAME=LO..HI UNIT`; the unit applies to both bounds and is checked
+    /// against the parameter's dimension by [`parameters`].
+    pub fn parse(text: &str) -> Result<(FitRequest, Option<Dimension>), String> {
+        let Some((name, range)) = text.split_once('=') else {
+            return Ok((
+                FitRequest {
+                    name: text.trim().to_string(),
+                    bounds: None,
+                },
+                None,
+            ));
+        };
+        let (lo, hi) = range.split_once("..").ok_or_else(|| {
+            format!(
+                "--fit `{text}`: expected NAME or NAME=LO..HI UNIT, e.g. `k_s3=10..100 uN*m/rad`"
+            )
+        })?;
+        // `10..100 uN*m/rad`: the unit follows the upper bound and applies to both.
+        let hi = hi.trim();
+        let split = hi
+            .find(|c: char| !(c.is_ascii_digit() || matches!(c, '.' | 'e' | 'E' | '-' | '+')))
+            .unwrap_or(hi.len());
+        let (hi_number, unit) = hi.split_at(split);
+        let parse = |number: &str| {
+            mech_codegen::front::units::parse_quantity(&format!("{} {unit}", number.trim()))
+                .map_err(|e| format!("--fit `{text}`: {e}"))
+        };
+        let ((lo, dimension), (hi, _)) = (parse(lo)?, parse(hi_number)?);
+        if lo >= hi || lo.is_nan() || hi.is_nan() {
+            return Err(format!(
+                "--fit `{text}`: the lower bound must be below the upper bound"
+            ));
+        }
+        Ok((
+            FitRequest {
+                name: name.trim().to_string(),
+                bounds: Some((lo, hi)),
+            },
+            Some(dimension),
+        ))
+    }
+}
+
+/// The LM parameters for `requests`, starting at the model's current values; errors name an
+/// unknown parameter (listing the known ones) or a bound with the wrong unit.
+pub fn parameters(
+    leg: &Leg,
+    requests: &[(FitRequest, Option<Dimension>)],
+) -> Result<Vec<(usize, Parameter)>, String> {
+    let model = leg.model();
+    let compiled = &leg.session.compiled.model;
+    requests
+        .iter()
+        .map(|(request, dimension)| {
+            let index = model.param_index(&request.name).ok_or_else(|| {
+                let known: Vec<&str> = (0..model.nparams()).map(|i| model.param_name(i)).collect();
+                format!(
+                    "--fit: unknown parameter `{}`; parameters of `{}`: {}",
+                    request.name,
+                    model.name(),
+                    known.join(", ")
+                )
+            })?;
+            let expected = compiled
+                .params
+                .iter()
+                .nth(index)
+                .map(|(_, p)| p.dimension)
+                .unwrap_or_default();
+            if let Some(d) = dimension {
+                if *d != expected {
+                    return Err(format!(
+                        "--fit {}: the bounds have unit {d}, but `{}` needs {expected}",
+                        request.name, request.name
+                    ));
+                }
+            }
+            let initial = model.param(index);
+            let parameter = Parameter::new(&request.name, initial);
+            let parameter = match request.bounds {
+                Some((lo, hi)) => parameter.bounded(lo, hi),
+                None if initial > 0.0 => parameter.bounded(initial / 10.0, initial * 10.0),
+                None => parameter,
+            };
+            Ok((index, parameter))
+        })
+        .collect()
+}
+
+/// RMS of the residual of one measured series, before and after the fit (in the series'
+/// SI unit; `ln|H|` is relative).
+#[derive(Debug, Clone)]
+pub struct SeriesResidual {
+    pub series: String,
+    pub before: f64,
+    pub after: f64,
+}
+
+/// Everything `mech fit` reports.
+#[derive(Debug, Clone)]
+pub struct FitReport {
+    pub title: String,
+    pub observations: Observations,
+    pub before: Vec<f64>,
+    pub after: Vec<f64>,
+    pub residuals: Vec<SeriesResidual>,
+    pub result: FitResult,
+}
+
+/// Fits the parameters `fitted` (model parameter index, LM parameter) of `leg` to `data`.
+/// On return the leg holds the fitted values.
+pub fn fit(
+    experiment: &Experiment,
+    data: &MeasuredData,
+    leg: &mut Leg,
+    fitted: &[(usize, Parameter)],
+) -> Result<FitReport, String> {
+    let observations = experiment.observations(leg, data)?;
+    let before = experiment.predict(leg, data, &observations)?;
+    let sigma = observations.sigma.clone();
+    let parameters: Vec<Parameter> = fitted.iter().map(|(_, p)| p.clone()).collect();
+    let options = LmOptions {
+        // The predictions come from Newton solves and finite-difference linearizations
+        // (relative accuracy ~1e-7): steps well above that noise.
+        relative_step: Some(1e-4),
+        difference: Difference::Central,
+        residuals_normalized: sigma.is_some(),
+        ..LmOptions::default()
+    };
+    let result = {
+        let mut residuals = |p: &[f64]| -> Result<Vec<f64>, String> {
+            for (&(index, _), &value) in fitted.iter().zip(p) {
+                leg.session.model.set_param(index, value);
+            }
+            let predicted = experiment.predict(leg, data, &observations)?;
+            Ok(residual(&predicted, &observations))
+        };
+        levenberg_marquardt(&mut residuals, &parameters, &options).map_err(|e| e.to_string())?
+    };
+    for (&(index, _), &value) in fitted.iter().zip(&result.params) {
+        leg.session.model.set_param(index, value);
+    }
+    let after = experiment.predict(leg, data, &observations)?;
+    let residuals = series_rms(&observations, &before, &after);
+    Ok(FitReport {
+        title: experiment.title().to_string(),
+        observations,
+        before,
+        after,
+        residuals,
+        result,
+    })
+}
+
+/// `(predicted − measured)/σ`, or `predicted − measured` without noise levels.
+pub fn residual(predicted: &[f64], observations: &Observations) -> Vec<f64> {
+    let difference = predicted
+        .iter()
+        .zip(&observations.values)
+        .map(|(p, m)| p - m);
+    match &observations.sigma {
+        Some(sigma) => difference.zip(sigma).map(|(d, s)| d / s).collect(),
+        None => difference.collect(),
+    }
+}
+
+fn series_rms(observations: &Observations, before: &[f64], after: &[f64]) -> Vec<SeriesResidual> {
+    let mut names: Vec<&String> = Vec::new();
+    for name in &observations.series {
+        if !names.contains(&name) {
+            names.push(name);
+        }
+    }
+    let rms = |predicted: &[f64], series: &str| {
+        let (sum, count) = predicted
+            .iter()
+            .zip(&observations.values)
+            .zip(&observations.series)
+            .filter(|(_, s)| s.as_str() == series)
+            .fold((0.0, 0usize), |(sum, n), ((p, m), _)| {
+                (sum + (p - m).powi(2), n + 1)
+            });
+        (sum / count.max(1) as f64).sqrt()
+    };
+    names
+        .into_iter()
+        .map(|name| SeriesResidual {
+            series: name.clone(),
+            before: rms(before, name),
+            after: rms(after, name),
+        })
+        .collect()
+}
