@@ -112,6 +112,9 @@ enum Command {
     /// Fit model parameters to measured data (Levenberg–Marquardt, standard errors), with the
     /// residual before and after; see docs/diagnose.md.
     Fit(mech::diagnose::command::FitArgs),
+    /// Find what the model gets wrong: fit every catalog cause, rank on held-out data, and
+    /// name the cause (or say there is none, or that none explains it); see docs/diagnose.md.
+    Diagnose(mech::diagnose::command::DiagnoseArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -202,6 +205,7 @@ fn main() -> ExitCode {
         Command::Experiment(args) => mech::experiments::report::experiment_command(&args),
         Command::Report(args) => mech::experiments::report::report_command(&args),
         Command::Fit(args) => mech::diagnose::command::fit_command(&args),
+        Command::Diagnose(args) => mech::diagnose::command::diagnose_command(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

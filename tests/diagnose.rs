@@ -7,6 +7,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::Rng;
+use mech::diagnose::candidates::{diagnose, Diagnosis, Holdout, Verdict};
 use mech::diagnose::data::MeasuredData;
 use mech::diagnose::experiment::{self, Experiment};
 use mech::diagnose::fit::{fit, parameters, FitRequest};
@@ -124,29 +125,7 @@ fn frequency_response_fit_recovers_the_loss_factor() {
     let Experiment::FrequencyResponse(_) = &experiment else {
         panic!("a frequency-response experiment");
     };
-    let mut truth = Leg::open(&experiment.model_spec()).unwrap();
-    set_param(&mut truth, "eta", 0.12);
-    let rest_inputs = truth.inputs(0.0, 0.0);
-    let rest = truth.equilibrium(&truth.q0, &rest_inputs, &[]).unwrap().q;
-    let linear =
-        mech_runtime::linearize(truth.model(), 0.0, &rest, &rest_inputs, &truth.independent)
-            .unwrap();
-    let mut rng = Rng::new(3);
-    let mut text = String::from("frequency [Hz], gain [mm/V], phase [deg]\n");
-    for k in 0..40 {
-        let f = 20.0 * (150.0f64 / 20.0).powf(k as f64 / 39.0);
-        let h = linear
-            .frequency_response(
-                truth.v_lift,
-                truth.foot[2],
-                2.0 * std::f64::consts::PI * f,
-                mech_runtime::FlexureDamping::Hysteretic,
-            )
-            .unwrap();
-        let gain = h.norm() * (1.0 + 0.02 * normal(&mut rng));
-        let phase = h.arg().to_degrees() + normal(&mut rng);
-        text += &format!("{f}, {}, {phase}\n", gain * 1e3);
-    }
+    let text = bode_data(&experiment, 0.12, 0.0, 3);
     let data_path = dir.join("measured.csv");
     write(&data_path, &text);
     let data = MeasuredData::load(&data_path).unwrap();
@@ -160,6 +139,99 @@ fn frequency_response_fit_recovers_the_loss_factor() {
     assert!((value - 0.12).abs() < 0.01, "η = {value}");
     let chi2_dof = 2.0 * report.result.cost / report.result.degrees_of_freedom as f64;
     assert!((0.3..2.5).contains(&chi2_dof), "χ²/dof = {chi2_dof}");
+}
+
+/// A lift Bode curve of HAMR-VI (40 points, 20–150 Hz) from the model with loss factor `eta`
+/// and a pure time delay `delay` (seconds; not in any model), with 2 % gain and 1° phase
+/// noise, as CSV text.
+fn bode_data(experiment: &Experiment, eta: f64, delay: f64, seed: u64) -> String {
+    let mut truth = Leg::open(&experiment.model_spec()).unwrap();
+    set_param(&mut truth, "eta", eta);
+    let rest_inputs = truth.inputs(0.0, 0.0);
+    let rest = truth.equilibrium(&truth.q0, &rest_inputs, &[]).unwrap().q;
+    let linear =
+        mech_runtime::linearize(truth.model(), 0.0, &rest, &rest_inputs, &truth.independent)
+            .unwrap();
+    let mut rng = Rng::new(seed);
+    let mut text = String::from("frequency [Hz], gain [mm/V], phase [deg]\n");
+    for k in 0..40 {
+        let f = 20.0 * (150.0f64 / 20.0).powf(k as f64 / 39.0);
+        let omega = 2.0 * std::f64::consts::PI * f;
+        let h = linear
+            .frequency_response(
+                truth.v_lift,
+                truth.foot[2],
+                omega,
+                mech_runtime::FlexureDamping::Hysteretic,
+            )
+            .unwrap();
+        let gain = h.norm() * (1.0 + 0.02 * normal(&mut rng));
+        let phase = (h.arg() - omega * delay).to_degrees() + normal(&mut rng);
+        text += &format!("{f}, {}, {phase}\n", gain * 1e3);
+    }
+    text
+}
+
+fn bode_experiment(dir: &Path) -> Experiment {
+    let experiment_path = dir.join("experiment.toml");
+    write(
+        &experiment_path,
+        &format!(
+            "kind = \"frequency_response\"\ntitle = \"lift\"\nmodel = \"{}\"\n\
+             input = \"v_lift\"\noutput = \"foot.z\"\ngain_noise = \"2 %\"\nphase_noise = \"1 deg\"\n",
+            model_path("hamr_vi")
+        ),
+    );
+    experiment::load(&experiment_path).unwrap()
+}
+
+fn diagnose_text(name: &str, text: &str) -> Diagnosis {
+    let dir = scratch_dir(name);
+    let experiment = bode_experiment(&dir);
+    let data_path = dir.join("measured.csv");
+    write(&data_path, text);
+    let data = MeasuredData::load(&data_path).unwrap();
+    diagnose(&experiment, &data, &[], Holdout::Every(3)).unwrap()
+}
+
+/// A loss factor of 0.12 instead of the model's 0.08 hidden in the Bode data: the diagnosis
+/// must name the loss factor (not a stiffness), recover it, and show the held-out gain.
+#[test]
+fn diagnose_names_a_hidden_loss_factor() {
+    let experiment = bode_experiment(&scratch_dir("diagnose_eta_setup"));
+    let d = diagnose_text("diagnose_eta", &bode_data(&experiment, 0.12, 0.0, 5));
+    assert_eq!(d.verdict, Verdict::Explained, "{d:#?}");
+    let best = &d.ranked[0];
+    assert_eq!(
+        (best.cause.as_str(), best.location.as_str()),
+        ("loss factor differs", "all flexures")
+    );
+    let (_, _, value, se) = best.parameters[0];
+    assert!(
+        (value - 0.12).abs() < 3.0 * se && (value - 0.12).abs() < 0.01,
+        "η = {value} ± {se}"
+    );
+    assert!(best.holdout_chi2 < 0.2 * d.base.holdout_chi2, "{d:#?}");
+}
+
+/// Clean data (the model as written, noise only): "no significant discrepancy".
+#[test]
+fn diagnose_finds_no_discrepancy_in_clean_data() {
+    let experiment = bode_experiment(&scratch_dir("diagnose_clean_setup"));
+    let d = diagnose_text("diagnose_clean", &bode_data(&experiment, 0.08, 0.0, 9));
+    assert_eq!(d.verdict, Verdict::NoSignificantDiscrepancy, "{d:#?}");
+}
+
+/// A 1 ms measurement delay (a phase lag growing with frequency that no catalog entry can
+/// produce): the diagnosis must not force a cause.
+#[test]
+fn diagnose_reports_an_uncovered_effect_as_unexplained() {
+    let experiment = bode_experiment(&scratch_dir("diagnose_delay_setup"));
+    let d = diagnose_text("diagnose_delay", &bode_data(&experiment, 0.08, 1e-3, 11));
+    assert!(
+        matches!(d.verdict, Verdict::Unexplained | Verdict::PartlyExplained),
+        "{d:#?}"
+    );
 }
 
 /// Bounds with the wrong unit, unknown parameters and missing columns are clear errors.

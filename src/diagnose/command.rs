@@ -171,3 +171,130 @@ fn finite_or_null(x: f64) -> serde_json::Value {
         serde_json::Value::Null
     }
 }
+
+#[derive(Args, Clone, Debug)]
+pub struct DiagnoseArgs {
+    /// The diagnosis experiment file (TOML, with the measurement noise).
+    #[arg(long)]
+    pub experiment: PathBuf,
+    /// The measured data (CSV with `name [unit]` headers).
+    #[arg(long)]
+    pub data: PathBuf,
+    /// Parameters the user lets vary in every model (as `mech fit --fit`).
+    #[arg(long = "fit")]
+    pub fit: Vec<String>,
+    /// Rows held out of every fit and used to rank: `every:N` (default `every:3`) or `last:P%`.
+    #[arg(long, default_value = "every:3")]
+    pub holdout: String,
+    /// Output folder for diagnosis.json.
+    #[arg(long, default_value = "out/diagnose")]
+    pub out_dir: PathBuf,
+}
+
+pub fn diagnose_command(args: &DiagnoseArgs) -> Result<(), String> {
+    use super::candidates::{diagnose, Holdout, Verdict, NOT_TRIED};
+    let experiment = experiment::load(&args.experiment)?;
+    let data = MeasuredData::load(&args.data).map_err(|e| e.to_string())?;
+    let holdout = Holdout::parse(&args.holdout)?;
+    let d = diagnose(&experiment, &data, &args.fit, holdout)?;
+    println!(
+        "{}: {} values fitted, {} held out ({}); noise band: held-out χ²/value ≤ {:.2}",
+        experiment.title(),
+        d.train_values,
+        d.holdout_values,
+        args.holdout,
+        d.noise_band
+    );
+    let per = |chi2: f64| chi2 / d.holdout_values as f64;
+    println!(
+        "\n{:<36} {:<16} {:>12} {:>12} {:>10}  fitted",
+        "cause", "where", "χ² fit", "χ²/value out", "ΔAICc"
+    );
+    let line = |t: &super::candidates::Trial| {
+        let fitted: Vec<String> = t
+            .parameters
+            .iter()
+            .map(|(name, nominal, value, se)| {
+                format!("{name} = {value:.4e} ± {se:.1e} (nominal {nominal:.4e})")
+            })
+            .collect();
+        println!(
+            "{:<36} {:<16} {:>12.1} {:>12.2} {:>10.1}  {}",
+            t.cause,
+            t.location,
+            t.train_chi2,
+            per(t.holdout_chi2),
+            t.aicc - d.base.aicc,
+            fitted.join(", ")
+        );
+    };
+    line(&d.base);
+    for t in &d.ranked {
+        line(t);
+    }
+    if !d.inert.is_empty() {
+        println!("\ninert (cannot change the response, or failed):");
+        for t in &d.inert {
+            println!(
+                "  {} at {}{}",
+                t.cause,
+                t.location,
+                t.error.as_ref().map_or(String::new(), |e| format!(": {e}"))
+            );
+        }
+    }
+    println!("\nnot in the catalog yet: {}", NOT_TRIED.join("; "));
+    let verdict = match (&d.verdict, d.ranked.first()) {
+        (Verdict::NoSignificantDiscrepancy, _) => {
+            "no significant discrepancy: the model as written explains the held-out data to the noise".to_string()
+        }
+        (Verdict::Explained, Some(best)) => format!(
+            "cause: {} at {} (held-out χ²/value {:.2} → {:.2}, {:+.0} %)",
+            best.cause,
+            best.location,
+            per(d.base.holdout_chi2),
+            per(best.holdout_chi2),
+            100.0 * (best.holdout_chi2 / d.base.holdout_chi2 - 1.0)
+        ),
+        (Verdict::PartlyExplained, Some(best)) => format!(
+            "partly explained by {} at {} (held-out χ²/value {:.2} → {:.2}); an unexplained \
+             residual above the noise remains",
+            best.cause,
+            best.location,
+            per(d.base.holdout_chi2),
+            per(best.holdout_chi2)
+        ),
+        _ => "unexplained: the residual is above the noise and no candidate explains it".to_string(),
+    };
+    println!("\nverdict: {verdict}");
+    std::fs::create_dir_all(&args.out_dir)
+        .map_err(|e| format!("cannot create {}: {e}", args.out_dir.display()))?;
+    let trial = |t: &super::candidates::Trial| {
+        json!({
+            "cause": t.cause, "location": t.location,
+            "train_chi2": t.train_chi2, "holdout_chi2": finite_or_null(t.holdout_chi2),
+            "delta_aicc": finite_or_null(t.aicc - d.base.aicc),
+            "parameters": t.parameters.iter().map(|(n, nominal, v, se)| json!({
+                "name": n, "nominal": nominal, "value": v, "standard_error": finite_or_null(*se),
+            })).collect::<Vec<_>>(),
+            "error": t.error,
+        })
+    };
+    let summary = json!({
+        "experiment": experiment.title(),
+        "data": args.data.display().to_string(),
+        "holdout": args.holdout,
+        "verdict": format!("{:?}", d.verdict),
+        "summary": verdict,
+        "base": trial(&d.base),
+        "ranked": d.ranked.iter().map(trial).collect::<Vec<_>>(),
+        "inert": d.inert.iter().map(trial).collect::<Vec<_>>(),
+        "not_tried": NOT_TRIED,
+    });
+    let path = args.out_dir.join("diagnosis.json");
+    let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
+    output::write_atomic(&path, text.as_bytes())
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    println!("wrote {}", path.display());
+    Ok(())
+}

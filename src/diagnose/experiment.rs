@@ -92,6 +92,8 @@ pub struct Observations {
     pub series: Vec<String>,
     /// The abscissa of each value (row index for quasi-static data, frequency in Hz).
     pub abscissa: Vec<f64>,
+    /// The data row (0-based) each value comes from.
+    pub row: Vec<usize>,
 }
 
 /// Reads and checks a diagnosis experiment file.
@@ -184,6 +186,7 @@ impl Experiment {
                         obs.values.push(v);
                         obs.series.push(name.clone());
                         obs.abscissa.push(row as f64);
+                        obs.row.push(row);
                         sigma.push(noise.unwrap_or(f64::NAN));
                     }
                 }
@@ -219,17 +222,19 @@ impl Experiment {
                     None => None,
                 };
                 let mut sigma = Vec::new();
-                for (&f, &g) in frequency.iter().zip(gain) {
+                for (row, (&f, &g)) in frequency.iter().zip(gain).enumerate() {
                     obs.values.push(g.ln());
                     obs.series.push("ln|H|".into());
                     obs.abscissa.push(f);
+                    obs.row.push(row);
                     // A relative gain noise σ_g is σ_g on ln|H| to first order.
                     sigma.push(gain_sigma.unwrap_or(f64::NAN));
                 }
-                for (&f, &p) in frequency.iter().zip(phase) {
+                for (row, (&f, &p)) in frequency.iter().zip(phase).enumerate() {
                     obs.values.push(p);
                     obs.series.push("phase".into());
                     obs.abscissa.push(f);
+                    obs.row.push(row);
                     sigma.push(phase_sigma.unwrap_or(f64::NAN));
                 }
                 obs.sigma = (gain_sigma.is_some() && phase_sigma.is_some()).then_some(sigma);

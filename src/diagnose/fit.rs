@@ -145,6 +145,20 @@ pub fn fit(
     fitted: &[(usize, Parameter)],
 ) -> Result<FitReport, String> {
     let observations = experiment.observations(leg, data)?;
+    let train = vec![true; observations.values.len()];
+    fit_values(experiment, data, leg, fitted, observations, &train)
+}
+
+/// As [`fit`] with the observations already built, fitting only the values marked in
+/// `train` (the rest are held out: predicted, not fitted).
+pub fn fit_values(
+    experiment: &Experiment,
+    data: &MeasuredData,
+    leg: &mut Leg,
+    fitted: &[(usize, Parameter)],
+    observations: Observations,
+    train: &[bool],
+) -> Result<FitReport, String> {
     let before = experiment.predict(leg, data, &observations)?;
     let sigma = observations.sigma.clone();
     let parameters: Vec<Parameter> = fitted.iter().map(|(_, p)| p.clone()).collect();
@@ -162,7 +176,13 @@ pub fn fit(
                 leg.session.model.set_param(index, value);
             }
             let predicted = experiment.predict(leg, data, &observations)?;
-            Ok(residual(&predicted, &observations))
+            let all = residual(&predicted, &observations);
+            Ok(all
+                .into_iter()
+                .zip(train)
+                .filter(|(_, &t)| t)
+                .map(|(r, _)| r)
+                .collect())
         };
         levenberg_marquardt(&mut residuals, &parameters, &options).map_err(|e| e.to_string())?
     };

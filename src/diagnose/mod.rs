@@ -9,10 +9,13 @@
 //! - [`experiment`]: a diagnosis experiment file + data → the measured values and, for any
 //!   parameter values, the model's prediction of them;
 //! - [`fit`]: experiment + data + parameters to fit → fitted values, standard errors and the
-//!   residual before and after (`mech fit`, wired up in [`command`]).
+//!   residual before and after (`mech fit`, wired up in [`command`]);
+//! - [`candidates`]: experiment + data + hold-out rule → every catalog candidate fitted and
+//!   ranked on held-out data, and a verdict (`mech diagnose`).
 //!
 //! The file format and the fitting method are documented in `docs/diagnose.md`.
 
+pub mod candidates;
 pub mod command;
 pub mod data;
 pub mod experiment;
