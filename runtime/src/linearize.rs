@@ -42,13 +42,22 @@ pub struct Linearization {
 }
 
 /// How flexure losses enter a frequency response.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum FlexureDamping {
     /// As the time-domain viscous dampers `b = kη/ω_ref` (already in `C`).
     Viscous,
     /// As the complex stiffness `k(1 + iη)`, exact at every frequency: `C − Gᵀ diag(b) G`
     /// and `+ i Gᵀ diag(ηk) G`.
     Hysteretic,
+    /// As `Hysteretic` with a loss factor that depends on frequency as a power law,
+    /// `η(ω) = η·(f/reference_hz)^exponent` (the seed, Sec. VI: η estimated at 1–10 Hz
+    /// over-predicts the quality factors at the 40–150 Hz resonances).
+    HystereticPowerLaw {
+        /// The power of frequency (0: `Hysteretic`).
+        exponent: f64,
+        /// The frequency at which the flexures' `η` holds, Hz (> 0).
+        reference_hz: f64,
+    },
 }
 
 /// `ẋ = A x + B in`, `y = C x + D in`.
@@ -373,6 +382,16 @@ impl Linearization {
                 &self.damping - self.flexure_matrix(|f| self.flexure_damping[f]),
                 self.hysteretic_stiffness(),
             ),
+            FlexureDamping::HystereticPowerLaw {
+                exponent,
+                reference_hz,
+            } => {
+                let scale = (omega / (2.0 * std::f64::consts::PI * reference_hz)).powf(exponent);
+                (
+                    &self.damping - self.flexure_matrix(|f| self.flexure_damping[f]),
+                    self.hysteretic_stiffness() * scale,
+                )
+            }
         };
         let n = self.mass.nrows();
         let i = Complex::new(0.0, 1.0);

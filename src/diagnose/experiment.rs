@@ -81,6 +81,15 @@ pub enum Damping {
     Viscous,
 }
 
+/// Model-form extensions that act in the prediction rather than through a model parameter.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Extensions {
+    /// A frequency-dependent loss factor `η(f) = η·(f/f_ref)^exponent`, with `f_ref` the
+    /// geometric mean of the measured frequencies (so `η` and the exponent are nearly
+    /// uncorrelated). Frequency responses only; inert for static data.
+    pub loss_exponent: Option<f64>,
+}
+
 /// The measured side of the residual: one flat vector of values, their σ (if known) and a
 /// label per value (`foot.x @ line 12`) for reports.
 #[derive(Debug, Clone, Default)]
@@ -250,6 +259,7 @@ impl Experiment {
         leg: &Leg,
         data: &MeasuredData,
         measured: &Observations,
+        extensions: &Extensions,
     ) -> Result<Vec<f64>, String> {
         let model = leg.model();
         match self {
@@ -295,11 +305,15 @@ impl Experiment {
                 let linear =
                     mech_runtime::linearize(model, 0.0, &rest, &rest_inputs, &leg.independent)
                         .map_err(|e| format!("linearization failed: {e}"))?;
-                let damping = match e.damping {
-                    Damping::Hysteretic => FlexureDamping::Hysteretic,
-                    Damping::Viscous => FlexureDamping::Viscous,
-                };
                 let n = measured.values.len() / 2;
+                let damping = match (extensions.loss_exponent, e.damping) {
+                    (Some(exponent), _) => FlexureDamping::HystereticPowerLaw {
+                        exponent,
+                        reference_hz: geometric_mean(&measured.abscissa[..n]),
+                    },
+                    (None, Damping::Hysteretic) => FlexureDamping::Hysteretic,
+                    (None, Damping::Viscous) => FlexureDamping::Viscous,
+                };
                 let mut ln_gain = Vec::with_capacity(n);
                 let mut phase = Vec::with_capacity(n);
                 for (k, &f) in measured.abscissa[..n].iter().enumerate() {
@@ -325,6 +339,10 @@ const GAIN: Dimension = Dimension {
     time: 3,
     current: 1,
 };
+
+fn geometric_mean(values: &[f64]) -> f64 {
+    (values.iter().map(|v| v.ln()).sum::<f64>() / values.len().max(1) as f64).exp()
+}
 
 /// `angle + 2πk` closest to `reference`.
 fn wrap_near(angle: f64, reference: f64) -> f64 {

@@ -14,9 +14,25 @@ use mech_codegen::ir::Dimension;
 use mech_runtime::Model;
 
 use super::data::MeasuredData;
-use super::experiment::{Experiment, Observations};
+use super::experiment::{Experiment, Extensions, Observations};
 use super::lm::{levenberg_marquardt, Difference, FitResult, LmOptions, Parameter};
 use crate::experiments::leg::Leg;
+
+/// What a fitted value sets: a model parameter (by index) or an extension's setting.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Target {
+    Param(usize),
+    LossExponent,
+}
+
+impl Target {
+    fn apply(self, leg: &mut Leg, extensions: &mut Extensions, value: f64) {
+        match self {
+            Target::Param(index) => leg.session.model.set_param(index, value),
+            Target::LossExponent => extensions.loss_exponent = Some(value),
+        }
+    }
+}
 
 /// A parameter to fit: `NAME` (bounds: a factor of 10 either side of a positive value, none
 /// otherwise) or `NAME=LO..HI` with units (`k_s3=10..100 uN*m/rad`).
@@ -75,7 +91,7 @@ impl FitRequest {
 pub fn parameters(
     leg: &Leg,
     requests: &[(FitRequest, Option<Dimension>)],
-) -> Result<Vec<(usize, Parameter)>, String> {
+) -> Result<Vec<(Target, Parameter)>, String> {
     let model = leg.model();
     let compiled = &leg.session.compiled.model;
     requests
@@ -111,7 +127,7 @@ pub fn parameters(
                 None if initial > 0.0 => parameter.bounded(initial / 10.0, initial * 10.0),
                 None => parameter,
             };
-            Ok((index, parameter))
+            Ok((Target::Param(index), parameter))
         })
         .collect()
 }
@@ -142,7 +158,7 @@ pub fn fit(
     experiment: &Experiment,
     data: &MeasuredData,
     leg: &mut Leg,
-    fitted: &[(usize, Parameter)],
+    fitted: &[(Target, Parameter)],
 ) -> Result<FitReport, String> {
     let observations = experiment.observations(leg, data)?;
     let train = vec![true; observations.values.len()];
@@ -155,11 +171,15 @@ pub fn fit_values(
     experiment: &Experiment,
     data: &MeasuredData,
     leg: &mut Leg,
-    fitted: &[(usize, Parameter)],
+    fitted: &[(Target, Parameter)],
     observations: Observations,
     train: &[bool],
 ) -> Result<FitReport, String> {
-    let before = experiment.predict(leg, data, &observations)?;
+    let mut extensions = Extensions::default();
+    for (target, parameter) in fitted {
+        target.apply(leg, &mut extensions, parameter.initial);
+    }
+    let before = experiment.predict(leg, data, &observations, &extensions)?;
     let sigma = observations.sigma.clone();
     let parameters: Vec<Parameter> = fitted.iter().map(|(_, p)| p.clone()).collect();
     let options = LmOptions {
@@ -172,10 +192,10 @@ pub fn fit_values(
     };
     let result = {
         let mut residuals = |p: &[f64]| -> Result<Vec<f64>, String> {
-            for (&(index, _), &value) in fitted.iter().zip(p) {
-                leg.session.model.set_param(index, value);
+            for (&(target, _), &value) in fitted.iter().zip(p) {
+                target.apply(leg, &mut extensions, value);
             }
-            let predicted = experiment.predict(leg, data, &observations)?;
+            let predicted = experiment.predict(leg, data, &observations, &extensions)?;
             let all = residual(&predicted, &observations);
             Ok(all
                 .into_iter()
@@ -186,10 +206,10 @@ pub fn fit_values(
         };
         levenberg_marquardt(&mut residuals, &parameters, &options).map_err(|e| e.to_string())?
     };
-    for (&(index, _), &value) in fitted.iter().zip(&result.params) {
-        leg.session.model.set_param(index, value);
+    for (&(target, _), &value) in fitted.iter().zip(&result.params) {
+        target.apply(leg, &mut extensions, value);
     }
-    let after = experiment.predict(leg, data, &observations)?;
+    let after = experiment.predict(leg, data, &observations, &extensions)?;
     let residuals = series_rms(&observations, &before, &after);
     Ok(FitReport {
         title: experiment.title().to_string(),
