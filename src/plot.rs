@@ -17,6 +17,7 @@ use std::sync::OnceLock;
 use plotters::coord::ranged1d::{Ranged, ValueFormatter};
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
+use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
@@ -64,6 +65,23 @@ pub struct Panel {
     pub y_label: String,
     /// The lines in this panel.
     pub series: Vec<Series>,
+}
+
+/// How [`plot_xy_styled`] draws one curve.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct CurveStyle {
+    /// Palette index (wraps), so that curves that belong together can share a colour.
+    pub color: usize,
+    /// Dashed instead of solid.
+    pub dashed: bool,
+}
+
+/// A point of a [`plot_xy_styled`] figure marked with a star, in the colour of curve `curve`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Star {
+    pub curve: usize,
+    pub x: f64,
+    pub y: f64,
 }
 
 /// Why a plot could not be made. Displays as one line naming the output file.
@@ -196,6 +214,63 @@ pub fn plot_xy(
         y_label,
         curves,
         log_x,
+        styles: None,
+        stars: &[],
+    };
+    render(path, format, (WIDTH, XY_HEIGHT), &figure)
+}
+
+/// As [`plot_xy`] on linear axes, each curve drawn in its `styles` entry (colour, dashes) and
+/// the `stars` marked, e.g. the chosen designs on design curves.
+pub fn plot_xy_styled(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    curves: &[(String, Vec<f64>, Vec<f64>)],
+    styles: &[CurveStyle],
+    stars: &[Star],
+) -> Result<(), PlotError> {
+    let fail = |msg: String| PlotError {
+        path: path.to_path_buf(),
+        kind: PlotErrorKind::InvalidData(msg),
+    };
+    if styles.len() != curves.len() {
+        return Err(fail(format!(
+            "{} curves but {} styles",
+            curves.len(),
+            styles.len()
+        )));
+    }
+    if let Some(star) = stars.iter().find(|s| s.curve >= curves.len()) {
+        return Err(fail(format!(
+            "a star refers to curve {} of {}",
+            star.curve,
+            curves.len()
+        )));
+    }
+    // The checks of plot_xy (lengths, nothing to plot, format), then the styled figure.
+    let format = Format::of(path)?;
+    if curves.is_empty() {
+        return Err(fail("nothing to plot (no curves)".into()));
+    }
+    for (name, xs, ys) in curves {
+        if xs.len() != ys.len() {
+            return Err(fail(format!(
+                "curve `{name}` has {} x values but {} y values",
+                xs.len(),
+                ys.len()
+            )));
+        }
+    }
+    let figure = XyFigure {
+        title,
+        x_label,
+        y_label,
+        curves,
+        log_x: false,
+        styles: Some(styles),
+        stars,
     };
     render(path, format, (WIDTH, XY_HEIGHT), &figure)
 }
@@ -350,7 +425,7 @@ impl Figure for TimeSeriesFigure<'_> {
                 .series
                 .iter()
                 .map(|s| (s.name.as_str(), self.times, s.values.as_slice()));
-            draw_curves(&mut chart, curves)?;
+            draw_curves(&mut chart, curves, None, &[])?;
         }
         Ok(())
     }
@@ -362,6 +437,9 @@ struct XyFigure<'a> {
     y_label: &'a str,
     curves: &'a [(String, Vec<f64>, Vec<f64>)],
     log_x: bool,
+    /// One per curve; `None`: palette colours in order, solid.
+    styles: Option<&'a [CurveStyle]>,
+    stars: &'a [Star],
 }
 
 impl Figure for XyFigure<'_> {
@@ -369,7 +447,15 @@ impl Figure for XyFigure<'_> {
         root.fill(&WHITE).map_err(|e| e.to_string())?;
         let (title_area, body) = root.split_vertically(TITLE_HEIGHT);
         draw_title(&title_area, self.title)?;
-        draw_xy_panel(&body, self.x_label, self.y_label, self.curves, self.log_x)
+        let marks = (self.styles, self.stars);
+        draw_xy_panel(
+            &body,
+            self.x_label,
+            self.y_label,
+            self.curves,
+            self.log_x,
+            marks,
+        )
     }
 }
 
@@ -387,8 +473,16 @@ impl Figure for BodeFigure<'_> {
         draw_title(&title_area, self.title)?;
         let (_, height) = body.dim_in_pixel();
         let (top, bottom) = body.split_vertically(height / 2);
-        draw_xy_panel(&top, "f [Hz]", "magnitude [dB]", self.magnitude, true)?;
-        draw_xy_panel(&bottom, "f [Hz]", "phase [deg]", self.phase, true)
+        let plain = (None, &[][..]);
+        draw_xy_panel(
+            &top,
+            "f [Hz]",
+            "magnitude [dB]",
+            self.magnitude,
+            true,
+            plain,
+        )?;
+        draw_xy_panel(&bottom, "f [Hz]", "phase [deg]", self.phase, true, plain)
     }
 }
 
@@ -421,13 +515,14 @@ pub fn plot_bode(
 }
 
 /// One pair of axes with `curves`, optionally with a logarithmic x axis (points at x <= 0 are
-/// then left out).
+/// then left out), styled and starred by `marks` (see [`draw_curves`]).
 fn draw_xy_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     x_label: &str,
     y_label: &str,
     curves: &[(String, Vec<f64>, Vec<f64>)],
     log_x: bool,
+    marks: (Option<&[CurveStyle]>, &[Star]),
 ) -> Result<(), String> {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     let visible = |x: f64| !log_x || x > 0.0;
@@ -435,12 +530,17 @@ fn draw_xy_panel<DB: DrawingBackend>(
         .iter()
         .flat_map(|(_, xs, _)| xs.iter().copied())
         .filter(|&x| visible(x));
-    let ys = curves.iter().flat_map(|(_, xs, ys)| {
-        xs.iter()
-            .zip(ys)
-            .filter(|(&x, _)| visible(x))
-            .map(|(_, &y)| y)
-    });
+    let (styles, stars) = marks;
+    let xs = xs.chain(stars.iter().map(|s| s.x).filter(|&x| visible(x)));
+    let ys = curves
+        .iter()
+        .flat_map(|(_, xs, ys)| {
+            xs.iter()
+                .zip(ys)
+                .filter(|(&x, _)| visible(x))
+                .map(|(_, &y)| y)
+        })
+        .chain(stars.iter().filter(|s| visible(s.x)).map(|s| s.y));
     let y_range = axis_range(ys);
     let mut builder = ChartBuilder::on(area);
     builder
@@ -459,7 +559,7 @@ fn draw_xy_panel<DB: DrawingBackend>(
             .map_err(e)?;
         let x_format = |v: &f64| significant(*v, 3);
         configure_xy_mesh(&mut chart, x_label, y_label, &x_format, &y_format)?;
-        draw_curves(&mut chart, named)
+        draw_curves(&mut chart, named, styles, stars)
     } else {
         let x_range = axis_range(xs);
         let mut chart = builder
@@ -467,7 +567,7 @@ fn draw_xy_panel<DB: DrawingBackend>(
             .map_err(e)?;
         let x_format = |v: &f64| linear_tick(*v, &x_range);
         configure_xy_mesh(&mut chart, x_label, y_label, &x_format, &y_format)?;
-        draw_curves(&mut chart, named)
+        draw_curves(&mut chart, named, styles, stars)
     }
 }
 
@@ -513,11 +613,14 @@ where
         .map_err(|e| e.to_string())
 }
 
-/// Draws each `(name, xs, ys)` curve in its palette colour, broken at non-finite points, and a
-/// legend for the named ones.
+/// Draws each `(name, xs, ys)` curve, broken at non-finite points, in its `styles` entry (by
+/// default its palette colour in order, solid), then the `stars`, and a legend for the named
+/// curves.
 fn draw_curves<'a, 'c, DB, X>(
     chart: &mut ChartContext<'a, DB, Cartesian2d<X, RangedCoordf64>>,
     curves: impl Iterator<Item = (&'c str, &'c [f64], &'c [f64])>,
+    styles: Option<&[CurveStyle]>,
+    stars: &[Star],
 ) -> Result<(), String>
 where
     DB: DrawingBackend + 'a,
@@ -526,26 +629,71 @@ where
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     let x_range = chart.x_range();
     let mut any_named = false;
+    let style_of = |index: usize| {
+        styles
+            .and_then(|s| s.get(index))
+            .copied()
+            .unwrap_or(CurveStyle {
+                color: index,
+                dashed: false,
+            })
+    };
+    // Points outside the x range (x <= 0 on a log axis) are dropped like non-finite ones.
+    let in_range = |x: f64| x >= x_range.start.min(x_range.end);
     for (index, (name, xs, ys)) in curves.enumerate() {
-        let color = PALETTE[index % PALETTE.len()];
-        let style = color.stroke_width(2);
-        // Points outside the x range (x <= 0 on a log axis) are dropped like non-finite ones.
-        let in_range = |x: f64| x >= x_range.start.min(x_range.end);
+        let CurveStyle { color, dashed } = style_of(index);
+        let style = PALETTE[color % PALETTE.len()].stroke_width(2);
         let segments = finite_segments(xs, ys, in_range);
-        let annotation = chart
-            .draw_series(
+        let annotation = if dashed {
+            chart.draw_series(
+                segments
+                    .into_iter()
+                    .map(move |segment| DashedPathElement::new(segment, 8, 5, style)),
+            )
+        } else {
+            chart.draw_series(
                 segments
                     .into_iter()
                     .map(move |segment| PathElement::new(segment, style)),
             )
-            .map_err(e)?;
+        }
+        .map_err(e)?;
         if !name.is_empty() {
             any_named = true;
-            annotation
-                .label(name)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], style));
+            annotation.label(name).legend(move |(x, y)| {
+                if dashed {
+                    DashedPathElement::new(vec![(x, y), (x + 24, y)], 8, 5, style).into_dyn()
+                } else {
+                    PathElement::new(vec![(x, y), (x + 24, y)], style).into_dyn()
+                }
+            });
         }
     }
+    // A five-pointed star in pixels around each marked point, outlined in black.
+    let star_shape: Vec<(i32, i32)> = (0..10)
+        .map(|k| {
+            let radius = if k % 2 == 0 { 9.0 } else { 4.0 };
+            let angle = std::f64::consts::PI * (k as f64 / 5.0 - 0.5);
+            (
+                (radius * angle.cos()).round() as i32,
+                (radius * angle.sin()).round() as i32,
+            )
+        })
+        .collect();
+    let outline: Vec<(i32, i32)> = star_shape.iter().chain(&star_shape[..1]).copied().collect();
+    chart
+        .draw_series(
+            stars
+                .iter()
+                .filter(|s| s.x.is_finite() && s.y.is_finite() && in_range(s.x))
+                .map(|s| {
+                    let color = PALETTE[style_of(s.curve).color % PALETTE.len()];
+                    EmptyElement::at((s.x, s.y))
+                        + Polygon::new(star_shape.clone(), color.filled())
+                        + PathElement::new(outline.clone(), BLACK.stroke_width(1))
+                }),
+        )
+        .map_err(e)?;
     if any_named {
         chart
             .configure_series_labels()

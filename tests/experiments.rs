@@ -205,3 +205,163 @@ fn report_renders_tables_and_inline_plots() {
     let md = experiments::report::render_markdown(&[outcome], &out("report"), 0.1);
     assert!(md.contains("| HAMR-VI | lift |"), "{md}");
 }
+
+/// The rows of a CSV written by an experiment, by column name.
+fn csv_columns(path: &std::path::Path) -> std::collections::BTreeMap<String, Vec<f64>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<String> = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(|s| s.trim().to_string())
+        .collect();
+    let mut columns: std::collections::BTreeMap<String, Vec<f64>> =
+        header.iter().map(|h| (h.clone(), Vec::new())).collect();
+    for line in lines.filter(|l| !l.trim().is_empty()) {
+        for (name, cell) in header.iter().zip(line.split(',')) {
+            columns
+                .get_mut(name)
+                .unwrap()
+                .push(cell.trim().parse().unwrap());
+        }
+    }
+    columns
+}
+
+#[test]
+fn ratio_sweep_matches_the_force_experiments_and_the_papers_trend() {
+    let spec = bundled("hamr_ratio_sweep.toml", &[("points = 16", "points = 5")]);
+    let outcome = spec.run("sweep", &out("sweep")).unwrap();
+    let v = &outcome.values;
+    println!("{v:?}");
+
+    // At the model's own arm the sweep runs the procedure of experiments 2 and 4: the same
+    // blocked force, free deflection and work as the force/deflection experiment (HAMR-VI)
+    // and the comparison (HAMR-V2.0).
+    let force = bundled("hamr_vi_force.toml", &[("\"127 um\"", "\"1000 um\"")])
+        .run("force", &out("sweep_force"))
+        .unwrap();
+    let compare = bundled("hamr_v2_vs_vi.toml", &[])
+        .run("compare", &out("sweep_compare"))
+        .unwrap();
+    for dof in ["lift", "swing"] {
+        for quantity in ["blocked_force", "free_deflection", "work", "normalized"] {
+            let sweep = v[&format!("hamr_vi_{dof}_chosen_{quantity}")];
+            let experiment = force.values[&format!("{dof}_{quantity}")];
+            assert!(
+                close(sweep, experiment, 1e-9),
+                "HAMR-VI {dof} {quantity}: sweep {sweep}, force experiment {experiment}"
+            );
+            let sweep = v[&format!("hamr_v2_{dof}_chosen_{quantity}")];
+            let experiment = compare.values[&format!("old_{dof}_{quantity}")];
+            assert!(
+                close(sweep, experiment, 1e-9),
+                "HAMR-V2.0 {dof} {quantity}: sweep {sweep}, comparison {experiment}"
+            );
+        }
+    }
+
+    // The ratio at the model's own arm is the small-motion ratio of tests/hamr.rs.
+    assert!(close(v["hamr_vi_lift_chosen_ratio"], 7.58 / 0.58, 1e-4));
+    assert!(close(v["hamr_vi_lift_chosen_ratio_y"], 13.0 / 0.58, 1e-4));
+    assert!(close(v["hamr_vi_swing_chosen_ratio"], 7.58 / 0.53, 1e-4));
+    assert!(close(
+        v["hamr_v2_lift_chosen_ratio"],
+        7.58 * 30.8 / 13.0,
+        1e-3
+    ));
+    assert!(close(v["hamr_v2_lift_chosen_ratio_y"], 30.8, 0.01));
+    assert!(close(
+        v["hamr_v2_swing_chosen_ratio"],
+        7.58 * 20.5 / (0.53 * 13.0),
+        1e-3
+    ));
+
+    let csvs: Vec<_> = outcome
+        .files
+        .iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "csv"))
+        .collect();
+    assert_eq!(csvs.len(), 4);
+    for path in csvs {
+        let c = csv_columns(path);
+        let n = c["ratio"].len();
+        // The 5 swept arms (range ends included) and the chosen design.
+        assert_eq!(n, 6, "{}", path.display());
+        assert_eq!(c["chosen"].iter().filter(|&&x| x == 1.0).count(), 1);
+        let arms = &c["arm"];
+        let (low, high) = arms
+            .iter()
+            .fold((f64::INFINITY, 0.0_f64), |(a, b), &x| (a.min(x), b.max(x)));
+        assert!(close(low, 0.25e-3, 1e-12) && close(high, 1.2e-3, 1e-12));
+        let f_b = if path.to_string_lossy().contains("hamr_v2") {
+            0.270
+        } else {
+            0.320
+        };
+        for k in 0..n {
+            // The ratio is the kinematic lever: geometric s_o/arm on the plotted axis (swing
+            // s_o = 7.58 mm; lift z the same s_o), up to the leg's small cross terms.
+            assert!(
+                close(c["ratio"][k], 7.58e-3 / arms[k], 1e-3),
+                "{}: T = {} at arm {}",
+                path.display(),
+                c["ratio"][k],
+                arms[k]
+            );
+            // A rigid lever at the blocked (rest) position: F = F_b / T_rest.
+            let lever_force = c["blocked_force"][k] * c["ratio_rest"][k];
+            assert!(
+                close(lever_force, f_b, 1e-3),
+                "{}: F·T_rest = {lever_force} at arm {}",
+                path.display(),
+                arms[k]
+            );
+            assert!(close(
+                c["work"][k],
+                c["blocked_force"][k] * c["free_deflection"][k],
+                1e-12
+            ));
+        }
+        // The paper's Fig. 8: the work rises as the ratio falls, over the whole range; the
+        // free deflection grows less than the ratio (the transmission stiffens as T²).
+        for k in 1..n {
+            assert!(c["ratio"][k] > c["ratio"][k - 1], "sorted by ratio");
+            assert!(
+                c["work"][k] < c["work"][k - 1],
+                "{}: work rises from T = {} to {}",
+                path.display(),
+                c["ratio"][k - 1],
+                c["ratio"][k]
+            );
+        }
+        let grows = c["free_deflection"][n - 1] / c["free_deflection"][0];
+        assert!(grows < 0.5 * c["ratio"][n - 1] / c["ratio"][0], "{grows}");
+    }
+    assert_eq!(outcome.plots.len(), 1);
+    assert!(outcome.plots[0].exists());
+}
+
+#[test]
+fn bad_ratio_sweeps_give_clear_errors() {
+    let sweep = |series: &str| {
+        experiments::parse(&format!(
+            "kind = \"ratio_sweep\"\ntitle = \"t\"\nvoltage = \"225 V\"\n[[series]]\nname = \"r\"\n\
+             actuator = \"a\"\nmodel = \"m.mech\"\ndof = \"lift\"\n{series}"
+        ))
+    };
+    assert!(sweep("arm = [\"0.3 mm\", \"1 mm\"]").is_ok());
+    let one = sweep("arm = [\"0.3 mm\"]").unwrap_err();
+    assert!(
+        one.contains("series[0].arm") && one.contains("two"),
+        "{one}"
+    );
+    let unit = sweep("arm = [\"0.3 V\", \"1 mm\"]").unwrap_err();
+    assert!(
+        unit.contains("series[0].arm") && unit.contains("length"),
+        "{unit}"
+    );
+    let lever = sweep("arm = [\"0.3 mm\", \"1 mm\"]\nlever = \"-1 mm\"").unwrap_err();
+    assert!(lever.contains("series[0].lever"), "{lever}");
+}

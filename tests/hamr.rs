@@ -215,6 +215,39 @@ fn hamr_vi_small_motion_transmission_ratios() {
     assert!(coupling.iter().all(|&c| c < 0.05), "{coupling:?}");
 }
 
+/// The crank arms are parameters (`lift_arm`, `swing_arm`, for the ratio sweep of seed
+/// Fig. 8): with a shorter or longer arm the loops still close at the zero configuration
+/// with two degrees of freedom, the foot stays where it is, and the ratios follow the arm
+/// (s_o/l_i, l_o/l_i, s_o/s_i), while the defaults are the URDF's geometry (checked above).
+#[test]
+fn hamr_vi_crank_arms_set_the_transmission_ratios() {
+    let mut model = load("hamr_vi");
+    for (name, default) in [("lift_arm", 0.58e-3), ("swing_arm", 0.53e-3)] {
+        let index = model.param_index(name).unwrap();
+        assert!(close(model.param(index), default, 1e-12), "{name}");
+    }
+    let (lift_arm, swing_arm) = (0.35e-3, 0.9e-3);
+    for (name, value) in [("lift_arm", lift_arm), ("swing_arm", swing_arm)] {
+        let index = model.param_index(name).unwrap();
+        model.set_param(index, value);
+    }
+    let q = assembled(&model, 0.0, 0.0);
+    let largest = q.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    assert!(largest < 1e-10, "assembly moved q by {largest:e}");
+    let rest = foot(&model, &q, &[0.0, 0.0]);
+    for (value, expected) in rest.iter().zip([12.754659815390e-3, 17.37e-3, -12.54e-3]) {
+        assert!((value - expected).abs() < 1e-12, "foot {rest:?}");
+    }
+    let m = mobility(&model, 0.0, &q);
+    assert_eq!((m.rank, m.dof()), (6, 2), "{m}");
+    let [x, y, z] = transmission(&model);
+    let (swing, lift) = (0, 1);
+    print_transmission("HAMR-VI, lift arm 0.35 mm, swing arm 0.9 mm", &[x, y, z]);
+    assert!(close(z[lift], 7.58e-3 / lift_arm, 1e-4), "{}", z[lift]);
+    assert!(close(y[lift], 13.0e-3 / lift_arm, 1e-4), "{}", y[lift]);
+    assert!(close(-x[swing], 7.58e-3 / swing_arm, 1e-4), "{}", x[swing]);
+}
+
 #[test]
 fn hamr_vi_quasi_static_response_and_modes() {
     let model = load("hamr_vi");

@@ -46,6 +46,13 @@ impl Dof {
             Dof::Swing => 0,
         }
     }
+    /// The crank-arm parameter (`l_i`, `s_i`) that sets the transmission ratio.
+    pub fn arm(self) -> &'static str {
+        match self {
+            Dof::Lift => "lift_arm",
+            Dof::Swing => "swing_arm",
+        }
+    }
 }
 
 pub const AXES: [&str; 3] = ["x", "y", "z"];
@@ -64,8 +71,20 @@ pub struct Leg {
 
 impl Leg {
     pub fn open(spec: &ModelSpec) -> Result<Leg, String> {
-        let session = Session::open(&spec.model, &spec.set, &[])
+        Leg::open_with(spec, &[])
+    }
+
+    /// As [`Leg::open`], with `params` (name, SI value) set after `spec.set`: sweeps set
+    /// their values directly, without a round trip through text.
+    pub fn open_with(spec: &ModelSpec, params: &[(&str, f64)]) -> Result<Leg, String> {
+        let mut session = Session::open(&spec.model, &spec.set, &[])
             .map_err(|e| format!("model `{}`: {e}", spec.model.display()))?;
+        for &(name, value) in params {
+            let index = session.model.param_index(name).ok_or_else(|| {
+                format!("model `{}` has no parameter `{name}`", spec.model.display())
+            })?;
+            session.model.set_param(index, value);
+        }
         let model = &session.model;
         let input = |name: &str| {
             model.input_index(name).ok_or_else(|| {
@@ -351,6 +370,8 @@ pub struct ForceDeflection {
     pub dof: Dof,
     pub axis: usize,
     pub voltage: f64,
+    /// The rest equilibrium (no drive).
+    pub rest_q: Vec<f64>,
     /// The foot at rest (no drive) and free at `voltage` (m, chassis frame).
     pub rest: [f64; 3],
     pub free: [f64; 3],
@@ -440,6 +461,7 @@ pub fn force_deflection(
         dof,
         axis,
         voltage,
+        rest_q,
         rest,
         free,
         free_deflection,
