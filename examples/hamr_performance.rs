@@ -203,7 +203,7 @@ fn main() {
                     q_start = q_static;
                 }
                 row(
-                    "max |foot(sim) − foot(quasi-static)| at the quarter cycles",
+                    "largest foot(sim) − foot(quasi-static) difference at the quarter cycles",
                     format!("{:.2} µm", worst * 1e6),
                 );
             }
