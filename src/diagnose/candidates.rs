@@ -179,6 +179,11 @@ pub struct Diagnosis {
     pub train_values: usize,
     /// The noise band: held-out χ² per value up to this is consistent with the noise.
     pub noise_band: f64,
+    /// How many of `ranked`, from the top, the data support about equally (training AICc
+    /// within 2 of the best's: Burnham & Anderson's "substantial support"), e.g. stiffness
+    /// changes at flexures in series that one measurement cannot tell apart. 0 or 1: the
+    /// top one stands alone.
+    pub tied: usize,
 }
 
 /// Runs the base model and every candidate (in parallel) on `data`.
@@ -259,8 +264,10 @@ pub fn diagnose(
             inert: true,
             error: Some(e),
         });
-        let unchanged =
-            (trial.train_chi2 - base.train_chi2).abs() <= 1e-9 * base.train_chi2.max(1e-300);
+        // Fitting it must lower the training χ² by at least 1 (one σ² in total): a smaller
+        // change is below what the noise (and the predictions' own ~1e-5 relative numerical
+        // noise, from the finite-difference linearization) can resolve.
+        let unchanged = base.train_chi2 - trial.train_chi2 < 1.0;
         if trial.inert || trial.error.is_some() || unchanged {
             inert.push(Trial {
                 inert: true,
@@ -294,6 +301,17 @@ pub fn diagnose(
             _ => Verdict::Unexplained,
         }
     };
+    let tied = match ranked.first() {
+        Some(best) => ranked
+            .iter()
+            .take_while(|t| (t.aicc - best.aicc).abs() < 2.0 || t.aicc < best.aicc)
+            .count(),
+        None => 0,
+    };
+    // Among candidates the data support equally, one whose fit ran into a bound (standard
+    // error NaN: the change it needs is outside the plausible range) goes after the others.
+    let at_bound = |t: &Trial| t.parameters.iter().any(|p| p.3.is_nan());
+    ranked[..tied].sort_by_key(at_bound);
     Ok(Diagnosis {
         base,
         ranked,
@@ -302,6 +320,7 @@ pub fn diagnose(
         holdout_values,
         train_values,
         noise_band,
+        tied,
     })
 }
 

@@ -164,6 +164,21 @@ fn write_outputs(
     Ok(())
 }
 
+/// `; the data support equally: …` when several candidates tie with the best.
+fn tied_text(d: &super::candidates::Diagnosis) -> String {
+    if d.tied <= 1 {
+        return String::new();
+    }
+    let others: Vec<String> = d.ranked[1..d.tied]
+        .iter()
+        .map(|t| format!("{} at {}", t.cause, t.location))
+        .collect();
+    format!(
+        "; these data support equally well: {} (a measurement that separates them is needed)",
+        others.join(", ")
+    )
+}
+
 fn finite_or_null(x: f64) -> serde_json::Value {
     if x.is_finite() {
         json!(x)
@@ -249,12 +264,13 @@ pub fn diagnose_command(args: &DiagnoseArgs) -> Result<(), String> {
             "no significant discrepancy: the model as written explains the held-out data to the noise".to_string()
         }
         (Verdict::Explained, Some(best)) => format!(
-            "cause: {} at {} (held-out χ²/value {:.2} → {:.2}, {:+.0} %)",
+            "cause: {} at {} (held-out χ²/value {:.2} → {:.2}, {:+.0} %){}",
             best.cause,
             best.location,
             per(d.base.holdout_chi2),
             per(best.holdout_chi2),
-            100.0 * (best.holdout_chi2 / d.base.holdout_chi2 - 1.0)
+            100.0 * (best.holdout_chi2 / d.base.holdout_chi2 - 1.0),
+            tied_text(&d)
         ),
         (Verdict::PartlyExplained, Some(best)) => format!(
             "partly explained by {} at {} (held-out χ²/value {:.2} → {:.2}); an unexplained \
@@ -286,6 +302,7 @@ pub fn diagnose_command(args: &DiagnoseArgs) -> Result<(), String> {
         "holdout": args.holdout,
         "verdict": format!("{:?}", d.verdict),
         "summary": verdict,
+        "tied_with_best": d.tied.saturating_sub(1),
         "base": trial(&d.base),
         "ranked": d.ranked.iter().map(trial).collect::<Vec<_>>(),
         "inert": d.inert.iter().map(trial).collect::<Vec<_>>(),

@@ -60,9 +60,16 @@ pub struct FrequencyResponse {
     pub set: Vec<String>,
     #[serde(default = "crate::experiments::default_independent")]
     pub independent: Vec<String>,
-    /// Model input and output of the transfer function, e.g. `v_lift` → `foot.z`.
-    pub input: String,
-    pub output: String,
+    /// One transfer function: model input and output, e.g. `v_lift` → `foot.z` (data
+    /// columns `gain`, `phase`). Or several as `[[channel]]` tables below.
+    #[serde(default)]
+    pub input: Option<String>,
+    #[serde(default)]
+    pub output: Option<String>,
+    /// Several transfer functions measured at the same frequencies, each with a `name`: data
+    /// columns `gain.NAME` and `phase.NAME`.
+    #[serde(default)]
+    pub channel: Vec<Channel>,
     /// `hysteretic` (complex stiffness k(1 + iη), default) or `viscous`.
     #[serde(default)]
     pub damping: Damping,
@@ -71,6 +78,29 @@ pub struct FrequencyResponse {
     pub gain_noise: Option<String>,
     #[serde(default)]
     pub phase_noise: Option<String>,
+}
+
+/// One measured transfer function of a `frequency_response` experiment.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Channel {
+    pub name: String,
+    pub input: String,
+    pub output: String,
+}
+
+impl FrequencyResponse {
+    /// The channels with their data-column suffix (`""` for the single-channel form).
+    fn channels(&self) -> Vec<(String, String, String)> {
+        match (&self.input, &self.output) {
+            (Some(i), Some(o)) => vec![(String::new(), i.clone(), o.clone())],
+            _ => self
+                .channel
+                .iter()
+                .map(|c| (format!(".{}", c.name), c.input.clone(), c.output.clone()))
+                .collect(),
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
@@ -161,6 +191,17 @@ impl Experiment {
                 }
             }
             Experiment::FrequencyResponse(e) => {
+                let single = e.input.is_some() || e.output.is_some();
+                if single && (e.input.is_none() || e.output.is_none() || !e.channel.is_empty()) {
+                    return Err(
+                        "give both `input` and `output` for one transfer function, or \
+                                `[[channel]]` tables (name, input, output) for several, not both"
+                            .into(),
+                    );
+                }
+                if !single && e.channel.is_empty() {
+                    return Err("missing `input` and `output` (or `[[channel]]` tables)".into());
+                }
                 if let Some(text) = &e.gain_noise {
                     noise_value("gain_noise", text)?;
                 }
@@ -202,26 +243,9 @@ impl Experiment {
                 obs.sigma = (!e.noise.is_empty()).then_some(sigma);
             }
             Experiment::FrequencyResponse(e) => {
-                model
-                    .input_index(&e.input)
-                    .ok_or_else(|| format!("key `input`: the model has no input `{}`", e.input))?;
-                model.output_index(&e.output).ok_or_else(|| {
-                    format!("key `output`: the model has no output `{}`", e.output)
-                })?;
                 let frequency = data
                     .require("frequency", crate::experiments::FREQUENCY)
                     .map_err(|e| e.to_string())?;
-                let gain = data.require("gain", GAIN).map_err(|e| e.to_string())?;
-                let phase = data
-                    .require("phase", Dimension::NONE)
-                    .map_err(|e| e.to_string())?;
-                if let Some(bad) = gain.iter().position(|&g| g <= 0.0) {
-                    return Err(format!(
-                        "`{}`, line {}: the gain must be positive (a magnitude)",
-                        data.path.display(),
-                        data.lines.get(bad).copied().unwrap_or(0)
-                    ));
-                }
                 let gain_sigma = match &e.gain_noise {
                     Some(t) => Some(noise_value("gain_noise", t)?),
                     None => None,
@@ -231,20 +255,41 @@ impl Experiment {
                     None => None,
                 };
                 let mut sigma = Vec::new();
-                for (row, (&f, &g)) in frequency.iter().zip(gain).enumerate() {
-                    obs.values.push(g.ln());
-                    obs.series.push("ln|H|".into());
-                    obs.abscissa.push(f);
-                    obs.row.push(row);
-                    // A relative gain noise σ_g is σ_g on ln|H| to first order.
-                    sigma.push(gain_sigma.unwrap_or(f64::NAN));
-                }
-                for (row, (&f, &p)) in frequency.iter().zip(phase).enumerate() {
-                    obs.values.push(p);
-                    obs.series.push("phase".into());
-                    obs.abscissa.push(f);
-                    obs.row.push(row);
-                    sigma.push(phase_sigma.unwrap_or(f64::NAN));
+                for (suffix, input, output) in e.channels() {
+                    model.input_index(&input).ok_or_else(|| {
+                        format!("channel `{suffix}`: the model has no input `{input}`")
+                    })?;
+                    model.output_index(&output).ok_or_else(|| {
+                        format!("channel `{suffix}`: the model has no output `{output}`")
+                    })?;
+                    let gain = data
+                        .require(&format!("gain{suffix}"), GAIN)
+                        .map_err(|e| e.to_string())?;
+                    let phase = data
+                        .require(&format!("phase{suffix}"), Dimension::NONE)
+                        .map_err(|e| e.to_string())?;
+                    if let Some(bad) = gain.iter().position(|&g| g <= 0.0) {
+                        return Err(format!(
+                            "`{}`, line {}: the gain must be positive (a magnitude)",
+                            data.path.display(),
+                            data.lines.get(bad).copied().unwrap_or(0)
+                        ));
+                    }
+                    for (row, (&f, &g)) in frequency.iter().zip(gain).enumerate() {
+                        obs.values.push(g.ln());
+                        obs.series.push(format!("ln|H|{suffix}"));
+                        obs.abscissa.push(f);
+                        obs.row.push(row);
+                        // A relative gain noise σ_g is σ_g on ln|H| to first order.
+                        sigma.push(gain_sigma.unwrap_or(f64::NAN));
+                    }
+                    for (row, (&f, &p)) in frequency.iter().zip(phase).enumerate() {
+                        obs.values.push(p);
+                        obs.series.push(format!("phase{suffix}"));
+                        obs.abscissa.push(f);
+                        obs.row.push(row);
+                        sigma.push(phase_sigma.unwrap_or(f64::NAN));
+                    }
                 }
                 obs.sigma = (gain_sigma.is_some() && phase_sigma.is_some()).then_some(sigma);
             }
@@ -296,37 +341,42 @@ impl Experiment {
                 Ok(per_output.concat())
             }
             Experiment::FrequencyResponse(e) => {
-                let (input, output) = (
-                    model.input_index(&e.input).expect("checked"),
-                    model.output_index(&e.output).expect("checked"),
-                );
                 let rest_inputs = leg.inputs(0.0, 0.0);
                 let rest = leg.equilibrium(&leg.q0, &rest_inputs, &[])?.q;
                 let linear =
                     mech_runtime::linearize(model, 0.0, &rest, &rest_inputs, &leg.independent)
                         .map_err(|e| format!("linearization failed: {e}"))?;
-                let n = measured.values.len() / 2;
+                let rows = data.rows;
+                let frequencies = &measured.abscissa[..rows];
                 let damping = match (extensions.loss_exponent, e.damping) {
                     (Some(exponent), _) => FlexureDamping::HystereticPowerLaw {
                         exponent,
-                        reference_hz: geometric_mean(&measured.abscissa[..n]),
+                        reference_hz: geometric_mean(frequencies),
                     },
                     (None, Damping::Hysteretic) => FlexureDamping::Hysteretic,
                     (None, Damping::Viscous) => FlexureDamping::Viscous,
                 };
-                let mut ln_gain = Vec::with_capacity(n);
-                let mut phase = Vec::with_capacity(n);
-                for (k, &f) in measured.abscissa[..n].iter().enumerate() {
-                    let h = linear
-                        .frequency_response(input, output, 2.0 * std::f64::consts::PI * f, damping)
-                        .ok_or_else(|| format!("the linear model is singular at {f} Hz"))?;
-                    ln_gain.push(h.norm().ln());
-                    // The measured phase picks the branch: model phase within ±π of it.
-                    let measured_phase = measured.values[n + k];
-                    phase.push(wrap_near(h.arg(), measured_phase));
+                // Per channel: `rows` values of ln|H|, then `rows` phases (as observed).
+                let mut predicted = Vec::with_capacity(measured.values.len());
+                for (c, (_, input, output)) in e.channels().iter().enumerate() {
+                    let (input, output) = (
+                        model.input_index(input).expect("checked"),
+                        model.output_index(output).expect("checked"),
+                    );
+                    let offset = 2 * rows * c;
+                    let mut phase = Vec::with_capacity(rows);
+                    for (k, &f) in frequencies.iter().enumerate() {
+                        let omega = 2.0 * std::f64::consts::PI * f;
+                        let h = linear
+                            .frequency_response(input, output, omega, damping)
+                            .ok_or_else(|| format!("the linear model is singular at {f} Hz"))?;
+                        predicted.push(h.norm().ln());
+                        // The measured phase picks the branch: model phase within ±π of it.
+                        phase.push(wrap_near(h.arg(), measured.values[offset + rows + k]));
+                    }
+                    predicted.extend(phase);
                 }
-                ln_gain.extend(phase);
-                Ok(ln_gain)
+                Ok(predicted)
             }
         }
     }
