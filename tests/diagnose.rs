@@ -415,3 +415,32 @@ fn diagnose_finds_a_hidden_stiffness_change() {
         }
     }
 }
+
+/// `mech diagnose` on the worked example of docs/diagnose.md writes a self-contained page
+/// (plots inlined) and the JSON summary, both naming the cause.
+#[test]
+fn diagnose_command_writes_the_page_and_the_summary() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let out_dir = scratch_dir("diagnose_command");
+    let args = mech::diagnose::command::DiagnoseArgs {
+        experiment: format!("{root}/docs/examples/diagnose/hamr_vi_lift_bode.toml").into(),
+        data: format!("{root}/docs/examples/diagnose/hamr_vi_lift_bode.csv").into(),
+        fit: Vec::new(),
+        holdout: "every:3".into(),
+        out_dir: out_dir.clone(),
+    };
+    // The example's model path is relative to the repository root.
+    std::env::set_current_dir(root).unwrap();
+    mech::diagnose::command::diagnose_command(&args).unwrap();
+    let html = std::fs::read_to_string(out_dir.join("diagnosis.html")).unwrap();
+    assert!(
+        html.contains("<svg") && html.contains("loss factor"),
+        "{}",
+        &html[..500]
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("diagnosis.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["verdict"], "Explained");
+    assert!(json["summary"].as_str().unwrap().contains("loss factor"));
+}

@@ -152,6 +152,8 @@ pub struct Trial {
     pub inert: bool,
     /// The fit failed (reported, not ranked).
     pub error: Option<String>,
+    /// The prediction of every observed value with the fitted parameters.
+    pub predicted: Vec<f64>,
 }
 
 /// What `mech diagnose` concludes.
@@ -184,6 +186,8 @@ pub struct Diagnosis {
     /// changes at flexures in series that one measurement cannot tell apart. 0 or 1: the
     /// top one stands alone.
     pub tied: usize,
+    /// The measured values the trials predict.
+    pub observations: super::experiment::Observations,
 }
 
 /// Runs the base model and every candidate (in parallel) on `data`.
@@ -263,6 +267,7 @@ pub fn diagnose(
             aicc: f64::NAN,
             inert: true,
             error: Some(e),
+            predicted: Vec::new(),
         });
         // Fitting it must lower the training χ² by at least 1 (one σ² in total): a smaller
         // change is below what the noise (and the predictions' own ~1e-5 relative numerical
@@ -321,6 +326,7 @@ pub fn diagnose(
         train_values,
         noise_band,
         tied,
+        observations,
     })
 }
 
@@ -394,5 +400,6 @@ fn run_trial(
         aicc,
         inert,
         error: None,
+        predicted,
     })
 }

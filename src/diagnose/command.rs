@@ -201,7 +201,7 @@ pub struct DiagnoseArgs {
     /// Rows held out of every fit and used to rank: `every:N` (default `every:3`) or `last:P%`.
     #[arg(long, default_value = "every:3")]
     pub holdout: String,
-    /// Output folder for diagnosis.json.
+    /// Output folder for diagnosis.html, diagnosis.json and the plots.
     #[arg(long, default_value = "out/diagnose")]
     pub out_dir: PathBuf,
 }
@@ -312,6 +312,122 @@ pub fn diagnose_command(args: &DiagnoseArgs) -> Result<(), String> {
     let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
     output::write_atomic(&path, text.as_bytes())
         .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-    println!("wrote {}", path.display());
+    let html = diagnosis_page(args, &experiment, &d, &verdict, path)?;
+    println!("wrote {} and its data", html.display());
     Ok(())
+}
+
+/// `diagnosis.html`, in the style of `mech report`: the verdict, the ranking, the inert
+/// candidates, and per measured series the data with the base model and the best candidate.
+fn diagnosis_page(
+    args: &DiagnoseArgs,
+    experiment: &Experiment,
+    d: &super::candidates::Diagnosis,
+    verdict: &str,
+    json_path: PathBuf,
+) -> Result<PathBuf, String> {
+    use crate::experiments::{report, Outcome, Table};
+    let per = |chi2: f64| chi2 / d.holdout_values as f64;
+    let mut ranking = Table::new(
+        "Candidates, best first (χ² on the fitted values; χ² per value on the held-out ones)",
+        &[
+            "cause",
+            "where",
+            "χ² fit",
+            "χ²/value held out",
+            "ΔAICc",
+            "fitted",
+        ],
+    );
+    for t in std::iter::once(&d.base).chain(&d.ranked) {
+        let fitted: Vec<String> = t
+            .parameters
+            .iter()
+            .map(|(name, nominal, value, se)| {
+                format!("{name} = {value:.4e} ± {se:.1e} (nominal {nominal:.4e})")
+            })
+            .collect();
+        ranking.row(vec![
+            t.cause.clone(),
+            t.location.clone(),
+            format!("{:.1}", t.train_chi2),
+            format!("{:.2}", per(t.holdout_chi2)),
+            format!("{:.1}", t.aicc - d.base.aicc),
+            fitted.join(", "),
+        ]);
+    }
+    let mut outcome = Outcome {
+        name: "diagnosis".into(),
+        source: Some(args.experiment.display().to_string()),
+        title: experiment.title().to_string(),
+        method: format!(
+            "{} values fitted, {} held out ({}); a model explains the data to the noise when \
+             its χ² per held-out value is at most {:.2}. Verdict: {verdict}.",
+            d.train_values, d.holdout_values, args.holdout, d.noise_band
+        ),
+        tables: vec![ranking],
+        files: vec![args.data.clone(), json_path],
+        ..Outcome::default()
+    };
+    if !d.inert.is_empty() {
+        let mut inert = Table::new(
+            "Inert: cannot change the response beyond the noise, or the fit failed",
+            &["cause", "where", "note"],
+        );
+        for t in &d.inert {
+            inert.row(vec![
+                t.cause.clone(),
+                t.location.clone(),
+                t.error.clone().unwrap_or_default(),
+            ]);
+        }
+        outcome.tables.push(inert);
+    }
+    let obs = &d.observations;
+    let mut names: Vec<&String> = Vec::new();
+    for s in &obs.series {
+        if !names.contains(&s) {
+            names.push(s);
+        }
+    }
+    let best = d.ranked.first();
+    let log_x = matches!(experiment, Experiment::FrequencyResponse(_));
+    for name in names {
+        let pick = |values: &[f64]| -> (Vec<f64>, Vec<f64>) {
+            (0..values.len().min(obs.series.len()))
+                .filter(|&k| &obs.series[k] == name)
+                .map(|k| (obs.abscissa[k], values[k]))
+                .unzip()
+        };
+        let mut curves = Vec::new();
+        for (label, values) in [("measured", &obs.values), ("base model", &d.base.predicted)] {
+            let (x, y) = pick(values);
+            curves.push((label.to_string(), x, y));
+        }
+        if let Some(best) = best {
+            let (x, y) = pick(&best.predicted);
+            curves.push((format!("{} at {}", best.cause, best.location), x, y));
+        }
+        let file = name.replace(['|', '.'], "_");
+        let path = args.out_dir.join(format!("diagnosis_{file}.svg"));
+        let x_label = if log_x { "frequency [Hz]" } else { "data row" };
+        plot::plot_xy(&path, name, x_label, name, &curves, log_x).map_err(|e| e.to_string())?;
+        outcome.plots.push(path);
+    }
+    outcome.notes.push(format!(
+        "Not in the catalog yet: {}.",
+        super::candidates::NOT_TRIED.join("; ")
+    ));
+    let page = report::render_page(
+        "mech diagnose: what the model gets wrong",
+        "Every candidate cause of the catalog is fitted to the rows not held out and ranked by \
+         its χ² on the held-out rows (docs/diagnose.md).",
+        &format!("Data: <code>{}</code>", args.data.display()),
+        &[outcome],
+        &args.out_dir,
+    )?;
+    let path = args.out_dir.join("diagnosis.html");
+    output::write_atomic(&path, page.as_bytes())
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    Ok(path)
 }

@@ -61,6 +61,9 @@ pub(crate) fn default_independent() -> Vec<String> {
 pub struct Outcome {
     /// The experiment file's stem (also the name of its output subfolder).
     pub name: String,
+    /// The file the section comes from, as shown in reports (default
+    /// `experiments/NAME.toml`).
+    pub source: Option<String>,
     pub title: String,
     /// How the experiment was run (method, assumptions), one paragraph.
     pub method: String,
