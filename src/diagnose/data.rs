@@ -29,7 +29,7 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use mech_codegen::front::units;
+use mech_codegen::front::{closest, units};
 use mech_codegen::ir::Dimension;
 
 /// At most this many errors are reported for one file; the rest are counted.
@@ -570,43 +570,6 @@ fn parse_unit(unit: &str) -> Result<(f64, Dimension), String> {
         return Err(format!("unit `{unit}` is out of range"));
     }
     Ok((scale, dimension))
-}
-
-/// The candidate closest to `name` by edit distance, if close enough to be a typo (one
-/// edit per three characters, ignoring case; ties go to the closest with case).
-fn closest<'c>(name: &str, candidates: &[&'c str]) -> Option<&'c str> {
-    let length = name.chars().count();
-    if length > 64 {
-        return None;
-    }
-    let limit = (length / 3).max(1);
-    let lower = name.to_lowercase();
-    candidates
-        .iter()
-        .filter(|c| c.chars().count() <= 64)
-        .map(|c| {
-            let folded = edit_distance(&lower, &c.to_lowercase());
-            ((folded, edit_distance(name, c)), *c)
-        })
-        .filter(|((folded, _), _)| *folded <= limit)
-        .min_by_key(|(key, _)| *key)
-        .map(|(_, c)| c)
-}
-
-/// Levenshtein distance over characters.
-fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut diagonal = row[0];
-        row[0] = i + 1;
-        for (j, cb) in b.iter().enumerate() {
-            let substitution = diagonal + usize::from(ca != *cb);
-            diagonal = row[j + 1];
-            row[j + 1] = substitution.min(row[j] + 1).min(row[j + 1] + 1);
-        }
-    }
-    row[b.len()]
 }
 
 /// A unit to suggest for a dimension in messages.

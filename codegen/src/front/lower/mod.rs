@@ -16,6 +16,8 @@ mod expr;
 mod loads;
 mod loops;
 mod names;
+
+pub use names::closest;
 mod tree;
 
 use std::collections::BTreeMap;
