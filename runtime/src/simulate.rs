@@ -8,7 +8,7 @@
 //! order.
 
 use crate::constraints::ConstrainedSolver;
-use crate::integrate::{AdaptiveOptions, Dop853, Dopri5, Ode, Rk4, Stats, Stepper};
+use crate::integrate::{check_len, AdaptiveOptions, Dop853, Dopri5, Ode, Rk4, Stats, Stepper};
 use crate::{Model, RuntimeError, Signal};
 use nalgebra::{Cholesky, DMatrix, DVector};
 
@@ -123,18 +123,6 @@ pub fn default_signals<M: Model + ?Sized>(model: &M) -> Vec<Signal> {
     (0..model.ninputs())
         .map(|i| Signal::Constant(model.input_default(i)))
         .collect()
-}
-
-fn check_len(what: &'static str, expected: usize, found: usize) -> Result<(), RuntimeError> {
-    if expected == found {
-        Ok(())
-    } else {
-        Err(RuntimeError::LengthMismatch {
-            what,
-            expected,
-            found,
-        })
-    }
 }
 
 /// Workspace for solving `M u̇ = F` without allocating.
@@ -468,70 +456,57 @@ pub fn simulate<M: Model + ?Sized>(
     x0.extend_from_slice(q0);
     x0.extend_from_slice(u0);
     let grid = output_grid(t_start, t_end, output_interval);
+    let sampling = Sampling {
+        model,
+        signals,
+        grid,
+        max_steps,
+        constraint_tolerance,
+        progress,
+    };
+    let adaptive = |defaults: AdaptiveOptions, rtol, atol, h_max| AdaptiveOptions {
+        rtol,
+        atol,
+        h_max,
+        max_steps,
+        ..defaults
+    };
     match method {
         Method::Dopri5 { rtol, atol, h_max } => {
-            let opts = AdaptiveOptions {
-                rtol,
-                atol,
-                h_max,
-                max_steps,
-                ..AdaptiveOptions::default()
-            };
-            let stepper = Dopri5::new(ode, t_start, &x0, t_end, opts)?;
-            run(
-                stepper,
-                model,
-                signals,
-                grid,
-                max_steps,
-                constraint_tolerance,
-                progress,
-            )
+            let opts = adaptive(AdaptiveOptions::default(), rtol, atol, h_max);
+            run(Dopri5::new(ode, t_start, &x0, t_end, opts)?, sampling)
         }
         Method::Dop853 { rtol, atol, h_max } => {
-            let opts = AdaptiveOptions {
-                rtol,
-                atol,
-                h_max,
-                max_steps,
-                ..AdaptiveOptions::dop853()
-            };
-            let stepper = Dop853::new(ode, t_start, &x0, t_end, opts)?;
-            run(
-                stepper,
-                model,
-                signals,
-                grid,
-                max_steps,
-                constraint_tolerance,
-                progress,
-            )
+            let opts = adaptive(AdaptiveOptions::dop853(), rtol, atol, h_max);
+            run(Dop853::new(ode, t_start, &x0, t_end, opts)?, sampling)
         }
-        Method::Rk4 { step } => {
-            let stepper = Rk4::new(ode, t_start, &x0, t_end, step)?;
-            run(
-                stepper,
-                model,
-                signals,
-                grid,
-                max_steps,
-                constraint_tolerance,
-                progress,
-            )
-        }
+        Method::Rk4 { step } => run(Rk4::new(ode, t_start, &x0, t_end, step)?, sampling),
     }
+}
+
+/// What [`run`] samples and how.
+struct Sampling<'a, M: Model + ?Sized> {
+    model: &'a M,
+    signals: &'a [Signal],
+    grid: Vec<f64>,
+    max_steps: usize,
+    constraint_tolerance: f64,
+    progress: &'a mut dyn FnMut(f64),
 }
 
 /// Steps `stepper` to its end time, sampling `grid` by dense output.
 fn run<M: Model + ?Sized, S: Stepper>(
     mut stepper: S,
-    model: &M,
-    signals: &[Signal],
-    grid: Vec<f64>,
-    max_steps: usize,
-    constraint_tolerance: f64,
-    progress: &mut dyn FnMut(f64),
+    sampling: Sampling<'_, M>,
 ) -> Result<Trajectory, RuntimeError> {
+    let Sampling {
+        model,
+        signals,
+        grid,
+        max_steps,
+        constraint_tolerance,
+        progress,
+    } = sampling;
     let nq = model.nq();
     let mut projector = (model.nc() > 0).then(|| ConstrainedSolver::new(nq, model.nc()));
     let mut project_inputs = vec![0.0; signals.len()];

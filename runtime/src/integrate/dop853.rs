@@ -10,8 +10,8 @@
 #![allow(clippy::excessive_precision)]
 
 use super::{
-    all_finite, check_len, initial_step, interp_theta, Adaptive, AdaptiveOptions, Ode, Stats,
-    Stepper,
+    all_finite, check_len, derivative_at, initial_step, interp_theta, Adaptive, AdaptiveOptions,
+    Ode, Stats, Stepper,
 };
 use crate::RuntimeError;
 
@@ -233,15 +233,9 @@ impl<O: Ode> Dop853<O> {
         let mut control = Adaptive::new(opts, 0.125 - opts.beta * 0.2, 11, t0, t_end)?;
         let n = ode.dim();
         check_len("x0", n, x0.len())?;
-        if !all_finite(x0) {
-            return Err(RuntimeError::NonFiniteState { t: t0 });
-        }
         let zeros = vec![0.0; n];
         let mut f = zeros.clone();
-        ode.rhs(t0, x0, &mut f)?;
-        if !all_finite(&f) {
-            return Err(RuntimeError::NonFiniteState { t: t0 });
-        }
+        derivative_at(&mut ode, t0, x0, &mut f)?;
         let (mut x_stage, mut scratch) = (zeros.clone(), zeros.clone());
         control.h = match opts.h_init {
             Some(h) => h.min(opts.h_max),
@@ -492,15 +486,8 @@ impl<O: Ode> Stepper for Dop853<O> {
         if !self.dirty {
             return Ok(());
         }
-        let t = self.control.t;
-        if !all_finite(&self.x) {
-            return Err(RuntimeError::NonFiniteState { t });
-        }
-        self.ode.rhs(t, &self.x, &mut self.f)?;
         self.control.stats.rhs_evaluations += 1;
-        if !all_finite(&self.f) {
-            return Err(RuntimeError::NonFiniteState { t });
-        }
+        derivative_at(&mut self.ode, self.control.t, &self.x, &mut self.f)?;
         self.dirty = false;
         Ok(())
     }

@@ -1,7 +1,7 @@
 //! Dormand–Prince 5(4) (Hairer's `DOPRI5`).
 
 use super::{
-    all_finite, check_len, initial_step, interp_theta, Adaptive, AdaptiveOptions, Ode, Stats,
+    check_len, derivative_at, initial_step, interp_theta, Adaptive, AdaptiveOptions, Ode, Stats,
     Stepper,
 };
 use crate::RuntimeError;
@@ -91,15 +91,9 @@ impl<O: Ode> Dopri5<O> {
         let mut control = Adaptive::new(opts, 0.2 - opts.beta * 0.75, 6, t0, t_end)?;
         let n = ode.dim();
         check_len("x0", n, x0.len())?;
-        if !all_finite(x0) {
-            return Err(RuntimeError::NonFiniteState { t: t0 });
-        }
         let zeros = vec![0.0; n];
         let mut k1 = zeros.clone();
-        ode.rhs(t0, x0, &mut k1)?;
-        if !all_finite(&k1) {
-            return Err(RuntimeError::NonFiniteState { t: t0 });
-        }
+        derivative_at(&mut ode, t0, x0, &mut k1)?;
         let (mut x_stage, mut k2) = (zeros.clone(), zeros.clone());
         control.h = match opts.h_init {
             Some(h) => h.min(opts.h_max),
@@ -302,15 +296,9 @@ impl<O: Ode> Stepper for Dopri5<O> {
         if !self.dirty {
             return Ok(());
         }
-        let t = self.control.t;
-        if !all_finite(&self.stages.x) {
-            return Err(RuntimeError::NonFiniteState { t });
-        }
-        self.ode.rhs(t, &self.stages.x, &mut self.stages.k1)?;
         self.control.stats.rhs_evaluations += 1;
-        if !all_finite(&self.stages.k1) {
-            return Err(RuntimeError::NonFiniteState { t });
-        }
+        let (t, s) = (self.control.t, &mut self.stages);
+        derivative_at(&mut self.ode, t, &s.x, &mut s.k1)?;
         self.dirty = false;
         Ok(())
     }

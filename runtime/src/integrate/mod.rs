@@ -128,11 +128,34 @@ pub trait Stepper {
     fn stats(&self) -> Stats;
 }
 
+/// `f(t, x)` into `f`, for a state and a derivative that must both be finite (the start of an
+/// integration, or the state after [`Stepper::state_mut`]).
+fn derivative_at<O: Ode + ?Sized>(
+    ode: &mut O,
+    t: f64,
+    x: &[f64],
+    f: &mut [f64],
+) -> Result<(), RuntimeError> {
+    if !all_finite(x) {
+        return Err(RuntimeError::NonFiniteState { t });
+    }
+    ode.rhs(t, x, f)?;
+    if all_finite(f) {
+        Ok(())
+    } else {
+        Err(RuntimeError::NonFiniteState { t })
+    }
+}
+
 fn all_finite(x: &[f64]) -> bool {
     x.iter().all(|v| v.is_finite())
 }
 
-fn check_len(what: &'static str, expected: usize, found: usize) -> Result<(), RuntimeError> {
+pub(crate) fn check_len(
+    what: &'static str,
+    expected: usize,
+    found: usize,
+) -> Result<(), RuntimeError> {
     if expected == found {
         Ok(())
     } else {

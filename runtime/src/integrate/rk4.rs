@@ -1,6 +1,6 @@
 //! Classical fixed-step Runge–Kutta of order 4.
 
-use super::{all_finite, check_len, check_times, interp_theta, Ode, Stats, Stepper};
+use super::{all_finite, check_len, check_times, derivative_at, interp_theta, Ode, Stats, Stepper};
 use crate::RuntimeError;
 
 /// Classical 4th-order Runge–Kutta with a fixed step `h`.
@@ -43,15 +43,9 @@ impl<O: Ode> Rk4<O> {
         }
         let n = ode.dim();
         check_len("x0", n, x0.len())?;
-        if !all_finite(x0) {
-            return Err(RuntimeError::NonFiniteState { t: t0 });
-        }
         let zeros = vec![0.0; n];
         let mut f = zeros.clone();
-        ode.rhs(t0, x0, &mut f)?;
-        if !all_finite(&f) {
-            return Err(RuntimeError::NonFiniteState { t: t0 });
-        }
+        derivative_at(&mut ode, t0, x0, &mut f)?;
         Ok(Rk4 {
             ode,
             h,
@@ -170,14 +164,8 @@ impl<O: Ode> Stepper for Rk4<O> {
         if !self.dirty {
             return Ok(());
         }
-        if !all_finite(&self.x) {
-            return Err(RuntimeError::NonFiniteState { t: self.t });
-        }
-        self.ode.rhs(self.t, &self.x, &mut self.f)?;
         self.stats.rhs_evaluations += 1;
-        if !all_finite(&self.f) {
-            return Err(RuntimeError::NonFiniteState { t: self.t });
-        }
+        derivative_at(&mut self.ode, self.t, &self.x, &mut self.f)?;
         self.dirty = false;
         Ok(())
     }
