@@ -98,18 +98,10 @@ fn write_outputs(
         .map_err(|e| format!("cannot write {}: {e}", json_path.display()))?;
 
     let obs = &report.observations;
-    let mut series_names: Vec<&String> = Vec::new();
-    for s in &obs.series {
-        if !series_names.contains(&s) {
-            series_names.push(s);
-        }
-    }
+    let names = obs.series_names();
     let rows: Vec<Vec<f64>> = (0..obs.values.len())
         .map(|k| {
-            let series = series_names
-                .iter()
-                .position(|s| **s == obs.series[k])
-                .unwrap_or(0);
+            let series = names.iter().position(|s| *s == obs.series[k]).unwrap_or(0);
             vec![
                 series as f64,
                 obs.abscissa[k],
@@ -126,42 +118,59 @@ fn write_outputs(
     let csv_path = dir.join("fit.csv");
     output::write_csv(&csv_path, &header, &rows)
         .map_err(|e| format!("cannot write {}: {e}", csv_path.display()))?;
-
-    let log_x = matches!(experiment, Experiment::FrequencyResponse(_));
-    for name in series_names {
-        let pick = |values: &[f64]| -> (Vec<f64>, Vec<f64>) {
-            (0..values.len())
-                .filter(|&k| &obs.series[k] == name)
-                .map(|k| (obs.abscissa[k], values[k]))
-                .unzip()
-        };
-        let curves: Vec<(String, Vec<f64>, Vec<f64>)> = [
-            ("measured", &obs.values),
-            ("model before", &report.before),
-            ("model after fit", &report.after),
-        ]
-        .into_iter()
-        .map(|(label, values)| {
-            let (x, y) = pick(values);
-            (label.to_string(), x, y)
-        })
-        .collect();
-        let file = name.replace(['|', '.'], "_");
-        let path = dir.join(format!("fit_{file}.svg"));
-        let x_label = if log_x { "frequency [Hz]" } else { "data row" };
-        plot::plot_xy(
-            &path,
-            &format!("{}: {name}", experiment.title()),
-            x_label,
-            name,
-            &curves,
-            log_x,
-        )
-        .map_err(|e| e.to_string())?;
+    let curves = [
+        ("model before".to_string(), report.before.as_slice()),
+        ("model after fit".to_string(), report.after.as_slice()),
+    ];
+    for path in overlay_plots(dir, "fit", experiment, obs, &curves)? {
         println!("wrote {}", path.display());
     }
     println!("wrote {} and {}", json_path.display(), csv_path.display());
     Ok(())
+}
+
+/// One plot per measured series (`PREFIX_SERIES.svg` in `dir`): the data and each of
+/// `curves` (a label and a prediction of every observed value).
+fn overlay_plots(
+    dir: &std::path::Path,
+    prefix: &str,
+    experiment: &Experiment,
+    obs: &super::experiment::Observations,
+    curves: &[(String, &[f64])],
+) -> Result<Vec<PathBuf>, String> {
+    let log_x = matches!(experiment, Experiment::FrequencyResponse(_));
+    let x_label = if log_x { "frequency [Hz]" } else { "data row" };
+    let mut paths = Vec::new();
+    for name in obs.series_names() {
+        let pick = |values: &[f64]| -> (Vec<f64>, Vec<f64>) {
+            (0..values.len().min(obs.series.len()))
+                .filter(|&k| obs.series[k] == name)
+                .map(|k| (obs.abscissa[k], values[k]))
+                .unzip()
+        };
+        let lines: Vec<(String, Vec<f64>, Vec<f64>)> =
+            std::iter::once(("measured".to_string(), obs.values.as_slice()))
+                .chain(
+                    curves
+                        .iter()
+                        .map(|(label, values)| (label.clone(), *values)),
+                )
+                .map(|(label, values)| {
+                    let (x, y) = pick(values);
+                    (label, x, y)
+                })
+                .collect();
+        let path = dir.join(format!("{prefix}_{}.svg", name.replace(['|', '.'], "_")));
+        let title = format!("{}: {name}", experiment.title());
+        plot::plot_xy(&path, &title, x_label, name, &lines, log_x).map_err(|e| e.to_string())?;
+        paths.push(path);
+    }
+    Ok(paths)
+}
+
+/// `NAME = value ± σ (nominal …)` for a fitted parameter of a trial.
+fn fitted_text((name, nominal, value, se): &(String, f64, f64, f64)) -> String {
+    format!("{name} = {value:.4e} ± {se:.1e} (nominal {nominal:.4e})")
 }
 
 /// `; the data support equally: …` when several candidates tie with the best.
@@ -226,13 +235,7 @@ pub fn diagnose_command(args: &DiagnoseArgs) -> Result<(), String> {
         "cause", "where", "χ² fit", "χ²/value out", "ΔAICc"
     );
     let line = |t: &super::candidates::Trial| {
-        let fitted: Vec<String> = t
-            .parameters
-            .iter()
-            .map(|(name, nominal, value, se)| {
-                format!("{name} = {value:.4e} ± {se:.1e} (nominal {nominal:.4e})")
-            })
-            .collect();
+        let fitted: Vec<String> = t.parameters.iter().map(fitted_text).collect();
         println!(
             "{:<36} {:<16} {:>12.1} {:>12.2} {:>10.1}  {}",
             t.cause,
@@ -340,13 +343,7 @@ fn diagnosis_page(
         ],
     );
     for t in std::iter::once(&d.base).chain(&d.ranked) {
-        let fitted: Vec<String> = t
-            .parameters
-            .iter()
-            .map(|(name, nominal, value, se)| {
-                format!("{name} = {value:.4e} ± {se:.1e} (nominal {nominal:.4e})")
-            })
-            .collect();
+        let fitted: Vec<String> = t.parameters.iter().map(fitted_text).collect();
         ranking.row(vec![
             t.cause.clone(),
             t.location.clone(),
@@ -383,37 +380,18 @@ fn diagnosis_page(
         }
         outcome.tables.push(inert);
     }
-    let obs = &d.observations;
-    let mut names: Vec<&String> = Vec::new();
-    for s in &obs.series {
-        if !names.contains(&s) {
-            names.push(s);
-        }
+    let mut curves = vec![("base model".to_string(), d.base.predicted.as_slice())];
+    if let Some(best) = d.ranked.first() {
+        let label = format!("{} at {}", best.cause, best.location);
+        curves.push((label, best.predicted.as_slice()));
     }
-    let best = d.ranked.first();
-    let log_x = matches!(experiment, Experiment::FrequencyResponse(_));
-    for name in names {
-        let pick = |values: &[f64]| -> (Vec<f64>, Vec<f64>) {
-            (0..values.len().min(obs.series.len()))
-                .filter(|&k| &obs.series[k] == name)
-                .map(|k| (obs.abscissa[k], values[k]))
-                .unzip()
-        };
-        let mut curves = Vec::new();
-        for (label, values) in [("measured", &obs.values), ("base model", &d.base.predicted)] {
-            let (x, y) = pick(values);
-            curves.push((label.to_string(), x, y));
-        }
-        if let Some(best) = best {
-            let (x, y) = pick(&best.predicted);
-            curves.push((format!("{} at {}", best.cause, best.location), x, y));
-        }
-        let file = name.replace(['|', '.'], "_");
-        let path = args.out_dir.join(format!("diagnosis_{file}.svg"));
-        let x_label = if log_x { "frequency [Hz]" } else { "data row" };
-        plot::plot_xy(&path, name, x_label, name, &curves, log_x).map_err(|e| e.to_string())?;
-        outcome.plots.push(path);
-    }
+    outcome.plots = overlay_plots(
+        &args.out_dir,
+        "diagnosis",
+        experiment,
+        &d.observations,
+        &curves,
+    )?;
     outcome.notes.push(format!(
         "Not in the catalog yet: {}.",
         super::candidates::NOT_TRIED.join("; ")

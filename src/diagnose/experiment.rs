@@ -135,6 +135,19 @@ pub struct Observations {
     pub row: Vec<usize>,
 }
 
+impl Observations {
+    /// The series in order of first appearance.
+    pub fn series_names(&self) -> Vec<&str> {
+        let mut names: Vec<&str> = Vec::new();
+        for name in &self.series {
+            if !names.contains(&name.as_str()) {
+                names.push(name);
+            }
+        }
+        names
+    }
+}
+
 /// Reads and checks a diagnosis experiment file.
 pub fn load(path: &Path) -> Result<Experiment, String> {
     let text = std::fs::read_to_string(path)

@@ -234,12 +234,7 @@ pub fn residual(predicted: &[f64], observations: &Observations) -> Vec<f64> {
 }
 
 fn series_rms(observations: &Observations, before: &[f64], after: &[f64]) -> Vec<SeriesResidual> {
-    let mut names: Vec<&String> = Vec::new();
-    for name in &observations.series {
-        if !names.contains(&name) {
-            names.push(name);
-        }
-    }
+    let names = observations.series_names();
     let rms = |predicted: &[f64], series: &str| {
         let (sum, count) = predicted
             .iter()
@@ -254,7 +249,7 @@ fn series_rms(observations: &Observations, before: &[f64], after: &[f64]) -> Vec
     names
         .into_iter()
         .map(|name| SeriesResidual {
-            series: name.clone(),
+            series: name.to_string(),
             before: rms(before, name),
             after: rms(after, name),
         })
