@@ -30,6 +30,17 @@ fn write(path: &Path, text: &str) {
     std::fs::write(path, text).unwrap();
 }
 
+/// The diagnosis experiment `toml` (without its `model` line: HAMR-VI) written into `dir`
+/// and loaded.
+fn experiment_in(dir: &Path, toml: &str) -> Experiment {
+    let path = dir.join("experiment.toml");
+    write(
+        &path,
+        &format!("model = \"{}\"\n{toml}", model_path("hamr_vi")),
+    );
+    experiment::load(&path).unwrap()
+}
+
 fn model_path(name: &str) -> String {
     format!("{}/models/{name}.mech", env!("CARGO_MANIFEST_DIR"))
 }
@@ -49,16 +60,11 @@ fn param(leg: &Leg, name: &str) -> f64 {
 #[test]
 fn quasi_static_fit_recovers_a_hidden_stiffness() {
     let dir = scratch_dir("diagnose_quasi_static");
-    let experiment_path = dir.join("experiment.toml");
-    write(
-        &experiment_path,
-        &format!(
-            "kind = \"quasi_static\"\ntitle = \"hidden k_s3\"\nmodel = \"{}\"\n\
+    let experiment = experiment_in(
+        &dir,
+        "kind = \"quasi_static\"\ntitle = \"hidden k_s3\"\n\
              outputs = [\"foot.x\", \"foot.z\"]\nnoise = [\"1 um\", \"1 um\"]\n",
-            model_path("hamr_vi")
-        ),
     );
-    let experiment = experiment::load(&experiment_path).unwrap();
     let mut truth = Leg::open(&experiment.model_spec()).unwrap();
     let nominal = param(&truth, "k_s3");
     set_param(&mut truth, "k_s3", 1.3 * nominal);
@@ -112,16 +118,7 @@ fn quasi_static_fit_recovers_a_hidden_stiffness() {
 #[test]
 fn frequency_response_fit_recovers_the_loss_factor() {
     let dir = scratch_dir("diagnose_frequency_response");
-    let experiment_path = dir.join("experiment.toml");
-    write(
-        &experiment_path,
-        &format!(
-            "kind = \"frequency_response\"\ntitle = \"hidden eta\"\nmodel = \"{}\"\n\
-             input = \"v_lift\"\noutput = \"foot.z\"\ngain_noise = \"2 %\"\nphase_noise = \"1 deg\"\n",
-            model_path("hamr_vi")
-        ),
-    );
-    let experiment = experiment::load(&experiment_path).unwrap();
+    let experiment = bode_experiment(&dir);
     let Experiment::FrequencyResponse(_) = &experiment else {
         panic!("a frequency-response experiment");
     };
@@ -181,16 +178,11 @@ fn bode_data_with(
 }
 
 fn bode_experiment(dir: &Path) -> Experiment {
-    let experiment_path = dir.join("experiment.toml");
-    write(
-        &experiment_path,
-        &format!(
-            "kind = \"frequency_response\"\ntitle = \"lift\"\nmodel = \"{}\"\n\
+    experiment_in(
+        dir,
+        "kind = \"frequency_response\"\ntitle = \"lift\"\n\
              input = \"v_lift\"\noutput = \"foot.z\"\ngain_noise = \"2 %\"\nphase_noise = \"1 deg\"\n",
-            model_path("hamr_vi")
-        ),
-    );
-    experiment::load(&experiment_path).unwrap()
+    )
 }
 
 fn diagnose_text(name: &str, text: &str) -> Diagnosis {
@@ -285,15 +277,10 @@ fn fit_requests_and_data_are_checked() {
     assert!(FitRequest::parse("k_s3=2..1 uN*m/rad").is_err());
 
     let dir = scratch_dir("diagnose_checks");
-    let experiment_path = dir.join("experiment.toml");
-    write(
-        &experiment_path,
-        &format!(
-            "kind = \"quasi_static\"\ntitle = \"t\"\nmodel = \"{}\"\noutputs = [\"foot.y\"]\n",
-            model_path("hamr_vi")
-        ),
+    let experiment = experiment_in(
+        &dir,
+        "kind = \"quasi_static\"\ntitle = \"t\"\noutputs = [\"foot.y\"]\n",
     );
-    let experiment = experiment::load(&experiment_path).unwrap();
     let data_path = dir.join("measured.csv");
     write(&data_path, "v_lift [V], foot.x [mm]\n1, 0.1\n");
     let data = MeasuredData::load(&data_path).unwrap();
@@ -305,18 +292,13 @@ fn fit_requests_and_data_are_checked() {
 /// with `change` applied to the true model, and the two-channel experiment that reads them.
 fn two_channel_case(name: &str, change: impl Fn(&mut Leg), seed: u64) -> Diagnosis {
     let dir = scratch_dir(name);
-    let experiment_path = dir.join("experiment.toml");
-    write(
-        &experiment_path,
-        &format!(
-            "kind = \"frequency_response\"\ntitle = \"lift and swing\"\nmodel = \"{}\"\n\
+    let experiment = experiment_in(
+        &dir,
+        "kind = \"frequency_response\"\ntitle = \"lift and swing\"\n\
              gain_noise = \"2 %\"\nphase_noise = \"1 deg\"\n\
              [[channel]]\nname = \"lift\"\ninput = \"v_lift\"\noutput = \"foot.z\"\n\
              [[channel]]\nname = \"swing\"\ninput = \"v_swing\"\noutput = \"foot.x\"\n",
-            model_path("hamr_vi")
-        ),
     );
-    let experiment = experiment::load(&experiment_path).unwrap();
     let mut truth = Leg::open(&experiment.model_spec()).unwrap();
     change(&mut truth);
     let rest_inputs = truth.inputs(0.0, 0.0);
