@@ -186,19 +186,7 @@ pub fn plot_xy(
         path: path.to_path_buf(),
         kind: PlotErrorKind::InvalidData(msg),
     };
-    let format = Format::of(path)?;
-    if curves.is_empty() {
-        return Err(fail("nothing to plot (no curves)".into()));
-    }
-    for (name, xs, ys) in curves {
-        if xs.len() != ys.len() {
-            return Err(fail(format!(
-                "curve `{name}` has {} x values but {} y values",
-                xs.len(),
-                ys.len()
-            )));
-        }
-    }
+    let format = check_curves(path, curves)?;
     if log_x
         && !curves
             .iter()
@@ -218,6 +206,28 @@ pub fn plot_xy(
         stars: &[],
     };
     render(path, format, (WIDTH, XY_HEIGHT), &figure)
+}
+
+/// The format of `path`, after checking there are curves and each has as many x as y values.
+fn check_curves(path: &Path, curves: &[(String, Vec<f64>, Vec<f64>)]) -> Result<Format, PlotError> {
+    let fail = |msg: String| PlotError {
+        path: path.to_path_buf(),
+        kind: PlotErrorKind::InvalidData(msg),
+    };
+    let format = Format::of(path)?;
+    if curves.is_empty() {
+        return Err(fail("nothing to plot (no curves)".into()));
+    }
+    for (name, xs, ys) in curves {
+        if xs.len() != ys.len() {
+            return Err(fail(format!(
+                "curve `{name}` has {} x values but {} y values",
+                xs.len(),
+                ys.len()
+            )));
+        }
+    }
+    Ok(format)
 }
 
 /// As [`plot_xy`] on linear axes, each curve drawn in its `styles` entry (colour, dashes) and
@@ -249,20 +259,7 @@ pub fn plot_xy_styled(
             curves.len()
         )));
     }
-    // The checks of plot_xy (lengths, nothing to plot, format), then the styled figure.
-    let format = Format::of(path)?;
-    if curves.is_empty() {
-        return Err(fail("nothing to plot (no curves)".into()));
-    }
-    for (name, xs, ys) in curves {
-        if xs.len() != ys.len() {
-            return Err(fail(format!(
-                "curve `{name}` has {} x values but {} y values",
-                xs.len(),
-                ys.len()
-            )));
-        }
-    }
+    let format = check_curves(path, curves)?;
     let figure = XyFigure {
         title,
         x_label,
