@@ -8,7 +8,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use mech_codegen::Compiled;
-use mech_runtime::constraints::{choose_independent, jacobian};
+use mech_runtime::constraints::{choose_independent, complete_independent, jacobian};
 use mech_runtime::{assemble, assemble_speeds, mobility, AssemblyOptions, Mobility, Model, Signal};
 
 use crate::signal_spec;
@@ -38,6 +38,15 @@ impl Session {
     /// Compiles `path` and applies `--set NAME=VALUE` and `--input NAME=SIGNAL` strings.
     pub fn open(path: &Path, sets: &[String], inputs: &[String]) -> Result<Session, String> {
         let compiled = Compiled::from_path(path).map_err(|errors| errors.to_string())?;
+        Session::from_compiled(compiled, sets, inputs)
+    }
+
+    /// As [`Session::open`], for a model already compiled (or transformed and re-derived).
+    pub fn from_compiled(
+        compiled: Compiled,
+        sets: &[String],
+        inputs: &[String],
+    ) -> Result<Session, String> {
         let model = TapeModel::new(&compiled);
         let signals = mech_runtime::default_signals(&model);
         let mut session = Session {
@@ -169,8 +178,14 @@ impl Session {
         }
         let iterations = assemble(model, 0.0, &mut q, &fixed, &AssemblyOptions::default())
             .map_err(|e| e.to_string())?;
+        let mobility = mobility(model, 0.0, &q);
+        if fixed.len() < mobility.dof() {
+            // More freedom than named (e.g. a twist added by `mech diagnose`): complete the
+            // list, keeping the named coordinates.
+            fixed = complete_independent(&jacobian(model, 0.0, &q), &fixed);
+        }
         assemble_speeds(model, 0.0, &q, &mut u, &fixed);
-        let mobility = Some(mobility(model, 0.0, &q));
+        let mobility = Some(mobility);
         Ok(Assembled {
             q,
             u,

@@ -61,6 +61,12 @@ impl Compiled {
         Ok(Compiled { model, equations })
     }
 
+    /// Derives a model built or transformed in memory (e.g. by `ir::transform`).
+    pub fn from_model(model: ir::Model) -> Compiled {
+        let equations = kane::derive(&model);
+        Compiled { model, equations }
+    }
+
     /// Reads and compiles a `.mech` file; diagnostics show `path` as given.
     pub fn from_path(path: impl AsRef<Path>) -> Result<Compiled, Errors> {
         let path = path.as_ref();

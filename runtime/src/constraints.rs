@@ -114,12 +114,19 @@ pub fn solve_least_squares(a: &DMatrix<f64>, b: &DVector<f64>) -> DVector<f64> {
 /// taken from the end of the list, each only if it adds a well-conditioned direction to the
 /// columns of `J` already taken (Gram–Schmidt with a relative threshold).
 pub fn choose_independent(j: &DMatrix<f64>) -> Vec<usize> {
+    complete_independent(j, &[])
+}
+
+/// As [`choose_independent`], keeping the `held` coordinates independent: completes a
+/// user's list (the actuators) when the mechanism has more degrees of freedom than it names
+/// (a model extension that adds a twist, say).
+pub fn complete_independent(j: &DMatrix<f64>, held: &[usize]) -> Vec<usize> {
     let scale = (0..j.ncols())
         .map(|c| j.column(c).norm())
         .fold(0.0, f64::max);
     let mut basis: Vec<DVector<f64>> = Vec::new();
     let mut dependent = Vec::new();
-    for c in (0..j.ncols()).rev() {
+    for c in (0..j.ncols()).rev().filter(|c| !held.contains(c)) {
         let mut column = j.column(c).into_owned();
         for direction in &basis {
             let along = column.dot(direction);

@@ -19,6 +19,7 @@ pub mod candidates;
 pub mod command;
 pub mod data;
 pub mod experiment;
+pub mod extend;
 pub mod fit;
 pub mod lm;
 

@@ -77,8 +77,17 @@ impl Leg {
     /// As [`Leg::open`], with `params` (name, SI value) set after `spec.set`: sweeps set
     /// their values directly, without a round trip through text.
     pub fn open_with(spec: &ModelSpec, params: &[(&str, f64)]) -> Result<Leg, String> {
-        let mut session = Session::open(&spec.model, &spec.set, &[])
+        let session = Session::open(&spec.model, &spec.set, &[])
             .map_err(|e| format!("model `{}`: {e}", spec.model.display()))?;
+        Leg::from_session(session, spec, params)
+    }
+
+    /// A leg from an opened session (e.g. of a transformed model), with `params` set.
+    pub fn from_session(
+        mut session: Session,
+        spec: &ModelSpec,
+        params: &[(&str, f64)],
+    ) -> Result<Leg, String> {
         for &(name, value) in params {
             let index = session.model.param_index(name).ok_or_else(|| {
                 format!("model `{}` has no parameter `{name}`", spec.model.display())

@@ -381,10 +381,20 @@ pub enum ClosureKind {
     /// unit `axis` (components in the parent interframe) stays aligned with the same axis in
     /// the child interframe. The interframes are given relative to each point's frame and
     /// coincide when the relative rotation about the axis is zero.
+    ///
+    /// With a `twist_axis` `t` (the flexure's length axis, components in the parent
+    /// interframe, perpendicular to the axis) the closure is compliant: only the points are
+    /// held together, and springs on its twist about `t` ([`FlexureAngle::LoopTwist`]) and its
+    /// lateral bending about `a × t` ([`FlexureAngle::LoopLateral`], or a row if
+    /// `lateral_row`) hold the axes in line.
     Revolute {
         axis: Vec3,
         parent_orientation: Vec<AxisAngle>,
         child_orientation: Vec<AxisAngle>,
+        twist_axis: Option<Box<Vec3>>,
+        /// With a `twist_axis`: whether the lateral bending stays a constraint row
+        /// (`a_P·t_C = 0`) instead of a spring.
+        lateral_row: bool,
     },
     /// `|child − parent| = length`.
     Distance { length: Expr },
@@ -447,6 +457,20 @@ pub enum Load {
         damping: Expr,
         span: Span,
     },
+    /// `−stiffness·(θ − rest)·∂θ/∂q` for an angle `θ(q)` that is not a coordinate (the twist
+    /// of a compliant closure); stores `½k(θ − rest)²` of potential energy.
+    AngleSpring {
+        angle: FlexureAngle,
+        stiffness: Expr,
+        rest: Expr,
+        span: Span,
+    },
+    /// `−damping·θ̇·∂θ/∂q`, `θ̇ = Σ ∂θ/∂qᵢ uᵢ`, for an angle as in [`Load::AngleSpring`].
+    AngleDamper {
+        angle: FlexureAngle,
+        damping: Expr,
+        span: Span,
+    },
     /// A generalized force acting directly on one coordinate (an actuator's force source).
     GeneralizedForce {
         coordinate: Handle<Coordinate>,
@@ -462,6 +486,10 @@ pub enum FlexureAngle {
     Coordinate(Handle<Coordinate>),
     /// The relative rotation of revolute loop `loops[index]` about its axis.
     Loop(usize),
+    /// The twist of compliant revolute loop `loops[index]` about its `twist_axis`.
+    LoopTwist(usize),
+    /// The lateral bending of compliant revolute loop `loops[index]`, about `axis × twist_axis`.
+    LoopLateral(usize),
 }
 
 /// A compliant hinge (Doshi et al. Eqs. 2, 5): bending stiffness `k`, loss factor `η`.

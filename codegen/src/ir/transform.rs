@@ -3,13 +3,189 @@
 //! Consumes: a model and a description of the change. Produces: the changed model (in place),
 //! with every frame handle remapped so that parents still come first.
 //!
-//! The first transformation inserts a moving frame into the kinematic tree, e.g. the twist
-//! degree of freedom of a flexure hinge (Doshi et al. Eq. 8) or, later, compliance of a loop
-//! closure.
+//! - [`insert_revolute_below`]: a moving frame in the kinematic tree;
+//! - [`add_twist`]: a flexure hinge twists about its length axis (Doshi et al. Eq. 8): a pin
+//!   joint gains a revolute frame, a revolute loop closure becomes compliant in twist.
 
-use super::{ClosureKind, Dimension};
+use super::{ClosureKind, Dimension, Flexure, FlexureAngle};
 use super::{Coordinate, Expr, Frame, FrameVector, Handle, Load, Model, Motion, OutputKind, Vec3};
 use crate::diag::Span;
+use crate::sym::Number;
+
+/// Lateral (in-plane) bending stiffness of a compliant loop closure, per unit bending
+/// stiffness `k`. A thin hinge's in-plane stiffness is `(w/t)²·k` (Eq. 2 with width and
+/// thickness swapped): ~1600 for w = 1 mm of 25 µm Kapton. A round, stiff value stands in for
+/// it when the geometry is not given; it only has to make the closure stiff laterally.
+pub const LATERAL_STIFFNESS_FACTOR: i64 = 1000;
+
+/// A spring about one direction of a flexure hinge: its stiffness, time-domain damper and
+/// loss factor, recorded as a flexure named `name` (for frequency-domain losses).
+#[derive(Clone, Debug, PartialEq)]
+pub struct HingeSpring {
+    pub name: String,
+    pub stiffness: Expr,
+    pub damping: Expr,
+    pub loss_factor: Expr,
+}
+
+/// A flexure hinge's twist about its length axis.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Twist {
+    /// Components in the pin joint's frame, or in the loop's parent interframe (where it
+    /// must not be parallel to the hinge axis).
+    pub axis: Vec3,
+    /// Twist spring, `2k/(1 + ν)` by Eq. 8.
+    pub twist: HingeSpring,
+    /// The spring on the hinge's lateral (in-plane, stiff) bending about `hinge axis × twist
+    /// axis`: a second new coordinate on a pin joint, a spring instead of the last alignment
+    /// row on a loop closure. `None`: rigid laterally.
+    pub lateral: Option<HingeSpring>,
+    pub span: Span,
+}
+
+/// Why a twist cannot be added.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TwistError {
+    /// The hinge is neither a revolute pin joint nor a revolute loop closure.
+    NotAHinge,
+    /// A loop's twist axis along its hinge axis (or not a constant direction).
+    AlongHingeAxis,
+    /// The loop is already compliant.
+    AlreadyTwists,
+}
+
+/// Gives `hinge` a twist. A pin joint's frame gets a revolute frame below it (a new
+/// coordinate with the twist spring and damper). A revolute loop closure becomes compliant:
+/// its alignment rows give way to springs on its twist and its lateral bending, so a loop
+/// can deform (a single twist axis in a rigid closed loop is locked by the other hinges).
+/// Pushes the springs' flexure records and returns the twist's angle.
+pub fn add_twist(
+    model: &mut Model,
+    hinge: FlexureAngle,
+    twist: Twist,
+) -> Result<FlexureAngle, TwistError> {
+    let span = twist.span;
+    match hinge {
+        FlexureAngle::Coordinate(coordinate) => {
+            let (frame, hinge_axis) = model
+                .frames
+                .iter()
+                .find_map(|(handle, f)| match &f.motion {
+                    Motion::Revolute {
+                        axis,
+                        coordinate: c,
+                    } if *c == coordinate => Some((handle, axis.clone())),
+                    _ => None,
+                })
+                .ok_or(TwistError::NotAHinge)?;
+            if !perpendicular_enough(&hinge_axis, &twist.axis) {
+                return Err(TwistError::AlongHingeAxis);
+            }
+            let mut springs = vec![(twist.axis.clone(), twist.twist)];
+            if let Some(lateral) = twist.lateral {
+                springs.push((cross(&hinge_axis, &twist.axis), lateral));
+            }
+            let mut angles = Vec::new();
+            for (axis, spring) in springs {
+                let (_, new) = insert_revolute_below(model, frame, &spring.name, axis, span);
+                model.loads.push(Load::Spring {
+                    coordinate: new,
+                    stiffness: spring.stiffness.clone(),
+                    rest: Expr::zero(),
+                    span,
+                });
+                model.loads.push(Load::Damper {
+                    coordinate: new,
+                    damping: spring.damping.clone(),
+                    span,
+                });
+                let angle = FlexureAngle::Coordinate(new);
+                push_flexure(model, angle, spring, span);
+                angles.push(angle);
+            }
+            Ok(angles[0])
+        }
+        FlexureAngle::Loop(closure) => {
+            let Some(ClosureKind::Revolute {
+                axis,
+                twist_axis,
+                lateral_row,
+                ..
+            }) = model.loops.get_mut(closure).map(|c| &mut c.kind)
+            else {
+                return Err(TwistError::NotAHinge);
+            };
+            if twist_axis.is_some() {
+                return Err(TwistError::AlreadyTwists);
+            }
+            if !perpendicular_enough(axis, &twist.axis) {
+                return Err(TwistError::AlongHingeAxis);
+            }
+            *twist_axis = Some(Box::new(twist.axis));
+            *lateral_row = twist.lateral.is_none();
+            let mut springs = vec![(FlexureAngle::LoopTwist(closure), twist.twist)];
+            if let Some(lateral) = twist.lateral {
+                springs.push((FlexureAngle::LoopLateral(closure), lateral));
+            }
+            for (angle, spring) in springs {
+                model.loads.push(Load::AngleSpring {
+                    angle,
+                    stiffness: spring.stiffness.clone(),
+                    rest: Expr::zero(),
+                    span,
+                });
+                model.loads.push(Load::AngleDamper {
+                    angle,
+                    damping: spring.damping.clone(),
+                    span,
+                });
+                push_flexure(model, angle, spring, span);
+            }
+            Ok(FlexureAngle::LoopTwist(closure))
+        }
+        FlexureAngle::LoopTwist(_) | FlexureAngle::LoopLateral(_) => Err(TwistError::AlreadyTwists),
+    }
+}
+
+fn push_flexure(model: &mut Model, angle: FlexureAngle, spring: HingeSpring, span: Span) {
+    model.flexures.push(Flexure {
+        name: spring.name,
+        angle,
+        stiffness: spring.stiffness,
+        loss_factor: spring.loss_factor,
+        damping: spring.damping,
+        span,
+    });
+}
+
+/// `a × b` of two constant directions (components as numbers).
+fn cross(a: &Vec3, b: &Vec3) -> Vec3 {
+    let value = |e: &Expr| match e {
+        Expr::Number(n) => *n,
+        _ => Number::ZERO,
+    };
+    let (a, b) = (a.clone().map(|e| value(&e)), b.clone().map(|e| value(&e)));
+    let component = |i: usize, j: usize| Expr::Number(a[i].mul(b[j]).sub(a[j].mul(b[i])));
+    [component(1, 2), component(2, 0), component(0, 1)]
+}
+
+/// Whether two constant directions are far from parallel (|cos| < 0.99): a twist axis must
+/// leave a well-defined normal `a × t`.
+fn perpendicular_enough(a: &Vec3, b: &Vec3) -> bool {
+    let value = |e: &Expr| match e {
+        Expr::Number(n) => Some(n.to_f64()),
+        _ => None,
+    };
+    let (Some(a), Some(b)) = (
+        a.iter().map(value).collect::<Option<Vec<f64>>>(),
+        b.iter().map(value).collect::<Option<Vec<f64>>>(),
+    ) else {
+        return false;
+    };
+    let dot: f64 = a.iter().zip(&b).map(|(x, y)| x * y).sum();
+    let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    dot.abs() < 0.99 * norm(&a) * norm(&b)
+}
 
 /// Inserts a frame rotating about `axis` (components in `parent`'s basis) right below
 /// `parent`: the frame's former children hang from it instead. Returns its frame and its
@@ -86,6 +262,8 @@ fn remap_handles(model: &mut Model, remap: &dyn Fn(Handle<Frame>) -> Handle<Fram
             | Load::Damper { .. }
             | Load::LoopSpring { .. }
             | Load::LoopDamper { .. }
+            | Load::AngleSpring { .. }
+            | Load::AngleDamper { .. }
             | Load::GeneralizedForce { .. } => {}
         }
     }

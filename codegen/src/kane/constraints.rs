@@ -8,7 +8,9 @@
 //! - coincident: the listed components of `r_C − r_P` in the basis of the named frame;
 //! - revolute: `r_C − r_P` in N (3 rows), then `a_P·e₁_C` and `a_P·e₂_C`, where `a_P` is
 //!   the axis in the parent interframe and `e₁, e₂ ⊥ a` are fixed in the child interframe
-//!   (zero exactly when the two axes are parallel);
+//!   (zero exactly when the two axes are parallel); a compliant closure (with a twist axis
+//!   `t`) keeps only the 3 position rows: its twist about `t` and its lateral bending about
+//!   `n = a × t` are flexure angles held by springs;
 //! - distance: `|r_C − r_P| − length`.
 //!
 //! `J` and `J̇u = Σᵢ ∂(J u)/∂qᵢ uᵢ` are exact symbolic derivatives of `φ`.
@@ -93,6 +95,16 @@ pub(super) struct RevoluteGeometry {
     pub reference_parent: Vec3,
     pub reference_child: Vec3,
     pub perpendicular_child: Vec3,
+    /// For a closure compliant in twist: the directions fixed in the child interframe.
+    pub twist: Option<TwistGeometry>,
+}
+
+/// A compliant closure's twist axis `t` and its normal `n = a × t`, fixed in the child
+/// interframe (in N), and the hinge axis `a_C` seen from the child.
+pub(super) struct TwistGeometry {
+    pub axis_child: Vec3,
+    pub twist_child: Vec3,
+    pub normal_child: Vec3,
 }
 
 fn revolute_geometry(
@@ -100,16 +112,44 @@ fn revolute_geometry(
     parent: &Side,
     child: &Side,
     axis: &ir::Vec3,
+    twist_axis: Option<&ir::Vec3>,
 ) -> RevoluteGeometry {
     let axis_local = lower_vec(pool, axis);
-    let (e1, e2) = perpendiculars(constant_vector(pool, axis_local));
+    let axis_numbers = constant_vector(pool, axis_local);
+    let (e1, e2) = perpendiculars(axis_numbers);
     let (e1, e2) = (number_vector(pool, e1), number_vector(pool, e2));
+    let twist = twist_axis.map(|twist_axis| {
+        let twist_local = lower_vec(pool, twist_axis);
+        let (t, n) = twist_directions(axis_numbers, constant_vector(pool, twist_local));
+        let (t, n) = (number_vector(pool, t), number_vector(pool, n));
+        TwistGeometry {
+            axis_child: vector::mat_vec(pool, &child.dcm, axis_local),
+            twist_child: vector::mat_vec(pool, &child.dcm, t),
+            normal_child: vector::mat_vec(pool, &child.dcm, n),
+        }
+    });
     RevoluteGeometry {
         axis: vector::mat_vec(pool, &parent.dcm, axis_local),
         reference_parent: vector::mat_vec(pool, &parent.dcm, e1),
         reference_child: vector::mat_vec(pool, &child.dcm, e1),
         perpendicular_child: vector::mat_vec(pool, &child.dcm, e2),
+        twist,
     }
+}
+
+/// The unit twist axis `t` (the given direction with its component along the unit hinge
+/// axis `a` removed) and `n = a × t`. The front end rejects twist axes parallel to `a`.
+fn twist_directions(axis: [f64; 3], twist: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    let along = axis[0] * twist[0] + axis[1] * twist[1] + axis[2] * twist[2];
+    let t = [0, 1, 2].map(|i| twist[i] - along * axis[i]);
+    let norm = (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();
+    let t = t.map(|c| c / norm);
+    let n = [
+        axis[1] * t[2] - axis[2] * t[1],
+        axis[2] * t[0] - axis[0] * t[2],
+        axis[0] * t[1] - axis[1] * t[0],
+    ];
+    (t, n)
 }
 
 /// The geometry of closure `index` (revolute closures only).
@@ -124,13 +164,21 @@ pub(super) fn closure_geometry(
         axis,
         parent_orientation,
         child_orientation,
+        twist_axis,
+        ..
     } = &closure.kind
     else {
         return None;
     };
     let parent = side(pool, kinematics, model, closure.parent, parent_orientation);
     let child = side(pool, kinematics, model, closure.child, child_orientation);
-    Some(revolute_geometry(pool, &parent, &child, axis))
+    Some(revolute_geometry(
+        pool,
+        &parent,
+        &child,
+        axis,
+        twist_axis.as_deref(),
+    ))
 }
 
 /// Relative rotation of a revolute closure about its axis:
@@ -139,6 +187,29 @@ pub(super) fn relative_angle(pool: &mut ExprPool, geometry: &RevoluteGeometry) -
     let cross = vector::cross(pool, geometry.reference_parent, geometry.reference_child);
     let sine = vector::dot(pool, cross, geometry.axis);
     let cosine = vector::dot(pool, geometry.reference_parent, geometry.reference_child);
+    pool.atan2(sine, cosine)
+}
+
+/// The two ways a compliant closure's child axis leaves the parent's: twist about `t` and
+/// lateral bending about `n = a × t`. Exact for a pure rotation: twist by β turns `n` towards
+/// `a` (`n_C = n cos β + a sin β`), lateral bending by γ turns `t` away from it
+/// (`t_C = t cos γ − a sin γ`), so `β = atan2(a_P·n_C, a_P·a_C)` and
+/// `γ = atan2(−a_P·t_C, a_P·a_C)`. Zero for a rigid closure.
+pub(super) fn off_axis_angle(
+    pool: &mut ExprPool,
+    geometry: &RevoluteGeometry,
+    lateral: bool,
+) -> ExprId {
+    let Some(twist) = &geometry.twist else {
+        return pool.zero();
+    };
+    let sine = if lateral {
+        let along = vector::dot(pool, geometry.axis, twist.twist_child);
+        pool.neg(along)
+    } else {
+        vector::dot(pool, geometry.axis, twist.normal_child)
+    };
+    let cosine = vector::dot(pool, geometry.axis, twist.axis_child);
     pool.atan2(sine, cosine)
 }
 
@@ -168,20 +239,33 @@ pub fn derive(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Model) -
                     names.push(format!("{}.{}", closure.name, ["x", "y", "z"][c]));
                 }
             }
-            ClosureKind::Revolute { axis, .. } => {
+            ClosureKind::Revolute {
+                axis,
+                twist_axis,
+                lateral_row,
+                ..
+            } => {
                 for (c, &component) in gap.iter().enumerate() {
                     residual.push(component);
                     names.push(format!("{}.{}", closure.name, ["x", "y", "z"][c]));
                 }
-                let geometry = revolute_geometry(pool, &parent, &child, axis);
-                residual.push(vector::dot(pool, geometry.axis, geometry.reference_child));
-                residual.push(vector::dot(
-                    pool,
-                    geometry.axis,
-                    geometry.perpendicular_child,
-                ));
-                names.push(format!("{}.align1", closure.name));
-                names.push(format!("{}.align2", closure.name));
+                let geometry = revolute_geometry(pool, &parent, &child, axis, twist_axis.as_deref());
+                // A compliant closure's axes are held by springs (its twist and lateral
+                // flexure angles), not by rows; or its lateral bending by `a_P·t_C`.
+                if let Some(twist) = geometry.twist.as_ref().filter(|_| *lateral_row) {
+                    residual.push(vector::dot(pool, geometry.axis, twist.twist_child));
+                    names.push(format!("{}.align", closure.name));
+                }
+                if geometry.twist.is_none() {
+                    residual.push(vector::dot(pool, geometry.axis, geometry.reference_child));
+                    residual.push(vector::dot(
+                        pool,
+                        geometry.axis,
+                        geometry.perpendicular_child,
+                    ));
+                    names.push(format!("{}.align1", closure.name));
+                    names.push(format!("{}.align2", closure.name));
+                }
             }
             ClosureKind::Distance { length } => {
                 let length = kinematics::lower_expr(pool, length);

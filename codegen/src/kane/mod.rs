@@ -77,12 +77,7 @@ fn flexure_rows(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Model)
     for flexure in &model.flexures {
         let angle = match flexure.angle {
             ir::FlexureAngle::Coordinate(c) => pool.symbol(Symbol::Coordinate(c.index() as u32)),
-            ir::FlexureAngle::Loop(closure) => {
-                match constraints::closure_geometry(pool, kinematics, model, closure) {
-                    Some(geometry) => constraints::relative_angle(pool, &geometry),
-                    None => pool.zero(),
-                }
-            }
+            angle => flexure_angle(pool, kinematics, model, angle),
         };
         rows.names.push(flexure.name.clone());
         rows.angles.push(angle);
@@ -92,6 +87,35 @@ fn flexure_rows(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Model)
             .push(lower_expr(pool, &flexure.loss_factor));
     }
     rows
+}
+
+/// `θ(q)` of a flexure angle.
+fn flexure_angle(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    model: &Model,
+    angle: ir::FlexureAngle,
+) -> ExprId {
+    use ir::FlexureAngle::{Coordinate, Loop, LoopLateral, LoopTwist};
+    let closure = match angle {
+        Coordinate(c) => return pool.symbol(Symbol::Coordinate(c.index() as u32)),
+        Loop(closure) | LoopTwist(closure) | LoopLateral(closure) => closure,
+    };
+    let Some(geometry) = constraints::closure_geometry(pool, kinematics, model, closure) else {
+        return pool.zero();
+    };
+    match angle {
+        LoopTwist(_) => constraints::off_axis_angle(pool, &geometry, false),
+        LoopLateral(_) => constraints::off_axis_angle(pool, &geometry, true),
+        _ => constraints::relative_angle(pool, &geometry),
+    }
+}
+
+/// `∂θ/∂q_r` for every coordinate.
+fn angle_gradient(pool: &mut ExprPool, angle: ExprId, nq: usize) -> Vec<ExprId> {
+    (0..nq)
+        .map(|r| pool.diff(angle, Symbol::Coordinate(r as u32)))
+        .collect()
 }
 
 impl Equations {
@@ -345,6 +369,46 @@ fn add_load(
             };
             constraints::closure_torque_forces(pool, kinematics, model, *closure, torque, forcing);
         }
+        Load::AngleSpring {
+            angle,
+            stiffness,
+            rest,
+            ..
+        } => {
+            // Q_r = −∂V/∂q_r with V = ½k(θ − rest)².
+            let k = lower_expr(pool, stiffness);
+            let rest = lower_expr(pool, rest);
+            let theta = flexure_angle(pool, kinematics, model, *angle);
+            let stretch = pool.sub(theta, rest);
+            let moment = pool.mul(k, stretch);
+            for (r, slope) in angle_gradient(pool, theta, forcing.len())
+                .into_iter()
+                .enumerate()
+            {
+                let force = pool.mul(moment, slope);
+                forcing[r].push(pool.neg(force));
+            }
+        }
+        Load::AngleDamper { angle, damping, .. } => {
+            // Q_r = −c θ̇ ∂θ/∂q_r with θ̇ = Σ ∂θ/∂q_i u_i (q̇ = u).
+            let c = lower_expr(pool, damping);
+            let theta = flexure_angle(pool, kinematics, model, *angle);
+            let gradient = angle_gradient(pool, theta, forcing.len());
+            let rates: Vec<ExprId> = gradient
+                .iter()
+                .enumerate()
+                .map(|(i, &slope)| {
+                    let u = pool.symbol(Symbol::Speed(i as u32));
+                    pool.mul(slope, u)
+                })
+                .collect();
+            let rate = pool.add_all(&rates);
+            let moment = pool.mul(c, rate);
+            for (r, slope) in gradient.into_iter().enumerate() {
+                let force = pool.mul(moment, slope);
+                forcing[r].push(pool.neg(force));
+            }
+        }
         Load::LoopDamper {
             closure, damping, ..
         } => {
@@ -445,7 +509,7 @@ fn potential_energy(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Mo
         terms.push(pool.neg(work));
     }
     for load in &model.loads {
-        // ½ k (x − rest)² for joint springs (x = q) and closure springs (x = θ).
+        // ½ k (x − rest)² for joint springs (x = q), closure and angle springs (x = θ).
         let (stiffness, rest, stretched) = match load {
             Load::Spring {
                 coordinate,
@@ -474,6 +538,16 @@ fn potential_energy(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Mo
                     constraints::relative_angle(pool, &geometry),
                 )
             }
+            Load::AngleSpring {
+                angle,
+                stiffness,
+                rest,
+                ..
+            } => (
+                stiffness,
+                rest,
+                flexure_angle(pool, kinematics, model, *angle),
+            ),
             _ => continue,
         };
         let k = lower_expr(pool, stiffness);

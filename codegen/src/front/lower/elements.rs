@@ -8,8 +8,10 @@
 //! - flexure bending stiffness `k = E w t³ / (12 l)` (Eq. 2), with `effective_length`
 //!   replacing `length` for castellated hinges; time-domain damping `b = k η / ω_ref`
 //!   (Eq. 5) with `ω_ref = 2π · reference_frequency`;
-//! - `twist_axis`: the hinge also twists about its length axis, a new coordinate with the
-//!   twist stiffness `2k/(1 + ν)` (Eq. 8) and damping `2b/(1 + ν)`;
+//! - `twist_axis`: the hinge also twists about its length axis with the twist stiffness
+//!   `2k/(1 + ν)` (Eq. 8) and damping `2b/(1 + ν)`: on a pin joint a new coordinate, on a
+//!   revolute loop a compliant closure (its lateral bending held by a stiff spring,
+//!   `ir::transform::LATERAL_STIFFNESS_FACTOR · k`);
 //! - actuator: a force source `F_b · V / V_rated` in parallel with the series stiffness
 //!   `k_a = F_b / δ_f` along a slider.
 
@@ -409,6 +411,8 @@ impl<'a> Lowerer<'a> {
                     span,
                 });
             }
+            // A flexure names a pin joint or a loop; twists are added by `apply_twists`.
+            FlexureAngle::LoopTwist(_) | FlexureAngle::LoopLateral(_) => {}
         }
         if let Some(field) = fields.iter().find(|f| f.name.name == "twist_axis") {
             self.twist(
@@ -431,8 +435,9 @@ impl<'a> Lowerer<'a> {
         });
     }
 
-    /// Records a twist degree of freedom for `apply_twists`: stiffness and damping scaled by
-    /// `2/(1 + ν)` (Eq. 8).
+    /// Records a twist for `apply_twists`: about `twist_axis`, stiffness and damping scaled
+    /// by `2/(1 + ν)` (Eq. 8). On a pin joint it is a new degree of freedom; on a revolute
+    /// loop the closure becomes compliant in twist.
     #[allow(clippy::too_many_arguments)]
     fn twist(
         &mut self,
@@ -444,19 +449,6 @@ impl<'a> Lowerer<'a> {
         damping: &Expr,
         loss_factor: &Expr,
     ) {
-        let FlexureAngle::Coordinate(coordinate) = angle else {
-            self.error(
-                Diagnostic::error(
-                    "E0403",
-                    "`twist_axis` is only allowed on a flexure of a pin joint",
-                )
-                .with_label(field.name.span, "this flexure is on a loop")
-                .with_help(
-                    "a twisting loop closure is a later capability; put the flexure on a pin joint",
-                ),
-            );
-            return;
-        };
         let Some(axis) = self.axis(&field.value, "a twist axis") else {
             return;
         };
@@ -469,27 +461,33 @@ impl<'a> Lowerer<'a> {
             );
             return;
         };
-        let Some(frame) = self
-            .joints
-            .iter()
-            .find(|j| j.coordinate == Some(coordinate))
-            .and_then(|j| j.frame)
-        else {
-            return;
-        };
         // 2/(1 + ν)
         let ratio = div(
             Expr::Number(Number::int(2)),
             Expr::Add(Box::new(Expr::one()), Box::new(poisson)),
         );
-        self.twists.push(super::PendingTwist {
-            frame,
-            name: format!("{}_twist", decl.name.name),
-            axis,
-            stiffness: mul(ratio.clone(), stiffness.clone()),
-            damping: mul(ratio, damping.clone()),
+        let spring = |suffix: &str, factor: &Expr| ir::transform::HingeSpring {
+            name: format!("{}_{suffix}", decl.name.name),
+            stiffness: mul(factor.clone(), stiffness.clone()),
+            damping: mul(factor.clone(), damping.clone()),
             loss_factor: loss_factor.clone(),
-            span: decl.span,
+        };
+        self.twists.push(super::PendingTwist {
+            hinge: angle,
+            axis_span: field.value.span,
+            twist: ir::transform::Twist {
+                axis,
+                twist: spring("twist", &ratio),
+                // A pin stays rigid laterally (one new coordinate); a loop closure's lateral
+                // bending is held by a stiff spring.
+                lateral: matches!(angle, FlexureAngle::Loop(_)).then(|| {
+                    spring(
+                        "lateral",
+                        &Expr::Number(Number::int(ir::transform::LATERAL_STIFFNESS_FACTOR)),
+                    )
+                }),
+                span: decl.span,
+            },
         });
     }
 

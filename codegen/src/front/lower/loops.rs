@@ -298,6 +298,8 @@ impl<'a> Lowerer<'a> {
             axis: axis?,
             parent_orientation,
             child_orientation,
+            twist_axis: None,
+            lateral_row: false,
         })
     }
 

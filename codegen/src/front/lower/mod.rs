@@ -107,16 +107,13 @@ struct Lowerer<'a> {
     twists: Vec<PendingTwist>,
 }
 
-/// A flexure's twist degree of freedom, waiting for [`Lowerer::apply_twists`].
+/// A flexure's twist, waiting for [`Lowerer::apply_twists`].
 struct PendingTwist {
-    /// The pin joint's frame: the twist frame goes right below it.
-    frame: Handle<ir::Frame>,
-    name: String,
-    axis: ir::Vec3,
-    stiffness: ir::Expr,
-    damping: ir::Expr,
-    loss_factor: ir::Expr,
-    span: crate::diag::Span,
+    /// The flexure's hinge: a pin joint's coordinate or a revolute loop.
+    hinge: ir::FlexureAngle,
+    /// The `twist_axis` value, for diagnostics.
+    axis_span: crate::diag::Span,
+    twist: ir::transform::Twist,
 }
 
 impl<'a> Lowerer<'a> {
@@ -165,43 +162,35 @@ impl<'a> Lowerer<'a> {
         self.apply_twists();
     }
 
-    /// Inserts each flexure twist as a revolute frame below its pin joint's frame, with its
-    /// spring, damper and flexure record. Frames after it are renumbered.
+    /// Adds each flexure twist (`ir::transform::add_twist`) once everything else refers to
+    /// frames: a pin joint's twist inserts a frame and renumbers the frames after it.
     fn apply_twists(&mut self) {
         if !self.diagnostics.is_empty() {
             return;
         }
-        // Later frames first, so earlier insertions do not move the frames still to process.
-        let mut twists = std::mem::take(&mut self.twists);
-        twists.sort_by_key(|t| std::cmp::Reverse(t.frame));
-        for twist in twists {
-            let (_, coordinate) = ir::transform::insert_revolute_below(
-                &mut self.model,
-                twist.frame,
-                &twist.name,
-                twist.axis,
-                twist.span,
+        for pending in std::mem::take(&mut self.twists) {
+            let error =
+                match ir::transform::add_twist(&mut self.model, pending.hinge, pending.twist) {
+                    Ok(_) => continue,
+                    Err(error) => error,
+                };
+            let (label, help) = match error {
+                ir::transform::TwistError::AlongHingeAxis => (
+                    "a twist axis along the hinge axis",
+                    "the twist axis is the flexure's length axis, perpendicular to its `axis`",
+                ),
+                ir::transform::TwistError::NotAHinge | ir::transform::TwistError::AlreadyTwists => {
+                    (
+                        "this hinge cannot take a twist",
+                        "`twist_axis` goes on a flexure of a pin joint or of a revolute loop",
+                    )
+                }
+            };
+            self.error(
+                Diagnostic::error("E0403", "cannot add this twist axis")
+                    .with_label(pending.axis_span, label)
+                    .with_help(help),
             );
-            let span = twist.span;
-            self.model.loads.push(ir::Load::Spring {
-                coordinate,
-                stiffness: twist.stiffness.clone(),
-                rest: ir::Expr::zero(),
-                span,
-            });
-            self.model.loads.push(ir::Load::Damper {
-                coordinate,
-                damping: twist.damping.clone(),
-                span,
-            });
-            self.model.flexures.push(ir::Flexure {
-                name: twist.name,
-                angle: ir::FlexureAngle::Coordinate(coordinate),
-                stiffness: twist.stiffness,
-                loss_factor: twist.loss_factor,
-                damping: twist.damping,
-                span,
-            });
         }
     }
 
