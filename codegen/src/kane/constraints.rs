@@ -249,7 +249,8 @@ pub fn derive(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Model) -
                     residual.push(component);
                     names.push(format!("{}.{}", closure.name, ["x", "y", "z"][c]));
                 }
-                let geometry = revolute_geometry(pool, &parent, &child, axis, twist_axis.as_deref());
+                let geometry =
+                    revolute_geometry(pool, &parent, &child, axis, twist_axis.as_deref());
                 // A compliant closure's axes are held by springs (its twist and lateral
                 // flexure angles), not by rows; or its lateral bending by `a_P·t_C`.
                 if let Some(twist) = geometry.twist.as_ref().filter(|_| *lateral_row) {
