@@ -161,13 +161,32 @@ pub fn assemble<M: Model + ?Sized>(
     fixed: &[usize],
     options: &AssemblyOptions,
 ) -> Result<usize, RuntimeError> {
-    let free: Vec<usize> = (0..model.nq()).filter(|c| !fixed.contains(c)).collect();
-    let mut phi = residual(model, t, q);
+    close(
+        |q| residual(model, t, q),
+        |q| jacobian(model, t, q),
+        q,
+        fixed,
+        options,
+    )
+    .map_err(|phi| assembly_error(model, &phi))
+}
+
+/// [`assemble`] for any residual `φ(q)` and its Jacobian (e.g. loops and fixtures together,
+/// in the statics): returns the iterations taken, or the `φ` it stopped at.
+pub fn close(
+    residual: impl Fn(&[f64]) -> DVector<f64>,
+    jacobian: impl Fn(&[f64]) -> DMatrix<f64>,
+    q: &mut [f64],
+    fixed: &[usize],
+    options: &AssemblyOptions,
+) -> Result<usize, DVector<f64>> {
+    let free: Vec<usize> = (0..q.len()).filter(|c| !fixed.contains(c)).collect();
+    let mut phi = residual(q);
     for iteration in 0..options.max_iterations {
         if phi.amax() <= options.tolerance {
             return Ok(iteration);
         }
-        let j = jacobian(model, t, q);
+        let j = jacobian(q);
         let j_free = j.select_columns(&free);
         let step = solve_least_squares(&j_free, &(-&phi));
         let mut scale = 1.0;
@@ -177,7 +196,7 @@ pub fn assemble<M: Model + ?Sized>(
             for (k, &c) in free.iter().enumerate() {
                 trial[c] = q[c] + scale * step[k];
             }
-            let trial_phi = residual(model, t, &trial);
+            let trial_phi = residual(&trial);
             if trial_phi.norm() < before || scale < 1e-6 {
                 q.copy_from_slice(&trial);
                 phi = trial_phi;
@@ -192,7 +211,7 @@ pub fn assemble<M: Model + ?Sized>(
     if phi.amax() <= options.tolerance {
         return Ok(options.max_iterations);
     }
-    Err(assembly_error(model, &phi))
+    Err(phi)
 }
 
 fn assembly_error<M: Model + ?Sized>(model: &M, phi: &DVector<f64>) -> RuntimeError {
