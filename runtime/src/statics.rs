@@ -6,14 +6,24 @@
 //! Produces: an [`Equilibrium`]: `q`, the loop multipliers `λ` and the force each fixture
 //! exerts on the model.
 //!
-//! Method: damped Newton on the KKT system `R(q, λ) = [F + Jᵀλ; s·φ] = 0`, whose Jacobian
-//! `[[∂(F + Jᵀλ)/∂q, Jᵀ], [s·J, 0]]` is formed by central differences in `q` and solved
-//! by rank-revealing least squares, so redundant loop rows are harmless. The constraint
-//! rows and the multipliers are scaled by `s` (`λ = s·μ`) so both blocks weigh alike.
+//! Method: Newton on the reduced equilibrium, in the tangent space of `φ = 0` (loops and
+//! fixtures together). Every iterate satisfies `φ = 0`; there the least-squares multipliers
+//! leave `F + Jᵀλ = Z Zᵀ F`, the part of `F` tangent to the constraints (`Z` an orthonormal
+//! basis of the null space of `J`, from its SVD, so redundant loop rows are harmless). The
+//! step `Δq = Z Δz` solves `Zᵀ ∂(F + Jᵀλ)/∂q Z Δz = −Zᵀ F` with `λ` held, so the curvature
+//! of the constraints (`λ·∇²φ`) is part of the stiffness; the loops and fixtures are then
+//! closed again ([`constraints::close`], minimum-norm Gauss–Newton), and the step is halved
+//! until `|F + Jᵀλ|` decreases. Convergence is quadratic.
+//!
+//! Why closing after each step: a tangent step leaves a curved constraint manifold by
+//! O(|Δq|²). Newton on the full KKT system in `(q, λ)` must weigh that error against the
+//! force residual in its line search, and on soft mechanisms (flexures of ~1e-4 N·m/rad
+//! against ~1 kN/m actuators) it rejected nearly every full step (the Maratos effect): the
+//! HAMR leg with both actuators driven took 20–50 iterations of 1/32 steps.
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::constraints::solve_least_squares;
+use crate::constraints::{self, solve_least_squares, AssemblyOptions, RANK_TOLERANCE};
 use crate::{Model, RuntimeError};
 
 /// A point of the model (given by three position outputs, components in the Newtonian frame)
@@ -111,7 +121,7 @@ impl<M: Model + ?Sized> Problem<'_, M> {
         j.rows_mut(0, self.nc).copy_from(&loops);
         if self.nf > 0 {
             for c in 0..self.nq {
-                let h = 1e-7 * q[c].abs().max(1e-3);
+                let h = OUTPUT_STEP * q[c].abs().max(1.0);
                 let (mut plus, mut minus) = (q.to_vec(), q.to_vec());
                 plus[c] += h;
                 minus[c] -= h;
@@ -137,11 +147,131 @@ impl<M: Model + ?Sized> Problem<'_, M> {
         f
     }
 
-    /// `F + Jᵀλ` and `φ`.
-    fn kkt_residual(&self, q: &[f64], lambda: &DVector<f64>) -> (DVector<f64>, DVector<f64>) {
-        let j = self.jacobian(q);
-        (self.force(q) + j.transpose() * lambda, self.residual(q))
+    /// Closes the loops and fixtures at `q` (in place): minimum-norm Gauss–Newton, as
+    /// [`constraints::close`] does for assembly, to a thousandth of `tolerance` where
+    /// round-off allows (so that equilibria reached from different starts agree to round-off,
+    /// not to the tolerance). False if `|φ|` stays above `tolerance`.
+    fn close(&self, q: &mut [f64], tolerance: f64) -> bool {
+        let options = AssemblyOptions {
+            tolerance: tolerance * 1e-3,
+            ..AssemblyOptions::default()
+        };
+        match constraints::close(|q| self.residual(q), |q| self.jacobian(q), q, &[], &options) {
+            Ok(_) => true,
+            Err(phi) => phi.amax() <= tolerance,
+        }
     }
+
+    /// The closed configuration after `step` from `point`, if the loops and fixtures close.
+    fn step(&self, point: &Point, step: &DVector<f64>, tolerance: f64) -> Option<Point> {
+        let mut q: Vec<f64> = point
+            .q
+            .iter()
+            .zip(step.iter())
+            .map(|(q, d)| q + d)
+            .collect();
+        self.close(&mut q, tolerance).then(|| self.point(q))
+    }
+
+    /// The equilibrium equations at `q`.
+    fn point(&self, q: Vec<f64>) -> Point {
+        let phi = self.residual(&q);
+        let j = self.jacobian(&q);
+        let force = self.force(&q);
+        let lambda = solve_least_squares(&j.transpose(), &(-&force));
+        let tangent = null_space(&j);
+        let residual = &tangent * (tangent.transpose() * &force);
+        Point {
+            tangent,
+            q,
+            phi,
+            force,
+            lambda,
+            residual,
+        }
+    }
+
+    /// `Zᵀ ∂(F + Jᵀλ)/∂q Z` at `point` with `λ` held, `Z` its tangent basis: the stiffness of
+    /// the reduced equilibrium. `F` by central differences along each column of `Z`, the
+    /// constraint curvature `Zᵀ ∇²(λ·φ) Z` by second differences of the scalar `λ·φ` (no
+    /// differences of differenced Jacobians).
+    fn reduced_stiffness(&self, point: &Point) -> DMatrix<f64> {
+        let z = &point.tangent;
+        let d = z.ncols();
+        let at = |steps: &[(usize, f64)]| -> Vec<f64> {
+            let mut q = point.q.clone();
+            for &(k, h) in steps {
+                for (value, dz) in q.iter_mut().zip(z.column(k).iter()) {
+                    *value += h * dz;
+                }
+            }
+            q
+        };
+        let mut stiffness = DMatrix::zeros(d, d);
+        for k in 0..d {
+            let difference = (self.force(&at(&[(k, FORCE_STEP)]))
+                - self.force(&at(&[(k, -FORCE_STEP)])))
+                / (2.0 * FORCE_STEP);
+            stiffness.set_column(k, &(z.transpose() * difference));
+        }
+        if point.lambda.is_empty() {
+            return stiffness;
+        }
+        let work = |steps: &[(usize, f64)]| point.lambda.dot(&self.residual(&at(steps)));
+        let h = CURVATURE_STEP;
+        let center = work(&[]);
+        for k in 0..d {
+            stiffness[(k, k)] += (work(&[(k, h)]) - 2.0 * center + work(&[(k, -h)])) / (h * h);
+            for j in 0..k {
+                let cross =
+                    (work(&[(j, h), (k, h)]) - work(&[(j, h), (k, -h)]) - work(&[(j, -h), (k, h)])
+                        + work(&[(j, -h), (k, -h)]))
+                        / (4.0 * h * h);
+                stiffness[(j, k)] += cross;
+                stiffness[(k, j)] += cross;
+            }
+        }
+        stiffness
+    }
+}
+
+/// Relative step of the central differences of the fixture outputs (at least this, absolute):
+/// positions are affine in slider coordinates and vary on the scale of a radian in angles,
+/// so the step is large enough to keep round-off (≈ ε·|y|/h) near 1e-13 of the derivative.
+const OUTPUT_STEP: f64 = 1e-5;
+/// Step along a unit tangent direction for the central differences of `F`.
+const FORCE_STEP: f64 = 1e-6;
+/// Step along a unit tangent direction for the second differences of `λ·φ`.
+const CURVATURE_STEP: f64 = 1e-4;
+
+/// A closed configuration with its forces.
+struct Point {
+    q: Vec<f64>,
+    phi: DVector<f64>,
+    /// `F(q, 0, inputs)`.
+    force: DVector<f64>,
+    /// The least-squares (minimum-norm) multipliers: `F + Jᵀλ` as small as it can be.
+    lambda: DVector<f64>,
+    /// `F + Jᵀλ`: the part of `F` the constraints cannot carry, tangent to `φ = 0`.
+    residual: DVector<f64>,
+    /// Orthonormal basis of the null space of `J` (`nq × dof`).
+    tangent: DMatrix<f64>,
+}
+
+/// Orthonormal basis of the null space of `j` (singular values at most `RANK_TOLERANCE·σ₁`
+/// count as zero, as in [`solve_least_squares`]).
+fn null_space(j: &DMatrix<f64>) -> DMatrix<f64> {
+    let nq = j.ncols();
+    // Zero rows up to a square matrix, so that the SVD's Vᵀ spans all of q.
+    let mut padded = DMatrix::zeros(j.nrows().max(nq), nq);
+    padded.rows_mut(0, j.nrows()).copy_from(j);
+    let svd = padded.svd(false, true);
+    let v_t = svd.v_t.expect("requested");
+    let threshold = svd.singular_values.max() * RANK_TOLERANCE;
+    let null: Vec<usize> = (0..nq)
+        .filter(|&i| svd.singular_values[i] <= threshold)
+        .collect();
+    DMatrix::from_fn(nq, null.len(), |r, c| v_t[(null[c], r)])
 }
 
 /// Solves for a static equilibrium near `q` (updated in place).
@@ -181,7 +311,7 @@ pub fn solve_statics<M: Model + ?Sized>(
     first
 }
 
-/// Damped Newton on the KKT system from `q` (see the module docs).
+/// Newton on the reduced equilibrium from `q` (see the module docs).
 fn newton<M: Model + ?Sized>(
     model: &M,
     t: f64,
@@ -200,63 +330,72 @@ fn newton<M: Model + ?Sized>(
         nc: model.nc(),
         nf,
     };
-    let rows = problem.nc + nf;
-    let mut lambda = DVector::zeros(rows);
-    let (mut force, mut phi) = problem.kkt_residual(q, &lambda);
-    let force_scale = force.amax().max(f64::MIN_POSITIVE);
+    let force_scale = problem.force(q).amax().max(f64::MIN_POSITIVE);
+    let tolerance = options.constraint_tolerance;
+    if !problem.close(q, tolerance) {
+        return Err(RuntimeError::InvalidOptions(format!(
+            "the loops and fixtures do not close from the start (|φ| = {:.3e}); start closer \
+             to a configuration that satisfies them",
+            problem.residual(q).amax()
+        )));
+    }
+    let mut point = problem.point(q.to_vec());
     let mut iterations = 0;
-    let converged = |force: &DVector<f64>, phi: &DVector<f64>| {
-        force.amax() <= options.relative_force_tolerance * force_scale
-            && phi.amax() <= options.constraint_tolerance
+    let converged = |point: &Point| {
+        point.residual.amax() <= options.relative_force_tolerance * force_scale
+            && point.phi.amax() <= tolerance
     };
-    while !converged(&force, &phi) {
-        if iterations == options.max_iterations {
+    // Once within tolerance, one more full Newton step: it costs little and, convergence
+    // being quadratic, takes the residual to round-off, so that equilibria reached from
+    // different starts agree to round-off rather than to the tolerance.
+    let mut polished = false;
+    loop {
+        let within = converged(&point);
+        if within && polished {
+            break;
+        }
+        if !within && iterations == options.max_iterations {
             return Err(RuntimeError::InvalidOptions(format!(
                 "no static equilibrium found in {iterations} Newton iterations (|F + Jᵀλ| = {:.3e}, |φ| = {:.3e}); \
                  start closer to one, or check that the loads can be balanced",
-                force.amax(),
-                phi.amax()
+                point.residual.amax(),
+                point.phi.amax()
             )));
         }
         iterations += 1;
-        let kkt = kkt_matrix(&problem, q, &lambda);
-        let scale = constraint_scale(&kkt, problem.nq);
-        let mut residual = DVector::zeros(problem.nq + rows);
-        residual.rows_mut(0, problem.nq).copy_from(&force);
-        residual
-            .rows_mut(problem.nq, rows)
-            .copy_from(&(&phi * scale));
-        // Rows and columns of the constraint block scaled alike (λ = s·μ) keep it symmetric.
-        let mut scaled = kkt.clone();
-        scaled.rows_mut(problem.nq, rows).scale_mut(scale);
-        scaled.columns_mut(problem.nq, rows).scale_mut(scale);
-        let step = solve_least_squares(&scaled, &(-&residual));
-        let merit = |force: &DVector<f64>, phi: &DVector<f64>| force.norm() + scale * phi.norm();
-        let before = merit(&force, &phi);
-        let mut fraction = 1.0;
-        loop {
-            let trial_q: Vec<f64> = q
-                .iter()
-                .zip(step.iter())
-                .map(|(q, d)| q + fraction * d)
-                .collect();
-            let trial_lambda = &lambda + step.rows(problem.nq, rows) * (fraction * scale);
-            let (trial_force, trial_phi) = problem.kkt_residual(&trial_q, &trial_lambda);
-            if merit(&trial_force, &trial_phi) < before || fraction < 1e-4 {
-                q.copy_from_slice(&trial_q);
-                lambda = trial_lambda;
-                (force, phi) = (trial_force, trial_phi);
-                break;
+        let stiffness = problem.reduced_stiffness(&point);
+        let along = solve_least_squares(&stiffness, &(-(point.tangent.transpose() * &point.force)));
+        let step = &point.tangent * along;
+        let before = point.residual.norm();
+        if within {
+            polished = true;
+            if let Some(candidate) = problem.step(&point, &step, tolerance) {
+                if candidate.residual.norm() < before {
+                    point = candidate;
+                }
             }
-            fraction *= 0.5;
+            continue;
         }
+        // Halved until `|F + Jᵀλ|` decreases (after 14 halvings the step is taken anyway).
+        let mut fraction = 1.0;
+        point = loop {
+            let trial = problem.step(&point, &(&step * fraction), tolerance);
+            match trial {
+                Some(candidate) if candidate.residual.norm() < before || fraction < 1e-4 => {
+                    break candidate;
+                }
+                None if fraction < 1e-4 => {
+                    return Err(RuntimeError::InvalidOptions(format!(
+                        "the loops and fixtures do not close after a Newton step (|F + Jᵀλ| = {:.3e})",
+                        point.residual.amax()
+                    )));
+                }
+                _ => fraction *= 0.5,
+            }
+        };
     }
-    // Newton steps may leave λ with a component in the null space of Jᵀ (loads shared by
-    // redundant rows are statically indeterminate); report the minimum-norm multipliers.
-    if rows > 0 {
-        let j = problem.jacobian(q);
-        lambda = solve_least_squares(&j.transpose(), &(-problem.force(q)));
-    }
+    q.copy_from_slice(&point.q);
+    let lambda = &point.lambda;
     let mut fixture_forces = Vec::with_capacity(fixtures.len());
     let mut row = problem.nc;
     for fixture in fixtures {
@@ -273,48 +412,8 @@ fn newton<M: Model + ?Sized>(
         q: q.to_vec(),
         loop_multipliers: lambda.rows(0, problem.nc).iter().copied().collect(),
         fixture_forces,
-        force_residual: force.amax(),
-        constraint_residual: phi.amax(),
+        force_residual: point.residual.amax(),
+        constraint_residual: point.phi.amax(),
         iterations,
     })
-}
-
-/// `[[∂(F + Jᵀλ)/∂q, Jᵀ], [J, 0]]` with the q-derivatives by central differences.
-fn kkt_matrix<M: Model + ?Sized>(
-    problem: &Problem<'_, M>,
-    q: &[f64],
-    lambda: &DVector<f64>,
-) -> DMatrix<f64> {
-    let (nq, rows) = (problem.nq, problem.nc + problem.nf);
-    let mut kkt = DMatrix::zeros(nq + rows, nq + rows);
-    for c in 0..nq {
-        let h = 1e-7 * q[c].abs().max(1e-3);
-        let (mut plus, mut minus) = (q.to_vec(), q.to_vec());
-        plus[c] += h;
-        minus[c] -= h;
-        let (force_plus, _) = problem.kkt_residual(&plus, lambda);
-        let (force_minus, _) = problem.kkt_residual(&minus, lambda);
-        kkt.view_mut((0, c), (nq, 1))
-            .copy_from(&((force_plus - force_minus) / (2.0 * h)));
-    }
-    let j = problem.jacobian(q);
-    kkt.view_mut((0, nq), (nq, rows)).copy_from(&j.transpose());
-    kkt.view_mut((nq, 0), (rows, nq)).copy_from(&j);
-    kkt
-}
-
-/// Ratio of the force block's size to the constraint block's, so both weigh alike in the
-/// least-squares solve (rank decisions are relative to the largest singular value).
-fn constraint_scale(kkt: &DMatrix<f64>, nq: usize) -> f64 {
-    let rows = kkt.nrows() - nq;
-    if rows == 0 {
-        return 1.0;
-    }
-    let stiffness = kkt.view((0, 0), (nq, nq)).amax();
-    let jacobian = kkt.view((nq, 0), (rows, nq)).amax();
-    if stiffness > 0.0 && jacobian > 0.0 {
-        stiffness / jacobian
-    } else {
-        1.0
-    }
 }
