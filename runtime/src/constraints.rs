@@ -95,18 +95,25 @@ pub fn mobility<M: Model + ?Sized>(model: &M, t: f64, q: &[f64]) -> Mobility {
 }
 
 /// Least-squares minimum-norm solution of `A x = b`, treating singular values below
-/// `RANK_TOLERANCE · σ₁` as zero.
+/// `RANK_TOLERANCE · σ₁` as zero, refined by one step of iterative refinement with the same
+/// factorization: nalgebra's SVD reproduces some rank-deficient matrices only to ~1e-8 of
+/// their entries (dimforge/nalgebra#1172; seen on the HAMR-VI loop Jacobian with a fixture
+/// row, where the plain solve left `|A x − b|` at 2e-9 of `|b|` for a consistent system),
+/// and the correction solve takes that to round-off.
 pub fn solve_least_squares(a: &DMatrix<f64>, b: &DVector<f64>) -> DVector<f64> {
     if a.is_empty() {
         return DVector::zeros(a.ncols());
     }
     let svd = a.clone().svd(true, true);
     let largest = svd.singular_values.max();
-    let threshold = largest * RANK_TOLERANCE;
-    match svd.solve(b, threshold.max(f64::MIN_POSITIVE)) {
-        Ok(x) => x,
-        Err(_) => DVector::zeros(a.ncols()),
-    }
+    let threshold = (largest * RANK_TOLERANCE).max(f64::MIN_POSITIVE);
+    let solve = |rhs: &DVector<f64>| {
+        svd.solve(rhs, threshold)
+            .unwrap_or_else(|_| DVector::zeros(a.ncols()))
+    };
+    let x = solve(b);
+    let correction = solve(&(b - a * &x));
+    x + correction
 }
 
 /// Independent coordinates for a model that names none: the coordinates declared first
