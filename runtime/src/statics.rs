@@ -37,6 +37,21 @@ pub struct Fixture {
     pub components: Vec<usize>,
 }
 
+/// A load at a fixture's point in proportion to the fixture's reaction along one of the
+/// components it holds: `ratio` times that reaction, along a component it does not hold (a
+/// force sensor that also pushes sideways, as in the HAMR force tests' ~30 % off-axis load;
+/// friction at a given ratio). The fixture's reaction then acts along `e_held + ratio·e_along`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SideLoad {
+    /// Index of the fixture, in the list passed with the loads.
+    pub fixture: usize,
+    /// The held component whose reaction sets the load (0 = x, 1 = y, 2 = z).
+    pub held: usize,
+    /// The component the load acts along (one the fixture does not hold).
+    pub along: usize,
+    pub ratio: f64,
+}
+
 /// An equilibrium and the forces holding it. Where several rows could carry the same load
 /// (redundant loops, a fixture along a direction the mechanism already holds), the reported
 /// multipliers are the minimum-norm ones.
@@ -45,10 +60,11 @@ pub struct Equilibrium {
     pub q: Vec<f64>,
     /// Multipliers of the model's loop rows (generalized constraint force `Jᵀλ`).
     pub loop_multipliers: Vec<f64>,
-    /// Per fixture, the force it exerts on the model at the point, Newtonian components
-    /// (zero for components it does not hold).
+    /// Per fixture, the force it exerts on the model at the point, side loads included,
+    /// Newtonian components (zero for components it neither holds nor loads).
     pub fixture_forces: Vec<[f64; 3]>,
-    /// `max |F + Jᵀλ|` at the solution (model units).
+    /// `max |F + Jᵀλ|` at the solution (model units; with side loads, `Jᵀ` has each loaded
+    /// fixture row's reaction direction).
     pub force_residual: f64,
     /// `max |φ|` at the solution, fixtures included.
     pub constraint_residual: f64,
@@ -84,25 +100,43 @@ struct Problem<'a, M: Model + ?Sized> {
     nq: usize,
     nc: usize,
     nf: usize,
+    /// Per fixture row, its side loads: (the component they act along, ratio).
+    sides: Vec<Vec<(usize, f64)>>,
 }
 
 impl<M: Model + ?Sized> Problem<'_, M> {
     /// `φ` of the loops and fixtures.
     fn residual(&self, q: &[f64]) -> DVector<f64> {
+        self.rows(q, false)
+    }
+
+    /// `φ`, or with `sides` the functions whose gradients are the reaction directions: each
+    /// fixture row plus its side loads' `ratio·y_along`.
+    fn rows(&self, q: &[f64], sides: bool) -> DVector<f64> {
         let mut phi = DVector::zeros(self.nc + self.nf);
         self.model
             .constraints(self.t, q, &mut phi.as_mut_slice()[..self.nc]);
-        let mut row = self.nc;
         if self.nf > 0 {
             let y = self.outputs(q);
-            for fixture in self.fixtures {
-                for &c in &fixture.components {
-                    phi[row] = y[fixture.outputs[c]] - fixture.target[c];
-                    row += 1;
-                }
-            }
+            self.fixture_rows(&y, sides, &mut phi.as_mut_slice()[self.nc..]);
         }
         phi
+    }
+
+    /// The fixture rows of [`rows`](Self::rows) from the outputs `y`.
+    fn fixture_rows(&self, y: &[f64], sides: bool, out: &mut [f64]) {
+        let mut row = 0;
+        for fixture in self.fixtures {
+            for &c in &fixture.components {
+                out[row] = y[fixture.outputs[c]] - fixture.target[c];
+                if sides {
+                    for &(along, ratio) in &self.sides[row] {
+                        out[row] += ratio * y[fixture.outputs[along]];
+                    }
+                }
+                row += 1;
+            }
+        }
     }
 
     fn outputs(&self, q: &[f64]) -> Vec<f64> {
@@ -112,26 +146,41 @@ impl<M: Model + ?Sized> Problem<'_, M> {
         y
     }
 
-    /// `J` of loops (analytic) and fixtures (central differences of the outputs).
-    fn jacobian(&self, q: &[f64]) -> DMatrix<f64> {
-        let mut j = DMatrix::zeros(self.nc + self.nf, self.nq);
+    fn has_side_loads(&self) -> bool {
+        self.sides.iter().any(|s| !s.is_empty())
+    }
+
+    /// `J` of loops (analytic) and fixtures (central differences of the outputs), and with
+    /// `reactions` and side loads, the reaction directions `G` (`J` with the loaded fixture
+    /// rows tilted).
+    fn jacobians(&self, q: &[f64], reactions: bool) -> (DMatrix<f64>, Option<DMatrix<f64>>) {
+        let rows = self.nc + self.nf;
+        let mut j = DMatrix::zeros(rows, self.nq);
         let mut loops = DMatrix::zeros(self.nc, self.nq);
         self.model
             .constraint_jacobian(self.t, q, loops.as_mut_slice());
         j.rows_mut(0, self.nc).copy_from(&loops);
+        let mut g = (reactions && self.has_side_loads()).then(|| j.clone());
         if self.nf > 0 {
+            let (mut a, mut b) = (vec![0.0; self.nf], vec![0.0; self.nf]);
             for c in 0..self.nq {
                 let h = OUTPUT_STEP * q[c].abs().max(1.0);
                 let (mut plus, mut minus) = (q.to_vec(), q.to_vec());
                 plus[c] += h;
                 minus[c] -= h;
-                let (a, b) = (self.residual(&plus), self.residual(&minus));
-                for r in self.nc..self.nc + self.nf {
-                    j[(r, c)] = (a[r] - b[r]) / (2.0 * h);
+                let (y_plus, y_minus) = (self.outputs(&plus), self.outputs(&minus));
+                for (matrix, sides) in [(Some(&mut j), false), (g.as_mut(), true)] {
+                    if let Some(matrix) = matrix {
+                        self.fixture_rows(&y_plus, sides, &mut a);
+                        self.fixture_rows(&y_minus, sides, &mut b);
+                        for r in 0..self.nf {
+                            matrix[(self.nc + r, c)] = (a[r] - b[r]) / (2.0 * h);
+                        }
+                    }
                 }
             }
         }
-        j
+        (j, g)
     }
 
     /// `F(q, 0, inputs)`.
@@ -156,7 +205,13 @@ impl<M: Model + ?Sized> Problem<'_, M> {
             tolerance: tolerance * 1e-3,
             ..AssemblyOptions::default()
         };
-        match constraints::close(|q| self.residual(q), |q| self.jacobian(q), q, &[], &options) {
+        match constraints::close(
+            |q| self.residual(q),
+            |q| self.jacobians(q, false).0,
+            q,
+            &[],
+            &options,
+        ) {
             Ok(_) => true,
             Err(phi) => phi.amax() <= tolerance,
         }
@@ -176,13 +231,23 @@ impl<M: Model + ?Sized> Problem<'_, M> {
     /// The equilibrium equations at `q`.
     fn point(&self, q: Vec<f64>) -> Point {
         let phi = self.residual(&q);
-        let j = self.jacobian(&q);
+        let (j, g) = self.jacobians(&q, true);
         let force = self.force(&q);
-        let lambda = solve_least_squares(&j.transpose(), &(-&force));
         let tangent = null_space(&j);
-        let residual = &tangent * (tangent.transpose() * &force);
+        let (lambda, balance) = match &g {
+            None => (
+                solve_least_squares(&j.transpose(), &(-&force)),
+                tangent.clone(),
+            ),
+            Some(g) => (
+                solve_least_squares(&g.transpose(), &(-&force)),
+                null_space(g),
+            ),
+        };
+        let residual = &balance * (balance.transpose() * &force);
         Point {
             tangent,
+            balance,
             q,
             phi,
             force,
@@ -191,44 +256,50 @@ impl<M: Model + ?Sized> Problem<'_, M> {
         }
     }
 
-    /// `Zᵀ ∂(F + Jᵀλ)/∂q Z` at `point` with `λ` held, `Z` its tangent basis: the stiffness of
-    /// the reduced equilibrium. `F` by central differences along each column of `Z`, the
-    /// constraint curvature `Zᵀ ∇²(λ·φ) Z` by second differences of the scalar `λ·φ` (no
-    /// differences of differenced Jacobians).
+    /// `Wᵀ ∂(F + Gᵀλ)/∂q Z` at `point` with `λ` held (`Z` its tangent basis, `W` the
+    /// directions its reactions `G` cannot balance; `W = Z`, `G = J` without side loads):
+    /// the stiffness of the reduced equilibrium. `F` by central differences along each
+    /// column of `Z`; the curvature term `Wᵀ ∇²(λ·g) Z` (`g` the rows whose gradients are
+    /// `G`: the constraints' curvature) by mixed second differences of the scalar `λ·g`, so no
+    /// differences of differenced fixture Jacobians.
     fn reduced_stiffness(&self, point: &Point) -> DMatrix<f64> {
-        let z = &point.tangent;
-        let d = z.ncols();
-        let at = |steps: &[(usize, f64)]| -> Vec<f64> {
+        let (z, w) = (&point.tangent, &point.balance);
+        let shifted = |steps: &[(&DMatrix<f64>, usize, f64)]| -> Vec<f64> {
             let mut q = point.q.clone();
-            for &(k, h) in steps {
-                for (value, dz) in q.iter_mut().zip(z.column(k).iter()) {
-                    *value += h * dz;
+            for &(basis, k, h) in steps {
+                for (value, d) in q.iter_mut().zip(basis.column(k).iter()) {
+                    *value += h * d;
                 }
             }
             q
         };
-        let mut stiffness = DMatrix::zeros(d, d);
-        for k in 0..d {
-            let difference = (self.force(&at(&[(k, FORCE_STEP)]))
-                - self.force(&at(&[(k, -FORCE_STEP)])))
+        let mut stiffness = DMatrix::zeros(w.ncols(), z.ncols());
+        for k in 0..z.ncols() {
+            let difference = (self.force(&shifted(&[(z, k, FORCE_STEP)]))
+                - self.force(&shifted(&[(z, k, -FORCE_STEP)])))
                 / (2.0 * FORCE_STEP);
-            stiffness.set_column(k, &(z.transpose() * difference));
+            stiffness.set_column(k, &(w.transpose() * difference));
         }
         if point.lambda.is_empty() {
             return stiffness;
         }
-        let work = |steps: &[(usize, f64)]| point.lambda.dot(&self.residual(&at(steps)));
+        let sides = self.has_side_loads();
+        let work = |i: usize, a: f64, k: usize, b: f64| {
+            let q = shifted(&[(w, i, a), (z, k, b)]);
+            point.lambda.dot(&self.rows(&q, sides))
+        };
         let h = CURVATURE_STEP;
-        let center = work(&[]);
-        for k in 0..d {
-            stiffness[(k, k)] += (work(&[(k, h)]) - 2.0 * center + work(&[(k, -h)])) / (h * h);
-            for j in 0..k {
-                let cross =
-                    (work(&[(j, h), (k, h)]) - work(&[(j, h), (k, -h)]) - work(&[(j, -h), (k, h)])
-                        + work(&[(j, -h), (k, -h)]))
-                        / (4.0 * h * h);
-                stiffness[(j, k)] += cross;
-                stiffness[(k, j)] += cross;
+        for i in 0..w.ncols() {
+            // Without side loads the term is symmetric (W = Z): the upper triangle suffices.
+            let first = if sides { 0 } else { i };
+            for k in first..z.ncols() {
+                let curvature = (work(i, h, k, h) - work(i, h, k, -h) - work(i, -h, k, h)
+                    + work(i, -h, k, -h))
+                    / (4.0 * h * h);
+                stiffness[(i, k)] += curvature;
+                if !sides && k != i {
+                    stiffness[(k, i)] += curvature;
+                }
             }
         }
         stiffness
@@ -252,10 +323,14 @@ struct Point {
     force: DVector<f64>,
     /// The least-squares (minimum-norm) multipliers: `F + Jᵀλ` as small as it can be.
     lambda: DVector<f64>,
-    /// `F + Jᵀλ`: the part of `F` the constraints cannot carry, tangent to `φ = 0`.
+    /// `F + Jᵀλ = W WᵀF`: the part of `F` the constraints cannot carry.
     residual: DVector<f64>,
-    /// Orthonormal basis of the null space of `J` (`nq × dof`).
+    /// `Z`: orthonormal basis of the null space of `J` (`nq × dof`), the directions the
+    /// configuration may move in.
     tangent: DMatrix<f64>,
+    /// `W`: orthonormal basis of the null space of the reaction directions `G` (`Z` itself
+    /// without side loads), the directions of the force the reactions cannot balance.
+    balance: DMatrix<f64>,
 }
 
 /// Orthonormal basis of the null space of `j` (singular values at most `RANK_TOLERANCE·σ₁`
@@ -287,8 +362,25 @@ pub fn solve_statics<M: Model + ?Sized>(
     fixtures: &[Fixture],
     options: &StaticsOptions,
 ) -> Result<Equilibrium, RuntimeError> {
+    solve_statics_with_loads(model, t, q, inputs, fixtures, &[], options)
+}
+
+/// [`solve_statics`] with side loads on the fixtures.
+pub fn solve_statics_with_loads<M: Model + ?Sized>(
+    model: &M,
+    t: f64,
+    q: &mut [f64],
+    inputs: &[f64],
+    fixtures: &[Fixture],
+    loads: &[SideLoad],
+    options: &StaticsOptions,
+) -> Result<Equilibrium, RuntimeError> {
     let start = q.to_vec();
-    let first = newton(model, t, q, inputs, fixtures, options);
+    let first = newton(
+        &Problem::new(model, t, inputs, fixtures, loads)?,
+        q,
+        options,
+    );
     if first.is_ok() || inputs.iter().all(|&x| x == 0.0) {
         return first;
     }
@@ -298,7 +390,11 @@ pub fn solve_statics<M: Model + ?Sized>(
         for k in 1..=steps {
             let fraction = k as f64 / steps as f64;
             let ramped: Vec<f64> = inputs.iter().map(|x| x * fraction).collect();
-            result = newton(model, t, q, &ramped, fixtures, options);
+            result = newton(
+                &Problem::new(model, t, &ramped, fixtures, loads)?,
+                q,
+                options,
+            );
             if result.is_err() {
                 break;
             }
@@ -311,25 +407,59 @@ pub fn solve_statics<M: Model + ?Sized>(
     first
 }
 
+impl<'a, M: Model + ?Sized> Problem<'a, M> {
+    fn new(
+        model: &'a M,
+        t: f64,
+        inputs: &'a [f64],
+        fixtures: &'a [Fixture],
+        loads: &[SideLoad],
+    ) -> Result<Self, RuntimeError> {
+        let mut sides = Vec::new();
+        for (index, fixture) in fixtures.iter().enumerate() {
+            for &c in &fixture.components {
+                sides.push(
+                    loads
+                        .iter()
+                        .filter(|load| load.fixture == index && load.held == c)
+                        .map(|load| (load.along, load.ratio))
+                        .collect(),
+                );
+            }
+        }
+        for load in loads {
+            let valid = fixtures.get(load.fixture).is_some_and(|fixture| {
+                fixture.components.contains(&load.held)
+                    && load.along < 3
+                    && !fixture.components.contains(&load.along)
+            });
+            if !valid {
+                return Err(RuntimeError::InvalidOptions(format!(
+                    "side load {load:?}: it needs a fixture that holds component {} and not \
+                     component {} (0 = x, 1 = y, 2 = z)",
+                    load.held, load.along
+                )));
+            }
+        }
+        Ok(Problem {
+            model,
+            t,
+            inputs,
+            fixtures,
+            nq: model.nq(),
+            nc: model.nc(),
+            nf: sides.len(),
+            sides,
+        })
+    }
+}
+
 /// Newton on the reduced equilibrium from `q` (see the module docs).
 fn newton<M: Model + ?Sized>(
-    model: &M,
-    t: f64,
+    problem: &Problem<'_, M>,
     q: &mut [f64],
-    inputs: &[f64],
-    fixtures: &[Fixture],
     options: &StaticsOptions,
 ) -> Result<Equilibrium, RuntimeError> {
-    let nf = fixtures.iter().map(|f| f.components.len()).sum();
-    let problem = Problem {
-        model,
-        t,
-        inputs,
-        fixtures,
-        nq: model.nq(),
-        nc: model.nc(),
-        nf,
-    };
     let force_scale = problem.force(q).amax().max(f64::MIN_POSITIVE);
     let tolerance = options.constraint_tolerance;
     if !problem.close(q, tolerance) {
@@ -364,7 +494,8 @@ fn newton<M: Model + ?Sized>(
         }
         iterations += 1;
         let stiffness = problem.reduced_stiffness(&point);
-        let along = solve_least_squares(&stiffness, &(-(point.tangent.transpose() * &point.force)));
+        let unbalanced = point.balance.transpose() * &point.force;
+        let along = solve_least_squares(&stiffness, &(-unbalanced));
         let step = &point.tangent * along;
         let before = point.residual.norm();
         if within {
@@ -396,14 +527,17 @@ fn newton<M: Model + ?Sized>(
     }
     q.copy_from_slice(&point.q);
     let lambda = &point.lambda;
-    let mut fixture_forces = Vec::with_capacity(fixtures.len());
+    let mut fixture_forces = Vec::with_capacity(problem.fixtures.len());
     let mut row = problem.nc;
-    for fixture in fixtures {
+    for fixture in problem.fixtures {
         // The fixture row is φ = y − target, so its generalized force Jᵀλ is the force λ
-        // applied at the point along that component.
+        // applied at the point along that component (and `ratio·λ` along a side load's).
         let mut force_on_model = [0.0; 3];
         for &c in &fixture.components {
             force_on_model[c] = lambda[row];
+            for &(along, ratio) in &problem.sides[row - problem.nc] {
+                force_on_model[along] += ratio * lambda[row];
+            }
             row += 1;
         }
         fixture_forces.push(force_on_model);
