@@ -2,9 +2,9 @@
 //! model point held at a given place, e.g. a foot pressed against a force sensor), with the
 //! reactions they carry.
 //!
-//! Consumes: a [`Model`], inputs, a starting configuration and optional [`Fixture`]s.
-//! Produces: an [`Equilibrium`]: `q`, the loop multipliers `λ` and the force each fixture
-//! exerts on the model.
+//! Consumes: a [`Model`], inputs, a starting configuration, optional [`Fixture`]s and
+//! [`SideLoad`]s on them. Produces: an [`Equilibrium`]: `q`, the loop multipliers `λ` and the
+//! force each fixture exerts on the model.
 //!
 //! Method: Newton on the reduced equilibrium, in the tangent space of `φ = 0` (loops and
 //! fixtures together). Every iterate satisfies `φ = 0`; there the least-squares multipliers
@@ -13,13 +13,16 @@
 //! step `Δq = Z Δz` solves `Zᵀ ∂(F + Jᵀλ)/∂q Z Δz = −Zᵀ F` with `λ` held, so the curvature
 //! of the constraints (`λ·∇²φ`) is part of the stiffness; the loops and fixtures are then
 //! closed again ([`constraints::close`], minimum-norm Gauss–Newton), and the step is halved
-//! until `|F + Jᵀλ|` decreases. Convergence is quadratic.
+//! until `|F + Jᵀλ|` decreases. Convergence is quadratic; once within tolerance, one more step
+//! takes the residuals to round-off. With side loads the reactions act along `G ≠ J` and the
+//! tangent force is replaced by the part of `F` in the null space of `G`.
 //!
 //! Why closing after each step: a tangent step leaves a curved constraint manifold by
 //! O(|Δq|²). Newton on the full KKT system in `(q, λ)` must weigh that error against the
 //! force residual in its line search, and on soft mechanisms (flexures of ~1e-4 N·m/rad
-//! against ~1 kN/m actuators) it rejected nearly every full step (the Maratos effect): the
-//! HAMR leg with both actuators driven took 20–50 iterations of 1/32 steps.
+//! against ~1 kN/m actuators) it rejected nearly every full step (the Maratos effect): with
+//! both HAMR-VI actuators driven it stalled at ~1/32 steps and needed load continuation,
+//! 138–229 iterations and 20–36 ms per equilibrium, against 4 iterations and ~0.2 ms now.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -102,6 +105,53 @@ struct Problem<'a, M: Model + ?Sized> {
     nf: usize,
     /// Per fixture row, its side loads: (the component they act along, ratio).
     sides: Vec<Vec<(usize, f64)>>,
+}
+
+impl<'a, M: Model + ?Sized> Problem<'a, M> {
+    fn new(
+        model: &'a M,
+        t: f64,
+        inputs: &'a [f64],
+        fixtures: &'a [Fixture],
+        loads: &[SideLoad],
+    ) -> Result<Self, RuntimeError> {
+        let mut sides = Vec::new();
+        for (index, fixture) in fixtures.iter().enumerate() {
+            for &c in &fixture.components {
+                sides.push(
+                    loads
+                        .iter()
+                        .filter(|load| load.fixture == index && load.held == c)
+                        .map(|load| (load.along, load.ratio))
+                        .collect(),
+                );
+            }
+        }
+        for load in loads {
+            let valid = fixtures.get(load.fixture).is_some_and(|fixture| {
+                fixture.components.contains(&load.held)
+                    && load.along < 3
+                    && !fixture.components.contains(&load.along)
+            });
+            if !valid {
+                return Err(RuntimeError::InvalidOptions(format!(
+                    "side load {load:?}: it needs a fixture that holds component {} and not \
+                     component {} (0 = x, 1 = y, 2 = z)",
+                    load.held, load.along
+                )));
+            }
+        }
+        Ok(Problem {
+            model,
+            t,
+            inputs,
+            fixtures,
+            nq: model.nq(),
+            nc: model.nc(),
+            nf: sides.len(),
+            sides,
+        })
+    }
 }
 
 impl<M: Model + ?Sized> Problem<'_, M> {
@@ -405,53 +455,6 @@ pub fn solve_statics_with_loads<M: Model + ?Sized>(
     }
     q.copy_from_slice(&start);
     first
-}
-
-impl<'a, M: Model + ?Sized> Problem<'a, M> {
-    fn new(
-        model: &'a M,
-        t: f64,
-        inputs: &'a [f64],
-        fixtures: &'a [Fixture],
-        loads: &[SideLoad],
-    ) -> Result<Self, RuntimeError> {
-        let mut sides = Vec::new();
-        for (index, fixture) in fixtures.iter().enumerate() {
-            for &c in &fixture.components {
-                sides.push(
-                    loads
-                        .iter()
-                        .filter(|load| load.fixture == index && load.held == c)
-                        .map(|load| (load.along, load.ratio))
-                        .collect(),
-                );
-            }
-        }
-        for load in loads {
-            let valid = fixtures.get(load.fixture).is_some_and(|fixture| {
-                fixture.components.contains(&load.held)
-                    && load.along < 3
-                    && !fixture.components.contains(&load.along)
-            });
-            if !valid {
-                return Err(RuntimeError::InvalidOptions(format!(
-                    "side load {load:?}: it needs a fixture that holds component {} and not \
-                     component {} (0 = x, 1 = y, 2 = z)",
-                    load.held, load.along
-                )));
-            }
-        }
-        Ok(Problem {
-            model,
-            t,
-            inputs,
-            fixtures,
-            nq: model.nq(),
-            nc: model.nc(),
-            nf: sides.len(),
-            sides,
-        })
-    }
 }
 
 /// Newton on the reduced equilibrium from `q` (see the module docs).
