@@ -19,6 +19,7 @@
 #      paired rounds on the four-bar, SymPy + SciPy and `mech-bench --loops-only` alternating,
 #      for the loop targets;
 #   5d. the HAMR leg: `cargo run --release --example hamr_performance` (a Markdown table);
+#   5e. the HAMR leg's statics: `cargo run --release --example statics_timing` (Markdown tables);
 #   6. bench/summarize.py: docs/benchmarks.md.
 # ../shared/peers is only read: every result goes to bench/results/ (JSON lines), and every
 # command run is logged in bench/results/commands.txt.
@@ -163,6 +164,11 @@ rm -f $R/paired_mech_round.jsonl
 echo "== 5d. HAMR leg" >&2
 load hamr
 run cargo run --release -q --example hamr_performance > $R/hamr.md || failed hamr_performance 0 $? >> $R/hamr.md
+
+# Static equilibria of the HAMR leg: one or both actuators, free, foot held, side load.
+echo "== 5e. HAMR statics" >&2
+load statics
+run cargo run --release -q --example statics_timing > $R/statics.md || failed statics_timing 0 $? >> $R/statics.md
 load end
 
 if [ "${SKIP_SUMMARY:-0}" != 1 ]; then

@@ -492,6 +492,7 @@ def main():
     w('')
     L.extend(loop_sections(loops, paired_loops, sympy_loops, paired_sympy_fourbar, loop_targets))
     L.extend(hamr_section(R))
+    L.extend(statics_section(R))
     with open(a.out, 'w') as f:
         f.write('\n'.join(L).rstrip('\n') + '\n')
     print(f'wrote {a.out}')
@@ -828,6 +829,35 @@ def hamr_section(R):
         L.extend(line.rstrip('\n') for line in f if line.startswith('|'))
     L.append('')
     path = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'analysis_hamr.md')
+    if os.path.exists(path):
+        with open(path) as f:
+            L.append(re.sub(r'<!--.*?-->\s*', '', f.read(), flags=re.S).rstrip('\n'))
+    return L
+
+
+def statics_section(R):
+    """Section 10: static equilibria of the HAMR leg (`examples/statics_timing.rs`, its Markdown
+    tables as printed) and the hand-written interpretation in bench/analysis_statics.md."""
+    L = ['', '## 10. Static equilibria of the HAMR leg', '']
+    table = os.path.join(R, 'statics.md')
+    if not os.path.exists(table):
+        L.append('Not measured in this run (`bench/results/statics.md` missing).')
+        return L
+    L.append('`cargo run --release --example statics_timing` (run by `bench/run.sh` after the HAMR '
+             'leg): one static equilibrium of HAMR-VI from its rest position (`solve_statics`, '
+             'tape model, as `mech diagnose` and the experiments use it), with one or both '
+             'actuators at ±112.5 V, free, with the foot held along z or x, and held along z with '
+             'a 30 % side load along y; then the force/deflection experiment\'s sensor sweep. '
+             'Fastest of 5 runs per case.')
+    with open(table) as f:
+        lines = [line.rstrip('\n') for line in f]
+    for line in lines:
+        if line.startswith('|'):
+            if not L[-1].startswith('|'):
+                L.append('')
+            L.append(line)
+    L.append('')
+    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'analysis_statics.md')
     if os.path.exists(path):
         with open(path) as f:
             L.append(re.sub(r'<!--.*?-->\s*', '', f.read(), flags=re.S).rstrip('\n'))

@@ -95,18 +95,25 @@ pub fn mobility<M: Model + ?Sized>(model: &M, t: f64, q: &[f64]) -> Mobility {
 }
 
 /// Least-squares minimum-norm solution of `A x = b`, treating singular values below
-/// `RANK_TOLERANCE · σ₁` as zero.
+/// `RANK_TOLERANCE · σ₁` as zero, refined by one step of iterative refinement with the same
+/// factorization: nalgebra's SVD reproduces some rank-deficient matrices only to ~1e-8 of
+/// their entries (dimforge/nalgebra#1172; seen on the HAMR-VI loop Jacobian with a fixture
+/// row, where the plain solve left `|A x − b|` at 2e-9 of `|b|` for a consistent system),
+/// and the correction solve takes that to round-off.
 pub fn solve_least_squares(a: &DMatrix<f64>, b: &DVector<f64>) -> DVector<f64> {
     if a.is_empty() {
         return DVector::zeros(a.ncols());
     }
     let svd = a.clone().svd(true, true);
     let largest = svd.singular_values.max();
-    let threshold = largest * RANK_TOLERANCE;
-    match svd.solve(b, threshold.max(f64::MIN_POSITIVE)) {
-        Ok(x) => x,
-        Err(_) => DVector::zeros(a.ncols()),
-    }
+    let threshold = (largest * RANK_TOLERANCE).max(f64::MIN_POSITIVE);
+    let solve = |rhs: &DVector<f64>| {
+        svd.solve(rhs, threshold)
+            .unwrap_or_else(|_| DVector::zeros(a.ncols()))
+    };
+    let x = solve(b);
+    let correction = solve(&(b - a * &x));
+    x + correction
 }
 
 /// Independent coordinates for a model that names none: the coordinates declared first
@@ -168,13 +175,32 @@ pub fn assemble<M: Model + ?Sized>(
     fixed: &[usize],
     options: &AssemblyOptions,
 ) -> Result<usize, RuntimeError> {
-    let free: Vec<usize> = (0..model.nq()).filter(|c| !fixed.contains(c)).collect();
-    let mut phi = residual(model, t, q);
+    close(
+        |q| residual(model, t, q),
+        |q| jacobian(model, t, q),
+        q,
+        fixed,
+        options,
+    )
+    .map_err(|phi| assembly_error(model, &phi))
+}
+
+/// [`assemble`] for any residual `φ(q)` and its Jacobian (e.g. loops and fixtures together,
+/// in the statics): returns the iterations taken, or the `φ` it stopped at.
+pub fn close(
+    residual: impl Fn(&[f64]) -> DVector<f64>,
+    jacobian: impl Fn(&[f64]) -> DMatrix<f64>,
+    q: &mut [f64],
+    fixed: &[usize],
+    options: &AssemblyOptions,
+) -> Result<usize, DVector<f64>> {
+    let free: Vec<usize> = (0..q.len()).filter(|c| !fixed.contains(c)).collect();
+    let mut phi = residual(q);
     for iteration in 0..options.max_iterations {
         if phi.amax() <= options.tolerance {
             return Ok(iteration);
         }
-        let j = jacobian(model, t, q);
+        let j = jacobian(q);
         let j_free = j.select_columns(&free);
         let step = solve_least_squares(&j_free, &(-&phi));
         let mut scale = 1.0;
@@ -184,7 +210,7 @@ pub fn assemble<M: Model + ?Sized>(
             for (k, &c) in free.iter().enumerate() {
                 trial[c] = q[c] + scale * step[k];
             }
-            let trial_phi = residual(model, t, &trial);
+            let trial_phi = residual(&trial);
             if trial_phi.norm() < before || scale < 1e-6 {
                 q.copy_from_slice(&trial);
                 phi = trial_phi;
@@ -199,7 +225,7 @@ pub fn assemble<M: Model + ?Sized>(
     if phi.amax() <= options.tolerance {
         return Ok(options.max_iterations);
     }
-    Err(assembly_error(model, &phi))
+    Err(phi)
 }
 
 fn assembly_error<M: Model + ?Sized>(model: &M, phi: &DVector<f64>) -> RuntimeError {

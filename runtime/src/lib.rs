@@ -33,7 +33,9 @@ pub use signal::{Signal, Table};
 pub use simulate::{
     accelerations, default_signals, simulate, Method, ModelOde, SimOptions, Trajectory,
 };
-pub use statics::{solve_statics, Equilibrium, Fixture, StaticsOptions};
+pub use statics::{
+    solve_statics, solve_statics_with_loads, Equilibrium, Fixture, SideLoad, StaticsOptions,
+};
 
 /// Includes the Rust code generated for a model by the build script: expands to
 /// `include!(concat!(env!("OUT_DIR"), "/", $name, ".rs"));`.

@@ -2,18 +2,31 @@
 //! model point held at a given place, e.g. a foot pressed against a force sensor), with the
 //! reactions they carry.
 //!
-//! Consumes: a [`Model`], inputs, a starting configuration and optional [`Fixture`]s.
-//! Produces: an [`Equilibrium`]: `q`, the loop multipliers `λ` and the force each fixture
-//! exerts on the model.
+//! Consumes: a [`Model`], inputs, a starting configuration, optional [`Fixture`]s and
+//! [`SideLoad`]s on them. Produces: an [`Equilibrium`]: `q`, the loop multipliers `λ` and the
+//! force each fixture exerts on the model.
 //!
-//! Method: damped Newton on the KKT system `R(q, λ) = [F + Jᵀλ; s·φ] = 0`, whose Jacobian
-//! `[[∂(F + Jᵀλ)/∂q, Jᵀ], [s·J, 0]]` is formed by central differences in `q` and solved
-//! by rank-revealing least squares, so redundant loop rows are harmless. The constraint
-//! rows and the multipliers are scaled by `s` (`λ = s·μ`) so both blocks weigh alike.
+//! Method: Newton on the reduced equilibrium, in the tangent space of `φ = 0` (loops and
+//! fixtures together). Every iterate satisfies `φ = 0`; there the least-squares multipliers
+//! leave `F + Jᵀλ = Z Zᵀ F`, the part of `F` tangent to the constraints (`Z` an orthonormal
+//! basis of the null space of `J`, from its SVD, so redundant loop rows are harmless). The
+//! step `Δq = Z Δz` solves `Zᵀ ∂(F + Jᵀλ)/∂q Z Δz = −Zᵀ F` with `λ` held, so the curvature
+//! of the constraints (`λ·∇²φ`) is part of the stiffness; the loops and fixtures are then
+//! closed again ([`constraints::close`], minimum-norm Gauss–Newton), and the step is halved
+//! until `|F + Jᵀλ|` decreases. Convergence is quadratic; once within tolerance, one more step
+//! takes the residuals to round-off. With side loads the reactions act along `G ≠ J` and the
+//! tangent force is replaced by the part of `F` in the null space of `G`.
+//!
+//! Why closing after each step: a tangent step leaves a curved constraint manifold by
+//! O(|Δq|²). Newton on the full KKT system in `(q, λ)` must weigh that error against the
+//! force residual in its line search, and on soft mechanisms (flexures of ~1e-4 N·m/rad
+//! against ~1 kN/m actuators) it rejected nearly every full step (the Maratos effect): with
+//! both HAMR-VI actuators driven it stalled at ~1/32 steps and needed load continuation,
+//! 138–229 iterations and 20–36 ms per equilibrium, against 4 iterations and ~0.2 ms now.
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::constraints::solve_least_squares;
+use crate::constraints::{self, solve_least_squares, AssemblyOptions, RANK_TOLERANCE};
 use crate::{Model, RuntimeError};
 
 /// A point of the model (given by three position outputs, components in the Newtonian frame)
@@ -27,6 +40,21 @@ pub struct Fixture {
     pub components: Vec<usize>,
 }
 
+/// A load at a fixture's point in proportion to the fixture's reaction along one of the
+/// components it holds: `ratio` times that reaction, along a component it does not hold (a
+/// force sensor that also pushes sideways, as in the HAMR force tests' ~30 % off-axis load;
+/// friction at a given ratio). The fixture's reaction then acts along `e_held + ratio·e_along`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SideLoad {
+    /// Index of the fixture, in the list passed with the loads.
+    pub fixture: usize,
+    /// The held component whose reaction sets the load (0 = x, 1 = y, 2 = z).
+    pub held: usize,
+    /// The component the load acts along (one the fixture does not hold).
+    pub along: usize,
+    pub ratio: f64,
+}
+
 /// An equilibrium and the forces holding it. Where several rows could carry the same load
 /// (redundant loops, a fixture along a direction the mechanism already holds), the reported
 /// multipliers are the minimum-norm ones.
@@ -35,10 +63,11 @@ pub struct Equilibrium {
     pub q: Vec<f64>,
     /// Multipliers of the model's loop rows (generalized constraint force `Jᵀλ`).
     pub loop_multipliers: Vec<f64>,
-    /// Per fixture, the force it exerts on the model at the point, Newtonian components
-    /// (zero for components it does not hold).
+    /// Per fixture, the force it exerts on the model at the point, side loads included,
+    /// Newtonian components (zero for components it neither holds nor loads).
     pub fixture_forces: Vec<[f64; 3]>,
-    /// `max |F + Jᵀλ|` at the solution (model units).
+    /// `max |F + Jᵀλ|` at the solution (model units; with side loads, `Jᵀ` has each loaded
+    /// fixture row's reaction direction).
     pub force_residual: f64,
     /// `max |φ|` at the solution, fixtures included.
     pub constraint_residual: f64,
@@ -74,25 +103,90 @@ struct Problem<'a, M: Model + ?Sized> {
     nq: usize,
     nc: usize,
     nf: usize,
+    /// Per fixture row, its side loads: (the component they act along, ratio).
+    sides: Vec<Vec<(usize, f64)>>,
+}
+
+impl<'a, M: Model + ?Sized> Problem<'a, M> {
+    fn new(
+        model: &'a M,
+        t: f64,
+        inputs: &'a [f64],
+        fixtures: &'a [Fixture],
+        loads: &[SideLoad],
+    ) -> Result<Self, RuntimeError> {
+        let mut sides = Vec::new();
+        for (index, fixture) in fixtures.iter().enumerate() {
+            for &c in &fixture.components {
+                sides.push(
+                    loads
+                        .iter()
+                        .filter(|load| load.fixture == index && load.held == c)
+                        .map(|load| (load.along, load.ratio))
+                        .collect(),
+                );
+            }
+        }
+        for load in loads {
+            let valid = fixtures.get(load.fixture).is_some_and(|fixture| {
+                fixture.components.contains(&load.held)
+                    && load.along < 3
+                    && !fixture.components.contains(&load.along)
+            });
+            if !valid {
+                return Err(RuntimeError::InvalidOptions(format!(
+                    "side load {load:?}: it needs a fixture that holds component {} and not \
+                     component {} (0 = x, 1 = y, 2 = z)",
+                    load.held, load.along
+                )));
+            }
+        }
+        Ok(Problem {
+            model,
+            t,
+            inputs,
+            fixtures,
+            nq: model.nq(),
+            nc: model.nc(),
+            nf: sides.len(),
+            sides,
+        })
+    }
 }
 
 impl<M: Model + ?Sized> Problem<'_, M> {
     /// `φ` of the loops and fixtures.
     fn residual(&self, q: &[f64]) -> DVector<f64> {
+        self.rows(q, false)
+    }
+
+    /// `φ`, or with `sides` the functions whose gradients are the reaction directions: each
+    /// fixture row plus its side loads' `ratio·y_along`.
+    fn rows(&self, q: &[f64], sides: bool) -> DVector<f64> {
         let mut phi = DVector::zeros(self.nc + self.nf);
         self.model
             .constraints(self.t, q, &mut phi.as_mut_slice()[..self.nc]);
-        let mut row = self.nc;
         if self.nf > 0 {
             let y = self.outputs(q);
-            for fixture in self.fixtures {
-                for &c in &fixture.components {
-                    phi[row] = y[fixture.outputs[c]] - fixture.target[c];
-                    row += 1;
-                }
-            }
+            self.fixture_rows(&y, sides, &mut phi.as_mut_slice()[self.nc..]);
         }
         phi
+    }
+
+    /// The fixture rows of [`rows`](Self::rows) from the outputs `y`.
+    fn fixture_rows(&self, y: &[f64], sides: bool, out: &mut [f64]) {
+        let mut row = 0;
+        for fixture in self.fixtures {
+            for &c in &fixture.components {
+                out[row] = y[fixture.outputs[c]] - fixture.target[c];
+                if sides {
+                    for &(along, ratio) in &self.sides[row] {
+                        out[row] += ratio * y[fixture.outputs[along]];
+                    }
+                }
+                row += 1;
+            }
+        }
     }
 
     fn outputs(&self, q: &[f64]) -> Vec<f64> {
@@ -102,26 +196,41 @@ impl<M: Model + ?Sized> Problem<'_, M> {
         y
     }
 
-    /// `J` of loops (analytic) and fixtures (central differences of the outputs).
-    fn jacobian(&self, q: &[f64]) -> DMatrix<f64> {
-        let mut j = DMatrix::zeros(self.nc + self.nf, self.nq);
+    fn has_side_loads(&self) -> bool {
+        self.sides.iter().any(|s| !s.is_empty())
+    }
+
+    /// `J` of loops (analytic) and fixtures (central differences of the outputs), and with
+    /// `reactions` and side loads, the reaction directions `G` (`J` with the loaded fixture
+    /// rows tilted).
+    fn jacobians(&self, q: &[f64], reactions: bool) -> (DMatrix<f64>, Option<DMatrix<f64>>) {
+        let rows = self.nc + self.nf;
+        let mut j = DMatrix::zeros(rows, self.nq);
         let mut loops = DMatrix::zeros(self.nc, self.nq);
         self.model
             .constraint_jacobian(self.t, q, loops.as_mut_slice());
         j.rows_mut(0, self.nc).copy_from(&loops);
+        let mut g = (reactions && self.has_side_loads()).then(|| j.clone());
         if self.nf > 0 {
+            let (mut a, mut b) = (vec![0.0; self.nf], vec![0.0; self.nf]);
             for c in 0..self.nq {
-                let h = 1e-7 * q[c].abs().max(1e-3);
+                let h = OUTPUT_STEP * q[c].abs().max(1.0);
                 let (mut plus, mut minus) = (q.to_vec(), q.to_vec());
                 plus[c] += h;
                 minus[c] -= h;
-                let (a, b) = (self.residual(&plus), self.residual(&minus));
-                for r in self.nc..self.nc + self.nf {
-                    j[(r, c)] = (a[r] - b[r]) / (2.0 * h);
+                let (y_plus, y_minus) = (self.outputs(&plus), self.outputs(&minus));
+                for (matrix, sides) in [(Some(&mut j), false), (g.as_mut(), true)] {
+                    if let Some(matrix) = matrix {
+                        self.fixture_rows(&y_plus, sides, &mut a);
+                        self.fixture_rows(&y_minus, sides, &mut b);
+                        for r in 0..self.nf {
+                            matrix[(self.nc + r, c)] = (a[r] - b[r]) / (2.0 * h);
+                        }
+                    }
                 }
             }
         }
-        j
+        (j, g)
     }
 
     /// `F(q, 0, inputs)`.
@@ -137,11 +246,157 @@ impl<M: Model + ?Sized> Problem<'_, M> {
         f
     }
 
-    /// `F + Jᵀλ` and `φ`.
-    fn kkt_residual(&self, q: &[f64], lambda: &DVector<f64>) -> (DVector<f64>, DVector<f64>) {
-        let j = self.jacobian(q);
-        (self.force(q) + j.transpose() * lambda, self.residual(q))
+    /// Closes the loops and fixtures at `q` (in place): minimum-norm Gauss–Newton, as
+    /// [`constraints::close`] does for assembly, to a thousandth of `tolerance` where
+    /// round-off allows (so that equilibria reached from different starts agree to round-off,
+    /// not to the tolerance). False if `|φ|` stays above `tolerance`.
+    fn close(&self, q: &mut [f64], tolerance: f64) -> bool {
+        let options = AssemblyOptions {
+            tolerance: tolerance * 1e-3,
+            ..AssemblyOptions::default()
+        };
+        match constraints::close(
+            |q| self.residual(q),
+            |q| self.jacobians(q, false).0,
+            q,
+            &[],
+            &options,
+        ) {
+            Ok(_) => true,
+            Err(phi) => phi.amax() <= tolerance,
+        }
     }
+
+    /// The closed configuration after `step` from `point`, if the loops and fixtures close.
+    fn step(&self, point: &Point, step: &DVector<f64>, tolerance: f64) -> Option<Point> {
+        let mut q: Vec<f64> = point
+            .q
+            .iter()
+            .zip(step.iter())
+            .map(|(q, d)| q + d)
+            .collect();
+        self.close(&mut q, tolerance).then(|| self.point(q))
+    }
+
+    /// The equilibrium equations at `q`.
+    fn point(&self, q: Vec<f64>) -> Point {
+        let phi = self.residual(&q);
+        let (j, g) = self.jacobians(&q, true);
+        let force = self.force(&q);
+        let tangent = null_space(&j);
+        let (lambda, balance) = match &g {
+            None => (
+                solve_least_squares(&j.transpose(), &(-&force)),
+                tangent.clone(),
+            ),
+            Some(g) => (
+                solve_least_squares(&g.transpose(), &(-&force)),
+                null_space(g),
+            ),
+        };
+        let residual = &balance * (balance.transpose() * &force);
+        Point {
+            tangent,
+            balance,
+            q,
+            phi,
+            force,
+            lambda,
+            residual,
+        }
+    }
+
+    /// `Wᵀ ∂(F + Gᵀλ)/∂q Z` at `point` with `λ` held (`Z` its tangent basis, `W` the
+    /// directions its reactions `G` cannot balance; `W = Z`, `G = J` without side loads):
+    /// the stiffness of the reduced equilibrium. `F` by central differences along each
+    /// column of `Z`; the curvature term `Wᵀ ∇²(λ·g) Z` (`g` the rows whose gradients are
+    /// `G`: the constraints' curvature) by mixed second differences of the scalar `λ·g`, so no
+    /// differences of differenced fixture Jacobians.
+    fn reduced_stiffness(&self, point: &Point) -> DMatrix<f64> {
+        let (z, w) = (&point.tangent, &point.balance);
+        let shifted = |steps: &[(&DMatrix<f64>, usize, f64)]| -> Vec<f64> {
+            let mut q = point.q.clone();
+            for &(basis, k, h) in steps {
+                for (value, d) in q.iter_mut().zip(basis.column(k).iter()) {
+                    *value += h * d;
+                }
+            }
+            q
+        };
+        let mut stiffness = DMatrix::zeros(w.ncols(), z.ncols());
+        for k in 0..z.ncols() {
+            let difference = (self.force(&shifted(&[(z, k, FORCE_STEP)]))
+                - self.force(&shifted(&[(z, k, -FORCE_STEP)])))
+                / (2.0 * FORCE_STEP);
+            stiffness.set_column(k, &(w.transpose() * difference));
+        }
+        if point.lambda.is_empty() {
+            return stiffness;
+        }
+        let sides = self.has_side_loads();
+        let work = |i: usize, a: f64, k: usize, b: f64| {
+            let q = shifted(&[(w, i, a), (z, k, b)]);
+            point.lambda.dot(&self.rows(&q, sides))
+        };
+        let h = CURVATURE_STEP;
+        for i in 0..w.ncols() {
+            // Without side loads the term is symmetric (W = Z): the upper triangle suffices.
+            let first = if sides { 0 } else { i };
+            for k in first..z.ncols() {
+                let curvature = (work(i, h, k, h) - work(i, h, k, -h) - work(i, -h, k, h)
+                    + work(i, -h, k, -h))
+                    / (4.0 * h * h);
+                stiffness[(i, k)] += curvature;
+                if !sides && k != i {
+                    stiffness[(k, i)] += curvature;
+                }
+            }
+        }
+        stiffness
+    }
+}
+
+/// Relative step of the central differences of the fixture outputs (at least this, absolute):
+/// positions are affine in slider coordinates and vary on the scale of a radian in angles,
+/// so the step is large enough to keep round-off (≈ ε·|y|/h) near 1e-13 of the derivative.
+const OUTPUT_STEP: f64 = 1e-5;
+/// Step along a unit tangent direction for the central differences of `F`.
+const FORCE_STEP: f64 = 1e-6;
+/// Step along a unit tangent direction for the second differences of `λ·φ`.
+const CURVATURE_STEP: f64 = 1e-4;
+
+/// A closed configuration with its forces.
+struct Point {
+    q: Vec<f64>,
+    phi: DVector<f64>,
+    /// `F(q, 0, inputs)`.
+    force: DVector<f64>,
+    /// The least-squares (minimum-norm) multipliers: `F + Jᵀλ` as small as it can be.
+    lambda: DVector<f64>,
+    /// `F + Jᵀλ = W WᵀF`: the part of `F` the constraints cannot carry.
+    residual: DVector<f64>,
+    /// `Z`: orthonormal basis of the null space of `J` (`nq × dof`), the directions the
+    /// configuration may move in.
+    tangent: DMatrix<f64>,
+    /// `W`: orthonormal basis of the null space of the reaction directions `G` (`Z` itself
+    /// without side loads), the directions of the force the reactions cannot balance.
+    balance: DMatrix<f64>,
+}
+
+/// Orthonormal basis of the null space of `j` (singular values at most `RANK_TOLERANCE·σ₁`
+/// count as zero, as in [`solve_least_squares`]).
+fn null_space(j: &DMatrix<f64>) -> DMatrix<f64> {
+    let nq = j.ncols();
+    // Zero rows up to a square matrix, so that the SVD's Vᵀ spans all of q.
+    let mut padded = DMatrix::zeros(j.nrows().max(nq), nq);
+    padded.rows_mut(0, j.nrows()).copy_from(j);
+    let svd = padded.svd(false, true);
+    let v_t = svd.v_t.expect("requested");
+    let threshold = svd.singular_values.max() * RANK_TOLERANCE;
+    let null: Vec<usize> = (0..nq)
+        .filter(|&i| svd.singular_values[i] <= threshold)
+        .collect();
+    DMatrix::from_fn(nq, null.len(), |r, c| v_t[(null[c], r)])
 }
 
 /// Solves for a static equilibrium near `q` (updated in place).
@@ -157,8 +412,25 @@ pub fn solve_statics<M: Model + ?Sized>(
     fixtures: &[Fixture],
     options: &StaticsOptions,
 ) -> Result<Equilibrium, RuntimeError> {
+    solve_statics_with_loads(model, t, q, inputs, fixtures, &[], options)
+}
+
+/// [`solve_statics`] with side loads on the fixtures.
+pub fn solve_statics_with_loads<M: Model + ?Sized>(
+    model: &M,
+    t: f64,
+    q: &mut [f64],
+    inputs: &[f64],
+    fixtures: &[Fixture],
+    loads: &[SideLoad],
+    options: &StaticsOptions,
+) -> Result<Equilibrium, RuntimeError> {
     let start = q.to_vec();
-    let first = newton(model, t, q, inputs, fixtures, options);
+    let first = newton(
+        &Problem::new(model, t, inputs, fixtures, loads)?,
+        q,
+        options,
+    );
     if first.is_ok() || inputs.iter().all(|&x| x == 0.0) {
         return first;
     }
@@ -168,7 +440,11 @@ pub fn solve_statics<M: Model + ?Sized>(
         for k in 1..=steps {
             let fraction = k as f64 / steps as f64;
             let ramped: Vec<f64> = inputs.iter().map(|x| x * fraction).collect();
-            result = newton(model, t, q, &ramped, fixtures, options);
+            result = newton(
+                &Problem::new(model, t, &ramped, fixtures, loads)?,
+                q,
+                options,
+            );
             if result.is_err() {
                 break;
             }
@@ -181,90 +457,90 @@ pub fn solve_statics<M: Model + ?Sized>(
     first
 }
 
-/// Damped Newton on the KKT system from `q` (see the module docs).
+/// Newton on the reduced equilibrium from `q` (see the module docs).
 fn newton<M: Model + ?Sized>(
-    model: &M,
-    t: f64,
+    problem: &Problem<'_, M>,
     q: &mut [f64],
-    inputs: &[f64],
-    fixtures: &[Fixture],
     options: &StaticsOptions,
 ) -> Result<Equilibrium, RuntimeError> {
-    let nf = fixtures.iter().map(|f| f.components.len()).sum();
-    let problem = Problem {
-        model,
-        t,
-        inputs,
-        fixtures,
-        nq: model.nq(),
-        nc: model.nc(),
-        nf,
-    };
-    let rows = problem.nc + nf;
-    let mut lambda = DVector::zeros(rows);
-    let (mut force, mut phi) = problem.kkt_residual(q, &lambda);
-    let force_scale = force.amax().max(f64::MIN_POSITIVE);
+    let force_scale = problem.force(q).amax().max(f64::MIN_POSITIVE);
+    let tolerance = options.constraint_tolerance;
+    if !problem.close(q, tolerance) {
+        return Err(RuntimeError::InvalidOptions(format!(
+            "the loops and fixtures do not close from the start (|φ| = {:.3e}); start closer \
+             to a configuration that satisfies them",
+            problem.residual(q).amax()
+        )));
+    }
+    let mut point = problem.point(q.to_vec());
     let mut iterations = 0;
-    let converged = |force: &DVector<f64>, phi: &DVector<f64>| {
-        force.amax() <= options.relative_force_tolerance * force_scale
-            && phi.amax() <= options.constraint_tolerance
+    let converged = |point: &Point| {
+        point.residual.amax() <= options.relative_force_tolerance * force_scale
+            && point.phi.amax() <= tolerance
     };
-    while !converged(&force, &phi) {
-        if iterations == options.max_iterations {
+    // Once within tolerance, one more full Newton step: it costs little and, convergence
+    // being quadratic, takes the residual to round-off, so that equilibria reached from
+    // different starts agree to round-off rather than to the tolerance.
+    let mut polished = false;
+    loop {
+        let within = converged(&point);
+        if within && polished {
+            break;
+        }
+        if !within && iterations == options.max_iterations {
             return Err(RuntimeError::InvalidOptions(format!(
                 "no static equilibrium found in {iterations} Newton iterations (|F + Jᵀλ| = {:.3e}, |φ| = {:.3e}); \
                  start closer to one, or check that the loads can be balanced",
-                force.amax(),
-                phi.amax()
+                point.residual.amax(),
+                point.phi.amax()
             )));
         }
         iterations += 1;
-        let kkt = kkt_matrix(&problem, q, &lambda);
-        let scale = constraint_scale(&kkt, problem.nq);
-        let mut residual = DVector::zeros(problem.nq + rows);
-        residual.rows_mut(0, problem.nq).copy_from(&force);
-        residual
-            .rows_mut(problem.nq, rows)
-            .copy_from(&(&phi * scale));
-        // Rows and columns of the constraint block scaled alike (λ = s·μ) keep it symmetric.
-        let mut scaled = kkt.clone();
-        scaled.rows_mut(problem.nq, rows).scale_mut(scale);
-        scaled.columns_mut(problem.nq, rows).scale_mut(scale);
-        let step = solve_least_squares(&scaled, &(-&residual));
-        let merit = |force: &DVector<f64>, phi: &DVector<f64>| force.norm() + scale * phi.norm();
-        let before = merit(&force, &phi);
-        let mut fraction = 1.0;
-        loop {
-            let trial_q: Vec<f64> = q
-                .iter()
-                .zip(step.iter())
-                .map(|(q, d)| q + fraction * d)
-                .collect();
-            let trial_lambda = &lambda + step.rows(problem.nq, rows) * (fraction * scale);
-            let (trial_force, trial_phi) = problem.kkt_residual(&trial_q, &trial_lambda);
-            if merit(&trial_force, &trial_phi) < before || fraction < 1e-4 {
-                q.copy_from_slice(&trial_q);
-                lambda = trial_lambda;
-                (force, phi) = (trial_force, trial_phi);
-                break;
+        let stiffness = problem.reduced_stiffness(&point);
+        let unbalanced = point.balance.transpose() * &point.force;
+        let along = solve_least_squares(&stiffness, &(-unbalanced));
+        let step = &point.tangent * along;
+        let before = point.residual.norm();
+        if within {
+            polished = true;
+            if let Some(candidate) = problem.step(&point, &step, tolerance) {
+                if candidate.residual.norm() < before {
+                    point = candidate;
+                }
             }
-            fraction *= 0.5;
+            continue;
         }
+        // Halved until `|F + Jᵀλ|` decreases (after 14 halvings the step is taken anyway).
+        let mut fraction = 1.0;
+        point = loop {
+            let trial = problem.step(&point, &(&step * fraction), tolerance);
+            match trial {
+                Some(candidate) if candidate.residual.norm() < before || fraction < 1e-4 => {
+                    break candidate;
+                }
+                None if fraction < 1e-4 => {
+                    return Err(RuntimeError::InvalidOptions(format!(
+                        "the loops and fixtures do not close after a Newton step (|F + Jᵀλ| = {:.3e})",
+                        point.residual.amax()
+                    )));
+                }
+                _ => fraction *= 0.5,
+            }
+        };
     }
-    // Newton steps may leave λ with a component in the null space of Jᵀ (loads shared by
-    // redundant rows are statically indeterminate); report the minimum-norm multipliers.
-    if rows > 0 {
-        let j = problem.jacobian(q);
-        lambda = solve_least_squares(&j.transpose(), &(-problem.force(q)));
-    }
-    let mut fixture_forces = Vec::with_capacity(fixtures.len());
+    q.copy_from_slice(&point.q);
+    let lambda = &point.lambda;
+    let mut fixture_forces = Vec::with_capacity(problem.fixtures.len());
     let mut row = problem.nc;
-    for fixture in fixtures {
+    for fixture in problem.fixtures {
         // The fixture row is φ = y − target, so its generalized force Jᵀλ is the force λ
-        // applied at the point along that component.
+        // applied at the point along that component (and `ratio·λ` along a side load's).
         let mut force_on_model = [0.0; 3];
         for &c in &fixture.components {
             force_on_model[c] = lambda[row];
+            for &(along, ratio) in &problem.sides[row - problem.nc] {
+                force_on_model[along] += ratio * lambda[row];
+            }
             row += 1;
         }
         fixture_forces.push(force_on_model);
@@ -273,48 +549,8 @@ fn newton<M: Model + ?Sized>(
         q: q.to_vec(),
         loop_multipliers: lambda.rows(0, problem.nc).iter().copied().collect(),
         fixture_forces,
-        force_residual: force.amax(),
-        constraint_residual: phi.amax(),
+        force_residual: point.residual.amax(),
+        constraint_residual: point.phi.amax(),
         iterations,
     })
-}
-
-/// `[[∂(F + Jᵀλ)/∂q, Jᵀ], [J, 0]]` with the q-derivatives by central differences.
-fn kkt_matrix<M: Model + ?Sized>(
-    problem: &Problem<'_, M>,
-    q: &[f64],
-    lambda: &DVector<f64>,
-) -> DMatrix<f64> {
-    let (nq, rows) = (problem.nq, problem.nc + problem.nf);
-    let mut kkt = DMatrix::zeros(nq + rows, nq + rows);
-    for c in 0..nq {
-        let h = 1e-7 * q[c].abs().max(1e-3);
-        let (mut plus, mut minus) = (q.to_vec(), q.to_vec());
-        plus[c] += h;
-        minus[c] -= h;
-        let (force_plus, _) = problem.kkt_residual(&plus, lambda);
-        let (force_minus, _) = problem.kkt_residual(&minus, lambda);
-        kkt.view_mut((0, c), (nq, 1))
-            .copy_from(&((force_plus - force_minus) / (2.0 * h)));
-    }
-    let j = problem.jacobian(q);
-    kkt.view_mut((0, nq), (nq, rows)).copy_from(&j.transpose());
-    kkt.view_mut((nq, 0), (rows, nq)).copy_from(&j);
-    kkt
-}
-
-/// Ratio of the force block's size to the constraint block's, so both weigh alike in the
-/// least-squares solve (rank decisions are relative to the largest singular value).
-fn constraint_scale(kkt: &DMatrix<f64>, nq: usize) -> f64 {
-    let rows = kkt.nrows() - nq;
-    if rows == 0 {
-        return 1.0;
-    }
-    let stiffness = kkt.view((0, 0), (nq, nq)).amax();
-    let jacobian = kkt.view((nq, 0), (rows, nq)).amax();
-    if stiffness > 0.0 && jacobian > 0.0 {
-        stiffness / jacobian
-    } else {
-        1.0
-    }
 }

@@ -3,7 +3,8 @@
 //! the force/deflection procedure of the paper (seed Sec. V.A, Fig. 7).
 
 use mech_runtime::{
-    assemble, solve_statics, AssemblyOptions, Equilibrium, Fixture, Model, StaticsOptions,
+    assemble, solve_statics_with_loads, AssemblyOptions, Equilibrium, Fixture, Model, SideLoad,
+    StaticsOptions,
 };
 use serde::Deserialize;
 
@@ -155,176 +156,36 @@ impl Leg {
         self.foot.map(|i| y[i])
     }
 
-    /// The static equilibrium nearest `start` under `inputs` and `fixtures` (at most one, on
-    /// the foot): the runtime's KKT Newton (`solve_statics`), and if that does not converge,
-    /// Newton on the reduced equilibrium in the independent coordinates
-    /// ([`Leg::reduced_equilibrium`]).
+    /// The static equilibrium nearest `start` under `inputs` and `fixtures` (the runtime's
+    /// `solve_statics`).
     pub fn equilibrium(
         &self,
         start: &[f64],
         inputs: &[f64],
         fixtures: &[Fixture],
     ) -> Result<Equilibrium, String> {
+        self.loaded_equilibrium(start, inputs, fixtures, &[])
+    }
+
+    /// [`Leg::equilibrium`] with side loads on the fixtures (`solve_statics_with_loads`).
+    pub fn loaded_equilibrium(
+        &self,
+        start: &[f64],
+        inputs: &[f64],
+        fixtures: &[Fixture],
+        loads: &[SideLoad],
+    ) -> Result<Equilibrium, String> {
         let mut q = start.to_vec();
-        let result = solve_statics(
+        solve_statics_with_loads(
             self.model(),
             0.0,
             &mut q,
             inputs,
             fixtures,
+            loads,
             &StaticsOptions::default(),
         )
-        .map_err(|e| format!("statics of `{}`: {e}", self.model().name()));
-        match result {
-            Err(e) if fixtures.len() <= 1 => {
-                let (q, force) = self
-                    .reduced_equilibrium(start, inputs, fixtures.first(), 0.0)
-                    .map_err(|r| format!("{e}; reduced Newton: {r}"))?;
-                Ok(Equilibrium {
-                    q,
-                    loop_multipliers: Vec::new(),
-                    fixture_forces: if fixtures.is_empty() {
-                        Vec::new()
-                    } else {
-                        vec![force]
-                    },
-                    force_residual: 0.0,
-                    constraint_residual: 0.0,
-                    iterations: 0,
-                })
-            }
-            other => other,
-        }
-    }
-
-    /// Closes the loops with the independent coordinates at `z` (`q` updated) and returns the
-    /// generalized forces `Tᵀ F(q, 0, inputs)` along `z` (`T = ∂q/∂z` from the speed map)
-    /// and the foot position.
-    fn reduced_force(
-        &self,
-        q: &mut [f64],
-        z: &[f64],
-        inputs: &[f64],
-    ) -> Result<(Vec<f64>, [f64; 3]), String> {
-        let model = self.model();
-        for (&i, &value) in self.independent.iter().zip(z) {
-            q[i] = value;
-        }
-        assemble(
-            model,
-            0.0,
-            q,
-            &self.independent,
-            &AssemblyOptions::default(),
-        )
-        .map_err(|e| e.to_string())?;
-        let mut f = vec![0.0; model.nu()];
-        model.forcing(0.0, q, &vec![0.0; model.nu()], inputs, &mut f);
-        let generalized = self
-            .independent
-            .iter()
-            .map(|&i| {
-                let mut u = vec![0.0; model.nu()];
-                u[i] = 1.0;
-                mech_runtime::assemble_speeds(model, 0.0, q, &mut u, &self.independent);
-                u.iter().zip(&f).map(|(a, b)| a * b).sum()
-            })
-            .collect();
-        Ok((generalized, self.foot_at(q, inputs)))
-    }
-
-    /// The residual of the reduced equilibrium `Tᵀ F + Gᵀ μ = 0`, `foot_c − target_c = 0`
-    /// with `G = ∂foot_c/∂z` (central differences) for the held components `c`.
-    fn reduced_residual(
-        &self,
-        q: &mut [f64],
-        z: &[f64],
-        mu: &[f64],
-        inputs: &[f64],
-        fixture: Option<&Fixture>,
-        load_y: f64,
-    ) -> Result<Vec<f64>, String> {
-        let (mut r, foot) = self.reduced_force(q, z, inputs)?;
-        if let Some(fixture) = fixture {
-            // An applied force on the foot along y, `load_y` times the first multiplier.
-            let applied_y = load_y * mu.first().copied().unwrap_or(0.0);
-            let h = 1e-8;
-            for k in 0..z.len() {
-                let mut scratch = q.to_vec();
-                let (mut plus, mut minus) = (z.to_vec(), z.to_vec());
-                plus[k] += h;
-                minus[k] -= h;
-                let a = self.reduced_force(&mut scratch, &plus, inputs)?.1;
-                let b = self.reduced_force(&mut scratch, &minus, inputs)?.1;
-                for (m, &c) in mu.iter().zip(&fixture.components) {
-                    r[k] += m * (a[c] - b[c]) / (2.0 * h);
-                }
-                r[k] += applied_y * (a[1] - b[1]) / (2.0 * h);
-            }
-            for &c in &fixture.components {
-                r.push(foot[c] - fixture.target[c]);
-            }
-        }
-        Ok(r)
-    }
-
-    /// Static equilibrium by Newton on the reduced equations in the independent coordinates
-    /// (loops closed at every step; Jacobian by central differences), with an optional foot
-    /// fixture and, with it, an applied y force on the foot of `load_y` times the fixture's
-    /// first force component. Returns `q` and the fixture's force on the foot (Newtonian
-    /// components).
-    pub fn reduced_equilibrium(
-        &self,
-        start: &[f64],
-        inputs: &[f64],
-        fixture: Option<&Fixture>,
-        load_y: f64,
-    ) -> Result<(Vec<f64>, [f64; 3]), String> {
-        use mech_runtime::nalgebra::{DMatrix, DVector};
-        let n = self.independent.len();
-        let m = fixture.map_or(0, |f| f.components.len());
-        let mut q = start.to_vec();
-        let mut x: Vec<f64> = self.independent.iter().map(|&i| q[i]).collect();
-        x.extend(std::iter::repeat_n(0.0, m));
-        let residual = |q: &mut [f64], x: &[f64]| {
-            self.reduced_residual(q, &x[..n], &x[n..], inputs, fixture, load_y)
-        };
-        for _ in 0..100 {
-            let r = DVector::from_vec(residual(&mut q, &x)?);
-            let mut jac = DMatrix::zeros(n + m, n + m);
-            for c in 0..n + m {
-                let h = if c < n { 1e-7 } else { 1e-3 };
-                let (mut plus, mut minus) = (x.clone(), x.clone());
-                plus[c] += h;
-                minus[c] -= h;
-                let mut scratch = q.clone();
-                let a = residual(&mut scratch, &plus)?;
-                let b = residual(&mut scratch, &minus)?;
-                for row in 0..n + m {
-                    jac[(row, c)] = (a[row] - b[row]) / (2.0 * h);
-                }
-            }
-            let mut step = jac.lu().solve(&(-r)).ok_or("singular reduced stiffness")?;
-            // Damped: at most 20 µm of actuator motion per iteration.
-            let largest = step.rows(0, n).amax();
-            if largest > 2e-5 {
-                step *= 2e-5 / largest;
-            }
-            for (xk, s) in x.iter_mut().zip(step.iter()) {
-                *xk += s;
-            }
-            if step.rows(0, n).amax() < 1e-12 {
-                residual(&mut q, &x)?;
-                let mut force = [0.0; 3];
-                if let Some(fixture) = fixture {
-                    for (k, &c) in fixture.components.iter().enumerate() {
-                        force[c] = x[n + k];
-                    }
-                }
-                return Ok((q, force));
-            }
-        }
-        Err("no convergence in 100 iterations".into())
+        .map_err(|e| format!("statics of `{}`: {e}", self.model().name()))
     }
 
     /// A fixture holding the listed foot components at `target`.
@@ -411,7 +272,7 @@ impl ForceDeflection {
 /// the free foot no longer reaches it. `step = None`: only the blocked point (distance 0).
 /// With `off_axis_fraction = c > 0` the sensor also pushes on the foot along y with `c`
 /// times the on-axis force, opposing the free foot's y motion (the paper's ~30 % off-axis
-/// load), found by holding the foot's y where the y reaction has that value.
+/// load): a side load of the sensor's fixture ([`SideLoad`]).
 pub fn force_deflection(
     leg: &Leg,
     dof: Dof,
@@ -449,10 +310,21 @@ pub fn force_deflection(
         // is y_direction·c·direction·μ.
         let load_y = y_direction * off_axis_fraction * direction;
         let fixture = leg.fixture(target, vec![axis]);
-        let (solved, f) = leg.reduced_equilibrium(&q, &inputs, Some(&fixture), load_y)?;
+        let loads: Vec<SideLoad> = (load_y != 0.0)
+            .then_some(SideLoad {
+                fixture: 0,
+                held: axis,
+                along: 1,
+                ratio: load_y,
+            })
+            .into_iter()
+            .collect();
+        let equilibrium = leg.loaded_equilibrium(&q, &inputs, &[fixture], &loads)?;
+        let (solved, f) = (equilibrium.q, equilibrium.fixture_forces[0]);
         let foot = leg.foot_at(&solved, &inputs);
         let force = -f[axis] * direction;
-        // The sensor's y force on the foot is the applied one; the foot's on the sensor, minus it.
+        // The sensor's y force on the foot is the side load, `load_y·f[axis]` (= f[1]); the
+        // foot's on the sensor, minus it.
         let point = SensorPoint {
             distance,
             force,

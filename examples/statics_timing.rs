@@ -1,0 +1,123 @@
+//! Timing of the runtime statics on the HAMR-VI leg (docs/benchmarks.md §10): one static
+//! equilibrium from the rest position with one or both actuators driven at ±112.5 V, free,
+//! with the foot held along z or x, and held along z with a 30 % side load along y; then the
+//! force/deflection experiment's sensor sweep. Tape model, as `mech diagnose` and the
+//! experiments use it. Times are the fastest of 5 runs per case; the residuals are
+//! `max |F + Jᵀλ|` (model units) and `max |φ|` at the solution.
+//!
+//! ```text
+//! cargo run --release --example statics_timing
+//! ```
+
+use std::path::Path;
+use std::time::Instant;
+
+use mech::experiments::leg::{force_deflection, Dof, Leg};
+use mech::experiments::ModelSpec;
+use mech_runtime::{solve_statics_with_loads, Fixture, SideLoad, StaticsOptions};
+
+/// The fastest of `runs` runs of `work`, in seconds, with its last result.
+fn fastest<T>(runs: usize, mut work: impl FnMut() -> T) -> (f64, T) {
+    let mut best = f64::INFINITY;
+    let mut last = None;
+    for _ in 0..runs {
+        let t0 = Instant::now();
+        last = Some(work());
+        best = best.min(t0.elapsed().as_secs_f64());
+    }
+    (best, last.expect("at least one run"))
+}
+
+fn main() {
+    let path = format!("{}/models/hamr_vi.mech", env!("CARGO_MANIFEST_DIR"));
+    let spec = ModelSpec {
+        model: Path::new(&path).to_path_buf(),
+        set: Vec::new(),
+        independent: vec!["qsact".into(), "qlact".into()],
+    };
+    let leg = Leg::open(&spec).expect("the leg opens");
+    let rest_inputs = leg.inputs(0.0, 0.0);
+    let rest = leg
+        .equilibrium(&leg.q0, &rest_inputs, &[])
+        .expect("rest equilibrium")
+        .q;
+    let foot = leg.foot_at(&rest, &rest_inputs);
+    let v = 112.5;
+    let drives = [(v, 0.0), (0.0, v), (v, v), (-v, v), (v, -v), (-v, -v)];
+    let side = |held| SideLoad {
+        fixture: 0,
+        held,
+        along: 1,
+        ratio: 0.3,
+    };
+    let cases: [(&str, Vec<Fixture>, Vec<SideLoad>); 4] = [
+        ("free", Vec::new(), Vec::new()),
+        ("foot z held", vec![leg.fixture(foot, vec![2])], Vec::new()),
+        ("foot x held", vec![leg.fixture(foot, vec![0])], Vec::new()),
+        (
+            "foot z held, 30 % side load",
+            vec![leg.fixture(foot, vec![2])],
+            vec![side(2)],
+        ),
+    ];
+    println!("| case | v_lift, v_swing (V) | Newton iterations | ms per equilibrium | force residual | constraint residual |");
+    println!("|---|---|---|---|---|---|");
+    for (name, fixtures, loads) in &cases {
+        let mut both = Vec::new();
+        for &(lift, swing) in &drives {
+            let inputs = leg.inputs(lift, swing);
+            let (time, result) = fastest(5, || {
+                let mut q = rest.clone();
+                let options = StaticsOptions::default();
+                solve_statics_with_loads(
+                    leg.model(),
+                    0.0,
+                    &mut q,
+                    &inputs,
+                    fixtures,
+                    loads,
+                    &options,
+                )
+            });
+            if lift != 0.0 && swing != 0.0 {
+                both.push(time);
+            }
+            match result {
+                Ok(eq) => println!(
+                    "| {name} | {lift}, {swing} | {} | {:.3} | {:.1e} | {:.1e} |",
+                    eq.iterations,
+                    time * 1e3,
+                    eq.force_residual,
+                    eq.constraint_residual
+                ),
+                Err(e) => println!(
+                    "| {name} | {lift}, {swing} | failed: {e} | {:.3} | | |",
+                    time * 1e3
+                ),
+            }
+        }
+        let mean = both.iter().sum::<f64>() / both.len() as f64;
+        println!(
+            "| {name}: mean, both driven | | | **{:.3}** | | |",
+            mean * 1e3
+        );
+    }
+    println!();
+    println!("| force/deflection sweep, 225 V, 127 µm steps | sensor points | ms per point |");
+    println!("|---|---|---|");
+    for (dof, axis) in [(Dof::Lift, 2), (Dof::Swing, 0)] {
+        for fraction in [0.0, 0.3] {
+            let (time, test) = fastest(5, || {
+                force_deflection(&leg, dof, axis, 225.0, Some(127e-6), fraction)
+                    .expect("the sweep runs")
+            });
+            println!(
+                "| {}, off-axis load {:.0} % | {} | {:.3} |",
+                dof.name(),
+                fraction * 100.0,
+                test.points.len(),
+                time * 1e3 / test.points.len() as f64
+            );
+        }
+    }
+}
