@@ -192,17 +192,18 @@ pub fn assemble<M: Model + ?Sized>(
     if phi.amax() <= options.tolerance {
         return Ok(options.max_iterations);
     }
-    Err(assembly_error(model, &phi))
+    Err(assembly_error(model, phi.as_slice()))
 }
 
-fn assembly_error<M: Model + ?Sized>(model: &M, phi: &DVector<f64>) -> RuntimeError {
+/// The open loop row with the largest residual in `phi`, as an error.
+pub(crate) fn assembly_error<M: Model + ?Sized>(model: &M, phi: &[f64]) -> RuntimeError {
     let worst = (0..phi.len())
         .max_by(|&a, &b| phi[a].abs().total_cmp(&phi[b].abs()))
         .unwrap_or(0);
     RuntimeError::AssemblyFailed {
         row: model.constraint_name(worst).to_string(),
-        residual: phi[worst],
-        norm: phi.norm(),
+        residual: phi.get(worst).copied().unwrap_or(0.0),
+        norm: phi.iter().map(|v| v * v).sum::<f64>().sqrt(),
     }
 }
 
