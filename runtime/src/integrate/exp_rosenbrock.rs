@@ -19,7 +19,9 @@ use crate::RuntimeError;
 // Dense output (the same variation-of-constants integral with g(y(t_n + s)) − g(y_n)
 // interpolated by the cubic a·s² + b·s³ through D2 at h/2 and D3 at h), θ = τ/h:
 //   y(t_n + τ) = y_n + τ·φ1(τJ)·F(y_n) + τ·(2θ²(8·D2 − D3)·φ3(τJ) + 6θ³(2·D3 − 8·D2)·φ4(τJ)),
-// which is y_{n+1} at τ = h.
+// which is y_{n+1} at τ = h. The time row of J is zero, so φ_k of it never needs forming:
+// with H = h·∂f/∂x and g = h·∂f/∂t, φ_k(hJ)·[v; c] = [φ_k(H)·v + c·φ_{k+1}(H)·g; c/k!],
+// and every D_i has c = 0 (φ-functions of the n × n matrix only).
 
 /// Adaptive exponential Rosenbrock integrator of order 4 with a 3rd-order error estimate
 /// (`exprb43`), with dense output: for systems whose stiffness is lightly damped oscillation.
@@ -31,7 +33,7 @@ use crate::RuntimeError;
 /// through lightly damped resonances is the slow motion. Each step costs three evaluations of
 /// the right-hand side, a forward-difference Jacobian (`n + 1` more, counted in
 /// [`Stats::rhs_evaluations`]; the Jacobians in [`Stats::jacobian_evaluations`]) and the
-/// φ-functions of an `(n + 1) × (n + 1)` matrix; each interpolated point costs another set of
+/// φ-functions of an `n × n` matrix; each interpolated point costs another set of
 /// φ-functions. Suited to small systems (the φ-functions are dense, `O(n³)`).
 ///
 /// The exact Jacobian is part of the method's order, so it is evaluated at every step.
@@ -45,7 +47,7 @@ pub struct ExpRosenbrock<O: Ode> {
     stages: Stages,
 }
 
-/// The working vectors of one step (length `n`, or `n + 1` with the time appended).
+/// The working vectors of one step (length `n`).
 struct Stages {
     x: Vec<f64>,
     /// `f(t, x)`.
@@ -59,19 +61,19 @@ struct Stages {
     dfdt: Vec<f64>,
     jacobian_current: bool,
     jacobian_evaluations: usize,
-    /// φ-functions of `h·J` (time appended) for `phi_h` (NaN: none, or of another argument).
+    /// φ-functions of `h·∂f/∂x` for `phi_h` (NaN: none, or of another argument).
     phi: PhiFunctions,
     phi_h: f64,
-    /// `h·J` with the time appended, `(n + 1) × (n + 1)`.
+    /// `h·∂f/∂x`.
     matrix: Vec<f64>,
-    /// `F(y_n) = [f0; 1]`, `D2`, `D3`, `h·φ1·F`, and scratch, all of length `n + 1`.
-    big_f: Vec<f64>,
+    /// `D2`, `D3`, `h·φ1(hJ)·F` (the linearized flow), and scratch.
     d2: Vec<f64>,
     d3: Vec<f64>,
     flow: Vec<f64>,
     work: Vec<f64>,
     error: Vec<f64>,
-    /// Dense output of the last step: `x`, `f(t, x)`, `D2`, `D3` (time appended) at its start.
+    /// Dense output of the last step: `x` and `f(t, x)` at its start, `D2`, `D3` (with the
+    /// Jacobian, still that of the last step).
     cont: [Vec<f64>; 4],
     cont_h: f64,
 }
@@ -92,7 +94,6 @@ impl<O: Ode> ExpRosenbrock<O> {
         let n = ode.dim();
         check_len("x0", n, x0.len())?;
         let zeros = vec![0.0; n];
-        let wide = vec![0.0; n + 1];
         let mut f0 = zeros.clone();
         derivative_at(&mut ode, t0, x0, &mut f0)?;
         let (mut x_stage, mut f_stage) = (zeros.clone(), zeros.clone());
@@ -116,19 +117,18 @@ impl<O: Ode> ExpRosenbrock<O> {
                 x_stage,
                 f_stage,
                 jacobian: vec![0.0; n * n],
-                dfdt: zeros,
+                dfdt: zeros.clone(),
                 jacobian_current: false,
                 jacobian_evaluations: 0,
-                phi: PhiFunctions::new(n + 1),
+                phi: PhiFunctions::new(n),
                 phi_h: f64::NAN,
-                matrix: vec![0.0; (n + 1) * (n + 1)],
-                big_f: wide.clone(),
-                d2: wide.clone(),
-                d3: wide.clone(),
-                flow: wide.clone(),
-                work: wide.clone(),
-                error: wide.clone(),
-                cont: [x0.to_vec(), wide.clone(), wide.clone(), wide],
+                matrix: vec![0.0; n * n],
+                d2: zeros.clone(),
+                d3: zeros.clone(),
+                flow: zeros.clone(),
+                work: zeros.clone(),
+                error: zeros.clone(),
+                cont: [x0.to_vec(), zeros.clone(), zeros.clone(), zeros],
                 cont_h: 0.0,
             },
         })
@@ -163,29 +163,47 @@ impl<O: Ode> ExpRosenbrock<O> {
 }
 
 impl Stages {
-    /// The φ-functions of `τ·J` (time appended); false if not finite.
+    /// The φ-functions of `τ·∂f/∂x`; false if not finite.
     fn phi_at(&mut self, tau: f64) -> bool {
         if self.phi_h == tau {
             return true;
         }
-        let n = self.x.len();
-        let m = n + 1;
-        self.matrix.fill(0.0);
-        for j in 0..n {
-            for i in 0..n {
-                self.matrix[i + m * j] = tau * self.jacobian[i + n * j];
-            }
-        }
-        for i in 0..n {
-            self.matrix[i + m * n] = tau * self.dfdt[i];
+        for (m, j) in self.matrix.iter_mut().zip(&self.jacobian) {
+            *m = tau * j;
         }
         let ok = self.phi.compute(&self.matrix);
         self.phi_h = if ok { tau } else { f64::NAN };
         ok
     }
 
-    /// `D = [f(t + c·h, x_stage) − f0 − J (x_stage − x) − ∂f/∂t·c·h; 0]` into `d`, from
-    /// `f_stage`.
+    /// `out = τ·φ1(τJ)·[f; 1] = τ·(φ1(τ∂f/∂x)·f + τ·φ2(τ∂f/∂x)·∂f/∂t)` for the φ-functions at
+    /// `τ` (`half`: at `τ` for the functions of half the argument).
+    fn linear_flow(
+        phi: &mut PhiFunctions,
+        half: bool,
+        tau: f64,
+        f: &[f64],
+        dfdt: &[f64],
+        out: &mut [f64],
+        work: &mut [f64],
+    ) {
+        out.fill(0.0);
+        for (w, d) in work.iter_mut().zip(dfdt) {
+            *w = tau * d;
+        }
+        if half {
+            phi.add_apply_half(1, f, out);
+            phi.add_apply_half(2, work, out);
+        } else {
+            phi.add_apply(1, f, out);
+            phi.add_apply(2, work, out);
+        }
+        for o in out.iter_mut() {
+            *o *= tau;
+        }
+    }
+
+    /// `D = f(t + c·h, x_stage) − f0 − J (x_stage − x) − ∂f/∂t·c·h` into `d`, from `f_stage`.
     fn remainder(&self, ch: f64, d: &mut [f64]) {
         let n = self.x.len();
         for i in 0..n {
@@ -193,11 +211,10 @@ impl Stages {
         }
         for j in 0..n {
             let dx = self.x_stage[j] - self.x[j];
-            for (i, di) in d[..n].iter_mut().enumerate() {
+            for (i, di) in d.iter_mut().enumerate() {
                 *di -= self.jacobian[i + n * j] * dx;
             }
         }
-        d[n] = 0.0;
     }
 
     /// A trial step of size `h` from `(t, x)`: `x_new`, `f_new = f(t + h, x_new)` and the
@@ -231,27 +248,37 @@ impl Stages {
         if !self.phi_at(h) {
             return Ok((f64::NAN, extra));
         }
-        self.big_f[..n].copy_from_slice(&self.f0);
-        self.big_f[n] = 1.0;
-
         // U2 = x + h/2·φ1(hJ/2)·F.
-        self.work.fill(0.0);
-        self.phi.add_apply_half1(&self.big_f, &mut self.work);
+        Self::linear_flow(
+            &mut self.phi,
+            true,
+            0.5 * h,
+            &self.f0,
+            &self.dfdt,
+            &mut self.flow,
+            &mut self.work,
+        );
         for i in 0..n {
-            self.x_stage[i] = self.x[i] + 0.5 * h * self.work[i];
+            self.x_stage[i] = self.x[i] + self.flow[i];
         }
         ode.rhs(t + 0.5 * h, &self.x_stage, &mut self.f_stage)?;
         let mut d2 = std::mem::take(&mut self.d2);
         self.remainder(0.5 * h, &mut d2);
         self.d2 = d2;
 
-        // h·φ1·F, and U3 = x + h·φ1·F + h·φ1·D2.
-        self.flow.fill(0.0);
-        self.phi.add_apply(1, &self.big_f, &mut self.flow);
+        // The flow h·φ1·F, and U3 = x + h·φ1·F + h·φ1·D2.
+        Self::linear_flow(
+            &mut self.phi,
+            false,
+            h,
+            &self.f0,
+            &self.dfdt,
+            &mut self.flow,
+            &mut self.work,
+        );
         self.work.fill(0.0);
         self.phi.add_apply(1, &self.d2, &mut self.work);
         for i in 0..n {
-            self.flow[i] *= h;
             self.x_stage[i] = self.x[i] + self.flow[i] + h * self.work[i];
         }
         ode.rhs(t + h, &self.x_stage, &mut self.f_stage)?;
@@ -260,28 +287,21 @@ impl Stages {
         self.d3 = d3;
 
         // x_new = x + h·φ1·F + φ3·w3 + φ4·w4, error φ4·w4.
-        for i in 0..=n {
+        for i in 0..n {
             self.work[i] = h * (16.0 * self.d2[i] - 2.0 * self.d3[i]);
+            self.x_new[i] = self.x[i] + self.flow[i];
         }
-        self.x_new.copy_from_slice(&self.x);
+        self.error.fill(0.0);
+        self.phi.add_apply(3, &self.work, &mut self.error);
         for i in 0..n {
-            self.x_new[i] += self.flow[i];
-        }
-        let mut correction = std::mem::take(&mut self.error);
-        correction.fill(0.0);
-        self.phi.add_apply(3, &self.work, &mut correction);
-        for i in 0..n {
-            self.x_new[i] += correction[i];
-        }
-        for i in 0..=n {
+            self.x_new[i] += self.error[i];
             self.work[i] = h * (-48.0 * self.d2[i] + 12.0 * self.d3[i]);
         }
-        correction.fill(0.0);
-        self.phi.add_apply(4, &self.work, &mut correction);
+        self.error.fill(0.0);
+        self.phi.add_apply(4, &self.work, &mut self.error);
         for i in 0..n {
-            self.x_new[i] += correction[i];
+            self.x_new[i] += self.error[i];
         }
-        self.error = correction;
         ode.rhs(t + h, &self.x_new, &mut self.f_new)?;
 
         let (rtol, atol) = (opts.rtol, opts.atol);
@@ -300,7 +320,7 @@ impl Stages {
     fn store_dense(&mut self, h: f64) {
         let [x0, f, d2, d3] = &mut self.cont;
         x0.copy_from_slice(&self.x);
-        f.copy_from_slice(&self.big_f);
+        f.copy_from_slice(&self.f0);
         d2.copy_from_slice(&self.d2);
         d3.copy_from_slice(&self.d3);
         self.cont_h = h;
@@ -386,14 +406,13 @@ impl<O: Ode> Stepper for ExpRosenbrock<O> {
             return Err(RuntimeError::NonFiniteState { t });
         }
         let [_, f, d2, d3] = &s.cont;
-        s.work.fill(0.0);
-        s.phi.add_apply(1, f, &mut s.work);
-        for (o, w) in out.iter_mut().zip(&s.work) {
-            *o += tau * w;
+        Stages::linear_flow(&mut s.phi, false, tau, f, &s.dfdt, &mut s.flow, &mut s.work);
+        for (o, w) in out.iter_mut().zip(&s.flow) {
+            *o += w;
         }
         let (a, b) = (2.0 * theta * theta * tau, 6.0 * theta.powi(3) * tau);
         for (order, coefficients) in [(3, (8.0 * a, -a)), (4, (-8.0 * b, 2.0 * b))] {
-            for i in 0..=n {
+            for i in 0..n {
                 s.error[i] = coefficients.0 * d2[i] + coefficients.1 * d3[i];
             }
             s.work.fill(0.0);

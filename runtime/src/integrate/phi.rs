@@ -8,7 +8,7 @@
 //! `B = A/2^s` with `‖B‖₁ ≤ 1/2`, sum the Taylor series of `φ_4(B)` to degree 10 (truncation
 //! `< 1e-16` relative), recover `φ_3 … φ_0` by `φ_k(B) = B φ_{k+1}(B) + I/k!`, and double the
 //! argument `s` times with `φ_k(2B) = (φ_0(B) φ_k(B) + Σ_{j=1..k} φ_j(B)/(k−j)!)/2^k`.
-//! The last doubling starts from `A/2`, whose `φ_1` is kept as well.
+//! The last doubling starts from `A/2`, whose `φ_1` and `φ_2` are kept as well.
 
 use crate::dense;
 
@@ -33,13 +33,13 @@ const FACTORIAL: [f64; 15] = [
     87178291200.0,
 ];
 
-/// φ_0 … φ_4 of one `n × n` matrix (column-major), and `φ_1` of half of it.
+/// φ_0 … φ_4 of one `n × n` matrix (column-major), and `φ_1`, `φ_2` of half of it.
 pub(crate) struct PhiFunctions {
     n: usize,
     /// `φ_k` of the balanced matrix, `k = 0..=4`.
     phi: [Vec<f64>; MAX_ORDER + 1],
-    /// `φ_1` of half the balanced matrix.
-    half_phi1: Vec<f64>,
+    /// `φ_1` and `φ_2` of half the balanced matrix.
+    half: [Vec<f64>; 2],
     /// The balancing: `A = D Ã D⁻¹` with `D = diag(scale)`.
     scale: Vec<f64>,
     scaled: Vec<f64>,
@@ -54,7 +54,7 @@ impl PhiFunctions {
         PhiFunctions {
             n,
             phi: std::array::from_fn(|_| square()),
-            half_phi1: square(),
+            half: [square(), square()],
             scale: vec![1.0; n],
             scaled: square(),
             next: std::array::from_fn(|_| square()),
@@ -79,7 +79,7 @@ impl PhiFunctions {
                     .sum::<f64>()
             })
             .fold(0.0, f64::max);
-        // At least one doubling, so that φ_1(A/2) falls out of the chain.
+        // At least one doubling, so that φ_1(A/2) and φ_2(A/2) fall out of the chain.
         let squarings = (norm / 0.5).log2().ceil().max(1.0) as i32;
         let factor = 0.5f64.powi(squarings);
         for v in &mut self.scaled {
@@ -103,13 +103,14 @@ impl PhiFunctions {
         add_identity(phi0, n, 1.0);
         for step in 0..squarings {
             if step == squarings - 1 {
-                self.half_phi1.copy_from_slice(&self.phi[1]);
+                self.half[0].copy_from_slice(&self.phi[1]);
+                self.half[1].copy_from_slice(&self.phi[2]);
             }
             self.double();
         }
         self.phi
             .iter()
-            .chain([&self.half_phi1])
+            .chain(&self.half)
             .all(|m| m.iter().all(|v| v.is_finite()))
     }
 
@@ -137,9 +138,16 @@ impl PhiFunctions {
         apply(&self.phi[k], &self.scale, self.n, v, out, &mut self.work);
     }
 
-    /// `out += φ_1(A/2) v`.
-    pub(crate) fn add_apply_half1(&mut self, v: &[f64], out: &mut [f64]) {
-        apply(&self.half_phi1, &self.scale, self.n, v, out, &mut self.work);
+    /// `out += φ_k(A/2) v` for `k` = 1 or 2.
+    pub(crate) fn add_apply_half(&mut self, k: usize, v: &[f64], out: &mut [f64]) {
+        apply(
+            &self.half[k - 1],
+            &self.scale,
+            self.n,
+            v,
+            out,
+            &mut self.work,
+        );
     }
 }
 
@@ -277,11 +285,14 @@ mod tests {
                     );
                 }
             }
-            let mut half = vec![0.0; 3];
-            phi.add_apply_half1(&v, &mut half);
-            let expected = reference(&(&a * 0.5), 1, &v);
-            for i in 0..3 {
-                assert!((half[i] - expected[i]).abs() <= 1e-10 * expected[i].abs().max(1e-12));
+            for k in [1, 2] {
+                let mut half = vec![0.0; 3];
+                phi.add_apply_half(k, &v, &mut half);
+                let expected = reference(&(&a * 0.5), k, &v);
+                for i in 0..3 {
+                    let scale = expected[i].abs().max(1e-12);
+                    assert!((half[i] - expected[i]).abs() <= 1e-10 * scale);
+                }
             }
         }
     }
