@@ -418,8 +418,8 @@ pub fn lu(a: &mut [f64], n: usize, pivots: &mut [usize]) -> bool {
             }
         }
         pivots[k] = p;
-        // NaN fails this test too.
-        if !(a[p + n * k].abs() > tol) {
+        let size = a[p + n * k].abs();
+        if size.is_nan() || size <= tol {
             return false;
         }
         if p != k {
@@ -446,8 +446,8 @@ pub fn lu(a: &mut [f64], n: usize, pivots: &mut [usize]) -> bool {
 /// Solves `A x = b` in place with the factor and pivots from [`lu`].
 pub fn lu_solve(lu: &[f64], n: usize, pivots: &[usize], b: &mut [f64]) {
     let (a, b) = (&lu[..n * n], &mut b[..n]);
-    for k in 0..n {
-        b.swap(k, pivots[k]);
+    for (k, &p) in pivots[..n].iter().enumerate() {
+        b.swap(k, p);
     }
     for i in 0..n {
         let mut s = b[i];

@@ -137,7 +137,7 @@ fn rosenbrock_is_l_stable() {
         run_to_end(&mut s);
         1.0 - s.state()[0]
     };
-    let r: Vec<f64> = [-1e3, -1e5, -1e7].map(|lambda| stability(lambda)).to_vec();
+    let r: Vec<f64> = [-1e3, -1e5, -1e7].map(stability).to_vec();
     println!("R(hλ) at hλ = −1e2, −1e4, −1e6: {r:?}");
     assert!(
         r[0].abs() < 0.05 && r[1].abs() < 1e-3 && r[2].abs() < 1e-6,

@@ -206,8 +206,13 @@ impl Stages {
     /// `D = f(t + c·h, x_stage) − f0 − J (x_stage − x) − ∂f/∂t·c·h` into `d`, from `f_stage`.
     fn remainder(&self, ch: f64, d: &mut [f64]) {
         let n = self.x.len();
-        for i in 0..n {
-            d[i] = self.f_stage[i] - self.f0[i] - self.dfdt[i] * ch;
+        for (((d, f), f0), dfdt) in d
+            .iter_mut()
+            .zip(&self.f_stage)
+            .zip(&self.f0)
+            .zip(&self.dfdt)
+        {
+            *d = f - f0 - dfdt * ch;
         }
         for j in 0..n {
             let dx = self.x_stage[j] - self.x[j];

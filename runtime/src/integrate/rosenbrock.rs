@@ -225,35 +225,35 @@ impl Stages {
         }
         let hd = h * D;
         let (factor, pivots) = (&self.factor, &self.pivots);
-        let (k1, k2, k3) = (&mut self.k1, &mut self.k2, &mut self.k3);
         for i in 0..n {
-            k1[i] = self.f0[i] + hd * self.dfdt[i];
+            self.k1[i] = self.f0[i] + hd * self.dfdt[i];
         }
-        dense::lu_solve(factor, n, pivots, k1);
+        dense::lu_solve(factor, n, pivots, &mut self.k1);
         for i in 0..n {
-            self.x_stage[i] = self.x[i] + 0.5 * h * k1[i];
+            self.x_stage[i] = self.x[i] + 0.5 * h * self.k1[i];
         }
         ode.rhs(t + 0.5 * h, &self.x_stage, &mut self.f1)?;
         for i in 0..n {
-            k2[i] = self.f1[i] - k1[i];
+            self.k2[i] = self.f1[i] - self.k1[i];
         }
-        dense::lu_solve(factor, n, pivots, k2);
+        dense::lu_solve(factor, n, pivots, &mut self.k2);
         for i in 0..n {
-            k2[i] += k1[i];
-            self.x_new[i] = self.x[i] + h * k2[i];
+            self.k2[i] += self.k1[i];
+            self.x_new[i] = self.x[i] + h * self.k2[i];
         }
         ode.rhs(t + h, &self.x_new, &mut self.f2)?;
         for i in 0..n {
-            k3[i] = self.f2[i] - E32 * (k2[i] - self.f1[i]) - 2.0 * (k1[i] - self.f0[i])
-                + hd * self.dfdt[i];
+            self.k3[i] =
+                self.f2[i] - E32 * (self.k2[i] - self.f1[i]) - 2.0 * (self.k1[i] - self.f0[i])
+                    + hd * self.dfdt[i];
         }
-        dense::lu_solve(factor, n, pivots, k3);
+        dense::lu_solve(factor, n, pivots, &mut self.k3);
 
         let (rtol, atol) = (opts.rtol, opts.atol);
         let mut sum = 0.0;
         let mut finite = true;
         for i in 0..n {
-            let err = h / 6.0 * (k1[i] - 2.0 * k2[i] + k3[i]);
+            let err = h / 6.0 * (self.k1[i] - 2.0 * self.k2[i] + self.k3[i]);
             let sk = atol + rtol * self.x[i].abs().max(self.x_new[i].abs());
             sum += (err / sk).powi(2);
             finite &= self.x_new[i].is_finite() && self.f2[i].is_finite();
