@@ -268,3 +268,43 @@ fn state_changes_and_bad_options_are_handled() {
     assert!(ExpRosenbrock::new(Smooth, 0.0, &y0, 1.0, bad).is_err());
     assert!(Rosenbrock::new(Smooth, 0.0, &[1.0], 1.0, AdaptiveOptions::rosenbrock()).is_err());
 }
+
+/// Prothero–Robinson `y' = λ(y − cos t) − sin t` with `λ = −10⁴`, on its smooth solution
+/// `y = cos t`: convergence in the stiff regime (`hλ` from −1000 to −125). The Rosenbrock
+/// method keeps its order 2; the exponential one shows order ≈ 3 here (the forcing `−λ cos t`
+/// has time derivatives of size λ, which its error constants carry).
+#[test]
+fn convergence_on_a_stiff_problem() {
+    struct ProtheroRobinson;
+    impl Ode for ProtheroRobinson {
+        fn dim(&self) -> usize {
+            1
+        }
+        fn rhs(&mut self, t: f64, y: &[f64], f: &mut [f64]) -> Result<(), RuntimeError> {
+            f[0] = -1e4 * (y[0] - t.cos()) - t.sin();
+            Ok(())
+        }
+    }
+    let error = |exp: bool, h: f64| {
+        let mut stepper: Box<dyn Stepper> = if exp {
+            Box::new(ExpRosenbrock::new(ProtheroRobinson, 0.0, &[1.0], 1.0, fixed(h)).unwrap())
+        } else {
+            Box::new(Rosenbrock::new(ProtheroRobinson, 0.0, &[1.0], 1.0, fixed(h)).unwrap())
+        };
+        run_to_end(stepper.as_mut());
+        (stepper.state()[0] - 1f64.cos()).abs()
+    };
+    let orders = |exp: bool| -> Vec<f64> {
+        let errors: Vec<f64> = [0.1, 0.05, 0.025, 0.0125].map(|h| error(exp, h)).to_vec();
+        errors.windows(2).map(|e| (e[0] / e[1]).log2()).collect()
+    };
+    let (rosenbrock, exp) = (orders(false), orders(true));
+    println!("Prothero–Robinson, λ = −1e4: observed orders {rosenbrock:.3?} (ode23s), {exp:.3?} (exprb43)");
+    for order in rosenbrock {
+        assert!((order - 2.0).abs() < 0.2, "ode23s order {order}");
+    }
+    for order in exp {
+        assert!(order > 2.5, "exprb43 order {order}");
+    }
+    assert!(error(true, 0.1) < 1e-8);
+}
