@@ -10,16 +10,15 @@
 //! With `J = [J_z J_d]`: `d` by Newton on `φ(z, d) = 0` (least squares in `J_d`), warm-started
 //! from the last closed configuration moved by `T_d Δz` and reusing its factor while that
 //! converges fast (a new `z` usually costs two `φ`, one `J` and one factorization, the same `z`
-//! none of them); `u = T ż` with
-//! `T = [I; T_d]`, `T_d = −J_d⁺ J_z`; `u̇ = T z̈ + s` with `s = [0; −J_d⁺ J̇u]`. Projecting
-//! `M u̇ = F + Jᵀλ` onto `T` (`J T = 0` removes `λ`) leaves `(TᵀMT) z̈ = Tᵀ(F − M s)`, a
-//! Cholesky solve of size `dim z` instead of the multiplier system of
-//! [`ConstrainedSolver`](crate::ConstrainedSolver). Redundant loop rows are consistent on the
-//! closed loops, so the least-squares solves are exact there, whatever the weight of each row:
-//! they are normal equations of `J_d` with its rows scaled to unit length, which keeps their
-//! condition number small (rows in metres and in radians differ by the lever arms; for the
-//! HAMR leg `κ(J_d)` ≈ 4400 becomes ≈ 5). For a model without loops
-//! `z = q`, `T = I` and this is `M q̈ = F`. Nothing allocates after construction.
+//! none of them); `u = T ż` with `T = [I; T_d]`, `T_d = −J_d⁺ J_z`; `u̇ = T z̈ + s` with
+//! `s = [0; −J_d⁺ J̇u]`. Projecting `M u̇ = F + Jᵀλ` onto `T` (`J T = 0` removes `λ`) leaves
+//! `(TᵀMT) z̈ = Tᵀ(F − M s)`, a Cholesky solve of size `dim z` instead of the multiplier system
+//! of [`ConstrainedSolver`](crate::ConstrainedSolver). Redundant loop rows are consistent on
+//! the closed loops, so the least-squares solves are exact there, whatever the weight of each
+//! row: they are normal equations of `J_d` with its rows scaled to unit length, which keeps
+//! their condition number small (rows in metres and in radians differ by the lever arms; for
+//! the HAMR leg `κ(J_d)` ≈ 4400 becomes ≈ 5). For a model without loops `z = q`, `T = I` and
+//! this is `M q̈ = F`. Nothing allocates after construction.
 
 use crate::constraints::{assembly_error, mobility};
 use crate::integrate::{check_len, Ode};
