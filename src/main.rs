@@ -58,10 +58,10 @@ enum Command {
         /// Integrator.
         #[arg(long, value_enum, default_value_t = Integrator::Dopri5)]
         method: Integrator,
-        /// Relative tolerance (dopri5).
+        /// Relative tolerance (adaptive methods).
         #[arg(long, default_value_t = 1e-9)]
         rtol: f64,
-        /// Absolute tolerance (dopri5).
+        /// Absolute tolerance (adaptive methods).
         #[arg(long, default_value_t = 1e-12)]
         atol: f64,
         /// Step size for rk4, with a unit or in seconds.
@@ -135,6 +135,11 @@ enum Integrator {
     Dop853,
     /// Fixed-step classical Runge–Kutta.
     Rk4,
+    /// Linearly implicit Rosenbrock 2(3) (L-stable), in the independent coordinates.
+    Rosenbrock,
+    /// Exponential Rosenbrock 4(3): follows lightly damped fast modes at long steps, in the
+    /// independent coordinates.
+    ExpRosenbrock,
 }
 
 /// Restores the default SIGPIPE action, so `mech ... | head` ends quietly instead of
@@ -411,6 +416,16 @@ fn simulate(path: &Path, request: &SimulateRequest) -> Result<(), String> {
         Integrator::Rk4 => Method::Rk4 {
             step: parse_time("--step", &request.step)?,
         },
+        Integrator::Rosenbrock => Method::Rosenbrock {
+            rtol: request.rtol,
+            atol: request.atol,
+            h_max: f64::INFINITY,
+        },
+        Integrator::ExpRosenbrock => Method::ExpRosenbrock {
+            rtol: request.rtol,
+            atol: request.atol,
+            h_max: f64::INFINITY,
+        },
     };
     let options = SimOptions {
         t_end,
@@ -431,7 +446,12 @@ fn simulate(path: &Path, request: &SimulateRequest) -> Result<(), String> {
         bar.set_position((1000.0 * t / t_end) as u64);
         bar.set_message(format!("{t:.4} s"));
     };
-    let trajectory = mech_runtime::simulate(model, q0, u0, signals, &options, &mut progress);
+    let trajectory = if method.is_reduced() {
+        let independent = &state.independent;
+        mech_runtime::simulate_reduced(model, q0, u0, independent, signals, &options, &mut progress)
+    } else {
+        mech_runtime::simulate(model, q0, u0, signals, &options, &mut progress)
+    };
     bar.finish_and_clear();
     let trajectory =
         trajectory.map_err(|e| format!("simulation of `{}` failed: {e}", model.name()))?;

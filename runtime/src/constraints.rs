@@ -182,7 +182,7 @@ pub fn assemble<M: Model + ?Sized>(
         fixed,
         options,
     )
-    .map_err(|phi| assembly_error(model, &phi))
+    .map_err(|phi| assembly_error(model, phi.as_slice()))
 }
 
 /// [`assemble`] for any residual `φ(q)` and its Jacobian (e.g. loops and fixtures together,
@@ -228,14 +228,15 @@ pub fn close(
     Err(phi)
 }
 
-fn assembly_error<M: Model + ?Sized>(model: &M, phi: &DVector<f64>) -> RuntimeError {
+/// The open loop row with the largest residual in `phi`, as an error.
+pub(crate) fn assembly_error<M: Model + ?Sized>(model: &M, phi: &[f64]) -> RuntimeError {
     let worst = (0..phi.len())
         .max_by(|&a, &b| phi[a].abs().total_cmp(&phi[b].abs()))
         .unwrap_or(0);
     RuntimeError::AssemblyFailed {
         row: model.constraint_name(worst).to_string(),
-        residual: phi[worst],
-        norm: phi.norm(),
+        residual: phi.get(worst).copied().unwrap_or(0.0),
+        norm: phi.iter().map(|v| v * v).sum::<f64>().sqrt(),
     }
 }
 

@@ -1,7 +1,10 @@
 //! Small dense linear algebra on column-major slices, without allocation: Cholesky for the
 //! mass matrix and a diagonally pivoted Cholesky that reveals the rank of a positive
 //! semidefinite matrix (`J M⁻¹ Jᵀ` with redundant constraint rows), plus the products the
-//! constrained solver needs (`Zᵀ Z`, `Zᵀ w`, `Z λ`).
+//! constrained solver needs (`Zᵀ Z`, `Zᵀ w`, `Z λ`); LU with partial pivoting for general
+//! square systems (a mass matrix that is not symmetric, the Rosenbrock iteration matrix);
+//! Householder QR for the least-squares
+//! solves of the reduced dynamics (the tall loop Jacobian of the dependent coordinates).
 //!
 //! Matrices are `n × n` (or `n × m`), column-major (`a[i + n*j]` is row i, column j), like the
 //! `Model` trait's outputs.
@@ -179,15 +182,22 @@ pub fn gram_lower(z: &[f64], n: usize, m: usize, out: &mut [f64]) {
 fn gram_in<D: Dim, E: Dim>(z: &[f64], dn: D, dm: E, out: &mut [f64]) {
     let (n, m) = (dn.get(), dm.get());
     let (z, out) = (&z[..n * m], &mut out[..m * m]);
-    for r in 0..m {
-        for s in 0..=r {
-            let mut sum = 0.0;
-            for k in 0..n {
-                sum += z[k + n * r] * z[k + n * s];
-            }
-            out[r + m * s] = sum;
+    if n == 0 {
+        out.fill(0.0);
+        return;
+    }
+    // Columns as slices: no bounds checks in the inner loop when `n` is only known at run time.
+    for (r, zr) in z.chunks_exact(n).enumerate() {
+        for (s, zs) in z.chunks_exact(n).take(r + 1).enumerate() {
+            out[r + m * s] = dot(zr, zs);
         }
     }
+}
+
+/// `Σ a_k b_k`, summed in order.
+#[inline(always)]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).fold(0.0, |sum, (x, y)| sum + x * y)
 }
 
 /// The lower triangle of `A Aᵀ` (`m × m`) into `out`, for the `m × n` matrix `a`.
@@ -221,12 +231,12 @@ pub fn transpose_times(z: &[f64], n: usize, m: usize, w: &[f64], out: &mut [f64]
 fn transpose_times_in<D: Dim, E: Dim>(z: &[f64], dn: D, dm: E, w: &[f64], out: &mut [f64]) {
     let (n, m) = (dn.get(), dm.get());
     let (z, w, out) = (&z[..n * m], &w[..n], &mut out[..m]);
-    for r in 0..m {
-        let mut sum = 0.0;
-        for k in 0..n {
-            sum += z[k + n * r] * w[k];
-        }
-        out[r] = sum;
+    if n == 0 {
+        out.fill(0.0);
+        return;
+    }
+    for (o, column) in out.iter_mut().zip(z.chunks_exact(n)) {
+        *o = dot(column, w);
     }
 }
 
@@ -239,10 +249,32 @@ pub fn add_times(z: &[f64], n: usize, m: usize, x: &[f64], out: &mut [f64]) {
 fn add_times_in<D: Dim, E: Dim>(z: &[f64], dn: D, dm: E, x: &[f64], out: &mut [f64]) {
     let (n, m) = (dn.get(), dm.get());
     let (z, x, out) = (&z[..n * m], &x[..m], &mut out[..n]);
-    for r in 0..m {
-        let x_r = x[r];
-        for k in 0..n {
-            out[k] += z[k + n * r] * x_r;
+    if n == 0 {
+        return;
+    }
+    for (column, &x_r) in z.chunks_exact(n).zip(x) {
+        for (o, z) in out.iter_mut().zip(column) {
+            *o += z * x_r;
+        }
+    }
+}
+
+/// `out = A B` for `n × n` matrices.
+pub fn multiply(a: &[f64], b: &[f64], n: usize, out: &mut [f64]) {
+    by_size!(n, |d| multiply_in(a, b, d, out))
+}
+
+#[inline(always)]
+fn multiply_in<D: Dim>(a: &[f64], b: &[f64], d: D, out: &mut [f64]) {
+    let n = d.get();
+    let (a, b, out) = (&a[..n * n], &b[..n * n], &mut out[..n * n]);
+    for j in 0..n {
+        for i in 0..n {
+            let mut sum = 0.0;
+            for k in 0..n {
+                sum += a[i + n * k] * b[k + n * j];
+            }
+            out[i + n * j] = sum;
         }
     }
 }
@@ -369,6 +401,67 @@ fn pivoted_solve_in<D: Dim>(
     x.fill(0.0);
     for i in 0..rank {
         x[order[i]] = work[i];
+    }
+}
+
+/// LU factorization with partial pivoting, `P A = L U`, in place (`L` unit lower, below the
+/// diagonal; `U` on and above it); `pivots[k]` is the row swapped with row `k` at step `k`.
+/// Returns false if a pivot is at most `n·ε·max|a_ij|` (singular to working precision).
+pub fn lu(a: &mut [f64], n: usize, pivots: &mut [usize]) -> bool {
+    let a = &mut a[..n * n];
+    let tol = n as f64 * f64::EPSILON * a.iter().fold(0.0, |m: f64, v| m.max(v.abs()));
+    for k in 0..n {
+        let mut p = k;
+        for i in k + 1..n {
+            if a[i + n * k].abs() > a[p + n * k].abs() {
+                p = i;
+            }
+        }
+        pivots[k] = p;
+        let size = a[p + n * k].abs();
+        if size.is_nan() || size <= tol {
+            return false;
+        }
+        if p != k {
+            for j in 0..n {
+                a.swap(k + n * j, p + n * j);
+            }
+        }
+        let pivot = a[k + n * k];
+        for i in k + 1..n {
+            a[i + n * k] /= pivot;
+        }
+        for j in k + 1..n {
+            let akj = a[k + n * j];
+            if akj != 0.0 {
+                for i in k + 1..n {
+                    a[i + n * j] -= a[i + n * k] * akj;
+                }
+            }
+        }
+    }
+    true
+}
+
+/// Solves `A x = b` in place with the factor and pivots from [`lu`].
+pub fn lu_solve(lu: &[f64], n: usize, pivots: &[usize], b: &mut [f64]) {
+    let (a, b) = (&lu[..n * n], &mut b[..n]);
+    for (k, &p) in pivots[..n].iter().enumerate() {
+        b.swap(k, p);
+    }
+    for i in 0..n {
+        let mut s = b[i];
+        for j in 0..i {
+            s -= a[i + n * j] * b[j];
+        }
+        b[i] = s;
+    }
+    for i in (0..n).rev() {
+        let mut s = b[i];
+        for j in i + 1..n {
+            s -= a[i + n * j] * b[j];
+        }
+        b[i] = s / a[i + n * i];
     }
 }
 

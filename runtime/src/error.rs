@@ -56,6 +56,12 @@ pub enum RuntimeError {
         residual: f64,
         norm: f64,
     },
+    /// The independent coordinates do not determine the others at this configuration: the
+    /// loop Jacobian of the dependent coordinates is rank-deficient (reduced dynamics).
+    SingularDependentJacobian {
+        /// Time at which the loops were closed.
+        t: f64,
+    },
     /// Dense output was requested outside the last step `[t_start, t_end]`.
     InterpolationOutOfRange {
         /// Requested time.
@@ -113,6 +119,12 @@ impl fmt::Display for RuntimeError {
                 "cannot close the loops: row `{row}` is still {residual:e} away (|φ| = {norm:e}); \
                  start from a configuration closer to a closed one (q0 of the joints), check \
                  the loop's points, or free more coordinates"
+            ),
+            RuntimeError::SingularDependentJacobian { t } => write!(
+                f,
+                "at t = {t} the independent coordinates no longer determine the others (the \
+                 loop Jacobian of the dependent coordinates is singular): choose other \
+                 independent coordinates, or check the mechanism for a lock-up there"
             ),
             RuntimeError::InterpolationOutOfRange { t, t_start, t_end } => write!(
                 f,

@@ -5,16 +5,17 @@
 //! [`solve_statics`](crate::solve_statics)) and the independent coordinates `z ⊂ q`.
 //! Produces: a [`Linearization`] `M δz̈ + C δż + K δz = B δin`, `δy = C_q δz + C_u δż + D δin`.
 //!
-//! The reduced dynamics `z̈ = f(z, ż, in)` close the loops for each `(z, ż)` (assembly, then
-//! `J u = 0` for the speeds) and solve the constrained accelerations, so constraint forces
-//! and geometric stiffness are included. Its derivatives are central differences refined by
+//! The reduced dynamics `z̈ = f(z, ż, in)` ([`Reduced`]) close the loops for each `(z, ż)` and
+//! project the equations of motion onto the motions they allow, so constraint forces and
+//! geometric stiffness are included. Its derivatives are central differences refined by
 //! one Richardson step (error O(h⁴)). `M = Tᵀ M(q) T` with `T = ∂q/∂z` (exact, from the
 //! speed map); then `K = −M ∂f/∂z`, `C = −M ∂f/∂ż`, `B = M ∂f/∂in`.
 
 use nalgebra::{Complex, DMatrix, DVector};
 
-use crate::constraints::{assemble, assemble_speeds, AssemblyOptions, ConstrainedSolver};
-use crate::simulate::accelerations;
+use crate::constraints::AssemblyOptions;
+use crate::reduced::Reduced;
+use crate::simulate::default_signals;
 use crate::{Model, RuntimeError};
 
 /// `M δz̈ + C δż + K δz = B δin` and `δy = C_q δz + C_u δż + D δin` about `q`, `inputs`.
@@ -87,59 +88,6 @@ impl Mode {
     }
 }
 
-/// The reduced dynamics around an operating point.
-struct Reduced<'a, M: Model + ?Sized> {
-    model: &'a M,
-    t: f64,
-    q: Vec<f64>,
-    independent: &'a [usize],
-    solver: Option<ConstrainedSolver>,
-}
-
-impl<M: Model + ?Sized> Reduced<'_, M> {
-    /// `(q, u)` for minimal coordinates `z` and rates `zdot`.
-    fn state(&self, z: &[f64], zdot: &[f64]) -> Result<(Vec<f64>, Vec<f64>), RuntimeError> {
-        let mut q = self.q.clone();
-        let mut u = vec![0.0; q.len()];
-        for (k, &i) in self.independent.iter().enumerate() {
-            q[i] = z[k];
-            u[i] = zdot[k];
-        }
-        if self.model.nc() > 0 {
-            assemble(
-                self.model,
-                self.t,
-                &mut q,
-                self.independent,
-                &AssemblyOptions::default(),
-            )?;
-            assemble_speeds(self.model, self.t, &q, &mut u, self.independent);
-        }
-        Ok((q, u))
-    }
-
-    /// `z̈` and the outputs at `(z, ż, in)`.
-    fn evaluate(
-        &mut self,
-        z: &[f64],
-        zdot: &[f64],
-        inputs: &[f64],
-    ) -> Result<(Vec<f64>, Vec<f64>), RuntimeError> {
-        let (q, u) = self.state(z, zdot)?;
-        let mut udot = vec![0.0; q.len()];
-        match &mut self.solver {
-            Some(solver) => {
-                solver.accelerations(self.model, self.t, &q, &u, inputs, &mut udot)?;
-            }
-            None => accelerations(self.model, self.t, &q, &u, inputs, &mut udot)?,
-        }
-        let mut y = vec![0.0; self.model.noutputs()];
-        self.model.outputs(self.t, &q, &u, inputs, &mut y);
-        let zddot = self.independent.iter().map(|&i| udot[i]).collect();
-        Ok((zddot, y))
-    }
-}
-
 /// Central difference of `f` along one argument, with one Richardson refinement.
 fn derivative(
     mut f: impl FnMut(f64) -> Result<Vec<f64>, RuntimeError>,
@@ -176,24 +124,31 @@ pub fn linearize<M: Model + ?Sized>(
 ) -> Result<Linearization, RuntimeError> {
     let n = independent.len();
     let (ni, ny) = (model.ninputs(), model.noutputs());
-    let solver = (model.nc() > 0).then(|| ConstrainedSolver::new(model.nq(), model.nc()));
-    let mut reduced = Reduced {
-        model,
-        t,
-        q: q.to_vec(),
-        independent,
-        solver,
-    };
+    let signals = default_signals(model);
+    let tolerance = AssemblyOptions::default().tolerance;
+    let mut reduced = Reduced::new(model, &signals, t, q, independent, tolerance)?;
     let z0: Vec<f64> = independent.iter().map(|&i| q[i]).collect();
     let zdot0 = vec![0.0; n];
+    // `[z̈; y]` at `(z, ż, in)`.
+    let evaluate = |reduced: &mut Reduced<'_, M>,
+                    z: &[f64],
+                    zdot: &[f64],
+                    inputs: &[f64]|
+     -> Result<Vec<f64>, RuntimeError> {
+        let mut values = vec![0.0; n + ny];
+        let (zddot, y) = values.split_at_mut(n);
+        reduced.accelerations(t, z, zdot, inputs, zddot)?;
+        model.outputs(t, reduced.q(), reduced.u(), inputs, y);
+        Ok(values)
+    };
 
     // T = ∂q/∂z: the speed map is linear in ż, so its columns are exact.
     let mut transform = DMatrix::zeros(model.nq(), n);
     for k in 0..n {
         let mut unit = vec![0.0; n];
         unit[k] = 1.0;
-        let (_, u) = reduced.state(&z0, &unit)?;
-        transform.column_mut(k).copy_from_slice(&u);
+        reduced.state(t, &z0, &unit)?;
+        transform.column_mut(k).copy_from_slice(reduced.u());
     }
     let mut full_mass = DMatrix::zeros(model.nq(), model.nq());
     model.mass_matrix(t, q, inputs, full_mass.as_mut_slice());
@@ -217,8 +172,7 @@ pub fn linearize<M: Model + ?Sized>(
                 |h| {
                     let (mut z, mut zdot, mut input) = (z0.clone(), zdot0.clone(), inputs.to_vec());
                     [&mut z, &mut zdot, &mut input][which][k] += h;
-                    let (zddot, y) = reduced.evaluate(&z, &zdot, &input)?;
-                    Ok(zddot.into_iter().chain(y).collect())
+                    evaluate(reduced, &z, &zdot, &input)
                 },
                 step_for(base),
             )
@@ -246,9 +200,9 @@ pub fn linearize<M: Model + ?Sized>(
             |h| {
                 let mut z = z0.clone();
                 z[k] += h;
-                let (q, _) = reduced.state(&z, &zdot0)?;
+                reduced.state(t, &z, &zdot0)?;
                 let mut out = vec![0.0; 4 * nf];
-                model.flexures(t, &q, &mut out);
+                model.flexures(t, reduced.q(), &mut out);
                 Ok(out[..nf].to_vec())
             },
             step_for(z0[k]),

@@ -1,15 +1,22 @@
 //! Simulation of a [`Model`]: the first-order form of its equations of motion, and a driver
 //! that integrates it and samples the trajectory on a regular output grid.
 //!
-//! The state is `x = [q; u]` and `ẋ = [u; M(q)⁻¹·F(t, q, u, inputs)]`. The accelerations are
+//! Two formulations: in full coordinates ([`simulate`] with the explicit methods) the state is
+//! `x = [q; u]` and `ẋ = [u; M(q)⁻¹·F(t, q, u, inputs)]`, and loops are held by projection after
+//! every step; in minimal coordinates ([`simulate_reduced`], and [`simulate`] with the
+//! Rosenbrock methods) the state is `[z; ż]` of the independent coordinates ([`Reduced`]),
+//! which closes the loops at every evaluation, and each sample is closed again from its `z`. The accelerations are
 //! obtained by a Cholesky factorisation of `M` (symmetric positive definite for a well-posed
 //! model); if `M` is not symmetric, or Cholesky fails or is ill-conditioned, by LU with partial
 //! pivoting. The inputs are evaluated from one [`Signal`] per model input, in the model's input
 //! order.
 
-use crate::constraints::ConstrainedSolver;
-use crate::integrate::{check_len, AdaptiveOptions, Dop853, Dopri5, Ode, Rk4, Stats, Stepper};
-use crate::{Model, RuntimeError, Signal};
+use crate::constraints::{choose_independent, jacobian, ConstrainedSolver};
+use crate::integrate::{
+    check_len, AdaptiveOptions, Dop853, Dopri5, ExpRosenbrock, Ode, Rk4, Rosenbrock, Stats, Stepper,
+};
+use crate::reduced::Reduced;
+use crate::{dense, Model, RuntimeError, Signal};
 use nalgebra::{Cholesky, DMatrix, DVector};
 
 /// Integration method of [`simulate`].
@@ -39,6 +46,38 @@ pub enum Method {
         /// Step size in seconds (> 0).
         step: f64,
     },
+    /// Linearly implicit Rosenbrock 2(3) ([`Rosenbrock`], `ode23s`), L-stable, on the reduced
+    /// dynamics: fast modes are damped, so the step follows the slow motion once they have
+    /// decayed below the tolerance. Error test on `[z; ż]`.
+    Rosenbrock {
+        /// Relative tolerance (≥ 0).
+        rtol: f64,
+        /// Absolute tolerance (> 0), in the units of each reduced state component.
+        atol: f64,
+        /// Largest step in seconds (> 0; `f64::INFINITY` for no limit).
+        h_max: f64,
+    },
+    /// Exponential Rosenbrock 4(3) ([`ExpRosenbrock`], `exprb43`) on the reduced dynamics:
+    /// the linearization over each step is integrated exactly, so lightly damped fast modes
+    /// are followed at steps longer than their period. Error test on `[z; ż]`.
+    ExpRosenbrock {
+        /// Relative tolerance (≥ 0).
+        rtol: f64,
+        /// Absolute tolerance (> 0), in the units of each reduced state component.
+        atol: f64,
+        /// Largest step in seconds (> 0; `f64::INFINITY` for no limit).
+        h_max: f64,
+    },
+}
+
+impl Method {
+    /// Whether the method integrates the reduced dynamics (also when given to [`simulate`]).
+    pub fn is_reduced(&self) -> bool {
+        matches!(
+            self,
+            Method::Rosenbrock { .. } | Method::ExpRosenbrock { .. }
+        )
+    }
 }
 
 impl Default for Method {
@@ -67,11 +106,13 @@ pub struct SimOptions {
     pub method: Method,
     /// Budget of integration steps, accepted and rejected (default `1_000_000`).
     pub max_steps: usize,
-    /// For models with loop closures: after every accepted step (and at every sample) the
-    /// state is projected back until `max |φ(q)| ≤ constraint_tolerance` (model units, SI;
-    /// default `1e-12`) and, when `max |J u|` exceeds the same number (per second), onto
-    /// `J u = 0` (kinetic-energy-closest correction). A state already within both is left as
-    /// it is (and the integrator keeps its derivative there).
+    /// For models with loop closures, in full coordinates: after every accepted step (and at
+    /// every sample) the state is projected back until `max |φ(q)| ≤ constraint_tolerance`
+    /// (model units, SI; default `1e-12`) and, when `max |J u|` exceeds the same number (per
+    /// second), onto `J u = 0` (kinetic-energy-closest correction). A state already within
+    /// both is left as it is (and the integrator keeps its derivative there). In minimal
+    /// coordinates: the loops are closed to `max |φ(q)| ≤ constraint_tolerance` at every
+    /// evaluation and sample (`J u = 0` holds by construction).
     pub constraint_tolerance: f64,
 }
 
@@ -212,59 +253,16 @@ impl AccelSolver {
         ok
     }
 
-    /// LU with partial pivoting, in place in `factor`; false if a pivot is below
-    /// `n·ε·max|M_ij|`.
+    /// LU with partial pivoting (in `factor`) and solve into `udot`; false if a pivot is
+    /// below `n·ε·max|M_ij|`.
     fn lu(&mut self, udot: &mut [f64]) -> bool {
         let n = self.mass.nrows();
-        let a = &mut self.factor;
-        a.copy_from(&self.mass);
-        let tol = n as f64 * f64::EPSILON * self.mass.amax();
-        for k in 0..n {
-            let mut p = k;
-            for i in k + 1..n {
-                if a[(i, k)].abs() > a[(p, k)].abs() {
-                    p = i;
-                }
-            }
-            self.pivots[k] = p;
-            if a[(p, k)].abs() <= tol {
-                return false;
-            }
-            if p != k {
-                a.swap_rows(k, p);
-            }
-            let pivot = a[(k, k)];
-            for i in k + 1..n {
-                a[(i, k)] /= pivot;
-            }
-            for j in k + 1..n {
-                let akj = a[(k, j)];
-                if akj != 0.0 {
-                    for i in k + 1..n {
-                        let aik = a[(i, k)];
-                        a[(i, j)] -= aik * akj;
-                    }
-                }
-            }
+        self.factor.copy_from(&self.mass);
+        if !dense::lu(self.factor.as_mut_slice(), n, &mut self.pivots) {
+            return false;
         }
         udot.copy_from_slice(self.force.as_slice());
-        for k in 0..n {
-            udot.swap(k, self.pivots[k]);
-        }
-        for i in 0..n {
-            let mut s = udot[i];
-            for j in 0..i {
-                s -= a[(i, j)] * udot[j];
-            }
-            udot[i] = s;
-        }
-        for i in (0..n).rev() {
-            let mut s = udot[i];
-            for j in i + 1..n {
-                s -= a[(i, j)] * udot[j];
-            }
-            udot[i] = s / a[(i, i)];
-        }
+        dense::lu_solve(self.factor.as_slice(), n, &self.pivots, udot);
         true
     }
 }
@@ -416,6 +414,10 @@ fn output_grid(t_start: f64, t_end: f64, dt: f64) -> Vec<f64> {
 /// signal per model input (in the model's input order), and returns the trajectory sampled on
 /// the output grid.
 ///
+/// The Rosenbrock methods run [`simulate_reduced`] with the independent coordinates chosen by
+/// [`choose_independent`] at `q0` (all coordinates for a model without loops); to choose them,
+/// call [`simulate_reduced`].
+///
 /// `progress` is called with the current time after every accepted step (cheap calls; throttle
 /// any display on the caller's side).
 ///
@@ -430,17 +432,86 @@ pub fn simulate<M: Model + ?Sized>(
     options: &SimOptions,
     progress: &mut dyn FnMut(f64),
 ) -> Result<Trajectory, RuntimeError> {
-    let ode = ModelOde::new(model, signals)?;
     let nq = model.nq();
     check_len("q0", nq, q0.len())?;
     check_len("u0", nq, u0.len())?;
+    if options.method.is_reduced() {
+        let independent = if model.nc() == 0 {
+            (0..nq).collect()
+        } else {
+            choose_independent(&jacobian(model, options.t_start, q0))
+        };
+        return simulate_reduced(model, q0, u0, &independent, signals, options, progress);
+    }
+    let ode = ModelOde::new(model, signals)?;
+    let grid = checked_grid(options)?;
+    let mut x0 = Vec::with_capacity(2 * nq);
+    x0.extend_from_slice(q0);
+    x0.extend_from_slice(u0);
+    let mut full = FullCoordinates {
+        model,
+        signals,
+        nq,
+        projector: (model.nc() > 0).then(|| ConstrainedSolver::new(nq, model.nc())),
+        inputs: vec![0.0; signals.len()],
+        tolerance: options.constraint_tolerance,
+    };
+    let sampling = Sampling {
+        model,
+        signals,
+        grid,
+        max_steps: options.max_steps,
+        progress,
+    };
+    integrate(ode, &x0, options, sampling, &mut full)
+}
+
+/// Simulates `model` as [`simulate`] does, in the minimal coordinates `independent` (indices
+/// into `q`; all of them for a model without loops): the state is `[z; ż]` with `z` these
+/// coordinates ([`Reduced`]). The loops are closed from `q0` with `z = q0[independent]`, and
+/// the initial speeds are `ż = u0[independent]` (the other entries of `u0` follow from the
+/// loops). Any [`Method`]; the Rosenbrock methods are meant for it.
+///
+/// Errors: those of [`simulate`], and those of [`Reduced::new`] (the independent coordinates
+/// must be as many as the degrees of freedom and determine the others).
+pub fn simulate_reduced<M: Model + ?Sized>(
+    model: &M,
+    q0: &[f64],
+    u0: &[f64],
+    independent: &[usize],
+    signals: &[Signal],
+    options: &SimOptions,
+    progress: &mut dyn FnMut(f64),
+) -> Result<Trajectory, RuntimeError> {
+    let nq = model.nq();
+    check_len("q0", nq, q0.len())?;
+    check_len("u0", nq, u0.len())?;
+    let grid = checked_grid(options)?;
+    let (t0, tolerance) = (options.t_start, options.constraint_tolerance);
+    let ode = Reduced::new(model, signals, t0, q0, independent, tolerance)?;
+    let mut x0: Vec<f64> = independent.iter().map(|&i| q0[i]).collect();
+    x0.extend(independent.iter().map(|&i| u0[i]));
+    let mut reduced = ReducedCoordinates {
+        sampler: Reduced::new(model, signals, t0, q0, independent, tolerance)?,
+        nz: independent.len(),
+    };
+    let sampling = Sampling {
+        model,
+        signals,
+        grid,
+        max_steps: options.max_steps,
+        progress,
+    };
+    integrate(ode, &x0, options, sampling, &mut reduced)
+}
+
+/// The output grid of `options`, after checking the times.
+fn checked_grid(options: &SimOptions) -> Result<Vec<f64>, RuntimeError> {
     let SimOptions {
         t_start,
         t_end,
         output_interval,
-        method,
-        max_steps,
-        constraint_tolerance,
+        ..
     } = *options;
     if !(t_start.is_finite() && t_end.is_finite() && t_end >= t_start) {
         return Err(RuntimeError::InvalidOptions(format!(
@@ -452,35 +523,126 @@ pub fn simulate<M: Model + ?Sized>(
             "output_interval must be finite and > 0 (got {output_interval})"
         )));
     }
-    let mut x0 = Vec::with_capacity(2 * nq);
-    x0.extend_from_slice(q0);
-    x0.extend_from_slice(u0);
-    let grid = output_grid(t_start, t_end, output_interval);
-    let sampling = Sampling {
-        model,
-        signals,
-        grid,
-        max_steps,
-        constraint_tolerance,
-        progress,
-    };
+    Ok(output_grid(t_start, t_end, output_interval))
+}
+
+/// Integrates `ode` from `x0` with `options.method` and samples it through `map`.
+fn integrate<O: Ode, M: Model + ?Sized>(
+    ode: O,
+    x0: &[f64],
+    options: &SimOptions,
+    sampling: Sampling<'_, M>,
+    map: &mut dyn StateMap,
+) -> Result<Trajectory, RuntimeError> {
+    let (t0, t1) = (options.t_start, options.t_end);
     let adaptive = |defaults: AdaptiveOptions, rtol, atol, h_max| AdaptiveOptions {
         rtol,
         atol,
         h_max,
-        max_steps,
+        max_steps: options.max_steps,
         ..defaults
     };
-    match method {
+    match options.method {
         Method::Dopri5 { rtol, atol, h_max } => {
             let opts = adaptive(AdaptiveOptions::default(), rtol, atol, h_max);
-            run(Dopri5::new(ode, t_start, &x0, t_end, opts)?, sampling)
+            run(Dopri5::new(ode, t0, x0, t1, opts)?, sampling, map)
         }
         Method::Dop853 { rtol, atol, h_max } => {
             let opts = adaptive(AdaptiveOptions::dop853(), rtol, atol, h_max);
-            run(Dop853::new(ode, t_start, &x0, t_end, opts)?, sampling)
+            run(Dop853::new(ode, t0, x0, t1, opts)?, sampling, map)
         }
-        Method::Rk4 { step } => run(Rk4::new(ode, t_start, &x0, t_end, step)?, sampling),
+        Method::Rk4 { step } => run(Rk4::new(ode, t0, x0, t1, step)?, sampling, map),
+        Method::Rosenbrock { rtol, atol, h_max } => {
+            let opts = adaptive(AdaptiveOptions::rosenbrock(), rtol, atol, h_max);
+            run(Rosenbrock::new(ode, t0, x0, t1, opts)?, sampling, map)
+        }
+        Method::ExpRosenbrock { rtol, atol, h_max } => {
+            let opts = adaptive(AdaptiveOptions::rosenbrock(), rtol, atol, h_max);
+            run(ExpRosenbrock::new(ode, t0, x0, t1, opts)?, sampling, map)
+        }
+    }
+}
+
+/// How the integrator's state relates to the model's `(q, u)`.
+trait StateMap {
+    /// Corrects the state after an accepted step in place; returns whether it changed.
+    fn after_step(&mut self, t: f64, x: &mut [f64]) -> Result<bool, RuntimeError>;
+    /// The model's `q` and `u` at a sample `(t, x)`.
+    fn full_state(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        q: &mut [f64],
+        u: &mut [f64],
+    ) -> Result<(), RuntimeError>;
+}
+
+/// `x = [q; u]`, projected onto the loops after every step and at every sample.
+struct FullCoordinates<'a, M: Model + ?Sized> {
+    model: &'a M,
+    signals: &'a [Signal],
+    nq: usize,
+    projector: Option<ConstrainedSolver>,
+    inputs: Vec<f64>,
+    tolerance: f64,
+}
+
+impl<M: Model + ?Sized> StateMap for FullCoordinates<'_, M> {
+    /// Projects `x` in place; returns whether it changed (a state already within tolerance is
+    /// left bit for bit as it was).
+    fn after_step(&mut self, t: f64, x: &mut [f64]) -> Result<bool, RuntimeError> {
+        let Some(projector) = self.projector.as_mut() else {
+            return Ok(false);
+        };
+        for (v, s) in self.inputs.iter_mut().zip(self.signals) {
+            *v = s.value(t);
+        }
+        let (q, u) = x.split_at_mut(self.nq);
+        projector.project_state(self.model, t, q, u, &self.inputs, self.tolerance)
+    }
+
+    fn full_state(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        q: &mut [f64],
+        u: &mut [f64],
+    ) -> Result<(), RuntimeError> {
+        q.copy_from_slice(&x[..self.nq]);
+        u.copy_from_slice(&x[self.nq..]);
+        if let Some(projector) = self.projector.as_mut() {
+            for (v, s) in self.inputs.iter_mut().zip(self.signals) {
+                *v = s.value(t);
+            }
+            projector.project_state(self.model, t, q, u, &self.inputs, self.tolerance)?;
+        }
+        Ok(())
+    }
+}
+
+/// `x = [z; ż]`; each sample closes the loops from the previous one.
+struct ReducedCoordinates<'a, M: Model + ?Sized> {
+    sampler: Reduced<'a, M>,
+    nz: usize,
+}
+
+impl<M: Model + ?Sized> StateMap for ReducedCoordinates<'_, M> {
+    fn after_step(&mut self, _t: f64, _x: &mut [f64]) -> Result<bool, RuntimeError> {
+        Ok(false)
+    }
+
+    fn full_state(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        q: &mut [f64],
+        u: &mut [f64],
+    ) -> Result<(), RuntimeError> {
+        let (z, zdot) = x.split_at(self.nz);
+        self.sampler.state(t, z, zdot)?;
+        q.copy_from_slice(self.sampler.q());
+        u.copy_from_slice(self.sampler.u());
+        Ok(())
     }
 }
 
@@ -490,38 +652,23 @@ struct Sampling<'a, M: Model + ?Sized> {
     signals: &'a [Signal],
     grid: Vec<f64>,
     max_steps: usize,
-    constraint_tolerance: f64,
     progress: &'a mut dyn FnMut(f64),
 }
 
-/// Steps `stepper` to its end time, sampling `grid` by dense output.
+/// Steps `stepper` to its end time, sampling `grid` by dense output through `map`.
 fn run<M: Model + ?Sized, S: Stepper>(
     mut stepper: S,
     sampling: Sampling<'_, M>,
+    map: &mut dyn StateMap,
 ) -> Result<Trajectory, RuntimeError> {
     let Sampling {
         model,
         signals,
         grid,
         max_steps,
-        constraint_tolerance,
         progress,
     } = sampling;
     let nq = model.nq();
-    let mut projector = (model.nc() > 0).then(|| ConstrainedSolver::new(nq, model.nc()));
-    let mut project_inputs = vec![0.0; signals.len()];
-    // Projects `x` in place; returns whether it changed (a state already within tolerance is
-    // left bit for bit as it was).
-    let mut project = |t: f64, x: &mut [f64]| -> Result<bool, RuntimeError> {
-        let Some(projector) = projector.as_mut() else {
-            return Ok(false);
-        };
-        for (v, s) in project_inputs.iter_mut().zip(signals) {
-            *v = s.value(t);
-        }
-        let (q, u) = x.split_at_mut(nq);
-        projector.project_state(model, t, q, u, &project_inputs, constraint_tolerance)
-    };
     let mut traj = Trajectory {
         q: Vec::with_capacity(grid.len()),
         u: Vec::with_capacity(grid.len()),
@@ -529,21 +676,28 @@ fn run<M: Model + ?Sized, S: Stepper>(
         inputs: Vec::with_capacity(grid.len()),
         ..Trajectory::default()
     };
-    let mut x = vec![0.0; 2 * nq];
-    // The projected state after a step, written back (which makes the stepper re-evaluate its
-    // derivative there) only when the projection moved it.
-    let mut projected = vec![0.0; 2 * nq];
-    let record = |t: f64, x: &[f64], traj: &mut Trajectory| {
-        let (q, u) = x.split_at(nq);
+    let mut x = vec![0.0; stepper.state().len()];
+    // The corrected state after a step, written back (which makes the stepper re-evaluate its
+    // derivative there) only when the correction moved it.
+    let mut corrected = x.clone();
+    let record = |map: &mut dyn StateMap,
+                  t: f64,
+                  x: &[f64],
+                  traj: &mut Trajectory|
+     -> Result<(), RuntimeError> {
+        let (mut q, mut u) = (vec![0.0; nq], vec![0.0; nq]);
+        map.full_state(t, x, &mut q, &mut u)?;
         let inputs: Vec<f64> = signals.iter().map(|s| s.value(t)).collect();
         let mut outputs = vec![0.0; model.noutputs()];
-        model.outputs(t, q, u, &inputs, &mut outputs);
-        traj.q.push(q.to_vec());
-        traj.u.push(u.to_vec());
+        model.outputs(t, &q, &u, &inputs, &mut outputs);
+        traj.q.push(q);
+        traj.u.push(u);
         traj.inputs.push(inputs);
         traj.outputs.push(outputs);
+        Ok(())
     };
-    record(grid[0], stepper.state(), &mut traj);
+    x.copy_from_slice(stepper.state());
+    record(map, grid[0], &x, &mut traj)?;
     let mut next = 1;
     while next < grid.len() {
         let steps = stepper.stats().accepted_steps + stepper.stats().rejected_steps;
@@ -554,25 +708,22 @@ fn run<M: Model + ?Sized, S: Stepper>(
             });
         }
         stepper.step()?;
-        if model.nc() > 0 {
-            let t = stepper.t();
-            projected.copy_from_slice(stepper.state());
-            if project(t, &mut projected)? {
-                stepper.state_mut().copy_from_slice(&projected);
-                stepper.reset()?;
-            }
+        corrected.copy_from_slice(stepper.state());
+        if map.after_step(stepper.t(), &mut corrected)? {
+            stepper.state_mut().copy_from_slice(&corrected);
+            stepper.reset()?;
         }
         progress(stepper.t());
         while next < grid.len() && grid[next] <= stepper.t() {
             stepper.interpolate(grid[next], &mut x)?;
-            project(grid[next], &mut x)?;
-            record(grid[next], &x, &mut traj);
+            record(map, grid[next], &x, &mut traj)?;
             next += 1;
         }
         if stepper.is_finished() {
             // The grid ends at t_end, where the stepper stops exactly; this is a safeguard.
+            x.copy_from_slice(stepper.state());
             while next < grid.len() {
-                record(grid[next], stepper.state(), &mut traj);
+                record(map, grid[next], &x, &mut traj)?;
                 next += 1;
             }
         }

@@ -1,6 +1,9 @@
 //! Stepping a model never allocates: all working storage is allocated up front.
 
-use mech_runtime::{AdaptiveOptions, Dopri5, Model, ModelOde, Rk4, Signal, Stepper};
+use mech_runtime::{
+    AdaptiveOptions, Dopri5, ExpRosenbrock, Model, ModelOde, Reduced, Rk4, Rosenbrock, Signal,
+    Stepper,
+};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
@@ -128,4 +131,30 @@ fn stepping_does_not_allocate() {
         });
         assert_eq!(n, 0, "RK4 allocated (indefinite M: {indefinite})");
     }
+
+    // The stiff methods, on the full and on the reduced form (all coordinates independent).
+    let model = Coupled { indefinite: false };
+    let x0 = [0.5, -0.2, 0.0, 0.0];
+    let opts = AdaptiveOptions::rosenbrock();
+    let mut out = [0.0; 4];
+    let mut stepped = |stepper: &mut dyn Stepper| {
+        let n = allocations(|| {
+            while !stepper.is_finished() {
+                stepper.step().unwrap();
+                let t = 0.5 * (stepper.t_prev() + stepper.t());
+                stepper.interpolate(t, &mut out).unwrap();
+            }
+        });
+        assert!(stepper.stats().accepted_steps > 10);
+        n
+    };
+    let ode = ModelOde::new(&model, &signals).unwrap();
+    let n = stepped(&mut Rosenbrock::new(ode, 0.0, &x0, 3.0, opts).unwrap());
+    assert_eq!(n, 0, "Rosenbrock allocated");
+    let ode = ModelOde::new(&model, &signals).unwrap();
+    let n = stepped(&mut ExpRosenbrock::new(ode, 0.0, &x0, 3.0, opts).unwrap());
+    assert_eq!(n, 0, "ExpRosenbrock allocated");
+    let reduced = Reduced::new(&model, &signals, 0.0, &x0[..2], &[0, 1], 1e-12).unwrap();
+    let n = stepped(&mut ExpRosenbrock::new(reduced, 0.0, &x0, 3.0, opts).unwrap());
+    assert_eq!(n, 0, "ExpRosenbrock on the reduced dynamics allocated");
 }

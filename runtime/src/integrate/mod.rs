@@ -1,4 +1,4 @@
-//! Explicit Runge–Kutta integrators with a step-by-step API and dense output.
+//! Runge–Kutta and Rosenbrock integrators with a step-by-step API and dense output.
 //!
 //! * [`Dopri5`]: adaptive Dormand–Prince 5(4), a transcription of Hairer's `DOPRI5` (same
 //!   coefficients, FSAL, Lund-stabilised PI step-size control, initial step-size heuristic,
@@ -10,13 +10,22 @@
 //!   takes exactly the steps the Fortran code takes. Fewer evaluations than [`Dopri5`] at
 //!   tight tolerances (≲ 1e-7).
 //! * [`Rk4`]: classical fixed-step Runge–Kutta of order 4, with cubic Hermite dense output.
+//! * [`Rosenbrock`]: adaptive linearly implicit Rosenbrock 2(3) (Shampine & Reichelt's
+//!   `ode23s`), L-stable, for stiff systems: its step follows the accuracy of the slow motion,
+//!   not the stability limit of the fast modes. Finite-difference Jacobian, an `n × n` LU per
+//!   step.
+//! * [`ExpRosenbrock`]: adaptive exponential Rosenbrock 4(3) (`exprb43` of Hochbruck,
+//!   Ostermann & Schweitzer): integrates the linearization of each step exactly (matrix
+//!   φ-functions), so lightly damped fast modes are followed at steps far longer than their
+//!   period. For small systems.
 //!
 //! All own their [`Ode`] and implement [`Stepper`]: `step()` advances by one accepted step
 //! toward the end time, `interpolate()` evaluates the solution inside the last step, and
 //! `state_mut()` lets the caller change the state between steps (e.g. to project it back onto
 //! constraints; the derivative at the modified state is recomputed before the next step).
 //! All working storage is allocated when the integrator is created; stepping never allocates.
-//! [`Dopri5`] and [`Dop853`] share the step-size controller and the initial step heuristic.
+//! The adaptive methods share the step-size controller and the initial step heuristic, the
+//! implicit ones the finite-difference Jacobian.
 //!
 //! Integration runs forward in time only (`t_end >= t0`).
 //!
@@ -45,11 +54,16 @@
 
 mod dop853;
 mod dopri5;
+mod exp_rosenbrock;
+mod phi;
 mod rk4;
+mod rosenbrock;
 
 pub use dop853::Dop853;
 pub use dopri5::Dopri5;
+pub use exp_rosenbrock::ExpRosenbrock;
 pub use rk4::Rk4;
+pub use rosenbrock::Rosenbrock;
 
 use crate::RuntimeError;
 
@@ -84,8 +98,10 @@ pub struct Stats {
     /// (always 0 for fixed-step methods).
     pub rejected_steps: usize,
     /// Evaluations of [`Ode::rhs`], including those of the initial step-size heuristic and of
-    /// derivative refreshes after [`Stepper::state_mut`].
+    /// derivative refreshes after [`Stepper::state_mut`], and those of Jacobians.
     pub rhs_evaluations: usize,
+    /// Jacobians evaluated (by finite differences; [`Rosenbrock`] and [`ExpRosenbrock`]).
+    pub jacobian_evaluations: usize,
 }
 
 /// The step-by-step interface shared by the integrators.
@@ -147,6 +163,45 @@ fn derivative_at<O: Ode + ?Sized>(
     }
 }
 
+/// `J = ∂f/∂x` (`n × n`, column-major) and `∂f/∂t` at `(t, x)` by forward differences from
+/// `f0 = f(t, x)`, with Hairer's increments `√(UROUND·max(1e-5, |x_j|))` (as in `RODAS`);
+/// `n + 1` evaluations. `x_scratch` and `f_scratch` are working vectors of length `n`.
+#[allow(clippy::too_many_arguments)]
+fn finite_difference_jacobian<O: Ode + ?Sized>(
+    ode: &mut O,
+    t: f64,
+    x: &[f64],
+    f0: &[f64],
+    jacobian: &mut [f64],
+    dfdt: &mut [f64],
+    x_scratch: &mut [f64],
+    f_scratch: &mut [f64],
+) -> Result<(), RuntimeError> {
+    let n = x.len();
+    x_scratch.copy_from_slice(x);
+    for j in 0..n {
+        x_scratch[j] = x[j] + (UROUND * x[j].abs().max(1e-5)).sqrt();
+        // The increment as represented, so that the quotient has no rounding bias.
+        let delta = x_scratch[j] - x[j];
+        ode.rhs(t, x_scratch, f_scratch)?;
+        for ((out, f), f0) in jacobian[n * j..n * (j + 1)]
+            .iter_mut()
+            .zip(&*f_scratch)
+            .zip(f0)
+        {
+            *out = (f - f0) / delta;
+        }
+        x_scratch[j] = x[j];
+    }
+    let t_plus = t + (UROUND * t.abs().max(1e-5)).sqrt();
+    ode.rhs(t_plus, x, f_scratch)?;
+    let delta = t_plus - t;
+    for ((out, f), f0) in dfdt.iter_mut().zip(&*f_scratch).zip(f0) {
+        *out = (f - f0) / delta;
+    }
+    Ok(())
+}
+
 fn all_finite(x: &[f64]) -> bool {
     x.iter().all(|v| v.is_finite())
 }
@@ -204,8 +259,10 @@ fn interp_theta(t: f64, t_prev: f64, t_cur: f64) -> Result<f64, RuntimeError> {
 /// Unit roundoff used in Hairer's step-size underflow test.
 const UROUND: f64 = 2.3e-16;
 
-/// Options of the adaptive methods [`Dopri5`] and [`Dop853`]. [`Default`] gives those of
-/// Hairer's `DOPRI5` and [`AdaptiveOptions::dop853`] those of `DOP853`, except the tolerances.
+/// Options of the adaptive methods [`Dopri5`], [`Dop853`], [`Rosenbrock`] and
+/// [`ExpRosenbrock`]. [`Default`] gives those of Hairer's `DOPRI5`, [`AdaptiveOptions::dop853`]
+/// those of `DOP853` and [`AdaptiveOptions::rosenbrock`] those of `RODAS`, except the
+/// tolerances.
 ///
 /// A step is accepted when its scaled error norm is at most 1: for [`Dopri5`]
 /// `sqrt(mean_i((err_i / sk_i)²))` with `sk_i = atol + rtol·max(|x_i|, |x_new_i|)` and `err` the
@@ -269,6 +326,17 @@ impl AdaptiveOptions {
         }
     }
 
+    /// Hairer's `RODAS` step-size settings: safety 0.9, step ratio in [0.2, 6], no Lund
+    /// stabilisation; tolerances as [`Default`].
+    pub fn rosenbrock() -> Self {
+        AdaptiveOptions {
+            fac_min: 0.2,
+            fac_max: 6.0,
+            beta: 0.0,
+            ..AdaptiveOptions::default()
+        }
+    }
+
     /// These options with `rtol` and `atol` replaced.
     pub fn with_tolerances(self, rtol: f64, atol: f64) -> Self {
         AdaptiveOptions { rtol, atol, ..self }
@@ -319,7 +387,7 @@ impl AdaptiveOptions {
     }
 }
 
-/// The state of an adaptive integration shared by [`Dopri5`] and [`Dop853`]: time, step size,
+/// The state of an adaptive integration shared by the adaptive methods: time, step size,
 /// Hairer's step-size controller (`FAC11 = err^expo1`, Lund stabilisation `/facold^beta`,
 /// `fac_min ≤ h_new/h ≤ fac_max`, no growth right after a rejection) and the counters.
 #[derive(Debug, Clone, Copy)]

@@ -1,0 +1,364 @@
+//! Linearly implicit Rosenbrock 2(3) of Shampine & Reichelt (MATLAB's `ode23s`).
+
+use super::{
+    check_len, derivative_at, finite_difference_jacobian, initial_step, interp_theta, Adaptive,
+    AdaptiveOptions, Ode, Stats, Stepper,
+};
+use crate::{dense, RuntimeError};
+
+// L. F. Shampine and M. W. Reichelt, "The MATLAB ODE Suite", SIAM J. Sci. Comput. 18(1),
+// 1997, §3: with W = I − h·d·J and T = ∂f/∂t,
+//   k1 = W⁻¹(F0 + h·d·T),          F0 = f(t, y)
+//   k2 = W⁻¹(F1 − k1) + k1,        F1 = f(t + h/2, y + h/2·k1)
+//   y_new = y + h·k2,               F2 = f(t + h, y_new)
+//   k3 = W⁻¹(F2 − e32(k2 − F1) − 2(k1 − F0) + h·d·T)
+//   error ≈ h/6·(k1 − 2k2 + k3)
+// and the continuous extension y(t + s·h) = y + h·(s(1−s)·k1 + s(s−2d)·k2)/(1−2d).
+/// `d = 1/(2 + √2)`: the method is L-stable.
+const D: f64 = 0.292_893_218_813_452_5;
+/// `e32 = 6 + √2`.
+const E32: f64 = 7.414_213_562_373_095;
+
+/// Adaptive linearly implicit Rosenbrock method of order 2 with a 3rd-order error estimate
+/// (Shampine & Reichelt's `ode23s`), for stiff systems, with dense output.
+///
+/// L-stable: modes far faster than the step are damped, not resolved, so the step follows the
+/// accuracy of the slow motion. Each step solves three linear systems with
+/// `W = I − h·d·J` (LU, `n × n`) and costs two evaluations of the right-hand side (the third
+/// is the first of the next step). `J = ∂f/∂x` and `∂f/∂t` are forward differences
+/// (`n + 1` evaluations, counted in [`Stats::rhs_evaluations`]; the Jacobians in
+/// [`Stats::jacobian_evaluations`]).
+///
+/// The order-2 solution is a W-method (order 2 for any `J`), but the error estimate is
+/// asymptotically correct only with the exact `J`: with a stale one it can under-estimate
+/// the error (by 10× or more). So `J` is re-evaluated at the start of every step by default;
+/// [`Rosenbrock::reuse_jacobian`] trades that for speed where `J` varies slowly. After a
+/// rejected step `J` is always re-evaluated at the current point.
+///
+/// Non-finite values (or a singular `W`) reject the trial step and shrink the step by
+/// `fac_min`; if that drives the step to underflow, the error is
+/// [`RuntimeError::NonFiniteState`].
+pub struct Rosenbrock<O: Ode> {
+    ode: O,
+    control: Adaptive,
+    /// The state was modified through `state_mut`; `f0` is stale.
+    dirty: bool,
+    stages: Stages,
+}
+
+/// The working vectors of one step, the Jacobian and the factor of `W`.
+struct Stages {
+    x: Vec<f64>,
+    /// `f(t, x)`.
+    f0: Vec<f64>,
+    x_new: Vec<f64>,
+    /// `f(t + h, x_new)`.
+    f2: Vec<f64>,
+    x_stage: Vec<f64>,
+    f1: Vec<f64>,
+    k1: Vec<f64>,
+    k2: Vec<f64>,
+    k3: Vec<f64>,
+    /// `∂f/∂x` (`n × n`, column-major) and `∂f/∂t`.
+    jacobian: Vec<f64>,
+    dfdt: Vec<f64>,
+    /// `J` was evaluated at the current `(t, x)`.
+    jacobian_current: bool,
+    /// Accepted steps since `J` was evaluated.
+    jacobian_age: usize,
+    /// Steps a Jacobian may serve after the one it was evaluated for.
+    jacobian_reuse: usize,
+    /// Trial steps tried from the current point.
+    attempts: usize,
+    /// LU factor of `W` and its pivots, for step size `factor_h` (NaN: none).
+    factor: Vec<f64>,
+    pivots: Vec<usize>,
+    factor_h: f64,
+    jacobian_evaluations: usize,
+    /// Dense output of the last step: `x_prev`, `h·k1/(1−2d)`, `h·k2/(1−2d)`.
+    cont: [Vec<f64>; 3],
+}
+
+impl<O: Ode> Rosenbrock<O> {
+    /// Creates the integrator at `(t0, x0)`, integrating toward `t_end >= t0`, and evaluates
+    /// the derivative at `x0` (plus once more for the initial step-size heuristic). Use
+    /// [`AdaptiveOptions::rosenbrock`] for the step-size controller's usual settings.
+    pub fn new(
+        mut ode: O,
+        t0: f64,
+        x0: &[f64],
+        t_end: f64,
+        opts: AdaptiveOptions,
+    ) -> Result<Self, RuntimeError> {
+        // The error estimate is O(h³): exponent 1/3, less the Lund stabilisation.
+        let mut control = Adaptive::new(opts, 1.0 / 3.0 - 0.75 * opts.beta, 2, t0, t_end)?;
+        let n = ode.dim();
+        check_len("x0", n, x0.len())?;
+        let zeros = vec![0.0; n];
+        let mut f0 = zeros.clone();
+        derivative_at(&mut ode, t0, x0, &mut f0)?;
+        let (mut x_stage, mut f1) = (zeros.clone(), zeros.clone());
+        control.h = match opts.h_init {
+            Some(h) => h.min(opts.h_max),
+            None if t_end > t0 => {
+                control.stats.rhs_evaluations += 1;
+                initial_step(&mut ode, &opts, 2, t0, x0, &f0, &mut x_stage, &mut f1)?
+            }
+            None => 0.0,
+        };
+        Ok(Rosenbrock {
+            ode,
+            control,
+            dirty: false,
+            stages: Stages {
+                x: x0.to_vec(),
+                f0,
+                x_new: zeros.clone(),
+                f2: zeros.clone(),
+                x_stage,
+                f1,
+                k1: zeros.clone(),
+                k2: zeros.clone(),
+                k3: zeros.clone(),
+                jacobian: vec![0.0; n * n],
+                dfdt: zeros.clone(),
+                jacobian_current: false,
+                jacobian_age: usize::MAX,
+                jacobian_reuse: 0,
+                attempts: 0,
+                factor: vec![0.0; n * n],
+                pivots: vec![0; n],
+                factor_h: f64::NAN,
+                jacobian_evaluations: 0,
+                cont: [x0.to_vec(), zeros.clone(), zeros],
+            },
+        })
+    }
+
+    /// Lets a Jacobian serve `steps` accepted steps after the one it was evaluated for
+    /// (default 0: a fresh `J` every step). Re-using it saves `n + 1` evaluations per step
+    /// but weakens the error estimate (see the type's docs); a rejection still forces a
+    /// fresh `J`.
+    pub fn reuse_jacobian(&mut self, steps: usize) {
+        self.stages.jacobian_reuse = steps;
+    }
+
+    /// The system being integrated.
+    pub fn ode(&self) -> &O {
+        &self.ode
+    }
+
+    /// Mutable access to the system (e.g. to change a parameter). Call [`Stepper::reset`]
+    /// afterwards if the change alters the derivative at the current state.
+    pub fn ode_mut(&mut self) -> &mut O {
+        self.dirty = true;
+        &mut self.ode
+    }
+
+    /// Consumes the integrator, returning the system.
+    pub fn into_ode(self) -> O {
+        self.ode
+    }
+
+    /// The options in use.
+    pub fn options(&self) -> &AdaptiveOptions {
+        &self.control.opts
+    }
+
+    /// Step size that the next step will try (before clipping to the end time).
+    pub fn next_step_size(&self) -> f64 {
+        self.control.h
+    }
+}
+
+impl Stages {
+    /// `J` and `∂f/∂t` at the current `(t, x)`.
+    fn evaluate_jacobian<O: Ode>(&mut self, ode: &mut O, t: f64) -> Result<(), RuntimeError> {
+        finite_difference_jacobian(
+            ode,
+            t,
+            &self.x,
+            &self.f0,
+            &mut self.jacobian,
+            &mut self.dfdt,
+            &mut self.x_stage,
+            &mut self.f1,
+        )?;
+        self.jacobian_evaluations += 1;
+        self.jacobian_current = true;
+        self.jacobian_age = 0;
+        self.factor_h = f64::NAN;
+        Ok(())
+    }
+
+    /// A trial step of size `h` from `(t, x)`: `x_new`, `f2 = f(t + h, x_new)`, and the scaled
+    /// error norm (NaN if anything is non-finite or `W` is singular). Returns the number of
+    /// extra evaluations spent on the Jacobian.
+    fn trial<O: Ode>(
+        &mut self,
+        ode: &mut O,
+        opts: &AdaptiveOptions,
+        t: f64,
+        h: f64,
+    ) -> Result<(f64, usize), RuntimeError> {
+        let n = self.x.len();
+        let mut extra = 0;
+        let stale = self.attempts > 0 || self.jacobian_age > self.jacobian_reuse;
+        if !self.jacobian_current && stale {
+            self.evaluate_jacobian(ode, t)?;
+            extra = n + 1;
+        }
+        self.attempts += 1;
+        if self.factor_h != h {
+            let hd = h * D;
+            for (w, j) in self.factor.iter_mut().zip(&self.jacobian) {
+                *w = -hd * j;
+            }
+            for i in 0..n {
+                self.factor[i + n * i] += 1.0;
+            }
+            if !dense::lu(&mut self.factor, n, &mut self.pivots) {
+                self.factor_h = f64::NAN;
+                return Ok((f64::NAN, extra));
+            }
+            self.factor_h = h;
+        }
+        let hd = h * D;
+        let (factor, pivots) = (&self.factor, &self.pivots);
+        for i in 0..n {
+            self.k1[i] = self.f0[i] + hd * self.dfdt[i];
+        }
+        dense::lu_solve(factor, n, pivots, &mut self.k1);
+        for i in 0..n {
+            self.x_stage[i] = self.x[i] + 0.5 * h * self.k1[i];
+        }
+        ode.rhs(t + 0.5 * h, &self.x_stage, &mut self.f1)?;
+        for i in 0..n {
+            self.k2[i] = self.f1[i] - self.k1[i];
+        }
+        dense::lu_solve(factor, n, pivots, &mut self.k2);
+        for i in 0..n {
+            self.k2[i] += self.k1[i];
+            self.x_new[i] = self.x[i] + h * self.k2[i];
+        }
+        ode.rhs(t + h, &self.x_new, &mut self.f2)?;
+        for i in 0..n {
+            self.k3[i] =
+                self.f2[i] - E32 * (self.k2[i] - self.f1[i]) - 2.0 * (self.k1[i] - self.f0[i])
+                    + hd * self.dfdt[i];
+        }
+        dense::lu_solve(factor, n, pivots, &mut self.k3);
+
+        let (rtol, atol) = (opts.rtol, opts.atol);
+        let mut sum = 0.0;
+        let mut finite = true;
+        for i in 0..n {
+            let err = h / 6.0 * (self.k1[i] - 2.0 * self.k2[i] + self.k3[i]);
+            let sk = atol + rtol * self.x[i].abs().max(self.x_new[i].abs());
+            sum += (err / sk).powi(2);
+            finite &= self.x_new[i].is_finite() && self.f2[i].is_finite();
+        }
+        let err = (sum / n.max(1) as f64).sqrt();
+        Ok((if finite { err } else { f64::NAN }, extra))
+    }
+
+    /// Stores the dense output of the accepted step of size `h` from `x`.
+    fn store_dense(&mut self, h: f64) {
+        let [c0, c1, c2] = &mut self.cont;
+        let scale = h / (1.0 - 2.0 * D);
+        for i in 0..self.x.len() {
+            c0[i] = self.x[i];
+            c1[i] = scale * self.k1[i];
+            c2[i] = scale * self.k2[i];
+        }
+    }
+}
+
+impl<O: Ode> Stepper for Rosenbrock<O> {
+    fn step(&mut self) -> Result<(), RuntimeError> {
+        self.reset()?;
+        let Rosenbrock {
+            ode,
+            control,
+            stages,
+            ..
+        } = self;
+        let opts = control.opts;
+        let mut extra = 0;
+        let accepted = control.advance(|t, h| {
+            let (err, spent) = stages.trial(ode, &opts, t, h)?;
+            extra += spent;
+            Ok(err)
+        });
+        control.stats.rhs_evaluations += extra;
+        if let Some(h) = accepted? {
+            stages.store_dense(h);
+            std::mem::swap(&mut stages.x, &mut stages.x_new);
+            std::mem::swap(&mut stages.f0, &mut stages.f2);
+            stages.jacobian_current = false;
+            stages.jacobian_age = stages.jacobian_age.saturating_add(1);
+            stages.attempts = 0;
+        }
+        Ok(())
+    }
+
+    fn t(&self) -> f64 {
+        self.control.t
+    }
+
+    fn t_prev(&self) -> f64 {
+        self.control.t_prev
+    }
+
+    fn t_end(&self) -> f64 {
+        self.control.t_end
+    }
+
+    fn state(&self) -> &[f64] {
+        &self.stages.x
+    }
+
+    fn state_mut(&mut self) -> &mut [f64] {
+        self.dirty = true;
+        &mut self.stages.x
+    }
+
+    fn reset(&mut self) -> Result<(), RuntimeError> {
+        if !self.dirty {
+            return Ok(());
+        }
+        self.control.stats.rhs_evaluations += 1;
+        let (t, s) = (self.control.t, &mut self.stages);
+        derivative_at(&mut self.ode, t, &s.x, &mut s.f0)?;
+        s.jacobian_current = false;
+        self.dirty = false;
+        Ok(())
+    }
+
+    fn interpolate(&mut self, t: f64, out: &mut [f64]) -> Result<(), RuntimeError> {
+        let s = &self.stages;
+        check_len("out", s.x.len(), out.len())?;
+        let theta = interp_theta(t, self.control.t_prev, self.control.t)?;
+        if theta == 1.0 {
+            out.copy_from_slice(&s.x);
+            return Ok(());
+        }
+        let [c0, c1, c2] = &s.cont;
+        let (a, b) = (theta * (1.0 - theta), theta * (theta - 2.0 * D));
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = c0[i] + a * c1[i] + b * c2[i];
+        }
+        Ok(())
+    }
+
+    fn set_t_end(&mut self, t_end: f64) -> Result<(), RuntimeError> {
+        self.control.set_t_end(t_end)
+    }
+
+    fn stats(&self) -> Stats {
+        Stats {
+            jacobian_evaluations: self.stages.jacobian_evaluations,
+            ..self.control.stats
+        }
+    }
+}
