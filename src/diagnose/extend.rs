@@ -13,8 +13,10 @@
 //! stiff springs (`LATERAL_STIFFNESS_FACTOR · k`, the order of a hinge's in-plane stiffness)
 //! about both off-axis directions.
 
-use mech_codegen::ir::transform::{add_twist, HingeSpring, Twist, LATERAL_STIFFNESS_FACTOR};
-use mech_codegen::ir::{self, Dimension, Expr, FlexureAngle, Param};
+use mech_codegen::ir::transform::{
+    add_twist, hinge_axis, perpendicular, HingeSpring, Twist, LATERAL_STIFFNESS_FACTOR,
+};
+use mech_codegen::ir::{self, Dimension, Expr, Param};
 use mech_codegen::sym::Number;
 use mech_codegen::Compiled;
 
@@ -110,15 +112,14 @@ fn twist(model: &mut ir::Model, hinges: &[(String, usize)]) -> Result<(), String
         .flexures
         .iter()
         .filter(|f| !named.contains(&f.name.as_str()))
-        .filter(|f| matches!(f.angle, FlexureAngle::Loop(_) | FlexureAngle::Coordinate(_)))
         .cloned()
         .collect();
     for flexure in others {
-        let Some(hinge_axis) = hinge_axis(model, flexure.angle) else {
+        let Some(axis) = hinge_axis(model, flexure.angle).and_then(|a| perpendicular(&a)) else {
             continue;
         };
         let twist = Twist {
-            axis: perpendicular(&hinge_axis),
+            axis,
             twist: spring(&flexure, "off_axis", &stiff),
             lateral: Some(spring(&flexure, "lateral", &stiff)),
             span: flexure.span,
@@ -127,41 +128,4 @@ fn twist(model: &mut ir::Model, hinges: &[(String, usize)]) -> Result<(), String
             .map_err(|e| format!("flexure `{}` cannot be made compliant: {e:?}", flexure.name))?;
     }
     Ok(())
-}
-
-/// The bending axis of a flexure on a revolute pin joint or a revolute loop.
-fn hinge_axis(model: &ir::Model, angle: FlexureAngle) -> Option<ir::Vec3> {
-    match angle {
-        FlexureAngle::Coordinate(coordinate) => {
-            model
-                .frames
-                .iter()
-                .find_map(|(_, frame)| match &frame.motion {
-                    ir::Motion::Revolute {
-                        axis,
-                        coordinate: c,
-                    } if *c == coordinate => Some(axis.clone()),
-                    _ => None,
-                })
-        }
-        FlexureAngle::Loop(index) => match &model.loops[index].kind {
-            ir::ClosureKind::Revolute { axis, .. } => Some(axis.clone()),
-            _ => None,
-        },
-        _ => None,
-    }
-}
-
-/// The coordinate axis least aligned with a constant `axis`.
-fn perpendicular(axis: &ir::Vec3) -> ir::Vec3 {
-    let value = |e: &Expr| match e {
-        Expr::Number(n) => n.to_f64().abs(),
-        _ => 1.0,
-    };
-    let least = (0..3)
-        .min_by(|&i, &j| value(&axis[i]).total_cmp(&value(&axis[j])))
-        .unwrap_or(0);
-    let mut direction = [Expr::zero(), Expr::zero(), Expr::zero()];
-    direction[least] = Expr::one();
-    direction
 }

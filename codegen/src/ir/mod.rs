@@ -385,16 +385,12 @@ pub enum ClosureKind {
     /// With a `twist_axis` `t` (the flexure's length axis, components in the parent
     /// interframe, perpendicular to the axis) the closure is compliant: only the points are
     /// held together, and springs on its twist about `t` ([`FlexureAngle::LoopTwist`]) and its
-    /// lateral bending about `a × t` ([`FlexureAngle::LoopLateral`], or a row if
-    /// `lateral_row`) hold the axes in line.
+    /// lateral bending about `a × t` ([`FlexureAngle::LoopLateral`]) hold the axes in line.
     Revolute {
         axis: Vec3,
         parent_orientation: Vec<AxisAngle>,
         child_orientation: Vec<AxisAngle>,
         twist_axis: Option<Box<Vec3>>,
-        /// With a `twist_axis`: whether the lateral bending stays a constraint row
-        /// (`a_P·t_C = 0`) instead of a spring.
-        lateral_row: bool,
     },
     /// `|child − parent| = length`.
     Distance { length: Expr },

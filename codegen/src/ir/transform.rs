@@ -37,8 +37,8 @@ pub struct Twist {
     /// Twist spring, `2k/(1 + ν)` by Eq. 8.
     pub twist: HingeSpring,
     /// The spring on the hinge's lateral (in-plane, stiff) bending about `hinge axis × twist
-    /// axis`: a second new coordinate on a pin joint, a spring instead of the last alignment
-    /// row on a loop closure. `None`: rigid laterally.
+    /// axis`: a second new coordinate on a pin joint (`None`: the pin stays rigid laterally);
+    /// required on a loop closure, whose alignment rows it replaces with the twist spring.
     pub lateral: Option<HingeSpring>,
     pub span: Span,
 }
@@ -52,6 +52,8 @@ pub enum TwistError {
     AlongHingeAxis,
     /// The loop is already compliant.
     AlreadyTwists,
+    /// A loop closure needs a lateral spring.
+    NoLateralSpring,
 }
 
 /// Gives `hinge` a twist. A pin joint's frame gets a revolute frame below it (a new
@@ -67,23 +69,14 @@ pub fn add_twist(
     let span = twist.span;
     match hinge {
         FlexureAngle::Coordinate(coordinate) => {
-            let (frame, hinge_axis) = model
-                .frames
-                .iter()
-                .find_map(|(handle, f)| match &f.motion {
-                    Motion::Revolute {
-                        axis,
-                        coordinate: c,
-                    } if *c == coordinate => Some((handle, axis.clone())),
-                    _ => None,
-                })
-                .ok_or(TwistError::NotAHinge)?;
+            let (frame, hinge_axis) = pin_frame(model, coordinate).ok_or(TwistError::NotAHinge)?;
             if !perpendicular_enough(&hinge_axis, &twist.axis) {
                 return Err(TwistError::AlongHingeAxis);
             }
             let mut springs = vec![(twist.axis.clone(), twist.twist)];
             if let Some(lateral) = twist.lateral {
-                springs.push((cross(&hinge_axis, &twist.axis), lateral));
+                let normal = cross(&hinge_axis, &twist.axis).ok_or(TwistError::AlongHingeAxis)?;
+                springs.push((normal, lateral));
             }
             let mut angles = Vec::new();
             for (axis, spring) in springs {
@@ -107,10 +100,7 @@ pub fn add_twist(
         }
         FlexureAngle::Loop(closure) => {
             let Some(ClosureKind::Revolute {
-                axis,
-                twist_axis,
-                lateral_row,
-                ..
+                axis, twist_axis, ..
             }) = model.loops.get_mut(closure).map(|c| &mut c.kind)
             else {
                 return Err(TwistError::NotAHinge);
@@ -121,12 +111,12 @@ pub fn add_twist(
             if !perpendicular_enough(axis, &twist.axis) {
                 return Err(TwistError::AlongHingeAxis);
             }
+            let lateral = twist.lateral.ok_or(TwistError::NoLateralSpring)?;
             *twist_axis = Some(Box::new(twist.axis));
-            *lateral_row = twist.lateral.is_none();
-            let mut springs = vec![(FlexureAngle::LoopTwist(closure), twist.twist)];
-            if let Some(lateral) = twist.lateral {
-                springs.push((FlexureAngle::LoopLateral(closure), lateral));
-            }
+            let springs = [
+                (FlexureAngle::LoopTwist(closure), twist.twist),
+                (FlexureAngle::LoopLateral(closure), lateral),
+            ];
             for (angle, spring) in springs {
                 model.loads.push(Load::AngleSpring {
                     angle,
@@ -158,32 +148,78 @@ fn push_flexure(model: &mut Model, angle: FlexureAngle, spring: HingeSpring, spa
     });
 }
 
-/// `a × b` of two constant directions (components as numbers).
-fn cross(a: &Vec3, b: &Vec3) -> Vec3 {
-    let value = |e: &Expr| match e {
-        Expr::Number(n) => *n,
-        _ => Number::ZERO,
+/// The frame of the revolute joint moved by `coordinate`, and its axis.
+fn pin_frame(model: &Model, coordinate: Handle<Coordinate>) -> Option<(Handle<Frame>, Vec3)> {
+    model
+        .frames
+        .iter()
+        .find_map(|(handle, frame)| match &frame.motion {
+            Motion::Revolute {
+                axis,
+                coordinate: c,
+            } if *c == coordinate => Some((handle, axis.clone())),
+            _ => None,
+        })
+}
+
+/// The bending axis of a hinge: a revolute pin joint's or a revolute loop's (components in
+/// its frame or parent interframe); `None` for anything else.
+pub fn hinge_axis(model: &Model, hinge: FlexureAngle) -> Option<Vec3> {
+    match hinge {
+        FlexureAngle::Coordinate(coordinate) => pin_frame(model, coordinate).map(|(_, axis)| axis),
+        FlexureAngle::Loop(index) => match &model.loops.get(index)?.kind {
+            ClosureKind::Revolute { axis, .. } => Some(axis.clone()),
+            _ => None,
+        },
+        FlexureAngle::LoopTwist(_) | FlexureAngle::LoopLateral(_) => None,
+    }
+}
+
+/// A unit direction perpendicular to the constant `axis`: `axis × e`, with `e` the
+/// coordinate axis least aligned with it.
+pub fn perpendicular(axis: &Vec3) -> Option<Vec3> {
+    let numbers = constant_numbers(axis)?;
+    let least = (0..3)
+        .min_by(|&i, &j| {
+            numbers[i]
+                .to_f64()
+                .abs()
+                .total_cmp(&numbers[j].to_f64().abs())
+        })
+        .unwrap_or(0);
+    let mut helper = [Expr::zero(), Expr::zero(), Expr::zero()];
+    helper[least] = Expr::one();
+    let direction = cross(axis, &helper)?;
+    let values = constant_numbers(&direction)?.map(Number::to_f64);
+    let norm = values.iter().map(|v| v * v).sum::<f64>().sqrt();
+    (norm > 0.0).then(|| values.map(|v| Expr::Number(Number::Float(v / norm))))
+}
+
+/// The components of a constant direction (axes are numbers after lowering).
+fn constant_numbers(v: &Vec3) -> Option<[Number; 3]> {
+    let number = |e: &Expr| match e {
+        Expr::Number(n) => Some(*n),
+        _ => None,
     };
-    let (a, b) = (a.clone().map(|e| value(&e)), b.clone().map(|e| value(&e)));
+    Some([number(&v[0])?, number(&v[1])?, number(&v[2])?])
+}
+
+/// `a × b` of two constant directions, exactly.
+fn cross(a: &Vec3, b: &Vec3) -> Option<Vec3> {
+    let (a, b) = (constant_numbers(a)?, constant_numbers(b)?);
     let component = |i: usize, j: usize| Expr::Number(a[i].mul(b[j]).sub(a[j].mul(b[i])));
-    [component(1, 2), component(2, 0), component(0, 1)]
+    Some([component(1, 2), component(2, 0), component(0, 1)])
 }
 
 /// Whether two constant directions are far from parallel (|cos| < 0.99): a twist axis must
 /// leave a well-defined normal `a × t`.
 fn perpendicular_enough(a: &Vec3, b: &Vec3) -> bool {
-    let value = |e: &Expr| match e {
-        Expr::Number(n) => Some(n.to_f64()),
-        _ => None,
-    };
-    let (Some(a), Some(b)) = (
-        a.iter().map(value).collect::<Option<Vec<f64>>>(),
-        b.iter().map(value).collect::<Option<Vec<f64>>>(),
-    ) else {
+    let (Some(a), Some(b)) = (constant_numbers(a), constant_numbers(b)) else {
         return false;
     };
+    let (a, b) = (a.map(Number::to_f64), b.map(Number::to_f64));
     let dot: f64 = a.iter().zip(&b).map(|(x, y)| x * y).sum();
-    let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let norm = |v: &[f64; 3]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
     dot.abs() < 0.99 * norm(&a) * norm(&b)
 }
 
@@ -278,5 +314,32 @@ fn remap_handles(model: &mut Model, remap: &dyn Fn(Handle<Frame>) -> Handle<Fram
         if let ClosureKind::Coincident { frame, .. } = &mut closure.kind {
             *frame = remap(*frame);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn values(v: &Vec3) -> [f64; 3] {
+        constant_numbers(v).unwrap().map(Number::to_f64)
+    }
+
+    #[test]
+    fn perpendicular_is_a_unit_normal_for_any_constant_axis() {
+        let number = |x: f64| Expr::Number(Number::Float(x));
+        let skew = [number(0.6), number(0.0), number(0.8)];
+        let axes = [[Expr::zero(), Expr::zero(), Expr::one()], skew];
+        for axis in &axes {
+            let n = values(&perpendicular(axis).unwrap());
+            let a = values(axis);
+            let dot: f64 = (0..3).map(|i| a[i] * n[i]).sum();
+            let norm: f64 = n.iter().map(|x| x * x).sum::<f64>().sqrt();
+            assert!(dot.abs() < 1e-15 && (norm - 1.0).abs() < 1e-15, "{n:?}");
+        }
+        assert!(
+            perpendicular(&[Expr::Param(Handle::new(0)), Expr::zero(), Expr::zero()]).is_none()
+        );
+        assert!(!perpendicular_enough(&axes[0], &axes[0]));
     }
 }

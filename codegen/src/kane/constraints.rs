@@ -240,10 +240,7 @@ pub fn derive(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Model) -
                 }
             }
             ClosureKind::Revolute {
-                axis,
-                twist_axis,
-                lateral_row,
-                ..
+                axis, twist_axis, ..
             } => {
                 for (c, &component) in gap.iter().enumerate() {
                     residual.push(component);
@@ -252,11 +249,7 @@ pub fn derive(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Model) -
                 let geometry =
                     revolute_geometry(pool, &parent, &child, axis, twist_axis.as_deref());
                 // A compliant closure's axes are held by springs (its twist and lateral
-                // flexure angles), not by rows; or its lateral bending by `a_P·t_C`.
-                if let Some(twist) = geometry.twist.as_ref().filter(|_| *lateral_row) {
-                    residual.push(vector::dot(pool, geometry.axis, twist.twist_child));
-                    names.push(format!("{}.align", closure.name));
-                }
+                // flexure angles), not by rows.
                 if geometry.twist.is_none() {
                     residual.push(vector::dot(pool, geometry.axis, geometry.reference_child));
                     residual.push(vector::dot(

@@ -393,18 +393,12 @@ fn add_load(
             // Q_r = −c θ̇ ∂θ/∂q_r with θ̇ = Σ ∂θ/∂q_i u_i (q̇ = u).
             let c = lower_expr(pool, damping);
             let theta = flexure_angle(pool, kinematics, model, *angle);
-            let gradient = angle_gradient(pool, theta, forcing.len());
-            let rates: Vec<ExprId> = gradient
-                .iter()
-                .enumerate()
-                .map(|(i, &slope)| {
-                    let u = pool.symbol(Symbol::Speed(i as u32));
-                    pool.mul(slope, u)
-                })
-                .collect();
-            let rate = pool.add_all(&rates);
+            let rate = pool.time_derivative(theta);
             let moment = pool.mul(c, rate);
-            for (r, slope) in gradient.into_iter().enumerate() {
+            for (r, slope) in angle_gradient(pool, theta, forcing.len())
+                .into_iter()
+                .enumerate()
+            {
                 let force = pool.mul(moment, slope);
                 forcing[r].push(pool.neg(force));
             }

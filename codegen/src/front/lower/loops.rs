@@ -299,7 +299,6 @@ impl<'a> Lowerer<'a> {
             parent_orientation,
             child_orientation,
             twist_axis: None,
-            lateral_row: false,
         })
     }
 

@@ -179,12 +179,12 @@ impl<'a> Lowerer<'a> {
                     "a twist axis along the hinge axis",
                     "the twist axis is the flexure's length axis, perpendicular to its `axis`",
                 ),
-                ir::transform::TwistError::NotAHinge | ir::transform::TwistError::AlreadyTwists => {
-                    (
-                        "this hinge cannot take a twist",
-                        "`twist_axis` goes on a flexure of a pin joint or of a revolute loop",
-                    )
-                }
+                ir::transform::TwistError::NotAHinge
+                | ir::transform::TwistError::AlreadyTwists
+                | ir::transform::TwistError::NoLateralSpring => (
+                    "this hinge cannot take a twist",
+                    "`twist_axis` goes on a flexure of a pin joint or of a revolute loop",
+                ),
             };
             self.error(
                 Diagnostic::error("E0403", "cannot add this twist axis")
