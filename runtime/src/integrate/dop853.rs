@@ -10,8 +10,8 @@
 #![allow(clippy::excessive_precision)]
 
 use super::{
-    all_finite, check_len, derivative_at, initial_step, interp_theta, Adaptive, AdaptiveOptions,
-    Ode, Stats, Stepper,
+    all_finite, check_len, derivative_at, interp_theta, Adaptive, AdaptiveOptions, Ode, Stats,
+    Stepper,
 };
 use crate::RuntimeError;
 
@@ -231,20 +231,10 @@ impl<O: Ode> Dop853<O> {
         opts: AdaptiveOptions,
     ) -> Result<Self, RuntimeError> {
         let mut control = Adaptive::new(opts, 0.125 - opts.beta * 0.2, 11, t0, t_end)?;
-        let n = ode.dim();
-        check_len("x0", n, x0.len())?;
+        let f = control.start(&mut ode, 8, x0)?;
+        let n = x0.len();
         let zeros = vec![0.0; n];
-        let mut f = zeros.clone();
-        derivative_at(&mut ode, t0, x0, &mut f)?;
-        let (mut x_stage, mut scratch) = (zeros.clone(), zeros.clone());
-        control.h = match opts.h_init {
-            Some(h) => h.min(opts.h_max),
-            None if t_end > t0 => {
-                control.stats.rhs_evaluations += 1;
-                initial_step(&mut ode, &opts, 8, t0, x0, &f, &mut x_stage, &mut scratch)?
-            }
-            None => 0.0,
-        };
+        let x_stage = zeros.clone();
         Ok(Dop853 {
             ode,
             control,

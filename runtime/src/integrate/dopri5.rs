@@ -1,8 +1,7 @@
 //! Dormand–Prince 5(4) (Hairer's `DOPRI5`).
 
 use super::{
-    check_len, derivative_at, initial_step, interp_theta, Adaptive, AdaptiveOptions, Ode, Stats,
-    Stepper,
+    check_len, derivative_at, interp_theta, Adaptive, AdaptiveOptions, Ode, Stats, Stepper,
 };
 use crate::RuntimeError;
 
@@ -89,20 +88,10 @@ impl<O: Ode> Dopri5<O> {
         opts: AdaptiveOptions,
     ) -> Result<Self, RuntimeError> {
         let mut control = Adaptive::new(opts, 0.2 - opts.beta * 0.75, 6, t0, t_end)?;
-        let n = ode.dim();
-        check_len("x0", n, x0.len())?;
+        let k1 = control.start(&mut ode, 5, x0)?;
+        let n = x0.len();
         let zeros = vec![0.0; n];
-        let mut k1 = zeros.clone();
-        derivative_at(&mut ode, t0, x0, &mut k1)?;
-        let (mut x_stage, mut k2) = (zeros.clone(), zeros.clone());
-        control.h = match opts.h_init {
-            Some(h) => h.min(opts.h_max),
-            None if t_end > t0 => {
-                control.stats.rhs_evaluations += 1;
-                initial_step(&mut ode, &opts, 5, t0, x0, &k1, &mut x_stage, &mut k2)?
-            }
-            None => 0.0,
-        };
+        let (x_stage, k2) = (zeros.clone(), zeros.clone());
         Ok(Dopri5 {
             ode,
             control,

@@ -2,8 +2,8 @@
 
 use super::phi::PhiFunctions;
 use super::{
-    check_len, derivative_at, finite_difference_jacobian, initial_step, interp_theta, Adaptive,
-    AdaptiveOptions, Ode, Stats, Stepper,
+    check_len, derivative_at, finite_difference_jacobian, interp_theta, Adaptive, AdaptiveOptions,
+    Ode, Stats, Stepper,
 };
 use crate::RuntimeError;
 
@@ -91,20 +91,10 @@ impl<O: Ode> ExpRosenbrock<O> {
     ) -> Result<Self, RuntimeError> {
         // The error estimate is O(h⁴): exponent 1/4, less the Lund stabilisation.
         let mut control = Adaptive::new(opts, 0.25 - 0.75 * opts.beta, 3, t0, t_end)?;
-        let n = ode.dim();
-        check_len("x0", n, x0.len())?;
+        let f0 = control.start(&mut ode, 4, x0)?;
+        let n = x0.len();
         let zeros = vec![0.0; n];
-        let mut f0 = zeros.clone();
-        derivative_at(&mut ode, t0, x0, &mut f0)?;
-        let (mut x_stage, mut f_stage) = (zeros.clone(), zeros.clone());
-        control.h = match opts.h_init {
-            Some(h) => h.min(opts.h_max),
-            None if t_end > t0 => {
-                control.stats.rhs_evaluations += 1;
-                initial_step(&mut ode, &opts, 4, t0, x0, &f0, &mut x_stage, &mut f_stage)?
-            }
-            None => 0.0,
-        };
+        let (x_stage, f_stage) = (zeros.clone(), zeros.clone());
         Ok(ExpRosenbrock {
             ode,
             control,

@@ -436,6 +436,31 @@ impl Adaptive {
         })
     }
 
+    /// The start shared by the adaptive methods: checks `x0`, evaluates `f(t0, x0)` (returned)
+    /// and picks the first step, `opts.h_init` or Hairer's `HINIT` for a method of `order`.
+    fn start<O: Ode>(
+        &mut self,
+        ode: &mut O,
+        order: i32,
+        x0: &[f64],
+    ) -> Result<Vec<f64>, RuntimeError> {
+        let n = ode.dim();
+        check_len("x0", n, x0.len())?;
+        let mut f0 = vec![0.0; n];
+        derivative_at(ode, self.t, x0, &mut f0)?;
+        let opts = self.opts;
+        self.h = match opts.h_init {
+            Some(h) => h.min(opts.h_max),
+            None if self.t_end > self.t => {
+                self.stats.rhs_evaluations += 1;
+                let (mut x1, mut f1) = (vec![0.0; n], vec![0.0; n]);
+                initial_step(ode, &opts, order, self.t, x0, &f0, &mut x1, &mut f1)?
+            }
+            None => 0.0,
+        };
+        Ok(f0)
+    }
+
     /// Tries steps from `t` until one passes the error test. `trial(t, h)` computes a step of
     /// size `h` and returns its scaled error norm (NaN if anything was non-finite; such a trial
     /// is rejected and the step shrunk by `fac_min`). On success `t`, `t_prev` and the next

@@ -1,8 +1,8 @@
 //! Linearly implicit Rosenbrock 2(3) of Shampine & Reichelt (MATLAB's `ode23s`).
 
 use super::{
-    check_len, derivative_at, finite_difference_jacobian, initial_step, interp_theta, Adaptive,
-    AdaptiveOptions, Ode, Stats, Stepper,
+    check_len, derivative_at, finite_difference_jacobian, interp_theta, Adaptive, AdaptiveOptions,
+    Ode, Stats, Stepper,
 };
 use crate::{dense, RuntimeError};
 
@@ -92,20 +92,10 @@ impl<O: Ode> Rosenbrock<O> {
     ) -> Result<Self, RuntimeError> {
         // The error estimate is O(h³): exponent 1/3, less the Lund stabilisation.
         let mut control = Adaptive::new(opts, 1.0 / 3.0 - 0.75 * opts.beta, 2, t0, t_end)?;
-        let n = ode.dim();
-        check_len("x0", n, x0.len())?;
+        let f0 = control.start(&mut ode, 2, x0)?;
+        let n = x0.len();
         let zeros = vec![0.0; n];
-        let mut f0 = zeros.clone();
-        derivative_at(&mut ode, t0, x0, &mut f0)?;
-        let (mut x_stage, mut f1) = (zeros.clone(), zeros.clone());
-        control.h = match opts.h_init {
-            Some(h) => h.min(opts.h_max),
-            None if t_end > t0 => {
-                control.stats.rhs_evaluations += 1;
-                initial_step(&mut ode, &opts, 2, t0, x0, &f0, &mut x_stage, &mut f1)?
-            }
-            None => 0.0,
-        };
+        let (x_stage, f1) = (zeros.clone(), zeros.clone());
         Ok(Rosenbrock {
             ode,
             control,
