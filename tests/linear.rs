@@ -329,6 +329,15 @@ fn flexure_twist_adds_a_degree_of_freedom_with_eq_8_stiffness() {
     );
     assert!(stiffness[(0, 1)].abs() < 1e-6 * k && stiffness[(1, 0)].abs() < 1e-6 * k);
     assert_eq!(model.nflexures(), 2);
+    // The paddle rides on the twist: M = diag(I_zz + m r², I_yy) about the pivot (its centre
+    // of mass lies on the twist axis y, 5 mm from the pivot).
+    let (m, r, inertia) = (1e-3, 5e-3, 1e-9);
+    let expected = [inertia + m * r * r, inertia];
+    for (i, want) in expected.iter().enumerate() {
+        let got = linear.mass[(i, i)];
+        assert!((got - want).abs() < 1e-12 * want, "M[{i},{i}] = {got}, want {want}");
+    }
+    assert!(linear.mass[(0, 1)].abs() < 1e-15);
 }
 
 /// An actuator given by its bimorph geometry (Table I "new geometry" with the HAMR-VI

@@ -3,7 +3,7 @@
 //! Consumes: a model and a description of the change. Produces: the changed model (in place),
 //! with every frame handle remapped so that parents still come first.
 //!
-//! - [`insert_revolute_below`]: a moving frame in the kinematic tree;
+//! - [`insert_revolute_above`]: a moving frame in the kinematic tree;
 //! - [`add_twist`]: a flexure hinge twists about its length axis (Doshi et al. Eq. 8): a pin
 //!   joint gains a revolute frame, a revolute loop closure becomes compliant in twist.
 
@@ -56,7 +56,7 @@ pub enum TwistError {
     NoLateralSpring,
 }
 
-/// Gives `hinge` a twist. A pin joint's frame gets a revolute frame below it (a new
+/// Gives `hinge` a twist. A pin joint's frame gets a revolute frame above it (a new
 /// coordinate with the twist spring and damper). A revolute loop closure becomes compliant:
 /// its alignment rows give way to springs on its twist and its lateral bending, so a loop
 /// can deform (a single twist axis in a rigid closed loop is locked by the other hinges).
@@ -80,7 +80,7 @@ pub fn add_twist(
             }
             let mut angles = Vec::new();
             for (axis, spring) in springs {
-                let (_, new) = insert_revolute_below(model, frame, &spring.name, axis, span);
+                let (_, new) = insert_revolute_above(model, frame, &spring.name, axis, span);
                 model.loads.push(Load::Spring {
                     coordinate: new,
                     stiffness: spring.stiffness.clone(),
@@ -223,12 +223,15 @@ fn perpendicular_enough(a: &Vec3, b: &Vec3) -> bool {
     dot.abs() < 0.99 * norm(&a) * norm(&b)
 }
 
-/// Inserts a frame rotating about `axis` (components in `parent`'s basis) right below
-/// `parent`: the frame's former children hang from it instead. Returns its frame and its
-/// new coordinate (appended after the existing ones).
-pub fn insert_revolute_below(
+/// Inserts a frame rotating about `axis` between `frame` and its parent: the new frame takes
+/// `frame`'s placement (origin and orientation in the parent), and `frame` hangs from it with
+/// no offset. So everything on `frame` — a joint's child body, its points, its children —
+/// rides on the new rotation (a hinge's twist moves the body the hinge carries). `axis` has
+/// components in `frame`'s basis at zero rotation. Returns the new frame and its coordinate
+/// (appended after the existing ones).
+pub fn insert_revolute_above(
     model: &mut Model,
-    parent: Handle<Frame>,
+    frame: Handle<Frame>,
     name: &str,
     axis: Vec3,
     span: Span,
@@ -240,37 +243,38 @@ pub fn insert_revolute_below(
         initial_speed: 0.0,
         span,
     });
-    let inserted = parent.index() + 1;
-    // Old index i → new index: unchanged up to `parent`, shifted by one after it.
-    let remap = |frame: Handle<Frame>| {
-        if frame.index() < inserted {
-            frame
+    let inserted = frame.index();
+    // Old index i → new index: unchanged before `frame`, shifted by one from it on (the new
+    // frame takes `frame`'s old index, so parents still come first).
+    let remap = |old: Handle<Frame>| {
+        if old.index() < inserted {
+            old
         } else {
-            Handle::new(frame.index() + 1)
+            Handle::new(old.index() + 1)
         }
     };
     let new_frame = Handle::<Frame>::new(inserted);
 
     let old = std::mem::take(&mut model.frames);
-    for (handle, frame) in old.iter() {
-        let mut copy = frame.clone();
-        copy.parent = frame
-            .parent
-            .map(|p| if p == parent { new_frame } else { remap(p) });
-        model.frames.append(copy);
-        if handle == parent {
+    for (handle, original) in old.iter() {
+        let mut copy = original.clone();
+        copy.parent = original.parent.map(remap);
+        if handle == frame {
+            let zero = [Expr::zero(), Expr::zero(), Expr::zero()];
             model.frames.append(Frame {
                 name: name.to_string(),
-                parent: Some(parent),
-                origin: [Expr::zero(), Expr::zero(), Expr::zero()],
-                orientation: Vec::new(),
+                parent: copy.parent,
+                origin: std::mem::replace(&mut copy.origin, zero),
+                orientation: std::mem::take(&mut copy.orientation),
                 motion: Motion::Revolute {
                     axis: axis.clone(),
                     coordinate,
                 },
                 span,
             });
+            copy.parent = Some(new_frame);
         }
+        model.frames.append(copy);
     }
     remap_handles(model, &remap);
     (new_frame, coordinate)
