@@ -108,8 +108,15 @@ fn main() {
     for (dof, axis) in [(Dof::Lift, 2), (Dof::Swing, 0)] {
         for fraction in [0.0, 0.3] {
             let (time, test) = fastest(5, || {
-                force_deflection(&leg, dof, axis, 225.0, Some(127e-6), fraction)
-                    .expect("the sweep runs")
+                force_deflection(
+                    &leg,
+                    dof,
+                    axis,
+                    225.0,
+                    mech::experiments::leg::Sensor::Steps(127e-6),
+                    fraction,
+                )
+                .expect("the sweep runs")
             });
             println!(
                 "| {}, off-axis load {:.0} % | {} | {:.3} |",

@@ -67,7 +67,8 @@ fn trajectory_peak_equals_the_statics_deflection_at_the_peak_voltage() {
         independent: t.independent.clone(),
     })
     .unwrap();
-    let test = leg::force_deflection(&leg, leg::Dof::Lift, 2, 225.0, None, 0.0).unwrap();
+    let test =
+        leg::force_deflection(&leg, leg::Dof::Lift, 2, 225.0, leg::Sensor::Blocked, 0.0).unwrap();
     let dz = test.free[2] - test.rest[2];
     assert!(
         close(outcome.values["lift_peak_dz"], dz, 1e-9),
@@ -132,7 +133,8 @@ fn force_deflection_blocked_force_and_work() {
         independent: f.independent.clone(),
     })
     .unwrap();
-    let test = leg::force_deflection(&leg, leg::Dof::Lift, 2, 225.0, None, 0.0).unwrap();
+    let test =
+        leg::force_deflection(&leg, leg::Dof::Lift, 2, 225.0, leg::Sensor::Blocked, 0.0).unwrap();
     let inputs = leg.drive(leg::Dof::Lift, 225.0);
     let rest_q = leg
         .equilibrium(&leg.q0, &leg.inputs(0.0, 0.0), &[])

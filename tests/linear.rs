@@ -335,7 +335,10 @@ fn flexure_twist_adds_a_degree_of_freedom_with_eq_8_stiffness() {
     let expected = [inertia + m * r * r, inertia];
     for (i, want) in expected.iter().enumerate() {
         let got = linear.mass[(i, i)];
-        assert!((got - want).abs() < 1e-12 * want, "M[{i},{i}] = {got}, want {want}");
+        assert!(
+            (got - want).abs() < 1e-12 * want,
+            "M[{i},{i}] = {got}, want {want}"
+        );
     }
     assert!(linear.mass[(0, 1)].abs() < 1e-15);
 }

@@ -139,13 +139,18 @@ fn overlay_plots(
     curves: &[(String, &[f64])],
 ) -> Result<Vec<PathBuf>, String> {
     let log_x = matches!(experiment, Experiment::FrequencyResponse(_));
-    let x_label = if log_x { "frequency [Hz]" } else { "data row" };
+    // Axis labels and the SI → plotted unit factors.
+    let (x_label, x_scale, y_unit, y_scale) = match experiment {
+        Experiment::FrequencyResponse(_) => ("frequency [Hz]", 1.0, "", 1.0),
+        Experiment::QuasiStatic(_) => ("data row", 1.0, " [m]", 1.0),
+        Experiment::ForceDeflection(_) => ("sensor distance [µm]", 1e6, " [mN]", 1e3),
+    };
     let mut paths = Vec::new();
     for name in obs.series_names() {
         let pick = |values: &[f64]| -> (Vec<f64>, Vec<f64>) {
             (0..values.len().min(obs.series.len()))
                 .filter(|&k| obs.series[k] == name)
-                .map(|k| (obs.abscissa[k], values[k]))
+                .map(|k| (obs.abscissa[k] * x_scale, values[k] * y_scale))
                 .unzip()
         };
         let lines: Vec<(String, Vec<f64>, Vec<f64>)> =
@@ -162,7 +167,9 @@ fn overlay_plots(
                 .collect();
         let path = dir.join(format!("{prefix}_{}.svg", name.replace(['|', '.'], "_")));
         let title = format!("{}: {name}", experiment.title());
-        plot::plot_xy(&path, &title, x_label, name, &lines, log_x).map_err(|e| e.to_string())?;
+        let y_label = format!("{name}{y_unit}");
+        plot::plot_xy(&path, &title, x_label, &y_label, &lines, log_x)
+            .map_err(|e| e.to_string())?;
         paths.push(path);
     }
     Ok(paths)

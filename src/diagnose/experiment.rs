@@ -15,6 +15,11 @@
 //!   input, any unit of that dimension) and `phase [deg]`; the model linearized about its rest
 //!   equilibrium predicts them, with the flexure losses as complex stiffness (hysteretic,
 //!   default) or viscous dampers. Gain residuals are taken on `ln |H|`, so σ is relative.
+//! - `force_deflection`: columns `distance [um]` (the sensor's distance from the foot's rest
+//!   position along the driven motion) and `force [mN]` (the on-axis force on the sensor);
+//!   the leg driven at `voltage` on `dof` against a sensor at each distance predicts them,
+//!   with the file's off-axis (y) load fraction (seed Sec. V-A, Fig. 6 a, b). A sensor that
+//!   the free foot no longer reaches reads 0.
 
 use std::path::{Path, PathBuf};
 
@@ -23,7 +28,7 @@ use mech_runtime::FlexureDamping;
 use serde::Deserialize;
 
 use super::data::MeasuredData;
-use crate::experiments::leg::Leg;
+use crate::experiments::leg::{force_deflection, Dof, Leg, Sensor};
 use crate::experiments::ModelSpec;
 
 /// One diagnosis experiment file.
@@ -32,6 +37,29 @@ use crate::experiments::ModelSpec;
 pub enum Experiment {
     QuasiStatic(QuasiStatic),
     FrequencyResponse(FrequencyResponse),
+    ForceDeflection(ForceDeflectionTest),
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ForceDeflectionTest {
+    pub title: String,
+    pub model: PathBuf,
+    #[serde(default)]
+    pub set: Vec<String>,
+    #[serde(default = "crate::experiments::default_independent")]
+    pub independent: Vec<String>,
+    /// The driven degree of freedom: `lift` (force along z) or `swing` (along x).
+    pub dof: Dof,
+    /// Drive voltage of the model input, e.g. `"225 V"`.
+    pub voltage: String,
+    /// The sensor's y force on the foot as a fraction of the on-axis force (the paper's
+    /// ~0.3), opposing the free foot's y motion; 0 by default.
+    #[serde(default)]
+    pub off_axis_fraction: f64,
+    /// Measurement noise of the force (one standard deviation), e.g. `"0.5 mN"`.
+    #[serde(default)]
+    pub noise: Option<String>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -118,6 +146,9 @@ pub struct Extensions {
     /// geometric mean of the measured frequencies (so `η` and the exponent are nearly
     /// uncorrelated). Frequency responses only; inert for static data.
     pub loss_exponent: Option<f64>,
+    /// An off-axis (y) load at the foot, as a fraction of the on-axis sensor force, in place
+    /// of the experiment file's (force/deflection only).
+    pub off_axis_fraction: Option<f64>,
 }
 
 /// The measured side of the residual: one flat vector of values, their σ (if known) and a
@@ -170,6 +201,7 @@ impl Experiment {
         match self {
             Experiment::QuasiStatic(e) => &e.title,
             Experiment::FrequencyResponse(e) => &e.title,
+            Experiment::ForceDeflection(e) => &e.title,
         }
     }
 
@@ -178,6 +210,7 @@ impl Experiment {
         let (model, set, independent) = match self {
             Experiment::QuasiStatic(e) => (&e.model, &e.set, &e.independent),
             Experiment::FrequencyResponse(e) => (&e.model, &e.set, &e.independent),
+            Experiment::ForceDeflection(e) => (&e.model, &e.set, &e.independent),
         };
         ModelSpec {
             model: model.clone(),
@@ -220,6 +253,18 @@ impl Experiment {
                 }
                 if let Some(text) = &e.phase_noise {
                     noise_value("phase_noise", text)?;
+                }
+            }
+            Experiment::ForceDeflection(e) => {
+                e.volts()?;
+                if let Some(text) = &e.noise {
+                    noise_value("noise", text)?;
+                }
+                if !(e.off_axis_fraction.is_finite() && e.off_axis_fraction.abs() <= 1.0) {
+                    return Err(format!(
+                        "key `off_axis_fraction`: expected a fraction between -1 and 1, got {}",
+                        e.off_axis_fraction
+                    ));
                 }
             }
         }
@@ -306,6 +351,33 @@ impl Experiment {
                 }
                 obs.sigma = (gain_sigma.is_some() && phase_sigma.is_some()).then_some(sigma);
             }
+            Experiment::ForceDeflection(e) => {
+                let distance = data
+                    .require("distance", Dimension::LENGTH)
+                    .map_err(|e| e.to_string())?;
+                let force = data
+                    .require("force", Dimension::FORCE)
+                    .map_err(|e| e.to_string())?;
+                if let Some(bad) = distance.iter().position(|&d| d < 0.0) {
+                    return Err(format!(
+                        "`{}`, line {}: the sensor distance must not be negative (it is measured \
+                         from the foot's rest position along its free motion)",
+                        data.path.display(),
+                        data.lines.get(bad).copied().unwrap_or(0)
+                    ));
+                }
+                let noise = match &e.noise {
+                    Some(text) => Some(noise_value("noise", text)?),
+                    None => None,
+                };
+                for (row, (&d, &f)) in distance.iter().zip(force).enumerate() {
+                    obs.values.push(f);
+                    obs.series.push("force".into());
+                    obs.abscissa.push(d);
+                    obs.row.push(row);
+                }
+                obs.sigma = noise.map(|sigma| vec![sigma; obs.values.len()]);
+            }
         }
         Ok(obs)
     }
@@ -391,7 +463,35 @@ impl Experiment {
                 }
                 Ok(predicted)
             }
+            Experiment::ForceDeflection(e) => {
+                let fraction = extensions.off_axis_fraction.unwrap_or(e.off_axis_fraction);
+                let distances = measured.abscissa.clone();
+                let test = force_deflection(
+                    leg,
+                    e.dof,
+                    e.dof.axis(),
+                    e.volts()?,
+                    Sensor::At(distances),
+                    fraction,
+                )?;
+                // A sensor beyond the free foot's reach is not touched: it reads 0.
+                Ok(test.points.iter().map(|p| p.force.max(0.0)).collect())
+            }
         }
+    }
+}
+
+impl ForceDeflectionTest {
+    fn volts(&self) -> Result<f64, String> {
+        let (value, dimension) = mech_codegen::front::units::parse_quantity(&self.voltage)
+            .map_err(|e| format!("key `voltage`: `{}`: {e}", self.voltage))?;
+        if dimension != crate::experiments::VOLTAGE || !value.is_finite() {
+            return Err(format!(
+                "key `voltage`: `{}` is not a voltage (e.g. \"225 V\")",
+                self.voltage
+            ));
+        }
+        Ok(value)
     }
 }
 

@@ -27,6 +27,10 @@ use crate::session::Session;
 /// The fitted factor on Eq. 8's twist stiffness.
 pub const TWIST_FACTOR: &str = "twist_factor";
 
+/// The off-axis (lateral, and twist of the hinges not named) compliance, per unit bending
+/// compliance: the inverse of the off-axis stiffness per unit k.
+pub const OFF_AXIS_COMPLIANCE: &str = "off_axis_compliance";
+
 /// Poisson's ratio of Kapton (seed Sec. V-A), in Eq. 8's `2/(1 + ν)` = 100/67.
 const TWIST_RATIO: (i128, i128) = (100, 67);
 
@@ -77,7 +81,15 @@ fn twist(model: &mut ir::Model, hinges: &[(String, usize)]) -> Result<(), String
         span: Default::default(),
     });
     let scaled = |factor: Expr, value: &Expr| Expr::Mul(Box::new(factor), Box::new(value.clone()));
-    let stiff = Expr::Number(Number::int(LATERAL_STIFFNESS_FACTOR));
+    // Off-axis stiffness = k / compliance (compliance → 0: rigid off-axis, the base model).
+    let compliance = model.params.append(Param {
+        name: OFF_AXIS_COMPLIANCE.into(),
+        value: 1.0 / LATERAL_STIFFNESS_FACTOR as f64,
+        dimension: Dimension::NONE,
+        docs: vec!["Off-axis compliance of the hinges, per unit bending compliance 1/k.".into()],
+        span: Default::default(),
+    });
+    let stiff = Expr::Div(Box::new(Expr::one()), Box::new(Expr::Param(compliance)));
     let eq8 = Expr::Mul(
         Box::new(Expr::Param(factor)),
         Box::new(Expr::Number(Number::rational(TWIST_RATIO.0, TWIST_RATIO.1))),
@@ -88,6 +100,14 @@ fn twist(model: &mut ir::Model, hinges: &[(String, usize)]) -> Result<(), String
         damping: scaled(factor.clone(), &flexure.damping),
         loss_factor: flexure.loss_factor.clone(),
     };
+    // The model's own hinges, before the springs added below get flexure records of their own.
+    let named: Vec<&str> = hinges.iter().map(|(name, _)| name.as_str()).collect();
+    let others: Vec<ir::Flexure> = model
+        .flexures
+        .iter()
+        .filter(|f| !named.contains(&f.name.as_str()))
+        .cloned()
+        .collect();
     for (name, axis) in hinges {
         let flexure = model
             .flexures
@@ -107,13 +127,6 @@ fn twist(model: &mut ir::Model, hinges: &[(String, usize)]) -> Result<(), String
             .map_err(|e| format!("flexure `{name}` cannot twist about {}: {e:?}", AXES[*axis]))?;
     }
     // Every other hinge: stiff in both off-axis directions, so the loops can deform.
-    let named: Vec<&str> = hinges.iter().map(|(name, _)| name.as_str()).collect();
-    let others: Vec<ir::Flexure> = model
-        .flexures
-        .iter()
-        .filter(|f| !named.contains(&f.name.as_str()))
-        .cloned()
-        .collect();
     for flexure in others {
         let Some(axis) = hinge_axis(model, flexure.angle).and_then(|a| perpendicular(&a)) else {
             continue;

@@ -23,13 +23,15 @@ use crate::experiments::leg::Leg;
 pub enum Target {
     Param(usize),
     LossExponent,
+    OffAxisFraction,
 }
 
 impl Target {
-    fn apply(self, leg: &mut Leg, extensions: &mut Extensions, value: f64) {
+    pub(crate) fn apply(self, leg: &mut Leg, extensions: &mut Extensions, value: f64) {
         match self {
             Target::Param(index) => leg.session.model.set_param(index, value),
             Target::LossExponent => extensions.loss_exponent = Some(value),
+            Target::OffAxisFraction => extensions.off_axis_fraction = Some(value),
         }
     }
 }
@@ -186,7 +188,13 @@ pub fn fit_values(
         // The predictions come from Newton solves and finite-difference linearizations
         // (relative accuracy ~1e-7): steps well above that noise.
         relative_step: Some(1e-4),
-        difference: Difference::Central,
+        // Forward differences while iterating (half the predictions); the covariance at the
+        // solution still uses central ones. A relative change of χ² below 1e-8 is far below
+        // what the noise resolves (χ² changes of order 1).
+        difference: Difference::Forward,
+        covariance_difference: Difference::Central,
+        ftol: 1e-8,
+        xtol: 1e-8,
         residuals_normalized: sigma.is_some(),
         ..LmOptions::default()
     };

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use super::force::{actuator_work, check_paper, PaperRow};
-use super::leg::{force_deflection, Dof, Leg};
+use super::leg::{force_deflection, Dof, Leg, Sensor};
 use super::{csv, positive, ModelSpec, Outcome, Table, VOLTAGE};
 
 #[derive(Debug, Clone, Deserialize)]
@@ -96,7 +96,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
             })?;
             let fbdf = actuator_work(&leg)?;
             let tests = [Dof::Lift, Dof::Swing]
-                .map(|dof| force_deflection(&leg, dof, dof.axis(), voltage, None, 0.0));
+                .map(|dof| force_deflection(&leg, dof, dof.axis(), voltage, Sensor::Blocked, 0.0));
             Ok((fbdf, tests))
         },
     );

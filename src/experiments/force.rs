@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
-use super::leg::{force_deflection, Dof, ForceDeflection, Leg, AXES};
+use super::leg::{force_deflection, Dof, ForceDeflection, Leg, Sensor, AXES};
 use super::{csv, paper_value, percent_diff, positive, ModelSpec, Outcome, Table, ENERGY, VOLTAGE};
 use crate::plot;
 
@@ -167,7 +167,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
         let axis = dof.axis();
         let mut cases = vec![(
             "on-axis only",
-            force_deflection(&leg, dof, axis, voltage, Some(step), 0.0)?,
+            force_deflection(&leg, dof, axis, voltage, Sensor::Steps(step), 0.0)?,
         )];
         if let Some(c) = spec.off_axis_fraction {
             if c > 0.0 {
@@ -178,7 +178,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
                 };
                 cases.push((
                     label,
-                    force_deflection(&leg, dof, axis, voltage, Some(step), c)?,
+                    force_deflection(&leg, dof, axis, voltage, Sensor::Steps(step), c)?,
                 ));
             }
         }

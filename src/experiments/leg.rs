@@ -266,11 +266,21 @@ impl ForceDeflection {
     }
 }
 
+/// Where the force sensor of [`force_deflection`] is placed: distances from the foot's rest
+/// position along its free motion.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Sensor {
+    /// Only at the foot's rest position (the blocked force).
+    Blocked,
+    /// At `0, step, 2·step, …` until the free foot no longer reaches it (the paper's 127 µm).
+    Steps(f64),
+    /// At these distances (measured data's sensor positions), in this order.
+    At(Vec<f64>),
+}
+
 /// The paper's force/deflection test (seed Sec. V.A, Fig. 7): the leg driven at `voltage`
-/// on `dof` pushes against a sensor (a frictionless plane normal to `axis`) placed at
-/// distances `0, step, 2·step, …` from the foot's rest position along its motion, until
-/// the free foot no longer reaches it. `step = None`: only the blocked point (distance 0).
-/// With `off_axis_fraction = c > 0` the sensor also pushes on the foot along y with `c`
+/// on `dof` pushes against a sensor (a frictionless plane normal to `axis`) placed as
+/// `sensor` says. With `off_axis_fraction = c > 0` the sensor also pushes on the foot along y with `c`
 /// times the on-axis force, opposing the free foot's y motion (the paper's ~30 % off-axis
 /// load): a side load of the sensor's fixture ([`SideLoad`]).
 pub fn force_deflection(
@@ -278,7 +288,7 @@ pub fn force_deflection(
     dof: Dof,
     axis: usize,
     voltage: f64,
-    step: Option<f64>,
+    sensor: Sensor,
     off_axis_fraction: f64,
 ) -> Result<ForceDeflection, String> {
     if off_axis_fraction != 0.0 && axis == 1 {
@@ -299,10 +309,16 @@ pub fn force_deflection(
     let mut q = rest_q.clone();
     let mut k = 0usize;
     loop {
-        let distance = step.map_or(0.0, |s| k as f64 * s);
-        if k > 0 && (step.is_none() || distance >= free_deflection) {
-            break;
-        }
+        let distance = match &sensor {
+            Sensor::Blocked if k > 0 => break,
+            Sensor::Blocked => 0.0,
+            Sensor::Steps(step) if k > 0 && k as f64 * step >= free_deflection => break,
+            Sensor::Steps(step) => k as f64 * step,
+            Sensor::At(distances) => match distances.get(k) {
+                Some(&d) => d,
+                None => break,
+            },
+        };
         let mut target = rest;
         target[axis] = rest[axis] + direction * distance;
         // The sensor pushes the foot along y with c·F, opposing the free y motion: with the
@@ -334,7 +350,7 @@ pub fn force_deflection(
         q = solved;
         points.push(point);
         k += 1;
-        if points.len() > 1000 {
+        if matches!(sensor, Sensor::Steps(_)) && points.len() > 1000 {
             return Err("more than 1000 sensor positions: is the step too small?".into());
         }
     }

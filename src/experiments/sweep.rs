@@ -11,7 +11,7 @@ use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
 use super::force::actuator_work;
-use super::leg::{force_deflection, Dof, Leg, AXES};
+use super::leg::{force_deflection, Dof, Leg, Sensor, AXES};
 use super::{csv, positive, ModelSpec, Outcome, Table, VOLTAGE};
 use crate::plot::{self, CurveStyle, Star};
 
@@ -165,7 +165,7 @@ pub fn sweep_point(series: &Series, voltage: f64, arm: Option<f64>) -> Result<Sw
     })?;
     let ratio = leg.kinematic_ratio(&leg.q0, dof, dof.axis())?.abs();
     let ratio_y = leg.kinematic_ratio(&leg.q0, dof, 1)?.abs();
-    let test = force_deflection(&leg, dof, dof.axis(), voltage, None, 0.0)?;
+    let test = force_deflection(&leg, dof, dof.axis(), voltage, Sensor::Blocked, 0.0)?;
     let ratio_rest = leg.kinematic_ratio(&test.rest_q, dof, dof.axis())?.abs();
     let actuator_force = match (leg.param("F_b"), leg.param("V_rated")) {
         (Some(f), Some(v)) => f * voltage / v,

@@ -190,9 +190,8 @@ pub fn perpendicular(axis: &Vec3) -> Option<Vec3> {
     let mut helper = [Expr::zero(), Expr::zero(), Expr::zero()];
     helper[least] = Expr::one();
     let direction = cross(axis, &helper)?;
-    let values = constant_numbers(&direction)?.map(Number::to_f64);
-    let norm = values.iter().map(|v| v * v).sum::<f64>().sqrt();
-    (norm > 0.0).then(|| values.map(|v| Expr::Number(Number::Float(v / norm))))
+    let unit = constant_direction(&direction)?;
+    Some(unit.map(|v| Expr::Number(Number::Float(v))))
 }
 
 /// The components of a constant direction (axes are numbers after lowering).
@@ -202,6 +201,13 @@ fn constant_numbers(v: &Vec3) -> Option<[Number; 3]> {
         _ => None,
     };
     Some([number(&v[0])?, number(&v[1])?, number(&v[2])?])
+}
+
+/// A constant direction's components as numbers, normalized (`None`: not constant, or zero).
+pub fn constant_direction(v: &Vec3) -> Option<[f64; 3]> {
+    let values = constant_numbers(v)?.map(Number::to_f64);
+    let norm = values.iter().map(|x| x * x).sum::<f64>().sqrt();
+    (norm > 0.0).then(|| values.map(|x| x / norm))
 }
 
 /// `a × b` of two constant directions, exactly.
