@@ -324,8 +324,8 @@ impl Experiment {
             Experiment::QuasiStatic(e) => {
                 let rows = data.rows;
                 let column = |name: &str| data.column(name);
-                let v_lift = column(model.input_name(leg.v_lift));
-                let v_swing = column(model.input_name(leg.v_swing));
+                let v_lift = column(model.input_name(leg.v_lift()));
+                let v_swing = column(model.input_name(leg.v_swing()));
                 let outputs: Vec<usize> = e
                     .outputs
                     .iter()
