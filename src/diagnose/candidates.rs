@@ -125,6 +125,18 @@ pub fn catalog(leg: &Leg) -> Vec<Candidate> {
             });
         }
     }
+    // A flexure whose stiffness is E w h³/(12 l) of a material: the modulus stands for it.
+    for (index, flexures) in super::pendulum::stiffness_moduli(leg) {
+        let (name, value) = (model.param_name(index), model.param(index));
+        out.push(Candidate {
+            cause: "flexure stiffness off by a factor".into(),
+            location: format!("flexure {} (modulus {name})", flexures.join(", ")),
+            parameters: vec![(
+                Target::Param(index),
+                Parameter::new(name, value).bounded(value / 4.0, value * 4.0),
+            )],
+        });
+    }
     out
 }
 
@@ -167,6 +179,10 @@ pub enum Verdict {
     PartlyExplained,
     /// No candidate helps significantly.
     Unexplained,
+    /// The data show something no parameter of the model can produce (the screening's
+    /// flags, e.g. a pendulum's amplitude-dependent damping): the candidates are fitted and
+    /// reported, but no cause is named.
+    Flagged,
 }
 
 #[derive(Debug, Clone)]
@@ -188,6 +204,8 @@ pub struct Diagnosis {
     pub tied: usize,
     /// The measured values the trials predict.
     pub observations: super::experiment::Observations,
+    /// The screening of the data before fitting (pendulum traces), with its flags.
+    pub screening: Option<super::pendulum::Screening>,
 }
 
 /// Runs the base model and every candidate (in parallel) on `data`.
@@ -198,8 +216,9 @@ pub fn diagnose(
     holdout: Holdout,
 ) -> Result<Diagnosis, String> {
     let spec = experiment.model_spec();
-    let leg = Leg::open(&spec)?;
+    let leg = Leg::open_any(&spec, &[])?;
     let observations = experiment.observations(&leg, data)?;
+    let screening = super::pendulum::screen_experiment(experiment, data)?;
     if observations.sigma.is_none() {
         return Err(
             "`mech diagnose` needs the measurement noise in the experiment file \
@@ -235,9 +254,9 @@ pub fn diagnose(
     }];
     jobs.extend(catalog(&leg).into_iter().filter(|c| {
         // A candidate on a parameter the user already fits adds nothing.
-        c.parameters
-            .iter()
-            .all(|(i, _)| user.iter().all(|(u, _)| u != i))
+        c.parameters.iter().all(|(i, _)| {
+            user.iter().all(|(u, _)| u != i) && super::pendulum::applies(experiment, i)
+        })
     }));
     let trials = crate::experiments::parallel(jobs, crate::experiments::threads(), |candidate| {
         run_trial(
@@ -292,7 +311,10 @@ pub fn diagnose(
     } else {
         consistent(&base)
     };
-    let verdict = if base_consistent {
+    let flagged = screening.as_ref().is_some_and(|s| !s.flags.is_empty());
+    let verdict = if flagged {
+        Verdict::Flagged
+    } else if base_consistent {
         Verdict::NoSignificantDiscrepancy
     } else {
         match ranked.first() {
@@ -327,6 +349,7 @@ pub fn diagnose(
         noise_band,
         tied,
         observations,
+        screening,
     })
 }
 
@@ -340,7 +363,7 @@ fn run_trial(
     train: &[bool],
 ) -> Result<Trial, (Candidate, String)> {
     let fail = |e: String| (candidate.clone(), e);
-    let mut leg = Leg::open(spec).map_err(fail)?;
+    let mut leg = Leg::open_any(spec, &[]).map_err(fail)?;
     let mut parameters = user.to_vec();
     parameters.extend(candidate.parameters.iter().cloned());
     let chi2 = |predicted: &[f64], keep: bool| -> f64 {

@@ -15,6 +15,9 @@
 //!   input, any unit of that dimension) and `phase [deg]`; the model linearized about its rest
 //!   equilibrium predicts them, with the flexure losses as complex stiffness (hysteretic,
 //!   default) or viscous dampers. Gain residuals are taken on `ln |H|`, so σ is relative.
+//! - `pendulum`: columns `time [s]` and the measured angle (`angle [deg]`): a ring-down of a
+//!   model without HAMR ports (the flexure rig), simulated from rest at the release angle
+//!   ([`super::pendulum`], which also screens the trace for what no parameter can fit).
 
 use std::path::{Path, PathBuf};
 
@@ -23,6 +26,7 @@ use mech_runtime::FlexureDamping;
 use serde::Deserialize;
 
 use super::data::MeasuredData;
+use super::pendulum::Pendulum;
 use crate::experiments::leg::Leg;
 use crate::experiments::ModelSpec;
 
@@ -32,6 +36,7 @@ use crate::experiments::ModelSpec;
 pub enum Experiment {
     QuasiStatic(QuasiStatic),
     FrequencyResponse(FrequencyResponse),
+    Pendulum(Pendulum),
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -170,6 +175,7 @@ impl Experiment {
         match self {
             Experiment::QuasiStatic(e) => &e.title,
             Experiment::FrequencyResponse(e) => &e.title,
+            Experiment::Pendulum(e) => &e.title,
         }
     }
 
@@ -178,6 +184,7 @@ impl Experiment {
         let (model, set, independent) = match self {
             Experiment::QuasiStatic(e) => (&e.model, &e.set, &e.independent),
             Experiment::FrequencyResponse(e) => (&e.model, &e.set, &e.independent),
+            Experiment::Pendulum(e) => (&e.model, &e.set, &e.independent),
         };
         ModelSpec {
             model: model.clone(),
@@ -222,6 +229,7 @@ impl Experiment {
                     noise_value("phase_noise", text)?;
                 }
             }
+            Experiment::Pendulum(e) => e.check()?,
         }
         Ok(())
     }
@@ -233,6 +241,7 @@ impl Experiment {
         let mut obs = Observations::default();
         match self {
             Experiment::QuasiStatic(e) => {
+                leg.require_hamr()?;
                 let mut sigma = Vec::new();
                 for (k, name) in e.outputs.iter().enumerate() {
                     model.output_index(name).ok_or_else(|| {
@@ -256,6 +265,7 @@ impl Experiment {
                 obs.sigma = (!e.noise.is_empty()).then_some(sigma);
             }
             Experiment::FrequencyResponse(e) => {
+                leg.require_hamr()?;
                 let frequency = data
                     .require("frequency", crate::experiments::FREQUENCY)
                     .map_err(|e| e.to_string())?;
@@ -306,6 +316,7 @@ impl Experiment {
                 }
                 obs.sigma = (gain_sigma.is_some() && phase_sigma.is_some()).then_some(sigma);
             }
+            Experiment::Pendulum(e) => obs = e.observations(leg, data)?,
         }
         Ok(obs)
     }
@@ -322,6 +333,7 @@ impl Experiment {
         let model = leg.model();
         match self {
             Experiment::QuasiStatic(e) => {
+                leg.require_hamr()?;
                 let rows = data.rows;
                 let column = |name: &str| data.column(name);
                 let v_lift = column(model.input_name(leg.v_lift()));
@@ -354,6 +366,7 @@ impl Experiment {
                 Ok(per_output.concat())
             }
             Experiment::FrequencyResponse(e) => {
+                leg.require_hamr()?;
                 let rest_inputs = leg.inputs(0.0, 0.0);
                 let rest = leg.equilibrium(&leg.q0, &rest_inputs, &[])?.q;
                 let linear =
@@ -391,6 +404,9 @@ impl Experiment {
                 }
                 Ok(predicted)
             }
+            // A frequency-dependent loss factor has no meaning at the one frequency of a
+            // ring-down (the catalog leaves it out: `pendulum::applies`).
+            Experiment::Pendulum(e) => e.predict(leg, data),
         }
     }
 }
@@ -414,7 +430,7 @@ fn wrap_near(angle: f64, reference: f64) -> f64 {
 }
 
 /// A noise level: a quantity (`5 um`, `3 deg`) or a percentage (`5 %`), as an SI number.
-fn noise_value(key: &str, text: &str) -> Result<f64, String> {
+pub(super) fn noise_value(key: &str, text: &str) -> Result<f64, String> {
     let text = text.trim();
     if let Some(percent) = text.strip_suffix('%') {
         let value: f64 = percent
