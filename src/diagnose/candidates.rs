@@ -4,11 +4,13 @@
 //! hold-out rule. Produces: a [`Diagnosis`] — the base model's residual on the data it was
 //! fitted to and on the held-out data, every catalog candidate fitted the same way (its own
 //! parameters plus the user's) and ranked on the held-out data, and a verdict: a named cause,
-//! "no significant discrepancy", or "unexplained".
+//! "no significant discrepancy", "unexplained", or "flagged" when the screening of the data
+//! (pendulum traces, [`super::pendulum`]) found what no parameter can produce.
 //!
 //! The catalog so far: the parameter changes of the model as written — a flexure's stiffness
 //! off by a factor (every `k_*` torsional stiffness), the loss factor (`eta`), the actuator
-//! preload (`preload`) — and one model-form extension, a frequency-dependent loss factor
+//! preload (`preload`), the modulus of a flexure's material (`E` of the flexure rig, standing
+//! for `E w h³/l`) — and one model-form extension, a frequency-dependent loss factor
 //! `η(f) = η·(f/f_ref)^α` (in the frequency response). The extensions that transform the IR
 //! (twist degrees of freedom with compliant closures, misaligned axes, actuator base
 //! compliance or tip mass, an off-axis load) are not built yet; reports list them as not

@@ -86,9 +86,6 @@ fn print_screening(screening: Option<&Screening>) {
     for flag in &s.flags {
         println!("\n  !! {}", flag.message);
     }
-    if !s.flags.is_empty() {
-        println!();
-    }
 }
 
 fn flag_kinds(s: &Screening) -> String {
@@ -341,7 +338,7 @@ pub fn diagnose_command(args: &DiagnoseArgs) -> Result<(), String> {
         ),
         (Verdict::Flagged, _) => format!(
             "flagged ({}): the data show what no parameter of the model can produce, so no \
-             cause is named; the fits above are reported with the flag{}",
+             cause is named; the fits are reported with the flag{}",
             d.screening.as_ref().map_or(String::new(), flag_kinds),
             match d.ranked.first() {
                 Some(best) => format!(

@@ -175,30 +175,32 @@ impl Pendulum {
             .require(TIME, Dimension::TIME)
             .map_err(|e| e.to_string())?;
         data.check_time_monotonic(TIME).map_err(|e| e.to_string())?;
-        let angles = data
-            .require(&self.angle, Dimension::NONE)
-            .map_err(|e| e.to_string())?;
-        // Dimensionless is not enough: a bare number or a percentage is no angle.
-        let (index, column) = data
+        // The unit first: a length or a bare number is no angle (and `require` alone would
+        // accept any dimensionless column, a percentage too).
+        if let Some((index, column)) = data
             .columns
             .iter()
             .enumerate()
             .find(|(_, c)| c.name == self.angle)
-            .expect("required above");
-        if !is_angle_unit(&column.unit_text) {
-            let found = if column.unit_text.is_empty() {
-                "no unit".to_string()
-            } else {
-                format!("`[{}]`", column.unit_text)
-            };
-            return Err(format!(
-                "`{}`, column {} (`{}`): expected an angle unit, `[deg]` or `[rad]`, found \
-                 {found}",
-                data.path.display(),
-                index + 1,
-                column.name,
-            ));
+        {
+            if !is_angle_unit(&column.unit_text) {
+                let found = if column.unit_text.is_empty() {
+                    "no unit".to_string()
+                } else {
+                    format!("`[{}]`", column.unit_text)
+                };
+                return Err(format!(
+                    "`{}`, column {} (`{}`): expected an angle unit, `[deg]` or `[rad]`, \
+                     found {found}",
+                    data.path.display(),
+                    index + 1,
+                    column.name,
+                ));
+            }
         }
+        let angles = data
+            .require(&self.angle, Dimension::NONE)
+            .map_err(|e| e.to_string())?;
         Ok((times, angles))
     }
 
