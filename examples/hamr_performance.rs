@@ -60,8 +60,8 @@ fn drive(leg: &Leg, amplitude: f64) -> Vec<Signal> {
         phase_rad,
         offset: 0.0,
     };
-    signals[leg.v_lift] = sine(0.0);
-    signals[leg.v_swing] = sine(std::f64::consts::FRAC_PI_2);
+    signals[leg.v_lift()] = sine(0.0);
+    signals[leg.v_swing()] = sine(std::f64::consts::FRAC_PI_2);
     signals
 }
 
@@ -101,7 +101,7 @@ fn foot_difference(leg: &Leg, run: &Trajectory, reference: &Trajectory) -> f64 {
     for (k, y) in run.outputs.iter().enumerate() {
         let r = &reference.outputs[k * every];
         assert!((run.times[k] - reference.times[k * every]).abs() < 1e-9);
-        for &i in &leg.foot {
+        for &i in &leg.foot() {
             worst = worst.max((y[i] - r[i]).abs());
         }
     }
@@ -275,7 +275,7 @@ fn main() {
         }
         let chirp_signals = {
             let mut s = leg.session.signals.clone();
-            s[leg.v_lift] = Signal::Chirp {
+            s[leg.v_lift()] = Signal::Chirp {
                 amplitude: 2.0,
                 f0_hz: 1.0,
                 f1_hz: 150.0,
@@ -318,7 +318,10 @@ fn main() {
                 mech_runtime::linearize(model.as_ref(), 0.0, &rest, &rest_inputs, &leg.independent)
                     .expect("linearization");
             let mut points = 0;
-            for (input, output) in [(leg.v_lift, leg.foot[2]), (leg.v_swing, leg.foot[0])] {
+            for (input, output) in [
+                (leg.v_lift(), leg.foot()[2]),
+                (leg.v_swing(), leg.foot()[0]),
+            ] {
                 for damping in [FlexureDamping::Hysteretic, FlexureDamping::Viscous] {
                     points += mech::frequency::linear_response(
                         &linear,

@@ -168,7 +168,7 @@ fn bode_data_with(
         let f = from_hz * (150.0 / from_hz).powf(k as f64 / 39.0);
         let omega = 2.0 * std::f64::consts::PI * f;
         let h = linear
-            .frequency_response(truth.v_lift, truth.foot[2], omega, damping)
+            .frequency_response(truth.v_lift(), truth.foot()[2], omega, damping)
             .unwrap();
         let gain = h.norm() * (1.0 + 0.02 * normal(&mut rng));
         let phase = (h.arg() - omega * delay).to_degrees() + normal(&mut rng);
@@ -315,8 +315,8 @@ fn two_channel_case(name: &str, change: impl Fn(&mut Leg), seed: u64) -> Diagnos
         let omega = 2.0 * std::f64::consts::PI * f;
         text += &format!("{f}");
         for (input, output) in [
-            (truth.v_lift, truth.foot[2]),
-            (truth.v_swing, truth.foot[0]),
+            (truth.v_lift(), truth.foot()[2]),
+            (truth.v_swing(), truth.foot()[0]),
         ] {
             let h = linear
                 .frequency_response(

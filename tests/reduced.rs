@@ -160,8 +160,8 @@ impl Drive {
         let leg = Leg::open(&spec).unwrap();
         let mut signals = leg.session.signals.clone();
         for (input, phase_rad) in [
-            (leg.v_lift, 0.0),
-            (leg.v_swing, std::f64::consts::FRAC_PI_2),
+            (leg.v_lift(), 0.0),
+            (leg.v_swing(), std::f64::consts::FRAC_PI_2),
         ] {
             signals[input] = Signal::Sine {
                 amplitude: 225.0,
@@ -210,7 +210,7 @@ impl Drive {
     fn foot_difference(&self, a: &Trajectory, b: &Trajectory) -> f64 {
         let mut worst: f64 = 0.0;
         for (ya, yb) in a.outputs.iter().zip(&b.outputs) {
-            for &i in &self.leg.foot {
+            for &i in &self.leg.foot() {
                 worst = worst.max((ya[i] - yb[i]).abs());
             }
         }

@@ -4,11 +4,13 @@
 //! hold-out rule. Produces: a [`Diagnosis`] — the base model's residual on the data it was
 //! fitted to and on the held-out data, every catalog candidate fitted the same way (its own
 //! parameters plus the user's) and ranked on the held-out data, and a verdict: a named cause,
-//! "no significant discrepancy", or "unexplained".
+//! "no significant discrepancy", "unexplained", or "flagged" when the screening of the data
+//! (pendulum traces, [`super::pendulum`]) found what no parameter can produce.
 //!
 //! The catalog so far: the parameter changes of the model as written — a flexure's stiffness
 //! off by a factor (every `k_*` torsional stiffness), the loss factor (`eta`), the actuator
-//! preload (`preload`) — and one model-form extension, a frequency-dependent loss factor
+//! preload (`preload`), the modulus of a flexure's material (`E` of the flexure rig, standing
+//! for `E w h³/l`) — and one model-form extension, a frequency-dependent loss factor
 //! `η(f) = η·(f/f_ref)^α` (in the frequency response). The extensions that transform the IR
 //! (twist degrees of freedom with compliant closures, misaligned axes, actuator base
 //! compliance or tip mass, an off-axis load) are not built yet; reports list them as not
@@ -170,7 +172,24 @@ pub fn catalog(leg: &Leg, experiment: &Experiment) -> Vec<Candidate> {
             supporting: 0,
         });
     }
-    out.extend(twist_candidates(leg));
+    // A flexure whose stiffness is E w h³/(12 l) of a material: the modulus stands for it.
+    for (index, flexures) in super::pendulum::stiffness_moduli(leg) {
+        let (name, value) = (model.param_name(index), model.param(index));
+        out.push(Candidate {
+            cause: "flexure stiffness off by a factor".into(),
+            location: format!("flexure {} (modulus {name})", flexures.join(", ")),
+            parameters: vec![(
+                Target::Param(index),
+                Parameter::new(name, value).bounded(value / 4.0, value * 4.0),
+            )],
+            extension: None,
+            supporting: 0,
+        });
+    }
+    // A ring-down swings in the hinge's plane: no twist to excite.
+    if !matches!(experiment, Experiment::Pendulum(_)) {
+        out.extend(twist_candidates(leg));
+    }
     out
 }
 
@@ -258,6 +277,10 @@ pub enum Verdict {
     PartlyExplained,
     /// No candidate helps significantly.
     Unexplained,
+    /// The data show something no parameter of the model can produce (the screening's
+    /// flags, e.g. a pendulum's amplitude-dependent damping): the candidates are fitted and
+    /// reported, but no cause is named.
+    Flagged,
 }
 
 #[derive(Debug, Clone)]
@@ -279,6 +302,8 @@ pub struct Diagnosis {
     pub tied: usize,
     /// The measured values the trials predict.
     pub observations: super::experiment::Observations,
+    /// The screening of the data before fitting (pendulum traces), with its flags.
+    pub screening: Option<super::pendulum::Screening>,
 }
 
 /// Runs the base model and every candidate (in parallel) on `data`.
@@ -289,8 +314,9 @@ pub fn diagnose(
     holdout: Holdout,
 ) -> Result<Diagnosis, String> {
     let spec = experiment.model_spec();
-    let leg = Leg::open(&spec)?;
+    let leg = Leg::open_any(&spec, &[])?;
     let observations = experiment.observations(&leg, data)?;
+    let screening = super::pendulum::screen_experiment(experiment, data)?;
     if observations.sigma.is_none() {
         return Err(
             "`mech diagnose` needs the measurement noise in the experiment file \
@@ -385,7 +411,10 @@ pub fn diagnose(
     } else {
         consistent(&base)
     };
-    let verdict = if base_consistent {
+    let flagged = screening.as_ref().is_some_and(|s| !s.flags.is_empty());
+    let verdict = if flagged {
+        Verdict::Flagged
+    } else if base_consistent {
         Verdict::NoSignificantDiscrepancy
     } else {
         match ranked.first() {
@@ -420,6 +449,7 @@ pub fn diagnose(
         noise_band,
         tied,
         observations,
+        screening,
     })
 }
 
@@ -435,7 +465,7 @@ fn run_trial(
     let fail = |e: String| (candidate.clone(), e);
     let mut leg = match &candidate.extension {
         Some(extension) => super::extend::open_leg(spec, extension),
-        None => Leg::open(spec),
+        None => Leg::open_any(spec, &[]),
     }
     .map_err(fail)?;
     let mut parameters = user.to_vec();

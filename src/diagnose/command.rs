@@ -10,6 +10,7 @@ use serde_json::json;
 use super::data::MeasuredData;
 use super::experiment::{self, Experiment};
 use super::fit::{fit, parameters, FitReport, FitRequest};
+use super::pendulum::{screen_experiment, Screening};
 use crate::experiments::leg::Leg;
 use crate::{output, plot};
 
@@ -33,13 +34,16 @@ pub struct FitArgs {
 pub fn fit_command(args: &FitArgs) -> Result<(), String> {
     let experiment = experiment::load(&args.experiment)?;
     let data = MeasuredData::load(&args.data).map_err(|e| e.to_string())?;
-    let mut leg = Leg::open(&experiment.model_spec())?;
+    let mut leg = Leg::open_any(&experiment.model_spec(), &[])?;
     let requests = args
         .fit
         .iter()
         .map(|text| FitRequest::parse(text))
         .collect::<Result<Vec<_>, _>>()?;
     let fitted = parameters(&leg, &requests)?;
+    // Checked before the screening, which reads the same columns.
+    experiment.observations(&leg, &data)?;
+    let screening = screen_experiment(&experiment, &data)?;
     println!(
         "{}: {} rows of `{}`, fitting {}",
         experiment.title(),
@@ -51,6 +55,7 @@ pub fn fit_command(args: &FitArgs) -> Result<(), String> {
             .collect::<Vec<_>>()
             .join(", ")
     );
+    print_screening(screening.as_ref());
     let report = fit(&experiment, &data, &mut leg, &fitted)
         .map_err(|e| format!("fit to `{}`: {e}", args.data.display()))?;
     println!("\n{}", report.result);
@@ -64,20 +69,63 @@ pub fn fit_command(args: &FitArgs) -> Result<(), String> {
             100.0 * (s.after / s.before - 1.0)
         );
     }
-    write_outputs(args, &experiment, &report)
+    if let Some(s) = screening.as_ref().filter(|s| !s.flags.is_empty()) {
+        println!(
+            "\nthe fit above is reported with {} flag(s): {}",
+            s.flags.len(),
+            flag_kinds(s)
+        );
+    }
+    write_outputs(args, &experiment, &report, screening.as_ref())
+}
+
+/// The screening's summary and, prominently, its flags (nothing for unscreened kinds).
+fn print_screening(screening: Option<&Screening>) {
+    let Some(s) = screening else { return };
+    println!("{}", s.summary());
+    for flag in &s.flags {
+        println!("\n  !! {}", flag.message);
+    }
+}
+
+fn flag_kinds(s: &Screening) -> String {
+    s.flags
+        .iter()
+        .map(|f| f.kind)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// `flags` and `screening` entries for the JSON summaries.
+fn screening_json(screening: Option<&Screening>) -> (serde_json::Value, serde_json::Value) {
+    match screening {
+        Some(s) => (
+            json!(s
+                .flags
+                .iter()
+                .map(|f| json!({"kind": f.kind, "message": f.message}))
+                .collect::<Vec<_>>()),
+            json!(s.summary()),
+        ),
+        None => (json!([]), serde_json::Value::Null),
+    }
 }
 
 fn write_outputs(
     args: &FitArgs,
     experiment: &Experiment,
     report: &FitReport,
+    screening: Option<&Screening>,
 ) -> Result<(), String> {
     let dir = &args.out_dir;
     std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     let r = &report.result;
+    let (flags, screened) = screening_json(screening);
     let summary = json!({
         "experiment": experiment.title(),
         "data": args.data.display().to_string(),
+        "flags": flags,
+        "screening": screened,
         "converged": r.converged,
         "reason": format!("{:?}", r.reason),
         "parameters": r.names.iter().enumerate().map(|(k, name)| json!({
@@ -144,6 +192,7 @@ fn overlay_plots(
         Experiment::FrequencyResponse(_) => ("frequency [Hz]", 1.0, "", 1.0),
         Experiment::QuasiStatic(_) => ("data row", 1.0, " [m]", 1.0),
         Experiment::ForceDeflection(_) => ("sensor distance [µm]", 1e6, " [mN]", 1e3),
+        Experiment::Pendulum(_) => ("time [s]", 1.0, " [rad]", 1.0),
     };
     let mut paths = Vec::new();
     for name in obs.series_names() {
@@ -236,6 +285,7 @@ pub fn diagnose_command(args: &DiagnoseArgs) -> Result<(), String> {
         args.holdout,
         d.noise_band
     );
+    print_screening(d.screening.as_ref());
     let per = |chi2: f64| chi2 / d.holdout_values as f64;
     println!(
         "\n{:<36} {:<16} {:>12} {:>12} {:>10}  fitted",
@@ -290,6 +340,21 @@ pub fn diagnose_command(args: &DiagnoseArgs) -> Result<(), String> {
             per(d.base.holdout_chi2),
             per(best.holdout_chi2)
         ),
+        (Verdict::Flagged, _) => format!(
+            "flagged ({}): the data show what no parameter of the model can produce, so no \
+             cause is named; the fits are reported with the flag{}",
+            d.screening.as_ref().map_or(String::new(), flag_kinds),
+            match d.ranked.first() {
+                Some(best) => format!(
+                    " (best fit: {} at {}, held-out χ²/value {:.2} → {:.2})",
+                    best.cause,
+                    best.location,
+                    per(d.base.holdout_chi2),
+                    per(best.holdout_chi2)
+                ),
+                None => String::new(),
+            }
+        ),
         _ => "unexplained: the residual is above the noise and no candidate explains it".to_string(),
     };
     println!("\nverdict: {verdict}");
@@ -306,9 +371,12 @@ pub fn diagnose_command(args: &DiagnoseArgs) -> Result<(), String> {
             "error": t.error,
         })
     };
+    let (flags, screened) = screening_json(d.screening.as_ref());
     let summary = json!({
         "experiment": experiment.title(),
         "data": args.data.display().to_string(),
+        "flags": flags,
+        "screening": screened,
         "holdout": args.holdout,
         "verdict": format!("{:?}", d.verdict),
         "summary": verdict,
@@ -373,6 +441,21 @@ fn diagnosis_page(
         files: vec![args.data.clone(), json_path],
         ..Outcome::default()
     };
+    if let Some(s) = &d.screening {
+        // First, above the ranking: what the fits cannot be trusted for.
+        let mut flags = Table::new(
+            "Screening before fitting: what no parameter of the model can produce",
+            &["flag", "finding"],
+        );
+        for flag in &s.flags {
+            flags.row(vec![flag.kind.to_string(), flag.message.clone()]);
+        }
+        if s.flags.is_empty() {
+            flags.row(vec!["none".into(), s.summary()]);
+        }
+        outcome.tables.insert(0, flags);
+        outcome.notes.push(s.summary());
+    }
     if !d.inert.is_empty() {
         let mut inert = Table::new(
             "Inert: cannot change the response beyond the noise, or the fit failed",

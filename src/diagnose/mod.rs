@@ -10,6 +10,9 @@
 //!   parameter values, the model's prediction of them;
 //! - [`fit`]: experiment + data + parameters to fit → fitted values, standard errors and the
 //!   residual before and after (`mech fit`, wired up in [`command`]);
+//! - [`pendulum`]: the flexure pendulum's ring-down (`kind = "pendulum"`) and the screening
+//!   of a decay trace for what no parameter can fit (amplitude-dependent damping, a
+//!   drifting baseline), reported as flags;
 //! - [`candidates`]: experiment + data + hold-out rule → every catalog candidate fitted and
 //!   ranked on held-out data, and a verdict (`mech diagnose`).
 //!
@@ -22,6 +25,7 @@ pub mod experiment;
 pub mod extend;
 pub mod fit;
 pub mod lm;
+pub mod pendulum;
 
 pub use data::{Column, DataError, DataErrors, MeasuredData};
 pub use lm::{

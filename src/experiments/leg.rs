@@ -1,6 +1,11 @@
 //! One HAMR leg as the experiments drive it: the model with its two drive voltages, the
 //! foot position output, static equilibria (optionally with the foot against a sensor) and
 //! the force/deflection procedure of the paper (seed Sec. V.A, Fig. 7).
+//!
+//! `mech fit` and `mech diagnose` also hold other models in a [`Leg`] (e.g. the flexure
+//! pendulum rig, which has neither drive nor foot): [`Leg::open_any`] opens a model without
+//! the HAMR ports, and the HAMR-only methods ([`Leg::inputs`], [`Leg::foot_at`], ...) are
+//! for legs that have them ([`Leg::require_hamr`]).
 
 use mech_runtime::{
     assemble, solve_statics_with_loads, AssemblyOptions, Equilibrium, Fixture, Model, SideLoad,
@@ -62,12 +67,20 @@ pub const AXES: [&str; 3] = ["x", "y", "z"];
 pub struct Leg {
     pub session: Session,
     pub independent: Vec<usize>,
-    pub v_lift: usize,
-    pub v_swing: usize,
-    /// Output indices of foot.x, foot.y, foot.z.
-    pub foot: [usize; 3],
+    /// The HAMR drive inputs and foot output; `None` for a model without them (opened by
+    /// [`Leg::open_any`]).
+    ports: Option<Ports>,
     /// The assembled initial state (loops closed, no load).
     pub q0: Vec<f64>,
+}
+
+/// A HAMR leg's drive inputs and foot output (indices into the model's inputs and outputs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Ports {
+    v_lift: usize,
+    v_swing: usize,
+    /// Output indices of foot.x, foot.y, foot.z.
+    foot: [usize; 3],
 }
 
 impl Leg {
@@ -78,12 +91,21 @@ impl Leg {
     /// As [`Leg::open`], with `params` (name, SI value) set after `spec.set`: sweeps set
     /// their values directly, without a round trip through text.
     pub fn open_with(spec: &ModelSpec, params: &[(&str, f64)]) -> Result<Leg, String> {
-        let session = Session::open(&spec.model, &spec.set, &[])
-            .map_err(|e| format!("model `{}`: {e}", spec.model.display()))?;
+        let session = open_session(spec)?;
+        // Checked before the assembly, whose default independent coordinates are HAMR's.
+        hamr_ports(&session.model, &spec.model.display().to_string())?;
         Leg::from_session(session, spec, params)
     }
 
-    /// A leg from an opened session (e.g. of a transformed model), with `params` set.
+    /// As [`Leg::open_with`] for any model: the HAMR drive and foot are optional (a model
+    /// without them, e.g. the flexure pendulum rig, only serves the experiments that do not
+    /// drive it; those that do check [`Leg::require_hamr`]).
+    pub fn open_any(spec: &ModelSpec, params: &[(&str, f64)]) -> Result<Leg, String> {
+        Leg::from_session(open_session(spec)?, spec, params)
+    }
+
+    /// A leg from an opened session (e.g. of a transformed model), with `params` set. The
+    /// HAMR ports are optional, as for [`Leg::open_any`].
     pub fn from_session(
         mut session: Session,
         spec: &ModelSpec,
@@ -95,34 +117,43 @@ impl Leg {
             })?;
             session.model.set_param(index, value);
         }
-        let model = &session.model;
-        let input = |name: &str| {
-            model.input_index(name).ok_or_else(|| {
-                format!(
-                    "model `{}` has no input `{name}` (a HAMR leg needs v_lift and v_swing)",
-                    spec.model.display()
-                )
-            })
-        };
-        let (v_lift, v_swing) = (input("v_lift")?, input("v_swing")?);
-        let mut foot = [0; 3];
-        for (slot, axis) in foot.iter_mut().zip(AXES) {
-            *slot = model.output_index(&format!("foot.{axis}")).ok_or_else(|| {
-                format!(
-                    "model `{}` has no position output `foot`",
-                    spec.model.display()
-                )
-            })?;
-        }
+        let ports = hamr_ports(&session.model, "").ok();
         let state = session.assemble(&spec.independent)?;
         Ok(Leg {
             independent: state.independent.clone(),
             q0: state.q,
             session,
-            v_lift,
-            v_swing,
-            foot,
+            ports,
         })
+    }
+
+    /// An error naming the model unless the leg has HAMR's drive inputs `v_lift` and
+    /// `v_swing` and the foot position output `foot`, which the HAMR-only methods use.
+    pub fn require_hamr(&self) -> Result<(), String> {
+        hamr_ports(self.model(), self.model().name()).map(|_| ())
+    }
+
+    /// The HAMR ports; panics for a leg without them (a programming error: every path
+    /// that reaches a HAMR-only method opened the leg with [`Leg::open`] or checked
+    /// [`Leg::require_hamr`]).
+    fn ports(&self) -> Ports {
+        self.ports
+            .expect("a HAMR-only method on a model without v_lift, v_swing and foot")
+    }
+
+    /// The index of the input `v_lift` (HAMR legs only).
+    pub fn v_lift(&self) -> usize {
+        self.ports().v_lift
+    }
+
+    /// The index of the input `v_swing` (HAMR legs only).
+    pub fn v_swing(&self) -> usize {
+        self.ports().v_swing
+    }
+
+    /// The output indices of foot.x, foot.y, foot.z (HAMR legs only).
+    pub fn foot(&self) -> [usize; 3] {
+        self.ports().foot
     }
 
     pub fn model(&self) -> &dyn Model {
@@ -135,10 +166,12 @@ impl Leg {
         model.param_index(name).map(|i| model.param(i))
     }
 
+    /// The model's inputs at their defaults with the drive voltages set (HAMR legs only).
     pub fn inputs(&self, lift: f64, swing: f64) -> Vec<f64> {
+        let ports = self.ports();
         let mut inputs: Vec<f64> = self.session.signals.iter().map(|s| s.value(0.0)).collect();
-        inputs[self.v_lift] = lift;
-        inputs[self.v_swing] = swing;
+        inputs[ports.v_lift] = lift;
+        inputs[ports.v_swing] = swing;
         inputs
     }
 
@@ -153,7 +186,7 @@ impl Leg {
         let model = self.model();
         let mut y = vec![0.0; model.noutputs()];
         model.outputs(0.0, q, &vec![0.0; model.nu()], inputs, &mut y);
-        self.foot.map(|i| y[i])
+        self.foot().map(|i| y[i])
     }
 
     /// The static equilibrium nearest `start` under `inputs` and `fixtures` (the runtime's
@@ -192,7 +225,7 @@ impl Leg {
     pub fn fixture(&self, target: [f64; 3], components: Vec<usize>) -> Fixture {
         Fixture {
             name: "foot".into(),
-            outputs: self.foot,
+            outputs: self.foot(),
             target,
             components,
         }
@@ -219,6 +252,32 @@ impl Leg {
         };
         Ok((at(h)? - at(-h)?) / (2.0 * h))
     }
+}
+
+fn open_session(spec: &ModelSpec) -> Result<Session, String> {
+    Session::open(&spec.model, &spec.set, &[])
+        .map_err(|e| format!("model `{}`: {e}", spec.model.display()))
+}
+
+/// The HAMR ports of `model` (named `shown` in errors), or what is missing.
+fn hamr_ports(model: &dyn Model, shown: &str) -> Result<Ports, String> {
+    let input = |name: &str| {
+        model.input_index(name).ok_or_else(|| {
+            format!("model `{shown}` has no input `{name}` (a HAMR leg needs v_lift and v_swing)")
+        })
+    };
+    let (v_lift, v_swing) = (input("v_lift")?, input("v_swing")?);
+    let mut foot = [0; 3];
+    for (slot, axis) in foot.iter_mut().zip(AXES) {
+        *slot = model
+            .output_index(&format!("foot.{axis}"))
+            .ok_or_else(|| format!("model `{shown}` has no position output `foot`"))?;
+    }
+    Ok(Ports {
+        v_lift,
+        v_swing,
+        foot,
+    })
 }
 
 /// One sensor position of a force/deflection test.
