@@ -288,6 +288,12 @@ pub struct Diagnosis {
     pub base: Trial,
     /// Candidates that moved the residual, best first (lowest held-out χ²).
     pub ranked: Vec<Trial>,
+    /// Two causes together, when the best alone leaves a residual above the noise and adding
+    /// a second one improves significantly (the verdict then speaks of both).
+    pub combined: Option<Trial>,
+    /// The pairs tried for [`Diagnosis::combined`] (the best with each other ranked
+    /// candidate), best first; empty when no second cause was sought.
+    pub second_round: Vec<Trial>,
     /// Candidates that could not change the response, or whose fit failed.
     pub inert: Vec<Trial>,
     pub verdict: Verdict,
@@ -358,50 +364,28 @@ pub fn diagnose(
             .iter()
             .all(|(i, _)| user.iter().all(|(u, _)| u != i))
     }));
-    let trials = crate::experiments::parallel(jobs, crate::experiments::threads(), |candidate| {
-        run_trial(
-            experiment,
-            data,
-            &spec,
-            &candidate,
-            &user,
-            &observations,
-            &train,
-        )
-    });
-    let mut trials = trials.into_iter();
-    let base = trials.next().expect("the base trial");
-    let base = base.map_err(|(_, e)| format!("the base model: {e}"))?;
+    let run = |jobs: Vec<Candidate>| {
+        crate::experiments::parallel(jobs, crate::experiments::threads(), |candidate| {
+            run_trial(
+                experiment,
+                data,
+                &spec,
+                &candidate,
+                &user,
+                &observations,
+                &train,
+            )
+            .map(|trial| (candidate, trial))
+        })
+    };
+    let mut trials = run(jobs).into_iter();
+    let (_, base) = trials
+        .next()
+        .expect("the base trial")
+        .map_err(|(_, e)| format!("the base model: {e}"))?;
     let m = holdout_values as f64;
     let noise_band = 1.0 + 3.0 * (2.0 / m).sqrt();
-    let mut ranked = Vec::new();
-    let mut inert = Vec::new();
-    for trial in trials {
-        let trial = trial.unwrap_or_else(|(candidate, e)| Trial {
-            cause: candidate.cause,
-            location: candidate.location,
-            parameters: Vec::new(),
-            train_chi2: f64::NAN,
-            holdout_chi2: f64::NAN,
-            aicc: f64::NAN,
-            inert: true,
-            error: Some(e),
-            predicted: Vec::new(),
-        });
-        // Fitting it must lower the training χ² by at least 1 (one σ² in total): a smaller
-        // change is below what the noise (and the predictions' own ~1e-5 relative numerical
-        // noise, from the finite-difference linearization) can resolve.
-        let unchanged = base.train_chi2 - trial.train_chi2 < 1.0;
-        if trial.inert || trial.error.is_some() || unchanged {
-            inert.push(Trial {
-                inert: true,
-                ..trial
-            });
-        } else {
-            ranked.push(trial);
-        }
-    }
-    ranked.sort_by(|a, b| a.holdout_chi2.total_cmp(&b.holdout_chi2));
+    let (ranked_pairs, inert) = sort_out(&base, trials);
     let consistent = |t: &Trial| t.holdout_chi2 / m <= noise_band;
     // Without user parameters the base model is not fitted, so every value tests it (a
     // held-out subset alone may miss a narrow resonance).
@@ -411,14 +395,34 @@ pub fn diagnose(
     } else {
         consistent(&base)
     };
+    // Significantly better than `than` (ΔAICc < −10: Burnham & Anderson's "essentially no
+    // support" for the other) and better on the held-out data.
+    let improves =
+        |t: &Trial, than: &Trial| than.aicc - t.aicc > 10.0 && t.holdout_chi2 < than.holdout_chi2;
+    // A second cause: when the best leaves a residual above the noise, every other candidate
+    // that moved the residual is fitted together with it (forward selection, one step).
+    let mut second_round = Vec::new();
+    let mut combined = None;
+    if let Some((best_candidate, best)) = ranked_pairs.first() {
+        if !base_consistent && improves(best, &base) && !consistent(best) {
+            let jobs: Vec<Candidate> = ranked_pairs[1..]
+                .iter()
+                .filter_map(|(other, _)| combine(best_candidate, other))
+                .collect();
+            let (pairs, _) = sort_out(best, run(jobs).into_iter());
+            second_round = pairs.into_iter().map(|(_, t)| t).collect();
+            combined = second_round.first().filter(|t| improves(t, best)).cloned();
+        }
+    }
+    let ranked: Vec<Trial> = ranked_pairs.into_iter().map(|(_, t)| t).collect();
     let flagged = screening.as_ref().is_some_and(|s| !s.flags.is_empty());
     let verdict = if flagged {
         Verdict::Flagged
     } else if base_consistent {
         Verdict::NoSignificantDiscrepancy
     } else {
-        match ranked.first() {
-            Some(best) if base.aicc - best.aicc > 10.0 && best.holdout_chi2 < base.holdout_chi2 => {
+        match combined.as_ref().or(ranked.first()) {
+            Some(best) if improves(best, &base) => {
                 if consistent(best) {
                     Verdict::Explained
                 } else {
@@ -435,6 +439,7 @@ pub fn diagnose(
             .count(),
         None => 0,
     };
+    let mut ranked = ranked;
     // Among candidates the data support equally, one whose fit ran into a bound (standard
     // error NaN: the change it needs is outside the plausible range) goes after the others.
     let at_bound = |t: &Trial| t.parameters.iter().any(|p| p.3.is_nan());
@@ -442,6 +447,8 @@ pub fn diagnose(
     Ok(Diagnosis {
         base,
         ranked,
+        combined,
+        second_round,
         inert,
         verdict,
         holdout_values,
@@ -450,6 +457,76 @@ pub fn diagnose(
         tied,
         observations,
         screening,
+    })
+}
+
+type TrialResult = Result<(Candidate, Trial), (Candidate, String)>;
+
+/// Splits trials into those that moved the residual (best first, lowest held-out χ²) and the
+/// inert ones (no change beyond the noise, or a failed fit), compared with `reference`.
+fn sort_out(
+    reference: &Trial,
+    trials: impl Iterator<Item = TrialResult>,
+) -> (Vec<(Candidate, Trial)>, Vec<Trial>) {
+    let mut ranked = Vec::new();
+    let mut inert = Vec::new();
+    for result in trials {
+        let (candidate, trial) = result.unwrap_or_else(|(candidate, e)| {
+            let trial = Trial {
+                cause: candidate.cause.clone(),
+                location: candidate.location.clone(),
+                parameters: Vec::new(),
+                train_chi2: f64::NAN,
+                holdout_chi2: f64::NAN,
+                aicc: f64::NAN,
+                inert: true,
+                error: Some(e),
+                predicted: Vec::new(),
+            };
+            (candidate, trial)
+        });
+        // Fitting it must lower the training χ² by at least 1 (one σ² in total): a smaller
+        // change is below what the noise (and the predictions' own ~1e-5 relative numerical
+        // noise, from the finite-difference linearization) can resolve.
+        let unchanged = reference.train_chi2 - trial.train_chi2 < 1.0;
+        if trial.inert || trial.error.is_some() || unchanged {
+            inert.push(Trial {
+                inert: true,
+                ..trial
+            });
+        } else {
+            ranked.push((candidate, trial));
+        }
+    }
+    ranked.sort_by(|a, b| a.1.holdout_chi2.total_cmp(&b.1.holdout_chi2));
+    (ranked, inert)
+}
+
+/// `first` and `second` fitted together: their parameters (a target both fit counts once)
+/// and the model-form extension of either. `None` when both change the model's form (their
+/// new parameters would collide) or `second` adds nothing.
+fn combine(first: &Candidate, second: &Candidate) -> Option<Candidate> {
+    if first.extension.is_some() && second.extension.is_some() {
+        return None;
+    }
+    let added: Vec<(Target, Parameter)> = second
+        .parameters
+        .iter()
+        .filter(|(target, _)| first.parameters.iter().all(|(t, _)| t != target))
+        .cloned()
+        .collect();
+    if added.is_empty() {
+        return None;
+    }
+    let mut parameters = first.parameters.clone();
+    parameters.extend(added);
+    Some(Candidate {
+        cause: format!("{} + {}", first.cause, second.cause),
+        location: format!("{}; {}", first.location, second.location),
+        parameters,
+        extension: first.extension.clone().or_else(|| second.extension.clone()),
+        // Combinations are not screened: each part moved the residual on its own.
+        supporting: 0,
     })
 }
 

@@ -307,6 +307,14 @@ pub fn diagnose_command(args: &DiagnoseArgs) -> Result<(), String> {
     for t in &d.ranked {
         line(t);
     }
+    if !d.second_round.is_empty() {
+        println!(
+            "\nthe best leaves a residual above the noise; fitted together with each other candidate:"
+        );
+        for t in &d.second_round {
+            line(t);
+        }
+    }
     if !d.inert.is_empty() {
         println!("\ninert (cannot change the response, or failed):");
         for t in &d.inert {
@@ -319,7 +327,7 @@ pub fn diagnose_command(args: &DiagnoseArgs) -> Result<(), String> {
         }
     }
     println!("\nnot in the catalog yet: {}", NOT_TRIED.join("; "));
-    let verdict = match (&d.verdict, d.ranked.first()) {
+    let verdict = match (&d.verdict, d.combined.as_ref().or(d.ranked.first())) {
         (Verdict::NoSignificantDiscrepancy, _) => {
             "no significant discrepancy: the model as written explains the held-out data to the noise".to_string()
         }
@@ -383,6 +391,8 @@ pub fn diagnose_command(args: &DiagnoseArgs) -> Result<(), String> {
         "tied_with_best": d.tied.saturating_sub(1),
         "base": trial(&d.base),
         "ranked": d.ranked.iter().map(trial).collect::<Vec<_>>(),
+        "combined": d.combined.as_ref().map(trial),
+        "second_round": d.second_round.iter().map(trial).collect::<Vec<_>>(),
         "inert": d.inert.iter().map(trial).collect::<Vec<_>>(),
         "not_tried": NOT_TRIED,
     });
@@ -417,7 +427,10 @@ fn diagnosis_page(
             "fitted",
         ],
     );
-    for t in std::iter::once(&d.base).chain(&d.ranked) {
+    for t in std::iter::once(&d.base)
+        .chain(&d.ranked)
+        .chain(&d.second_round)
+    {
         let fitted: Vec<String> = t.parameters.iter().map(fitted_text).collect();
         ranking.row(vec![
             t.cause.clone(),
