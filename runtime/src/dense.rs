@@ -1,7 +1,8 @@
 //! Small dense linear algebra on column-major slices, without allocation: Cholesky for the
 //! mass matrix and a diagonally pivoted Cholesky that reveals the rank of a positive
 //! semidefinite matrix (`J M⁻¹ Jᵀ` with redundant constraint rows), plus the products the
-//! constrained solver needs (`Zᵀ Z`, `Zᵀ w`, `Z λ`); LU with partial pivoting for general
+//! constrained solver needs (`Zᵀ Z`, `Zᵀ w`, `Z λ`), and the inverse from a Cholesky factor
+//! (for the reduced dynamics' many solves with one factor); LU with partial pivoting for general
 //! square systems (a mass matrix that is not symmetric, the Rosenbrock iteration matrix);
 //! Householder QR for the least-squares
 //! solves of the reduced dynamics (the tall loop Jacobian of the dependent coordinates).
