@@ -56,6 +56,9 @@ pub struct Reduced<'a, M: Model + ?Sized> {
     /// `W b` on `rows`.
     gathered: Vec<f64>,
     factor: Vec<f64>,
+    /// `((W J_d)ᵀ(W J_d))⁻¹` from `factor` (`nd × nd`): every solve is then two products,
+    /// without the divisions of triangular solves in a chain.
+    inverse: Vec<f64>,
     factor_at_q: bool,
     /// Solution of the last [`Reduced::solve_dependent`].
     solution: Vec<f64>,
@@ -149,6 +152,7 @@ impl<'a, M: Model + ?Sized> Reduced<'a, M> {
             weights: vec![0.0; nc],
             gathered: vec![0.0; nc],
             factor: vec![0.0; nd * nd],
+            inverse: vec![0.0; nd * nd],
             factor_at_q: false,
             solution: vec![0.0; nd],
             work: vec![0.0; nc.max(nq)],
@@ -386,17 +390,23 @@ impl<'a, M: Model + ?Sized> Reduced<'a, M> {
             }
         }
         dense::gram_lower(&self.scaled, nr, nd, &mut self.factor);
-        dense::cholesky(&mut self.factor, nd)
+        if !dense::cholesky(&mut self.factor, nd) {
+            return false;
+        }
+        dense::cholesky_inverse(&self.factor, nd, &mut self.inverse);
+        true
     }
 
-    /// The least-squares solution of `J_d x = b` into `solution`, for `b` in `work[..nc]`.
+    /// The least-squares solution of `J_d x = b` into `solution`, for `b` in `work[..nc]` (which
+    /// it overwrites).
     fn solve_dependent(&mut self) {
         let (nr, nd) = (self.rows.len(), self.dependent.len());
         for (g, &r) in self.gathered.iter_mut().zip(&self.rows) {
             *g = self.work[r] * self.weights[r];
         }
-        dense::transpose_times(&self.scaled, nr, nd, &self.gathered, &mut self.solution);
-        dense::cholesky_solve(&self.factor, nd, &mut self.solution);
+        dense::transpose_times(&self.scaled, nr, nd, &self.gathered, &mut self.work[..nd]);
+        self.solution.fill(0.0);
+        dense::add_times(&self.inverse, nd, nd, &self.work[..nd], &mut self.solution);
     }
 }
 
