@@ -30,7 +30,10 @@ use mech_codegen::ir::transform::{constant_direction, hinge_axis};
 use super::data::MeasuredData;
 use super::experiment::Experiment;
 use super::experiment::Extensions;
-use super::extend::{Extension, OFF_AXIS_COMPLIANCE, TWIST_FACTOR};
+use super::extend::{
+    Extension, BASE_COMPLIANCE, MISALIGNMENT, OFF_AXIS_COMPLIANCE, TIP_MASS, TIP_PRELOAD,
+    TWIST_FACTOR,
+};
 use super::fit::{fit_values, residual, Target};
 use super::lm::{information_criteria, NoiseModel, Parameter};
 use crate::experiments::leg::{Leg, AXES};
@@ -188,21 +191,30 @@ pub fn catalog(leg: &Leg, experiment: &Experiment) -> Vec<Candidate> {
     }
     // A ring-down swings in the hinge's plane: no twist to excite.
     if !matches!(experiment, Experiment::Pendulum(_)) {
-        out.extend(twist_candidates(leg));
+        out.extend(hinge_candidates(leg));
+        out.extend(actuator_candidates(leg));
     }
     out
 }
 
-/// Twist of each flexure hinge about each coordinate axis of its frame that is
-/// perpendicular to its bending axis (its length axis is one of them), Eq. 8's stiffness
+/// Twist of each flexure hinge, and a tilt of its bending axis, about each coordinate axis of
+/// its frame that is perpendicular to its bending axis (its length axis is one of them), Eq. 8's stiffness
 /// times a fitted factor (`extend::Extension::Twist`). A twist in a closed loop can only act
 /// as far as the other hinges give way off their axes, so their off-axis compliance (per unit
 /// 1/k; `(t/w)²` for lateral bending, a geometry the model does not give) is fitted with it;
 /// at its lower bound (10⁻⁶) the extension is the base model to ~0.1 % (HAMR-VI swing
 /// blocked force).
-fn twist_candidates(leg: &Leg) -> Vec<Candidate> {
+fn hinge_candidates(leg: &Leg) -> Vec<Candidate> {
     let model = &leg.session.compiled.model;
-    let first_new_param = model.params.len();
+    let first_new = model.params.len();
+    // From near the base model: a fit started where the hinges give way a lot can stall with
+    // a resonance at the wrong place.
+    let compliance = (
+        Target::Param(first_new + 1),
+        Parameter::new(OFF_AXIS_COMPLIANCE, 1e-5)
+            .bounded(1e-6, 1e-2)
+            .with_scale(1e-3),
+    );
     let mut out = Vec::new();
     for flexure in model.flexures.iter() {
         let Some(axis) = hinge_axis(model, flexure.angle).and_then(|a| constant_direction(&a))
@@ -219,20 +231,32 @@ fn twist_candidates(leg: &Leg) -> Vec<Candidate> {
                 location: format!("flexure {} about {name}", flexure.name),
                 parameters: vec![
                     (
-                        Target::Param(first_new_param),
+                        Target::Param(first_new),
                         // Eq. 8 within a factor of 2 either way: a plausible twist stiffness.
                         Parameter::new(TWIST_FACTOR, 1.0).bounded(0.5, 2.0),
                     ),
-                    (
-                        Target::Param(first_new_param + 1),
-                        // From near the base model: a fit started where the twist acts
-                        // strongly can stall with a resonance at the wrong place.
-                        Parameter::new(OFF_AXIS_COMPLIANCE, 1e-5)
-                            .bounded(1e-6, 1e-2)
-                            .with_scale(1e-3),
-                    ),
+                    compliance.clone(),
                 ],
                 extension: Some(Extension::Twist(vec![(flexure.name.clone(), index)])),
+                supporting: 1,
+            });
+            out.push(Candidate {
+                cause: "flexure axis misalignment".into(),
+                location: format!("flexure {} tilted about {name}", flexure.name),
+                parameters: vec![
+                    (
+                        Target::Param(first_new),
+                        // Up to ~3° (a fabrication error of 50 µm over 1 mm).
+                        Parameter::new(MISALIGNMENT, 0.0)
+                            .bounded(-0.05, 0.05)
+                            .with_scale(0.01),
+                    ),
+                    compliance.clone(),
+                ],
+                extension: Some(Extension::Misalignment {
+                    flexure: flexure.name.clone(),
+                    about: index,
+                }),
                 supporting: 1,
             });
         }
@@ -240,11 +264,66 @@ fn twist_candidates(leg: &Leg) -> Vec<Candidate> {
     out
 }
 
-/// The extensions of the design's catalog that are not built yet (named in reports).
-pub const NOT_TRIED: &[&str] = &[
-    "flexure axis misalignment",
-    "actuator base compliance or tip mass",
-];
+/// Per actuator (a slider coordinate with a force source): a compliant base in series (up to
+/// twice the actuator's own compliance) and a mass on its tip (up to 20 mg, the order of a
+/// HAMR actuator's mass).
+fn actuator_candidates(leg: &Leg) -> Vec<Candidate> {
+    let model = &leg.session.compiled.model;
+    let first_new = model.params.len();
+    let mut out = Vec::new();
+    // A model with its own `preload` parameter has that candidate already.
+    let has_preload = model.params.iter().any(|(_, p)| p.name == "preload");
+    let actuated = model
+        .loads
+        .iter()
+        .any(|load| matches!(load, mech_codegen::ir::Load::GeneralizedForce { .. }));
+    if actuated && !has_preload {
+        out.push(Candidate {
+            cause: "actuator tip preload".into(),
+            location: "every actuator".into(),
+            parameters: vec![(
+                Target::Param(first_new),
+                Parameter::new(TIP_PRELOAD, 0.0)
+                    .bounded(-200e-6, 200e-6)
+                    .with_scale(50e-6),
+            )],
+            extension: Some(Extension::Preload),
+            supporting: 0,
+        });
+    }
+    for load in &model.loads {
+        let mech_codegen::ir::Load::GeneralizedForce { coordinate, .. } = load else {
+            continue;
+        };
+        let slider = model.coordinates[*coordinate].name.clone();
+        let location = format!("actuator along {slider}");
+        out.push(Candidate {
+            cause: "actuator base compliance".into(),
+            location: location.clone(),
+            parameters: vec![(
+                Target::Param(first_new),
+                Parameter::new(BASE_COMPLIANCE, 0.0)
+                    .bounded(0.0, 2.0)
+                    .with_scale(0.1),
+            )],
+            extension: Some(Extension::BaseCompliance(slider.clone())),
+            supporting: 0,
+        });
+        out.push(Candidate {
+            cause: "actuator tip mass".into(),
+            location,
+            parameters: vec![(
+                Target::Param(first_new),
+                Parameter::new(TIP_MASS, 0.0)
+                    .bounded(0.0, 20e-6)
+                    .with_scale(1e-6),
+            )],
+            extension: Some(Extension::TipMass(slider)),
+            supporting: 0,
+        });
+    }
+    out
+}
 
 /// One fitted model (the base or a candidate) and how it does.
 #[derive(Debug, Clone)]
@@ -631,8 +710,8 @@ fn run_trial(
 }
 
 /// Screens a candidate before fitting it: moving each of its defining parameters alone to
-/// either bound (the others at their starting values, supporting ones at their upper bound)
-/// changes the predictions by less than the noise, Σ((Δ prediction)/σ)² < 1 — it cannot change the response (e.g. a twist the other
+/// either bound (the others at their starting values, the supporting ones at their starting
+/// values and again at their upper bounds) changes the predictions by less than the noise, Σ((Δ prediction)/σ)² < 1 — it cannot change the response (e.g. a twist the other
 /// hinges lock). Returns the predictions at the starting values then; `None` when the
 /// candidate moves them, a prediction fails, or there is no noise level to compare with.
 fn cannot_move(
@@ -647,39 +726,50 @@ fn cannot_move(
     if candidate.parameters.is_empty() {
         return None;
     }
-    // The supporting parameters at their upper bound: the most room the fit can give the
-    // defining ones to act.
     let supporting = &candidate.parameters[candidate.parameters.len() - candidate.supporting..];
     let mut extensions = Extensions::default();
-    for (target, parameter) in user.iter().chain(candidate.defining()) {
+    for (target, parameter) in user.iter().chain(&candidate.parameters) {
         target.apply(leg, &mut extensions, parameter.initial);
     }
-    for (target, parameter) in supporting {
-        target.apply(leg, &mut extensions, parameter.upper);
-    }
-    let reference = experiment
+    let at_start = experiment
         .predict(leg, data, observations, &extensions)
         .ok()?;
-    for (target, parameter) in candidate.defining() {
-        for bound in [parameter.lower, parameter.upper] {
-            if !bound.is_finite() {
-                return None;
-            }
-            target.apply(leg, &mut extensions, bound);
-            let moved = experiment
-                .predict(leg, data, observations, &extensions)
-                .ok()?;
-            let change: f64 = moved
-                .iter()
-                .zip(&reference)
-                .zip(sigma)
-                .map(|((a, b), s)| ((a - b) / s).powi(2))
-                .sum();
-            if change >= 1.0 {
-                return None;
-            }
+    // The supporting parameters at their starting values, then at their upper bounds (a
+    // twist acts most where the other hinges give way most; a misalignment where they are
+    // stiff).
+    let settings: &[fn(&Parameter) -> f64] = if supporting.is_empty() {
+        &[|p| p.initial]
+    } else {
+        &[|p| p.initial, |p| p.upper]
+    };
+    for setting in settings {
+        for (target, parameter) in supporting {
+            target.apply(leg, &mut extensions, setting(parameter));
         }
-        target.apply(leg, &mut extensions, parameter.initial);
+        let reference = experiment
+            .predict(leg, data, observations, &extensions)
+            .ok()?;
+        for (target, parameter) in candidate.defining() {
+            for bound in [parameter.lower, parameter.upper] {
+                if !bound.is_finite() {
+                    return None;
+                }
+                target.apply(leg, &mut extensions, bound);
+                let moved = experiment
+                    .predict(leg, data, observations, &extensions)
+                    .ok()?;
+                let change: f64 = moved
+                    .iter()
+                    .zip(&reference)
+                    .zip(sigma)
+                    .map(|((a, b), s)| ((a - b) / s).powi(2))
+                    .sum();
+                if change >= 1.0 {
+                    return None;
+                }
+            }
+            target.apply(leg, &mut extensions, parameter.initial);
+        }
     }
-    Some(reference)
+    Some(at_start)
 }

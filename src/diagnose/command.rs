@@ -272,7 +272,7 @@ pub struct DiagnoseArgs {
 }
 
 pub fn diagnose_command(args: &DiagnoseArgs) -> Result<(), String> {
-    use super::candidates::{diagnose, Holdout, Verdict, NOT_TRIED};
+    use super::candidates::{diagnose, Holdout, Verdict};
     let experiment = experiment::load(&args.experiment)?;
     let data = MeasuredData::load(&args.data).map_err(|e| e.to_string())?;
     let holdout = Holdout::parse(&args.holdout)?;
@@ -326,7 +326,6 @@ pub fn diagnose_command(args: &DiagnoseArgs) -> Result<(), String> {
             );
         }
     }
-    println!("\nnot in the catalog yet: {}", NOT_TRIED.join("; "));
     let verdict = match (&d.verdict, d.combined.as_ref().or(d.ranked.first())) {
         (Verdict::NoSignificantDiscrepancy, _) => {
             "no significant discrepancy: the model as written explains the held-out data to the noise".to_string()
@@ -394,7 +393,6 @@ pub fn diagnose_command(args: &DiagnoseArgs) -> Result<(), String> {
         "combined": d.combined.as_ref().map(trial),
         "second_round": d.second_round.iter().map(trial).collect::<Vec<_>>(),
         "inert": d.inert.iter().map(trial).collect::<Vec<_>>(),
-        "not_tried": NOT_TRIED,
     });
     let path = args.out_dir.join("diagnosis.json");
     let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
@@ -495,10 +493,6 @@ fn diagnosis_page(
         &d.observations,
         &curves,
     )?;
-    outcome.notes.push(format!(
-        "Not in the catalog yet: {}.",
-        super::candidates::NOT_TRIED.join("; ")
-    ));
     let page = report::render_page(
         "mech diagnose: what the model gets wrong",
         "Every candidate cause of the catalog is fitted to the rows not held out and ranked by \

@@ -14,9 +14,12 @@
 //! about both off-axis directions.
 
 use mech_codegen::ir::transform::{
-    add_twist, hinge_axis, perpendicular, HingeSpring, Twist, LATERAL_STIFFNESS_FACTOR,
+    add_twist, constant_direction, hinge_axis, perpendicular, HingeSpring, Twist,
+    LATERAL_STIFFNESS_FACTOR,
 };
-use mech_codegen::ir::{self, Dimension, Expr, Param};
+use mech_codegen::ir::{
+    self, ClosureKind, Dimension, Expr, FlexureAngle, Function, Load, Motion, Param, Vec3,
+};
 use mech_codegen::sym::Number;
 use mech_codegen::Compiled;
 
@@ -37,9 +40,33 @@ const TWIST_RATIO: (i128, i128) = (100, 67);
 /// A change of the model's form.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Extension {
-    /// These flexures twist about a length axis (0 = x, 1 = y, 2 = z in the hinge's frame).
+    /// These flexures twist about a length axis (0 = x, 1 = y, 2 = z in the hinge's frame),
+    /// every other hinge compliant off its axis. New parameters: [`TWIST_FACTOR`],
+    /// [`OFF_AXIS_COMPLIANCE`].
     Twist(Vec<(String, usize)>),
+    /// A flexure's bending axis tilted by a small angle (fabrication) about a coordinate axis
+    /// of its frame perpendicular to it, every hinge compliant off its axis so the loops take
+    /// up the misfit. New parameters: [`MISALIGNMENT`], [`OFF_AXIS_COMPLIANCE`].
+    Misalignment { flexure: String, about: usize },
+    /// The actuator along this slider coordinate sits on a compliant base (a spring in series
+    /// with its own stiffness). New parameter: [`BASE_COMPLIANCE`].
+    BaseCompliance(String),
+    /// A mass rides on the tip of the actuator along this slider coordinate. New parameter:
+    /// [`TIP_MASS`].
+    TipMass(String),
+    /// Every actuator's tip offset by the same length along its slider at zero voltage (an
+    /// assembly preload, the seed's 50 µm in −y). New parameter: [`TIP_PRELOAD`].
+    Preload,
 }
+
+/// The fitted misalignment angle (rad) of [`Extension::Misalignment`].
+pub const MISALIGNMENT: &str = "misalignment";
+/// The base compliance of [`Extension::BaseCompliance`], per unit actuator compliance.
+pub const BASE_COMPLIANCE: &str = "base_compliance";
+/// The mass (kg) of [`Extension::TipMass`].
+pub const TIP_MASS: &str = "tip_mass";
+/// The offset (m, positive along the slider axes) of [`Extension::Preload`].
+pub const TIP_PRELOAD: &str = "tip_preload";
 
 impl Extension {
     /// Where it acts, for reports: `s3 about x, fb3 about x`.
@@ -50,6 +77,13 @@ impl Extension {
                 .map(|(flexure, axis)| format!("{flexure} about {}", AXES[*axis]))
                 .collect::<Vec<_>>()
                 .join(", "),
+            Extension::Misalignment { flexure, about } => {
+                format!("{flexure} tilted about {}", AXES[*about])
+            }
+            Extension::BaseCompliance(slider) | Extension::TipMass(slider) => {
+                format!("actuator along {slider}")
+            }
+            Extension::Preload => "every actuator".into(),
         }
     }
 }
@@ -65,41 +99,76 @@ pub fn open_leg(spec: &ModelSpec, extension: &Extension) -> Result<Leg, String> 
     Leg::from_session(session, spec, &[])
 }
 
-/// Transforms `model` in place.
+/// Transforms `model` in place; the new parameters are appended in the order the variant
+/// names them.
 pub fn apply(model: &mut ir::Model, extension: &Extension) -> Result<(), String> {
     match extension {
         Extension::Twist(hinges) => twist(model, hinges),
+        Extension::Misalignment { flexure, about } => misalign(model, flexure, *about),
+        Extension::BaseCompliance(slider) => base_compliance(model, slider),
+        Extension::TipMass(slider) => tip_mass(model, slider),
+        Extension::Preload => preload(model),
     }
 }
 
-fn twist(model: &mut ir::Model, hinges: &[(String, usize)]) -> Result<(), String> {
-    let factor = model.params.append(Param {
-        name: TWIST_FACTOR.into(),
-        value: 1.0,
-        dimension: Dimension::NONE,
-        docs: vec!["Factor on Eq. 8's twist stiffness 2k/(1 + ν) (mech diagnose).".into()],
+fn append_param(
+    model: &mut ir::Model,
+    name: &str,
+    value: f64,
+    dimension: Dimension,
+    doc: &str,
+) -> Expr {
+    Expr::Param(model.params.append(Param {
+        name: name.into(),
+        value,
+        dimension,
+        docs: vec![doc.into()],
         span: Default::default(),
-    });
-    let scaled = |factor: Expr, value: &Expr| Expr::Mul(Box::new(factor), Box::new(value.clone()));
-    // Off-axis stiffness = k / compliance (compliance → 0: rigid off-axis, the base model).
-    let compliance = model.params.append(Param {
-        name: OFF_AXIS_COMPLIANCE.into(),
-        value: 1.0 / LATERAL_STIFFNESS_FACTOR as f64,
-        dimension: Dimension::NONE,
-        docs: vec!["Off-axis compliance of the hinges, per unit bending compliance 1/k.".into()],
-        span: Default::default(),
-    });
-    let stiff = Expr::Div(Box::new(Expr::one()), Box::new(Expr::Param(compliance)));
-    let eq8 = Expr::Mul(
-        Box::new(Expr::Param(factor)),
-        Box::new(Expr::Number(Number::rational(TWIST_RATIO.0, TWIST_RATIO.1))),
-    );
-    let spring = |flexure: &ir::Flexure, suffix: &str, factor: &Expr| HingeSpring {
+    }))
+}
+
+fn scaled(factor: &Expr, value: &Expr) -> Expr {
+    Expr::Mul(Box::new(factor.clone()), Box::new(value.clone()))
+}
+
+/// A spring about one direction of `flexure`: its stiffness and damper times `factor`.
+fn spring(flexure: &ir::Flexure, suffix: &str, factor: &Expr) -> HingeSpring {
+    HingeSpring {
         name: format!("{}_{suffix}", flexure.name),
-        stiffness: scaled(factor.clone(), &flexure.stiffness),
-        damping: scaled(factor.clone(), &flexure.damping),
+        stiffness: scaled(factor, &flexure.stiffness),
+        damping: scaled(factor, &flexure.damping),
         loss_factor: flexure.loss_factor.clone(),
-    };
+    }
+}
+
+fn find_flexure(model: &ir::Model, name: &str) -> Result<ir::Flexure, String> {
+    model
+        .flexures
+        .iter()
+        .find(|f| f.name == name)
+        .cloned()
+        .ok_or_else(|| format!("no flexure `{name}`"))
+}
+
+fn unit(axis: usize) -> Vec3 {
+    let mut direction = [Expr::zero(), Expr::zero(), Expr::zero()];
+    direction[axis] = Expr::one();
+    direction
+}
+
+fn twist(model: &mut ir::Model, hinges: &[(String, usize)]) -> Result<(), String> {
+    let factor = append_param(
+        model,
+        TWIST_FACTOR,
+        1.0,
+        Dimension::NONE,
+        "Factor on Eq. 8's twist stiffness 2k/(1 + ν) (mech diagnose).",
+    );
+    let stiff = off_axis_stiffness(model);
+    let eq8 = scaled(
+        &factor,
+        &Expr::Number(Number::rational(TWIST_RATIO.0, TWIST_RATIO.1)),
+    );
     // The model's own hinges, before the springs added below get flexure records of their own.
     let named: Vec<&str> = hinges.iter().map(|(name, _)| name.as_str()).collect();
     let others: Vec<ir::Flexure> = model
@@ -109,16 +178,9 @@ fn twist(model: &mut ir::Model, hinges: &[(String, usize)]) -> Result<(), String
         .cloned()
         .collect();
     for (name, axis) in hinges {
-        let flexure = model
-            .flexures
-            .iter()
-            .find(|f| &f.name == name)
-            .cloned()
-            .ok_or_else(|| format!("no flexure `{name}` to twist"))?;
-        let mut direction = [Expr::zero(), Expr::zero(), Expr::zero()];
-        direction[*axis] = Expr::one();
+        let flexure = find_flexure(model, name)?;
         let twist = Twist {
-            axis: direction,
+            axis: unit(*axis),
             twist: spring(&flexure, "twist", &eq8),
             lateral: Some(spring(&flexure, "lateral", &stiff)),
             span: flexure.span,
@@ -126,19 +188,230 @@ fn twist(model: &mut ir::Model, hinges: &[(String, usize)]) -> Result<(), String
         add_twist(model, flexure.angle, twist)
             .map_err(|e| format!("flexure `{name}` cannot twist about {}: {e:?}", AXES[*axis]))?;
     }
-    // Every other hinge: stiff in both off-axis directions, so the loops can deform.
-    for flexure in others {
+    compliant_off_axis(model, others, &stiff)
+}
+
+/// The off-axis stiffness factor `1/c` of [`OFF_AXIS_COMPLIANCE`] `c` (appended): c → 0 is
+/// rigid off-axis, the base model.
+fn off_axis_stiffness(model: &mut ir::Model) -> Expr {
+    let compliance = append_param(
+        model,
+        OFF_AXIS_COMPLIANCE,
+        1.0 / LATERAL_STIFFNESS_FACTOR as f64,
+        Dimension::NONE,
+        "Off-axis compliance of the hinges, per unit bending compliance 1/k.",
+    );
+    Expr::Div(Box::new(Expr::one()), Box::new(compliance))
+}
+
+/// Makes each of `flexures` stiff (`stiff`·k) in both off-axis directions, so the loops can
+/// deform.
+fn compliant_off_axis(
+    model: &mut ir::Model,
+    flexures: Vec<ir::Flexure>,
+    stiff: &Expr,
+) -> Result<(), String> {
+    for flexure in flexures {
         let Some(axis) = hinge_axis(model, flexure.angle).and_then(|a| perpendicular(&a)) else {
             continue;
         };
         let twist = Twist {
             axis,
-            twist: spring(&flexure, "off_axis", &stiff),
-            lateral: Some(spring(&flexure, "lateral", &stiff)),
+            twist: spring(&flexure, "off_axis", stiff),
+            lateral: Some(spring(&flexure, "lateral", stiff)),
             span: flexure.span,
         };
         add_twist(model, flexure.angle, twist)
             .map_err(|e| format!("flexure `{}` cannot be made compliant: {e:?}", flexure.name))?;
+    }
+    Ok(())
+}
+
+/// Tilts `name`'s bending axis `a` by the fitted angle α about the coordinate axis `p`:
+/// `a cos α + p sin α` (a unit vector for `p ⊥ a`). At α = 0 it is the base model.
+fn misalign(model: &mut ir::Model, name: &str, about: usize) -> Result<(), String> {
+    let angle = append_param(
+        model,
+        MISALIGNMENT,
+        0.0,
+        Dimension::NONE,
+        "Tilt of the flexure's bending axis (rad, mech diagnose).",
+    );
+    let stiff = off_axis_stiffness(model);
+    let flexure = find_flexure(model, name)?;
+    let all: Vec<ir::Flexure> = model.flexures.clone();
+    compliant_off_axis(model, all, &stiff)?;
+    let tilt = |axis: &mut Vec3| -> Result<(), String> {
+        let a = constant_direction(axis)
+            .ok_or_else(|| format!("flexure `{name}`: its axis is not a constant direction"))?;
+        if a[about].abs() > 0.1 {
+            return Err(format!(
+                "flexure `{name}`: cannot tilt about {}, its own axis",
+                AXES[about]
+            ));
+        }
+        let (cos, sin) = (
+            Expr::Call(Function::Cos, vec![angle.clone()]),
+            Expr::Call(Function::Sin, vec![angle.clone()]),
+        );
+        for (i, component) in axis.iter_mut().enumerate() {
+            let along = scaled(&cos, &Expr::Number(Number::Float(a[i])));
+            *component = if i == about {
+                Expr::Add(Box::new(along), Box::new(sin.clone()))
+            } else {
+                along
+            };
+        }
+        Ok(())
+    };
+    match flexure.angle {
+        FlexureAngle::Coordinate(coordinate) => {
+            let frame = model
+                .frames
+                .iter()
+                .find_map(|(handle, frame)| match &frame.motion {
+                    Motion::Revolute { coordinate: c, .. } if *c == coordinate => Some(handle),
+                    _ => None,
+                })
+                .ok_or_else(|| format!("flexure `{name}` is not on a pin joint"))?;
+            match &mut model.frames.get_mut(frame).motion {
+                Motion::Revolute { axis, .. } => tilt(axis),
+                _ => unreachable!("found as revolute"),
+            }
+        }
+        FlexureAngle::Loop(index) => match model.loops.get_mut(index).map(|c| &mut c.kind) {
+            Some(ClosureKind::Revolute { axis, .. }) => tilt(axis),
+            _ => Err(format!("flexure `{name}` is not on a revolute loop")),
+        },
+        _ => Err(format!("flexure `{name}` is not a bending hinge")),
+    }
+}
+
+/// The actuator (force source and series spring) on slider coordinate `slider`: indices
+/// into `model.loads` of its spring and its generalized force.
+fn actuator_loads(model: &ir::Model, slider: &str) -> Result<(usize, usize), String> {
+    let coordinate = model
+        .coordinates
+        .iter()
+        .find(|(_, c)| c.name == slider)
+        .map(|(handle, _)| handle)
+        .ok_or_else(|| format!("no coordinate `{slider}`"))?;
+    let find = |want_force: bool| {
+        model.loads.iter().position(|load| match load {
+            Load::GeneralizedForce { coordinate: c, .. } => want_force && *c == coordinate,
+            Load::Spring { coordinate: c, .. } => !want_force && *c == coordinate,
+            _ => false,
+        })
+    };
+    match (find(false), find(true)) {
+        (Some(spring), Some(force)) => Ok((spring, force)),
+        _ => Err(format!("no actuator along `{slider}`")),
+    }
+}
+
+/// A base spring `k_b` in series with the actuator's `k_a`, as the fitted compliance ratio
+/// `c = k_a/k_b`. The node between them carries no mass, so it condenses out exactly: the
+/// force on the transmission `(F_b(V) − k_a x)/(1 + c)` — force source and series stiffness
+/// both scaled by `1/(1 + c)`. At c = 0 it is the base model.
+fn base_compliance(model: &mut ir::Model, slider: &str) -> Result<(), String> {
+    let (spring, force) = actuator_loads(model, slider)?;
+    let compliance = append_param(
+        model,
+        BASE_COMPLIANCE,
+        0.0,
+        Dimension::NONE,
+        "Actuator base compliance per unit actuator compliance (mech diagnose).",
+    );
+    let factor = Expr::Div(
+        Box::new(Expr::one()),
+        Box::new(Expr::Add(Box::new(Expr::one()), Box::new(compliance))),
+    );
+    for index in [spring, force] {
+        match &mut model.loads[index] {
+            Load::Spring {
+                stiffness: value, ..
+            }
+            | Load::GeneralizedForce { force: value, .. } => {
+                *value = scaled(&factor, value);
+            }
+            _ => unreachable!("found as the actuator's loads"),
+        }
+    }
+    Ok(())
+}
+
+/// A point mass (fitted, starting at 0) on the frame of the actuator's slider.
+fn tip_mass(model: &mut ir::Model, slider: &str) -> Result<(), String> {
+    actuator_loads(model, slider)?;
+    let frame = model
+        .frames
+        .iter()
+        .find_map(|(handle, frame)| match &frame.motion {
+            Motion::Prismatic { coordinate, .. }
+                if model.coordinates[*coordinate].name == slider =>
+            {
+                Some(handle)
+            }
+            _ => None,
+        })
+        .ok_or_else(|| format!("`{slider}` is not a slider joint"))?;
+    let mass = append_param(
+        model,
+        TIP_MASS,
+        0.0,
+        Dimension::MASS,
+        "Mass on the actuator tip (kg, mech diagnose).",
+    );
+    let zero = Expr::zero;
+    model.bodies.append(ir::Body {
+        name: format!("{slider}_tip_mass"),
+        frame,
+        mass,
+        center_of_mass: [zero(), zero(), zero()],
+        inertia: ir::Inertia {
+            xx: zero(),
+            yy: zero(),
+            zz: zero(),
+            xy: zero(),
+            yz: zero(),
+            zx: zero(),
+        },
+        docs: Vec::new(),
+        span: Default::default(),
+    });
+    Ok(())
+}
+
+/// Every actuator's series spring rests `tip_preload` further along its slider: at zero
+/// voltage the spring pulls the tip there (as `rest = -preload` in `hamr_v2.mech`).
+fn preload(model: &mut ir::Model) -> Result<(), String> {
+    let offset = append_param(
+        model,
+        TIP_PRELOAD,
+        0.0,
+        Dimension::LENGTH,
+        "Offset of every actuator's tip along its slider at zero voltage (m, mech diagnose).",
+    );
+    let actuated: Vec<_> = model
+        .loads
+        .iter()
+        .filter_map(|load| match load {
+            Load::GeneralizedForce { coordinate, .. } => Some(*coordinate),
+            _ => None,
+        })
+        .collect();
+    if actuated.is_empty() {
+        return Err("no actuator to preload".into());
+    }
+    for load in &mut model.loads {
+        if let Load::Spring {
+            coordinate, rest, ..
+        } = load
+        {
+            if actuated.contains(coordinate) {
+                *rest = Expr::Add(Box::new(rest.clone()), Box::new(offset.clone()));
+            }
+        }
     }
     Ok(())
 }
