@@ -58,12 +58,22 @@ fn summary(d: &Diagnosis) -> String {
         "verdict {:?}; base χ² {:.1}/{:.1}\n",
         d.verdict, d.base.train_chi2, d.base.holdout_chi2
     );
-    for t in &d.ranked {
-        text += &format!(
+    let line = |t: &mech::diagnose::candidates::Trial| {
+        format!(
             "  {} at {}: χ² {:.1}/{:.1} AICc {:.1} {:?}\n",
             t.cause, t.location, t.train_chi2, t.holdout_chi2, t.aicc, t.parameters
-        );
+        )
+    };
+    for t in &d.ranked {
+        text += &line(t);
     }
+    if !d.second_round.is_empty() {
+        text += "second round:\n";
+        for t in &d.second_round {
+            text += &line(t);
+        }
+    }
+    text += &format!("{} inert\n", d.inert.len());
     text
 }
 
@@ -413,4 +423,83 @@ fn a_hidden_preload_is_found_in_a_quasi_static_trajectory() {
     let d = diagnose_data(&dir, &experiment, &text);
     let fitted = top(&d, "actuator tip preload", "every actuator", TIP_PRELOAD);
     assert!((fitted - preload).abs() < 10e-6, "{fitted} vs {preload}");
+}
+
+// ---------------------------------------------------------------- the paper's story
+
+/// The seed's story for HAMR-VI (Sec. V-A, VI): the swing force almost 50 % below the model
+/// (the sensor's ~30 % off-axis load twists s3 and fb3, Eq. 8), the swing resonance below
+/// the model's, and quality factors over-estimated because the loss factor, measured at
+/// 1–10 Hz, grows with frequency.
+///
+/// From the paper: the ~30 % off-axis load, the ~50 % swing force loss, the 1–140 Hz chirp
+/// band, η measured at 1–10 Hz, twist stiffness 2k/(1 + ν) with ν = 0.34 (Eq. 8).
+/// Chosen here: the twist acts at fb3 about y (our model's s3 twist is inert: the five-bar
+/// locks it — the diagnosis lists it so); the other hinges' off-axis compliance
+/// 6.25e-4 of their bending compliance, `(t/w)²` for 25 µm Kapton 1 mm wide (the width Eq. 2
+/// gives for k_fb3 with a ~100 µm hinge); η(f) = 0.08·(f/5 Hz)^0.3; noise 0.3 mN, 2 %, 1°.
+///
+/// The finding about the paper: with Eq. 8's stiffness and that geometry estimate, the twist
+/// of fb3 removes 45–60 % of the swing force (asserted below) — as much as the paper reports.
+#[test]
+fn the_papers_story_twist_and_a_frequency_dependent_loss_factor() {
+    let dir = scratch_dir("paper_story");
+    let mut rng = Rng::new(2024);
+    let base = blocked_swing_force(&Leg::open(&hamr_spec()).unwrap());
+    let mut truth = open_leg(&hamr_spec(), &Extension::Twist(vec![("fb3".into(), 1)])).unwrap();
+    set_param(&mut truth, TWIST_FACTOR, 1.0);
+    set_param(&mut truth, OFF_AXIS_COMPLIANCE, 6.25e-4);
+    let loss = 1.0 - blocked_swing_force(&truth) / base;
+    assert!(
+        (0.45..=0.6).contains(&loss),
+        "Eq. 8 twist at fb3 removes {:.0} % of the swing force",
+        100.0 * loss
+    );
+
+    // Force/deflection: the swing force, ~50 % low → twist of fb3.
+    let (experiment, text) = swing_force_case(&dir, &truth, 0.3, 0.3, &mut rng);
+    let d = diagnose_data(&dir, &experiment, &text);
+    top(
+        &d,
+        "flexure twist",
+        "flexure fb3 about y",
+        OFF_AXIS_COMPLIANCE,
+    );
+    assert!(
+        d.inert
+            .iter()
+            .any(|t| t.location.starts_with("flexure s3 about")),
+        "s3's twist should be reported inert\n{}",
+        summary(&d)
+    );
+
+    // The chirp: swing resonance low and Q over-estimated → twist and η(f), together.
+    let bode_dir = scratch_dir("paper_story_bode");
+    let damping = mech_runtime::FlexureDamping::HystereticPowerLaw {
+        exponent: 0.3,
+        reference_hz: 5.0,
+    };
+    let (experiment, text) = bode_case(&bode_dir, &truth, damping, &mut rng);
+    let d = diagnose_data(&bode_dir, &experiment, &text);
+    let both = d
+        .combined
+        .as_ref()
+        .unwrap_or_else(|| panic!("no second cause\n{}", summary(&d)));
+    assert!(
+        both.cause.contains("flexure twist")
+            && both.cause.contains("frequency-dependent loss factor")
+            && both.location.contains("fb3 about y"),
+        "{}: {}\n{}",
+        both.cause,
+        both.location,
+        summary(&d)
+    );
+    assert_eq!(d.verdict, Verdict::Explained, "{}", summary(&d));
+    let exponent = both
+        .parameters
+        .iter()
+        .find(|p| p.0 == "loss_exponent")
+        .unwrap()
+        .2;
+    assert!((exponent - 0.3).abs() < 0.1, "loss exponent {exponent}");
 }
