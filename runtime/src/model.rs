@@ -84,6 +84,7 @@ pub trait Model {
     /// `J`, for callers that already hold `J` at `q` (the reduced dynamics factor it when
     /// they close the loops). Generated code overrides it with the fused pass of
     /// `constrained_terms` minus what only `J` needs.
+    #[allow(clippy::too_many_arguments)]
     fn dynamics_terms(
         &self,
         t: f64,
