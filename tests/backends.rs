@@ -113,8 +113,8 @@ fn long_functions_are_split_into_parts() {
     assert!(source.contains("spill["), "expected spilled temporaries");
 }
 
-/// The fused `constrained_terms` of generated code equals the four separate functions of the
-/// tape, for every bundled model with loops.
+/// The fused `constrained_terms` and `dynamics_terms` of generated code equal the separate
+/// functions of the tape, for every bundled model with loops.
 #[test]
 fn fused_constrained_terms_agree_with_the_separate_functions() {
     let mut rng = Rng::new(77);
@@ -143,5 +143,14 @@ fn fused_constrained_terms_agree_with_the_separate_functions() {
         assert_agree(&format!("{name} F"), &f, &f2);
         assert_agree(&format!("{name} J"), &j, &j2);
         assert_agree(&format!("{name} J̇u"), &b, &b2);
+        // `dynamics_terms` is the same pass without `J`: the same values, and the tape's
+        // default (three separate functions) agrees too.
+        let (mut m3, mut f3, mut b3) = (vec![0.0; n * n], vec![0.0; n], vec![0.0; nc]);
+        compiled.dynamics_terms(0.0, &q, &u, &inputs, &mut m3, &mut f3, &mut b3);
+        assert_eq!((&m3, &f3, &b3), (&m, &f, &b), "{name}: dynamics_terms");
+        tape.dynamics_terms(0.0, &q, &u, &inputs, &mut m3, &mut f3, &mut b3);
+        assert_agree(&format!("{name} tape M"), &m3, &m2);
+        assert_agree(&format!("{name} tape F"), &f3, &f2);
+        assert_agree(&format!("{name} tape J̇u"), &b3, &b2);
     }
 }

@@ -80,6 +80,26 @@ pub trait Model {
         self.constraint_bias(t, q, u, bias);
     }
 
+    /// `M`, `F` and `J̇u` in one call (`M` column-major): [`Model::constrained_terms`] without
+    /// `J`, for callers that already hold `J` at `q` (the reduced dynamics factor it when
+    /// they close the loops). Generated code overrides it with the fused pass of
+    /// `constrained_terms` minus what only `J` needs.
+    #[allow(clippy::too_many_arguments)]
+    fn dynamics_terms(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        inputs: &[f64],
+        mass: &mut [f64],
+        forcing: &mut [f64],
+        bias: &mut [f64],
+    ) {
+        self.mass_matrix(t, q, inputs, mass);
+        self.forcing(t, q, u, inputs, forcing);
+        self.constraint_bias(t, q, u, bias);
+    }
+
     /// Number of flexures (compliant hinges with a loss factor).
     fn nflexures(&self) -> usize {
         0

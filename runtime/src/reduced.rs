@@ -220,14 +220,14 @@ impl<'a, M: Model + ?Sized> Reduced<'a, M> {
             self.independent.len(),
             self.dependent.len(),
         );
-        self.model.constrained_terms(
+        // No `J`: the closure left the factor of `J_d` at `q`.
+        self.model.dynamics_terms(
             t,
             &self.q,
             &self.u,
             inputs,
             &mut self.mass,
             &mut self.force,
-            &mut self.jacobian,
             &mut self.bias,
         );
         // s = [0; −J_d⁺ J̇u], with the factor of J_d at q from the closure.

@@ -150,6 +150,7 @@ enum Function {
     ConstraintBias,
     Flexures,
     ConstrainedTerms,
+    DynamicsTerms,
 }
 
 impl Function {
@@ -163,6 +164,7 @@ impl Function {
             Function::ConstraintBias => "constraint_bias",
             Function::Flexures => "flexures",
             Function::ConstrainedTerms => "constrained_terms",
+            Function::DynamicsTerms => "dynamics_terms",
         }
     }
 }
@@ -507,6 +509,18 @@ impl<'a> Emitter<'a> {
         .collect();
         let fused_count = usize_literal(fused.len());
         let (fused_parts, fused_body) = self.function_body(Function::ConstrainedTerms, &fused);
+        let dynamics: Vec<ExprId> = [
+            &self.equations.mass_matrix,
+            &self.equations.forcing,
+            &rows.bias,
+        ]
+        .into_iter()
+        .flatten()
+        .copied()
+        .collect();
+        let dynamics_count = usize_literal(dynamics.len());
+        let (dynamics_parts, dynamics_body) =
+            self.function_body(Function::DynamicsTerms, &dynamics);
         let (mass_len, forcing_len, jacobian_len) = (
             usize_literal(self.equations.mass_matrix.len()),
             usize_literal(self.equations.forcing.len()),
@@ -561,6 +575,19 @@ impl<'a> Emitter<'a> {
             }
 
             #(#fused_parts)*
+
+            /// `[M (column-major), F, J̇u]` in one pass: `constrained_terms` without `J`.
+            pub fn dynamics_terms(
+                &self,
+                t: f64,
+                q: &#rt::__codegen::SVector<f64, #nq>,
+                u: &#rt::__codegen::SVector<f64, #nu>,
+                inputs: &#rt::__codegen::SVector<f64, #ni>,
+            ) -> #rt::__codegen::SVector<f64, #dynamics_count> {
+                #dynamics_body
+            }
+
+            #(#dynamics_parts)*
         };
         let in_trait = quote! {
             fn nc(&self) -> usize { #nc }
@@ -603,6 +630,27 @@ impl<'a> Emitter<'a> {
                 for (slot, value) in mass.iter_mut().zip(m) { *slot = *value; }
                 for (slot, value) in forcing.iter_mut().zip(f) { *slot = *value; }
                 for (slot, value) in jacobian.iter_mut().zip(j) { *slot = *value; }
+                for (slot, value) in bias.iter_mut().zip(b) { *slot = *value; }
+            }
+            fn dynamics_terms(
+                &self,
+                t: f64,
+                q: &[f64],
+                u: &[f64],
+                inputs: &[f64],
+                mass: &mut [f64],
+                forcing: &mut [f64],
+                bias: &mut [f64],
+            ) {
+                let q = #rt::__codegen::vector_from_slice::<#nq>(q);
+                let u = #rt::__codegen::vector_from_slice::<#nu>(u);
+                let inputs = #rt::__codegen::vector_from_slice::<#ni>(inputs);
+                let all = #name::dynamics_terms(self, t, &q, &u, &inputs);
+                let values = all.as_slice();
+                let (m, rest) = values.split_at(#mass_len);
+                let (f, b) = rest.split_at(#forcing_len);
+                for (slot, value) in mass.iter_mut().zip(m) { *slot = *value; }
+                for (slot, value) in forcing.iter_mut().zip(f) { *slot = *value; }
                 for (slot, value) in bias.iter_mut().zip(b) { *slot = *value; }
             }
         };

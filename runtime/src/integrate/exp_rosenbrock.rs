@@ -64,8 +64,8 @@ struct Stages {
     /// φ-functions of `h·∂f/∂x` for `phi_h` (NaN: none, or of another argument).
     phi: PhiFunctions,
     phi_h: f64,
-    /// `h·∂f/∂x`.
-    matrix: Vec<f64>,
+    /// `phi` holds the balancing of the Jacobian in `jacobian`.
+    phi_balanced: bool,
     /// `D2`, `D3`, `h·φ1(hJ)·F` (the linearized flow), and scratch.
     d2: Vec<f64>,
     d3: Vec<f64>,
@@ -112,7 +112,7 @@ impl<O: Ode> ExpRosenbrock<O> {
                 jacobian_evaluations: 0,
                 phi: PhiFunctions::new(n),
                 phi_h: f64::NAN,
-                matrix: vec![0.0; n * n],
+                phi_balanced: false,
                 d2: zeros.clone(),
                 d3: zeros.clone(),
                 flow: zeros.clone(),
@@ -158,10 +158,11 @@ impl Stages {
         if self.phi_h == tau {
             return true;
         }
-        for (m, j) in self.matrix.iter_mut().zip(&self.jacobian) {
-            *m = tau * j;
-        }
-        let ok = self.phi.compute(&self.matrix);
+        let ok = self
+            .phi
+            .compute_multiple(&self.jacobian, tau, !self.phi_balanced);
+        // A non-finite Jacobian leaves the balancing's norm NaN: every τ fails.
+        self.phi_balanced = true;
         self.phi_h = if ok { tau } else { f64::NAN };
         ok
     }
@@ -238,6 +239,7 @@ impl Stages {
             self.jacobian_evaluations += 1;
             self.jacobian_current = true;
             self.phi_h = f64::NAN;
+            self.phi_balanced = false;
             extra = n + 1;
         }
         if !self.phi_at(h) {

@@ -166,6 +166,11 @@ fn derivative_at<O: Ode + ?Sized>(
 /// `J = ∂f/∂x` (`n × n`, column-major) and `∂f/∂t` at `(t, x)` by forward differences from
 /// `f0 = f(t, x)`, with Hairer's increments `√(UROUND·max(1e-5, |x_j|))` (as in `RODAS`);
 /// `n + 1` evaluations. `x_scratch` and `f_scratch` are working vectors of length `n`.
+///
+/// The time column comes first, then the state columns from the last to the first: a system
+/// whose state is `[positions; rates]` and which keeps work that depends on the positions
+/// only (the loops closed by [`Reduced`](crate::Reduced)) evaluates every column that leaves
+/// the positions at `x` before it moves them, instead of moving away and back.
 #[allow(clippy::too_many_arguments)]
 fn finite_difference_jacobian<O: Ode + ?Sized>(
     ode: &mut O,
@@ -178,8 +183,14 @@ fn finite_difference_jacobian<O: Ode + ?Sized>(
     f_scratch: &mut [f64],
 ) -> Result<(), RuntimeError> {
     let n = x.len();
+    let t_plus = t + (UROUND * t.abs().max(1e-5)).sqrt();
+    ode.rhs(t_plus, x, f_scratch)?;
+    let delta = t_plus - t;
+    for ((out, f), f0) in dfdt.iter_mut().zip(&*f_scratch).zip(f0) {
+        *out = (f - f0) / delta;
+    }
     x_scratch.copy_from_slice(x);
-    for j in 0..n {
+    for j in (0..n).rev() {
         x_scratch[j] = x[j] + (UROUND * x[j].abs().max(1e-5)).sqrt();
         // The increment as represented, so that the quotient has no rounding bias.
         let delta = x_scratch[j] - x[j];
@@ -192,12 +203,6 @@ fn finite_difference_jacobian<O: Ode + ?Sized>(
             *out = (f - f0) / delta;
         }
         x_scratch[j] = x[j];
-    }
-    let t_plus = t + (UROUND * t.abs().max(1e-5)).sqrt();
-    ode.rhs(t_plus, x, f_scratch)?;
-    let delta = t_plus - t;
-    for ((out, f), f0) in dfdt.iter_mut().zip(&*f_scratch).zip(f0) {
-        *out = (f - f0) / delta;
     }
     Ok(())
 }

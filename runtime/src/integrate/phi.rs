@@ -43,6 +43,10 @@ pub(crate) struct PhiFunctions {
     half: [Vec<f64>; 2],
     /// The balancing: `A = D Ã D⁻¹` with `D = diag(scale)`.
     scale: Vec<f64>,
+    /// `D⁻¹ J D` for the matrix `J` of the last [`PhiFunctions::compute_multiple`] that
+    /// balanced, and its 1-norm: the balancing of `τ J` is that of `J` for every `τ`.
+    balanced: Vec<f64>,
+    balanced_norm: f64,
     scaled: Vec<f64>,
     next: [Vec<f64>; MAX_ORDER + 1],
     product: Vec<f64>,
@@ -57,6 +61,8 @@ impl PhiFunctions {
             phi: std::array::from_fn(|_| square()),
             half: [square(), square()],
             scale: vec![1.0; n],
+            balanced: square(),
+            balanced_norm: f64::NAN,
             scaled: square(),
             next: std::array::from_fn(|_| square()),
             product: square(),
@@ -65,26 +71,43 @@ impl PhiFunctions {
     }
 
     /// Computes the functions of `a` (`n × n`); false if `a` or a result is not finite.
+    #[cfg(test)]
     pub(crate) fn compute(&mut self, a: &[f64]) -> bool {
+        self.compute_multiple(a, 1.0, true)
+    }
+
+    /// Computes the functions of `τ·j` (`j` is `n × n`); false if `τ·j` or a result is not
+    /// finite. With `rebalance` false, `j` must be the matrix of the last call that
+    /// rebalanced (not read again): its balancing serves, which saves the balancing sweeps
+    /// when one matrix is taken at several `τ` (the trial steps and the dense output of one
+    /// Jacobian).
+    pub(crate) fn compute_multiple(&mut self, j: &[f64], tau: f64, rebalance: bool) -> bool {
         let n = self.n;
-        if !a[..n * n].iter().all(|v| v.is_finite()) {
+        if rebalance {
+            self.balanced_norm = f64::NAN;
+            if !j[..n * n].iter().all(|v| v.is_finite()) {
+                return false;
+            }
+            self.balanced.copy_from_slice(&j[..n * n]);
+            balance(&mut self.balanced, n, &mut self.scale);
+            self.balanced_norm = (0..n)
+                .map(|c| {
+                    self.balanced[n * c..n * (c + 1)]
+                        .iter()
+                        .map(|v| v.abs())
+                        .sum::<f64>()
+                })
+                .fold(0.0, f64::max);
+        }
+        let norm = tau.abs() * self.balanced_norm;
+        if !norm.is_finite() {
             return false;
         }
-        self.scaled.copy_from_slice(&a[..n * n]);
-        balance(&mut self.scaled, n, &mut self.scale);
-        let norm = (0..n)
-            .map(|j| {
-                self.scaled[n * j..n * (j + 1)]
-                    .iter()
-                    .map(|v| v.abs())
-                    .sum::<f64>()
-            })
-            .fold(0.0, f64::max);
         // At least one doubling, so that φ_1(A/2) and φ_2(A/2) fall out of the chain.
         let squarings = (norm / SCALED_NORM).log2().ceil().max(1.0) as i32;
-        let factor = 0.5f64.powi(squarings);
-        for v in &mut self.scaled {
-            *v *= factor;
+        let factor = tau * 0.5f64.powi(squarings);
+        for (s, b) in self.scaled.iter_mut().zip(&self.balanced) {
+            *s = factor * b;
         }
         self.taylor_phi4();
         // φ_k(B) = B φ_{k+1}(B) + I/k!.
@@ -323,6 +346,36 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// One balancing for several multiples of a matrix gives the functions of each multiple,
+    /// as a fresh computation does; a non-finite matrix fails at every multiple.
+    #[test]
+    fn reused_balancing_matches_a_fresh_computation() {
+        let omega: f64 = 2.0 * std::f64::consts::PI * 80.0;
+        let j = [0.0, -omega * omega, 1.0, -0.05 * omega];
+        let mut shared = PhiFunctions::new(2);
+        for (i, tau) in [0.02, 3e-3, 0.011, 1e-7, 0.0].into_iter().enumerate() {
+            assert!(shared.compute_multiple(&j, tau, i == 0));
+            let mut fresh = PhiFunctions::new(2);
+            let scaled: Vec<f64> = j.iter().map(|v| tau * v).collect();
+            assert!(fresh.compute(&scaled));
+            let v = [1.0e-4, -2.0e-2];
+            for k in 0..=MAX_ORDER {
+                let (mut a, mut b) = ([0.0; 2], [0.0; 2]);
+                shared.add_apply(k, &v, &mut a);
+                fresh.add_apply(k, &v, &mut b);
+                for (x, y) in a.iter().zip(&b) {
+                    assert!(
+                        (x - y).abs() <= 1e-13 * y.abs().max(1e-12),
+                        "φ_{k}({tau}): {x} vs {y}"
+                    );
+                }
+            }
+        }
+        let mut broken = PhiFunctions::new(2);
+        assert!(!broken.compute_multiple(&[f64::NAN, 0.0, 1.0, 0.0], 0.01, true));
+        assert!(!broken.compute_multiple(&[0.0; 4], 0.01, false));
     }
 
     #[test]
