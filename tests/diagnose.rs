@@ -405,6 +405,9 @@ fn diagnose_command_writes_the_page_and_the_summary() {
     let root = env!("CARGO_MANIFEST_DIR");
     let out_dir = scratch_dir("diagnose_command");
     let args = mech::diagnose::command::DiagnoseArgs {
+        // The model named on the command line, as `mech diagnose MODEL --experiment …`.
+        model: Some(format!("{root}/models/hamr_vi.mech").into()),
+        causes: Vec::new(),
         experiment: format!("{root}/docs/examples/diagnose/hamr_vi_lift_bode.toml").into(),
         data: format!("{root}/docs/examples/diagnose/hamr_vi_lift_bode.csv").into(),
         fit: Vec::new(),

@@ -512,6 +512,8 @@ fn pendulum_commands_report_flags() {
     ] {
         let out_dir = scratch_dir(&format!("pendulum_command_{verdict}"));
         let args = mech::diagnose::command::DiagnoseArgs {
+            model: None,
+            causes: Vec::new(),
             experiment: example("flexure_rig_ringdown.toml"),
             data: example(data),
             fit: Vec::new(),

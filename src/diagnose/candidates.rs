@@ -88,6 +88,10 @@ pub struct Candidate {
     /// other hinges' off-axis stiffness that lets a twist act): the screen for inert
     /// candidates moves the defining ones only.
     pub supporting: usize,
+    /// Whether the screen sets the supporting parameters to their upper bounds (a twist acts
+    /// most where the other hinges give way most) rather than their starting values (a
+    /// misalignment acts most where they are stiff).
+    pub screen_at_upper: bool,
 }
 
 impl Candidate {
@@ -117,6 +121,7 @@ pub fn catalog(leg: &Leg, experiment: &Experiment) -> Vec<Candidate> {
                 )],
                 extension: None,
                 supporting: 0,
+                screen_at_upper: false,
             });
         } else if name == "eta" && value > 0.0 {
             let eta = Parameter::new(name, value).bounded(value / 5.0, value * 5.0);
@@ -126,6 +131,7 @@ pub fn catalog(leg: &Leg, experiment: &Experiment) -> Vec<Candidate> {
                 parameters: vec![(Target::Param(index), eta.clone())],
                 extension: None,
                 supporting: 0,
+                screen_at_upper: false,
             });
             if !frequency_response {
                 continue;
@@ -145,6 +151,7 @@ pub fn catalog(leg: &Leg, experiment: &Experiment) -> Vec<Candidate> {
                 ],
                 extension: None,
                 supporting: 0,
+                screen_at_upper: false,
             });
         } else if name == "preload" {
             out.push(Candidate {
@@ -158,6 +165,7 @@ pub fn catalog(leg: &Leg, experiment: &Experiment) -> Vec<Candidate> {
                 )],
                 extension: None,
                 supporting: 0,
+                screen_at_upper: false,
             });
         }
     }
@@ -173,6 +181,7 @@ pub fn catalog(leg: &Leg, experiment: &Experiment) -> Vec<Candidate> {
             )],
             extension: None,
             supporting: 0,
+            screen_at_upper: false,
         });
     }
     // A flexure whose stiffness is E w h³/(12 l) of a material: the modulus stands for it.
@@ -187,6 +196,7 @@ pub fn catalog(leg: &Leg, experiment: &Experiment) -> Vec<Candidate> {
             )],
             extension: None,
             supporting: 0,
+            screen_at_upper: false,
         });
     }
     // A ring-down swings in the hinge's plane: no twist to excite.
@@ -239,6 +249,7 @@ fn hinge_candidates(leg: &Leg) -> Vec<Candidate> {
                 ],
                 extension: Some(Extension::Twist(vec![(flexure.name.clone(), index)])),
                 supporting: 1,
+                screen_at_upper: true,
             });
             out.push(Candidate {
                 cause: "flexure axis misalignment".into(),
@@ -258,6 +269,7 @@ fn hinge_candidates(leg: &Leg) -> Vec<Candidate> {
                     about: index,
                 }),
                 supporting: 1,
+                screen_at_upper: false,
             });
         }
     }
@@ -289,6 +301,7 @@ fn actuator_candidates(leg: &Leg) -> Vec<Candidate> {
             )],
             extension: Some(Extension::Preload),
             supporting: 0,
+            screen_at_upper: false,
         });
     }
     for load in &model.loads {
@@ -308,6 +321,7 @@ fn actuator_candidates(leg: &Leg) -> Vec<Candidate> {
             )],
             extension: Some(Extension::BaseCompliance(slider.clone())),
             supporting: 0,
+            screen_at_upper: false,
         });
         out.push(Candidate {
             cause: "actuator tip mass".into(),
@@ -320,6 +334,7 @@ fn actuator_candidates(leg: &Leg) -> Vec<Candidate> {
             )],
             extension: Some(Extension::TipMass(slider)),
             supporting: 0,
+            screen_at_upper: false,
         });
     }
     out
@@ -398,6 +413,18 @@ pub fn diagnose(
     user_parameters: &[String],
     holdout: Holdout,
 ) -> Result<Diagnosis, String> {
+    diagnose_causes(experiment, data, user_parameters, holdout, &[])
+}
+
+/// [`diagnose`] with the catalog limited to the causes whose name contains one of `causes`
+/// (`mech diagnose --cause twist`); empty: the whole catalog.
+pub fn diagnose_causes(
+    experiment: &Experiment,
+    data: &MeasuredData,
+    user_parameters: &[String],
+    holdout: Holdout,
+    causes: &[String],
+) -> Result<Diagnosis, String> {
     let spec = experiment.model_spec();
     let leg = Leg::open_any(&spec, &[])?;
     let observations = experiment.observations(&leg, data)?;
@@ -436,16 +463,34 @@ pub fn diagnose(
         parameters: Vec::new(),
         extension: None,
         supporting: 0,
+        screen_at_upper: false,
     }];
-    jobs.extend(catalog(&leg, experiment).into_iter().filter(|c| {
+    let catalog = catalog(&leg, experiment);
+    if let Some(unknown) = causes
+        .iter()
+        .find(|wanted| catalog.iter().all(|c| !c.cause.contains(wanted.as_str())))
+    {
+        let mut names: Vec<&str> = catalog.iter().map(|c| c.cause.as_str()).collect();
+        names.dedup();
+        return Err(format!(
+            "--cause `{unknown}`: no cause of the catalog for this experiment contains it \
+             (the catalog: {})",
+            names.join(", ")
+        ));
+    }
+    jobs.extend(catalog.into_iter().filter(|c| {
         // A candidate on a parameter the user already fits adds nothing.
-        c.parameters
+        let fitted = c
+            .parameters
             .iter()
-            .all(|(i, _)| user.iter().all(|(u, _)| u != i))
+            .any(|(i, _)| user.iter().any(|(u, _)| u == i));
+        let wanted = causes.is_empty() || causes.iter().any(|w| c.cause.contains(w.as_str()));
+        !fitted && wanted
     }));
     let run = |jobs: Vec<Candidate>| {
         crate::experiments::parallel(jobs, crate::experiments::threads(), |candidate| {
-            run_trial(
+            let started = std::time::Instant::now();
+            let trial = run_trial(
                 experiment,
                 data,
                 &spec,
@@ -453,15 +498,25 @@ pub fn diagnose(
                 &user,
                 &observations,
                 &train,
-            )
-            .map(|trial| (candidate, trial))
+            );
+            if std::env::var_os("MECH_DIAGNOSE_TIMING").is_some() {
+                eprintln!(
+                    "{:>8.2?}  {} at {}{}",
+                    started.elapsed(),
+                    candidate.cause,
+                    candidate.location,
+                    match &trial {
+                        Ok(t) if t.inert && t.parameters.is_empty() => " (screened: inert)",
+                        _ => "",
+                    }
+                );
+            }
+            (candidate, trial)
         })
     };
     let mut trials = run(jobs).into_iter();
-    let (_, base) = trials
-        .next()
-        .expect("the base trial")
-        .map_err(|(_, e)| format!("the base model: {e}"))?;
+    let (_, base) = trials.next().expect("the base trial");
+    let base = base.map_err(|e| format!("the base model: {e}"))?;
     let m = holdout_values as f64;
     let noise_band = 1.0 + 3.0 * (2.0 / m).sqrt();
     let (ranked_pairs, inert) = sort_out(&base, trials);
@@ -539,7 +594,8 @@ pub fn diagnose(
     })
 }
 
-type TrialResult = Result<(Candidate, Trial), (Candidate, String)>;
+/// A candidate and its trial, or why the trial failed.
+type TrialResult = (Candidate, Result<Trial, String>);
 
 /// Splits trials into those that moved the residual (best first, lowest held-out χ²) and the
 /// inert ones (no change beyond the noise, or a failed fit), compared with `reference`.
@@ -550,19 +606,17 @@ fn sort_out(
     let mut ranked = Vec::new();
     let mut inert = Vec::new();
     for result in trials {
-        let (candidate, trial) = result.unwrap_or_else(|(candidate, e)| {
-            let trial = Trial {
-                cause: candidate.cause.clone(),
-                location: candidate.location.clone(),
-                parameters: Vec::new(),
-                train_chi2: f64::NAN,
-                holdout_chi2: f64::NAN,
-                aicc: f64::NAN,
-                inert: true,
-                error: Some(e),
-                predicted: Vec::new(),
-            };
-            (candidate, trial)
+        let (candidate, trial) = result;
+        let trial = trial.unwrap_or_else(|e| Trial {
+            cause: candidate.cause.clone(),
+            location: candidate.location.clone(),
+            parameters: Vec::new(),
+            train_chi2: f64::NAN,
+            holdout_chi2: f64::NAN,
+            aicc: f64::NAN,
+            inert: true,
+            error: Some(e),
+            predicted: Vec::new(),
         });
         // Fitting it must lower the training χ² by at least 1 (one σ² in total): a smaller
         // change is below what the noise (and the predictions' own ~1e-5 relative numerical
@@ -606,6 +660,7 @@ fn combine(first: &Candidate, second: &Candidate) -> Option<Candidate> {
         extension: first.extension.clone().or_else(|| second.extension.clone()),
         // Combinations are not screened: each part moved the residual on its own.
         supporting: 0,
+        screen_at_upper: false,
     })
 }
 
@@ -617,13 +672,11 @@ fn run_trial(
     user: &[(Target, Parameter)],
     observations: &super::experiment::Observations,
     train: &[bool],
-) -> Result<Trial, (Candidate, String)> {
-    let fail = |e: String| (candidate.clone(), e);
+) -> Result<Trial, String> {
     let mut leg = match &candidate.extension {
         Some(extension) => super::extend::open_leg(spec, extension),
         None => Leg::open_any(spec, &[]),
-    }
-    .map_err(fail)?;
+    }?;
     let mut parameters = user.to_vec();
     parameters.extend(candidate.parameters.iter().cloned());
     let chi2 = |predicted: &[f64], keep: bool| -> f64 {
@@ -657,9 +710,7 @@ fn run_trial(
         });
     }
     let (predicted, fitted) = if parameters.is_empty() {
-        let predicted = experiment
-            .predict(&leg, data, observations, &Extensions::default())
-            .map_err(fail)?;
+        let predicted = experiment.predict(&leg, data, observations, &Extensions::default())?;
         (predicted, None)
     } else {
         let report = fit_values(
@@ -669,8 +720,7 @@ fn run_trial(
             &parameters,
             observations.clone(),
             train,
-        )
-        .map_err(fail)?;
+        )?;
         (report.after, Some(report.result))
     };
     let train_chi2 = chi2(&predicted, true);
@@ -711,7 +761,8 @@ fn run_trial(
 
 /// Screens a candidate before fitting it: moving each of its defining parameters alone to
 /// either bound (the others at their starting values, the supporting ones at their starting
-/// values and again at their upper bounds) changes the predictions by less than the noise, Σ((Δ prediction)/σ)² < 1 — it cannot change the response (e.g. a twist the other
+/// values or, with `screen_at_upper`, their upper bounds) changes the predictions by less
+/// than the noise, Σ((Δ prediction)/σ)² < 1 — it cannot change the response (e.g. a twist the other
 /// hinges lock). Returns the predictions at the starting values then; `None` when the
 /// candidate moves them, a prediction fails, or there is no noise level to compare with.
 fn cannot_move(
@@ -734,42 +785,36 @@ fn cannot_move(
     let at_start = experiment
         .predict(leg, data, observations, &extensions)
         .ok()?;
-    // The supporting parameters at their starting values, then at their upper bounds (a
-    // twist acts most where the other hinges give way most; a misalignment where they are
-    // stiff).
-    let settings: &[fn(&Parameter) -> f64] = if supporting.is_empty() {
-        &[|p| p.initial]
-    } else {
-        &[|p| p.initial, |p| p.upper]
-    };
-    for setting in settings {
+    let reference = if candidate.screen_at_upper && !supporting.is_empty() {
         for (target, parameter) in supporting {
-            target.apply(leg, &mut extensions, setting(parameter));
+            target.apply(leg, &mut extensions, parameter.upper);
         }
-        let reference = experiment
+        experiment
             .predict(leg, data, observations, &extensions)
-            .ok()?;
-        for (target, parameter) in candidate.defining() {
-            for bound in [parameter.lower, parameter.upper] {
-                if !bound.is_finite() {
-                    return None;
-                }
-                target.apply(leg, &mut extensions, bound);
-                let moved = experiment
-                    .predict(leg, data, observations, &extensions)
-                    .ok()?;
-                let change: f64 = moved
-                    .iter()
-                    .zip(&reference)
-                    .zip(sigma)
-                    .map(|((a, b), s)| ((a - b) / s).powi(2))
-                    .sum();
-                if change >= 1.0 {
-                    return None;
-                }
+            .ok()?
+    } else {
+        at_start.clone()
+    };
+    for (target, parameter) in candidate.defining() {
+        for bound in [parameter.lower, parameter.upper] {
+            if !bound.is_finite() {
+                return None;
             }
-            target.apply(leg, &mut extensions, parameter.initial);
+            target.apply(leg, &mut extensions, bound);
+            let moved = experiment
+                .predict(leg, data, observations, &extensions)
+                .ok()?;
+            let change: f64 = moved
+                .iter()
+                .zip(&reference)
+                .zip(sigma)
+                .map(|((a, b), s)| ((a - b) / s).powi(2))
+                .sum();
+            if change >= 1.0 {
+                return None;
+            }
         }
+        target.apply(leg, &mut extensions, parameter.initial);
     }
     Some(at_start)
 }

@@ -254,6 +254,8 @@ fn finite_or_null(x: f64) -> serde_json::Value {
 
 #[derive(Args, Clone, Debug)]
 pub struct DiagnoseArgs {
+    /// The model (`.mech`); default: the experiment file's `model`.
+    pub model: Option<PathBuf>,
     /// The diagnosis experiment file (TOML, with the measurement noise).
     #[arg(long)]
     pub experiment: PathBuf,
@@ -266,17 +268,24 @@ pub struct DiagnoseArgs {
     /// Rows held out of every fit and used to rank: `every:N` (default `every:3`) or `last:P%`.
     #[arg(long, default_value = "every:3")]
     pub holdout: String,
+    /// Try only the catalog causes whose name contains this (repeatable), e.g. `--cause twist
+    /// --cause "loss factor"`; default: the whole catalog.
+    #[arg(long = "cause")]
+    pub causes: Vec<String>,
     /// Output folder for diagnosis.html, diagnosis.json and the plots.
     #[arg(long, default_value = "out/diagnose")]
     pub out_dir: PathBuf,
 }
 
 pub fn diagnose_command(args: &DiagnoseArgs) -> Result<(), String> {
-    use super::candidates::{diagnose, Holdout, Verdict};
-    let experiment = experiment::load(&args.experiment)?;
+    use super::candidates::{diagnose_causes, Holdout, Verdict};
+    let mut experiment = experiment::load(&args.experiment)?;
+    if let Some(model) = &args.model {
+        experiment.set_model(model.clone());
+    }
     let data = MeasuredData::load(&args.data).map_err(|e| e.to_string())?;
     let holdout = Holdout::parse(&args.holdout)?;
-    let d = diagnose(&experiment, &data, &args.fit, holdout)?;
+    let d = diagnose_causes(&experiment, &data, &args.fit, holdout, &args.causes)?;
     println!(
         "{}: {} values fitted, {} held out ({}); noise band: held-out χ²/value ≤ {:.2}",
         experiment.title(),

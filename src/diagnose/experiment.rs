@@ -226,6 +226,16 @@ impl Experiment {
         }
     }
 
+    /// The same experiment on another model file (`mech diagnose MODEL …`).
+    pub fn set_model(&mut self, path: PathBuf) {
+        match self {
+            Experiment::QuasiStatic(e) => e.model = path,
+            Experiment::FrequencyResponse(e) => e.model = path,
+            Experiment::ForceDeflection(e) => e.model = path,
+            Experiment::Pendulum(e) => e.model = path,
+        }
+    }
+
     fn check(&self) -> Result<(), String> {
         match self {
             Experiment::QuasiStatic(e) => {
