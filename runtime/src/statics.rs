@@ -13,16 +13,18 @@
 //! basis of the null space of `J`, from its SVD, so redundant loop rows are harmless). The
 //! step `Δq = Z Δz` solves `Zᵀ ∂(F + Jᵀλ)/∂q Z Δz = −Zᵀ F` with `λ` held, so the curvature
 //! of the constraints (`λ·∇²φ`) is part of the stiffness; the loops and fixtures are then
-//! closed again ([`constraints::close`], minimum-norm Gauss–Newton), and the step is halved
-//! until `|F + Jᵀλ|` decreases. Convergence is quadratic; once within tolerance, one more step
-//! takes the residuals to round-off. With side loads the reactions act along `G ≠ J` and the
-//! tangent force is replaced by the part of `F` in the null space of `G`.
+//! closed again ([`constraints::close`]: Gauss–Newton, first with the Jacobian of the point
+//! the step left), and the step is halved until `|F + Jᵀλ|` decreases. Convergence is
+//! quadratic; once within tolerance, one more step takes the residuals to round-off. With
+//! side loads the reactions act along `G ≠ J` and the tangent force is replaced by the part
+//! of `F` in the null space of `G`.
 //!
 //! Cost: the model's functions dominate. Per Newton iteration with `dof` tangent directions
 //! and fixtures: 2·dof evaluations of `F` and of the loops' analytic `J` (the stiffness and
 //! the loops' curvature), ~dof² + dof + 1 of the outputs (the fixtures' curvature; 2–4·dof²
-//! of outputs and loop `φ` with the mixed second differences of `λ·φ` this replaced), and
-//! 2·nq of the outputs for the fixtures' rows of `J` (at each point and each closing step).
+//! of outputs and loop `φ` with the mixed second differences of `λ·φ` this replaced), 2·nq
+//! of the outputs for the fixtures' rows of `J` at each point, and one `φ` per closing step
+//! (Gauss–Newton with `J` afresh took 2·nq outputs more per step).
 //!
 //! Why closing after each step: a tangent step leaves a curved constraint manifold by
 //! O(|Δq|²). Newton on the full KKT system in `(q, λ)` must weigh that error against the
@@ -253,11 +255,26 @@ impl<M: Model + ?Sized> Problem<'_, M> {
     /// [`constraints::close`] does for assembly, to a thousandth of `tolerance` where
     /// round-off allows (so that equilibria reached from different starts agree to round-off,
     /// not to the tolerance). False if `|φ|` stays above `tolerance`.
-    fn close(&self, q: &mut [f64], tolerance: f64) -> bool {
+    ///
+    /// With `chord`, the Jacobian of a nearby closed point (the one a Newton step left):
+    /// first up to [`CHORD_ITERATIONS`] steps with it held (corrections normal to that
+    /// point's tangent space; the error left shrinks by about `|Δq|·curvature` per step),
+    /// then Gauss–Newton as above if that has not closed. Each step then costs one `φ` instead
+    /// of `J`, whose fixture rows are 2·nq output evaluations.
+    fn close(&self, q: &mut [f64], tolerance: f64, chord: Option<&DMatrix<f64>>) -> bool {
         let options = AssemblyOptions {
             tolerance: tolerance * 1e-3,
             ..AssemblyOptions::default()
         };
+        if let Some(j) = chord {
+            let held = AssemblyOptions {
+                max_iterations: CHORD_ITERATIONS,
+                ..options
+            };
+            if constraints::close(|q| self.residual(q), |_| j.clone(), q, &[], &held).is_ok() {
+                return true;
+            }
+        }
         match constraints::close(
             |q| self.residual(q),
             |q| self.jacobians(q, false).0,
@@ -278,7 +295,8 @@ impl<M: Model + ?Sized> Problem<'_, M> {
             .zip(step.iter())
             .map(|(q, d)| q + d)
             .collect();
-        self.close(&mut q, tolerance).then(|| self.point(q))
+        self.close(&mut q, tolerance, Some(&point.jacobian))
+            .then(|| self.point(q))
     }
 
     /// The equilibrium equations at `q`.
@@ -299,6 +317,7 @@ impl<M: Model + ?Sized> Problem<'_, M> {
         };
         let residual = &balance * (balance.transpose() * &force);
         Point {
+            jacobian: j,
             tangent,
             balance,
             q,
@@ -401,6 +420,8 @@ impl<M: Model + ?Sized> Problem<'_, M> {
 /// positions are affine in slider coordinates and vary on the scale of a radian in angles,
 /// so the step is large enough to keep round-off (≈ ε·|y|/h) near 1e-13 of the derivative.
 const OUTPUT_STEP: f64 = 1e-5;
+/// Steps of [`Problem::close`] with the Jacobian held before it evaluates `J` afresh.
+const CHORD_ITERATIONS: usize = 10;
 /// Step along a unit tangent direction for the central differences of `F`.
 const FORCE_STEP: f64 = 1e-6;
 /// Step along a unit tangent direction for the second differences of `λ·φ`.
@@ -416,6 +437,8 @@ struct Point {
     lambda: DVector<f64>,
     /// `F + Jᵀλ = W WᵀF`: the part of `F` the constraints cannot carry.
     residual: DVector<f64>,
+    /// `J` of the loops and fixtures.
+    jacobian: DMatrix<f64>,
     /// `Z`: orthonormal basis of the null space of `J` (`nq × dof`), the directions the
     /// configuration may move in.
     tangent: DMatrix<f64>,
@@ -566,7 +589,7 @@ fn newton<M: Model + ?Sized>(
 ) -> Result<Equilibrium, RuntimeError> {
     let force_scale = problem.force(q).amax().max(f64::MIN_POSITIVE);
     let tolerance = options.constraint_tolerance;
-    if !problem.close(q, tolerance) {
+    if !problem.close(q, tolerance, None) {
         return Err(RuntimeError::InvalidOptions(format!(
             "the loops and fixtures do not close from the start (|φ| = {:.3e}); start closer \
              to a configuration that satisfies them",
