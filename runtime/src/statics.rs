@@ -295,8 +295,10 @@ impl<M: Model + ?Sized> Problem<'_, M> {
             .zip(step.iter())
             .map(|(q, d)| q + d)
             .collect();
-        self.close(&mut q, tolerance, Some(&point.jacobian))
-            .then(|| self.point(q))
+        // Held only with fixtures: without them `J` is the analytic loop Jacobian, no dearer
+        // than the extra steps (each with its SVD) the chord takes.
+        let chord = (self.nf > 0).then_some(&point.jacobian);
+        self.close(&mut q, tolerance, chord).then(|| self.point(q))
     }
 
     /// The equilibrium equations at `q`.
