@@ -514,3 +514,28 @@ fn reduced_stiffness_on_the_extended_leg_matches_differences_of_the_generalized_
         );
     }
 }
+
+/// The tape model evaluates any outputs apart from the others (`selected_outputs`, which the
+/// statics' fixtures use) to the values `outputs` gives, in the order asked, speeds and
+/// inputs included (the kinetic energy reads `u`).
+#[test]
+fn selected_outputs_equal_the_outputs() {
+    let leg = hamr_vi();
+    let model = leg.model();
+    let q = rest(&leg);
+    let u: Vec<f64> = (0..model.nu()).map(|i| 0.1 * (i as f64 + 1.0)).collect();
+    let inputs = leg.inputs(50.0, -80.0);
+    let mut all = vec![0.0; model.noutputs()];
+    model.outputs(0.0, &q, &u, &inputs, &mut all);
+    let which: Vec<usize> = (0..model.noutputs()).rev().collect();
+    let mut selected = vec![f64::NAN; which.len()];
+    assert!(model.selected_outputs(0.0, &q, &u, &inputs, &which, &mut selected));
+    for (&row, value) in which.iter().zip(&selected) {
+        assert!(
+            (value - all[row]).abs() <= 1e-14 * all[row].abs().max(1.0),
+            "{}: {value} vs {}",
+            model.output_name(row),
+            all[row]
+        );
+    }
+}
