@@ -149,6 +149,31 @@ impl mech_runtime::Model for TapeModel {
         };
         self.run(&self.tape.outputs, &env, out);
     }
+    fn selected_outputs(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        inputs: &[f64],
+        which: &[usize],
+        out: &mut [f64],
+    ) -> bool {
+        let env = Env {
+            t,
+            q,
+            u,
+            params: &self.params,
+            inputs,
+        };
+        for (&row, value) in which.iter().zip(out.iter_mut()) {
+            self.run(
+                &self.tape.output_rows[row],
+                &env,
+                std::slice::from_mut(value),
+            );
+        }
+        true
+    }
     fn nc(&self) -> usize {
         self.tape.nc
     }

@@ -6,12 +6,13 @@
 
 mod common;
 
+use mech::diagnose::extend::{open_leg, Extension};
 use mech::experiments::leg::{Dof, Leg};
 use mech::experiments::ModelSpec;
-use mech_runtime::nalgebra::{Matrix2, Vector2};
+use mech_runtime::nalgebra::{DMatrix, DVector, Matrix2, Vector2};
 use mech_runtime::{
-    assemble, solve_statics, solve_statics_with_loads, AssemblyOptions, Equilibrium, Fixture,
-    Model, SideLoad, StaticsOptions,
+    assemble, reduced_equilibrium, solve_statics, solve_statics_with_loads, AssemblyOptions,
+    Equilibrium, Fixture, Model, SideLoad, StaticsOptions,
 };
 
 /// The drives of the problem statement: both actuators at ±112.5 V.
@@ -405,4 +406,136 @@ fn side_load_on_a_held_pendulum_matches_the_closed_form() {
     );
     assert_eq!(plain.unwrap(), loaded.unwrap());
     assert_eq!(model.nq(), 1);
+}
+
+/// The stiffness Newton steps with, `Wᵀ ∂(F + Gᵀλ)/∂q Z` with `λ` held, on the extended
+/// HAMR leg of `mech diagnose` (every hinge compliant off its axis, fb3 twisting about y: 20
+/// coordinates) at a swing force-test point (foot held along x halfway to its free
+/// deflection at 225 V, with and without a 30 % side load along y), against an independent
+/// reference: central differences along each column of `Z` of `F`, of `J_loopsᵀλ_loops`
+/// (analytic `J`) and of `∇g·λ_fixture` (`g` = foot x + ratio·foot y, its gradient by central
+/// differences of the outputs), projected on `W`. The runtime differences `J` for the loops
+/// and takes the fixture's curvature from second differences of `λ·g`. They agree to 1e-5
+/// of the smaller curvature term (~4e-11 against ~3e-5 and ~1e-4 N·m/rad; the entries of
+/// the stiffness reach ~0.1, the off-axis springs), so dropping either term fails the test.
+#[test]
+fn reduced_stiffness_on_the_extended_leg_matches_differences_of_the_generalized_force() {
+    let spec = ModelSpec {
+        model: format!("{}/models/hamr_vi.mech", env!("CARGO_MANIFEST_DIR")).into(),
+        set: Vec::new(),
+        independent: vec!["qsact".into(), "qlact".into()],
+    };
+    let leg = open_leg(&spec, &Extension::Twist(vec![("fb3".into(), 1)])).unwrap();
+    let model = leg.model();
+    let (nq, nc) = (model.nq(), model.nc());
+    assert_eq!(nq, 20);
+    let rest = rest(&leg);
+    let foot = leg.foot_at(&rest, &leg.inputs(0.0, 0.0));
+    let inputs = leg.drive(Dof::Swing, 225.0);
+    let free = leg.equilibrium(&rest, &inputs, &[]).unwrap().q;
+    let mut target = foot;
+    target[0] = 0.5 * (foot[0] + leg.foot_at(&free, &inputs)[0]);
+    let fixture = leg.fixture(target, vec![0]);
+    let [x, y, _] = leg.foot();
+    for ratio in [0.0, 0.3] {
+        let loads = [SideLoad {
+            fixture: 0,
+            held: 0,
+            along: 1,
+            ratio,
+        }];
+        let fixtures = std::slice::from_ref(&fixture);
+        let q = leg
+            .loaded_equilibrium(&rest, &inputs, fixtures, &loads)
+            .unwrap()
+            .q;
+        let reduced = reduced_equilibrium(model, 0.0, &q, &inputs, fixtures, &loads).unwrap();
+        let (z, w, lambda) = (&reduced.tangent, &reduced.balance, &reduced.multipliers);
+        let force = |q: &[f64]| {
+            let mut f = DVector::zeros(nq);
+            model.forcing(0.0, q, &vec![0.0; nq], &inputs, f.as_mut_slice());
+            f
+        };
+        let loops = |q: &[f64]| {
+            let mut j = DMatrix::zeros(nc, nq);
+            model.constraint_jacobian(0.0, q, j.as_mut_slice());
+            j.tr_mul(&lambda.rows(0, nc))
+        };
+        let held = |q: &[f64]| {
+            let mut outputs = vec![0.0; model.noutputs()];
+            model.outputs(0.0, q, &vec![0.0; nq], &inputs, &mut outputs);
+            outputs[x] + ratio * outputs[y]
+        };
+        let fixture_force = |q: &[f64]| {
+            let h = 1e-5;
+            DVector::from_fn(nq, |c, _| {
+                let (mut plus, mut minus) = (q.to_vec(), q.to_vec());
+                plus[c] += h;
+                minus[c] -= h;
+                lambda[nc] * (held(&plus) - held(&minus)) / (2.0 * h)
+            })
+        };
+        // `Wᵀ ∂part/∂q Z` by central differences along the columns of `Z`.
+        let stiffness = |part: &dyn Fn(&[f64]) -> DVector<f64>| {
+            let h = 1e-5;
+            let mut k = DMatrix::zeros(w.ncols(), z.ncols());
+            for column in 0..z.ncols() {
+                let shifted = |a: f64| -> Vec<f64> {
+                    q.iter()
+                        .zip(z.column(column).iter())
+                        .map(|(q, d)| q + a * d)
+                        .collect()
+                };
+                let difference = (part(&shifted(h)) - part(&shifted(-h))) / (2.0 * h);
+                k.set_column(column, &(w.transpose() * difference));
+            }
+            k
+        };
+        let (of_force, of_loops, of_fixture) = (
+            stiffness(&force),
+            stiffness(&loops),
+            stiffness(&fixture_force),
+        );
+        let error = (&reduced.stiffness - (&of_force + &of_loops + &of_fixture)).amax();
+        let smaller = of_loops.amax().min(of_fixture.amax());
+        eprintln!(
+            "ratio {ratio}: |K| {:.3e}, loops {:.3e}, fixture {:.3e}, error {error:.3e}",
+            reduced.stiffness.amax(),
+            of_loops.amax(),
+            of_fixture.amax()
+        );
+        assert!(
+            error < 1e-5 * smaller,
+            "ratio {ratio}: stiffness off by {error:.3e}; curvature terms of the loops \
+             {:.3e} and the fixture {:.3e}, |K| = {:.3e}",
+            of_loops.amax(),
+            of_fixture.amax(),
+            reduced.stiffness.amax()
+        );
+    }
+}
+
+/// The tape model evaluates any outputs apart from the others (`selected_outputs`, which the
+/// statics' fixtures use) to the values `outputs` gives, in the order asked, speeds and
+/// inputs included (the kinetic energy reads `u`).
+#[test]
+fn selected_outputs_equal_the_outputs() {
+    let leg = hamr_vi();
+    let model = leg.model();
+    let q = rest(&leg);
+    let u: Vec<f64> = (0..model.nu()).map(|i| 0.1 * (i as f64 + 1.0)).collect();
+    let inputs = leg.inputs(50.0, -80.0);
+    let mut all = vec![0.0; model.noutputs()];
+    model.outputs(0.0, &q, &u, &inputs, &mut all);
+    let which: Vec<usize> = (0..model.noutputs()).rev().collect();
+    let mut selected = vec![f64::NAN; which.len()];
+    assert!(model.selected_outputs(0.0, &q, &u, &inputs, &which, &mut selected));
+    for (&row, value) in which.iter().zip(&selected) {
+        assert!(
+            (value - all[row]).abs() <= 1e-14 * all[row].abs().max(1.0),
+            "{}: {value} vs {}",
+            model.output_name(row),
+            all[row]
+        );
+    }
 }

@@ -41,7 +41,8 @@ pub use simulate::{
     Trajectory,
 };
 pub use statics::{
-    solve_statics, solve_statics_with_loads, Equilibrium, Fixture, SideLoad, StaticsOptions,
+    reduced_equilibrium, solve_statics, solve_statics_with_loads, Equilibrium, Fixture,
+    ReducedEquilibrium, SideLoad, StaticsOptions,
 };
 
 /// Includes the Rust code generated for a model by the build script: expands to

@@ -42,6 +42,21 @@ pub trait Model {
     fn forcing(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]);
     /// Outputs `y(t, q, u, inputs)`.
     fn outputs(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]);
+    /// The outputs listed in `which` alone, `out[k] = y[which[k]]`, for callers that need a
+    /// few outputs many times (the fixtures of the statics). False, with `out` untouched,
+    /// where the model evaluates its outputs only together (the default); the caller then
+    /// uses [`Model::outputs`].
+    fn selected_outputs(
+        &self,
+        _t: f64,
+        _q: &[f64],
+        _u: &[f64],
+        _inputs: &[f64],
+        _which: &[usize],
+        _out: &mut [f64],
+    ) -> bool {
+        false
+    }
 
     /// Number of loop-closure constraint rows `φ(q) = 0` (0 for tree models). Rows may be
     /// redundant (rank-deficient `J`).

@@ -4,7 +4,8 @@
 //!
 //! Consumes: a [`Model`], inputs, a starting configuration, optional [`Fixture`]s and
 //! [`SideLoad`]s on them. Produces: an [`Equilibrium`]: `q`, the loop multipliers `λ` and the
-//! force each fixture exerts on the model.
+//! force each fixture exerts on the model; and, for tests, the [`ReducedEquilibrium`] at a
+//! configuration (bases, multipliers, stiffness).
 //!
 //! Method: Newton on the reduced equilibrium, in the tangent space of `φ = 0` (loops and
 //! fixtures together). Every iterate satisfies `φ = 0`; there the least-squares multipliers
@@ -12,10 +13,20 @@
 //! basis of the null space of `J`, from its SVD, so redundant loop rows are harmless). The
 //! step `Δq = Z Δz` solves `Zᵀ ∂(F + Jᵀλ)/∂q Z Δz = −Zᵀ F` with `λ` held, so the curvature
 //! of the constraints (`λ·∇²φ`) is part of the stiffness; the loops and fixtures are then
-//! closed again ([`constraints::close`], minimum-norm Gauss–Newton), and the step is halved
-//! until `|F + Jᵀλ|` decreases. Convergence is quadratic; once within tolerance, one more step
-//! takes the residuals to round-off. With side loads the reactions act along `G ≠ J` and the
-//! tangent force is replaced by the part of `F` in the null space of `G`.
+//! closed again ([`constraints::close`]: Gauss–Newton, first with the Jacobian of the point
+//! the step left), and the step is halved until `|F + Jᵀλ|` decreases. Convergence is
+//! quadratic; once within tolerance, one more step takes the residuals to round-off. With
+//! side loads the reactions act along `G ≠ J` and the tangent force is replaced by the part
+//! of `F` in the null space of `G`.
+//!
+//! Cost: the model's functions dominate. Per Newton iteration with `dof` tangent directions
+//! and fixtures: 2·dof evaluations of `F` and of the loops' analytic `J` (the stiffness and
+//! the loops' curvature), ~dof² + dof + 1 of the outputs (the fixtures' curvature; 2–4·dof²
+//! of outputs and loop `φ` with the mixed second differences of `λ·φ` this replaced), 2·nq
+//! of the outputs for the fixtures' rows of `J` at each point, and one `φ` per closing step
+//! (Gauss–Newton with `J` afresh took 2·nq outputs more per step). "Outputs" are those the
+//! fixtures read, where the model evaluates them alone ([`Model::selected_outputs`]: the
+//! foot of the extended HAMR leg is 225 of its 2,604 output operations).
 //!
 //! Why closing after each step: a tangent step leaves a curved constraint manifold by
 //! O(|Δq|²). Newton on the full KKT system in `(q, λ)` must weigh that error against the
@@ -24,7 +35,7 @@
 //! both HAMR-VI actuators driven it stalled at ~1/32 steps and needed load continuation,
 //! 138–229 iterations and 20–36 ms per equilibrium, against 4 iterations and ~0.2 ms now.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, DVectorView};
 
 use crate::constraints::{self, solve_least_squares, AssemblyOptions, RANK_TOLERANCE};
 use crate::{Model, RuntimeError};
@@ -105,6 +116,8 @@ struct Problem<'a, M: Model + ?Sized> {
     nf: usize,
     /// Per fixture row, its side loads: (the component they act along, ratio).
     sides: Vec<Vec<(usize, f64)>>,
+    /// The outputs the fixture rows read (held and side-loaded components), ascending.
+    read: Vec<usize>,
 }
 
 impl<'a, M: Model + ?Sized> Problem<'a, M> {
@@ -141,6 +154,17 @@ impl<'a, M: Model + ?Sized> Problem<'a, M> {
                 )));
             }
         }
+        let mut read: Vec<usize> = fixtures
+            .iter()
+            .flat_map(|fixture| fixture.components.iter().map(|&c| fixture.outputs[c]))
+            .chain(
+                loads
+                    .iter()
+                    .map(|load| fixtures[load.fixture].outputs[load.along]),
+            )
+            .collect();
+        read.sort_unstable();
+        read.dedup();
         Ok(Problem {
             model,
             t,
@@ -150,6 +174,7 @@ impl<'a, M: Model + ?Sized> Problem<'a, M> {
             nc: model.nc(),
             nf: sides.len(),
             sides,
+            read,
         })
     }
 }
@@ -157,23 +182,19 @@ impl<'a, M: Model + ?Sized> Problem<'a, M> {
 impl<M: Model + ?Sized> Problem<'_, M> {
     /// `φ` of the loops and fixtures.
     fn residual(&self, q: &[f64]) -> DVector<f64> {
-        self.rows(q, false)
-    }
-
-    /// `φ`, or with `sides` the functions whose gradients are the reaction directions: each
-    /// fixture row plus its side loads' `ratio·y_along`.
-    fn rows(&self, q: &[f64], sides: bool) -> DVector<f64> {
         let mut phi = DVector::zeros(self.nc + self.nf);
         self.model
             .constraints(self.t, q, &mut phi.as_mut_slice()[..self.nc]);
         if self.nf > 0 {
             let y = self.outputs(q);
-            self.fixture_rows(&y, sides, &mut phi.as_mut_slice()[self.nc..]);
+            self.fixture_rows(&y, false, &mut phi.as_mut_slice()[self.nc..]);
         }
         phi
     }
 
-    /// The fixture rows of [`rows`](Self::rows) from the outputs `y`.
+    /// The fixture rows of `φ` from the outputs `y`, or with `sides` the functions whose
+    /// gradients are the reaction directions: each fixture row plus its side loads'
+    /// `ratio·y_along`.
     fn fixture_rows(&self, y: &[f64], sides: bool, out: &mut [f64]) {
         let mut row = 0;
         for fixture in self.fixtures {
@@ -189,10 +210,22 @@ impl<M: Model + ?Sized> Problem<'_, M> {
         }
     }
 
+    /// The outputs at `q` with zero speeds: those the fixtures read, or all where the model
+    /// evaluates them only together (the others are then left zero).
     fn outputs(&self, q: &[f64]) -> Vec<f64> {
         let mut y = vec![0.0; self.model.noutputs()];
         let zero = vec![0.0; self.nq];
-        self.model.outputs(self.t, q, &zero, self.inputs, &mut y);
+        let mut read = vec![0.0; self.read.len()];
+        if self
+            .model
+            .selected_outputs(self.t, q, &zero, self.inputs, &self.read, &mut read)
+        {
+            for (&row, value) in self.read.iter().zip(read) {
+                y[row] = value;
+            }
+        } else {
+            self.model.outputs(self.t, q, &zero, self.inputs, &mut y);
+        }
         y
     }
 
@@ -250,11 +283,26 @@ impl<M: Model + ?Sized> Problem<'_, M> {
     /// [`constraints::close`] does for assembly, to a thousandth of `tolerance` where
     /// round-off allows (so that equilibria reached from different starts agree to round-off,
     /// not to the tolerance). False if `|φ|` stays above `tolerance`.
-    fn close(&self, q: &mut [f64], tolerance: f64) -> bool {
+    ///
+    /// With `chord`, the Jacobian of a nearby closed point (the one a Newton step left):
+    /// first up to [`CHORD_ITERATIONS`] steps with it held (corrections normal to that
+    /// point's tangent space; the error left shrinks by about `|Δq|·curvature` per step),
+    /// then Gauss–Newton as above if that has not closed. Each step then costs one `φ` instead
+    /// of `J`, whose fixture rows are 2·nq output evaluations.
+    fn close(&self, q: &mut [f64], tolerance: f64, chord: Option<&DMatrix<f64>>) -> bool {
         let options = AssemblyOptions {
             tolerance: tolerance * 1e-3,
             ..AssemblyOptions::default()
         };
+        if let Some(j) = chord {
+            let held = AssemblyOptions {
+                max_iterations: CHORD_ITERATIONS,
+                ..options
+            };
+            if constraints::close(|q| self.residual(q), |_| j.clone(), q, &[], &held).is_ok() {
+                return true;
+            }
+        }
         match constraints::close(
             |q| self.residual(q),
             |q| self.jacobians(q, false).0,
@@ -275,7 +323,10 @@ impl<M: Model + ?Sized> Problem<'_, M> {
             .zip(step.iter())
             .map(|(q, d)| q + d)
             .collect();
-        self.close(&mut q, tolerance).then(|| self.point(q))
+        // Held only with fixtures: without them `J` is the analytic loop Jacobian, no dearer
+        // than the extra steps (each with its SVD) the chord takes.
+        let chord = (self.nf > 0).then_some(&point.jacobian);
+        self.close(&mut q, tolerance, chord).then(|| self.point(q))
     }
 
     /// The equilibrium equations at `q`.
@@ -296,6 +347,7 @@ impl<M: Model + ?Sized> Problem<'_, M> {
         };
         let residual = &balance * (balance.transpose() * &force);
         Point {
+            jacobian: j,
             tangent,
             balance,
             q,
@@ -308,51 +360,89 @@ impl<M: Model + ?Sized> Problem<'_, M> {
 
     /// `Wᵀ ∂(F + Gᵀλ)/∂q Z` at `point` with `λ` held (`Z` its tangent basis, `W` the
     /// directions its reactions `G` cannot balance; `W = Z`, `G = J` without side loads):
-    /// the stiffness of the reduced equilibrium. `F` by central differences along each
-    /// column of `Z`; the curvature term `Wᵀ ∇²(λ·g) Z` (`g` the rows whose gradients are
-    /// `G`: the constraints' curvature) by mixed second differences of the scalar `λ·g`, so no
-    /// differences of differenced fixture Jacobians.
+    /// the stiffness of the reduced equilibrium, curvature of the constraints (`λ·∇²g`)
+    /// included. The loops' part of `F + Gᵀλ` is `F + J_loopsᵀλ_loops`, differenced along
+    /// each column of `Z` with the analytic `J` (2·dof evaluations of `F` and `J`); the
+    /// fixtures' part is the curvature of `s = λ_fixtures·g_fixtures`, a function of the
+    /// outputs alone, from its Hessian on the span of `Z` and `W` ([`Self::fixture_curvature`]).
     fn reduced_stiffness(&self, point: &Point) -> DMatrix<f64> {
         let (z, w) = (&point.tangent, &point.balance);
-        let shifted = |steps: &[(&DMatrix<f64>, usize, f64)]| -> Vec<f64> {
-            let mut q = point.q.clone();
-            for &(basis, k, h) in steps {
-                for (value, d) in q.iter_mut().zip(basis.column(k).iter()) {
-                    *value += h * d;
-                }
-            }
-            q
-        };
+        let loops = point.lambda.rows(0, self.nc);
         let mut stiffness = DMatrix::zeros(w.ncols(), z.ncols());
         for k in 0..z.ncols() {
-            let difference = (self.force(&shifted(&[(z, k, FORCE_STEP)]))
-                - self.force(&shifted(&[(z, k, -FORCE_STEP)])))
-                / (2.0 * FORCE_STEP);
+            let loaded = |h: f64| {
+                let q: Vec<f64> = point
+                    .q
+                    .iter()
+                    .zip(z.column(k).iter())
+                    .map(|(q, d)| q + h * d)
+                    .collect();
+                self.loop_loaded_force(&q, &loops)
+            };
+            let difference = (loaded(FORCE_STEP) - loaded(-FORCE_STEP)) / (2.0 * FORCE_STEP);
             stiffness.set_column(k, &(w.transpose() * difference));
         }
-        if point.lambda.is_empty() {
-            return stiffness;
-        }
-        let sides = self.has_side_loads();
-        let work = |i: usize, a: f64, k: usize, b: f64| {
-            let q = shifted(&[(w, i, a), (z, k, b)]);
-            point.lambda.dot(&self.rows(&q, sides))
-        };
-        let h = CURVATURE_STEP;
-        for i in 0..w.ncols() {
-            // Without side loads the term is symmetric (W = Z): the upper triangle suffices.
-            let first = if sides { 0 } else { i };
-            for k in first..z.ncols() {
-                let curvature = (work(i, h, k, h) - work(i, h, k, -h) - work(i, -h, k, h)
-                    + work(i, -h, k, -h))
-                    / (4.0 * h * h);
-                stiffness[(i, k)] += curvature;
-                if !sides && k != i {
-                    stiffness[(k, i)] += curvature;
-                }
-            }
+        let fixtures = point.lambda.rows(self.nc, self.nf);
+        if !stiffness.is_empty() && fixtures.iter().any(|&l| l != 0.0) {
+            let basis = span(z, w);
+            let hessian = self.fixture_curvature(&point.q, &basis, &fixtures);
+            stiffness += w.transpose() * &basis * hessian * (basis.transpose() * z);
         }
         stiffness
+    }
+
+    /// `F + J_loopsᵀ λ_loops` at `q` (`F` alone for a tree model).
+    fn loop_loaded_force(&self, q: &[f64], loops: &DVectorView<'_, f64>) -> DVector<f64> {
+        let mut f = self.force(q);
+        if self.nc > 0 {
+            let mut j = DMatrix::zeros(self.nc, self.nq);
+            self.model.constraint_jacobian(self.t, q, j.as_mut_slice());
+            f += j.tr_mul(loops);
+        }
+        f
+    }
+
+    /// `Bᵀ ∇²s B` at `q` for `s = λ·g` over the fixture rows (`g` with side loads: the rows
+    /// whose gradients are the reaction directions), `B` an orthonormal basis (columns), by
+    /// central second differences of `s` from the outputs: `s(q ± h bᵢ)` give the diagonal,
+    /// `s(q ± h(bᵢ + bⱼ))` the rest (`Hᵢⱼ = [s(+ᵢⱼ) + s(−ᵢⱼ) − s(±ᵢ) − s(±ⱼ) + 2s]/2h²`,
+    /// error O(h²)): m² + m + 1 output evaluations for m columns, against 4 per entry of
+    /// the four-point mixed difference.
+    fn fixture_curvature(
+        &self,
+        q: &[f64],
+        basis: &DMatrix<f64>,
+        lambda: &DVectorView<'_, f64>,
+    ) -> DMatrix<f64> {
+        let sides = self.has_side_loads();
+        let mut rows = vec![0.0; self.nf];
+        let h = CURVATURE_STEP;
+        let mut work = |coefficients: &[(usize, f64)]| {
+            let mut shifted = q.to_vec();
+            for &(i, a) in coefficients {
+                for (value, d) in shifted.iter_mut().zip(basis.column(i).iter()) {
+                    *value += a * d;
+                }
+            }
+            self.fixture_rows(&self.outputs(&shifted), sides, &mut rows);
+            lambda.iter().zip(&rows).map(|(l, g)| l * g).sum::<f64>()
+        };
+        let m = basis.ncols();
+        let center = work(&[]);
+        let plus: Vec<f64> = (0..m).map(|i| work(&[(i, h)])).collect();
+        let minus: Vec<f64> = (0..m).map(|i| work(&[(i, -h)])).collect();
+        let mut hessian = DMatrix::zeros(m, m);
+        for i in 0..m {
+            hessian[(i, i)] = (plus[i] + minus[i] - 2.0 * center) / (h * h);
+            for j in 0..i {
+                let both = work(&[(i, h), (j, h)]) + work(&[(i, -h), (j, -h)]);
+                let value =
+                    (both - plus[i] - minus[i] - plus[j] - minus[j] + 2.0 * center) / (2.0 * h * h);
+                hessian[(i, j)] = value;
+                hessian[(j, i)] = value;
+            }
+        }
+        hessian
     }
 }
 
@@ -360,6 +450,8 @@ impl<M: Model + ?Sized> Problem<'_, M> {
 /// positions are affine in slider coordinates and vary on the scale of a radian in angles,
 /// so the step is large enough to keep round-off (≈ ε·|y|/h) near 1e-13 of the derivative.
 const OUTPUT_STEP: f64 = 1e-5;
+/// Steps of [`Problem::close`] with the Jacobian held before it evaluates `J` afresh.
+const CHORD_ITERATIONS: usize = 10;
 /// Step along a unit tangent direction for the central differences of `F`.
 const FORCE_STEP: f64 = 1e-6;
 /// Step along a unit tangent direction for the second differences of `λ·φ`.
@@ -375,12 +467,36 @@ struct Point {
     lambda: DVector<f64>,
     /// `F + Jᵀλ = W WᵀF`: the part of `F` the constraints cannot carry.
     residual: DVector<f64>,
+    /// `J` of the loops and fixtures.
+    jacobian: DMatrix<f64>,
     /// `Z`: orthonormal basis of the null space of `J` (`nq × dof`), the directions the
     /// configuration may move in.
     tangent: DMatrix<f64>,
     /// `W`: orthonormal basis of the null space of the reaction directions `G` (`Z` itself
     /// without side loads), the directions of the force the reactions cannot balance.
     balance: DMatrix<f64>,
+}
+
+/// Orthonormal basis of the span of the columns of `z` and `w` (both orthonormal): `z`, then
+/// the parts of `w`'s columns outside what is already spanned (Gram–Schmidt, twice for
+/// orthogonality to round-off), those below `RANK_TOLERANCE` dropped. Not an SVD of `[z w]`:
+/// with `w` close to `z` that matrix has a cluster of singular values at √2, and nalgebra's
+/// SVD returned factors off by ~5e-2 from it (on the extended HAMR leg with a side load).
+fn span(z: &DMatrix<f64>, w: &DMatrix<f64>) -> DMatrix<f64> {
+    let mut columns: Vec<DVector<f64>> = z.column_iter().map(|c| c.into_owned()).collect();
+    for column in w.column_iter() {
+        let mut v = column.into_owned();
+        for _ in 0..2 {
+            for b in &columns {
+                v -= b * b.dot(&v);
+            }
+        }
+        let norm = v.norm();
+        if norm > RANK_TOLERANCE {
+            columns.push(v / norm);
+        }
+    }
+    DMatrix::from_columns(&columns)
 }
 
 /// Orthonormal basis of the null space of `j` (singular values at most `RANK_TOLERANCE·σ₁`
@@ -457,6 +573,44 @@ pub fn solve_statics_with_loads<M: Model + ?Sized>(
     first
 }
 
+/// The reduced equilibrium at `q` as the Newton of [`solve_statics_with_loads`] sees it:
+/// bases, multipliers and stiffness. `q` should close the loops and fixtures. For checking
+/// the stiffness against an independent difference of `F + Gᵀλ` (tests), and for looking
+/// into a solve that converges slowly.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReducedEquilibrium {
+    /// `Z` (`nq × dof`): orthonormal basis of the directions that keep the loops and
+    /// fixtures closed.
+    pub tangent: DMatrix<f64>,
+    /// `W`: orthonormal basis of the directions the reactions cannot balance (`Z` without
+    /// side loads).
+    pub balance: DMatrix<f64>,
+    /// `λ`: least-squares multipliers of the loop rows, then of the fixture rows.
+    pub multipliers: DVector<f64>,
+    /// `Wᵀ ∂(F + Gᵀλ)/∂q Z` with `λ` held (`G`: the reaction directions, `J` without side
+    /// loads).
+    pub stiffness: DMatrix<f64>,
+}
+
+/// [`ReducedEquilibrium`] at `q`.
+pub fn reduced_equilibrium<M: Model + ?Sized>(
+    model: &M,
+    t: f64,
+    q: &[f64],
+    inputs: &[f64],
+    fixtures: &[Fixture],
+    loads: &[SideLoad],
+) -> Result<ReducedEquilibrium, RuntimeError> {
+    let problem = Problem::new(model, t, inputs, fixtures, loads)?;
+    let point = problem.point(q.to_vec());
+    Ok(ReducedEquilibrium {
+        stiffness: problem.reduced_stiffness(&point),
+        tangent: point.tangent,
+        balance: point.balance,
+        multipliers: point.lambda,
+    })
+}
+
 /// Newton on the reduced equilibrium from `q` (see the module docs).
 fn newton<M: Model + ?Sized>(
     problem: &Problem<'_, M>,
@@ -465,7 +619,7 @@ fn newton<M: Model + ?Sized>(
 ) -> Result<Equilibrium, RuntimeError> {
     let force_scale = problem.force(q).amax().max(f64::MIN_POSITIVE);
     let tolerance = options.constraint_tolerance;
-    if !problem.close(q, tolerance) {
+    if !problem.close(q, tolerance, None) {
         return Err(RuntimeError::InvalidOptions(format!(
             "the loops and fixtures do not close from the start (|φ| = {:.3e}); start closer \
              to a configuration that satisfies them",

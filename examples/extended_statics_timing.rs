@@ -1,0 +1,62 @@
+//! Timing of the force/deflection experiment's sensor sweep (docs/benchmarks.md §10) on
+//! HAMR-VI and on the model-form extension `mech diagnose` fits (`src/diagnose/extend.rs`:
+//! fb3 twisting about y, every other hinge and loop closure compliant off its axis; 20
+//! coordinates and 11 degrees of freedom against 8 and 2). Each sensor position is one static
+//! equilibrium with the foot held (`solve_statics_with_loads`); the sweep starts each from
+//! the last. Swing and lift at 225 V, 127 µm steps, with and without the 30 % off-axis load.
+//! Times are the fastest of 5 sweeps, per sensor point.
+//!
+//! ```text
+//! cargo run --release --example extended_statics_timing
+//! ```
+
+use std::path::Path;
+use std::time::Instant;
+
+use mech::diagnose::extend::{open_leg, Extension};
+use mech::experiments::leg::{force_deflection, Dof, Leg, Sensor};
+use mech::experiments::ModelSpec;
+
+fn main() {
+    let path = format!("{}/models/hamr_vi.mech", env!("CARGO_MANIFEST_DIR"));
+    let spec = ModelSpec {
+        model: Path::new(&path).to_path_buf(),
+        set: Vec::new(),
+        independent: vec!["qsact".into(), "qlact".into()],
+    };
+    let legs: [(&str, Leg); 2] = [
+        ("HAMR-VI", Leg::open(&spec).expect("the leg opens")),
+        (
+            "extended (fb3 twist)",
+            open_leg(&spec, &Extension::Twist(vec![("fb3".into(), 1)]))
+                .expect("the extension opens"),
+        ),
+    ];
+    println!(
+        "| model | sweep, 225 V, 127 µm steps | sensor points | ms per point | ms per sweep |"
+    );
+    println!("|---|---|---|---|---|");
+    for (name, leg) in &legs {
+        for (dof, axis) in [(Dof::Swing, 0), (Dof::Lift, 2)] {
+            for fraction in [0.0, 0.3] {
+                let mut best = f64::INFINITY;
+                let mut points = 0;
+                for _ in 0..5 {
+                    let start = Instant::now();
+                    let test =
+                        force_deflection(leg, dof, axis, 225.0, Sensor::Steps(127e-6), fraction)
+                            .expect("the sweep runs");
+                    best = best.min(start.elapsed().as_secs_f64());
+                    points = test.points.len();
+                }
+                println!(
+                    "| {name} | {}, off-axis load {:.0} % | {points} | {:.2} | {:.1} |",
+                    dof.name(),
+                    fraction * 100.0,
+                    best * 1e3 / points as f64,
+                    best * 1e3
+                );
+            }
+        }
+    }
+}
