@@ -195,6 +195,9 @@ pub fn fit_values(
         covariance_difference: Difference::Central,
         ftol: 1e-8,
         xtol: 1e-8,
+        // A fit that has not converged in 50 iterations will not rank well anyway; the cap
+        // bounds the cost of a candidate whose predictions are slow (IR extensions).
+        max_iterations: 50,
         residuals_normalized: sigma.is_some(),
         ..LmOptions::default()
     };
