@@ -493,6 +493,7 @@ def main():
     L.extend(loop_sections(loops, paired_loops, sympy_loops, paired_sympy_fourbar, loop_targets))
     L.extend(hamr_section(R))
     L.extend(statics_section(R))
+    L.extend(diagnose_section())
     with open(a.out, 'w') as f:
         f.write('\n'.join(L).rstrip('\n') + '\n')
     print(f'wrote {a.out}')
@@ -858,6 +859,17 @@ def statics_section(R):
             L.append(line)
     L.append('')
     path = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'analysis_statics.md')
+    if os.path.exists(path):
+        with open(path) as f:
+            L.append(re.sub(r'<!--.*?-->\s*', '', f.read(), flags=re.S).rstrip('\n'))
+    return L
+
+
+def diagnose_section():
+    """Section 11: `mech diagnose` over the whole catalog (measured by hand with the commands
+    it shows: bench/analysis_diagnose.md)."""
+    L = ['', '## 11. `mech diagnose`: the whole catalog on the HAMR leg', '']
+    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'analysis_diagnose.md')
     if os.path.exists(path):
         with open(path) as f:
             L.append(re.sub(r'<!--.*?-->\s*', '', f.read(), flags=re.S).rstrip('\n'))
