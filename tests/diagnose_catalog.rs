@@ -84,21 +84,22 @@ const FORCE_NOISE: f64 = 0.3e-3;
 /// The paper's sensor step (seed Sec. V-A).
 const SENSOR_STEP: f64 = 127e-6;
 
-/// The swing force/deflection test of HAMR-VI at 225 V with the paper's ~30 % off-axis load:
-/// the on-axis force at every 127 µm from the rest position until the free foot no longer
-/// reaches the sensor, from `truth`, with noise; and the experiment file that reads it
-/// (stating `file_fraction` as the off-axis load).
-fn swing_force_case(
+/// The force/deflection test of `dof` (swing along x, lift along z) at 225 V with the
+/// sensor's y load `true_fraction` of the on-axis force: the on-axis force at every 127 µm
+/// from the rest position until the free foot no longer reaches the sensor, from `truth`,
+/// with noise; and the experiment file that reads it (stating `file_fraction`).
+fn force_case(
     dir: &Path,
     truth: &Leg,
+    dof: Dof,
     true_fraction: f64,
     file_fraction: f64,
     rng: &mut Rng,
 ) -> (Experiment, String) {
     let test = force_deflection(
         truth,
-        Dof::Swing,
-        0,
+        dof,
+        dof.axis(),
         225.0,
         Sensor::Steps(SENSOR_STEP),
         true_fraction,
@@ -109,10 +110,11 @@ fn swing_force_case(
         let force = point.force + FORCE_NOISE * normal(rng);
         text += &format!("{}, {}\n", point.distance * 1e6, force * 1e3);
     }
+    let name = dof.name();
     let experiment = experiment_in(
         dir,
         &format!(
-            "kind = \"force_deflection\"\ntitle = \"swing force\"\ndof = \"swing\"\n\
+            "kind = \"force_deflection\"\ntitle = \"{name} force\"\ndof = \"{name}\"\n\
              voltage = \"225 V\"\noff_axis_fraction = {file_fraction}\nnoise = \"0.3 mN\"\n"
         ),
     );
@@ -153,7 +155,7 @@ fn a_hidden_twist_is_found_in_swing_force_data() {
         (0.3..=0.5).contains(&loss),
         "the generator's twist removes {loss}"
     );
-    let (experiment, text) = swing_force_case(&dir, &truth, 0.3, 0.3, &mut rng);
+    let (experiment, text) = force_case(&dir, &truth, Dof::Swing, 0.3, 0.3, &mut rng);
     let d = diagnose_data(&dir, &experiment, &text);
     let best = d.ranked.first().expect("a ranked candidate");
     assert_eq!(
@@ -208,38 +210,6 @@ fn top(d: &Diagnosis, cause: &str, location: &str, parameter: &str) -> f64 {
         .2
 }
 
-/// The lift force/deflection test of `truth` (as [`swing_force_case`], along z).
-fn lift_force_case(
-    dir: &Path,
-    truth: &Leg,
-    true_fraction: f64,
-    file_fraction: f64,
-    rng: &mut Rng,
-) -> (Experiment, String) {
-    let test = force_deflection(
-        truth,
-        Dof::Lift,
-        2,
-        225.0,
-        Sensor::Steps(SENSOR_STEP),
-        true_fraction,
-    )
-    .unwrap();
-    let mut text = String::from("distance [um], force [mN]\n");
-    for point in &test.points {
-        let force = point.force + FORCE_NOISE * normal(rng);
-        text += &format!("{}, {}\n", point.distance * 1e6, force * 1e3);
-    }
-    let experiment = experiment_in(
-        dir,
-        &format!(
-            "kind = \"force_deflection\"\ntitle = \"lift force\"\ndof = \"lift\"\n\
-             voltage = \"225 V\"\noff_axis_fraction = {file_fraction}\nnoise = \"0.3 mN\"\n"
-        ),
-    );
-    (experiment, text)
-}
-
 /// An unmodelled off-axis load: the sensor pushes on the foot along y with 20–40 % of the
 /// on-axis force (the seed's ~30 %), the experiment file says none. Lift force data; the
 /// fraction recovered within 0.05.
@@ -249,7 +219,7 @@ fn a_hidden_off_axis_load_is_found_in_lift_force_data() {
     let mut rng = Rng::new(5);
     let fraction = rng.uniform(0.2, 0.4);
     let truth = Leg::open(&hamr_spec()).unwrap();
-    let (experiment, text) = lift_force_case(&dir, &truth, fraction, 0.0, &mut rng);
+    let (experiment, text) = force_case(&dir, &truth, Dof::Lift, fraction, 0.0, &mut rng);
     let d = diagnose_data(&dir, &experiment, &text);
     let fitted = top(
         &d,
@@ -269,7 +239,7 @@ fn a_hidden_actuator_base_compliance_is_found_in_lift_force_data() {
     let compliance = rng.uniform(0.2, 0.5);
     let mut truth = open_leg(&hamr_spec(), &Extension::BaseCompliance("qlact".into())).unwrap();
     set_param(&mut truth, BASE_COMPLIANCE, compliance);
-    let (experiment, text) = lift_force_case(&dir, &truth, 0.0, 0.0, &mut rng);
+    let (experiment, text) = force_case(&dir, &truth, Dof::Lift, 0.0, 0.0, &mut rng);
     let d = diagnose_data(&dir, &experiment, &text);
     let fitted = top(
         &d,
@@ -510,7 +480,7 @@ fn the_papers_story_twist_and_a_frequency_dependent_loss_factor() {
     );
 
     // Force/deflection: the swing force, ~50 % low → twist of fb3.
-    let (experiment, text) = swing_force_case(&dir, &truth, 0.3, 0.3, &mut rng);
+    let (experiment, text) = force_case(&dir, &truth, Dof::Swing, 0.3, 0.3, &mut rng);
     let d = diagnose_data(&dir, &experiment, &text);
     top(
         &d,

@@ -212,8 +212,8 @@ pub fn catalog(leg: &Leg, experiment: &Experiment) -> Vec<Candidate> {
 /// times a fitted factor (`extend::Extension::Twist`). A twist in a closed loop can only act
 /// as far as the other hinges give way off their axes, so their off-axis compliance (per unit
 /// 1/k; `(t/w)²` for lateral bending, a geometry the model does not give) is fitted with it;
-/// at its lower bound (10⁻⁶) the extension is the base model to ~0.1 % (HAMR-VI swing
-/// blocked force).
+/// at its lower bound (10⁻⁶) the extension is the base model to ~0.1 % in the HAMR-VI swing
+/// blocked force and ~1 % in the modes.
 fn hinge_candidates(leg: &Leg) -> Vec<Candidate> {
     let model = &leg.session.compiled.model;
     let first_new = model.params.len();
