@@ -139,6 +139,19 @@ impl mech_runtime::Model for TapeModel {
         };
         self.run(&self.tape.forcing, &env, out);
     }
+    fn static_forcing(&self, t: f64, q: &[f64], inputs: &[f64], out: &mut [f64]) {
+        let Some(program) = &self.tape.static_forcing else {
+            return self.forcing(t, q, &vec![0.0; self.tape.nu], inputs, out);
+        };
+        let env = Env {
+            t,
+            q,
+            u: &[],
+            params: &self.params,
+            inputs,
+        };
+        self.run(program, &env, out);
+    }
     fn outputs(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]) {
         let env = Env {
             t,

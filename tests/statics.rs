@@ -539,3 +539,45 @@ fn selected_outputs_equal_the_outputs() {
         );
     }
 }
+
+/// The forcing at rest the statics evaluate (`static_forcing`, the forcing re-derived with
+/// every speed set to zero, so its velocity terms and dampers are gone from the tape) equals
+/// the full forcing at zero speeds, on HAMR-VI and on the 20-coordinate extended leg, away
+/// from equilibrium and with both drives on; and the full forcing at nonzero speeds differs
+/// (so the comparison would see a velocity term left in or a spring dropped).
+#[test]
+fn static_forcing_is_the_forcing_at_zero_speed() {
+    let spec = ModelSpec {
+        model: format!("{}/models/hamr_vi.mech", env!("CARGO_MANIFEST_DIR")).into(),
+        set: Vec::new(),
+        independent: vec!["qsact".into(), "qlact".into()],
+    };
+    let extended = open_leg(&spec, &Extension::Twist(vec![("fb3".into(), 1)])).unwrap();
+    for leg in [hamr_vi(), extended] {
+        let model = leg.model();
+        let nq = model.nq();
+        let q: Vec<f64> = rest(&leg)
+            .iter()
+            .enumerate()
+            .map(|(i, q)| q + 1e-3 * ((i as f64) * 0.7).sin())
+            .collect();
+        let inputs = leg.inputs(80.0, -60.0);
+        let (mut at_rest, mut full, mut moving) = (vec![0.0; nq], vec![0.0; nq], vec![0.0; nq]);
+        model.static_forcing(0.0, &q, &inputs, &mut at_rest);
+        model.forcing(0.0, &q, &vec![0.0; model.nu()], &inputs, &mut full);
+        let u: Vec<f64> = (0..model.nu()).map(|i| 0.5 + 0.1 * i as f64).collect();
+        model.forcing(0.0, &q, &u, &inputs, &mut moving);
+        let scale = full.iter().fold(0.0f64, |m, f| m.max(f.abs()));
+        for r in 0..nq {
+            assert!(
+                (at_rest[r] - full[r]).abs() <= 1e-12 * scale,
+                "{} row {r}: {} vs {}",
+                model.name(),
+                at_rest[r],
+                full[r]
+            );
+        }
+        let differs = (0..nq).any(|r| (moving[r] - full[r]).abs() > 1e-6 * scale);
+        assert!(differs, "{}: the speeds do not enter F", model.name());
+    }
+}

@@ -40,6 +40,12 @@ pub trait Model {
     /// `F(t, q, u, inputs)`: generalized active forces plus the velocity-dependent part of the
     /// generalized inertia forces, so that `M u̇ = F`.
     fn forcing(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]);
+    /// `F(t, q, 0, inputs)`, the forcing at rest (statics). The default evaluates
+    /// [`Model::forcing`] with zero speeds; a model may supply a cheaper form without the
+    /// velocity terms.
+    fn static_forcing(&self, t: f64, q: &[f64], inputs: &[f64], out: &mut [f64]) {
+        self.forcing(t, q, &vec![0.0; self.nu()], inputs, out);
+    }
     /// Outputs `y(t, q, u, inputs)`.
     fn outputs(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]);
     /// The outputs listed in `which` alone, `out[k] = y[which[k]]`, for callers that need a

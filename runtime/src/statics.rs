@@ -269,13 +269,8 @@ impl<M: Model + ?Sized> Problem<'_, M> {
     /// `F(q, 0, inputs)`.
     fn force(&self, q: &[f64]) -> DVector<f64> {
         let mut f = DVector::zeros(self.nq);
-        self.model.forcing(
-            self.t,
-            q,
-            &vec![0.0; self.nq],
-            self.inputs,
-            f.as_mut_slice(),
-        );
+        self.model
+            .static_forcing(self.t, q, self.inputs, f.as_mut_slice());
         f
     }
 
@@ -365,10 +360,19 @@ impl<M: Model + ?Sized> Problem<'_, M> {
     /// each column of `Z` with the analytic `J` (2·dof evaluations of `F` and `J`); the
     /// fixtures' part is the curvature of `s = λ_fixtures·g_fixtures`, a function of the
     /// outputs alone, from its Hessian on the span of `Z` and `W` ([`Self::fixture_curvature`]).
-    fn reduced_stiffness(&self, point: &Point) -> DMatrix<f64> {
+    ///
+    /// `central`: central differences (error O(h²), 2·dof evaluations); otherwise forward
+    /// differences from `point` itself (O(h) ≈ 1e-6 relative, dof evaluations), which is all
+    /// a Newton step needs: it changes the contraction of the iteration by that much, not the
+    /// equilibrium it converges to.
+    fn reduced_stiffness(&self, point: &Point, central: bool) -> DMatrix<f64> {
         let (z, w) = (&point.tangent, &point.balance);
         let loops = point.lambda.rows(0, self.nc);
         let mut stiffness = DMatrix::zeros(w.ncols(), z.ncols());
+        let at_point = (!central).then(|| {
+            let loop_rows = point.jacobian.rows(0, self.nc);
+            &point.force + loop_rows.tr_mul(&loops)
+        });
         for k in 0..z.ncols() {
             let loaded = |h: f64| {
                 let q: Vec<f64> = point
@@ -379,7 +383,10 @@ impl<M: Model + ?Sized> Problem<'_, M> {
                     .collect();
                 self.loop_loaded_force(&q, &loops)
             };
-            let difference = (loaded(FORCE_STEP) - loaded(-FORCE_STEP)) / (2.0 * FORCE_STEP);
+            let difference = match &at_point {
+                Some(center) => (loaded(FORCE_STEP) - center) / FORCE_STEP,
+                None => (loaded(FORCE_STEP) - loaded(-FORCE_STEP)) / (2.0 * FORCE_STEP),
+            };
             stiffness.set_column(k, &(w.transpose() * difference));
         }
         let fixtures = point.lambda.rows(self.nc, self.nf);
@@ -604,7 +611,7 @@ pub fn reduced_equilibrium<M: Model + ?Sized>(
     let problem = Problem::new(model, t, inputs, fixtures, loads)?;
     let point = problem.point(q.to_vec());
     Ok(ReducedEquilibrium {
-        stiffness: problem.reduced_stiffness(&point),
+        stiffness: problem.reduced_stiffness(&point, true),
         tangent: point.tangent,
         balance: point.balance,
         multipliers: point.lambda,
@@ -634,8 +641,11 @@ fn newton<M: Model + ?Sized>(
     };
     // Once within tolerance, one more full Newton step: it costs little and, convergence
     // being quadratic, takes the residual to round-off, so that equilibria reached from
-    // different starts agree to round-off rather than to the tolerance.
+    // different starts agree to round-off rather than to the tolerance. That step reuses the
+    // last iteration's stiffness (a chord step: its point is within |Δq| of this one, so the
+    // residual still shrinks by ~|Δq|·∂K/∂q / K), carried to this point's bases.
     let mut polished = false;
+    let mut last: Option<(DMatrix<f64>, DMatrix<f64>, DMatrix<f64>)> = None;
     loop {
         let within = converged(&point);
         if within && polished {
@@ -650,7 +660,23 @@ fn newton<M: Model + ?Sized>(
             )));
         }
         iterations += 1;
-        let stiffness = problem.reduced_stiffness(&point);
+        let stiffness = match &last {
+            Some((stiffness, z, w))
+                if within
+                    && z.ncols() == point.tangent.ncols()
+                    && w.ncols() == point.balance.ncols() =>
+            {
+                point
+                    .balance
+                    .tr_mul(&(w * (stiffness * z.tr_mul(&point.tangent))))
+            }
+            _ => problem.reduced_stiffness(&point, false),
+        };
+        last = Some((
+            stiffness.clone(),
+            point.tangent.clone(),
+            point.balance.clone(),
+        ));
         let unbalanced = point.balance.transpose() * &point.force;
         let along = solve_least_squares(&stiffness, &(-unbalanced));
         let step = &point.tangent * along;

@@ -208,6 +208,10 @@ pub struct Tape {
     /// `M(q)`, column-major `nu × nu`.
     pub mass_matrix: Program,
     pub forcing: Program,
+    /// `F(t, q, 0, inputs)` (`Equations::static_forcing`): on the extended HAMR leg a
+    /// fraction of `forcing`'s operations, and the statics evaluate it 2·dof times per Newton
+    /// iteration.
+    pub static_forcing: Option<Program>,
     pub outputs: Program,
     /// Each output row alone: for callers that need a few outputs many times (the fixtures of
     /// the statics hold the foot, 225 of the extended HAMR leg's 2,604 output operations; its
@@ -234,6 +238,10 @@ impl Tape {
             nu: equations.nu,
             mass_matrix: Program::compile(&equations.pool, &equations.mass_matrix),
             forcing: Program::compile(&equations.pool, &equations.forcing),
+            static_forcing: equations
+                .static_forcing
+                .as_ref()
+                .map(|roots| Program::compile(&equations.pool, roots)),
             outputs: Program::compile(&equations.pool, &equations.outputs),
             output_rows: equations
                 .outputs

@@ -35,6 +35,9 @@ pub struct Equations {
     pub mass_matrix: Vec<ExprId>,
     /// `F(t, q, u, inputs)`, length `nu`.
     pub forcing: Vec<ExprId>,
+    /// `F(t, q, 0, inputs)`: the forcing at rest, for statics (no velocity term of `F_r*`, no
+    /// damper); `None` where a speed sits under a negative power (no value at `u = 0`).
+    pub static_forcing: Option<Vec<ExprId>>,
     /// Scalar outputs in declaration order (vector outputs expanded to `.x`, `.y`, `.z`).
     pub outputs: Vec<ExprId>,
     pub output_names: Vec<String>,
@@ -157,6 +160,8 @@ pub fn derive(model: &Model) -> Equations {
         .iter()
         .map(|terms| pool.add_all(terms))
         .collect();
+    let static_forcing =
+        pool.substitute(&forcing, &|s| matches!(s, Symbol::Speed(_)).then_some(zero));
 
     let mut outputs = Vec::new();
     let mut output_names = Vec::new();
@@ -172,6 +177,7 @@ pub fn derive(model: &Model) -> Equations {
         nu,
         mass_matrix,
         forcing,
+        static_forcing,
         outputs,
         output_names,
         constraints,

@@ -9,6 +9,7 @@ mod eval;
 mod expr;
 pub mod number;
 mod sexpr;
+mod subst;
 #[cfg(test)]
 mod tests;
 

@@ -133,3 +133,27 @@ fn identity_search_respects_its_limit() {
     assert_eq!(limited.sexpr(id), "(+ (^ (sin q0) 2) (^ (cos q0) 2) a b c)");
     check(text, "(+ 1 a b c)");
 }
+
+/// `input` with every speed `u_i` set to zero prints as `expected` (`None`: no value there).
+fn check_at_rest(input: &str, expected: Option<&str>) {
+    let mut pool = ExprPool::new();
+    let id = pool.parse_sexpr(input).unwrap();
+    let zero = pool.zero();
+    let rebuilt = pool.substitute(&[id], &|s| matches!(s, Symbol::Speed(_)).then_some(zero));
+    assert_eq!(
+        rebuilt.map(|r| pool.sexpr(r[0])).as_deref(),
+        expected,
+        "{input} at u = 0"
+    );
+}
+
+#[test]
+fn substitution_drops_vanishing_terms() {
+    check_at_rest(
+        "(+ (* m u0 u1 (sin q0)) (* k q0) 3)",
+        Some("(+ 3 (* q0 k))"),
+    );
+    check_at_rest("(* c (+ u0 (cos u1)))", Some("c"));
+    check_at_rest("(+ (sin q0) (atan2 u0 1))", Some("(sin q0)"));
+    check_at_rest("(* q0 (^ u0 -1))", None);
+}
