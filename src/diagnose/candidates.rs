@@ -36,7 +36,7 @@ use super::extend::{
 };
 use super::fit::{fit_values, residual, Target};
 use super::lm::{information_criteria, NoiseModel, Parameter};
-use crate::experiments::leg::{Leg, AXES};
+use crate::experiments::leg::{Leg, WarmStarts, AXES};
 
 /// Which rows are held out of the fit.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -789,15 +789,18 @@ fn cannot_move(
     for (target, parameter) in user.iter().chain(&candidate.parameters) {
         target.apply(leg, &mut extensions, parameter.initial);
     }
+    // Every moved prediction starts its equilibria from the reference's: for an inert
+    // candidate (most of them) they hardly move.
+    let mut warm = WarmStarts::default();
     let at_start = experiment
-        .predict(leg, data, observations, &extensions)
+        .predict_warm(leg, data, observations, &extensions, &mut warm)
         .ok()?;
     let reference = if candidate.screen_at_upper && !supporting.is_empty() {
         for (target, parameter) in supporting {
             target.apply(leg, &mut extensions, parameter.upper);
         }
         experiment
-            .predict(leg, data, observations, &extensions)
+            .predict_warm(leg, data, observations, &extensions, &mut warm)
             .ok()?
     } else {
         at_start.clone()
@@ -809,7 +812,7 @@ fn cannot_move(
             }
             target.apply(leg, &mut extensions, bound);
             let moved = experiment
-                .predict(leg, data, observations, &extensions)
+                .predict_warm(leg, data, observations, &extensions, &mut warm.clone())
                 .ok()?;
             let change: f64 = moved
                 .iter()

@@ -32,7 +32,7 @@ use serde::Deserialize;
 
 use super::data::MeasuredData;
 use super::pendulum::Pendulum;
-use crate::experiments::leg::{force_deflection, Dof, Leg, Sensor};
+use crate::experiments::leg::{force_deflection_warm, Dof, Leg, Sensor, WarmStarts};
 use crate::experiments::ModelSpec;
 
 /// One diagnosis experiment file.
@@ -413,6 +413,19 @@ impl Experiment {
         measured: &Observations,
         extensions: &Extensions,
     ) -> Result<Vec<f64>, String> {
+        self.predict_warm(leg, data, measured, extensions, &mut WarmStarts::default())
+    }
+
+    /// [`Experiment::predict`] with its equilibria started from those of the last prediction
+    /// `warm` recorded (a fit's previous evaluation), and recorded there in turn.
+    pub fn predict_warm(
+        &self,
+        leg: &Leg,
+        data: &MeasuredData,
+        measured: &Observations,
+        extensions: &Extensions,
+        warm: &mut WarmStarts,
+    ) -> Result<Vec<f64>, String> {
         let model = leg.model();
         match self {
             Experiment::QuasiStatic(e) => {
@@ -436,7 +449,7 @@ impl Experiment {
                         v_swing.map_or(0.0, |c| c[row]),
                     );
                     q = leg
-                        .equilibrium(&q, &inputs, &[])
+                        .warm_equilibrium(warm, row, &q, &inputs, &[], &[])
                         .map_err(|e| {
                             format!("line {}: {e}", data.lines.get(row).copied().unwrap_or(0))
                         })?
@@ -451,7 +464,9 @@ impl Experiment {
             Experiment::FrequencyResponse(e) => {
                 leg.require_hamr()?;
                 let rest_inputs = leg.inputs(0.0, 0.0);
-                let rest = leg.equilibrium(&leg.q0, &rest_inputs, &[])?.q;
+                let rest = leg
+                    .warm_equilibrium(warm, 0, &leg.q0, &rest_inputs, &[], &[])?
+                    .q;
                 let linear =
                     mech_runtime::linearize(model, 0.0, &rest, &rest_inputs, &leg.independent)
                         .map_err(|e| format!("linearization failed: {e}"))?;
@@ -491,13 +506,14 @@ impl Experiment {
                 leg.require_hamr()?;
                 let fraction = extensions.off_axis_fraction.unwrap_or(e.off_axis_fraction);
                 let distances = measured.abscissa.clone();
-                let test = force_deflection(
+                let test = force_deflection_warm(
                     leg,
                     e.dof,
                     e.dof.axis(),
                     e.volts()?,
                     Sensor::At(distances),
                     fraction,
+                    warm,
                 )?;
                 // A sensor beyond the free foot's reach is not touched: it reads 0.
                 Ok(test.points.iter().map(|p| p.force.max(0.0)).collect())

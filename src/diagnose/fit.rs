@@ -16,7 +16,7 @@ use mech_runtime::Model;
 use super::data::MeasuredData;
 use super::experiment::{Experiment, Extensions, Observations};
 use super::lm::{levenberg_marquardt, Difference, FitResult, LmOptions, Parameter};
-use crate::experiments::leg::Leg;
+use crate::experiments::leg::{Leg, WarmStarts};
 
 /// What a fitted value sets: a model parameter (by index) or an extension's setting.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -181,7 +181,9 @@ pub fn fit_values(
     for (target, parameter) in fitted {
         target.apply(leg, &mut extensions, parameter.initial);
     }
-    let before = experiment.predict(leg, data, &observations, &extensions)?;
+    // Each evaluation starts its equilibria from the last one's (the parameters move little).
+    let mut warm = WarmStarts::default();
+    let before = experiment.predict_warm(leg, data, &observations, &extensions, &mut warm)?;
     let sigma = observations.sigma.clone();
     let parameters: Vec<Parameter> = fitted.iter().map(|(_, p)| p.clone()).collect();
     let options = LmOptions {
@@ -206,7 +208,8 @@ pub fn fit_values(
             for (&(target, _), &value) in fitted.iter().zip(p) {
                 target.apply(leg, &mut extensions, value);
             }
-            let predicted = experiment.predict(leg, data, &observations, &extensions)?;
+            let predicted =
+                experiment.predict_warm(leg, data, &observations, &extensions, &mut warm)?;
             let all = residual(&predicted, &observations);
             Ok(all
                 .into_iter()
@@ -220,7 +223,7 @@ pub fn fit_values(
     for (&(target, _), &value) in fitted.iter().zip(&result.params) {
         target.apply(leg, &mut extensions, value);
     }
-    let after = experiment.predict(leg, data, &observations, &extensions)?;
+    let after = experiment.predict_warm(leg, data, &observations, &extensions, &mut warm)?;
     let residuals = series_rms(&observations, &before, &after);
     Ok(FitReport {
         title: experiment.title().to_string(),

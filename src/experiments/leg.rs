@@ -221,6 +221,31 @@ impl Leg {
         .map_err(|e| format!("statics of `{}`: {e}", self.model().name()))
     }
 
+    /// [`Leg::loaded_equilibrium`] started from the solution `warm` holds in `slot` (a
+    /// previous sweep's, with parameters a fit has since moved a little), else from `start`;
+    /// the solution is recorded in the slot. A warm start that fails is retried from `start`.
+    pub fn warm_equilibrium(
+        &self,
+        warm: &mut WarmStarts,
+        slot: usize,
+        start: &[f64],
+        inputs: &[f64],
+        fixtures: &[Fixture],
+        loads: &[SideLoad],
+    ) -> Result<Equilibrium, String> {
+        let solved = match warm.slots.get(slot) {
+            Some(Some(previous)) if previous.len() == start.len() => self
+                .loaded_equilibrium(previous, inputs, fixtures, loads)
+                .or_else(|_| self.loaded_equilibrium(start, inputs, fixtures, loads)),
+            _ => self.loaded_equilibrium(start, inputs, fixtures, loads),
+        }?;
+        if warm.slots.len() <= slot {
+            warm.slots.resize(slot + 1, None);
+        }
+        warm.slots[slot] = Some(solved.q.clone());
+        Ok(solved)
+    }
+
     /// A fixture holding the listed foot components at `target`.
     pub fn fixture(&self, target: [f64; 3], components: Vec<usize>) -> Fixture {
         Fixture {
@@ -280,6 +305,16 @@ fn hamr_ports(model: &dyn Model, shown: &str) -> Result<Ports, String> {
     })
 }
 
+/// The equilibria a sweep solved, by slot (its own numbering: rest, free, one per sensor
+/// position or data row), for [`Leg::warm_equilibrium`]. A fit predicts the same sweep many
+/// times with parameters that move a little: started from the last prediction's equilibria,
+/// Newton takes about half the iterations (one step and the polish) that a start from the
+/// previous sensor position takes.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct WarmStarts {
+    slots: Vec<Option<Vec<f64>>>,
+}
+
 /// One sensor position of a force/deflection test.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SensorPoint {
@@ -333,7 +368,8 @@ pub enum Sensor {
     Blocked,
     /// At `0, step, 2·step, …` until the free foot no longer reaches it (the paper's 127 µm).
     Steps(f64),
-    /// At these distances (measured data's sensor positions), in this order.
+    /// At these distances (measured data's sensor positions), in this order; one beyond the
+    /// free deflection is not touched (force 0, the foot free).
     At(Vec<f64>),
 }
 
@@ -350,14 +386,39 @@ pub fn force_deflection(
     sensor: Sensor,
     off_axis_fraction: f64,
 ) -> Result<ForceDeflection, String> {
+    let mut cold = WarmStarts::default();
+    force_deflection_warm(
+        leg,
+        dof,
+        axis,
+        voltage,
+        sensor,
+        off_axis_fraction,
+        &mut cold,
+    )
+}
+
+/// [`force_deflection`] with each equilibrium started from its counterpart in `warm` (and
+/// recorded there): slots 0 rest, 1 free, 2 + k the k-th sensor position.
+pub fn force_deflection_warm(
+    leg: &Leg,
+    dof: Dof,
+    axis: usize,
+    voltage: f64,
+    sensor: Sensor,
+    off_axis_fraction: f64,
+    warm: &mut WarmStarts,
+) -> Result<ForceDeflection, String> {
     if off_axis_fraction != 0.0 && axis == 1 {
         return Err("an off-axis (y) load needs an on-axis direction x or z".into());
     }
     let rest_inputs = leg.inputs(0.0, 0.0);
-    let rest_q = leg.equilibrium(&leg.q0, &rest_inputs, &[])?.q;
+    let rest_q = leg
+        .warm_equilibrium(warm, 0, &leg.q0, &rest_inputs, &[], &[])?
+        .q;
     let rest = leg.foot_at(&rest_q, &rest_inputs);
     let inputs = leg.drive(dof, voltage);
-    let free_q = leg.equilibrium(&rest_q, &inputs, &[])?.q;
+    let free_q = leg.warm_equilibrium(warm, 1, &rest_q, &inputs, &[], &[])?.q;
     let free = leg.foot_at(&free_q, &inputs);
     let signed = free[axis] - rest[axis];
     let direction = if signed < 0.0 { -1.0 } else { 1.0 };
@@ -378,6 +439,19 @@ pub fn force_deflection(
                 None => break,
             },
         };
+        if distance > free_deflection {
+            // Beyond the free foot's reach the sensor is not touched: no equilibrium to solve
+            // (holding the foot there would pull on it, and such a pulled leg far from its
+            // working range is where Newton struggles).
+            points.push(SensorPoint {
+                distance,
+                force: 0.0,
+                force_y: 0.0,
+                foot_y: free[1] - rest[1],
+            });
+            k += 1;
+            continue;
+        }
         let mut target = rest;
         target[axis] = rest[axis] + direction * distance;
         // The sensor pushes the foot along y with c·F, opposing the free y motion: with the
@@ -394,7 +468,7 @@ pub fn force_deflection(
             })
             .into_iter()
             .collect();
-        let equilibrium = leg.loaded_equilibrium(&q, &inputs, &[fixture], &loads)?;
+        let equilibrium = leg.warm_equilibrium(warm, 2 + k, &q, &inputs, &[fixture], &loads)?;
         let (solved, f) = (equilibrium.q, equilibrium.fixture_forces[0]);
         let foot = leg.foot_at(&solved, &inputs);
         let force = -f[axis] * direction;
