@@ -26,8 +26,8 @@ pub struct FitArgs {
     /// Repeat for several.
     #[arg(long = "fit", required = true)]
     pub fit: Vec<String>,
-    /// Output folder for fit.json, fit.csv and the plots.
-    #[arg(long, default_value = "out/fit")]
+    /// Output folder for fit.json, fit.csv and the plots (`--out` also works).
+    #[arg(long, visible_alias = "out", default_value = "out/fit")]
     pub out_dir: PathBuf,
 }
 
@@ -272,8 +272,8 @@ pub struct DiagnoseArgs {
     /// --cause "loss factor"`; default: the whole catalog.
     #[arg(long = "cause")]
     pub causes: Vec<String>,
-    /// Output folder for diagnosis.html, diagnosis.json and the plots.
-    #[arg(long, default_value = "out/diagnose")]
+    /// Output folder for diagnosis.html, diagnosis.json and the plots (`--out` also works).
+    #[arg(long, visible_alias = "out", default_value = "out/diagnose")]
     pub out_dir: PathBuf,
 }
 
