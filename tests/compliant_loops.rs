@@ -141,3 +141,122 @@ fn the_twist_extension_is_conservative_and_frees_the_loops() {
         );
     }
 }
+
+/// A misaligned hinge (`mech diagnose`'s misalignment): the extension turns a pin's axis `a`
+/// by α about a coordinate axis `p` (Rodrigues' formula in expressions of α), and a loop
+/// closure's two interframes by α about `p` (its axis and the directions tied to it alike).
+/// Independent construction: the same model with the hinge's axis written as the numbers of
+/// `R(p, α)·a` (for a loop closure, its reference and twist directions are then computed ⊥
+/// the tilted axis by the derivation itself) and α = 0. For l3 (the lift crank's loop
+/// hinge, about y) and l2 (a pin of the lift linkage, about y) the two must give the same
+/// rest configuration and the same foot under a 225 V lift drive and a 225 V swing drive (to
+/// 1e-9 m), and differ from the aligned model by far more.
+#[test]
+fn a_tilted_hinge_equals_one_written_tilted() {
+    use mech::diagnose::extend::{apply, MISALIGNMENT};
+    use mech::experiments::leg::{Dof, Leg};
+    use mech::session::Session;
+    use mech_codegen::ir::transform::constant_direction;
+    use mech_codegen::ir::{ClosureKind, Expr, FlexureAngle, Motion};
+    use mech_codegen::sym::Number;
+    use mech_codegen::Compiled;
+
+    let spec = hamr_spec();
+    let alpha = 0.03_f64;
+    let leg_of = |model: mech_codegen::ir::Model, tilt: f64| {
+        let session = Session::from_compiled(Compiled::from_model(model), &[], &[]).unwrap();
+        let mut leg = Leg::from_session(session, &spec, &[]).unwrap();
+        let index = leg.model().param_index(MISALIGNMENT).unwrap();
+        leg.session.model.set_param(index, tilt);
+        leg
+    };
+    let feet = |leg: &Leg| -> Vec<[f64; 3]> {
+        let rest_inputs = leg.inputs(0.0, 0.0);
+        let rest = leg.equilibrium(&leg.q0, &rest_inputs, &[]).unwrap().q;
+        let mut feet = vec![leg.foot_at(&rest, &rest_inputs)];
+        for dof in [Dof::Lift, Dof::Swing] {
+            let inputs = leg.drive(dof, 225.0);
+            let q = leg.equilibrium(&rest, &inputs, &[]).unwrap().q;
+            feet.push(leg.foot_at(&q, &inputs));
+        }
+        feet
+    };
+    let largest = |a: &[[f64; 3]], b: &[[f64; 3]]| {
+        a.iter()
+            .zip(b)
+            .flat_map(|(a, b)| (0..3).map(move |i| (a[i] - b[i]).abs()))
+            .fold(0.0_f64, f64::max)
+    };
+    let base = Compiled::from_path(&spec.model).unwrap().model;
+    for (hinge, about) in [("l3", 1), ("l2", 1)] {
+        let extension = Extension::Misalignment {
+            flexure: hinge.into(),
+            about,
+        };
+        let mut turned = base.clone();
+        apply(&mut turned, &extension).unwrap();
+
+        let mut written = base.clone();
+        let angle = written
+            .flexures
+            .iter()
+            .find(|f| f.name == hinge)
+            .unwrap()
+            .angle;
+        let axis = match angle {
+            FlexureAngle::Loop(index) => match &mut written.loops[index].kind {
+                ClosureKind::Revolute { axis, .. } => axis,
+                _ => panic!("a revolute closure"),
+            },
+            FlexureAngle::Coordinate(coordinate) => {
+                let frame = written
+                    .frames
+                    .iter()
+                    .find_map(|(handle, frame)| match &frame.motion {
+                        Motion::Revolute { coordinate: c, .. } if *c == coordinate => Some(handle),
+                        _ => None,
+                    })
+                    .unwrap();
+                match &mut written.frames.get_mut(frame).motion {
+                    Motion::Revolute { axis, .. } => axis,
+                    _ => panic!("a pin"),
+                }
+            }
+            _ => panic!("a bending hinge"),
+        };
+        // R(p, α)·a for the unit coordinate axis p, a ⊥ p: a cos α + (p × a) sin α.
+        let a = constant_direction(axis).unwrap();
+        let (j, k) = ((about + 1) % 3, (about + 2) % 3);
+        let mut p_cross_a = [0.0; 3];
+        p_cross_a[j] = -a[k];
+        p_cross_a[k] = a[j];
+        let tilted: Vec<Expr> = (0..3)
+            .map(|i| {
+                Expr::Number(Number::Float(
+                    a[i] * alpha.cos() + p_cross_a[i] * alpha.sin(),
+                ))
+            })
+            .collect();
+        *axis = [tilted[0].clone(), tilted[1].clone(), tilted[2].clone()];
+        apply(&mut written, &extension).unwrap();
+
+        let mut aligned = base.clone();
+        apply(&mut aligned, &extension).unwrap();
+
+        let (turned, written, aligned) = (
+            feet(&leg_of(turned, alpha)),
+            feet(&leg_of(written, 0.0)),
+            feet(&leg_of(aligned, 0.0)),
+        );
+        let (same, tilt_effect) = (largest(&turned, &written), largest(&turned, &aligned));
+        eprintln!("{hinge}: turned vs written {same:.3e} m, vs aligned {tilt_effect:.3e} m");
+        assert!(
+            same < 1e-9,
+            "{hinge}: turned {turned:?}\nwritten {written:?}"
+        );
+        assert!(
+            tilt_effect > 1e-6,
+            "{hinge}: the tilt moves the foot by only {tilt_effect:.3e} m"
+        );
+    }
+}

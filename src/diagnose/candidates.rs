@@ -251,11 +251,6 @@ fn hinge_candidates(leg: &Leg) -> Vec<Candidate> {
                 supporting: 1,
                 screen_at_upper: true,
             });
-            // A loop closure's axis tilted: not offered (its statics did not converge in
-            // the fits tried; left for later).
-            if !matches!(flexure.angle, mech_codegen::ir::FlexureAngle::Coordinate(_)) {
-                continue;
-            }
             out.push(Candidate {
                 cause: "flexure axis misalignment".into(),
                 location: format!("flexure {} tilted about {name}", flexure.name),

@@ -18,7 +18,8 @@ use mech_codegen::ir::transform::{
     LATERAL_STIFFNESS_FACTOR,
 };
 use mech_codegen::ir::{
-    self, ClosureKind, Dimension, Expr, FlexureAngle, Function, Load, Motion, Param, Vec3,
+    self, AxisAngle, ClosureKind, Dimension, Expr, FlexureAngle, Function, Load, Motion, Param,
+    Vec3,
 };
 use mech_codegen::sym::Number;
 use mech_codegen::Compiled;
@@ -44,9 +45,9 @@ pub enum Extension {
     /// every other hinge compliant off its axis. New parameters: [`TWIST_FACTOR`],
     /// [`OFF_AXIS_COMPLIANCE`].
     Twist(Vec<(String, usize)>),
-    /// A flexure's bending axis tilted by a small angle (fabrication) about a coordinate axis
-    /// of its frame perpendicular to it, every hinge compliant off its axis so the loops take
-    /// up the misfit. New parameters: [`MISALIGNMENT`], [`OFF_AXIS_COMPLIANCE`].
+    /// A flexure's bending axis tilted by a small angle (fabrication; a rotation of the whole
+    /// hinge about a coordinate axis of its frame perpendicular to it), pins and loop closures,
+    /// every hinge compliant off its axis so the loops take up the misfit. New parameters: [`MISALIGNMENT`], [`OFF_AXIS_COMPLIANCE`].
     Misalignment { flexure: String, about: usize },
     /// The actuator along this slider coordinate sits on a compliant base (a spring in series
     /// with its own stiffness). New parameter: [`BASE_COMPLIANCE`].
@@ -227,8 +228,14 @@ fn compliant_off_axis(
     Ok(())
 }
 
-/// Tilts `name`'s bending axis `a` by the fitted angle α about the coordinate axis `p`:
-/// `a cos α + p sin α` (a unit vector for `p ⊥ a`). At α = 0 it is the base model.
+/// Tilts `name`'s bending axis `a` by the fitted angle α about the coordinate axis `p` (a
+/// rotation about `p`, so `a` leans towards `p × a`). At α = 0 it is the base model.
+///
+/// A pin's axis and its off-axis axes turn by Rodrigues' formula ([`rotate`]). A loop
+/// closure's axis is read as a constant by the closure's geometry (its reference and twist
+/// directions are built ⊥ it): instead both interframes turn by α about `p` (the last
+/// rotation of each, so `p` is in the axis's own coordinates), which tilts the axis and every
+/// direction tied to it alike and leaves the closure unstrained.
 fn misalign(model: &mut ir::Model, name: &str, about: usize) -> Result<(), String> {
     let angle = append_param(
         model,
@@ -241,7 +248,7 @@ fn misalign(model: &mut ir::Model, name: &str, about: usize) -> Result<(), Strin
     let flexure = find_flexure(model, name)?;
     let all: Vec<ir::Flexure> = model.flexures.clone();
     compliant_off_axis(model, all, &stiff)?;
-    let tilt = |axis: &mut Vec3| -> Result<(), String> {
+    let tiltable = |axis: &Vec3| -> Result<[f64; 3], String> {
         let a = constant_direction(axis)
             .ok_or_else(|| format!("flexure `{name}`: its axis is not a constant direction"))?;
         if a[about].abs() > 0.1 {
@@ -250,41 +257,91 @@ fn misalign(model: &mut ir::Model, name: &str, about: usize) -> Result<(), Strin
                 AXES[about]
             ));
         }
-        let (cos, sin) = (
-            Expr::Call(Function::Cos, vec![angle.clone()]),
-            Expr::Call(Function::Sin, vec![angle.clone()]),
-        );
-        for (i, component) in axis.iter_mut().enumerate() {
-            let along = scaled(&cos, &Expr::Number(Number::Float(a[i])));
-            *component = if i == about {
-                Expr::Add(Box::new(along), Box::new(sin.clone()))
-            } else {
-                along
-            };
-        }
-        Ok(())
+        Ok(a)
     };
     match flexure.angle {
         FlexureAngle::Coordinate(coordinate) => {
-            let frame = model
+            // The hinge's own axis and the off-axis axes `compliant_off_axis` inserted above
+            // it turn together: R(Ra, q) = R·R(a, q)·Rᵀ, so the chain of the three is the
+            // aligned hinge conjugated by R — the whole hinge tilted, its springs still
+            // about its own (tilted) directions.
+            let hinge_frames: Vec<_> = model
                 .frames
                 .iter()
-                .find_map(|(handle, frame)| match &frame.motion {
-                    Motion::Revolute { coordinate: c, .. } if *c == coordinate => Some(handle),
+                .filter_map(|(handle, frame)| match &frame.motion {
+                    Motion::Revolute { coordinate: c, .. } => {
+                        let coordinate_name = &model.coordinates[*c].name;
+                        let own = *c == coordinate;
+                        let off_axis = [format!("{name}_off_axis"), format!("{name}_lateral")]
+                            .contains(coordinate_name);
+                        (own || off_axis).then_some((handle, own))
+                    }
                     _ => None,
                 })
-                .ok_or_else(|| format!("flexure `{name}` is not on a pin joint"))?;
-            match &mut model.frames.get_mut(frame).motion {
-                Motion::Revolute { axis, .. } => tilt(axis),
-                _ => unreachable!("found as revolute"),
+                .collect();
+            if !hinge_frames.iter().any(|&(_, own)| own) {
+                return Err(format!("flexure `{name}` is not on a pin joint"));
             }
+            for (frame, own) in hinge_frames {
+                let Motion::Revolute { axis, .. } = &mut model.frames.get_mut(frame).motion else {
+                    unreachable!("found as revolute")
+                };
+                if own {
+                    tiltable(axis)?;
+                }
+                rotate(axis, about, &angle).ok_or_else(|| {
+                    format!("flexure `{name}`: an axis is not a constant direction")
+                })?;
+            }
+            Ok(())
         }
         FlexureAngle::Loop(index) => match model.loops.get_mut(index).map(|c| &mut c.kind) {
-            Some(ClosureKind::Revolute { axis, .. }) => tilt(axis),
+            Some(ClosureKind::Revolute {
+                axis,
+                parent_orientation,
+                child_orientation,
+                ..
+            }) => {
+                tiltable(axis)?;
+                for orientation in [parent_orientation, child_orientation] {
+                    orientation.push(AxisAngle {
+                        axis: unit(about),
+                        angle: angle.clone(),
+                    });
+                }
+                Ok(())
+            }
             _ => Err(format!("flexure `{name}` is not on a revolute loop")),
         },
         _ => Err(format!("flexure `{name}` is not a bending hinge")),
     }
+}
+
+/// `axis` (a constant direction `a`) turned by `angle` about the coordinate axis `about`
+/// (`p`), by Rodrigues' formula `a cos α + (p × a) sin α + p (p·a)(1 − cos α)`; `None` if `a`
+/// is not constant.
+fn rotate(axis: &mut Vec3, about: usize, angle: &Expr) -> Option<()> {
+    let a = constant_direction(axis)?;
+    let p = [0, 1, 2].map(|i| if i == about { 1.0 } else { 0.0 });
+    let p_cross_a = [
+        p[1] * a[2] - p[2] * a[1],
+        p[2] * a[0] - p[0] * a[2],
+        p[0] * a[1] - p[1] * a[0],
+    ];
+    let number = |x: f64| Expr::Number(Number::Float(x));
+    let cos = Expr::Call(Function::Cos, vec![angle.clone()]);
+    let sin = Expr::Call(Function::Sin, vec![angle.clone()]);
+    let one_minus_cos = Expr::Sub(Box::new(Expr::one()), Box::new(cos.clone()));
+    for (i, component) in axis.iter_mut().enumerate() {
+        *component = Expr::Add(
+            Box::new(Expr::Add(
+                Box::new(scaled(&cos, &number(a[i]))),
+                Box::new(scaled(&sin, &number(p_cross_a[i]))),
+            )),
+            Box::new(scaled(&one_minus_cos, &number(p[i] * a[about]))),
+        );
+    }
+    Some(())
 }
 
 /// The actuator (force source and series spring) on slider coordinate `slider`: indices
