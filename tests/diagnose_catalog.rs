@@ -1,15 +1,18 @@
 //! An effect hidden in the data (issue 7's test): "measured" data made with mech's own
-//! simulator from the HAMR-VI model plus one hidden effect of the catalog, drawn by a seeded
-//! random choice at a realistic size, with noise. Only the data and the base model go to
-//! `diagnose`; the top-ranked candidate must name the effect and where it acts, recover its
-//! parameter within a stated tolerance, and show a held-out gain.
+//! simulator from the HAMR-VI model plus one hidden effect of the catalog — the entry drawn
+//! by a seeded random choice ([`draw`]), then its size, location and the noise from the same
+//! generator. Only the data and the base model go to `diagnose`; the top-ranked candidate
+//! must name the effect and where it acts, recover its parameter within a stated tolerance,
+//! and show a held-out gain (each entry's case states its own checks). The seeds run every
+//! entry (checked); clean data and an effect no entry covers are in `tests/diagnose.rs`; the
+//! paper's story closes the file.
 
 mod common;
 
 use std::path::{Path, PathBuf};
 
 use common::Rng;
-use mech::diagnose::candidates::{diagnose, Diagnosis, Holdout, Verdict};
+use mech::diagnose::candidates::{diagnose, Diagnosis, Holdout, Trial, Verdict};
 use mech::diagnose::data::MeasuredData;
 use mech::diagnose::experiment::{self, Experiment};
 use mech::diagnose::extend::{
@@ -58,7 +61,7 @@ fn summary(d: &Diagnosis) -> String {
         "verdict {:?}; base χ² {:.1}/{:.1}\n",
         d.verdict, d.base.train_chi2, d.base.holdout_chi2
     );
-    let line = |t: &mech::diagnose::candidates::Trial| {
+    let line = |t: &Trial| {
         format!(
             "  {} at {}: χ² {:.1}/{:.1} AICc {:.1} {:?}\n",
             t.cause, t.location, t.train_chi2, t.holdout_chi2, t.aicc, t.parameters
@@ -139,12 +142,7 @@ fn blocked_swing_force(leg: &Leg) -> f64 {
 /// twists about y with Eq. 8's stiffness, the other hinges' off-axis compliance drawn so that
 /// the blocked swing force falls by 30–50 %. The diagnosis must name the twist of fb3 about y
 /// and recover the off-axis compliance within 30 %.
-#[test]
-fn a_hidden_twist_is_found_in_swing_force_data() {
-    let dir = scratch_dir("hidden_twist");
-    // (Seed 71 drew noise whose 8 held-out values give χ²/value 2.5 at the true model itself,
-    // at the edge of the noise band: a 1 % tail event, not a test of the diagnosis.)
-    let mut rng = Rng::new(72);
+fn twist_case(dir: &Path, rng: &mut Rng) {
     let base = blocked_swing_force(&Leg::open(&hamr_spec()).unwrap());
     let mut truth = open_leg(&hamr_spec(), &Extension::Twist(vec![("fb3".into(), 1)])).unwrap();
     set_param(&mut truth, TWIST_FACTOR, 1.0);
@@ -155,8 +153,8 @@ fn a_hidden_twist_is_found_in_swing_force_data() {
         (0.3..=0.5).contains(&loss),
         "the generator's twist removes {loss}"
     );
-    let (experiment, text) = force_case(&dir, &truth, Dof::Swing, 0.3, 0.3, &mut rng);
-    let d = diagnose_data(&dir, &experiment, &text);
+    let (experiment, text) = force_case(dir, &truth, Dof::Swing, 0.3, 0.3, rng);
+    let d = diagnose_data(dir, &experiment, &text);
     let best = d.ranked.first().expect("a ranked candidate");
     assert_eq!(
         (best.cause.as_str(), best.location.as_str()),
@@ -213,14 +211,11 @@ fn top(d: &Diagnosis, cause: &str, location: &str, parameter: &str) -> f64 {
 /// An unmodelled off-axis load: the sensor pushes on the foot along y with 20–40 % of the
 /// on-axis force (the seed's ~30 %), the experiment file says none. Lift force data; the
 /// fraction recovered within 0.05.
-#[test]
-fn a_hidden_off_axis_load_is_found_in_lift_force_data() {
-    let dir = scratch_dir("hidden_off_axis");
-    let mut rng = Rng::new(5);
+fn off_axis_load_case(dir: &Path, rng: &mut Rng) {
     let fraction = rng.uniform(0.2, 0.4);
     let truth = Leg::open(&hamr_spec()).unwrap();
-    let (experiment, text) = force_case(&dir, &truth, Dof::Lift, fraction, 0.0, &mut rng);
-    let d = diagnose_data(&dir, &experiment, &text);
+    let (experiment, text) = force_case(dir, &truth, Dof::Lift, fraction, 0.0, rng);
+    let d = diagnose_data(dir, &experiment, &text);
     let fitted = top(
         &d,
         "unmodelled off-axis load at the foot",
@@ -232,15 +227,12 @@ fn a_hidden_off_axis_load_is_found_in_lift_force_data() {
 
 /// A compliant actuator base: the lift actuator's base compliance 0.2–0.5 of its own (force
 /// and stroke fall by 1/(1 + c)). Lift force data; c recovered within 15 %.
-#[test]
-fn a_hidden_actuator_base_compliance_is_found_in_lift_force_data() {
-    let dir = scratch_dir("hidden_base");
-    let mut rng = Rng::new(9);
+fn base_compliance_case(dir: &Path, rng: &mut Rng) {
     let compliance = rng.uniform(0.2, 0.5);
     let mut truth = open_leg(&hamr_spec(), &Extension::BaseCompliance("qlact".into())).unwrap();
     set_param(&mut truth, BASE_COMPLIANCE, compliance);
-    let (experiment, text) = force_case(&dir, &truth, Dof::Lift, 0.0, 0.0, &mut rng);
-    let d = diagnose_data(&dir, &experiment, &text);
+    let (experiment, text) = force_case(dir, &truth, Dof::Lift, 0.0, 0.0, rng);
+    let d = diagnose_data(dir, &experiment, &text);
     let fitted = top(
         &d,
         "actuator base compliance",
@@ -259,10 +251,7 @@ fn a_hidden_actuator_base_compliance_is_found_in_lift_force_data() {
 /// points of a lift sweep to 225 V, foot z with 2 µm noise
 /// (its sign is not observable: a tilt acts to second order); the assertions say what these
 /// data can and cannot tell.
-#[test]
-fn a_hidden_misalignment_is_found_in_a_lift_sweep() {
-    let dir = scratch_dir("hidden_misalignment");
-    let mut rng = Rng::new(13);
+fn misalignment_case(dir: &Path, rng: &mut Rng) {
     let angle = rng.uniform(1.0, 2.0).to_radians();
     let extension = Extension::Misalignment {
         flexure: "l2".into(),
@@ -272,7 +261,7 @@ fn a_hidden_misalignment_is_found_in_a_lift_sweep() {
     set_param(&mut truth, MISALIGNMENT, angle);
     set_param(&mut truth, OFF_AXIS_COMPLIANCE, 1e-4);
     let experiment = experiment_in(
-        &dir,
+        dir,
         "kind = \"quasi_static\"\ntitle = \"lift sweep\"\n\
          outputs = [\"foot.z\"]\nnoise = [\"2 um\"]\n",
     );
@@ -282,10 +271,10 @@ fn a_hidden_misalignment_is_found_in_a_lift_sweep() {
         let volts = 225.0 * k as f64 / 16.0;
         let inputs = truth.inputs(volts, 0.0);
         q = truth.equilibrium(&q, &inputs, &[]).unwrap().q;
-        let z = truth.foot_at(&q, &inputs)[2] + 2e-6 * normal(&mut rng);
+        let z = truth.foot_at(&q, &inputs)[2] + 2e-6 * normal(rng);
         text += &format!("{volts}, {}\n", z * 1e3);
     }
-    let d = diagnose_data(&dir, &experiment, &text);
+    let d = diagnose_data(dir, &experiment, &text);
     // Measured: a tilt about y or about z of l2 fit these data equally (AICc within 2: the
     // diagnosis reports them tied), and the tilt and the hinges' off-axis compliance act
     // through one combination (a stiffening ~α²/c), so neither is recovered alone from a
@@ -371,35 +360,32 @@ fn bode_case(
 
 /// A mass on the lift actuator's tip, 10–20 mg (a bimorph's effective tip mass is about a
 /// quarter of its ~60 mg), in Bode data of both channels (2 %, 1°). Measured: at this size
-/// the lift resonance moves by less than these data resolve (the leg's inertia reflected
-/// through the transmission dominates the actuator's effective mass), so the diagnosis must
-/// not invent a cause: "no significant discrepancy", with the tip-mass candidate's own fit
-/// consistent with the truth within 3 standard errors.
-#[test]
-fn a_realistic_tip_mass_is_below_what_bode_data_resolve() {
-    let dir = scratch_dir("hidden_tip_mass");
-    let mut rng = Rng::new(17);
+/// the lift resonance moves by about what these data resolve (the leg's inertia reflected
+/// through the transmission dominates the actuator's effective mass). So the diagnosis must
+/// not name a confident wrong cause: either "no significant discrepancy", or (seen at
+/// 17.8 mg: the base model's χ² 1.40 per value against a band of 1.39) the tip mass is among
+/// the causes the data support equally, reported as a tie. Either way the tip-mass
+/// candidate's own fit is consistent with the truth within 3 standard errors.
+fn tip_mass_case(dir: &Path, rng: &mut Rng) {
     let mass = rng.uniform(10e-6, 20e-6);
     let mut truth = open_leg(&hamr_spec(), &Extension::TipMass("qlact".into())).unwrap();
     set_param(&mut truth, TIP_MASS, mass);
-    let (experiment, text) = bode_case(
-        &dir,
-        &truth,
-        mech_runtime::FlexureDamping::Hysteretic,
-        &mut rng,
-    );
-    let d = diagnose_data(&dir, &experiment, &text);
-    assert_eq!(
-        d.verdict,
-        Verdict::NoSignificantDiscrepancy,
-        "{}",
-        summary(&d)
-    );
+    let (experiment, text) = bode_case(dir, &truth, mech_runtime::FlexureDamping::Hysteretic, rng);
+    let d = diagnose_data(dir, &experiment, &text);
+    let is_tip_mass =
+        |t: &&Trial| t.cause == "actuator tip mass" && t.location == "actuator along qlact";
+    if d.verdict != Verdict::NoSignificantDiscrepancy {
+        assert!(
+            d.ranked[..d.tied.max(1)].iter().any(|t| is_tip_mass(&t)),
+            "a cause other than the tip mass stands alone (mass {mass})\n{}",
+            summary(&d)
+        );
+    }
     let trial = d
         .ranked
         .iter()
         .chain(&d.inert)
-        .find(|t| t.cause == "actuator tip mass" && t.location == "actuator along qlact")
+        .find(is_tip_mass)
         .expect("the tip-mass candidate");
     let (_, _, fitted, se) = trial
         .parameters
@@ -417,15 +403,12 @@ fn a_realistic_tip_mass_is_below_what_bode_data_resolve() {
 /// 8 quasi-static points of the
 /// paper's 1 Hz, 225 V drive (swing 90° ahead of lift), foot x, y, z with 2 µm noise; the
 /// preload recovered within 10 µm.
-#[test]
-fn a_hidden_preload_is_found_in_a_quasi_static_trajectory() {
-    let dir = scratch_dir("hidden_preload");
-    let mut rng = Rng::new(23);
+fn preload_case(dir: &Path, rng: &mut Rng) {
     let preload = -50e-6;
     let mut truth = open_leg(&hamr_spec(), &Extension::Preload).unwrap();
     set_param(&mut truth, TIP_PRELOAD, preload);
     let experiment = experiment_in(
-        &dir,
+        dir,
         "kind = \"quasi_static\"\ntitle = \"1 Hz trajectory\"\n\
          outputs = [\"foot.x\", \"foot.y\", \"foot.z\"]\nnoise = [\"2 um\", \"2 um\", \"2 um\"]\n",
     );
@@ -439,13 +422,236 @@ fn a_hidden_preload_is_found_in_a_quasi_static_trajectory() {
         let foot = truth.foot_at(&q, &inputs);
         let noisy: Vec<String> = foot
             .iter()
-            .map(|x| format!("{}", (x + 2e-6 * normal(&mut rng)) * 1e3))
+            .map(|x| format!("{}", (x + 2e-6 * normal(rng)) * 1e3))
             .collect();
         text += &format!("{lift}, {swing}, {}\n", noisy.join(", "));
     }
-    let d = diagnose_data(&dir, &experiment, &text);
+    let d = diagnose_data(dir, &experiment, &text);
     let fitted = top(&d, "actuator tip preload", "every actuator", TIP_PRELOAD);
     assert!((fitted - preload).abs() < 10e-6, "{fitted} vs {preload}");
+}
+
+/// A flexure's stiffness 20 % off (the issue's size): a flexure drawn by the generator made
+/// 20 % stiffer, in Bode data of both channels. The diagnosis must name a stiffness change,
+/// with the true flexure at the top or among the candidates the data support equally (then it
+/// says so), and recover the factor (within 5 % and 4σ) when the true flexure is on top. If
+/// it finds no significant discrepancy, the change must be below what these data resolve for
+/// that flexure (its candidate inert, or 1.2 × nominal within 3σ of its own fit).
+fn stiffness_case(dir: &Path, rng: &mut Rng) {
+    let flexures = ["s1", "s2", "s3", "l1", "l2", "l3", "fb1", "fb2", "fb3"];
+    let pick = flexures[rng.index(flexures.len())];
+    let name = format!("k_{pick}");
+    let mut truth = Leg::open(&hamr_spec()).unwrap();
+    let nominal = truth.param(&name).unwrap();
+    set_param(&mut truth, &name, 1.2 * nominal);
+    let damping = mech_runtime::FlexureDamping::Hysteretic;
+    let (experiment, text) = bode_case(dir, &truth, damping, rng);
+    let d = diagnose_data(dir, &experiment, &text);
+    let location = format!("flexure {pick}");
+    if d.verdict == Verdict::NoSignificantDiscrepancy {
+        let unresolved = d.inert.iter().any(|t| t.location == location)
+            || d.ranked.iter().any(|t| {
+                t.location == location
+                    && t.parameters
+                        .first()
+                        .is_some_and(|&(_, nominal, _, se)| 0.2 * nominal < 3.0 * se)
+            });
+        assert!(
+            unresolved,
+            "{name}: no discrepancy found, yet resolvable\n{}",
+            summary(&d)
+        );
+        return;
+    }
+    let supported = &d.ranked[..d.tied.max(1)];
+    assert!(
+        supported
+            .iter()
+            .any(|t| t.location == location && t.cause == "flexure stiffness off by a factor"),
+        "{name}\n{}",
+        summary(&d)
+    );
+    let best = &d.ranked[0];
+    if best.location == location {
+        let (_, nominal, value, se) = best.parameters[0];
+        assert!(
+            (value / nominal - 1.2).abs() < 0.05 && (value - 1.2 * nominal).abs() < 4.0 * se,
+            "{name}: factor {} ± {}",
+            value / nominal,
+            se / nominal
+        );
+    }
+}
+
+/// A loss factor that lowers the resonance Q by 27–38 % (the issue's 30 %; Q ∝ 1/η): η drawn
+/// from 0.11–0.13 instead of the model's 0.08, in Bode data of both channels. The diagnosis
+/// must put a loss-factor cause on top (the frequency-dependent one nests the constant one:
+/// they may tie), recover η within 0.01 and 3σ, and show the held-out gain.
+fn loss_factor_case(dir: &Path, rng: &mut Rng) {
+    let eta = rng.uniform(0.11, 0.13);
+    let mut truth = Leg::open(&hamr_spec()).unwrap();
+    set_param(&mut truth, "eta", eta);
+    let damping = mech_runtime::FlexureDamping::Hysteretic;
+    let (experiment, text) = bode_case(dir, &truth, damping, rng);
+    let d = diagnose_data(dir, &experiment, &text);
+    assert_eq!(d.verdict, Verdict::Explained, "{}", summary(&d));
+    let supported = &d.ranked[..d.tied.max(1)];
+    assert!(
+        supported.iter().all(|t| t.cause.contains("loss factor")),
+        "{}",
+        summary(&d)
+    );
+    let constant = supported
+        .iter()
+        .find(|t| t.cause == "loss factor differs" && t.location == "all flexures")
+        .unwrap_or_else(|| panic!("the constant loss factor is not supported\n{}", summary(&d)));
+    let (_, _, value, se) = constant.parameters[0];
+    assert!(
+        (value - eta).abs() < 3.0 * se && (value - eta).abs() < 0.01,
+        "η = {value} ± {se} vs {eta}"
+    );
+    // "Explained" already says the held-out residual is down to the noise; with every third
+    // frequency held out, the rows near the resonances (where the loss factor shows) fall
+    // mostly in the training set, so the held-out gain itself is modest (seen: 76 → 42).
+    assert!(
+        constant.holdout_chi2 < d.base.holdout_chi2,
+        "{}",
+        summary(&d)
+    );
+}
+
+/// The loss factor grows with frequency, η(f) = 0.08·(f/10 Hz)^α with α drawn from
+/// 0.12–0.22 (the seed: η measured at 1–10 Hz; at the ~80 Hz lift resonance α = 0.17 lowers
+/// Q by about 30 %), Bode data of both channels from 1 to 150 Hz. The diagnosis must prefer
+/// the frequency-dependent loss factor to a constant one and recover the exponent within 3σ
+/// (σ at least 0.01).
+fn frequency_dependent_loss_case(dir: &Path, rng: &mut Rng) {
+    let exponent = rng.uniform(0.12, 0.22);
+    let truth = Leg::open(&hamr_spec()).unwrap();
+    let damping = mech_runtime::FlexureDamping::HystereticPowerLaw {
+        exponent,
+        reference_hz: 10.0,
+    };
+    let (experiment, text) = bode_case(dir, &truth, damping, rng);
+    let d = diagnose_data(dir, &experiment, &text);
+    assert_eq!(d.verdict, Verdict::Explained, "{}", summary(&d));
+    let best = &d.ranked[0];
+    assert_eq!(
+        (best.cause.as_str(), best.location.as_str()),
+        ("frequency-dependent loss factor", "all flexures"),
+        "{}",
+        summary(&d)
+    );
+    // A held-out gain, modest for the reason the loss-factor case gives (seen: 72 → 51).
+    assert!(best.holdout_chi2 < d.base.holdout_chi2, "{}", summary(&d));
+    let (_, _, fitted, se) = best
+        .parameters
+        .iter()
+        .find(|p| p.0 == "loss_exponent")
+        .cloned()
+        .unwrap();
+    assert!(
+        (fitted - exponent).abs() < 3.0 * se.max(0.01),
+        "α = {fitted} ± {se} vs {exponent}"
+    );
+}
+
+// ---------------------------------------------------------------- the generator
+
+/// The catalog's entries, each shown by the experiment its case builds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Entry {
+    Twist,
+    OffAxisLoad,
+    BaseCompliance,
+    Misalignment,
+    TipMass,
+    Preload,
+    Stiffness,
+    LossFactor,
+    FrequencyDependentLoss,
+}
+
+const CATALOG: [Entry; 9] = [
+    Entry::Twist,
+    Entry::OffAxisLoad,
+    Entry::BaseCompliance,
+    Entry::Misalignment,
+    Entry::TipMass,
+    Entry::Preload,
+    Entry::Stiffness,
+    Entry::LossFactor,
+    Entry::FrequencyDependentLoss,
+];
+
+/// The generator's choice: the entry is a seeded random choice from the catalog; the same
+/// generator then draws the effect's size (and its location, where the entry has several)
+/// and the noise.
+fn draw(seed: u64) -> (Entry, Rng) {
+    let mut rng = Rng::new(seed);
+    let entry = CATALOG[rng.index(CATALOG.len())];
+    (entry, rng)
+}
+
+/// Builds the data with the effect `seed` draws, hides everything but the CSV and the base
+/// model, diagnoses, and checks what the entry's case says.
+fn hidden_effect(seed: u64) {
+    let (entry, mut rng) = draw(seed);
+    eprintln!("seed {seed}: {entry:?}");
+    let dir = scratch_dir(&format!("hidden_effect_{seed}"));
+    let case = match entry {
+        Entry::Twist => twist_case,
+        Entry::OffAxisLoad => off_axis_load_case,
+        Entry::BaseCompliance => base_compliance_case,
+        Entry::Misalignment => misalignment_case,
+        Entry::TipMass => tip_mass_case,
+        Entry::Preload => preload_case,
+        Entry::Stiffness => stiffness_case,
+        Entry::LossFactor => loss_factor_case,
+        Entry::FrequencyDependentLoss => frequency_dependent_loss_case,
+    };
+    case(&dir, &mut rng);
+}
+
+/// One test per seed, and `SEEDS` for the coverage check.
+macro_rules! hidden_effect_tests {
+    ($($name:ident: $seed:literal),* $(,)?) => {
+        const SEEDS: &[u64] = &[$($seed),*];
+        $(
+            #[test]
+            fn $name() {
+                hidden_effect($seed)
+            }
+        )*
+    };
+}
+
+// The first seeds, counting from 1, that draw each entry (1 → preload, 3 → off-axis load,
+// 4 → misalignment, 6 → stiffness, 10 → twist, 11 → base compliance, 15 → tip mass,
+// 22 → loss factor, 23 → frequency-dependent loss factor).
+hidden_effect_tests!(
+    hidden_effect_seed_1: 1,
+    hidden_effect_seed_3: 3,
+    hidden_effect_seed_4: 4,
+    hidden_effect_seed_6: 6,
+    hidden_effect_seed_10: 10,
+    hidden_effect_seed_11: 11,
+    hidden_effect_seed_15: 15,
+    hidden_effect_seed_22: 22,
+    hidden_effect_seed_23: 23,
+);
+
+/// The seeds above run every entry of the catalog (a change of the generator that leaves one
+/// out fails here, not silently).
+#[test]
+fn the_seeds_draw_every_catalog_entry() {
+    let drawn: Vec<Entry> = SEEDS.iter().map(|&seed| draw(seed).0).collect();
+    for entry in CATALOG {
+        assert!(
+            drawn.contains(&entry),
+            "{entry:?} is drawn by none of {SEEDS:?}: {drawn:?}"
+        );
+    }
 }
 
 // ---------------------------------------------------------------- the paper's story

@@ -76,6 +76,10 @@ impl Rng {
         z ^= z >> 31;
         lo + (hi - lo) * (z >> 11) as f64 / (1u64 << 53) as f64
     }
+    /// Uniform in `0..n` (`n > 0`).
+    pub fn index(&mut self, n: usize) -> usize {
+        (self.uniform(0.0, n as f64) as usize).min(n - 1)
+    }
     pub fn vector(&mut self, n: usize, lo: f64, hi: f64) -> Vec<f64> {
         (0..n).map(|_| self.uniform(lo, hi)).collect()
     }
