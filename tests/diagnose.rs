@@ -259,4 +259,31 @@ fn diagnose_command_writes_the_page_and_the_summary() {
             .unwrap();
     assert_eq!(json["verdict"], "Explained");
     assert!(json["summary"].as_str().unwrap().contains("loss factor"));
+    // The features, read the same way off the data and both models: the best candidate's
+    // resonance and largest gain are closer to the data's than the base model's (the data
+    // have η = 0.12 against the model's 0.08), and the held-out RMS falls in both series.
+    assert!(html.contains("Features, read the same way"));
+    let feature = |name: &str| {
+        json["features"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|f| f["name"] == name)
+            .unwrap_or_else(|| panic!("no feature {name}: {}", json["features"]))
+            .clone()
+    };
+    for name in ["resonance frequency", "largest gain"] {
+        let f = feature(name);
+        let [data, base, best] = ["data", "base", "best"].map(|k| f[k].as_f64().unwrap());
+        assert!(
+            (best - data).abs() < 0.5 * (base - data).abs(),
+            "{name}: data {data}, base {base}, best {best}"
+        );
+    }
+    for series in json["residual_rms_held_out"].as_array().unwrap() {
+        assert!(
+            series["best"].as_f64() < series["base"].as_f64(),
+            "{series}"
+        );
+    }
 }

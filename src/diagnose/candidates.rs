@@ -406,6 +406,8 @@ pub struct Diagnosis {
     pub observations: super::experiment::Observations,
     /// The screening of the data before fitting (pendulum traces), with its flags.
     pub screening: Option<super::pendulum::Screening>,
+    /// Per observed value: fitted (true) or held out (false).
+    pub train: Vec<bool>,
 }
 
 /// Runs the base model and every candidate (in parallel) on `data`.
@@ -593,6 +595,7 @@ pub fn diagnose_causes(
         tied,
         observations,
         screening,
+        train,
     })
 }
 

@@ -9,6 +9,7 @@ use serde_json::json;
 
 use super::data::MeasuredData;
 use super::experiment::{self, Experiment};
+use super::features::{features, series_rms, Feature, SeriesResidual};
 use super::fit::{fit, parameters, FitReport, FitRequest};
 use super::pendulum::{screen_experiment, Screening};
 use crate::experiments::leg::Leg;
@@ -373,6 +374,8 @@ pub fn diagnose_command(args: &DiagnoseArgs) -> Result<(), String> {
         ),
         _ => "unexplained: the residual is above the noise and no candidate explains it".to_string(),
     };
+    let comparison = Comparison::new(&experiment, &d);
+    comparison.print();
     println!("\nverdict: {verdict}");
     std::fs::create_dir_all(&args.out_dir)
         .map_err(|e| format!("cannot create {}: {e}", args.out_dir.display()))?;
@@ -402,12 +405,15 @@ pub fn diagnose_command(args: &DiagnoseArgs) -> Result<(), String> {
         "combined": d.combined.as_ref().map(trial),
         "second_round": d.second_round.iter().map(trial).collect::<Vec<_>>(),
         "inert": d.inert.iter().map(trial).collect::<Vec<_>>(),
+        "best": comparison.best_label,
+        "features": comparison.features_json(),
+        "residual_rms_held_out": comparison.rms_json(),
     });
     let path = args.out_dir.join("diagnosis.json");
     let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
     output::write_atomic(&path, text.as_bytes())
         .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-    let html = diagnosis_page(args, &experiment, &d, &verdict, path)?;
+    let html = diagnosis_page(args, &experiment, &d, &verdict, &comparison, path)?;
     println!("wrote {} and its data", html.display());
     Ok(())
 }
@@ -419,6 +425,7 @@ fn diagnosis_page(
     experiment: &Experiment,
     d: &super::candidates::Diagnosis,
     verdict: &str,
+    comparison: &Comparison,
     json_path: PathBuf,
 ) -> Result<PathBuf, String> {
     use crate::experiments::{report, Outcome, Table};
@@ -457,7 +464,7 @@ fn diagnosis_page(
              its χ² per held-out value is at most {:.2}. Verdict: {verdict}.",
             d.train_values, d.holdout_values, args.holdout, d.noise_band
         ),
-        tables: vec![ranking],
+        tables: vec![ranking, comparison.features_table(), comparison.rms_table()],
         files: vec![args.data.clone(), json_path],
         ..Outcome::default()
     };
@@ -514,4 +521,164 @@ fn diagnosis_page(
     output::write_atomic(&path, page.as_bytes())
         .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     Ok(path)
+}
+
+/// What the data show against what the base model and the best candidate predict: the
+/// features of the response ([`super::features`]), each read the same way off the data and
+/// off both predictions, and the residual RMS per series on the held-out values.
+struct Comparison {
+    /// `cause at location` of the best candidate (the combined pair when there is one).
+    best_label: Option<String>,
+    /// Per feature: the data's, the base model's, the best candidate's.
+    features: Vec<(Feature, Feature, Option<Feature>)>,
+    /// Held-out residual RMS per series: base model (`before`) and best (`after`).
+    rms: Vec<SeriesResidual>,
+}
+
+impl Comparison {
+    fn new(experiment: &Experiment, d: &super::candidates::Diagnosis) -> Comparison {
+        let best = d
+            .combined
+            .as_ref()
+            .or(d.ranked.first())
+            .filter(|t| t.predicted.len() == d.observations.values.len());
+        let of = |values: &[f64]| features(experiment, &d.observations, values);
+        let (data, base) = (of(&d.observations.values), of(&d.base.predicted));
+        let best_features = best.map(|t| of(&t.predicted));
+        let features = data
+            .into_iter()
+            .zip(base)
+            .enumerate()
+            .map(|(k, (data, base))| {
+                let best = best_features.as_ref().and_then(|f| f.get(k).cloned());
+                (data, base, best)
+            })
+            .collect();
+        let held_out = |k: usize| !d.train.get(k).copied().unwrap_or(true);
+        let rms = match best {
+            Some(best) => series_rms(
+                &d.observations,
+                &d.base.predicted,
+                &best.predicted,
+                &held_out,
+            ),
+            None => series_rms(
+                &d.observations,
+                &d.base.predicted,
+                &d.base.predicted,
+                &held_out,
+            ),
+        };
+        Comparison {
+            best_label: best.map(|t| format!("{} at {}", t.cause, t.location)),
+            features,
+            rms,
+        }
+    }
+
+    /// `value (+x.x %)`: a model's feature and its deviation from the data's.
+    fn against(model: &Feature, data: &Feature) -> String {
+        match (model.value, data.value) {
+            (Some(m), Some(v)) if v != 0.0 => {
+                format!("{} ({:+.1} %)", model.display(), 100.0 * (m / v - 1.0))
+            }
+            _ => model.display(),
+        }
+    }
+
+    fn rows(&self) -> Vec<Vec<String>> {
+        self.features
+            .iter()
+            .map(|(data, base, best)| {
+                vec![
+                    data.label(),
+                    data.display(),
+                    Self::against(base, data),
+                    best.as_ref()
+                        .map_or("-".into(), |best| Self::against(best, data)),
+                ]
+            })
+            .collect()
+    }
+
+    fn print(&self) {
+        if self.features.is_empty() {
+            return;
+        }
+        println!(
+            "\nfeatures, read the same way off the data and each model (best: {}):",
+            self.best_label.as_deref().unwrap_or("none")
+        );
+        println!(
+            "  {:<36} {:>12} {:>22} {:>22}",
+            "feature", "data", "base model", "best"
+        );
+        for row in self.rows() {
+            println!(
+                "  {:<36} {:>12} {:>22} {:>22}",
+                row[0], row[1], row[2], row[3]
+            );
+        }
+        println!("residual RMS on the held-out values (SI units; ln|H| relative):");
+        for r in &self.rms {
+            println!(
+                "  {:<36} base {:.4e}  best {:.4e}  ({:+.1} %)",
+                r.series,
+                r.before,
+                r.after,
+                100.0 * (r.after / r.before - 1.0)
+            );
+        }
+    }
+
+    fn features_json(&self) -> serde_json::Value {
+        let value = |f: &Feature| f.value.map_or(serde_json::Value::Null, |v| json!(v));
+        self.features
+            .iter()
+            .map(|(data, base, best)| {
+                json!({
+                    "name": data.name,
+                    "display_unit": data.unit,
+                    "display_scale": data.scale,
+                    "data": value(data),
+                    "base": value(base),
+                    "best": best.as_ref().map_or(serde_json::Value::Null, value),
+                })
+            })
+            .collect()
+    }
+
+    fn rms_json(&self) -> serde_json::Value {
+        self.rms
+            .iter()
+            .map(|r| json!({"series": r.series, "base": r.before, "best": r.after}))
+            .collect()
+    }
+
+    fn features_table(&self) -> crate::experiments::Table {
+        let mut table = crate::experiments::Table::new(
+            "Features, read the same way off the data and each model (deviation from the data)",
+            &["feature", "data", "base model", "best candidate"],
+        );
+        for row in self.rows() {
+            table.row(row);
+        }
+        table
+    }
+
+    fn rms_table(&self) -> crate::experiments::Table {
+        let mut table = crate::experiments::Table::new(
+            "Residual RMS on the held-out values (SI units; ln|H| relative)",
+            &["series", "base model", "best candidate", "change"],
+        );
+        for r in &self.rms {
+            table.row(vec![
+                r.series.clone(),
+                format!("{:.4e}", r.before),
+                format!("{:.4e}", r.after),
+                format!("{:+.1} %", 100.0 * (r.after / r.before - 1.0)),
+            ]);
+        }
+        table
+    }
 }

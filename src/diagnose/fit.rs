@@ -15,6 +15,8 @@ use mech_runtime::Model;
 
 use super::data::MeasuredData;
 use super::experiment::{Experiment, Extensions, Observations};
+use super::features::series_rms;
+pub use super::features::SeriesResidual;
 use super::lm::{levenberg_marquardt, Difference, FitResult, LmOptions, Parameter};
 use crate::experiments::leg::{Leg, WarmStarts};
 
@@ -134,15 +136,6 @@ pub fn parameters(
         .collect()
 }
 
-/// RMS of the residual of one measured series, before and after the fit (in the series'
-/// SI unit; `ln|H|` is relative).
-#[derive(Debug, Clone)]
-pub struct SeriesResidual {
-    pub series: String,
-    pub before: f64,
-    pub after: f64,
-}
-
 /// Everything `mech fit` reports.
 #[derive(Debug, Clone)]
 pub struct FitReport {
@@ -224,7 +217,7 @@ pub fn fit_values(
         target.apply(leg, &mut extensions, value);
     }
     let after = experiment.predict_warm(leg, data, &observations, &extensions, &mut warm)?;
-    let residuals = series_rms(&observations, &before, &after);
+    let residuals = series_rms(&observations, &before, &after, &|_| true);
     Ok(FitReport {
         title: experiment.title().to_string(),
         observations,
@@ -245,27 +238,4 @@ pub fn residual(predicted: &[f64], observations: &Observations) -> Vec<f64> {
         Some(sigma) => difference.zip(sigma).map(|(d, s)| d / s).collect(),
         None => difference.collect(),
     }
-}
-
-fn series_rms(observations: &Observations, before: &[f64], after: &[f64]) -> Vec<SeriesResidual> {
-    let names = observations.series_names();
-    let rms = |predicted: &[f64], series: &str| {
-        let (sum, count) = predicted
-            .iter()
-            .zip(&observations.values)
-            .zip(&observations.series)
-            .filter(|(_, s)| s.as_str() == series)
-            .fold((0.0, 0usize), |(sum, n), ((p, m), _)| {
-                (sum + (p - m).powi(2), n + 1)
-            });
-        (sum / count.max(1) as f64).sqrt()
-    };
-    names
-        .into_iter()
-        .map(|name| SeriesResidual {
-            series: name.to_string(),
-            before: rms(before, name),
-            after: rms(after, name),
-        })
-        .collect()
 }

@@ -13,6 +13,8 @@
 //! - [`pendulum`]: the flexure pendulum's ring-down (`kind = "pendulum"`) and the screening
 //!   of a decay trace for what no parameter can fit (amplitude-dependent damping, a
 //!   drifting baseline), reported as flags;
+//! - [`features`]: a response (data or prediction) → what a designer reads off it (resonance
+//!   frequency, quality factor, blocked force, …) and the residual RMS per series;
 //! - [`candidates`]: experiment + data + hold-out rule → every catalog candidate fitted and
 //!   ranked on held-out data, and a verdict (`mech diagnose`).
 //!
@@ -23,6 +25,7 @@ pub mod command;
 pub mod data;
 pub mod experiment;
 pub mod extend;
+pub mod features;
 pub mod fit;
 pub mod lm;
 pub mod pendulum;
