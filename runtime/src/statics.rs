@@ -20,8 +20,9 @@
 //! of `F` in the null space of `G`.
 //!
 //! Cost: the model's functions dominate. Per Newton iteration with `dof` tangent directions
-//! and fixtures: 2·dof evaluations of `F` and of the loops' analytic `J` (the stiffness and
-//! the loops' curvature), ~dof² + dof + 1 of the outputs (the fixtures' curvature; 2–4·dof²
+//! and fixtures: dof evaluations of `F` at rest ([`Model::static_forcing`]) and of the loops'
+//! analytic `J` (the stiffness and the loops' curvature, by forward differences; none for
+//! the polishing step, which reuses the last stiffness), ~dof² + dof + 1 of the outputs (the fixtures' curvature; 2–4·dof²
 //! of outputs and loop `φ` with the mixed second differences of `λ·φ` this replaced), 2·nq
 //! of the outputs for the fixtures' rows of `J` at each point, and one `φ` per closing step
 //! (Gauss–Newton with `J` afresh took 2·nq outputs more per step). "Outputs" are those the
@@ -357,7 +358,7 @@ impl<M: Model + ?Sized> Problem<'_, M> {
     /// directions its reactions `G` cannot balance; `W = Z`, `G = J` without side loads):
     /// the stiffness of the reduced equilibrium, curvature of the constraints (`λ·∇²g`)
     /// included. The loops' part of `F + Gᵀλ` is `F + J_loopsᵀλ_loops`, differenced along
-    /// each column of `Z` with the analytic `J` (2·dof evaluations of `F` and `J`); the
+    /// each column of `Z` with the analytic `J`; the
     /// fixtures' part is the curvature of `s = λ_fixtures·g_fixtures`, a function of the
     /// outputs alone, from its Hessian on the span of `Z` and `W` ([`Self::fixture_curvature`]).
     ///

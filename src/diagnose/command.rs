@@ -562,12 +562,19 @@ impl Comparison {
                 &best.predicted,
                 &held_out,
             ),
+            // No candidate: the base model's RMS alone (`after` NaN, shown as `-`).
             None => series_rms(
                 &d.observations,
                 &d.base.predicted,
                 &d.base.predicted,
                 &held_out,
-            ),
+            )
+            .into_iter()
+            .map(|r| SeriesResidual {
+                after: f64::NAN,
+                ..r
+            })
+            .collect(),
         };
         Comparison {
             best_label: best.map(|t| format!("{} at {}", t.cause, t.location)),
@@ -621,14 +628,21 @@ impl Comparison {
         }
         println!("residual RMS on the held-out values (SI units; ln|H| relative):");
         for r in &self.rms {
-            println!(
-                "  {:<36} base {:.4e}  best {:.4e}  ({:+.1} %)",
-                r.series,
-                r.before,
-                r.after,
-                100.0 * (r.after / r.before - 1.0)
-            );
+            let [before, after, change] = Self::rms_cells(r);
+            println!("  {:<36} base {before}  best {after}  ({change})", r.series);
         }
+    }
+
+    /// Base RMS, best RMS and the change, as shown (`-` without a best candidate).
+    fn rms_cells(r: &SeriesResidual) -> [String; 3] {
+        if r.after.is_nan() {
+            return [format!("{:.4e}", r.before), "-".into(), "-".into()];
+        }
+        [
+            format!("{:.4e}", r.before),
+            format!("{:.4e}", r.after),
+            format!("{:+.1} %", 100.0 * (r.after / r.before - 1.0)),
+        ]
     }
 
     fn features_json(&self) -> serde_json::Value {
@@ -651,7 +665,7 @@ impl Comparison {
     fn rms_json(&self) -> serde_json::Value {
         self.rms
             .iter()
-            .map(|r| json!({"series": r.series, "base": r.before, "best": r.after}))
+            .map(|r| json!({"series": r.series, "base": r.before, "best": finite_or_null(r.after)}))
             .collect()
     }
 
@@ -672,12 +686,8 @@ impl Comparison {
             &["series", "base model", "best candidate", "change"],
         );
         for r in &self.rms {
-            table.row(vec![
-                r.series.clone(),
-                format!("{:.4e}", r.before),
-                format!("{:.4e}", r.after),
-                format!("{:+.1} %", 100.0 * (r.after / r.before - 1.0)),
-            ]);
+            let [before, after, change] = Self::rms_cells(r);
+            table.row(vec![r.series.clone(), before, after, change]);
         }
         table
     }

@@ -209,7 +209,7 @@ pub struct Tape {
     pub mass_matrix: Program,
     pub forcing: Program,
     /// `F(t, q, 0, inputs)` (`Equations::static_forcing`): on the extended HAMR leg a
-    /// fraction of `forcing`'s operations, and the statics evaluate it 2·dof times per Newton
+    /// fraction of `forcing`'s operations, and the statics evaluate it dof times per Newton
     /// iteration.
     pub static_forcing: Option<Program>,
     pub outputs: Program,
