@@ -5,15 +5,15 @@
 //!
 //! Symbols: `q` generalized coordinates, `u = q̇` generalized speeds, `M(q) u̇ = F`.
 
+pub mod cli;
 pub mod describe;
 pub mod diagnose;
 pub mod experiments;
 pub mod flexure_fit;
 pub mod frequency;
-pub mod linear_cli;
 pub mod output;
 pub mod physics;
-pub mod plot;
+pub mod render;
 pub mod session;
 pub mod signal_spec;
 pub mod tape_model;

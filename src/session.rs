@@ -9,7 +9,10 @@ use std::path::Path;
 
 use mech_codegen::Compiled;
 use mech_runtime::constraints::{choose_independent, complete_independent, jacobian};
-use mech_runtime::{assemble, assemble_speeds, mobility, AssemblyOptions, Mobility, Model, Signal};
+use mech_runtime::{
+    assemble, assemble_speeds, linearize, mobility, solve_statics, AssemblyOptions, Equilibrium,
+    Fixture, Linearization, Mobility, Model, Signal, StaticsOptions,
+};
 
 use crate::signal_spec;
 use crate::tape_model::TapeModel;
@@ -193,6 +196,41 @@ impl Session {
             mobility,
             iterations,
         })
+    }
+
+    /// A static equilibrium near the assembled initial state (`independent` as for
+    /// [`Session::assemble`]), under constant `inputs`, with `fixtures` holding points; and
+    /// the independent coordinates of the assembly.
+    pub fn equilibrium(
+        &self,
+        independent: &[String],
+        inputs: &[f64],
+        fixtures: &[Fixture],
+    ) -> Result<(Equilibrium, Vec<usize>), String> {
+        let state = self.assemble(independent)?;
+        let mut q = state.q.clone();
+        let equilibrium = solve_statics(
+            &self.model,
+            0.0,
+            &mut q,
+            inputs,
+            fixtures,
+            &StaticsOptions::default(),
+        )
+        .map_err(|e| format!("statics of `{}`: {e}", self.model.name()))?;
+        Ok((equilibrium, state.independent))
+    }
+
+    /// The linear model about the static equilibrium under constant `inputs`, in the
+    /// minimal coordinates of the assembly.
+    pub fn linearization(
+        &self,
+        independent: &[String],
+        inputs: &[f64],
+    ) -> Result<Linearization, String> {
+        let (equilibrium, independent) = self.equilibrium(independent, inputs, &[])?;
+        linearize(&self.model, 0.0, &equilibrium.q, inputs, &independent)
+            .map_err(|e| format!("linearization failed: {e}"))
     }
 }
 

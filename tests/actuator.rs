@@ -138,7 +138,7 @@ fn linear_actuator_model() {
 
 #[test]
 fn seed_tables_text() {
-    let text = mech::flexure_fit::cli::seed_tables_i_ii();
+    let text = mech::cli::actuator::seed_tables_i_ii();
     assert!(
         text.contains("PS 'b'") && text.contains("new geometry"),
         "{text}"

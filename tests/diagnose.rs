@@ -235,7 +235,7 @@ fn fit_requests_and_data_are_checked() {
 fn diagnose_command_writes_the_page_and_the_summary() {
     let root = env!("CARGO_MANIFEST_DIR");
     let out_dir = scratch_dir("diagnose_command");
-    let args = mech::diagnose::command::DiagnoseArgs {
+    let args = mech::cli::diagnose::DiagnoseArgs {
         // The model named on the command line, as `mech diagnose MODEL --experiment …`.
         model: Some(format!("{root}/models/hamr_vi.mech").into()),
         causes: Vec::new(),
@@ -247,7 +247,7 @@ fn diagnose_command_writes_the_page_and_the_summary() {
     };
     // The example's model path is relative to the repository root.
     std::env::set_current_dir(root).unwrap();
-    mech::diagnose::command::diagnose_command(&args).unwrap();
+    mech::cli::diagnose::run(&args).unwrap();
     let html = std::fs::read_to_string(out_dir.join("diagnosis.html")).unwrap();
     assert!(
         html.contains("<svg") && html.contains("loss factor"),

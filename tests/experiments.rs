@@ -199,12 +199,12 @@ fn report_renders_tables_and_inline_plots() {
     let spec = bundled("hamr_v2_vs_vi.toml", &[]);
     let outcome = spec.run("compare", &out("report").join("compare")).unwrap();
     let html =
-        experiments::report::render_html(std::slice::from_ref(&outcome), &out("report"), 0.1)
+        mech::render::report::render_html(std::slice::from_ref(&outcome), &out("report"), 0.1)
             .unwrap();
     assert!(
         html.starts_with("<!DOCTYPE html>") && html.contains("<table>") && html.contains("266")
     );
-    let md = experiments::report::render_markdown(&[outcome], &out("report"), 0.1);
+    let md = mech::render::report::render_markdown(&[outcome], &out("report"), 0.1);
     assert!(md.contains("| HAMR-VI | lift |"), "{md}");
 }
 

@@ -511,7 +511,7 @@ fn pendulum_commands_report_flags() {
         ("flexure_rig_ringdown_air.csv", "Flagged", 1),
     ] {
         let out_dir = scratch_dir(&format!("pendulum_command_{verdict}"));
-        let args = mech::diagnose::command::DiagnoseArgs {
+        let args = mech::cli::diagnose::DiagnoseArgs {
             model: None,
             causes: Vec::new(),
             experiment: example("flexure_rig_ringdown.toml"),
@@ -520,19 +520,19 @@ fn pendulum_commands_report_flags() {
             holdout: "every:3".into(),
             out_dir: out_dir.clone(),
         };
-        mech::diagnose::command::diagnose_command(&args).unwrap();
+        mech::cli::diagnose::run(&args).unwrap();
         let json = read(out_dir.join("diagnosis.json"));
         assert_eq!(json["verdict"], verdict, "{json:#}");
         assert_eq!(json["flags"].as_array().unwrap().len(), flags, "{json:#}");
         let html = std::fs::read_to_string(out_dir.join("diagnosis.html")).unwrap();
         assert!(html.contains("Screening before fitting"));
-        let fit_args = mech::diagnose::command::FitArgs {
+        let fit_args = mech::cli::fit::FitArgs {
             experiment: example("flexure_rig_ringdown.toml"),
             data: example(data),
             fit: vec!["eta".into()],
             out_dir: out_dir.clone(),
         };
-        mech::diagnose::command::fit_command(&fit_args).unwrap();
+        mech::cli::fit::run(&fit_args).unwrap();
         let json = read(out_dir.join("fit.json"));
         assert_eq!(json["flags"].as_array().unwrap().len(), flags, "{json:#}");
         if flags == 1 {

@@ -9,7 +9,7 @@
 //! - [`experiment`]: a diagnosis experiment file + data → the measured values and, for any
 //!   parameter values, the model's prediction of them;
 //! - [`fit`]: experiment + data + parameters to fit → fitted values, standard errors and the
-//!   residual before and after (`mech fit`, wired up in [`command`]);
+//!   residual before and after (`mech fit`, the command in `cli/fit.rs`);
 //! - [`pendulum`]: the flexure pendulum's ring-down (`kind = "pendulum"`) and the screening
 //!   of a decay trace for what no parameter can fit (amplitude-dependent damping, a
 //!   drifting baseline), reported as flags;
@@ -21,7 +21,6 @@
 //! The file format and the fitting method are documented in `docs/diagnose.md`.
 
 pub mod candidates;
-pub mod command;
 pub mod data;
 pub mod experiment;
 pub mod extend;

@@ -9,8 +9,8 @@ use serde::Deserialize;
 
 use super::leg::Leg;
 use super::{csv, positive, quantity, ModelSpec, Outcome, Table, FREQUENCY};
-use crate::frequency::{self, Point};
-use crate::plot;
+use crate::frequency::{self, ChirpSweep, Point};
+use crate::render::plot;
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -192,17 +192,25 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
         Some((amplitude, duration, analysis_from)) => {
             super::parallel(indices.clone(), super::threads(), |(input, output)| {
                 let leg = Leg::open(&model_spec)?;
-                let mut estimate = chirp_estimate(
-                    &leg,
-                    &rest_q,
+                let sweep = ChirpSweep {
                     input,
                     output,
                     amplitude,
-                    from,
-                    to,
+                    from_hz: from,
+                    to_hz: to,
                     duration,
+                    rtol: 1e-7,
+                };
+                let u0 = vec![0.0; leg.model().nu()];
+                let mut estimate = frequency::simulated_chirp(
+                    leg.model(),
+                    &rest_q,
+                    &u0,
+                    &leg.session.signals,
+                    &sweep,
                     &frequencies,
-                )?;
+                )
+                .map_err(|e| format!("chirp simulation failed: {e}"))?;
                 // Blank the start of the sweep (NaN: not drawn, not searched).
                 for point in estimate
                     .iter_mut()
@@ -337,44 +345,4 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
     outcome.tables.push(modes_table);
     outcome.notes = spec.notes.clone();
     Ok(outcome)
-}
-
-/// Simulates a chirp on `input` from the rest equilibrium and estimates `H(f)`.
-#[allow(clippy::too_many_arguments)]
-fn chirp_estimate(
-    leg: &Leg,
-    rest_q: &[f64],
-    input: usize,
-    output: usize,
-    amplitude: f64,
-    from: f64,
-    to: f64,
-    duration: f64,
-    frequencies: &[f64],
-) -> Result<Vec<Point>, String> {
-    let model = leg.model();
-    let mut signals = leg.session.signals.clone();
-    signals[input] = mech_runtime::Signal::Chirp {
-        amplitude,
-        f0_hz: from,
-        f1_hz: to,
-        duration,
-        offset: 0.0,
-    };
-    let options = mech_runtime::SimOptions {
-        t_end: duration,
-        output_interval: 1.0 / (20.0 * to),
-        method: mech_runtime::Method::Dopri5 {
-            rtol: 1e-7,
-            atol: 1e-12,
-            h_max: 1.0 / (20.0 * to),
-        },
-        ..mech_runtime::SimOptions::default()
-    };
-    let u0 = vec![0.0; model.nu()];
-    let run = mech_runtime::simulate(model, rest_q, &u0, &signals, &options, &mut |_| {})
-        .map_err(|e| format!("chirp simulation failed: {e}"))?;
-    let u: Vec<f64> = run.inputs.iter().map(|x| x[input]).collect();
-    let y: Vec<f64> = run.outputs.iter().map(|x| x[output]).collect();
-    Ok(frequency::chirp_estimate(&run.times, &u, &y, frequencies))
 }

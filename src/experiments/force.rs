@@ -11,7 +11,7 @@ use serde::Deserialize;
 
 use super::leg::{force_deflection, Dof, ForceDeflection, Leg, Sensor, AXES};
 use super::{csv, paper_value, percent_diff, positive, ModelSpec, Outcome, Table, ENERGY, VOLTAGE};
-use crate::plot;
+use crate::render::plot;
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]

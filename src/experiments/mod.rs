@@ -14,18 +14,16 @@ pub mod bode;
 pub mod compare;
 pub mod force;
 pub mod leg;
-pub mod report;
 pub mod sweep;
-pub mod table;
 pub mod trajectory;
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
-pub use table::Table;
+pub use crate::render::report::Outcome;
+pub use crate::render::table::Table;
 
 /// One experiment file.
 #[derive(Debug, Clone, Deserialize)]
@@ -54,28 +52,6 @@ pub struct ModelSpec {
 
 pub(crate) fn default_independent() -> Vec<String> {
     vec!["qsact".into(), "qlact".into()]
-}
-
-/// What an experiment produced.
-#[derive(Debug, Clone, Default)]
-pub struct Outcome {
-    /// The experiment file's stem (also the name of its output subfolder).
-    pub name: String,
-    /// The file the section comes from, as shown in reports (default
-    /// `experiments/NAME.toml`).
-    pub source: Option<String>,
-    pub title: String,
-    /// How the experiment was run (method, assumptions), one paragraph.
-    pub method: String,
-    pub tables: Vec<Table>,
-    /// Plots (SVG) written.
-    pub plots: Vec<PathBuf>,
-    /// CSV files written.
-    pub files: Vec<PathBuf>,
-    /// Comparison with the paper: agreements, differences and the paper's explanations.
-    pub notes: Vec<String>,
-    /// Key results by name, SI units (for tests and scripts).
-    pub values: BTreeMap<String, f64>,
 }
 
 /// Reads and checks an experiment file. Errors name the file and the key.
@@ -145,6 +121,54 @@ impl Experiment {
         outcome.title = self.title().to_string();
         Ok(outcome)
     }
+}
+
+/// The experiment files of a folder, sorted by name.
+pub fn experiment_files(folder: &Path) -> Result<Vec<PathBuf>, String> {
+    let entries = std::fs::read_dir(folder).map_err(|e| {
+        format!(
+            "cannot read the experiments folder `{}`: {e}",
+            folder.display()
+        )
+    })?;
+    let mut files: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        return Err(format!(
+            "no `*.toml` experiment files in `{}`",
+            folder.display()
+        ));
+    }
+    Ok(files)
+}
+
+/// Runs every file (parsed first, so a bad file fails before anything runs), the costly
+/// ones first, on all cores; `progress` is called after each one finishes.
+pub fn run_all(
+    files: &[PathBuf],
+    out_dir: &Path,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Vec<Outcome>, String> {
+    let experiments: Vec<(usize, String, Experiment)> = files
+        .iter()
+        .enumerate()
+        .map(|(k, f)| Ok((k, stem(f), load(f)?)))
+        .collect::<Result<_, String>>()?;
+    let mut jobs = experiments;
+    jobs.sort_by(|a, b| b.2.cost().total_cmp(&a.2.cost()));
+    let results = parallel(jobs, threads(), |(k, name, experiment)| {
+        let result = experiment
+            .run(&name, &out_dir.join(&name))
+            .map_err(|e| format!("experiment `{}`: {e}", files[k].display()));
+        progress(&name);
+        (k, result)
+    });
+    let mut results: Vec<(usize, Result<Outcome, String>)> = results;
+    results.sort_by_key(|(k, _)| *k);
+    results.into_iter().map(|(_, r)| r).collect()
 }
 
 /// Runs one experiment file, its outputs in `out_dir/<stem>/`.

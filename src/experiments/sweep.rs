@@ -13,7 +13,7 @@ use serde::Deserialize;
 use super::force::actuator_work;
 use super::leg::{force_deflection, Dof, Leg, Sensor, AXES};
 use super::{csv, positive, ModelSpec, Outcome, Table, VOLTAGE};
-use crate::plot::{self, CurveStyle, Star};
+use crate::render::plot::{self, CurveStyle, Star};
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]

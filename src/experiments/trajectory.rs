@@ -9,7 +9,7 @@ use serde::Deserialize;
 
 use super::leg::Leg;
 use super::{csv, positive, ModelSpec, Outcome, Table, FREQUENCY, VOLTAGE};
-use crate::plot;
+use crate::render::plot;
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]

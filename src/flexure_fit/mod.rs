@@ -8,9 +8,7 @@
 //! - [`rig`]: the specimen description (flexure geometry, pendulum, trace files) in TOML;
 //! - [`fit`]: Eqs. 3–4 per trace, means per specimen, Eqs. 6–7 and the castellated fits;
 //! - [`report`]: tables, CSV and plots;
-//! - [`cli`]: the `mech flexure ...` and `mech actuator` commands.
 
-pub mod cli;
 pub mod fit;
 pub mod report;
 pub mod rig;

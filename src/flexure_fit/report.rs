@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use super::fit::{FitReport, LineFit};
 use super::rig::Kind;
 use crate::output;
-use crate::plot;
+use crate::render::plot;
 
 fn file_name(path: &Path) -> String {
     path.file_name().map_or_else(

@@ -1,33 +1,35 @@
-//! `mech experiment FILE` and `mech report`: run experiment files (in parallel), print their
-//! tables, and write a self-contained HTML report (plots inline as SVG) and a Markdown one.
+//! Experiment outcomes as a report: the terminal text, a Markdown file and a self-contained
+//! HTML page (SVG plots inlined), shared by `mech experiment`, `mech report` and
+//! `mech diagnose`.
+//!
+//! Consumes: [`Outcome`]s (tables, plots already written, notes, files). Produces: strings.
 
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
-use clap::Args;
+use super::table::{escape_html, Table};
 
-use super::table::escape_html;
-use super::{load, parallel, stem, threads, Experiment, Outcome};
-use crate::output;
-
-#[derive(Args, Clone, Debug)]
-pub struct ExperimentArgs {
-    /// The experiment file (TOML), e.g. `experiments/hamr_vi_trajectory.toml`.
-    pub file: PathBuf,
-    /// Folder for the CSV files and plots (a subfolder named after the file is used).
-    #[arg(long, default_value = "out/experiments")]
-    pub out_dir: PathBuf,
-}
-
-#[derive(Args, Clone, Debug)]
-pub struct ReportArgs {
-    /// Folder of experiment files (every `*.toml` in it is run).
-    #[arg(long, default_value = "experiments")]
-    pub experiments: PathBuf,
-    /// Output folder: `report.html`, `report.md`, and one subfolder per experiment.
-    #[arg(long, default_value = "out/report")]
-    pub out_dir: PathBuf,
+/// What an experiment produced.
+#[derive(Debug, Clone, Default)]
+pub struct Outcome {
+    /// The experiment file's stem (also the name of its output subfolder).
+    pub name: String,
+    /// The file the section comes from, as shown in reports (default
+    /// `experiments/NAME.toml`).
+    pub source: Option<String>,
+    pub title: String,
+    /// How the experiment was run (method, assumptions), one paragraph.
+    pub method: String,
+    pub tables: Vec<Table>,
+    /// Plots (SVG) written.
+    pub plots: Vec<PathBuf>,
+    /// CSV files written.
+    pub files: Vec<PathBuf>,
+    /// Comparison with the paper: agreements, differences and the paper's explanations.
+    pub notes: Vec<String>,
+    /// Key results by name, SI units (for tests and scripts).
+    pub values: BTreeMap<String, f64>,
 }
 
 /// The terminal text of an outcome: method, tables, notes, files.
@@ -47,106 +49,6 @@ pub fn outcome_text(outcome: &Outcome) -> String {
         let _ = writeln!(text, "written: {}", file.display());
     }
     text
-}
-
-pub fn experiment_command(args: &ExperimentArgs) -> Result<(), String> {
-    let outcome = super::run_file(&args.file, &args.out_dir)?;
-    print!("{}", outcome_text(&outcome));
-    Ok(())
-}
-
-/// The experiment files of a folder, sorted by name.
-pub fn experiment_files(folder: &Path) -> Result<Vec<PathBuf>, String> {
-    let entries = std::fs::read_dir(folder).map_err(|e| {
-        format!(
-            "cannot read the experiments folder `{}`: {e}",
-            folder.display()
-        )
-    })?;
-    let mut files: Vec<PathBuf> = entries
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
-        .collect();
-    files.sort();
-    if files.is_empty() {
-        return Err(format!(
-            "no `*.toml` experiment files in `{}`",
-            folder.display()
-        ));
-    }
-    Ok(files)
-}
-
-/// Runs every file (parsed first, so a bad file fails before anything runs), the costly
-/// ones first, on all cores; `progress` is called after each one finishes.
-pub fn run_all(
-    files: &[PathBuf],
-    out_dir: &Path,
-    progress: &(dyn Fn(&str) + Sync),
-) -> Result<Vec<Outcome>, String> {
-    let experiments: Vec<(usize, String, Experiment)> = files
-        .iter()
-        .enumerate()
-        .map(|(k, f)| Ok((k, stem(f), load(f)?)))
-        .collect::<Result<_, String>>()?;
-    let mut jobs = experiments;
-    jobs.sort_by(|a, b| b.2.cost().total_cmp(&a.2.cost()));
-    let results = parallel(jobs, threads(), |(k, name, experiment)| {
-        let result = experiment
-            .run(&name, &out_dir.join(&name))
-            .map_err(|e| format!("experiment `{}`: {e}", files[k].display()));
-        progress(&name);
-        (k, result)
-    });
-    let mut results: Vec<(usize, Result<Outcome, String>)> = results;
-    results.sort_by_key(|(k, _)| *k);
-    results.into_iter().map(|(_, r)| r).collect()
-}
-
-pub fn report_command(args: &ReportArgs) -> Result<(), String> {
-    let start = Instant::now();
-    let files = experiment_files(&args.experiments)?;
-    let bar = indicatif::ProgressBar::new(files.len() as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "experiments {bar:40} {pos}/{len} {msg} [{elapsed}]",
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    bar.tick();
-    let outcomes = run_all(&files, &args.out_dir, &|name| {
-        bar.inc(1);
-        bar.set_message(format!("done: {name}"));
-    });
-    bar.finish_and_clear();
-    let mut outcomes = outcomes?;
-    // In the order of their titles ("1. …", "2. …").
-    outcomes.sort_by(|a, b| a.title.cmp(&b.title));
-    for outcome in &outcomes {
-        println!("{}", outcome_text(outcome));
-    }
-    let elapsed = start.elapsed().as_secs_f64();
-    let (html, markdown) = (
-        args.out_dir.join("report.html"),
-        args.out_dir.join("report.md"),
-    );
-    output::write_atomic(
-        &html,
-        render_html(&outcomes, &args.out_dir, elapsed)?.as_bytes(),
-    )
-    .map_err(|e| e.to_string())?;
-    output::write_atomic(
-        &markdown,
-        render_markdown(&outcomes, &args.out_dir, elapsed).as_bytes(),
-    )
-    .map_err(|e| e.to_string())?;
-    println!(
-        "{} experiments in {elapsed:.1} s; report written to {} and {}",
-        outcomes.len(),
-        html.display(),
-        markdown.display()
-    );
-    Ok(())
 }
 
 const INTRO: &str = "Model predictions of the bundled HAMR leg models (models/hamr_vi.mech, \

@@ -1,0 +1,234 @@
+//! `mech bode MODEL --from-input IN --output OUT --from F1 --to F2`: the frequency response
+//! of the linear model (and optionally of a simulated chirp), its resonances and Q.
+//!
+//! Consumes: [`ModelArgs`] and the sweep settings. Produces: text on stdout, and with
+//! `--out`/`--plot` a CSV and a Bode plot.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+use mech_runtime::Model;
+
+use super::{frequency_value, ModelArgs};
+use crate::frequency::{self, ChirpSweep, Point};
+use crate::output;
+use crate::render::plot;
+
+#[derive(Args, Clone, Debug)]
+pub struct BodeArgs {
+    #[command(flatten)]
+    pub common: ModelArgs,
+    /// Input driving the response.
+    #[arg(long = "from-input", alias = "drive", value_name = "INPUT")]
+    pub drive: String,
+    /// Output observed.
+    #[arg(long, value_name = "OUTPUT")]
+    pub output: String,
+    /// Lowest frequency, with a unit (`1 Hz`) or in Hz.
+    #[arg(long)]
+    pub from: String,
+    /// Highest frequency.
+    #[arg(long)]
+    pub to: String,
+    /// Number of log-spaced frequencies.
+    #[arg(long, default_value_t = 400)]
+    pub points: usize,
+    /// How flexure losses enter: `hysteretic` (complex stiffness k(1 + iη), exact at every
+    /// frequency) or `viscous` (the time-domain dampers b = kη/ω_ref, as a simulation sees them).
+    #[arg(long, value_enum, default_value_t = Damping::Hysteretic)]
+    pub damping: Damping,
+    /// Also simulate a linear chirp from `from` to `to` and overlay its swept-sine estimate.
+    #[arg(long)]
+    pub chirp: bool,
+    /// Chirp amplitude (with the input's unit; default: 1 in SI units).
+    #[arg(long)]
+    pub chirp_amplitude: Option<String>,
+    /// CSV file (frequency, magnitude, phase, and the chirp estimate if any).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Bode plot (`.svg` or `.png`): magnitude and phase panels.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+}
+
+/// `--damping` of `mech bode`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Damping {
+    Hysteretic,
+    Viscous,
+}
+
+pub fn run(args: &BodeArgs) -> Result<(), String> {
+    let (session, inputs) = args.common.open()?;
+    let model = &session.model;
+    let input = model.input_index(&args.drive).ok_or_else(|| {
+        let known: Vec<&str> = (0..model.ninputs()).map(|i| model.input_name(i)).collect();
+        format!(
+            "unknown input `{}`; inputs of `{}`: {}",
+            args.drive,
+            model.name(),
+            known.join(", ")
+        )
+    })?;
+    let output = model.output_index(&args.output).ok_or_else(|| {
+        let known: Vec<&str> = (0..model.noutputs())
+            .map(|i| model.output_name(i))
+            .collect();
+        format!(
+            "unknown output `{}`; outputs of `{}`: {}",
+            args.output,
+            model.name(),
+            known.join(", ")
+        )
+    })?;
+    let (from, to) = (
+        frequency_value("--from", &args.from)?,
+        frequency_value("--to", &args.to)?,
+    );
+    if to <= from {
+        return Err(format!("--to ({to} Hz) must be above --from ({from} Hz)"));
+    }
+    let linear = session.linearization(&args.common.independent, &inputs)?;
+    let frequencies = frequency::log_space(from, to, args.points);
+    let damping = match args.damping {
+        Damping::Hysteretic => mech_runtime::FlexureDamping::Hysteretic,
+        Damping::Viscous => mech_runtime::FlexureDamping::Viscous,
+    };
+    let response = frequency::linear_response(&linear, input, output, &frequencies, damping)
+        .ok_or("the linear model is singular at some frequency")?;
+    let losses = if model.nflexures() == 0 {
+        "no flexures"
+    } else if args.damping == Damping::Hysteretic {
+        "flexure losses as complex stiffness k(1 + iη)"
+    } else {
+        "flexure losses as viscous dampers b = kη/ω_ref"
+    };
+    let mut text = format!(
+        "frequency response of `{}` from `{}` to `{}`, {from} – {to} Hz ({losses})\n",
+        model.name(),
+        args.drive,
+        args.output
+    );
+    let found = frequency::resonances(&response);
+    if found.is_empty() {
+        text += "no resonance peak inside the sweep\n";
+    }
+    for resonance in &found {
+        let q = resonance
+            .quality_factor
+            .map_or("n/a (−3 dB points outside the sweep)".to_string(), |q| {
+                format!("{q:.4}")
+            });
+        let _ = writeln!(
+            text,
+            "resonance at {:.6} Hz, peak gain {:.6e}, Q = {q}",
+            resonance.frequency_hz, resonance.peak_magnitude
+        );
+    }
+    let chirp = if args.chirp {
+        let amplitude = match &args.chirp_amplitude {
+            Some(text) => {
+                mech_codegen::front::units::parse_quantity(text)
+                    .map_err(|e| format!("--chirp-amplitude: {e}"))?
+                    .0
+            }
+            None => 1.0,
+        };
+        // Sweep slowly enough to pass each resonance in many cycles: 200 periods of the
+        // lowest frequency, at least 2 s.
+        let sweep = ChirpSweep {
+            input,
+            output,
+            amplitude,
+            from_hz: from,
+            to_hz: to,
+            duration: (200.0 / from).max(2.0),
+            rtol: 1e-8,
+        };
+        let state = session.assemble(&args.common.independent)?;
+        let estimate = frequency::simulated_chirp(
+            model,
+            &state.q,
+            &state.u,
+            &session.signals,
+            &sweep,
+            &frequencies,
+        )
+        .map_err(|e| format!("chirp simulation failed: {e}"))?;
+        Some(estimate)
+    } else {
+        None
+    };
+    print!("{text}");
+
+    let mut header = vec![
+        "frequency_hz".to_string(),
+        "magnitude_db".to_string(),
+        "phase_deg".to_string(),
+    ];
+    if chirp.is_some() {
+        header.extend([
+            "chirp_magnitude_db".to_string(),
+            "chirp_phase_deg".to_string(),
+        ]);
+    }
+    let rows: Vec<Vec<f64>> = response
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let mut row = vec![p.frequency_hz, p.magnitude_db(), p.phase_deg()];
+            if let Some(estimate) = &chirp {
+                row.extend([estimate[k].magnitude_db(), estimate[k].phase_deg()]);
+            }
+            row
+        })
+        .collect();
+    if let Some(out) = &args.out {
+        output::write_csv(out, &header, &rows)
+            .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+        println!("written to {}", out.display());
+    }
+    if let Some(path) = &args.plot {
+        bode_plot(
+            path,
+            &format!("{}: {} → {}", model.name(), args.drive, args.output),
+            &response,
+            chirp.as_deref(),
+        )?;
+        println!("plot written to {}", path.display());
+    }
+    Ok(())
+}
+
+fn bode_plot(
+    path: &Path,
+    title: &str,
+    response: &[Point],
+    chirp: Option<&[Point]>,
+) -> Result<(), String> {
+    let frequencies: Vec<f64> = response.iter().map(|p| p.frequency_hz).collect();
+    let mut magnitude = vec![(
+        "linear model".to_string(),
+        frequencies.clone(),
+        response.iter().map(Point::magnitude_db).collect(),
+    )];
+    let mut phase = vec![(
+        "linear model".to_string(),
+        frequencies.clone(),
+        response.iter().map(Point::phase_deg).collect(),
+    )];
+    if let Some(chirp) = chirp {
+        magnitude.push((
+            "chirp estimate".to_string(),
+            frequencies.clone(),
+            chirp.iter().map(Point::magnitude_db).collect(),
+        ));
+        phase.push((
+            "chirp estimate".to_string(),
+            frequencies.clone(),
+            chirp.iter().map(Point::phase_deg).collect(),
+        ));
+    }
+    plot::plot_bode(path, title, &magnitude, &phase).map_err(|e| format!("cannot plot: {e}"))
+}

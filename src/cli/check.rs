@@ -1,0 +1,109 @@
+//! `mech check MODEL`: validate a model and print its coordinates, bodies and degrees of
+//! freedom (the mobility at the assembled q0 for models with loops).
+//!
+//! Consumes: the model path. Produces: text on stdout.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use crate::session::{self, Session};
+
+#[derive(Args, Clone, Debug)]
+pub struct CheckArgs {
+    /// The `.mech` file.
+    pub model: PathBuf,
+}
+
+pub fn run(args: &CheckArgs) -> Result<(), String> {
+    let path = args.model.as_path();
+    let session = Session::open(path, &[], &[])?;
+    let compiled = &session.compiled;
+    let model = &compiled.model;
+    println!("model `{}` ({})", model.name, path.display());
+    if model.loops.is_empty() {
+        println!(
+            "  {} bodies, {} joints, {} degrees of freedom",
+            model.bodies.len(),
+            model.joints.len(),
+            model.coordinates.len()
+        );
+    } else {
+        let state = session.assemble(&[])?;
+        let mobility = state
+            .mobility
+            .as_ref()
+            .map(ToString::to_string)
+            .unwrap_or_default();
+        println!(
+            "  {} bodies, {} joints, {} loops; at the assembled q0: {mobility}",
+            model.bodies.len(),
+            model.joints.len(),
+            model.loops.len()
+        );
+        // The singular values that decide the rank, and any warning about them.
+        let report = session::assembly_report(&session.model, &state);
+        for line in report.lines().skip(1).take_while(|line| !line.is_empty()) {
+            println!("  {line}");
+        }
+    }
+    println!("\ncoordinates (q, with u = q̇):");
+    for (_, joint) in model.joints.iter() {
+        for &c in &joint.coordinates {
+            let coordinate = &model.coordinates[c];
+            let unit = if coordinate.dimension == mech_codegen::ir::Dimension::NONE {
+                "rad"
+            } else {
+                "m"
+            };
+            println!(
+                "  {:<16} {:?} joint `{}`, q0 = {} {unit}, u0 = {} {unit}/s",
+                coordinate.name,
+                joint.kind,
+                joint.name,
+                coordinate.initial,
+                coordinate.initial_speed
+            );
+        }
+    }
+    println!("\nbodies:");
+    for (_, body) in model.bodies.iter() {
+        let parent = model
+            .joints
+            .iter()
+            .find(|(_, j)| model.bodies[j.child].name == body.name);
+        let attached = parent.map_or("?".to_string(), |(_, joint)| {
+            let parent_name = joint
+                .parent
+                .map_or("newtonian", |b| model.bodies[b].name.as_str());
+            format!(
+                "child of `{parent_name}` by {:?} joint `{}`",
+                joint.kind, joint.name
+            )
+        });
+        println!("  {:<16} {attached}", body.name);
+    }
+    let list = |title: &str, items: Vec<String>| {
+        if !items.is_empty() {
+            println!("\n{title}: {}", items.join(", "));
+        }
+    };
+    list(
+        "parameters",
+        model
+            .params
+            .iter()
+            .map(|(_, p)| format!("{} = {} {}", p.name, p.value, p.dimension))
+            .collect(),
+    );
+    list(
+        "inputs",
+        model
+            .inputs
+            .iter()
+            .map(|(_, i)| format!("{} [{}]", i.name, i.dimension))
+            .collect(),
+    );
+    list("outputs", compiled.equations.output_names.clone());
+    Ok(())
+}

@@ -1,0 +1,191 @@
+//! `mech diagnose [MODEL] --experiment E --data D`: find what the model gets wrong — fit
+//! every catalog cause, rank on held-out data, and name the cause (or say there is none, or
+//! that none explains it).
+//!
+//! Consumes: a diagnosis experiment file, measured data (CSV), optional extra parameters and
+//! cause filters. Produces: the ranking and verdict on stdout, and `diagnosis.json`,
+//! `diagnosis.html` and plots in the output folder.
+
+use std::path::PathBuf;
+
+use clap::Args;
+use serde_json::json;
+
+use crate::diagnose::candidates::{diagnose_causes, Holdout, Trial, Verdict};
+use crate::diagnose::data::MeasuredData;
+use crate::diagnose::experiment;
+use crate::output;
+use crate::render::diagnosis::{
+    diagnosis_page, finite_or_null, fitted_text, flag_kinds, screening_json, screening_text,
+    tied_text, Comparison, PageSources,
+};
+
+#[derive(Args, Clone, Debug)]
+pub struct DiagnoseArgs {
+    /// The model (`.mech`); default: the experiment file's `model`.
+    pub model: Option<PathBuf>,
+    /// The diagnosis experiment file (TOML, with the measurement noise).
+    #[arg(long)]
+    pub experiment: PathBuf,
+    /// The measured data (CSV with `name [unit]` headers).
+    #[arg(long)]
+    pub data: PathBuf,
+    /// Parameters the user lets vary in every model (as `mech fit --fit`).
+    #[arg(long = "fit")]
+    pub fit: Vec<String>,
+    /// Rows held out of every fit and used to rank: `every:N` (default `every:3`) or `last:P%`.
+    #[arg(long, default_value = "every:3")]
+    pub holdout: String,
+    /// Try only the catalog causes whose name contains this (repeatable), e.g. `--cause twist
+    /// --cause "loss factor"`; default: the whole catalog.
+    #[arg(long = "cause")]
+    pub causes: Vec<String>,
+    /// Output folder for diagnosis.html, diagnosis.json and the plots (`--out` also works).
+    #[arg(long, visible_alias = "out", default_value = "out/diagnose")]
+    pub out_dir: PathBuf,
+}
+
+pub fn run(args: &DiagnoseArgs) -> Result<(), String> {
+    let mut experiment = experiment::load(&args.experiment)?;
+    if let Some(model) = &args.model {
+        experiment.set_model(model.clone());
+    }
+    let data = MeasuredData::load(&args.data).map_err(|e| e.to_string())?;
+    let holdout = Holdout::parse(&args.holdout)?;
+    let d = diagnose_causes(&experiment, &data, &args.fit, holdout, &args.causes)?;
+    println!(
+        "{}: {} values fitted, {} held out ({}); noise band: held-out χ²/value ≤ {:.2}",
+        experiment.title(),
+        d.train_values,
+        d.holdout_values,
+        args.holdout,
+        d.noise_band
+    );
+    print!("{}", screening_text(d.screening.as_ref()));
+    let per = |chi2: f64| chi2 / d.holdout_values as f64;
+    println!(
+        "\n{:<36} {:<16} {:>12} {:>12} {:>10}  fitted",
+        "cause", "where", "χ² fit", "χ²/value out", "ΔAICc"
+    );
+    let line = |t: &Trial| {
+        let fitted: Vec<String> = t.parameters.iter().map(fitted_text).collect();
+        println!(
+            "{:<36} {:<16} {:>12.1} {:>12.2} {:>10.1}  {}",
+            t.cause,
+            t.location,
+            t.train_chi2,
+            per(t.holdout_chi2),
+            t.aicc - d.base.aicc,
+            fitted.join(", ")
+        );
+    };
+    line(&d.base);
+    for t in &d.ranked {
+        line(t);
+    }
+    if !d.second_round.is_empty() {
+        println!(
+            "\nthe best leaves a residual above the noise; fitted together with each other candidate:"
+        );
+        for t in &d.second_round {
+            line(t);
+        }
+    }
+    if !d.inert.is_empty() {
+        println!("\ninert (cannot change the response, or failed):");
+        for t in &d.inert {
+            println!(
+                "  {} at {}{}",
+                t.cause,
+                t.location,
+                t.error.as_ref().map_or(String::new(), |e| format!(": {e}"))
+            );
+        }
+    }
+    let verdict = match (&d.verdict, d.combined.as_ref().or(d.ranked.first())) {
+        (Verdict::NoSignificantDiscrepancy, _) => {
+            "no significant discrepancy: the model as written explains the held-out data to the noise".to_string()
+        }
+        (Verdict::Explained, Some(best)) => format!(
+            "cause: {} at {} (held-out χ²/value {:.2} → {:.2}, {:+.0} %){}",
+            best.cause,
+            best.location,
+            per(d.base.holdout_chi2),
+            per(best.holdout_chi2),
+            100.0 * (best.holdout_chi2 / d.base.holdout_chi2 - 1.0),
+            tied_text(&d)
+        ),
+        (Verdict::PartlyExplained, Some(best)) => format!(
+            "partly explained by {} at {} (held-out χ²/value {:.2} → {:.2}); an unexplained \
+             residual above the noise remains",
+            best.cause,
+            best.location,
+            per(d.base.holdout_chi2),
+            per(best.holdout_chi2)
+        ),
+        (Verdict::Flagged, _) => format!(
+            "flagged ({}): the data show what no parameter of the model can produce, so no \
+             cause is named; the fits are reported with the flag{}",
+            d.screening.as_ref().map_or(String::new(), flag_kinds),
+            match d.ranked.first() {
+                Some(best) => format!(
+                    " (best fit: {} at {}, held-out χ²/value {:.2} → {:.2})",
+                    best.cause,
+                    best.location,
+                    per(d.base.holdout_chi2),
+                    per(best.holdout_chi2)
+                ),
+                None => String::new(),
+            }
+        ),
+        _ => "unexplained: the residual is above the noise and no candidate explains it".to_string(),
+    };
+    let comparison = Comparison::new(&experiment, &d);
+    print!("{}", comparison.text());
+    println!("\nverdict: {verdict}");
+    std::fs::create_dir_all(&args.out_dir)
+        .map_err(|e| format!("cannot create {}: {e}", args.out_dir.display()))?;
+    let trial = |t: &Trial| {
+        json!({
+            "cause": t.cause, "location": t.location,
+            "train_chi2": t.train_chi2, "holdout_chi2": finite_or_null(t.holdout_chi2),
+            "delta_aicc": finite_or_null(t.aicc - d.base.aicc),
+            "parameters": t.parameters.iter().map(|(n, nominal, v, se)| json!({
+                "name": n, "nominal": nominal, "value": v, "standard_error": finite_or_null(*se),
+            })).collect::<Vec<_>>(),
+            "error": t.error,
+        })
+    };
+    let (flags, screened) = screening_json(d.screening.as_ref());
+    let summary = json!({
+        "experiment": experiment.title(),
+        "data": args.data.display().to_string(),
+        "flags": flags,
+        "screening": screened,
+        "holdout": args.holdout,
+        "verdict": format!("{:?}", d.verdict),
+        "summary": verdict,
+        "tied_with_best": d.tied.saturating_sub(1),
+        "base": trial(&d.base),
+        "ranked": d.ranked.iter().map(trial).collect::<Vec<_>>(),
+        "combined": d.combined.as_ref().map(trial),
+        "second_round": d.second_round.iter().map(trial).collect::<Vec<_>>(),
+        "inert": d.inert.iter().map(trial).collect::<Vec<_>>(),
+        "best": comparison.best_label,
+        "features": comparison.features_json(),
+        "residual_rms_held_out": comparison.rms_json(),
+    });
+    let path = args.out_dir.join("diagnosis.json");
+    let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
+    output::write_atomic(&path, text.as_bytes())
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    let sources = PageSources {
+        experiment: &args.experiment,
+        data: &args.data,
+        holdout: &args.holdout,
+        out_dir: &args.out_dir,
+    };
+    let html = diagnosis_page(&sources, &experiment, &d, &verdict, &comparison, path)?;
+    println!("wrote {} and its data", html.display());
+    Ok(())
+}

@@ -1,0 +1,26 @@
+//! `mech experiment FILE`: run one experiment file (`experiments/*.toml`) and print its
+//! tables; its CSV files and plots go to a subfolder of the output folder.
+//!
+//! Consumes: the experiment file. Produces: text on stdout, files from the experiment.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use crate::experiments;
+use crate::render::report::outcome_text;
+
+#[derive(Args, Clone, Debug)]
+pub struct ExperimentArgs {
+    /// The experiment file (TOML), e.g. `experiments/hamr_vi_trajectory.toml`.
+    pub file: PathBuf,
+    /// Folder for the CSV files and plots (a subfolder named after the file is used).
+    #[arg(long, default_value = "out/experiments")]
+    pub out_dir: PathBuf,
+}
+
+pub fn run(args: &ExperimentArgs) -> Result<(), String> {
+    let outcome = experiments::run_file(&args.file, &args.out_dir)?;
+    print!("{}", outcome_text(&outcome));
+    Ok(())
+}

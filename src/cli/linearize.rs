@@ -1,0 +1,104 @@
+//! `mech linearize MODEL`: `M δz̈ + C δż + K δz = B δin` about the static equilibrium, in
+//! minimal coordinates, and the normal modes.
+//!
+//! Consumes: [`ModelArgs`]. Produces: the matrices and modes on stdout and, with `--out`,
+//! the modes as CSV.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use clap::Args;
+use mech_runtime::Model;
+
+use super::ModelArgs;
+use crate::output;
+
+#[derive(Args, Clone, Debug)]
+pub struct LinearizeArgs {
+    #[command(flatten)]
+    pub common: ModelArgs,
+    /// CSV file for the modes (frequency, damping ratio, shape).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+fn matrix_text(name: &str, matrix: &mech_runtime::nalgebra::DMatrix<f64>) -> String {
+    let mut text = format!("{name} =\n");
+    for r in 0..matrix.nrows() {
+        let row: Vec<String> = (0..matrix.ncols())
+            .map(|c| format!("{:>13.5e}", matrix[(r, c)]))
+            .collect();
+        let _ = writeln!(text, "  [{}]", row.join(" "));
+    }
+    text
+}
+
+pub fn run(args: &LinearizeArgs) -> Result<(), String> {
+    let (session, inputs) = args.common.open()?;
+    let model = &session.model;
+    let linear = session.linearization(&args.common.independent, &inputs)?;
+    let names: Vec<&str> = linear
+        .independent
+        .iter()
+        .map(|&i| model.coordinate_name(i))
+        .collect();
+    let mut text = format!(
+        "`{}` linearized about its static equilibrium, in the minimal coordinates [{}]:\n\
+         M δz̈ + C δż + K δz = B δin (SI units)\n\n",
+        model.name(),
+        names.join(", ")
+    );
+    text += &matrix_text("M", &linear.mass);
+    text += &matrix_text("C", &linear.damping);
+    text += &matrix_text("K", &linear.stiffness);
+    if linear.input.ncols() > 0 {
+        let inputs: Vec<&str> = (0..model.ninputs()).map(|i| model.input_name(i)).collect();
+        text += &matrix_text(&format!("B (inputs {})", inputs.join(", ")), &linear.input);
+    }
+    let modes = linear
+        .modes()
+        .ok_or("the reduced mass matrix is not positive definite")?;
+    let _ = writeln!(
+        text,
+        "\n{:>4} {:>14} {:>14} {:>12}  shape",
+        "mode", "f [Hz]", "ω_n [rad/s]", "ζ"
+    );
+    let mut rows = Vec::new();
+    for (k, mode) in modes.iter().enumerate() {
+        let shape: Vec<String> = mode.shape.iter().map(|x| format!("{x:+.4}")).collect();
+        let unstable = if mode.natural_frequency < 0.0 {
+            "  (unstable: growth rate −ω_n)"
+        } else {
+            ""
+        };
+        let _ = writeln!(
+            text,
+            "{:>4} {:>14.6} {:>14.6} {:>12.4e}  [{}]{unstable}",
+            k + 1,
+            mode.frequency_hz(),
+            mode.natural_frequency,
+            mode.damping_ratio,
+            shape.join(", ")
+        );
+        let mut row = vec![
+            mode.frequency_hz(),
+            mode.natural_frequency,
+            mode.damping_ratio,
+        ];
+        row.extend(&mode.shape);
+        rows.push(row);
+    }
+    print!("{text}");
+    if let Some(out) = &args.out {
+        let mut header = vec![
+            "frequency_hz".to_string(),
+            "omega_rad_s".to_string(),
+            "damping_ratio".to_string(),
+        ];
+        header.extend(names.iter().map(|n| format!("shape_{n}")));
+        output::write_csv(out, &header, &rows)
+            .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+        println!("written to {}", out.display());
+    }
+    Ok(())
+}

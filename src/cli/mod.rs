@@ -1,0 +1,224 @@
+//! The command line: one file per command, named after it, and the only code that parses
+//! arguments, prints and decides which files to write. Each command file holds its clap
+//! arguments (`XArgs`) and a `run` that calls the library's analyses (which return data)
+//! and the renderers of [`crate::render`].
+//!
+//! Consumes: the process arguments. Produces: text on stdout/stderr, files, the exit code.
+
+pub mod actuator;
+pub mod assemble;
+pub mod bode;
+pub mod check;
+pub mod derive;
+pub mod diagnose;
+pub mod experiment;
+pub mod fit;
+pub mod flexure;
+pub mod linearize;
+pub mod report;
+pub mod simulate;
+pub mod statics;
+
+use std::f64::consts::TAU;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Args, Parser, Subcommand};
+use mech_codegen::ir::Dimension;
+
+use crate::flexure_fit::rig::parse_si;
+use crate::session::Session;
+
+#[derive(Parser)]
+#[command(
+    name = "mech",
+    version,
+    about = "A Kane's-method compiler for flexure-based microrobots"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Validate a model and print its coordinates, bodies and degrees of freedom.
+    Check(check::CheckArgs),
+    /// Derive the equations of motion and print generated code or equations.
+    Derive(derive::DeriveArgs),
+    /// Simulate a model and write the trajectory as CSV (and optionally a plot).
+    Simulate(simulate::SimulateArgs),
+    /// Static equilibrium under the inputs and loads, with loop reactions and the forces
+    /// of fixtures (e.g. a foot held against a force sensor).
+    Statics(statics::StaticsArgs),
+    /// Linearize about the static equilibrium in minimal coordinates: M, C, K, B and the
+    /// normal modes.
+    Linearize(linearize::LinearizeArgs),
+    /// Frequency response from an input to an output (Bode plot), with resonances and Q.
+    Bode(bode::BodeArgs),
+    /// Close the loops of a model: mobility, the singular values deciding it, and a
+    /// consistent state (CSV with --out).
+    Assemble(assemble::AssembleArgs),
+    /// Flexure hinges: stiffness and damping (seed Eqs. 2, 5, 8) and the pendulum fit (Sec. IV).
+    Flexure {
+        #[command(subcommand)]
+        command: flexure::FlexureCommand,
+    },
+    /// Piezo bending actuator: blocked force, free deflection, series stiffness, energy density.
+    Actuator(actuator::ActuatorArgs),
+    /// Run one experiment file (`experiments/*.toml`): CSV, plots and tables.
+    Experiment(experiment::ExperimentArgs),
+    /// Run every experiment in `experiments/` and write an HTML and Markdown report.
+    Report(report::ReportArgs),
+    /// Fit model parameters to measured data (Levenberg–Marquardt, standard errors), with the
+    /// residual before and after; see docs/diagnose.md.
+    Fit(fit::FitArgs),
+    /// Find what the model gets wrong: fit every catalog cause, rank on held-out data, and
+    /// name the cause (or say there is none, or that none explains it); see docs/diagnose.md.
+    Diagnose(diagnose::DiagnoseArgs),
+}
+
+/// Restores the default SIGPIPE action, so `mech ... | head` ends quietly instead of
+/// panicking on a closed pipe (Rust ignores SIGPIPE by default).
+#[cfg(unix)]
+fn restore_default_sigpipe() {
+    unsafe extern "C" {
+        fn signal(signum: i32, handler: usize) -> usize;
+    }
+    const SIGPIPE: i32 = 13;
+    const SIG_DFL: usize = 0;
+    // SAFETY: setting a signal's disposition to SIG_DFL is async-signal-safe and has no
+    // preconditions; it runs before any other thread exists.
+    unsafe {
+        signal(SIGPIPE, SIG_DFL);
+    }
+}
+
+#[cfg(not(unix))]
+fn restore_default_sigpipe() {}
+
+/// Parses the process arguments, runs the command, prints its error (if any) on stderr.
+pub fn main() -> ExitCode {
+    restore_default_sigpipe();
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Check(args) => check::run(&args),
+        Command::Derive(args) => derive::run(&args),
+        Command::Simulate(args) => simulate::run(&args),
+        Command::Statics(args) => statics::run(&args),
+        Command::Linearize(args) => linearize::run(&args),
+        Command::Bode(args) => bode::run(&args),
+        Command::Assemble(args) => assemble::run(&args),
+        Command::Flexure { command } => flexure::run(command),
+        Command::Actuator(args) => actuator::run(&args),
+        Command::Experiment(args) => experiment::run(&args),
+        Command::Report(args) => report::run(&args),
+        Command::Fit(args) => fit::run(&args),
+        Command::Diagnose(args) => diagnose::run(&args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(message) => {
+            eprintln!("{}", message.trim_end());
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// What every linear-analysis command takes.
+#[derive(Args, Clone, Debug)]
+pub struct ModelArgs {
+    /// The `.mech` file.
+    pub model: PathBuf,
+    /// Set a parameter: `--set 'm=12 g'` (repeatable).
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub sets: Vec<String>,
+    /// Hold an input at a value: `--input 'drive=2 mN'` (a constant; repeatable).
+    #[arg(long = "input", value_name = "NAME=VALUE")]
+    pub inputs: Vec<String>,
+    /// For models with loops: a coordinate kept independent (`NAME` or `NAME=VALUE` for the
+    /// starting guess); default: chosen by pivoting.
+    #[arg(long = "independent", value_name = "NAME[=VALUE]")]
+    pub independent: Vec<String>,
+}
+
+impl ModelArgs {
+    /// Opens the model with constant inputs, and returns it with the input values.
+    fn open(&self) -> Result<(Session, Vec<f64>), String> {
+        let session = Session::open(&self.model, &self.sets, &self.inputs)?;
+        let inputs: Vec<f64> = session.signals.iter().map(|s| s.value(0.0)).collect();
+        Ok((session, inputs))
+    }
+}
+
+// ------------------------------------------------------------------ quantities
+
+/// A time given with a unit (`2 s`, `500 ms`) or as plain seconds.
+pub(crate) fn parse_time(what: &str, text: &str) -> Result<f64, String> {
+    let (value, dimension) =
+        mech_codegen::front::units::parse_quantity(text).map_err(|e| format!("{what}: {e}"))?;
+    let seconds_ok = dimension == mech_codegen::ir::Dimension::TIME
+        || dimension == mech_codegen::ir::Dimension::NONE;
+    if !seconds_ok || !value.is_finite() || value <= 0.0 {
+        return Err(format!(
+            "{what}: expected a positive time such as `2 s` or `500 ms`, got `{text}`"
+        ));
+    }
+    Ok(value)
+}
+
+/// A positive frequency such as `10 Hz` (or plain hertz).
+pub(crate) fn frequency_value(what: &str, text: &str) -> Result<f64, String> {
+    let (value, dimension) =
+        mech_codegen::front::units::parse_quantity(text).map_err(|e| format!("{what}: {e}"))?;
+    let hertz = mech_codegen::ir::Dimension {
+        time: -1,
+        ..mech_codegen::ir::Dimension::NONE
+    };
+    if (dimension != hertz && dimension != mech_codegen::ir::Dimension::NONE)
+        || value.is_nan()
+        || value <= 0.0
+    {
+        return Err(format!(
+            "{what}: expected a positive frequency such as `10 Hz`, got `{text}`"
+        ));
+    }
+    Ok(value)
+}
+
+/// A positive length such as `25 um`.
+pub(crate) fn length(what: &str, text: &str) -> Result<f64, String> {
+    positive(what, parse_si(what, text, Dimension::LENGTH, false)?)
+}
+
+/// `value` itself if it is positive and finite.
+pub(crate) fn positive(what: &str, value: f64) -> Result<f64, String> {
+    if value > 0.0 && value.is_finite() {
+        Ok(value)
+    } else {
+        Err(format!("{what} must be positive, got {value}"))
+    }
+}
+
+/// An angular frequency (rad/s) from `40 Hz` (cycles per second) or `250 rad/s`.
+pub(crate) fn angular_frequency(what: &str, text: &str) -> Result<f64, String> {
+    let frequency = Dimension::TIME.powi(-1);
+    let value = parse_si(what, text, frequency, false)?;
+    let angular = text.contains("rad") || text.contains("deg");
+    let omega = if angular {
+        // `deg/s` parses to (π/180)/s; `rad/s` to 1/s: already angular.
+        value
+    } else {
+        TAU * value
+    };
+    positive(what, omega)
+}
+
+/// A positive voltage such as `225 V`.
+pub(crate) fn voltage(what: &str, text: &str) -> Result<f64, String> {
+    let volt = Dimension::MASS
+        .mul(Dimension::LENGTH.powi(2))
+        .div(Dimension::TIME.powi(3))
+        .div(Dimension::CURRENT);
+    positive(what, parse_si(what, text, volt, false)?)
+}

@@ -1,0 +1,70 @@
+//! `mech report`: run every experiment in a folder in parallel (progress bar) and write
+//! `report.html` (self-contained) and `report.md`.
+//!
+//! Consumes: the experiments folder. Produces: text on stdout, the two report files written
+//! atomically, and each experiment's files.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use clap::Args;
+
+use crate::experiments::{experiment_files, run_all};
+use crate::output;
+use crate::render::report::{outcome_text, render_html, render_markdown};
+
+#[derive(Args, Clone, Debug)]
+pub struct ReportArgs {
+    /// Folder of experiment files (every `*.toml` in it is run).
+    #[arg(long, default_value = "experiments")]
+    pub experiments: PathBuf,
+    /// Output folder: `report.html`, `report.md`, and one subfolder per experiment.
+    #[arg(long, default_value = "out/report")]
+    pub out_dir: PathBuf,
+}
+
+pub fn run(args: &ReportArgs) -> Result<(), String> {
+    let start = Instant::now();
+    let files = experiment_files(&args.experiments)?;
+    let bar = indicatif::ProgressBar::new(files.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "experiments {bar:40} {pos}/{len} {msg} [{elapsed}]",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar.tick();
+    let outcomes = run_all(&files, &args.out_dir, &|name| {
+        bar.inc(1);
+        bar.set_message(format!("done: {name}"));
+    });
+    bar.finish_and_clear();
+    let mut outcomes = outcomes?;
+    // In the order of their titles ("1. …", "2. …").
+    outcomes.sort_by(|a, b| a.title.cmp(&b.title));
+    for outcome in &outcomes {
+        println!("{}", outcome_text(outcome));
+    }
+    let elapsed = start.elapsed().as_secs_f64();
+    let (html, markdown) = (
+        args.out_dir.join("report.html"),
+        args.out_dir.join("report.md"),
+    );
+    output::write_atomic(
+        &html,
+        render_html(&outcomes, &args.out_dir, elapsed)?.as_bytes(),
+    )
+    .map_err(|e| e.to_string())?;
+    output::write_atomic(
+        &markdown,
+        render_markdown(&outcomes, &args.out_dir, elapsed).as_bytes(),
+    )
+    .map_err(|e| e.to_string())?;
+    println!(
+        "{} experiments in {elapsed:.1} s; report written to {} and {}",
+        outcomes.len(),
+        html.display(),
+        markdown.display()
+    );
+    Ok(())
+}

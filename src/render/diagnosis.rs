@@ -1,0 +1,420 @@
+//! The rendering shared by `mech fit` and `mech diagnose`: the screening's flags, the
+//! overlay plots of data and models, the comparison of features and residuals, and the
+//! self-contained `diagnosis.html`.
+//!
+//! Consumes: a [`crate::diagnose`] experiment, its observations and predictions, a
+//! [`Diagnosis`]. Produces: text, JSON values, SVG plots and the HTML page (written
+//! atomically).
+
+use std::path::{Path, PathBuf};
+
+use serde_json::json;
+
+use crate::diagnose::candidates::Diagnosis;
+use crate::diagnose::experiment::{Experiment, Observations};
+use crate::diagnose::features::{features, series_rms, Feature, SeriesResidual};
+use crate::diagnose::pendulum::Screening;
+use crate::output;
+use crate::render::plot;
+use crate::render::report::{render_page, Outcome};
+use crate::render::table::Table;
+
+/// The screening's summary and, prominently, its flags (empty for unscreened kinds).
+pub fn screening_text(screening: Option<&Screening>) -> String {
+    let Some(s) = screening else {
+        return String::new();
+    };
+    let mut text = format!("{}\n", s.summary());
+    for flag in &s.flags {
+        text += &format!("\n  !! {}\n", flag.message);
+    }
+    text
+}
+
+/// The kinds of the screening's flags, comma-separated.
+pub fn flag_kinds(s: &Screening) -> String {
+    s.flags
+        .iter()
+        .map(|f| f.kind)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// `flags` and `screening` entries for the JSON summaries.
+pub fn screening_json(screening: Option<&Screening>) -> (serde_json::Value, serde_json::Value) {
+    match screening {
+        Some(s) => (
+            json!(s
+                .flags
+                .iter()
+                .map(|f| json!({"kind": f.kind, "message": f.message}))
+                .collect::<Vec<_>>()),
+            json!(s.summary()),
+        ),
+        None => (json!([]), serde_json::Value::Null),
+    }
+}
+
+/// One plot per measured series (`PREFIX_SERIES.svg` in `dir`): the data and each of
+/// `curves` (a label and a prediction of every observed value).
+pub fn overlay_plots(
+    dir: &Path,
+    prefix: &str,
+    experiment: &Experiment,
+    obs: &Observations,
+    curves: &[(String, &[f64])],
+) -> Result<Vec<PathBuf>, String> {
+    let log_x = matches!(experiment, Experiment::FrequencyResponse(_));
+    // Axis labels and the SI → plotted unit factors.
+    let (x_label, x_scale, y_unit, y_scale) = match experiment {
+        Experiment::FrequencyResponse(_) => ("frequency [Hz]", 1.0, "", 1.0),
+        Experiment::QuasiStatic(_) => ("data row", 1.0, " [m]", 1.0),
+        Experiment::ForceDeflection(_) => ("sensor distance [µm]", 1e6, " [mN]", 1e3),
+        Experiment::Pendulum(_) => ("time [s]", 1.0, " [rad]", 1.0),
+    };
+    let mut paths = Vec::new();
+    for name in obs.series_names() {
+        let pick = |values: &[f64]| -> (Vec<f64>, Vec<f64>) {
+            (0..values.len().min(obs.series.len()))
+                .filter(|&k| obs.series[k] == name)
+                .map(|k| (obs.abscissa[k] * x_scale, values[k] * y_scale))
+                .unzip()
+        };
+        let lines: Vec<(String, Vec<f64>, Vec<f64>)> =
+            std::iter::once(("measured".to_string(), obs.values.as_slice()))
+                .chain(
+                    curves
+                        .iter()
+                        .map(|(label, values)| (label.clone(), *values)),
+                )
+                .map(|(label, values)| {
+                    let (x, y) = pick(values);
+                    (label, x, y)
+                })
+                .collect();
+        let path = dir.join(format!("{prefix}_{}.svg", name.replace(['|', '.'], "_")));
+        let title = format!("{}: {name}", experiment.title());
+        let y_label = format!("{name}{y_unit}");
+        plot::plot_xy(&path, &title, x_label, &y_label, &lines, log_x)
+            .map_err(|e| e.to_string())?;
+        paths.push(path);
+    }
+    Ok(paths)
+}
+
+/// `NAME = value ± σ (nominal …)` for a fitted parameter of a trial.
+pub fn fitted_text((name, nominal, value, se): &(String, f64, f64, f64)) -> String {
+    format!("{name} = {value:.4e} ± {se:.1e} (nominal {nominal:.4e})")
+}
+
+/// `; the data support equally: …` when several candidates tie with the best.
+pub fn tied_text(d: &Diagnosis) -> String {
+    if d.tied <= 1 {
+        return String::new();
+    }
+    let others: Vec<String> = d.ranked[1..d.tied]
+        .iter()
+        .map(|t| format!("{} at {}", t.cause, t.location))
+        .collect();
+    format!(
+        "; these data support equally well: {} (a measurement that separates them is needed)",
+        others.join(", ")
+    )
+}
+
+/// A JSON number, or `null` for NaN and infinities (which JSON cannot hold).
+pub fn finite_or_null(x: f64) -> serde_json::Value {
+    if x.is_finite() {
+        json!(x)
+    } else {
+        serde_json::Value::Null
+    }
+}
+
+/// Where a diagnosis came from and where its page goes.
+pub struct PageSources<'a> {
+    pub experiment: &'a Path,
+    pub data: &'a Path,
+    /// The hold-out rule as the user wrote it (`every:3`).
+    pub holdout: &'a str,
+    pub out_dir: &'a Path,
+}
+
+/// `diagnosis.html`, in the style of `mech report`: the verdict, the ranking, the inert
+/// candidates, and per measured series the data with the base model and the best candidate.
+pub fn diagnosis_page(
+    sources: &PageSources,
+    experiment: &Experiment,
+    d: &Diagnosis,
+    verdict: &str,
+    comparison: &Comparison,
+    json_path: PathBuf,
+) -> Result<PathBuf, String> {
+    let per = |chi2: f64| chi2 / d.holdout_values as f64;
+    let mut ranking = Table::new(
+        "Candidates, best first (χ² on the fitted values; χ² per value on the held-out ones)",
+        &[
+            "cause",
+            "where",
+            "χ² fit",
+            "χ²/value held out",
+            "ΔAICc",
+            "fitted",
+        ],
+    );
+    for t in std::iter::once(&d.base)
+        .chain(&d.ranked)
+        .chain(&d.second_round)
+    {
+        let fitted: Vec<String> = t.parameters.iter().map(fitted_text).collect();
+        ranking.row(vec![
+            t.cause.clone(),
+            t.location.clone(),
+            format!("{:.1}", t.train_chi2),
+            format!("{:.2}", per(t.holdout_chi2)),
+            format!("{:.1}", t.aicc - d.base.aicc),
+            fitted.join(", "),
+        ]);
+    }
+    let mut outcome = Outcome {
+        name: "diagnosis".into(),
+        source: Some(sources.experiment.display().to_string()),
+        title: experiment.title().to_string(),
+        method: format!(
+            "{} values fitted, {} held out ({}); a model explains the data to the noise when \
+             its χ² per held-out value is at most {:.2}. Verdict: {verdict}.",
+            d.train_values, d.holdout_values, sources.holdout, d.noise_band
+        ),
+        tables: vec![ranking, comparison.features_table(), comparison.rms_table()],
+        files: vec![sources.data.to_path_buf(), json_path],
+        ..Outcome::default()
+    };
+    if let Some(s) = &d.screening {
+        // First, above the ranking: what the fits cannot be trusted for.
+        let mut flags = Table::new(
+            "Screening before fitting: what no parameter of the model can produce",
+            &["flag", "finding"],
+        );
+        for flag in &s.flags {
+            flags.row(vec![flag.kind.to_string(), flag.message.clone()]);
+        }
+        if s.flags.is_empty() {
+            flags.row(vec!["none".into(), s.summary()]);
+        }
+        outcome.tables.insert(0, flags);
+        outcome.notes.push(s.summary());
+    }
+    if !d.inert.is_empty() {
+        let mut inert = Table::new(
+            "Inert: cannot change the response beyond the noise, or the fit failed",
+            &["cause", "where", "note"],
+        );
+        for t in &d.inert {
+            inert.row(vec![
+                t.cause.clone(),
+                t.location.clone(),
+                t.error.clone().unwrap_or_default(),
+            ]);
+        }
+        outcome.tables.push(inert);
+    }
+    let mut curves = vec![("base model".to_string(), d.base.predicted.as_slice())];
+    if let Some(best) = d.ranked.first() {
+        let label = format!("{} at {}", best.cause, best.location);
+        curves.push((label, best.predicted.as_slice()));
+    }
+    outcome.plots = overlay_plots(
+        sources.out_dir,
+        "diagnosis",
+        experiment,
+        &d.observations,
+        &curves,
+    )?;
+    let page = render_page(
+        "mech diagnose: what the model gets wrong",
+        "Every candidate cause of the catalog is fitted to the rows not held out and ranked by \
+         its χ² on the held-out rows (docs/diagnose.md).",
+        &format!("Data: <code>{}</code>", sources.data.display()),
+        &[outcome],
+        sources.out_dir,
+    )?;
+    let path = sources.out_dir.join("diagnosis.html");
+    output::write_atomic(&path, page.as_bytes())
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    Ok(path)
+}
+
+/// What the data show against what the base model and the best candidate predict: the
+/// features of the response ([`super::features`]), each read the same way off the data and
+/// off both predictions, and the residual RMS per series on the held-out values.
+pub struct Comparison {
+    /// `cause at location` of the best candidate (the combined pair when there is one).
+    pub best_label: Option<String>,
+    /// Per feature: the data's, the base model's, the best candidate's.
+    features: Vec<(Feature, Feature, Option<Feature>)>,
+    /// Held-out residual RMS per series: base model (`before`) and best (`after`).
+    rms: Vec<SeriesResidual>,
+}
+
+impl Comparison {
+    pub fn new(experiment: &Experiment, d: &Diagnosis) -> Comparison {
+        let best = d
+            .combined
+            .as_ref()
+            .or(d.ranked.first())
+            .filter(|t| t.predicted.len() == d.observations.values.len());
+        let of = |values: &[f64]| features(experiment, &d.observations, values);
+        let (data, base) = (of(&d.observations.values), of(&d.base.predicted));
+        let best_features = best.map(|t| of(&t.predicted));
+        let features = data
+            .into_iter()
+            .zip(base)
+            .enumerate()
+            .map(|(k, (data, base))| {
+                let best = best_features.as_ref().and_then(|f| f.get(k).cloned());
+                (data, base, best)
+            })
+            .collect();
+        let held_out = |k: usize| !d.train.get(k).copied().unwrap_or(true);
+        let rms = match best {
+            Some(best) => series_rms(
+                &d.observations,
+                &d.base.predicted,
+                &best.predicted,
+                &held_out,
+            ),
+            // No candidate: the base model's RMS alone (`after` NaN, shown as `-`).
+            None => series_rms(
+                &d.observations,
+                &d.base.predicted,
+                &d.base.predicted,
+                &held_out,
+            )
+            .into_iter()
+            .map(|r| SeriesResidual {
+                after: f64::NAN,
+                ..r
+            })
+            .collect(),
+        };
+        Comparison {
+            best_label: best.map(|t| format!("{} at {}", t.cause, t.location)),
+            features,
+            rms,
+        }
+    }
+
+    /// `value (+x.x %)`: a model's feature and its deviation from the data's.
+    fn against(model: &Feature, data: &Feature) -> String {
+        match (model.value, data.value) {
+            (Some(m), Some(v)) if v != 0.0 => {
+                format!("{} ({:+.1} %)", model.display(), 100.0 * (m / v - 1.0))
+            }
+            _ => model.display(),
+        }
+    }
+
+    fn rows(&self) -> Vec<Vec<String>> {
+        self.features
+            .iter()
+            .map(|(data, base, best)| {
+                vec![
+                    data.label(),
+                    data.display(),
+                    Self::against(base, data),
+                    best.as_ref()
+                        .map_or("-".into(), |best| Self::against(best, data)),
+                ]
+            })
+            .collect()
+    }
+
+    /// The comparison as terminal text (empty without features).
+    pub fn text(&self) -> String {
+        if self.features.is_empty() {
+            return String::new();
+        }
+        let mut text = format!(
+            "\nfeatures, read the same way off the data and each model (best: {}):\n",
+            self.best_label.as_deref().unwrap_or("none")
+        );
+        text += &format!(
+            "  {:<36} {:>12} {:>22} {:>22}\n",
+            "feature", "data", "base model", "best"
+        );
+        for row in self.rows() {
+            text += &format!(
+                "  {:<36} {:>12} {:>22} {:>22}\n",
+                row[0], row[1], row[2], row[3]
+            );
+        }
+        text += "residual RMS on the held-out values (SI units; ln|H| relative):\n";
+        for r in &self.rms {
+            let [before, after, change] = Self::rms_cells(r);
+            text += &format!(
+                "  {:<36} base {before}  best {after}  ({change})\n",
+                r.series
+            );
+        }
+        text
+    }
+
+    /// Base RMS, best RMS and the change, as shown (`-` without a best candidate).
+    fn rms_cells(r: &SeriesResidual) -> [String; 3] {
+        if r.after.is_nan() {
+            return [format!("{:.4e}", r.before), "-".into(), "-".into()];
+        }
+        [
+            format!("{:.4e}", r.before),
+            format!("{:.4e}", r.after),
+            format!("{:+.1} %", 100.0 * (r.after / r.before - 1.0)),
+        ]
+    }
+
+    pub fn features_json(&self) -> serde_json::Value {
+        let value = |f: &Feature| f.value.map_or(serde_json::Value::Null, |v| json!(v));
+        self.features
+            .iter()
+            .map(|(data, base, best)| {
+                json!({
+                    "name": data.name,
+                    "display_unit": data.unit,
+                    "display_scale": data.scale,
+                    "data": value(data),
+                    "base": value(base),
+                    "best": best.as_ref().map_or(serde_json::Value::Null, value),
+                })
+            })
+            .collect()
+    }
+
+    pub fn rms_json(&self) -> serde_json::Value {
+        self.rms
+            .iter()
+            .map(|r| json!({"series": r.series, "base": r.before, "best": finite_or_null(r.after)}))
+            .collect()
+    }
+
+    fn features_table(&self) -> Table {
+        let mut table = Table::new(
+            "Features, read the same way off the data and each model (deviation from the data)",
+            &["feature", "data", "base model", "best candidate"],
+        );
+        for row in self.rows() {
+            table.row(row);
+        }
+        table
+    }
+
+    fn rms_table(&self) -> Table {
+        let mut table = Table::new(
+            "Residual RMS on the held-out values (SI units; ln|H| relative)",
+            &["series", "base model", "best candidate", "change"],
+        );
+        for r in &self.rms {
+            let [before, after, change] = Self::rms_cells(r);
+            table.row(vec![r.series.clone(), before, after, change]);
+        }
+        table
+    }
+}
