@@ -9,11 +9,11 @@ use clap::Args;
 use mech_codegen::ir::Dimension;
 
 use super::{length, positive, voltage};
-use crate::flexure_fit::rig::parse_si;
 use crate::physics::actuator::{
     energy_density, SEED_DRIVE_VOLTAGE, SEED_TABLE_II, SEED_TABLE_I_MODEL,
 };
 use crate::physics::{Actuator, Bimorph};
+use crate::quantity::parse_si;
 
 /// Options of `mech actuator`.
 #[derive(Args)]

@@ -13,7 +13,7 @@ use serde_json::json;
 use crate::diagnose::data::MeasuredData;
 use crate::diagnose::experiment::{self, Experiment};
 use crate::diagnose::fit::{fit, parameters, FitReport, FitRequest};
-use crate::diagnose::pendulum::{screen_experiment, Screening};
+use crate::diagnose::pendulum::Screening;
 use crate::experiments::leg::Leg;
 use crate::output;
 use crate::render::diagnosis::{
@@ -49,7 +49,7 @@ pub fn run(args: &FitArgs) -> Result<(), String> {
     let fitted = parameters(&leg, &requests)?;
     // Checked before the screening, which reads the same columns.
     experiment.observations(&leg, &data)?;
-    let screening = screen_experiment(&experiment, &data)?;
+    let screening = experiment.screen(&data)?;
     println!(
         "{}: {} rows of `{}`, fitting {}",
         experiment.title(),

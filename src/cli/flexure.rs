@@ -14,12 +14,13 @@ use mech_codegen::ir::Dimension;
 use super::{angular_frequency, length, positive};
 use crate::flexure_fit::fit::{fit_specimens, FitOptions};
 use crate::flexure_fit::report;
-use crate::flexure_fit::rig::{parse_si, pressure, read_specimen, specimen_files};
+use crate::flexure_fit::rig::{read_specimen, specimen_files};
 use crate::physics::flexure::{
     twist_ratio, HAMR_HINGE_EFFECTIVE_LENGTH, HAMR_HINGE_LOSS_FACTOR, HAMR_HINGE_THICKNESS,
     SEED_TABLE_III,
 };
 use crate::physics::{Flexure, HingeKind, Material};
+use crate::quantity::parse_si;
 
 /// `mech flexure ...`
 #[derive(Subcommand)]
@@ -108,8 +109,10 @@ fn stiffness(args: &StiffnessArgs) -> Result<(), String> {
         )
     })?;
     if let Some(text) = &args.modulus {
-        material.youngs_modulus =
-            positive("--modulus", parse_si("--modulus", text, pressure(), false)?)?;
+        material.youngs_modulus = positive(
+            "--modulus",
+            parse_si("--modulus", text, Dimension::PRESSURE, false)?,
+        )?;
     }
     if let Some(nu) = args.poisson {
         material.poisson_ratio = nu;
@@ -266,7 +269,7 @@ fn fit(args: &FitArgs) -> Result<(), String> {
     let modulus = match &args.modulus {
         Some(text) => Some(positive(
             "--modulus",
-            parse_si("--modulus", text, pressure(), false)?,
+            parse_si("--modulus", text, Dimension::PRESSURE, false)?,
         )?),
         None => None,
     };

@@ -26,7 +26,7 @@ use std::process::ExitCode;
 use clap::{Args, Parser, Subcommand};
 use mech_codegen::ir::Dimension;
 
-use crate::flexure_fit::rig::parse_si;
+use crate::quantity::parse_si;
 use crate::session::Session;
 
 #[derive(Parser)]

@@ -432,7 +432,7 @@ pub fn diagnose_causes(
     let spec = experiment.model_spec();
     let leg = Leg::open_any(&spec, &[])?;
     let observations = experiment.observations(&leg, data)?;
-    let screening = super::pendulum::screen_experiment(experiment, data)?;
+    let screening = experiment.screen(data)?;
     if observations.sigma.is_none() {
         return Err(
             "`mech diagnose` needs the measurement noise in the experiment file \
@@ -492,7 +492,7 @@ pub fn diagnose_causes(
         !fitted && wanted
     }));
     let run = |jobs: Vec<Candidate>| {
-        crate::experiments::parallel(jobs, crate::experiments::threads(), |candidate| {
+        crate::parallel::parallel(jobs, crate::parallel::threads(), |candidate| {
             let started = std::time::Instant::now();
             let trial = run_trial(
                 experiment,

@@ -31,7 +31,9 @@ use mech_runtime::FlexureDamping;
 use serde::Deserialize;
 
 use super::data::MeasuredData;
-use super::pendulum::Pendulum;
+use super::observations::noise_value;
+pub use super::observations::Observations;
+use super::pendulum::{self, Pendulum, Screening};
 use crate::experiments::leg::{force_deflection_warm, Dof, Leg, Sensor, WarmStarts};
 use crate::experiments::ModelSpec;
 
@@ -156,34 +158,6 @@ pub struct Extensions {
     pub off_axis_fraction: Option<f64>,
 }
 
-/// The measured side of the residual: one flat vector of values, their σ (if known) and a
-/// label per value (`foot.x @ line 12`) for reports.
-#[derive(Debug, Clone, Default)]
-pub struct Observations {
-    pub values: Vec<f64>,
-    /// One σ per value; `None` when the experiment file gives no noise.
-    pub sigma: Option<Vec<f64>>,
-    /// The series each value belongs to (an output name, `ln|H|` or `phase`).
-    pub series: Vec<String>,
-    /// The abscissa of each value (row index for quasi-static data, frequency in Hz).
-    pub abscissa: Vec<f64>,
-    /// The data row (0-based) each value comes from.
-    pub row: Vec<usize>,
-}
-
-impl Observations {
-    /// The series in order of first appearance.
-    pub fn series_names(&self) -> Vec<&str> {
-        let mut names: Vec<&str> = Vec::new();
-        for name in &self.series {
-            if !names.contains(&name.as_str()) {
-                names.push(name);
-            }
-        }
-        names
-    }
-}
-
 /// Reads and checks a diagnosis experiment file.
 pub fn load(path: &Path) -> Result<Experiment, String> {
     let text = std::fs::read_to_string(path)
@@ -202,6 +176,19 @@ pub fn load(path: &Path) -> Result<Experiment, String> {
 }
 
 impl Experiment {
+    /// The screening of a pendulum experiment's trace (nothing for the other kinds): see
+    /// [`pendulum`]. Errors only for unreadable data (missing column, bad unit, time not
+    /// increasing), which the observations report too.
+    pub fn screen(&self, data: &MeasuredData) -> Result<Option<Screening>, String> {
+        match self {
+            Experiment::Pendulum(e) => {
+                let (times, angles) = e.trace(data)?;
+                Ok(Some(pendulum::screen(times, angles)))
+            }
+            _ => Ok(None),
+        }
+    }
+
     pub fn title(&self) -> &str {
         match self {
             Experiment::QuasiStatic(e) => &e.title,
@@ -322,7 +309,7 @@ impl Experiment {
             Experiment::FrequencyResponse(e) => {
                 leg.require_hamr()?;
                 let frequency = data
-                    .require("frequency", crate::experiments::FREQUENCY)
+                    .require("frequency", Dimension::FREQUENCY)
                     .map_err(|e| e.to_string())?;
                 let gain_sigma = match &e.gain_noise {
                     Some(t) => Some(noise_value("gain_noise", t)?),
@@ -529,7 +516,7 @@ impl ForceDeflectionTest {
     fn volts(&self) -> Result<f64, String> {
         let (value, dimension) = mech_codegen::front::units::parse_quantity(&self.voltage)
             .map_err(|e| format!("key `voltage`: `{}`: {e}", self.voltage))?;
-        if dimension != crate::experiments::VOLTAGE || !value.is_finite() {
+        if dimension != Dimension::VOLTAGE || !value.is_finite() {
             return Err(format!(
                 "key `voltage`: `{}` is not a voltage (e.g. \"225 V\")",
                 self.voltage
@@ -555,30 +542,4 @@ fn geometric_mean(values: &[f64]) -> f64 {
 fn wrap_near(angle: f64, reference: f64) -> f64 {
     let two_pi = 2.0 * std::f64::consts::PI;
     angle + two_pi * ((reference - angle) / two_pi).round()
-}
-
-/// A noise level: a quantity (`5 um`, `3 deg`) or a percentage (`5 %`), as an SI number.
-pub(super) fn noise_value(key: &str, text: &str) -> Result<f64, String> {
-    let text = text.trim();
-    if let Some(percent) = text.strip_suffix('%') {
-        let value: f64 = percent
-            .trim()
-            .parse()
-            .map_err(|_| format!("key `{key}`: `{text}` is not a percentage"))?;
-        if value > 0.0 && value.is_finite() {
-            return Ok(value / 100.0);
-        }
-        return Err(format!(
-            "key `{key}`: expected a positive noise, got `{text}`"
-        ));
-    }
-    let (value, _) = mech_codegen::front::units::parse_quantity(text)
-        .map_err(|e| format!("key `{key}`: `{text}`: {e}"))?;
-    if value > 0.0 && value.is_finite() {
-        Ok(value)
-    } else {
-        Err(format!(
-            "key `{key}`: expected a positive noise, got `{text}`"
-        ))
-    }
 }

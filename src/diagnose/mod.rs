@@ -27,6 +27,7 @@ pub mod extend;
 pub mod features;
 pub mod fit;
 pub mod lm;
+pub mod observations;
 pub mod pendulum;
 
 pub use data::{Column, DataError, DataErrors, MeasuredData};

@@ -45,8 +45,8 @@ use mech_runtime::Reduced;
 use serde::Deserialize;
 
 use super::data::MeasuredData;
-use super::experiment::{noise_value, Experiment, Observations};
 use super::lm::{levenberg_marquardt, LmOptions, Parameter};
+use super::observations::{noise_value, Observations};
 use crate::experiments::leg::Leg;
 use crate::flexure_fit::trace::{analyze_trace, TraceAnalysis, TraceOptions};
 
@@ -419,22 +419,6 @@ impl Screening {
             f.drift_sigma,
             f.offset_sigma
         )
-    }
-}
-
-/// The screening of `experiment`'s trace (nothing for the other kinds): see the module
-/// documentation. Errors only for unreadable data (missing column, bad unit, time not
-/// increasing), which the observations report too.
-pub fn screen_experiment(
-    experiment: &Experiment,
-    data: &MeasuredData,
-) -> Result<Option<Screening>, String> {
-    match experiment {
-        Experiment::Pendulum(e) => {
-            let (times, angles) = e.trace(data)?;
-            Ok(Some(screen(times, angles)))
-        }
-        _ => Ok(None),
     }
 }
 

@@ -8,8 +8,10 @@ use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
 use super::leg::Leg;
-use super::{csv, positive, quantity, ModelSpec, Outcome, Table, FREQUENCY};
+use super::{csv, ModelSpec, Outcome, Table};
 use crate::frequency::{self, ChirpSweep, Point};
+use crate::parallel::{parallel, threads};
+use crate::quantity::{positive, quantity};
 use crate::render::plot;
 
 #[derive(Debug, Clone, Deserialize)]
@@ -67,8 +69,8 @@ impl Chirp {
 
 impl Spec {
     pub fn check(&self) -> Result<(), String> {
-        let from = positive("from", &self.from, FREQUENCY)?;
-        let to = positive("to", &self.to, FREQUENCY)?;
+        let from = positive("from", &self.from, Dimension::FREQUENCY)?;
+        let to = positive("to", &self.to, Dimension::FREQUENCY)?;
         if to <= from {
             return Err(format!(
                 "key `to`: {to} Hz must be above `from` ({from} Hz)"
@@ -80,7 +82,7 @@ impl Spec {
             );
         }
         if let Some(chirp) = &self.chirp {
-            positive("chirp.amplitude", &chirp.amplitude, super::VOLTAGE)?;
+            positive("chirp.amplitude", &chirp.amplitude, Dimension::VOLTAGE)?;
             positive("chirp.duration", &chirp.duration, Dimension::TIME)?;
         }
         Ok(())
@@ -92,8 +94,8 @@ fn q_text(q: Option<f64>) -> String {
 }
 
 pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
-    let from = positive("from", &spec.from, FREQUENCY)?;
-    let to = positive("to", &spec.to, FREQUENCY)?;
+    let from = positive("from", &spec.from, Dimension::FREQUENCY)?;
+    let to = positive("to", &spec.to, Dimension::FREQUENCY)?;
     let model_spec = ModelSpec {
         model: spec.model.clone(),
         set: spec.set.clone(),
@@ -163,10 +165,10 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
     // Chirps in parallel, one per channel.
     let chirp = match &spec.chirp {
         Some(c) => Some((
-            positive("chirp.amplitude", &c.amplitude, super::VOLTAGE)?,
+            positive("chirp.amplitude", &c.amplitude, Dimension::VOLTAGE)?,
             positive("chirp.duration", &c.duration, Dimension::TIME)?,
             match &c.analysis_from {
-                Some(t) => positive("chirp.analysis_from", t, FREQUENCY)?,
+                Some(t) => positive("chirp.analysis_from", t, Dimension::FREQUENCY)?,
                 None => 5.0,
             },
         )),
@@ -190,7 +192,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
     }
     let estimates = match chirp {
         Some((amplitude, duration, analysis_from)) => {
-            super::parallel(indices.clone(), super::threads(), |(input, output)| {
+            parallel(indices.clone(), threads(), |(input, output)| {
                 let leg = Leg::open(&model_spec)?;
                 let sweep = ChirpSweep {
                     input,

@@ -5,11 +5,14 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
 use super::force::{actuator_work, check_paper, PaperRow};
 use super::leg::{force_deflection, Dof, Leg, Sensor};
-use super::{csv, positive, ModelSpec, Outcome, Table, VOLTAGE};
+use super::{csv, ModelSpec, Outcome, Table};
+use crate::parallel::parallel;
+use crate::quantity::positive;
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -41,7 +44,7 @@ pub struct Robot {
 
 impl Spec {
     pub fn check(&self) -> Result<(), String> {
-        positive("voltage", &self.voltage, VOLTAGE)?;
+        positive("voltage", &self.voltage, Dimension::VOLTAGE)?;
         if self.robot.len() != 2 {
             return Err(format!(
                 "key `robot`: expected exactly two [[robot]] tables (old, new), got {}",
@@ -56,7 +59,7 @@ impl Spec {
 }
 
 pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
-    let voltage = positive("voltage", &spec.voltage, VOLTAGE)?;
+    let voltage = positive("voltage", &spec.voltage, Dimension::VOLTAGE)?;
     let mut outcome = Outcome {
         method: format!(
             "For each robot and degree of freedom, at {voltage} V: the free deflection d of the \
@@ -85,7 +88,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
     let mut work = [[0.0; 2]; 2];
     let mut paper_work = [[f64::NAN; 2]; 2];
     let mut rows = Vec::new();
-    let results = super::parallel(
+    let results = parallel(
         spec.robot.iter().collect(),
         2,
         |robot| -> Result<_, String> {

@@ -10,7 +10,8 @@ use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
 use super::leg::{force_deflection, Dof, ForceDeflection, Leg, Sensor, AXES};
-use super::{csv, paper_value, percent_diff, positive, ModelSpec, Outcome, Table, ENERGY, VOLTAGE};
+use super::{csv, percent_diff, ModelSpec, Outcome, Table};
+use crate::quantity::{paper_value, positive};
 use crate::render::plot;
 
 #[derive(Debug, Clone, Deserialize)]
@@ -66,7 +67,7 @@ impl PaperRow {
         Ok(Paper {
             d: paper_value(&format!("{key}.d"), &self.d, Dimension::LENGTH)?,
             force: paper_value(&format!("{key}.force"), &self.force, Dimension::FORCE)?,
-            work: paper_value(&format!("{key}.work"), &self.work, ENERGY)?,
+            work: paper_value(&format!("{key}.work"), &self.work, Dimension::ENERGY)?,
             normalized: paper_value(
                 &format!("{key}.normalized"),
                 &self.normalized,
@@ -94,7 +95,7 @@ fn default_dofs() -> Vec<Dof> {
 
 impl Spec {
     pub fn check(&self) -> Result<(), String> {
-        positive("voltage", &self.voltage, VOLTAGE)?;
+        positive("voltage", &self.voltage, Dimension::VOLTAGE)?;
         positive("sensor_step", &self.sensor_step, Dimension::LENGTH)?;
         if let Some(c) = self.off_axis_fraction {
             if !(0.0..=2.0).contains(&c) {
@@ -119,7 +120,7 @@ pub(crate) fn actuator_work(leg: &Leg) -> Result<f64, String> {
 }
 
 pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
-    let voltage = positive("voltage", &spec.voltage, VOLTAGE)?;
+    let voltage = positive("voltage", &spec.voltage, Dimension::VOLTAGE)?;
     let step = positive("sensor_step", &spec.sensor_step, Dimension::LENGTH)?;
     let leg = Leg::open(&ModelSpec {
         model: spec.model.clone(),

@@ -19,7 +19,7 @@ pub mod trajectory;
 
 use std::path::{Path, PathBuf};
 
-use mech_codegen::ir::Dimension;
+use crate::parallel::{parallel, threads};
 use serde::Deserialize;
 
 pub use crate::render::report::Outcome;
@@ -186,87 +186,6 @@ pub(crate) fn stem(path: &Path) -> String {
         .unwrap_or_else(|| "experiment".into())
 }
 
-// ------------------------------------------------------------------ quantities
-
-/// V = kg·m²·s⁻³·A⁻¹.
-pub const VOLTAGE: Dimension = Dimension {
-    mass: 1,
-    length: 2,
-    time: -3,
-    current: -1,
-};
-/// Hz = s⁻¹.
-pub const FREQUENCY: Dimension = Dimension {
-    mass: 0,
-    length: 0,
-    time: -1,
-    current: 0,
-};
-/// J = kg·m²·s⁻².
-pub const ENERGY: Dimension = Dimension::TORQUE;
-
-fn dimension_name(d: Dimension) -> &'static str {
-    match d {
-        VOLTAGE => "a voltage (e.g. `225 V`)",
-        FREQUENCY => "a frequency (e.g. `1 Hz`)",
-        Dimension::LENGTH => "a length (e.g. `127 um`)",
-        Dimension::FORCE => "a force (e.g. `17.7 mN`)",
-        Dimension::TORQUE => "an energy (e.g. `38.9 uJ`)",
-        Dimension::TIME => "a time (e.g. `2 s`)",
-        _ => "a quantity with a unit",
-    }
-}
-
-/// Parses `text` (e.g. `"225 V"`) as a quantity of dimension `expected`, in SI. `key` names
-/// the TOML key in errors.
-pub fn quantity(key: &str, text: &str, expected: Dimension) -> Result<f64, String> {
-    let (value, dimension) = mech_codegen::front::units::parse_quantity(text)
-        .map_err(|e| format!("key `{key}`: `{text}`: {e}"))?;
-    if dimension != expected || !value.is_finite() {
-        return Err(format!(
-            "key `{key}`: expected {}, got `{text}`",
-            dimension_name(expected)
-        ));
-    }
-    Ok(value)
-}
-
-/// As [`quantity`], and positive.
-pub fn positive(key: &str, text: &str, expected: Dimension) -> Result<f64, String> {
-    let value = quantity(key, text, expected)?;
-    if value <= 0.0 {
-        return Err(format!(
-            "key `{key}`: expected a positive value, got `{text}`"
-        ));
-    }
-    Ok(value)
-}
-
-/// A paper value with its uncertainty: `"2.2 mm"` or `"2.2 +- 0.1 mm"`.
-pub fn paper_value(key: &str, text: &str, expected: Dimension) -> Result<(f64, f64), String> {
-    match text.split_once("+-") {
-        Some((mean, rest)) => {
-            // `2.2 +- 0.1 mm`: the unit follows the spread.
-            let rest = rest.trim();
-            let split = rest
-                .find(|c: char| !(c.is_ascii_digit() || c == '.' || c == 'e' || c == '-'))
-                .unwrap_or(rest.len());
-            let (spread, unit) = rest.split_at(split);
-            let mean = quantity(key, &format!("{} {unit}", mean.trim()), expected)?;
-            let spread = if unit.trim().is_empty() && expected == Dimension::NONE {
-                spread
-                    .trim()
-                    .parse::<f64>()
-                    .map_err(|e| format!("key `{key}`: {e}"))?
-            } else {
-                quantity(key, &format!("{spread} {unit}"), expected)?
-            };
-            Ok((mean, spread))
-        }
-        None => Ok((quantity(key, text, expected)?, 0.0)),
-    }
-}
-
 // ------------------------------------------------------------------ plumbing
 
 /// Writes a CSV under `dir` and records it.
@@ -291,41 +210,4 @@ pub(crate) fn percent_diff(model: f64, paper: f64) -> String {
         return "–".into();
     }
     format!("{:+.0} %", 100.0 * (model / paper - 1.0))
-}
-
-/// Runs `jobs` on up to `threads` threads, results in order.
-pub(crate) fn parallel<T: Send, R: Send>(
-    jobs: Vec<T>,
-    threads: usize,
-    work: impl Fn(T) -> R + Sync,
-) -> Vec<R> {
-    use std::sync::Mutex;
-    let n = jobs.len();
-    // Reversed, so that `pop` hands out the jobs in the given order.
-    let queue = Mutex::new(jobs.into_iter().enumerate().rev().collect::<Vec<_>>());
-    let results = Mutex::new((0..n).map(|_| None).collect::<Vec<Option<R>>>());
-    let threads = threads.clamp(1, n.max(1));
-    std::thread::scope(|scope| {
-        for _ in 0..threads {
-            scope.spawn(|| loop {
-                let job = queue.lock().map(|mut q| q.pop()).unwrap_or(None);
-                let Some((index, job)) = job else { break };
-                let result = work(job);
-                if let Ok(mut slots) = results.lock() {
-                    slots[index] = Some(result);
-                }
-            });
-        }
-    });
-    results
-        .into_inner()
-        .unwrap_or_default()
-        .into_iter()
-        .map(|r| r.expect("every job ran"))
-        .collect()
-}
-
-/// Threads to use: the machine's parallelism.
-pub(crate) fn threads() -> usize {
-    std::thread::available_parallelism().map_or(2, |n| n.get())
 }

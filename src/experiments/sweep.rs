@@ -12,7 +12,9 @@ use serde::Deserialize;
 
 use super::force::actuator_work;
 use super::leg::{force_deflection, Dof, Leg, Sensor, AXES};
-use super::{csv, positive, ModelSpec, Outcome, Table, VOLTAGE};
+use super::{csv, ModelSpec, Outcome, Table};
+use crate::parallel::{parallel, threads};
+use crate::quantity::positive;
 use crate::render::plot::{self, CurveStyle, Star};
 
 #[derive(Debug, Clone, Deserialize)]
@@ -98,7 +100,7 @@ impl Series {
 
 impl Spec {
     pub fn check(&self) -> Result<(), String> {
-        positive("voltage", &self.voltage, VOLTAGE)?;
+        positive("voltage", &self.voltage, Dimension::VOLTAGE)?;
         if !(2..=200).contains(&self.points) {
             return Err(format!(
                 "key `points`: expected 2 to 200 arm values per series, got {}",
@@ -211,7 +213,7 @@ fn keys(series: &[Series]) -> Vec<String> {
 }
 
 pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
-    let voltage = positive("voltage", &spec.voltage, VOLTAGE)?;
+    let voltage = positive("voltage", &spec.voltage, Dimension::VOLTAGE)?;
     // Every (series, arm) pair is one job: the model is compiled per point (milliseconds),
     // so that the points are independent and run on all cores.
     let mut jobs = Vec::new();
@@ -224,7 +226,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
                 .map(|a| (k, Some(a))),
         );
     }
-    let results = super::parallel(jobs, super::threads(), |(k, arm)| {
+    let results = parallel(jobs, threads(), |(k, arm)| {
         (k, arm, sweep_point(&spec.series[k], voltage, arm))
     });
     let keys = keys(&spec.series);

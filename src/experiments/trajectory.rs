@@ -5,10 +5,12 @@
 
 use std::path::{Path, PathBuf};
 
+use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
 use super::leg::Leg;
-use super::{csv, positive, ModelSpec, Outcome, Table, FREQUENCY, VOLTAGE};
+use super::{csv, ModelSpec, Outcome, Table};
+use crate::quantity::positive;
 use crate::render::plot;
 
 #[derive(Debug, Clone, Deserialize)]
@@ -45,8 +47,8 @@ fn default_points() -> usize {
 
 impl Spec {
     pub fn check(&self) -> Result<(), String> {
-        positive("amplitude", &self.amplitude, VOLTAGE)?;
-        positive("frequency", &self.frequency, FREQUENCY)?;
+        positive("amplitude", &self.amplitude, Dimension::VOLTAGE)?;
+        positive("frequency", &self.frequency, Dimension::FREQUENCY)?;
         if self.points < 4 {
             return Err("key `points`: expected at least 4 equilibria per cycle".into());
         }
@@ -69,8 +71,8 @@ const CASES: [(&str, bool, bool); 3] = [
 ];
 
 pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
-    let amplitude = positive("amplitude", &spec.amplitude, VOLTAGE)?;
-    let frequency = positive("frequency", &spec.frequency, FREQUENCY)?;
+    let amplitude = positive("amplitude", &spec.amplitude, Dimension::VOLTAGE)?;
+    let frequency = positive("frequency", &spec.frequency, Dimension::FREQUENCY)?;
     let leg = Leg::open(&spec.leg())?;
     let rest_inputs = leg.inputs(0.0, 0.0);
     let rest_q = leg.equilibrium(&leg.q0, &rest_inputs, &[])?.q;

@@ -24,6 +24,7 @@
 //!
 //! Quantities are strings with a unit (any unit of the `.mech` language) or plain numbers in SI.
 
+use crate::quantity::parse_si;
 use std::path::{Path, PathBuf};
 
 use mech_codegen::ir::Dimension;
@@ -130,33 +131,6 @@ enum Quantity {
     Text(String),
 }
 
-/// Parses `text` (`2 mm`, `25 um`, `0.2 g`) as a quantity of dimension `expected` and returns
-/// its SI value. A bare number is accepted only for dimensionless quantities unless
-/// `bare_is_si`.
-pub fn parse_si(
-    what: &str,
-    text: &str,
-    expected: Dimension,
-    bare_is_si: bool,
-) -> Result<f64, String> {
-    let (value, dimension) =
-        mech_codegen::front::units::parse_quantity(text).map_err(|e| format!("{what}: {e}"))?;
-    if dimension == expected || (bare_is_si && dimension == Dimension::NONE) {
-        if !value.is_finite() {
-            return Err(format!("{what}: `{text}` is not finite"));
-        }
-        return Ok(value);
-    }
-    if dimension == Dimension::NONE {
-        return Err(format!(
-            "{what}: `{text}` has no unit; write it with a unit of {expected} (e.g. `2 mm`, `25 um`)"
-        ));
-    }
-    Err(format!(
-        "{what}: `{text}` has unit {dimension}, but {what} needs {expected}"
-    ))
-}
-
 fn quantity(what: &str, q: &Quantity, expected: Dimension) -> Result<f64, String> {
     let value = match q {
         Quantity::Number(v) => *v,
@@ -166,11 +140,6 @@ fn quantity(what: &str, q: &Quantity, expected: Dimension) -> Result<f64, String
         return Err(format!("{what} must be positive, got {value}"));
     }
     Ok(value)
-}
-
-/// Dimension of pressure / Young's modulus (Pa).
-pub fn pressure() -> Dimension {
-    Dimension::FORCE.div(Dimension::LENGTH.powi(2))
 }
 
 /// Reads a specimen description. Errors name the file.

@@ -87,6 +87,27 @@ impl Dimension {
         time: -2,
         current: 0,
     };
+    /// J = kg·m²/s², the dimension of a torque.
+    pub const ENERGY: Dimension = Dimension::TORQUE;
+    /// V = kg·m²/(s³·A)
+    pub const VOLTAGE: Dimension = Dimension {
+        mass: 1,
+        length: 2,
+        time: -3,
+        current: -1,
+    };
+    /// Hz = 1/s
+    pub const FREQUENCY: Dimension = Dimension {
+        time: -1,
+        ..Dimension::NONE
+    };
+    /// Pa = kg/(m·s²), also a Young's modulus.
+    pub const PRESSURE: Dimension = Dimension {
+        mass: 1,
+        length: -1,
+        time: -2,
+        current: 0,
+    };
 
     pub fn mul(self, other: Dimension) -> Dimension {
         Dimension {

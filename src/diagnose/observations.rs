@@ -1,0 +1,59 @@
+//! The measured side of a residual, shared by every experiment kind: the observed values
+//! with their σ, series and abscissa, and the noise levels experiment files give.
+//!
+//! Consumes: nothing of the other diagnosis modules. Produces: [`Observations`] and
+//! [`noise_value`].
+
+/// The measured side of the residual: one flat vector of values, their σ (if known) and a
+/// label per value (`foot.x @ line 12`) for reports.
+#[derive(Debug, Clone, Default)]
+pub struct Observations {
+    pub values: Vec<f64>,
+    /// One σ per value; `None` when the experiment file gives no noise.
+    pub sigma: Option<Vec<f64>>,
+    /// The series each value belongs to (an output name, `ln|H|` or `phase`).
+    pub series: Vec<String>,
+    /// The abscissa of each value (row index for quasi-static data, frequency in Hz).
+    pub abscissa: Vec<f64>,
+    /// The data row (0-based) each value comes from.
+    pub row: Vec<usize>,
+}
+
+impl Observations {
+    /// The series in order of first appearance.
+    pub fn series_names(&self) -> Vec<&str> {
+        let mut names: Vec<&str> = Vec::new();
+        for name in &self.series {
+            if !names.contains(&name.as_str()) {
+                names.push(name);
+            }
+        }
+        names
+    }
+}
+
+/// A noise level: a quantity (`5 um`, `3 deg`) or a percentage (`5 %`), as an SI number.
+pub fn noise_value(key: &str, text: &str) -> Result<f64, String> {
+    let text = text.trim();
+    if let Some(percent) = text.strip_suffix('%') {
+        let value: f64 = percent
+            .trim()
+            .parse()
+            .map_err(|_| format!("key `{key}`: `{text}` is not a percentage"))?;
+        if value > 0.0 && value.is_finite() {
+            return Ok(value / 100.0);
+        }
+        return Err(format!(
+            "key `{key}`: expected a positive noise, got `{text}`"
+        ));
+    }
+    let (value, _) = mech_codegen::front::units::parse_quantity(text)
+        .map_err(|e| format!("key `{key}`: `{text}`: {e}"))?;
+    if value > 0.0 && value.is_finite() {
+        Ok(value)
+    } else {
+        Err(format!(
+            "key `{key}`: expected a positive noise, got `{text}`"
+        ))
+    }
+}
