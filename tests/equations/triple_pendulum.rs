@@ -1,7 +1,7 @@
 //! The 3D triple pendulum (full inertia tensors, skewed axis): definiteness of `M`, `M`
 //! against the kinetic energy, and conservation of energy under integration.
 
-mod common;
+use crate::common;
 
 use common::{assert_close, mass_matrix, output, Rng};
 use mech_runtime::{Method, Model, SimOptions};

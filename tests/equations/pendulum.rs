@@ -1,7 +1,7 @@
 //! The simple pendulum against closed forms: exact symbolic `M` and `F`, the small-angle
 //! period, and the large-amplitude period from the complete elliptic integral.
 
-mod common;
+use crate::common;
 
 use mech_runtime::{Method, Model, SimOptions};
 

@@ -4,7 +4,7 @@
 //! output), which uses neither the generalized forces nor the statics solver. Also the
 //! Newton iteration counts, and a side load on a pendulum against its closed form.
 
-mod common;
+use crate::common;
 
 use mech::diagnose::extend::{open_leg, Extension};
 use mech::experiments::leg::{Dof, Leg};

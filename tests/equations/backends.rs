@@ -3,7 +3,7 @@
 //! relative at random states; generating twice gives identical bytes; the generated code of
 //! the pendulum is a golden file (`MECH_BLESS=1 cargo test` rewrites it).
 
-mod common;
+use crate::common;
 
 use common::Rng;
 use mech_runtime::Model;

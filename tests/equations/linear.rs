@@ -1,6 +1,6 @@
 //! Statics, linearization and frequency response against closed forms and simulation.
 
-mod common;
+use crate::common;
 
 use mech_runtime::{
     linearize, solve_statics, Fixture, FlexureDamping, Method, Model, SimOptions, StaticsOptions,

@@ -2,7 +2,7 @@
 //! must recover the hidden value within its own standard errors (and a stated tolerance),
 //! and bring the residual down to the noise.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

@@ -6,7 +6,7 @@
 //! only those; `mech fit` must recover the loss factor and modulus of clean traces; bad data
 //! must give errors that name the file, line and column.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

@@ -7,7 +7,7 @@
 //! entry (checked); clean data and an effect no entry covers are in `tests/diagnose.rs`; the
 //! paper's story closes the file.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

@@ -1,7 +1,7 @@
 //! Compliant loop closures: a flexure with `twist_axis` on a revolute loop (Doshi et al.
 //! Eq. 8), and the twist extension `mech diagnose` builds on the HAMR leg.
 
-mod common;
+use crate::common;
 
 use mech::diagnose::extend::{open_leg, Extension};
 use mech::experiments::ModelSpec;

@@ -3,7 +3,7 @@
 //! four-bar's motion against SymPy, and 1 s of the HAMR-VI leg under the paper's 1 Hz drive
 //! with both Rosenbrock methods against DOP853 at a tight tolerance.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -2,7 +2,7 @@
 //! `../shared/peers/sympy_fourbar.py`, the slider-crank, an over-constrained (redundant)
 //! closure, `J` and `J̇u` against finite differences, and drift control over long runs.
 
-mod common;
+use crate::common;
 
 use common::Rng;
 use mech::tape_model::TapeModel;

@@ -1,0 +1,11 @@
+//! The analyses of the application crate: the paper's experiments, flexure and actuator physics, the README.
+//!
+//! One test binary per group, so the suite links a few binaries instead of one per file.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod actuator;
+mod experiments;
+mod flexure;
+mod readme;

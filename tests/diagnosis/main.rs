@@ -1,0 +1,10 @@
+//! Diagnosis: measured data, fits, the candidate catalog on hidden effects, the pendulum kind.
+//!
+//! One test binary per group, so the suite links a few binaries instead of one per file.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod diagnose;
+mod diagnose_catalog;
+mod pendulum_diagnose;

@@ -1,0 +1,18 @@
+//! The equations and the numbers under them: SymPy cross-checks, back ends, loops, reduced dynamics, statics, linearization, the HAMR leg.
+//!
+//! One test binary per group, so the suite links a few binaries instead of one per file.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod backends;
+mod compliant_loops;
+mod hamr;
+mod linear;
+mod loops;
+mod pendulum;
+mod reduced;
+mod statics;
+mod sympy_cross_check;
+mod sympy_loops;
+mod triple_pendulum;
