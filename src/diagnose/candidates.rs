@@ -25,18 +25,18 @@
 
 use mech_codegen::ir::Dimension;
 
+use mech_codegen::ir::transform::actuator::{BASE_COMPLIANCE, TIP_MASS, TIP_PRELOAD};
+use mech_codegen::ir::transform::hinge::{MISALIGNMENT, OFF_AXIS_COMPLIANCE, TWIST_FACTOR};
 use mech_codegen::ir::transform::{constant_direction, hinge_axis};
 
 use super::data::MeasuredData;
 use super::experiment::Experiment;
 use super::experiment::Extensions;
-use super::extend::{
-    Extension, BASE_COMPLIANCE, MISALIGNMENT, OFF_AXIS_COMPLIANCE, TIP_MASS, TIP_PRELOAD,
-    TWIST_FACTOR,
-};
+use super::extend::Extension;
 use super::fit::{fit_values, residual, Target};
 use super::lm::{information_criteria, NoiseModel, Parameter};
-use crate::experiments::leg::{Leg, WarmStarts, AXES};
+use crate::experiments::leg::{Leg, WarmStarts};
+use mech_codegen::ir::transform::AXES;
 
 /// Which rows are held out of the fit.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -7,6 +7,7 @@
 //! the HAMR ports, and the HAMR-only methods ([`Leg::inputs`], [`Leg::foot_at`], ...) are
 //! for legs that have them ([`Leg::require_hamr`]).
 
+use mech_codegen::ir::transform::AXES;
 use mech_runtime::{
     assemble, solve_statics_with_loads, AssemblyOptions, Equilibrium, Fixture, Model, SideLoad,
     StaticsOptions,
@@ -60,8 +61,6 @@ impl Dof {
         }
     }
 }
-
-pub const AXES: [&str; 3] = ["x", "y", "z"];
 
 /// An opened leg model.
 pub struct Leg {

@@ -11,11 +11,12 @@ use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
 use super::force::actuator_work;
-use super::leg::{force_deflection, Dof, Leg, Sensor, AXES};
+use super::leg::{force_deflection, Dof, Leg, Sensor};
 use super::{csv, ModelSpec, Outcome, Table};
 use crate::parallel::{parallel, threads};
 use crate::quantity::positive;
 use crate::render::plot::{self, CurveStyle, Star};
+use mech_codegen::ir::transform::AXES;
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]

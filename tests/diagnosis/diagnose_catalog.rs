@@ -15,12 +15,11 @@ use common::Rng;
 use mech::diagnose::candidates::{diagnose, Diagnosis, Holdout, Trial, Verdict};
 use mech::diagnose::data::MeasuredData;
 use mech::diagnose::experiment::{self, Experiment};
-use mech::diagnose::extend::{
-    open_leg, Extension, BASE_COMPLIANCE, MISALIGNMENT, OFF_AXIS_COMPLIANCE, TIP_MASS, TIP_PRELOAD,
-    TWIST_FACTOR,
-};
+use mech::diagnose::extend::{open_leg, Extension};
 use mech::diagnose::features::features;
 use mech::experiments::leg::{force_deflection, Dof, Leg, Sensor};
+use mech_codegen::ir::transform::actuator::{BASE_COMPLIANCE, TIP_MASS, TIP_PRELOAD};
+use mech_codegen::ir::transform::hinge::{MISALIGNMENT, OFF_AXIS_COMPLIANCE, TWIST_FACTOR};
 use mech_runtime::Model;
 
 /// A standard normal variate (Box–Muller) from the shared test generator.

@@ -153,10 +153,11 @@ fn the_twist_extension_is_conservative_and_frees_the_loops() {
 /// 1e-9 m), and differ from the aligned model by far more.
 #[test]
 fn a_tilted_hinge_equals_one_written_tilted() {
-    use mech::diagnose::extend::{apply, MISALIGNMENT};
+    use mech::diagnose::extend::apply;
     use mech::experiments::leg::{Dof, Leg};
     use mech::session::Session;
     use mech_codegen::ir::transform::constant_direction;
+    use mech_codegen::ir::transform::hinge::MISALIGNMENT;
     use mech_codegen::ir::{ClosureKind, Expr, FlexureAngle, Motion};
     use mech_codegen::sym::Number;
     use mech_codegen::Compiled;

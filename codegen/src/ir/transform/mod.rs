@@ -5,12 +5,21 @@
 //!
 //! - [`insert_revolute_above`]: a moving frame in the kinematic tree;
 //! - [`add_twist`]: a flexure hinge twists about its length axis (Doshi et al. Eq. 8): a pin
-//!   joint gains a revolute frame, a revolute loop closure becomes compliant in twist.
+//!   joint gains a revolute frame, a revolute loop closure becomes compliant in twist;
+//! - [`hinge`]: physics a model of flexure hinges leaves out — named hinges twisting with
+//!   every other hinge compliant off its axis, a hinge's axis misaligned;
+//! - [`actuator`]: an actuator's compliant base, a mass on its tip, a preload.
+//!
+//! The transforms of [`hinge`] and [`actuator`] append their new parameters after the
+//! model's own (so those keep their indices), at values where the model is unchanged.
 
-use super::{ClosureKind, Dimension, Flexure, FlexureAngle};
+use super::{ClosureKind, Dimension, Flexure, FlexureAngle, Param};
 use super::{Coordinate, Expr, Frame, FrameVector, Handle, Load, Model, Motion, OutputKind, Vec3};
 use crate::diag::Span;
 use crate::sym::Number;
+
+pub mod actuator;
+pub mod hinge;
 
 /// Lateral (in-plane) bending stiffness of a compliant loop closure, per unit bending
 /// stiffness `k`. A thin hinge's in-plane stiffness is `(w/t)²·k` (Eq. 2 with width and
@@ -54,6 +63,130 @@ pub enum TwistError {
     AlreadyTwists,
     /// A loop closure needs a lateral spring.
     NoLateralSpring,
+}
+
+impl std::fmt::Display for TwistError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            TwistError::NotAHinge => "it is neither a pin joint nor a revolute loop closure",
+            TwistError::AlongHingeAxis => "the twist axis lies along the hinge axis",
+            TwistError::AlreadyTwists => "it already twists",
+            TwistError::NoLateralSpring => "a loop closure needs a lateral spring",
+        })
+    }
+}
+
+/// Why a transform of [`hinge`] or [`actuator`] cannot be applied; the messages name the
+/// element and say what it is instead.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum TransformError {
+    NoFlexure(String),
+    NoCoordinate(String),
+    /// A slider coordinate without an actuator's spring and force.
+    NoActuator(String),
+    /// The model has no actuator at all.
+    NoActuators,
+    NotASlider(String),
+    Twist {
+        flexure: String,
+        /// The axis, as shown (`x`, or `off its axis`).
+        about: String,
+        error: TwistError,
+    },
+    AxisNotConstant(String),
+    TiltAboutOwnAxis {
+        flexure: String,
+        about: usize,
+    },
+    NotOnPin(String),
+    NotOnRevoluteLoop(String),
+    NotABendingHinge(String),
+}
+
+/// The coordinate axes by index, as reports show them.
+pub const AXES: [&str; 3] = ["x", "y", "z"];
+
+impl std::fmt::Display for TransformError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            TransformError::NoFlexure(name) => write!(f, "no flexure `{name}`"),
+            TransformError::NoCoordinate(name) => write!(f, "no coordinate `{name}`"),
+            TransformError::NoActuator(slider) => write!(f, "no actuator along `{slider}`"),
+            TransformError::NoActuators => f.write_str("no actuator to preload"),
+            TransformError::NotASlider(name) => write!(f, "`{name}` is not a slider joint"),
+            TransformError::Twist {
+                flexure,
+                about,
+                error,
+            } => write!(f, "flexure `{flexure}` cannot twist {about}: {error}"),
+            TransformError::AxisNotConstant(name) => {
+                write!(f, "flexure `{name}`: its axis is not a constant direction")
+            }
+            TransformError::TiltAboutOwnAxis { flexure, about } => write!(
+                f,
+                "flexure `{flexure}`: cannot tilt about {}, its own axis",
+                AXES[*about]
+            ),
+            TransformError::NotOnPin(name) => write!(f, "flexure `{name}` is not on a pin joint"),
+            TransformError::NotOnRevoluteLoop(name) => {
+                write!(f, "flexure `{name}` is not on a revolute loop")
+            }
+            TransformError::NotABendingHinge(name) => {
+                write!(f, "flexure `{name}` is not a bending hinge")
+            }
+        }
+    }
+}
+
+impl std::error::Error for TransformError {}
+
+/// Appends a parameter and returns it as an expression.
+pub(crate) fn append_param(
+    model: &mut Model,
+    name: &str,
+    value: f64,
+    dimension: Dimension,
+    doc: &str,
+) -> Expr {
+    Expr::Param(model.params.append(Param {
+        name: name.into(),
+        value,
+        dimension,
+        docs: vec![doc.into()],
+        span: Default::default(),
+    }))
+}
+
+/// `factor · value`.
+pub(crate) fn scaled(factor: &Expr, value: &Expr) -> Expr {
+    Expr::Mul(Box::new(factor.clone()), Box::new(value.clone()))
+}
+
+/// A spring about one direction of `flexure`: its stiffness and damper times `factor`.
+pub(crate) fn spring(flexure: &Flexure, suffix: &str, factor: &Expr) -> HingeSpring {
+    HingeSpring {
+        name: format!("{}_{suffix}", flexure.name),
+        stiffness: scaled(factor, &flexure.stiffness),
+        damping: scaled(factor, &flexure.damping),
+        loss_factor: flexure.loss_factor.clone(),
+    }
+}
+
+/// The flexure named `name`.
+pub(crate) fn find_flexure(model: &Model, name: &str) -> Result<Flexure, TransformError> {
+    model
+        .flexures
+        .iter()
+        .find(|f| f.name == name)
+        .cloned()
+        .ok_or_else(|| TransformError::NoFlexure(name.to_string()))
+}
+
+/// The unit vector along coordinate axis `axis`.
+pub(crate) fn unit(axis: usize) -> Vec3 {
+    let mut direction = [Expr::zero(), Expr::zero(), Expr::zero()];
+    direction[axis] = Expr::one();
+    direction
 }
 
 /// Gives `hinge` a twist. A pin joint's frame gets a revolute frame above it (a new

@@ -1,0 +1,145 @@
+//! An actuator beyond the model as written: a compliant base in series with it, a mass on
+//! its tip, a preload of every actuator's tip. An actuator is a force source and a series
+//! spring on a slider coordinate (`actuator` in the language).
+//!
+//! Consumes: a checked model and the actuator's slider coordinate. Produces: the model
+//! changed in place, with [`BASE_COMPLIANCE`], [`TIP_MASS`] or [`TIP_PRELOAD`] appended.
+
+use super::{append_param, scaled, TransformError};
+use crate::ir::{Body, Dimension, Expr, Inertia, Load, Model, Motion};
+
+/// The base compliance of [`Extension::BaseCompliance`], per unit actuator compliance.
+pub const BASE_COMPLIANCE: &str = "base_compliance";
+/// The mass (kg) of [`Extension::TipMass`].
+pub const TIP_MASS: &str = "tip_mass";
+/// The offset (m, positive along the slider axes) of [`Extension::Preload`].
+pub const TIP_PRELOAD: &str = "tip_preload";
+
+/// The actuator (force source and series spring) on slider coordinate `slider`: indices
+/// into `model.loads` of its spring and its generalized force.
+fn actuator_loads(model: &Model, slider: &str) -> Result<(usize, usize), TransformError> {
+    let coordinate = model
+        .coordinates
+        .iter()
+        .find(|(_, c)| c.name == slider)
+        .map(|(handle, _)| handle)
+        .ok_or_else(|| TransformError::NoCoordinate(slider.to_string()))?;
+    let find = |want_force: bool| {
+        model.loads.iter().position(|load| match load {
+            Load::GeneralizedForce { coordinate: c, .. } => want_force && *c == coordinate,
+            Load::Spring { coordinate: c, .. } => !want_force && *c == coordinate,
+            _ => false,
+        })
+    };
+    match (find(false), find(true)) {
+        (Some(spring), Some(force)) => Ok((spring, force)),
+        _ => Err(TransformError::NoActuator(slider.to_string())),
+    }
+}
+
+/// A base spring `k_b` in series with the actuator's `k_a`, as the fitted compliance ratio
+/// `c = k_a/k_b`. The node between them carries no mass, so it condenses out exactly: the
+/// force on the transmission `(F_b(V) − k_a x)/(1 + c)` — force source and series stiffness
+/// both scaled by `1/(1 + c)`. At c = 0 it is the base model.
+pub fn base_compliance(model: &mut Model, slider: &str) -> Result<(), TransformError> {
+    let (spring, force) = actuator_loads(model, slider)?;
+    let compliance = append_param(
+        model,
+        BASE_COMPLIANCE,
+        0.0,
+        Dimension::NONE,
+        "Actuator base compliance per unit actuator compliance (mech diagnose).",
+    );
+    let factor = Expr::Div(
+        Box::new(Expr::one()),
+        Box::new(Expr::Add(Box::new(Expr::one()), Box::new(compliance))),
+    );
+    for index in [spring, force] {
+        match &mut model.loads[index] {
+            Load::Spring {
+                stiffness: value, ..
+            }
+            | Load::GeneralizedForce { force: value, .. } => {
+                *value = scaled(&factor, value);
+            }
+            _ => unreachable!("found as the actuator's loads"),
+        }
+    }
+    Ok(())
+}
+
+/// A point mass (fitted, starting at 0) on the frame of the actuator's slider.
+pub fn tip_mass(model: &mut Model, slider: &str) -> Result<(), TransformError> {
+    actuator_loads(model, slider)?;
+    let frame = model
+        .frames
+        .iter()
+        .find_map(|(handle, frame)| match &frame.motion {
+            Motion::Prismatic { coordinate, .. }
+                if model.coordinates[*coordinate].name == slider =>
+            {
+                Some(handle)
+            }
+            _ => None,
+        })
+        .ok_or_else(|| TransformError::NotASlider(slider.to_string()))?;
+    let mass = append_param(
+        model,
+        TIP_MASS,
+        0.0,
+        Dimension::MASS,
+        "Mass on the actuator tip (kg, mech diagnose).",
+    );
+    let zero = Expr::zero;
+    model.bodies.append(Body {
+        name: format!("{slider}_tip_mass"),
+        frame,
+        mass,
+        center_of_mass: [zero(), zero(), zero()],
+        inertia: Inertia {
+            xx: zero(),
+            yy: zero(),
+            zz: zero(),
+            xy: zero(),
+            yz: zero(),
+            zx: zero(),
+        },
+        docs: Vec::new(),
+        span: Default::default(),
+    });
+    Ok(())
+}
+
+/// Every actuator's series spring rests `tip_preload` further along its slider: at zero
+/// voltage the spring pulls the tip there (as `rest = -preload` in `hamr_v2.mech`).
+pub fn preload(model: &mut Model) -> Result<(), TransformError> {
+    let offset = append_param(
+        model,
+        TIP_PRELOAD,
+        0.0,
+        Dimension::LENGTH,
+        "Offset of every actuator's tip along its slider at zero voltage (m, mech diagnose).",
+    );
+    let actuated: Vec<_> = model
+        .loads
+        .iter()
+        .filter_map(|load| match load {
+            Load::GeneralizedForce { coordinate, .. } => Some(*coordinate),
+            _ => None,
+        })
+        .collect();
+    if actuated.is_empty() {
+        return Err(TransformError::NoActuators);
+    }
+    for load in &mut model.loads {
+        if let Load::Spring {
+            coordinate, rest, ..
+        } = load
+        {
+            if actuated.contains(coordinate) {
+                *rest = Expr::Add(Box::new(rest.clone()), Box::new(offset.clone()));
+            }
+        }
+    }
+    Ok(())
+}

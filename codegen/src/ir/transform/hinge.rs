@@ -1,0 +1,228 @@
+//! Flexure hinges beyond the model as written: named hinges twisting about a length axis
+//! (Doshi et al. Sec. V-A, Eq. 8) and a hinge's bending axis misaligned, each with every
+//! other hinge compliant off its axis so the closed loops can take up the deformation.
+//!
+//! Consumes: a checked model and the hinges by name. Produces: the model changed in place,
+//! with [`TWIST_FACTOR`], [`MISALIGNMENT`] and [`OFF_AXIS_COMPLIANCE`] appended.
+//!
+//! In a rigid closed loop a single extra twist axis is locked by the other hinges (and a
+//! twist at a loop closure is free only to first order), so every revolute loop closure
+//! becomes compliant: its points stay together, and springs hold its axis in line — the
+//! twisting hinge's own twist spring and, for the other closures, stiff springs
+//! (`LATERAL_STIFFNESS_FACTOR · k`, the order of a hinge's in-plane stiffness) about both
+//! off-axis directions.
+
+use super::{
+    add_twist, append_param, constant_direction, find_flexure, hinge_axis, perpendicular, scaled,
+    spring, unit, TransformError, Twist, AXES, LATERAL_STIFFNESS_FACTOR,
+};
+use crate::ir::{
+    AxisAngle, ClosureKind, Dimension, Expr, Flexure, FlexureAngle, Function, Model, Motion, Vec3,
+};
+use crate::sym::Number;
+
+/// The fitted factor on Eq. 8's twist stiffness.
+pub const TWIST_FACTOR: &str = "twist_factor";
+
+/// The off-axis (lateral, and twist of the hinges not named) compliance, per unit bending
+/// compliance: the inverse of the off-axis stiffness per unit k.
+pub const OFF_AXIS_COMPLIANCE: &str = "off_axis_compliance";
+
+/// Poisson's ratio of Kapton (seed Sec. V-A), in Eq. 8's `2/(1 + ν)` = 100/67.
+const TWIST_RATIO: (i128, i128) = (100, 67);
+
+/// The fitted misalignment angle (rad) of [`Extension::Misalignment`].
+pub const MISALIGNMENT: &str = "misalignment";
+/// `hinges` (name, length axis in the hinge's frame: 0 = x, 1 = y, 2 = z) twist with
+/// stiffness [`TWIST_FACTOR`] · 2k/(1 + ν); every other hinge is compliant off its axis.
+pub fn twist(model: &mut Model, hinges: &[(String, usize)]) -> Result<(), TransformError> {
+    let factor = append_param(
+        model,
+        TWIST_FACTOR,
+        1.0,
+        Dimension::NONE,
+        "Factor on Eq. 8's twist stiffness 2k/(1 + ν) (mech diagnose).",
+    );
+    let stiff = off_axis_stiffness(model);
+    let eq8 = scaled(
+        &factor,
+        &Expr::Number(Number::rational(TWIST_RATIO.0, TWIST_RATIO.1)),
+    );
+    // The model's own hinges, before the springs added below get flexure records of their own.
+    let named: Vec<&str> = hinges.iter().map(|(name, _)| name.as_str()).collect();
+    let others: Vec<Flexure> = model
+        .flexures
+        .iter()
+        .filter(|f| !named.contains(&f.name.as_str()))
+        .cloned()
+        .collect();
+    for (name, axis) in hinges {
+        let flexure = find_flexure(model, name)?;
+        let twist = Twist {
+            axis: unit(*axis),
+            twist: spring(&flexure, "twist", &eq8),
+            lateral: Some(spring(&flexure, "lateral", &stiff)),
+            span: flexure.span,
+        };
+        add_twist(model, flexure.angle, twist).map_err(|error| TransformError::Twist {
+            flexure: name.clone(),
+            about: format!("about {}", AXES[*axis]),
+            error,
+        })?;
+    }
+    compliant_off_axis(model, others, &stiff)
+}
+
+/// The off-axis stiffness factor `1/c` of [`OFF_AXIS_COMPLIANCE`] `c` (appended): c → 0 is
+/// rigid off-axis, the base model.
+fn off_axis_stiffness(model: &mut Model) -> Expr {
+    let compliance = append_param(
+        model,
+        OFF_AXIS_COMPLIANCE,
+        1.0 / LATERAL_STIFFNESS_FACTOR as f64,
+        Dimension::NONE,
+        "Off-axis compliance of the hinges, per unit bending compliance 1/k.",
+    );
+    Expr::Div(Box::new(Expr::one()), Box::new(compliance))
+}
+
+/// Makes each of `flexures` stiff (`stiff`·k) in both off-axis directions, so the loops can
+/// deform.
+fn compliant_off_axis(
+    model: &mut Model,
+    flexures: Vec<Flexure>,
+    stiff: &Expr,
+) -> Result<(), TransformError> {
+    for flexure in flexures {
+        let Some(axis) = hinge_axis(model, flexure.angle).and_then(|a| perpendicular(&a)) else {
+            continue;
+        };
+        let twist = Twist {
+            axis,
+            twist: spring(&flexure, "off_axis", stiff),
+            lateral: Some(spring(&flexure, "lateral", stiff)),
+            span: flexure.span,
+        };
+        add_twist(model, flexure.angle, twist).map_err(|error| TransformError::Twist {
+            flexure: flexure.name.clone(),
+            about: "off its axis".into(),
+            error,
+        })?;
+    }
+    Ok(())
+}
+
+/// Tilts `name`'s bending axis `a` by the fitted angle α about the coordinate axis `p` (a
+/// rotation about `p`, so `a` leans towards `p × a`). At α = 0 it is the base model.
+///
+/// A pin's axis and its off-axis axes turn by Rodrigues' formula ([`rotate`]). A loop
+/// closure's axis is read as a constant by the closure's geometry (its reference and twist
+/// directions are built ⊥ it): instead both interframes turn by α about `p` (the last
+/// rotation of each, so `p` is in the axis's own coordinates), which tilts the axis and every
+/// direction tied to it alike and leaves the closure unstrained.
+pub fn misalign(model: &mut Model, name: &str, about: usize) -> Result<(), TransformError> {
+    let angle = append_param(
+        model,
+        MISALIGNMENT,
+        0.0,
+        Dimension::NONE,
+        "Tilt of the flexure's bending axis (rad, mech diagnose).",
+    );
+    let stiff = off_axis_stiffness(model);
+    let flexure = find_flexure(model, name)?;
+    let all: Vec<Flexure> = model.flexures.clone();
+    compliant_off_axis(model, all, &stiff)?;
+    let tiltable = |axis: &Vec3| -> Result<[f64; 3], TransformError> {
+        let a = constant_direction(axis)
+            .ok_or_else(|| TransformError::AxisNotConstant(name.to_string()))?;
+        if a[about].abs() > 0.1 {
+            return Err(TransformError::TiltAboutOwnAxis {
+                flexure: name.to_string(),
+                about,
+            });
+        }
+        Ok(a)
+    };
+    match flexure.angle {
+        FlexureAngle::Coordinate(coordinate) => {
+            // The hinge's own axis and the off-axis axes `compliant_off_axis` inserted above
+            // it turn together: R(Ra, q) = R·R(a, q)·Rᵀ, so the chain of the three is the
+            // aligned hinge conjugated by R — the whole hinge tilted, its springs still
+            // about its own (tilted) directions.
+            let hinge_frames: Vec<_> = model
+                .frames
+                .iter()
+                .filter_map(|(handle, frame)| match &frame.motion {
+                    Motion::Revolute { coordinate: c, .. } => {
+                        let coordinate_name = &model.coordinates[*c].name;
+                        let own = *c == coordinate;
+                        let off_axis = [format!("{name}_off_axis"), format!("{name}_lateral")]
+                            .contains(coordinate_name);
+                        (own || off_axis).then_some((handle, own))
+                    }
+                    _ => None,
+                })
+                .collect();
+            if !hinge_frames.iter().any(|&(_, own)| own) {
+                return Err(TransformError::NotOnPin(name.to_string()));
+            }
+            for (frame, own) in hinge_frames {
+                let Motion::Revolute { axis, .. } = &mut model.frames.get_mut(frame).motion else {
+                    unreachable!("found as revolute")
+                };
+                if own {
+                    tiltable(axis)?;
+                }
+                rotate(axis, about, &angle)
+                    .ok_or_else(|| TransformError::AxisNotConstant(name.to_string()))?;
+            }
+            Ok(())
+        }
+        FlexureAngle::Loop(index) => match model.loops.get_mut(index).map(|c| &mut c.kind) {
+            Some(ClosureKind::Revolute {
+                axis,
+                parent_orientation,
+                child_orientation,
+                ..
+            }) => {
+                tiltable(axis)?;
+                for orientation in [parent_orientation, child_orientation] {
+                    orientation.push(AxisAngle {
+                        axis: unit(about),
+                        angle: angle.clone(),
+                    });
+                }
+                Ok(())
+            }
+            _ => Err(TransformError::NotOnRevoluteLoop(name.to_string())),
+        },
+        _ => Err(TransformError::NotABendingHinge(name.to_string())),
+    }
+}
+
+/// `axis` (a constant direction `a`) turned by `angle` about the coordinate axis `about`
+/// (`p`), by Rodrigues' formula `a cos α + (p × a) sin α + p (p·a)(1 − cos α)`; `None` if `a`
+/// is not constant.
+fn rotate(axis: &mut Vec3, about: usize, angle: &Expr) -> Option<()> {
+    let a = constant_direction(axis)?;
+    let p = [0, 1, 2].map(|i| if i == about { 1.0 } else { 0.0 });
+    let p_cross_a = [
+        p[1] * a[2] - p[2] * a[1],
+        p[2] * a[0] - p[0] * a[2],
+        p[0] * a[1] - p[1] * a[0],
+    ];
+    let number = |x: f64| Expr::Number(Number::Float(x));
+    let cos = Expr::Call(Function::Cos, vec![angle.clone()]);
+    let sin = Expr::Call(Function::Sin, vec![angle.clone()]);
+    let one_minus_cos = Expr::Sub(Box::new(Expr::one()), Box::new(cos.clone()));
+    for (i, component) in axis.iter_mut().enumerate() {
+        *component = Expr::Add(
+            Box::new(Expr::Add(
+                Box::new(scaled(&cos, &number(a[i]))),
+                Box::new(scaled(&sin, &number(p_cross_a[i]))),
+            )),
+            Box::new(scaled(&one_minus_cos, &number(p[i] * a[about]))),
+        );
+    }
+    Some(())
+}
