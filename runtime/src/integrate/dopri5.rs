@@ -1,8 +1,11 @@
-//! Dormand–Prince 5(4) (Hairer's `DOPRI5`).
+//! Dormand–Prince 5(4) (Hairer's `DOPRI5`): the stages, error estimate and continuous
+//! extension that the adaptive shell ([`AdaptiveStepper`]) steps with.
+//!
+//! Consumes the right-hand side through the shell; produces the 5th-order solution of each
+//! step, its scaled error norm and the coefficients of Shampine's 4th-order dense output.
 
-use super::{
-    check_len, derivative_at, interp_theta, Adaptive, AdaptiveOptions, Ode, Stats, Stepper,
-};
+use super::adaptive::{AdaptiveMethod, DenseWithStep, StepControl};
+use super::{AdaptiveOptions, AdaptiveStepper, Ode, Stats};
 use crate::RuntimeError;
 
 // Dormand & Prince (1980) coefficients, as in Hairer's CDOPRI.
@@ -53,113 +56,90 @@ const D7: f64 = 69997945.0 / 29380423.0;
 ///
 /// Non-finite values produced by a trial step reject it and shrink the step by `fac_min`; if
 /// that drives the step to underflow, the error is [`RuntimeError::NonFiniteState`].
-pub struct Dopri5<O: Ode> {
-    ode: O,
-    control: Adaptive,
-    /// The state was modified through `state_mut`; `k1` is stale.
-    dirty: bool,
-    stages: Stages,
-}
+pub type Dopri5<O> = AdaptiveStepper<O, Dopri5Method>;
 
-/// The working vectors of one step.
-struct Stages {
+/// The stages of [`Dopri5`]: the working vectors of one step and the dense output of the last.
+pub struct Dopri5Method {
     x: Vec<f64>,
     x_new: Vec<f64>,
     x_stage: Vec<f64>,
+    /// `f(t, x)`.
     k1: Vec<f64>,
     k2: Vec<f64>,
     k3: Vec<f64>,
     k4: Vec<f64>,
     k5: Vec<f64>,
     k6: Vec<f64>,
+    /// `f(t + h, x_new)`.
     k7: Vec<f64>,
     /// Dense output coefficients of the last step.
     cont: [Vec<f64>; 5],
 }
 
 impl<O: Ode> Dopri5<O> {
-    /// Creates the integrator at `(t0, x0)`, integrating toward `t_end >= t0`, and evaluates
-    /// the derivative at `x0` (plus once more for the initial step-size heuristic).
-    pub fn new(
-        mut ode: O,
-        t0: f64,
-        x0: &[f64],
-        t_end: f64,
-        opts: AdaptiveOptions,
-    ) -> Result<Self, RuntimeError> {
-        let mut control = Adaptive::new(opts, 0.2 - opts.beta * 0.75, 6, t0, t_end)?;
-        let k1 = control.start(&mut ode, 5, x0)?;
-        let n = x0.len();
-        let zeros = vec![0.0; n];
-        let (x_stage, k2) = (zeros.clone(), zeros.clone());
-        Ok(Dopri5 {
-            ode,
-            control,
-            dirty: false,
-            stages: Stages {
-                x: x0.to_vec(),
-                x_new: zeros.clone(),
-                x_stage,
-                k1,
-                k2,
-                k3: zeros.clone(),
-                k4: zeros.clone(),
-                k5: zeros.clone(),
-                k6: zeros.clone(),
-                k7: zeros.clone(),
-                cont: [
-                    x0.to_vec(),
-                    zeros.clone(),
-                    zeros.clone(),
-                    zeros.clone(),
-                    zeros,
-                ],
-            },
-        })
-    }
-
-    /// The system being integrated.
-    pub fn ode(&self) -> &O {
-        &self.ode
-    }
-
-    /// Mutable access to the system (e.g. to change a parameter). Call [`Stepper::reset`]
-    /// afterwards if the change alters the derivative at the current state.
-    pub fn ode_mut(&mut self) -> &mut O {
-        self.dirty = true;
-        &mut self.ode
-    }
-
-    /// Consumes the integrator, returning the system.
-    pub fn into_ode(self) -> O {
-        self.ode
-    }
-
-    /// The options in use.
-    pub fn options(&self) -> &AdaptiveOptions {
-        &self.control.opts
-    }
-
-    /// Step size that the next step will try (before clipping to the end time).
-    pub fn next_step_size(&self) -> f64 {
-        self.control.h
-    }
-
     /// Derivative `f(t, x)` at the current state (stale between [`Stepper::state_mut`] and the
     /// next [`Stepper::reset`] or [`Stepper::step`]).
+    ///
+    /// [`Stepper::state_mut`]: super::Stepper::state_mut
+    /// [`Stepper::reset`]: super::Stepper::reset
+    /// [`Stepper::step`]: super::Stepper::step
     pub fn derivative(&self) -> &[f64] {
-        &self.stages.k1
+        &self.method.k1
     }
 }
 
-impl Stages {
+impl DenseWithStep for Dopri5Method {}
+
+impl AdaptiveMethod for Dopri5Method {
+    const ORDER: i32 = 5;
+    const EVALUATIONS_PER_TRIAL: usize = 6;
+
+    fn error_exponent(beta: f64) -> f64 {
+        0.2 - beta * 0.75
+    }
+
+    fn new(x0: &[f64], k1: Vec<f64>) -> Self {
+        let zeros = vec![0.0; x0.len()];
+        Dopri5Method {
+            x: x0.to_vec(),
+            x_new: zeros.clone(),
+            x_stage: zeros.clone(),
+            k1,
+            k2: zeros.clone(),
+            k3: zeros.clone(),
+            k4: zeros.clone(),
+            k5: zeros.clone(),
+            k6: zeros.clone(),
+            k7: zeros.clone(),
+            cont: [
+                x0.to_vec(),
+                zeros.clone(),
+                zeros.clone(),
+                zeros.clone(),
+                zeros,
+            ],
+        }
+    }
+
+    fn state(&self) -> &[f64] {
+        &self.x
+    }
+
+    fn state_mut(&mut self) -> &mut [f64] {
+        &mut self.x
+    }
+
+    fn state_and_derivative(&mut self) -> (&[f64], &mut [f64]) {
+        (&self.x, &mut self.k1)
+    }
+
     /// Computes the six stages of a trial step of size `h` from `(t, x)`: `x_new` holds the
-    /// 5th-order solution, `k7` its derivative, and the return value is the scaled error norm
-    /// (NaN if anything is non-finite).
+    /// 5th-order solution and `k7` its derivative.
     fn trial<O: Ode>(
         &mut self,
         ode: &mut O,
         opts: &AdaptiveOptions,
+        _stats: &mut Stats,
         t: f64,
         h: f64,
     ) -> Result<f64, RuntimeError> {
@@ -221,6 +201,36 @@ impl Stages {
         Ok(if finite { err } else { f64::NAN })
     }
 
+    fn accept<O: Ode>(
+        &mut self,
+        _ode: &mut O,
+        _control: &mut StepControl,
+        h: f64,
+    ) -> Result<(), RuntimeError> {
+        self.store_dense(h);
+        std::mem::swap(&mut self.x, &mut self.x_new);
+        std::mem::swap(&mut self.k1, &mut self.k7);
+        Ok(())
+    }
+
+    fn interpolate<O: Ode>(
+        &mut self,
+        _ode: &mut O,
+        _control: &mut StepControl,
+        _t: f64,
+        theta: f64,
+        out: &mut [f64],
+    ) -> Result<(), RuntimeError> {
+        let theta1 = 1.0 - theta;
+        let [c0, c1, c2, c3, c4] = &self.cont;
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = c0[i] + theta * (c1[i] + theta1 * (c2[i] + theta * (c3[i] + theta1 * c4[i])));
+        }
+        Ok(())
+    }
+}
+
+impl Dopri5Method {
     /// Stores the dense output coefficients of the step of size `h` from `x` to `x_new`.
     fn store_dense(&mut self, h: f64) {
         let [c0, c1, c2, c3, c4] = &mut self.cont;
@@ -239,80 +249,5 @@ impl Stages {
                     + D6 * self.k6[i]
                     + D7 * self.k7[i]);
         }
-    }
-}
-
-impl<O: Ode> Stepper for Dopri5<O> {
-    fn step(&mut self) -> Result<(), RuntimeError> {
-        self.reset()?;
-        let Dopri5 {
-            ode,
-            control,
-            stages,
-            ..
-        } = self;
-        let opts = control.opts;
-        if let Some(h) = control.advance(|t, h| stages.trial(ode, &opts, t, h))? {
-            stages.store_dense(h);
-            std::mem::swap(&mut stages.x, &mut stages.x_new);
-            std::mem::swap(&mut stages.k1, &mut stages.k7);
-        }
-        Ok(())
-    }
-
-    fn t(&self) -> f64 {
-        self.control.t
-    }
-
-    fn t_prev(&self) -> f64 {
-        self.control.t_prev
-    }
-
-    fn t_end(&self) -> f64 {
-        self.control.t_end
-    }
-
-    fn state(&self) -> &[f64] {
-        &self.stages.x
-    }
-
-    fn state_mut(&mut self) -> &mut [f64] {
-        self.dirty = true;
-        &mut self.stages.x
-    }
-
-    fn reset(&mut self) -> Result<(), RuntimeError> {
-        if !self.dirty {
-            return Ok(());
-        }
-        self.control.stats.rhs_evaluations += 1;
-        let (t, s) = (self.control.t, &mut self.stages);
-        derivative_at(&mut self.ode, t, &s.x, &mut s.k1)?;
-        self.dirty = false;
-        Ok(())
-    }
-
-    fn interpolate(&mut self, t: f64, out: &mut [f64]) -> Result<(), RuntimeError> {
-        let s = &self.stages;
-        check_len("out", s.x.len(), out.len())?;
-        let theta = interp_theta(t, self.control.t_prev, self.control.t)?;
-        if theta == 1.0 {
-            out.copy_from_slice(&s.x);
-            return Ok(());
-        }
-        let theta1 = 1.0 - theta;
-        let [c0, c1, c2, c3, c4] = &s.cont;
-        for (i, o) in out.iter_mut().enumerate() {
-            *o = c0[i] + theta * (c1[i] + theta1 * (c2[i] + theta * (c3[i] + theta1 * c4[i])));
-        }
-        Ok(())
-    }
-
-    fn set_t_end(&mut self, t_end: f64) -> Result<(), RuntimeError> {
-        self.control.set_t_end(t_end)
-    }
-
-    fn stats(&self) -> Stats {
-        self.control.stats
     }
 }
