@@ -16,6 +16,8 @@ use crate::integrate::{
     check_len, AdaptiveOptions, Dop853, Dopri5, ExpRosenbrock, Ode, Rk4, Rosenbrock, Stats, Stepper,
 };
 use crate::reduced::Reduced;
+pub use crate::signal::default_signals;
+use crate::signal::{check_inputs, values_at};
 use crate::{dense, Model, RuntimeError, Signal};
 use nalgebra::{Cholesky, DMatrix, DVector};
 
@@ -159,13 +161,6 @@ impl Trajectory {
     }
 }
 
-/// One [`Signal::Constant`] per model input, at the input's default value.
-pub fn default_signals<M: Model + ?Sized>(model: &M) -> Vec<Signal> {
-    (0..model.ninputs())
-        .map(|i| Signal::Constant(model.input_default(i)))
-        .collect()
-}
-
 /// Workspace for solving `M u̇ = F` without allocating.
 struct AccelSolver {
     mass: DMatrix<f64>,
@@ -296,10 +291,7 @@ impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
                 model.name()
             )));
         }
-        check_len("signals", model.ninputs(), signals.len())?;
-        for s in signals {
-            s.validate()?;
-        }
+        check_inputs(model, signals)?;
         Ok(ModelOde {
             model,
             signals,
@@ -322,9 +314,7 @@ impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
 
     /// Writes the input values at time `t` into `out` (length `ninputs`).
     pub fn inputs_at(&self, t: f64, out: &mut [f64]) {
-        for (o, s) in out.iter_mut().zip(self.signals) {
-            *o = s.value(t);
-        }
+        values_at(self.signals, t, out);
     }
 
     /// Solves `M(q) u̇ = F(t, q, u, inputs)` for `u̇` with the given input values (the signals
@@ -360,9 +350,7 @@ impl<M: Model + ?Sized> Ode for ModelOde<'_, M> {
 
     fn rhs(&mut self, t: f64, x: &[f64], dxdt: &mut [f64]) -> Result<(), RuntimeError> {
         let (q, u) = x.split_at(self.nq);
-        for (v, s) in self.inputs.iter_mut().zip(self.signals) {
-            *v = s.value(t);
-        }
+        values_at(self.signals, t, &mut self.inputs);
         let (qdot, udot) = dxdt.split_at_mut(self.nq);
         qdot.copy_from_slice(u);
         if let Some(constrained) = &mut self.constrained {
@@ -594,9 +582,7 @@ impl<M: Model + ?Sized> StateMap for FullCoordinates<'_, M> {
         let Some(projector) = self.projector.as_mut() else {
             return Ok(false);
         };
-        for (v, s) in self.inputs.iter_mut().zip(self.signals) {
-            *v = s.value(t);
-        }
+        values_at(self.signals, t, &mut self.inputs);
         let (q, u) = x.split_at_mut(self.nq);
         projector.project_state(self.model, t, q, u, &self.inputs, self.tolerance)
     }
@@ -611,9 +597,7 @@ impl<M: Model + ?Sized> StateMap for FullCoordinates<'_, M> {
         q.copy_from_slice(&x[..self.nq]);
         u.copy_from_slice(&x[self.nq..]);
         if let Some(projector) = self.projector.as_mut() {
-            for (v, s) in self.inputs.iter_mut().zip(self.signals) {
-                *v = s.value(t);
-            }
+            values_at(self.signals, t, &mut self.inputs);
             projector.project_state(self.model, t, q, u, &self.inputs, self.tolerance)?;
         }
         Ok(())
@@ -687,7 +671,8 @@ fn run<M: Model + ?Sized, S: Stepper>(
      -> Result<(), RuntimeError> {
         let (mut q, mut u) = (vec![0.0; nq], vec![0.0; nq]);
         map.full_state(t, x, &mut q, &mut u)?;
-        let inputs: Vec<f64> = signals.iter().map(|s| s.value(t)).collect();
+        let mut inputs = vec![0.0; signals.len()];
+        values_at(signals, t, &mut inputs);
         let mut outputs = vec![0.0; model.noutputs()];
         model.outputs(t, &q, &u, &inputs, &mut outputs);
         traj.q.push(q);
