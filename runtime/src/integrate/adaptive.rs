@@ -344,10 +344,43 @@ fn initial_step<O: Ode>(
     Ok(if h.is_finite() && h > 0.0 { h } else { 1e-6 })
 }
 
+/// The error test's norm of a trial step from `x` to `x_new`, whose derivative there is
+/// `f_new`: `sqrt(mean_i((error(i) / sk_i)²))` with `sk_i = atol + rtol·max(|x_i|, |x_new_i|)`
+/// for the local error estimate `error(i)`; NaN (a rejection) if `x_new` or `f_new` is not
+/// finite.
+pub(super) fn error_norm(
+    opts: &AdaptiveOptions,
+    x: &[f64],
+    x_new: &[f64],
+    f_new: &[f64],
+    error: impl Fn(usize) -> f64,
+) -> f64 {
+    let mut sum = 0.0;
+    let mut finite = true;
+    for (i, ((x, x_new), f_new)) in x.iter().zip(x_new).zip(f_new).enumerate() {
+        let sk = opts.atol + opts.rtol * x.abs().max(x_new.abs());
+        sum += (error(i) / sk).powi(2);
+        finite &= x_new.is_finite() && f_new.is_finite();
+    }
+    let norm = (sum / x.len().max(1) as f64).sqrt();
+    if finite {
+        norm
+    } else {
+        f64::NAN
+    }
+}
+
+/// The current point of an integration: the state `x(t)` and the derivative `f(t, x)`, which
+/// is the first stage of the next step for every adaptive method.
+pub struct Current {
+    pub(super) x: Vec<f64>,
+    pub(super) f: Vec<f64>,
+}
+
 /// The method-specific part of an adaptive integrator: its working storage and stages.
 ///
 /// The shell calls [`AdaptiveMethod::trial`] until the controller accepts a step, then
-/// [`AdaptiveMethod::accept`]; the method holds the current state `x` and its derivative.
+/// [`AdaptiveMethod::accept`], which moves the [`Current`] point to the step's end.
 pub trait AdaptiveMethod {
     /// Order of the propagated solution, for the initial step-size heuristic.
     const ORDER: i32;
@@ -358,20 +391,14 @@ pub trait AdaptiveMethod {
     /// Lund stabilisation exponent `beta`.
     fn error_exponent(beta: f64) -> f64;
 
-    /// Working storage for a start at `x0` with `f0 = f(t0, x0)` (taken over as the current
-    /// derivative). Every vector is allocated here; stepping never allocates.
-    fn new(x0: &[f64], f0: Vec<f64>) -> Self;
+    /// Working storage for a start at `x0`. Every vector is allocated here; stepping never
+    /// allocates.
+    fn new(x0: &[f64]) -> Self;
 
-    /// The current state `x`.
-    fn state(&self) -> &[f64];
-    /// The current state, to be modified by the caller.
-    fn state_mut(&mut self) -> &mut [f64];
-    /// The current state and the derivative stored for it, to refresh the latter.
-    fn state_and_derivative(&mut self) -> (&[f64], &mut [f64]);
     /// The derivative was refreshed at a modified state: drop what depended on the old one.
     fn derivative_refreshed(&mut self) {}
 
-    /// A trial step of size `h` from `(t, x)`: computes the new state (kept until
+    /// A trial step of size `h` from `(t, now.x)`: computes the new state (kept until
     /// [`AdaptiveMethod::accept`] or the next trial) and returns the scaled error norm, NaN
     /// if anything is non-finite. The shell has counted
     /// [`AdaptiveMethod::EVALUATIONS_PER_TRIAL`]; any other work goes into `stats`.
@@ -380,17 +407,18 @@ pub trait AdaptiveMethod {
         ode: &mut O,
         opts: &AdaptiveOptions,
         stats: &mut Stats,
+        now: &Current,
         t: f64,
         h: f64,
     ) -> Result<f64, RuntimeError>;
 
     /// The last trial step, of size `h` from `control.t_prev`, was accepted (`control` is
-    /// already past it): make its new state the current one and keep what its dense output
-    /// needs.
+    /// already past it): move `now` to its end and keep what its dense output needs.
     fn accept<O: Ode>(
         &mut self,
         ode: &mut O,
         control: &mut StepControl,
+        now: &mut Current,
         h: f64,
     ) -> Result<(), RuntimeError>;
 
@@ -411,7 +439,8 @@ pub trait AdaptiveMethod {
 pub struct AdaptiveStepper<O: Ode, M> {
     pub(super) ode: O,
     pub(super) control: StepControl,
-    /// The state (or the system) was modified; the stored derivative is stale.
+    pub(super) now: Current,
+    /// The state (or the system) was modified; `now.f` is stale.
     pub(super) dirty: bool,
     pub(super) method: M,
 }
@@ -433,8 +462,12 @@ impl<O: Ode, M: AdaptiveMethod> AdaptiveStepper<O, M> {
         Ok(AdaptiveStepper {
             ode,
             control,
+            now: Current {
+                x: x0.to_vec(),
+                f: f0,
+            },
             dirty: false,
-            method: M::new(x0, f0),
+            method: M::new(x0),
         })
     }
 
@@ -478,12 +511,14 @@ impl<O: Ode, M: AdaptiveMethod> Stepper for AdaptiveStepper<O, M> {
         let AdaptiveStepper {
             ode,
             control,
+            now,
             method,
             ..
         } = self;
         let opts = control.opts;
-        if let Some(h) = control.advance(|stats, t, h| method.trial(ode, &opts, stats, t, h))? {
-            method.accept(ode, control, h)?;
+        let accepted = control.advance(|stats, t, h| method.trial(ode, &opts, stats, now, t, h));
+        if let Some(h) = accepted? {
+            method.accept(ode, control, now, h)?;
         }
         Ok(())
     }
@@ -501,12 +536,12 @@ impl<O: Ode, M: AdaptiveMethod> Stepper for AdaptiveStepper<O, M> {
     }
 
     fn state(&self) -> &[f64] {
-        self.method.state()
+        &self.now.x
     }
 
     fn state_mut(&mut self) -> &mut [f64] {
         self.dirty = true;
-        self.method.state_mut()
+        &mut self.now.x
     }
 
     fn reset(&mut self) -> Result<(), RuntimeError> {
@@ -514,8 +549,8 @@ impl<O: Ode, M: AdaptiveMethod> Stepper for AdaptiveStepper<O, M> {
             return Ok(());
         }
         self.control.stats.rhs_evaluations += 1;
-        let (x, f) = self.method.state_and_derivative();
-        derivative_at(&mut self.ode, self.control.t, x, f)?;
+        let now = &mut self.now;
+        derivative_at(&mut self.ode, self.control.t, &now.x, &mut now.f)?;
         self.method.derivative_refreshed();
         self.dirty = false;
         Ok(())
@@ -523,7 +558,7 @@ impl<O: Ode, M: AdaptiveMethod> Stepper for AdaptiveStepper<O, M> {
 
     fn interpolate(&mut self, t: f64, out: &mut [f64]) -> Result<(), RuntimeError> {
         let (t_prev, t_cur) = (self.control.t_prev, self.control.t);
-        let Some(theta) = begin_interpolation(t, t_prev, t_cur, self.method.state(), out)? else {
+        let Some(theta) = begin_interpolation(t, t_prev, t_cur, &self.now.x, out)? else {
             return Ok(());
         };
         self.method

@@ -13,7 +13,7 @@
 // The coefficients are kept digit for digit as published (the compiler rounds them to f64).
 #![allow(clippy::excessive_precision)]
 
-use super::adaptive::{AdaptiveMethod, StepControl};
+use super::adaptive::{AdaptiveMethod, Current, StepControl};
 use super::{all_finite, AdaptiveOptions, AdaptiveStepper, Ode, Stats};
 use crate::RuntimeError;
 
@@ -206,10 +206,8 @@ const D7: [f64; 12] = [
 pub type Dop853<O> = AdaptiveStepper<O, Dop853Method>;
 
 /// The stages of [`Dop853`], the last step as computed and its continuous extension.
+/// The current state and its derivative are the shell's.
 pub struct Dop853Method {
-    /// Current state and its derivative.
-    x: Vec<f64>,
-    f: Vec<f64>,
     x_stage: Vec<f64>,
     /// The last step as computed: start and end states, end derivative, and stages
     /// `k[0]` = f at the start, `k[1..12]` = stages 2–12; stages 14–16 of the dense output
@@ -246,11 +244,9 @@ impl AdaptiveMethod for Dop853Method {
         0.125 - beta * 0.2
     }
 
-    fn new(x0: &[f64], f: Vec<f64>) -> Self {
+    fn new(x0: &[f64]) -> Self {
         let zeros = vec![0.0; x0.len()];
         Dop853Method {
-            x: x0.to_vec(),
-            f,
             x_stage: zeros.clone(),
             x_start: x0.to_vec(),
             x_end: x0.to_vec(),
@@ -261,18 +257,6 @@ impl AdaptiveMethod for Dop853Method {
         }
     }
 
-    fn state(&self) -> &[f64] {
-        &self.x
-    }
-
-    fn state_mut(&mut self) -> &mut [f64] {
-        &mut self.x
-    }
-
-    fn state_and_derivative(&mut self) -> (&[f64], &mut [f64]) {
-        (&self.x, &mut self.f)
-    }
-
     /// Computes stages 2–12 of a trial step of size `h` from `(t, x)` with `k[0] = f(t, x)`:
     /// `x_end` holds the 8th-order solution; returns the scaled error norm (NaN if anything
     /// is non-finite).
@@ -281,11 +265,12 @@ impl AdaptiveMethod for Dop853Method {
         ode: &mut O,
         opts: &AdaptiveOptions,
         _stats: &mut Stats,
+        now: &Current,
         t: f64,
         h: f64,
     ) -> Result<f64, RuntimeError> {
-        let n = self.x.len();
-        let (x, xs, k) = (&self.x, &mut self.x_stage, &mut self.k);
+        let n = now.x.len();
+        let (x, xs, k) = (&now.x, &mut self.x_stage, &mut self.k);
         // Stage i: x + h·Σ_j a_ij k_j, evaluated into k[i − 1].
         macro_rules! stage {
             ($dst:expr, $c:expr, $($a:expr => $j:expr),+) => {{
@@ -295,7 +280,7 @@ impl AdaptiveMethod for Dop853Method {
                 ode.rhs(t + $c * h, xs, &mut k[$dst])?;
             }};
         }
-        k[0].copy_from_slice(&self.f);
+        k[0].copy_from_slice(&now.f);
         // Stage 2 associates as `dop853.f` does (`Y + H*A21*K1`), so steps match it exactly.
         for i in 0..n {
             xs[i] = x[i] + h * A21 * k[0][i];
@@ -354,17 +339,18 @@ impl AdaptiveMethod for Dop853Method {
         &mut self,
         ode: &mut O,
         control: &mut StepControl,
+        now: &mut Current,
         h: f64,
     ) -> Result<(), RuntimeError> {
         // At `t_prev + h`, where the stages put the step's end (the controller sets the
         // last step's `t` to `t_end` exactly).
         ode.rhs(control.t_prev + h, &self.x_end, &mut self.f_end)?;
         control.stats.rhs_evaluations += 1;
-        self.x_start.copy_from_slice(&self.x);
-        self.x.copy_from_slice(&self.x_end);
-        self.f.copy_from_slice(&self.f_end);
+        self.x_start.copy_from_slice(&now.x);
+        now.x.copy_from_slice(&self.x_end);
+        now.f.copy_from_slice(&self.f_end);
         self.dense_ready = false;
-        if !all_finite(&self.f) {
+        if !all_finite(&now.f) {
             return Err(RuntimeError::NonFiniteState { t: control.t });
         }
         Ok(())
@@ -399,7 +385,7 @@ impl Dop853Method {
         if self.dense_ready || control.t == control.t_prev {
             return Ok(());
         }
-        let n = self.x.len();
+        let n = self.x_start.len();
         let (t, h) = (control.t_prev, control.t - control.t_prev);
         let (x, fe, xs) = (&self.x_start, &self.f_end, &mut self.x_stage);
         let k = &mut self.k;

@@ -4,7 +4,7 @@
 //! Consumes the right-hand side through the shell; produces the 5th-order solution of each
 //! step, its scaled error norm and the coefficients of Shampine's 4th-order dense output.
 
-use super::adaptive::{AdaptiveMethod, DenseWithStep, StepControl};
+use super::adaptive::{error_norm, AdaptiveMethod, Current, DenseWithStep, StepControl};
 use super::{AdaptiveOptions, AdaptiveStepper, Ode, Stats};
 use crate::RuntimeError;
 
@@ -59,12 +59,10 @@ const D7: f64 = 69997945.0 / 29380423.0;
 pub type Dopri5<O> = AdaptiveStepper<O, Dopri5Method>;
 
 /// The stages of [`Dopri5`]: the working vectors of one step and the dense output of the last.
+/// `k1 = f(t, x)` is the shell's current derivative.
 pub struct Dopri5Method {
-    x: Vec<f64>,
     x_new: Vec<f64>,
     x_stage: Vec<f64>,
-    /// `f(t, x)`.
-    k1: Vec<f64>,
     k2: Vec<f64>,
     k3: Vec<f64>,
     k4: Vec<f64>,
@@ -84,7 +82,7 @@ impl<O: Ode> Dopri5<O> {
     /// [`Stepper::reset`]: super::Stepper::reset
     /// [`Stepper::step`]: super::Stepper::step
     pub fn derivative(&self) -> &[f64] {
-        &self.method.k1
+        &self.now.f
     }
 }
 
@@ -98,13 +96,11 @@ impl AdaptiveMethod for Dopri5Method {
         0.2 - beta * 0.75
     }
 
-    fn new(x0: &[f64], k1: Vec<f64>) -> Self {
+    fn new(x0: &[f64]) -> Self {
         let zeros = vec![0.0; x0.len()];
         Dopri5Method {
-            x: x0.to_vec(),
             x_new: zeros.clone(),
             x_stage: zeros.clone(),
-            k1,
             k2: zeros.clone(),
             k3: zeros.clone(),
             k4: zeros.clone(),
@@ -121,18 +117,6 @@ impl AdaptiveMethod for Dopri5Method {
         }
     }
 
-    fn state(&self) -> &[f64] {
-        &self.x
-    }
-
-    fn state_mut(&mut self) -> &mut [f64] {
-        &mut self.x
-    }
-
-    fn state_and_derivative(&mut self) -> (&[f64], &mut [f64]) {
-        (&self.x, &mut self.k1)
-    }
-
     /// Computes the six stages of a trial step of size `h` from `(t, x)`: `x_new` holds the
     /// 5th-order solution and `k7` its derivative.
     fn trial<O: Ode>(
@@ -140,31 +124,32 @@ impl AdaptiveMethod for Dopri5Method {
         ode: &mut O,
         opts: &AdaptiveOptions,
         _stats: &mut Stats,
+        now: &Current,
         t: f64,
         h: f64,
     ) -> Result<f64, RuntimeError> {
-        let n = self.x.len();
+        let (x, k1) = (&now.x, &now.f);
+        let n = x.len();
         for i in 0..n {
-            self.x_stage[i] = self.x[i] + h * A21 * self.k1[i];
+            self.x_stage[i] = x[i] + h * A21 * k1[i];
         }
         ode.rhs(t + C2 * h, &self.x_stage, &mut self.k2)?;
         for i in 0..n {
-            self.x_stage[i] = self.x[i] + h * (A31 * self.k1[i] + A32 * self.k2[i]);
+            self.x_stage[i] = x[i] + h * (A31 * k1[i] + A32 * self.k2[i]);
         }
         ode.rhs(t + C3 * h, &self.x_stage, &mut self.k3)?;
         for i in 0..n {
-            self.x_stage[i] =
-                self.x[i] + h * (A41 * self.k1[i] + A42 * self.k2[i] + A43 * self.k3[i]);
+            self.x_stage[i] = x[i] + h * (A41 * k1[i] + A42 * self.k2[i] + A43 * self.k3[i]);
         }
         ode.rhs(t + C4 * h, &self.x_stage, &mut self.k4)?;
         for i in 0..n {
-            self.x_stage[i] = self.x[i]
-                + h * (A51 * self.k1[i] + A52 * self.k2[i] + A53 * self.k3[i] + A54 * self.k4[i]);
+            self.x_stage[i] =
+                x[i] + h * (A51 * k1[i] + A52 * self.k2[i] + A53 * self.k3[i] + A54 * self.k4[i]);
         }
         ode.rhs(t + C5 * h, &self.x_stage, &mut self.k5)?;
         for i in 0..n {
-            self.x_stage[i] = self.x[i]
-                + h * (A61 * self.k1[i]
+            self.x_stage[i] = x[i]
+                + h * (A61 * k1[i]
                     + A62 * self.k2[i]
                     + A63 * self.k3[i]
                     + A64 * self.k4[i]
@@ -173,8 +158,8 @@ impl AdaptiveMethod for Dopri5Method {
         let t_new = t + h;
         ode.rhs(t_new, &self.x_stage, &mut self.k6)?;
         for i in 0..n {
-            self.x_new[i] = self.x[i]
-                + h * (A71 * self.k1[i]
+            self.x_new[i] = x[i]
+                + h * (A71 * k1[i]
                     + A73 * self.k3[i]
                     + A74 * self.k4[i]
                     + A75 * self.k5[i]
@@ -182,34 +167,28 @@ impl AdaptiveMethod for Dopri5Method {
         }
         ode.rhs(t_new, &self.x_new, &mut self.k7)?;
 
-        let (rtol, atol) = (opts.rtol, opts.atol);
-        let mut sum = 0.0;
-        let mut finite = true;
-        for i in 0..n {
-            let err = (E1 * self.k1[i]
+        let error = |i: usize| {
+            (E1 * k1[i]
                 + E3 * self.k3[i]
                 + E4 * self.k4[i]
                 + E5 * self.k5[i]
                 + E6 * self.k6[i]
                 + E7 * self.k7[i])
-                * h;
-            let sk = atol + rtol * self.x[i].abs().max(self.x_new[i].abs());
-            sum += (err / sk).powi(2);
-            finite &= self.x_new[i].is_finite() && self.k7[i].is_finite();
-        }
-        let err = (sum / n.max(1) as f64).sqrt();
-        Ok(if finite { err } else { f64::NAN })
+                * h
+        };
+        Ok(error_norm(opts, x, &self.x_new, &self.k7, error))
     }
 
     fn accept<O: Ode>(
         &mut self,
         _ode: &mut O,
         _control: &mut StepControl,
+        now: &mut Current,
         h: f64,
     ) -> Result<(), RuntimeError> {
-        self.store_dense(h);
-        std::mem::swap(&mut self.x, &mut self.x_new);
-        std::mem::swap(&mut self.k1, &mut self.k7);
+        self.store_dense(now, h);
+        std::mem::swap(&mut now.x, &mut self.x_new);
+        std::mem::swap(&mut now.f, &mut self.k7);
         Ok(())
     }
 
@@ -231,18 +210,19 @@ impl AdaptiveMethod for Dopri5Method {
 }
 
 impl Dopri5Method {
-    /// Stores the dense output coefficients of the step of size `h` from `x` to `x_new`.
-    fn store_dense(&mut self, h: f64) {
+    /// Stores the dense output coefficients of the step of size `h` from `now.x` to `x_new`.
+    fn store_dense(&mut self, now: &Current, h: f64) {
+        let (x, k1) = (&now.x, &now.f);
         let [c0, c1, c2, c3, c4] = &mut self.cont;
-        for i in 0..self.x.len() {
-            let ydiff = self.x_new[i] - self.x[i];
-            let bspl = h * self.k1[i] - ydiff;
-            c0[i] = self.x[i];
+        for i in 0..x.len() {
+            let ydiff = self.x_new[i] - x[i];
+            let bspl = h * k1[i] - ydiff;
+            c0[i] = x[i];
             c1[i] = ydiff;
             c2[i] = bspl;
             c3[i] = -h * self.k7[i] + ydiff - bspl;
             c4[i] = h
-                * (D1 * self.k1[i]
+                * (D1 * k1[i]
                     + D3 * self.k3[i]
                     + D4 * self.k4[i]
                     + D5 * self.k5[i]

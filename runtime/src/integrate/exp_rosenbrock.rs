@@ -6,7 +6,7 @@
 //! matrix φ-functions of [`PhiFunctions`]); produces the order-4 solution of each step, its
 //! scaled error norm and the dense output of the same variation-of-constants formula.
 
-use super::adaptive::{AdaptiveMethod, DenseWithStep, StepControl};
+use super::adaptive::{error_norm, AdaptiveMethod, Current, DenseWithStep, StepControl};
 use super::phi::PhiFunctions;
 use super::{finite_difference_jacobian, AdaptiveOptions, AdaptiveStepper, Ode, Stats};
 use crate::RuntimeError;
@@ -46,11 +46,9 @@ use crate::RuntimeError;
 /// [`AdaptiveOptions::rosenbrock`] for the step-size controller's usual settings.
 pub type ExpRosenbrock<O> = AdaptiveStepper<O, ExpRosenbrockMethod>;
 
-/// The working vectors of one step (length `n`).
+/// The working vectors of one step (length `n`); `F(y_n) = f(t, x)` is the shell's current
+/// derivative.
 pub struct ExpRosenbrockMethod {
-    x: Vec<f64>,
-    /// `f(t, x)`.
-    f0: Vec<f64>,
     x_new: Vec<f64>,
     f_new: Vec<f64>,
     x_stage: Vec<f64>,
@@ -87,12 +85,10 @@ impl AdaptiveMethod for ExpRosenbrockMethod {
         0.25 - 0.75 * beta
     }
 
-    fn new(x0: &[f64], f0: Vec<f64>) -> Self {
+    fn new(x0: &[f64]) -> Self {
         let n = x0.len();
         let zeros = vec![0.0; n];
         ExpRosenbrockMethod {
-            x: x0.to_vec(),
-            f0,
             x_new: zeros.clone(),
             f_new: zeros.clone(),
             x_stage: zeros.clone(),
@@ -113,18 +109,6 @@ impl AdaptiveMethod for ExpRosenbrockMethod {
         }
     }
 
-    fn state(&self) -> &[f64] {
-        &self.x
-    }
-
-    fn state_mut(&mut self) -> &mut [f64] {
-        &mut self.x
-    }
-
-    fn state_and_derivative(&mut self) -> (&[f64], &mut [f64]) {
-        (&self.x, &mut self.f0)
-    }
-
     fn derivative_refreshed(&mut self) {
         self.jacobian_current = false;
     }
@@ -136,16 +120,17 @@ impl AdaptiveMethod for ExpRosenbrockMethod {
         ode: &mut O,
         opts: &AdaptiveOptions,
         stats: &mut Stats,
+        now: &Current,
         t: f64,
         h: f64,
     ) -> Result<f64, RuntimeError> {
-        let n = self.x.len();
+        let n = now.x.len();
         if !self.jacobian_current {
             finite_difference_jacobian(
                 ode,
                 t,
-                &self.x,
-                &self.f0,
+                &now.x,
+                &now.f,
                 &mut self.jacobian,
                 &mut self.dfdt,
                 &mut self.x_stage,
@@ -165,17 +150,17 @@ impl AdaptiveMethod for ExpRosenbrockMethod {
             &mut self.phi,
             true,
             0.5 * h,
-            &self.f0,
+            &now.f,
             &self.dfdt,
             &mut self.flow,
             &mut self.work,
         );
         for i in 0..n {
-            self.x_stage[i] = self.x[i] + self.flow[i];
+            self.x_stage[i] = now.x[i] + self.flow[i];
         }
         ode.rhs(t + 0.5 * h, &self.x_stage, &mut self.f_stage)?;
         let mut d2 = std::mem::take(&mut self.d2);
-        self.remainder(0.5 * h, &mut d2);
+        self.remainder(now, 0.5 * h, &mut d2);
         self.d2 = d2;
 
         // The flow h·φ1·F, and U3 = x + h·φ1·F + h·φ1·D2.
@@ -183,7 +168,7 @@ impl AdaptiveMethod for ExpRosenbrockMethod {
             &mut self.phi,
             false,
             h,
-            &self.f0,
+            &now.f,
             &self.dfdt,
             &mut self.flow,
             &mut self.work,
@@ -191,17 +176,17 @@ impl AdaptiveMethod for ExpRosenbrockMethod {
         self.work.fill(0.0);
         self.phi.add_apply(1, &self.d2, &mut self.work);
         for i in 0..n {
-            self.x_stage[i] = self.x[i] + self.flow[i] + h * self.work[i];
+            self.x_stage[i] = now.x[i] + self.flow[i] + h * self.work[i];
         }
         ode.rhs(t + h, &self.x_stage, &mut self.f_stage)?;
         let mut d3 = std::mem::take(&mut self.d3);
-        self.remainder(h, &mut d3);
+        self.remainder(now, h, &mut d3);
         self.d3 = d3;
 
         // x_new = x + h·φ1·F + φ3·w3 + φ4·w4, error φ4·w4.
         for i in 0..n {
             self.work[i] = h * (16.0 * self.d2[i] - 2.0 * self.d3[i]);
-            self.x_new[i] = self.x[i] + self.flow[i];
+            self.x_new[i] = now.x[i] + self.flow[i];
         }
         self.error.fill(0.0);
         self.phi.add_apply(3, &self.work, &mut self.error);
@@ -216,27 +201,20 @@ impl AdaptiveMethod for ExpRosenbrockMethod {
         }
         ode.rhs(t + h, &self.x_new, &mut self.f_new)?;
 
-        let (rtol, atol) = (opts.rtol, opts.atol);
-        let mut sum = 0.0;
-        let mut finite = true;
-        for i in 0..n {
-            let sk = atol + rtol * self.x[i].abs().max(self.x_new[i].abs());
-            sum += (self.error[i] / sk).powi(2);
-            finite &= self.x_new[i].is_finite() && self.f_new[i].is_finite();
-        }
-        let err = (sum / n.max(1) as f64).sqrt();
-        Ok(if finite { err } else { f64::NAN })
+        let error = |i: usize| self.error[i];
+        Ok(error_norm(opts, &now.x, &self.x_new, &self.f_new, error))
     }
 
     fn accept<O: Ode>(
         &mut self,
         _ode: &mut O,
         _control: &mut StepControl,
+        now: &mut Current,
         h: f64,
     ) -> Result<(), RuntimeError> {
-        self.store_dense(h);
-        std::mem::swap(&mut self.x, &mut self.x_new);
-        std::mem::swap(&mut self.f0, &mut self.f_new);
+        self.store_dense(now, h);
+        std::mem::swap(&mut now.x, &mut self.x_new);
+        std::mem::swap(&mut now.f, &mut self.f_new);
         // The Jacobian of the last step stays for its dense output; the next step starts
         // with a new one.
         self.jacobian_current = false;
@@ -251,7 +229,7 @@ impl AdaptiveMethod for ExpRosenbrockMethod {
         theta: f64,
         out: &mut [f64],
     ) -> Result<(), RuntimeError> {
-        let n = self.x.len();
+        let n = out.len();
         out.copy_from_slice(&self.cont[0]);
         if theta == 0.0 {
             return Ok(());
@@ -331,18 +309,13 @@ impl ExpRosenbrockMethod {
     }
 
     /// `D = f(t + c·h, x_stage) − f0 − J (x_stage − x) − ∂f/∂t·c·h` into `d`, from `f_stage`.
-    fn remainder(&self, ch: f64, d: &mut [f64]) {
-        let n = self.x.len();
-        for (((d, f), f0), dfdt) in d
-            .iter_mut()
-            .zip(&self.f_stage)
-            .zip(&self.f0)
-            .zip(&self.dfdt)
-        {
+    fn remainder(&self, now: &Current, ch: f64, d: &mut [f64]) {
+        let n = now.x.len();
+        for (((d, f), f0), dfdt) in d.iter_mut().zip(&self.f_stage).zip(&now.f).zip(&self.dfdt) {
             *d = f - f0 - dfdt * ch;
         }
         for j in 0..n {
-            let dx = self.x_stage[j] - self.x[j];
+            let dx = self.x_stage[j] - now.x[j];
             for (i, di) in d.iter_mut().enumerate() {
                 *di -= self.jacobian[i + n * j] * dx;
             }
@@ -350,10 +323,10 @@ impl ExpRosenbrockMethod {
     }
 
     /// Keeps what the dense output of the accepted step of size `h` needs.
-    fn store_dense(&mut self, h: f64) {
+    fn store_dense(&mut self, now: &Current, h: f64) {
         let [x0, f, d2, d3] = &mut self.cont;
-        x0.copy_from_slice(&self.x);
-        f.copy_from_slice(&self.f0);
+        x0.copy_from_slice(&now.x);
+        f.copy_from_slice(&now.f);
         d2.copy_from_slice(&self.d2);
         d3.copy_from_slice(&self.d3);
         self.cont_h = h;

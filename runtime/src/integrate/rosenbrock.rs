@@ -6,7 +6,7 @@
 //! produces the order-2 solution of each step, its scaled error norm and the quadratic dense
 //! output.
 
-use super::adaptive::{AdaptiveMethod, DenseWithStep, StepControl};
+use super::adaptive::{error_norm, AdaptiveMethod, Current, DenseWithStep, StepControl};
 use super::{finite_difference_jacobian, AdaptiveOptions, AdaptiveStepper, Ode, Stats};
 use crate::{dense, RuntimeError};
 
@@ -45,11 +45,9 @@ const E32: f64 = 7.414_213_562_373_095;
 /// step-size controller's usual settings.
 pub type Rosenbrock<O> = AdaptiveStepper<O, RosenbrockMethod>;
 
-/// The working vectors of one step, the Jacobian and the factor of `W`.
+/// The working vectors of one step, the Jacobian and the factor of `W`; `F0 = f(t, x)` is
+/// the shell's current derivative.
 pub struct RosenbrockMethod {
-    x: Vec<f64>,
-    /// `f(t, x)`.
-    f0: Vec<f64>,
     x_new: Vec<f64>,
     /// `f(t + h, x_new)`.
     f2: Vec<f64>,
@@ -98,12 +96,10 @@ impl AdaptiveMethod for RosenbrockMethod {
         1.0 / 3.0 - 0.75 * beta
     }
 
-    fn new(x0: &[f64], f0: Vec<f64>) -> Self {
+    fn new(x0: &[f64]) -> Self {
         let n = x0.len();
         let zeros = vec![0.0; n];
         RosenbrockMethod {
-            x: x0.to_vec(),
-            f0,
             x_new: zeros.clone(),
             f2: zeros.clone(),
             x_stage: zeros.clone(),
@@ -124,18 +120,6 @@ impl AdaptiveMethod for RosenbrockMethod {
         }
     }
 
-    fn state(&self) -> &[f64] {
-        &self.x
-    }
-
-    fn state_mut(&mut self) -> &mut [f64] {
-        &mut self.x
-    }
-
-    fn state_and_derivative(&mut self) -> (&[f64], &mut [f64]) {
-        (&self.x, &mut self.f0)
-    }
-
     fn derivative_refreshed(&mut self) {
         self.jacobian_current = false;
     }
@@ -143,18 +127,22 @@ impl AdaptiveMethod for RosenbrockMethod {
     /// A trial step of size `h` from `(t, x)`: `x_new`, `f2 = f(t + h, x_new)`, and the scaled
     /// error norm (NaN also if `W` is singular). A Jacobian evaluated first is counted in
     /// `stats`.
+    // Indexed loops, so that each line reads as the formula at the top of the file.
+    #[allow(clippy::needless_range_loop)]
     fn trial<O: Ode>(
         &mut self,
         ode: &mut O,
         opts: &AdaptiveOptions,
         stats: &mut Stats,
+        now: &Current,
         t: f64,
         h: f64,
     ) -> Result<f64, RuntimeError> {
-        let n = self.x.len();
+        let (x, f0) = (&now.x, &now.f);
+        let n = x.len();
         let stale = self.attempts > 0 || self.jacobian_age > self.jacobian_reuse;
         if !self.jacobian_current && stale {
-            self.evaluate_jacobian(ode, t)?;
+            self.evaluate_jacobian(ode, now, t)?;
             stats.rhs_evaluations += n + 1;
             stats.jacobian_evaluations += 1;
         }
@@ -176,11 +164,11 @@ impl AdaptiveMethod for RosenbrockMethod {
         let hd = h * D;
         let (factor, pivots) = (&self.factor, &self.pivots);
         for i in 0..n {
-            self.k1[i] = self.f0[i] + hd * self.dfdt[i];
+            self.k1[i] = f0[i] + hd * self.dfdt[i];
         }
         dense::lu_solve(factor, n, pivots, &mut self.k1);
         for i in 0..n {
-            self.x_stage[i] = self.x[i] + 0.5 * h * self.k1[i];
+            self.x_stage[i] = x[i] + 0.5 * h * self.k1[i];
         }
         ode.rhs(t + 0.5 * h, &self.x_stage, &mut self.f1)?;
         for i in 0..n {
@@ -189,38 +177,29 @@ impl AdaptiveMethod for RosenbrockMethod {
         dense::lu_solve(factor, n, pivots, &mut self.k2);
         for i in 0..n {
             self.k2[i] += self.k1[i];
-            self.x_new[i] = self.x[i] + h * self.k2[i];
+            self.x_new[i] = x[i] + h * self.k2[i];
         }
         ode.rhs(t + h, &self.x_new, &mut self.f2)?;
         for i in 0..n {
-            self.k3[i] =
-                self.f2[i] - E32 * (self.k2[i] - self.f1[i]) - 2.0 * (self.k1[i] - self.f0[i])
-                    + hd * self.dfdt[i];
+            self.k3[i] = self.f2[i] - E32 * (self.k2[i] - self.f1[i]) - 2.0 * (self.k1[i] - f0[i])
+                + hd * self.dfdt[i];
         }
         dense::lu_solve(factor, n, pivots, &mut self.k3);
 
-        let (rtol, atol) = (opts.rtol, opts.atol);
-        let mut sum = 0.0;
-        let mut finite = true;
-        for i in 0..n {
-            let err = h / 6.0 * (self.k1[i] - 2.0 * self.k2[i] + self.k3[i]);
-            let sk = atol + rtol * self.x[i].abs().max(self.x_new[i].abs());
-            sum += (err / sk).powi(2);
-            finite &= self.x_new[i].is_finite() && self.f2[i].is_finite();
-        }
-        let err = (sum / n.max(1) as f64).sqrt();
-        Ok(if finite { err } else { f64::NAN })
+        let error = |i: usize| h / 6.0 * (self.k1[i] - 2.0 * self.k2[i] + self.k3[i]);
+        Ok(error_norm(opts, x, &self.x_new, &self.f2, error))
     }
 
     fn accept<O: Ode>(
         &mut self,
         _ode: &mut O,
         _control: &mut StepControl,
+        now: &mut Current,
         h: f64,
     ) -> Result<(), RuntimeError> {
-        self.store_dense(h);
-        std::mem::swap(&mut self.x, &mut self.x_new);
-        std::mem::swap(&mut self.f0, &mut self.f2);
+        self.store_dense(now, h);
+        std::mem::swap(&mut now.x, &mut self.x_new);
+        std::mem::swap(&mut now.f, &mut self.f2);
         self.jacobian_current = false;
         self.jacobian_age = self.jacobian_age.saturating_add(1);
         self.attempts = 0;
@@ -245,24 +224,29 @@ impl AdaptiveMethod for RosenbrockMethod {
 }
 
 impl RosenbrockMethod {
-    /// Stores the dense output of the accepted step of size `h` from `x`.
-    fn store_dense(&mut self, h: f64) {
+    /// Stores the dense output of the accepted step of size `h` from `now.x`.
+    fn store_dense(&mut self, now: &Current, h: f64) {
         let [c0, c1, c2] = &mut self.cont;
         let scale = h / (1.0 - 2.0 * D);
-        for i in 0..self.x.len() {
-            c0[i] = self.x[i];
+        for i in 0..now.x.len() {
+            c0[i] = now.x[i];
             c1[i] = scale * self.k1[i];
             c2[i] = scale * self.k2[i];
         }
     }
 
     /// `J` and `∂f/∂t` at the current `(t, x)`.
-    fn evaluate_jacobian<O: Ode>(&mut self, ode: &mut O, t: f64) -> Result<(), RuntimeError> {
+    fn evaluate_jacobian<O: Ode>(
+        &mut self,
+        ode: &mut O,
+        now: &Current,
+        t: f64,
+    ) -> Result<(), RuntimeError> {
         finite_difference_jacobian(
             ode,
             t,
-            &self.x,
-            &self.f0,
+            &now.x,
+            &now.f,
             &mut self.jacobian,
             &mut self.dfdt,
             &mut self.x_stage,
