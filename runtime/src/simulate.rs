@@ -420,9 +420,7 @@ pub fn simulate<M: Model + ?Sized>(
     options: &SimOptions,
     progress: &mut dyn FnMut(f64),
 ) -> Result<Trajectory, RuntimeError> {
-    let nq = model.nq();
-    check_len("q0", nq, q0.len())?;
-    check_len("u0", nq, u0.len())?;
+    let nq = check_initial_state(model, q0, u0)?;
     if options.method.is_reduced() {
         let independent = if model.nc() == 0 {
             (0..nq).collect()
@@ -432,7 +430,7 @@ pub fn simulate<M: Model + ?Sized>(
         return simulate_reduced(model, q0, u0, &independent, signals, options, progress);
     }
     let ode = ModelOde::new(model, signals)?;
-    let grid = checked_grid(options)?;
+    let sampling = Sampling::new(model, signals, options, progress)?;
     let mut x0 = Vec::with_capacity(2 * nq);
     x0.extend_from_slice(q0);
     x0.extend_from_slice(u0);
@@ -443,13 +441,6 @@ pub fn simulate<M: Model + ?Sized>(
         projector: (model.nc() > 0).then(|| ConstrainedSolver::new(nq, model.nc())),
         inputs: vec![0.0; signals.len()],
         tolerance: options.constraint_tolerance,
-    };
-    let sampling = Sampling {
-        model,
-        signals,
-        grid,
-        max_steps: options.max_steps,
-        progress,
     };
     integrate(ode, &x0, options, sampling, &mut full)
 }
@@ -471,10 +462,8 @@ pub fn simulate_reduced<M: Model + ?Sized>(
     options: &SimOptions,
     progress: &mut dyn FnMut(f64),
 ) -> Result<Trajectory, RuntimeError> {
-    let nq = model.nq();
-    check_len("q0", nq, q0.len())?;
-    check_len("u0", nq, u0.len())?;
-    let grid = checked_grid(options)?;
+    check_initial_state(model, q0, u0)?;
+    let sampling = Sampling::new(model, signals, options, progress)?;
     let (t0, tolerance) = (options.t_start, options.constraint_tolerance);
     let ode = Reduced::new(model, signals, t0, q0, independent, tolerance)?;
     let mut x0: Vec<f64> = independent.iter().map(|&i| q0[i]).collect();
@@ -483,14 +472,19 @@ pub fn simulate_reduced<M: Model + ?Sized>(
         sampler: Reduced::new(model, signals, t0, q0, independent, tolerance)?,
         nz: independent.len(),
     };
-    let sampling = Sampling {
-        model,
-        signals,
-        grid,
-        max_steps: options.max_steps,
-        progress,
-    };
     integrate(ode, &x0, options, sampling, &mut reduced)
+}
+
+/// Checks that `q0` and `u0` have one entry per coordinate of `model`; returns their number.
+fn check_initial_state<M: Model + ?Sized>(
+    model: &M,
+    q0: &[f64],
+    u0: &[f64],
+) -> Result<usize, RuntimeError> {
+    let nq = model.nq();
+    check_len("q0", nq, q0.len())?;
+    check_len("u0", nq, u0.len())?;
+    Ok(nq)
 }
 
 /// The output grid of `options`, after checking the times.
@@ -637,6 +631,24 @@ struct Sampling<'a, M: Model + ?Sized> {
     grid: Vec<f64>,
     max_steps: usize,
     progress: &'a mut dyn FnMut(f64),
+}
+
+impl<'a, M: Model + ?Sized> Sampling<'a, M> {
+    /// The sampling of a simulation of `model` with `options`, after checking its times.
+    fn new(
+        model: &'a M,
+        signals: &'a [Signal],
+        options: &SimOptions,
+        progress: &'a mut dyn FnMut(f64),
+    ) -> Result<Self, RuntimeError> {
+        Ok(Sampling {
+            model,
+            signals,
+            grid: checked_grid(options)?,
+            max_steps: options.max_steps,
+            progress,
+        })
+    }
 }
 
 /// Steps `stepper` to its end time, sampling `grid` by dense output through `map`.
