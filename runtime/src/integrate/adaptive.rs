@@ -17,6 +17,236 @@ use crate::RuntimeError;
 #[cfg(doc)]
 use super::{Dop853, Dopri5, ExpRosenbrock, Rosenbrock};
 
+/// The current point of an integration: the state `x(t)` and the derivative `f(t, x)`, which
+/// is the first stage of the next step for every adaptive method.
+pub struct Current {
+    pub(super) x: Vec<f64>,
+    pub(super) f: Vec<f64>,
+}
+
+/// The method-specific part of an adaptive integrator: its working storage and stages.
+///
+/// The shell calls [`AdaptiveMethod::trial`] until the controller accepts a step, then
+/// [`AdaptiveMethod::accept`], which moves the [`Current`] point to the step's end.
+pub trait AdaptiveMethod {
+    /// Order of the propagated solution, for the initial step-size heuristic.
+    const ORDER: i32;
+    /// Evaluations of the right-hand side in every trial step.
+    const EVALUATIONS_PER_TRIAL: usize;
+
+    /// The controller's exponent `1/(p+1) − c·β` for an error estimate of order `p` and the
+    /// Lund stabilisation exponent `beta`.
+    fn error_exponent(beta: f64) -> f64;
+
+    /// Working storage for a start at `x0`. Every vector is allocated here; stepping never
+    /// allocates.
+    fn new(x0: &[f64]) -> Self;
+
+    /// The derivative was refreshed at a modified state: drop what depended on the old one.
+    fn derivative_refreshed(&mut self) {}
+
+    /// A trial step of size `h` from `(t, now.x)`: computes the new state (kept until
+    /// [`AdaptiveMethod::accept`] or the next trial) and returns the scaled error norm, NaN
+    /// if anything is non-finite. The shell has counted
+    /// [`AdaptiveMethod::EVALUATIONS_PER_TRIAL`]; any other work goes into `stats`.
+    fn trial<O: Ode>(
+        &mut self,
+        ode: &mut O,
+        opts: &AdaptiveOptions,
+        stats: &mut Stats,
+        now: &Current,
+        t: f64,
+        h: f64,
+    ) -> Result<f64, RuntimeError>;
+
+    /// The last trial step, of size `h` from `control.t_prev`, was accepted (`control` is
+    /// already past it): move `now` to its end and keep what its dense output needs.
+    fn accept<O: Ode>(
+        &mut self,
+        ode: &mut O,
+        control: &mut StepControl,
+        now: &mut Current,
+        h: f64,
+    ) -> Result<(), RuntimeError>;
+
+    /// Writes the solution at `t`, the fraction `theta` in `[0, 1)` of the last step
+    /// `[control.t_prev, control.t]`, into `out` (its length checked).
+    fn interpolate<O: Ode>(
+        &mut self,
+        ode: &mut O,
+        control: &mut StepControl,
+        t: f64,
+        theta: f64,
+        out: &mut [f64],
+    ) -> Result<(), RuntimeError>;
+}
+
+/// An adaptive integrator: the shell shared by [`Dopri5`], [`Dop853`], [`Rosenbrock`] and
+/// [`ExpRosenbrock`] (type aliases of it), around the method's stages `M`.
+pub struct AdaptiveStepper<O: Ode, M> {
+    pub(super) ode: O,
+    pub(super) control: StepControl,
+    pub(super) now: Current,
+    /// The state (or the system) was modified; `now.f` is stale.
+    pub(super) dirty: bool,
+    pub(super) method: M,
+}
+
+impl<O: Ode, M: AdaptiveMethod> AdaptiveStepper<O, M> {
+    /// Creates the integrator at `(t0, x0)`, integrating toward `t_end >= t0`, and evaluates
+    /// the derivative at `x0` (plus once more for the initial step-size heuristic, unless
+    /// `opts.h_init` is given).
+    pub fn new(
+        mut ode: O,
+        t0: f64,
+        x0: &[f64],
+        t_end: f64,
+        opts: AdaptiveOptions,
+    ) -> Result<Self, RuntimeError> {
+        let expo1 = M::error_exponent(opts.beta);
+        let mut control = StepControl::new(opts, expo1, M::EVALUATIONS_PER_TRIAL, t0, t_end)?;
+        let f0 = control.start(&mut ode, M::ORDER, x0)?;
+        Ok(AdaptiveStepper {
+            ode,
+            control,
+            now: Current {
+                x: x0.to_vec(),
+                f: f0,
+            },
+            dirty: false,
+            method: M::new(x0),
+        })
+    }
+
+    /// The system being integrated.
+    pub fn ode(&self) -> &O {
+        &self.ode
+    }
+
+    /// Consumes the integrator, returning the system.
+    pub fn into_ode(self) -> O {
+        self.ode
+    }
+
+    /// The options in use.
+    pub fn options(&self) -> &AdaptiveOptions {
+        &self.control.opts
+    }
+
+    /// Step size that the next step will try (before clipping to the end time).
+    pub fn next_step_size(&self) -> f64 {
+        self.control.h
+    }
+}
+
+/// The methods whose dense output is computed with the step, so that changing the system
+/// afterwards cannot alter it ([`Dop853`] computes its on first use).
+pub trait DenseWithStep {}
+
+impl<O: Ode, M: AdaptiveMethod + DenseWithStep> AdaptiveStepper<O, M> {
+    /// Mutable access to the system (e.g. to change a parameter). Call [`Stepper::reset`]
+    /// afterwards if the change alters the derivative at the current state.
+    pub fn ode_mut(&mut self) -> &mut O {
+        self.dirty = true;
+        &mut self.ode
+    }
+}
+
+impl<O: Ode, M: AdaptiveMethod> Stepper for AdaptiveStepper<O, M> {
+    fn step(&mut self) -> Result<(), RuntimeError> {
+        self.reset()?;
+        let AdaptiveStepper {
+            ode,
+            control,
+            now,
+            method,
+            ..
+        } = self;
+        let opts = control.opts;
+        let accepted = control.advance(|stats, t, h| method.trial(ode, &opts, stats, now, t, h));
+        if let Some(h) = accepted? {
+            method.accept(ode, control, now, h)?;
+        }
+        Ok(())
+    }
+
+    fn t(&self) -> f64 {
+        self.control.t
+    }
+
+    fn t_prev(&self) -> f64 {
+        self.control.t_prev
+    }
+
+    fn t_end(&self) -> f64 {
+        self.control.t_end
+    }
+
+    fn state(&self) -> &[f64] {
+        &self.now.x
+    }
+
+    fn state_mut(&mut self) -> &mut [f64] {
+        self.dirty = true;
+        &mut self.now.x
+    }
+
+    fn reset(&mut self) -> Result<(), RuntimeError> {
+        if !self.dirty {
+            return Ok(());
+        }
+        self.control.stats.rhs_evaluations += 1;
+        let now = &mut self.now;
+        derivative_at(&mut self.ode, self.control.t, &now.x, &mut now.f)?;
+        self.method.derivative_refreshed();
+        self.dirty = false;
+        Ok(())
+    }
+
+    fn interpolate(&mut self, t: f64, out: &mut [f64]) -> Result<(), RuntimeError> {
+        let (t_prev, t_cur) = (self.control.t_prev, self.control.t);
+        let Some(theta) = begin_interpolation(t, t_prev, t_cur, &self.now.x, out)? else {
+            return Ok(());
+        };
+        self.method
+            .interpolate(&mut self.ode, &mut self.control, t, theta, out)
+    }
+
+    fn set_t_end(&mut self, t_end: f64) -> Result<(), RuntimeError> {
+        self.control.set_t_end(t_end)
+    }
+
+    fn stats(&self) -> Stats {
+        self.control.stats
+    }
+}
+
+/// The error test's norm of a trial step from `x` to `x_new`, whose derivative there is
+/// `f_new`: `sqrt(mean_i((error(i) / sk_i)²))` with `sk_i = atol + rtol·max(|x_i|, |x_new_i|)`
+/// for the local error estimate `error(i)`; NaN (a rejection) if `x_new` or `f_new` is not
+/// finite.
+pub(super) fn error_norm(
+    opts: &AdaptiveOptions,
+    x: &[f64],
+    x_new: &[f64],
+    f_new: &[f64],
+    error: impl Fn(usize) -> f64,
+) -> f64 {
+    let mut sum = 0.0;
+    let mut finite = true;
+    for (i, ((x, x_new), f_new)) in x.iter().zip(x_new).zip(f_new).enumerate() {
+        let sk = opts.atol + opts.rtol * x.abs().max(x_new.abs());
+        sum += (error(i) / sk).powi(2);
+        finite &= x_new.is_finite() && f_new.is_finite();
+    }
+    let norm = (sum / x.len().max(1) as f64).sqrt();
+    if finite {
+        norm
+    } else {
+        f64::NAN
+    }
+}
+
 /// Options of the adaptive methods [`Dopri5`], [`Dop853`], [`Rosenbrock`] and
 /// [`ExpRosenbrock`]. [`Default`] gives those of Hairer's `DOPRI5`, [`AdaptiveOptions::dop853`]
 /// those of `DOP853` and [`AdaptiveOptions::rosenbrock`] those of `RODAS`, except the
@@ -342,234 +572,4 @@ fn initial_step<O: Ode>(
     };
     let h = (100.0 * h).min(h1).min(h_max);
     Ok(if h.is_finite() && h > 0.0 { h } else { 1e-6 })
-}
-
-/// The error test's norm of a trial step from `x` to `x_new`, whose derivative there is
-/// `f_new`: `sqrt(mean_i((error(i) / sk_i)²))` with `sk_i = atol + rtol·max(|x_i|, |x_new_i|)`
-/// for the local error estimate `error(i)`; NaN (a rejection) if `x_new` or `f_new` is not
-/// finite.
-pub(super) fn error_norm(
-    opts: &AdaptiveOptions,
-    x: &[f64],
-    x_new: &[f64],
-    f_new: &[f64],
-    error: impl Fn(usize) -> f64,
-) -> f64 {
-    let mut sum = 0.0;
-    let mut finite = true;
-    for (i, ((x, x_new), f_new)) in x.iter().zip(x_new).zip(f_new).enumerate() {
-        let sk = opts.atol + opts.rtol * x.abs().max(x_new.abs());
-        sum += (error(i) / sk).powi(2);
-        finite &= x_new.is_finite() && f_new.is_finite();
-    }
-    let norm = (sum / x.len().max(1) as f64).sqrt();
-    if finite {
-        norm
-    } else {
-        f64::NAN
-    }
-}
-
-/// The current point of an integration: the state `x(t)` and the derivative `f(t, x)`, which
-/// is the first stage of the next step for every adaptive method.
-pub struct Current {
-    pub(super) x: Vec<f64>,
-    pub(super) f: Vec<f64>,
-}
-
-/// The method-specific part of an adaptive integrator: its working storage and stages.
-///
-/// The shell calls [`AdaptiveMethod::trial`] until the controller accepts a step, then
-/// [`AdaptiveMethod::accept`], which moves the [`Current`] point to the step's end.
-pub trait AdaptiveMethod {
-    /// Order of the propagated solution, for the initial step-size heuristic.
-    const ORDER: i32;
-    /// Evaluations of the right-hand side in every trial step.
-    const EVALUATIONS_PER_TRIAL: usize;
-
-    /// The controller's exponent `1/(p+1) − c·β` for an error estimate of order `p` and the
-    /// Lund stabilisation exponent `beta`.
-    fn error_exponent(beta: f64) -> f64;
-
-    /// Working storage for a start at `x0`. Every vector is allocated here; stepping never
-    /// allocates.
-    fn new(x0: &[f64]) -> Self;
-
-    /// The derivative was refreshed at a modified state: drop what depended on the old one.
-    fn derivative_refreshed(&mut self) {}
-
-    /// A trial step of size `h` from `(t, now.x)`: computes the new state (kept until
-    /// [`AdaptiveMethod::accept`] or the next trial) and returns the scaled error norm, NaN
-    /// if anything is non-finite. The shell has counted
-    /// [`AdaptiveMethod::EVALUATIONS_PER_TRIAL`]; any other work goes into `stats`.
-    fn trial<O: Ode>(
-        &mut self,
-        ode: &mut O,
-        opts: &AdaptiveOptions,
-        stats: &mut Stats,
-        now: &Current,
-        t: f64,
-        h: f64,
-    ) -> Result<f64, RuntimeError>;
-
-    /// The last trial step, of size `h` from `control.t_prev`, was accepted (`control` is
-    /// already past it): move `now` to its end and keep what its dense output needs.
-    fn accept<O: Ode>(
-        &mut self,
-        ode: &mut O,
-        control: &mut StepControl,
-        now: &mut Current,
-        h: f64,
-    ) -> Result<(), RuntimeError>;
-
-    /// Writes the solution at `t`, the fraction `theta` in `[0, 1)` of the last step
-    /// `[control.t_prev, control.t]`, into `out` (its length checked).
-    fn interpolate<O: Ode>(
-        &mut self,
-        ode: &mut O,
-        control: &mut StepControl,
-        t: f64,
-        theta: f64,
-        out: &mut [f64],
-    ) -> Result<(), RuntimeError>;
-}
-
-/// An adaptive integrator: the shell shared by [`Dopri5`], [`Dop853`], [`Rosenbrock`] and
-/// [`ExpRosenbrock`] (type aliases of it), around the method's stages `M`.
-pub struct AdaptiveStepper<O: Ode, M> {
-    pub(super) ode: O,
-    pub(super) control: StepControl,
-    pub(super) now: Current,
-    /// The state (or the system) was modified; `now.f` is stale.
-    pub(super) dirty: bool,
-    pub(super) method: M,
-}
-
-impl<O: Ode, M: AdaptiveMethod> AdaptiveStepper<O, M> {
-    /// Creates the integrator at `(t0, x0)`, integrating toward `t_end >= t0`, and evaluates
-    /// the derivative at `x0` (plus once more for the initial step-size heuristic, unless
-    /// `opts.h_init` is given).
-    pub fn new(
-        mut ode: O,
-        t0: f64,
-        x0: &[f64],
-        t_end: f64,
-        opts: AdaptiveOptions,
-    ) -> Result<Self, RuntimeError> {
-        let expo1 = M::error_exponent(opts.beta);
-        let mut control = StepControl::new(opts, expo1, M::EVALUATIONS_PER_TRIAL, t0, t_end)?;
-        let f0 = control.start(&mut ode, M::ORDER, x0)?;
-        Ok(AdaptiveStepper {
-            ode,
-            control,
-            now: Current {
-                x: x0.to_vec(),
-                f: f0,
-            },
-            dirty: false,
-            method: M::new(x0),
-        })
-    }
-
-    /// The system being integrated.
-    pub fn ode(&self) -> &O {
-        &self.ode
-    }
-
-    /// Consumes the integrator, returning the system.
-    pub fn into_ode(self) -> O {
-        self.ode
-    }
-
-    /// The options in use.
-    pub fn options(&self) -> &AdaptiveOptions {
-        &self.control.opts
-    }
-
-    /// Step size that the next step will try (before clipping to the end time).
-    pub fn next_step_size(&self) -> f64 {
-        self.control.h
-    }
-}
-
-/// The methods whose dense output is computed with the step, so that changing the system
-/// afterwards cannot alter it ([`Dop853`] computes its on first use).
-pub trait DenseWithStep {}
-
-impl<O: Ode, M: AdaptiveMethod + DenseWithStep> AdaptiveStepper<O, M> {
-    /// Mutable access to the system (e.g. to change a parameter). Call [`Stepper::reset`]
-    /// afterwards if the change alters the derivative at the current state.
-    pub fn ode_mut(&mut self) -> &mut O {
-        self.dirty = true;
-        &mut self.ode
-    }
-}
-
-impl<O: Ode, M: AdaptiveMethod> Stepper for AdaptiveStepper<O, M> {
-    fn step(&mut self) -> Result<(), RuntimeError> {
-        self.reset()?;
-        let AdaptiveStepper {
-            ode,
-            control,
-            now,
-            method,
-            ..
-        } = self;
-        let opts = control.opts;
-        let accepted = control.advance(|stats, t, h| method.trial(ode, &opts, stats, now, t, h));
-        if let Some(h) = accepted? {
-            method.accept(ode, control, now, h)?;
-        }
-        Ok(())
-    }
-
-    fn t(&self) -> f64 {
-        self.control.t
-    }
-
-    fn t_prev(&self) -> f64 {
-        self.control.t_prev
-    }
-
-    fn t_end(&self) -> f64 {
-        self.control.t_end
-    }
-
-    fn state(&self) -> &[f64] {
-        &self.now.x
-    }
-
-    fn state_mut(&mut self) -> &mut [f64] {
-        self.dirty = true;
-        &mut self.now.x
-    }
-
-    fn reset(&mut self) -> Result<(), RuntimeError> {
-        if !self.dirty {
-            return Ok(());
-        }
-        self.control.stats.rhs_evaluations += 1;
-        let now = &mut self.now;
-        derivative_at(&mut self.ode, self.control.t, &now.x, &mut now.f)?;
-        self.method.derivative_refreshed();
-        self.dirty = false;
-        Ok(())
-    }
-
-    fn interpolate(&mut self, t: f64, out: &mut [f64]) -> Result<(), RuntimeError> {
-        let (t_prev, t_cur) = (self.control.t_prev, self.control.t);
-        let Some(theta) = begin_interpolation(t, t_prev, t_cur, &self.now.x, out)? else {
-            return Ok(());
-        };
-        self.method
-            .interpolate(&mut self.ode, &mut self.control, t, theta, out)
-    }
-
-    fn set_t_end(&mut self, t_end: f64) -> Result<(), RuntimeError> {
-        self.control.set_t_end(t_end)
-    }
-
-    fn stats(&self) -> Stats {
-        self.control.stats
-    }
 }
