@@ -35,10 +35,9 @@ pub use linearize::{linearize, FlexureDamping, Linearization, Mode, StateSpace};
 pub use model::Model;
 pub use nalgebra;
 pub use reduced::Reduced;
-pub use signal::{Signal, Table};
+pub use signal::{default_signals, Signal, Table};
 pub use simulate::{
-    accelerations, default_signals, simulate, simulate_reduced, Method, ModelOde, SimOptions,
-    Trajectory,
+    accelerations, simulate, simulate_reduced, Method, ModelOde, SimOptions, Trajectory,
 };
 pub use statics::{
     reduced_equilibrium, solve_statics, solve_statics_with_loads, Equilibrium, Fixture,

@@ -15,7 +15,7 @@ use nalgebra::{Complex, DMatrix, DVector};
 
 use crate::constraints::AssemblyOptions;
 use crate::reduced::Reduced;
-use crate::simulate::default_signals;
+use crate::signal::default_signals;
 use crate::{Model, RuntimeError};
 
 /// `M δz̈ + C δż + K δz = B δin` and `δy = C_q δz + C_u δż + D δin` about `q`, `inputs`.

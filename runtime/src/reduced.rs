@@ -22,6 +22,7 @@
 
 use crate::constraints::{assembly_error, mobility};
 use crate::integrate::{check_len, Ode};
+use crate::signal::{check_inputs, values_at};
 use crate::{dense, Model, RuntimeError, Signal};
 
 /// Newton iterations allowed per closure; warm-started closures take one or two.
@@ -97,10 +98,7 @@ impl<'a, M: Model + ?Sized> Reduced<'a, M> {
             )));
         }
         check_len("q", nq, q.len())?;
-        check_len("signals", model.ninputs(), signals.len())?;
-        for s in signals {
-            s.validate()?;
-        }
+        check_inputs(model, signals)?;
         if !(tolerance > 0.0 && tolerance.is_finite()) {
             return Err(RuntimeError::InvalidOptions(format!(
                 "the constraint tolerance must be finite and > 0 (got {tolerance})"
@@ -420,9 +418,7 @@ impl<M: Model + ?Sized> Ode for Reduced<'_, M> {
     /// mass matrix is an error.
     fn rhs(&mut self, t: f64, x: &[f64], dxdt: &mut [f64]) -> Result<(), RuntimeError> {
         let nz = self.independent.len();
-        for (v, s) in self.inputs.iter_mut().zip(self.signals) {
-            *v = s.value(t);
-        }
+        values_at(self.signals, t, &mut self.inputs);
         let (z, zdot) = x.split_at(nz);
         let (velocity, acceleration) = dxdt.split_at_mut(nz);
         velocity.copy_from_slice(zdot);

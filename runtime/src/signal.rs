@@ -1,9 +1,15 @@
 //! Input signals: scalar functions of time that drive a model's inputs during a simulation.
 //!
+//! Consumes the signal definitions (and, to check them against it, the [`Model`] they drive);
+//! produces their values at a time. Everything about signals is here: the [`Signal`] and
+//! [`Table`] types, their validation, the defaults of a model's inputs ([`default_signals`])
+//! and the evaluation of one signal per input that the dynamics call at every time.
+//!
 //! Times are in seconds (the model's time unit), frequencies in hertz, phases in radians; the
 //! value has the unit of the input it drives.
 
-use crate::RuntimeError;
+use crate::integrate::check_len;
+use crate::{Model, RuntimeError};
 use std::f64::consts::TAU;
 
 /// A scalar input signal `s(t)`.
@@ -244,5 +250,28 @@ impl Signal {
             }
             Signal::Table(_) => Ok(()),
         }
+    }
+}
+
+/// One [`Signal::Constant`] per model input, at the input's default value.
+pub fn default_signals<M: Model + ?Sized>(model: &M) -> Vec<Signal> {
+    (0..model.ninputs())
+        .map(|i| Signal::Constant(model.input_default(i)))
+        .collect()
+}
+
+/// Checks that `signals` can drive `model`: one per input, each valid.
+pub(crate) fn check_inputs<M: Model + ?Sized>(
+    model: &M,
+    signals: &[Signal],
+) -> Result<(), RuntimeError> {
+    check_len("signals", model.ninputs(), signals.len())?;
+    signals.iter().try_for_each(Signal::validate)
+}
+
+/// The value of each signal at `t` into `values` (one per signal).
+pub(crate) fn values_at(signals: &[Signal], t: f64, values: &mut [f64]) {
+    for (value, signal) in values.iter_mut().zip(signals) {
+        *value = signal.value(t);
     }
 }

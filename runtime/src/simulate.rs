@@ -16,6 +16,8 @@ use crate::integrate::{
     check_len, AdaptiveOptions, Dop853, Dopri5, ExpRosenbrock, Ode, Rk4, Rosenbrock, Stats, Stepper,
 };
 use crate::reduced::Reduced;
+pub use crate::signal::default_signals;
+use crate::signal::{check_inputs, values_at};
 use crate::{dense, Model, RuntimeError, Signal};
 use nalgebra::{Cholesky, DMatrix, DVector};
 
@@ -159,13 +161,6 @@ impl Trajectory {
     }
 }
 
-/// One [`Signal::Constant`] per model input, at the input's default value.
-pub fn default_signals<M: Model + ?Sized>(model: &M) -> Vec<Signal> {
-    (0..model.ninputs())
-        .map(|i| Signal::Constant(model.input_default(i)))
-        .collect()
-}
-
 /// Workspace for solving `M u̇ = F` without allocating.
 struct AccelSolver {
     mass: DMatrix<f64>,
@@ -296,10 +291,7 @@ impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
                 model.name()
             )));
         }
-        check_len("signals", model.ninputs(), signals.len())?;
-        for s in signals {
-            s.validate()?;
-        }
+        check_inputs(model, signals)?;
         Ok(ModelOde {
             model,
             signals,
@@ -322,9 +314,7 @@ impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
 
     /// Writes the input values at time `t` into `out` (length `ninputs`).
     pub fn inputs_at(&self, t: f64, out: &mut [f64]) {
-        for (o, s) in out.iter_mut().zip(self.signals) {
-            *o = s.value(t);
-        }
+        values_at(self.signals, t, out);
     }
 
     /// Solves `M(q) u̇ = F(t, q, u, inputs)` for `u̇` with the given input values (the signals
@@ -360,9 +350,7 @@ impl<M: Model + ?Sized> Ode for ModelOde<'_, M> {
 
     fn rhs(&mut self, t: f64, x: &[f64], dxdt: &mut [f64]) -> Result<(), RuntimeError> {
         let (q, u) = x.split_at(self.nq);
-        for (v, s) in self.inputs.iter_mut().zip(self.signals) {
-            *v = s.value(t);
-        }
+        values_at(self.signals, t, &mut self.inputs);
         let (qdot, udot) = dxdt.split_at_mut(self.nq);
         qdot.copy_from_slice(u);
         if let Some(constrained) = &mut self.constrained {
@@ -432,9 +420,7 @@ pub fn simulate<M: Model + ?Sized>(
     options: &SimOptions,
     progress: &mut dyn FnMut(f64),
 ) -> Result<Trajectory, RuntimeError> {
-    let nq = model.nq();
-    check_len("q0", nq, q0.len())?;
-    check_len("u0", nq, u0.len())?;
+    let nq = check_initial_state(model, q0, u0)?;
     if options.method.is_reduced() {
         let independent = if model.nc() == 0 {
             (0..nq).collect()
@@ -444,7 +430,7 @@ pub fn simulate<M: Model + ?Sized>(
         return simulate_reduced(model, q0, u0, &independent, signals, options, progress);
     }
     let ode = ModelOde::new(model, signals)?;
-    let grid = checked_grid(options)?;
+    let sampling = Sampling::new(model, signals, options, progress)?;
     let mut x0 = Vec::with_capacity(2 * nq);
     x0.extend_from_slice(q0);
     x0.extend_from_slice(u0);
@@ -455,13 +441,6 @@ pub fn simulate<M: Model + ?Sized>(
         projector: (model.nc() > 0).then(|| ConstrainedSolver::new(nq, model.nc())),
         inputs: vec![0.0; signals.len()],
         tolerance: options.constraint_tolerance,
-    };
-    let sampling = Sampling {
-        model,
-        signals,
-        grid,
-        max_steps: options.max_steps,
-        progress,
     };
     integrate(ode, &x0, options, sampling, &mut full)
 }
@@ -483,10 +462,8 @@ pub fn simulate_reduced<M: Model + ?Sized>(
     options: &SimOptions,
     progress: &mut dyn FnMut(f64),
 ) -> Result<Trajectory, RuntimeError> {
-    let nq = model.nq();
-    check_len("q0", nq, q0.len())?;
-    check_len("u0", nq, u0.len())?;
-    let grid = checked_grid(options)?;
+    check_initial_state(model, q0, u0)?;
+    let sampling = Sampling::new(model, signals, options, progress)?;
     let (t0, tolerance) = (options.t_start, options.constraint_tolerance);
     let ode = Reduced::new(model, signals, t0, q0, independent, tolerance)?;
     let mut x0: Vec<f64> = independent.iter().map(|&i| q0[i]).collect();
@@ -495,14 +472,19 @@ pub fn simulate_reduced<M: Model + ?Sized>(
         sampler: Reduced::new(model, signals, t0, q0, independent, tolerance)?,
         nz: independent.len(),
     };
-    let sampling = Sampling {
-        model,
-        signals,
-        grid,
-        max_steps: options.max_steps,
-        progress,
-    };
     integrate(ode, &x0, options, sampling, &mut reduced)
+}
+
+/// Checks that `q0` and `u0` have one entry per coordinate of `model`; returns their number.
+fn check_initial_state<M: Model + ?Sized>(
+    model: &M,
+    q0: &[f64],
+    u0: &[f64],
+) -> Result<usize, RuntimeError> {
+    let nq = model.nq();
+    check_len("q0", nq, q0.len())?;
+    check_len("u0", nq, u0.len())?;
+    Ok(nq)
 }
 
 /// The output grid of `options`, after checking the times.
@@ -594,9 +576,7 @@ impl<M: Model + ?Sized> StateMap for FullCoordinates<'_, M> {
         let Some(projector) = self.projector.as_mut() else {
             return Ok(false);
         };
-        for (v, s) in self.inputs.iter_mut().zip(self.signals) {
-            *v = s.value(t);
-        }
+        values_at(self.signals, t, &mut self.inputs);
         let (q, u) = x.split_at_mut(self.nq);
         projector.project_state(self.model, t, q, u, &self.inputs, self.tolerance)
     }
@@ -611,9 +591,7 @@ impl<M: Model + ?Sized> StateMap for FullCoordinates<'_, M> {
         q.copy_from_slice(&x[..self.nq]);
         u.copy_from_slice(&x[self.nq..]);
         if let Some(projector) = self.projector.as_mut() {
-            for (v, s) in self.inputs.iter_mut().zip(self.signals) {
-                *v = s.value(t);
-            }
+            values_at(self.signals, t, &mut self.inputs);
             projector.project_state(self.model, t, q, u, &self.inputs, self.tolerance)?;
         }
         Ok(())
@@ -655,6 +633,24 @@ struct Sampling<'a, M: Model + ?Sized> {
     progress: &'a mut dyn FnMut(f64),
 }
 
+impl<'a, M: Model + ?Sized> Sampling<'a, M> {
+    /// The sampling of a simulation of `model` with `options`, after checking its times.
+    fn new(
+        model: &'a M,
+        signals: &'a [Signal],
+        options: &SimOptions,
+        progress: &'a mut dyn FnMut(f64),
+    ) -> Result<Self, RuntimeError> {
+        Ok(Sampling {
+            model,
+            signals,
+            grid: checked_grid(options)?,
+            max_steps: options.max_steps,
+            progress,
+        })
+    }
+}
+
 /// Steps `stepper` to its end time, sampling `grid` by dense output through `map`.
 fn run<M: Model + ?Sized, S: Stepper>(
     mut stepper: S,
@@ -687,7 +683,8 @@ fn run<M: Model + ?Sized, S: Stepper>(
      -> Result<(), RuntimeError> {
         let (mut q, mut u) = (vec![0.0; nq], vec![0.0; nq]);
         map.full_state(t, x, &mut q, &mut u)?;
-        let inputs: Vec<f64> = signals.iter().map(|s| s.value(t)).collect();
+        let mut inputs = vec![0.0; signals.len()];
+        values_at(signals, t, &mut inputs);
         let mut outputs = vec![0.0; model.noutputs()];
         model.outputs(t, &q, &u, &inputs, &mut outputs);
         traj.q.push(q);

@@ -5,14 +5,16 @@
 //! 5th-order and a 3rd-order error estimate combined as
 //! `err = h·e5²/sqrt(n·(e5² + 0.01·e3²))` (sums of squares of the scaled estimates), and a
 //! 7th-order continuous extension that needs 3 more stages.
+//!
+//! Consumes the right-hand side through the adaptive shell ([`AdaptiveStepper`]); produces
+//! the 8th-order solution of each step, its combined error norm and, for a step that is
+//! interpolated, the continuous extension.
 
 // The coefficients are kept digit for digit as published (the compiler rounds them to f64).
 #![allow(clippy::excessive_precision)]
 
-use super::{
-    all_finite, check_len, derivative_at, interp_theta, Adaptive, AdaptiveOptions, Ode, Stats,
-    Stepper,
-};
+use super::adaptive::{AdaptiveMethod, Current, StepControl};
+use super::{all_finite, AdaptiveOptions, AdaptiveStepper, Ode, Stats};
 use crate::RuntimeError;
 
 const C2: f64 = 0.526001519587677318785587544488e-01;
@@ -199,14 +201,13 @@ const D7: [f64; 12] = [
 /// interpolated inside (at most once per step), so a caller that never samples within steps
 /// pays nothing for it. It describes the step as computed, even if the state was modified
 /// through [`Stepper::state_mut`] afterwards (`interpolate(t())` returns the modified state).
-pub struct Dop853<O: Ode> {
-    ode: O,
-    control: Adaptive,
-    /// The state was modified through `state_mut`; `f` is stale.
-    dirty: bool,
-    /// Current state and its derivative.
-    x: Vec<f64>,
-    f: Vec<f64>,
+///
+/// [`Stepper::state_mut`]: super::Stepper::state_mut
+pub type Dop853<O> = AdaptiveStepper<O, Dop853Method>;
+
+/// The stages of [`Dop853`], the last step as computed and its continuous extension.
+/// The current state and its derivative are the shell's.
+pub struct Dop853Method {
     x_stage: Vec<f64>,
     /// The last step as computed: start and end states, end derivative, and stages
     /// `k[0]` = f at the start, `k[1..12]` = stages 2–12; stages 14–16 of the dense output
@@ -221,86 +222,70 @@ pub struct Dop853<O: Ode> {
 }
 
 impl<O: Ode> Dop853<O> {
-    /// Creates the integrator at `(t0, x0)`, integrating toward `t_end >= t0`, and evaluates
-    /// the derivative at `x0` (plus once more for the initial step-size heuristic).
-    pub fn new(
-        mut ode: O,
-        t0: f64,
-        x0: &[f64],
-        t_end: f64,
-        opts: AdaptiveOptions,
-    ) -> Result<Self, RuntimeError> {
-        let mut control = Adaptive::new(opts, 0.125 - opts.beta * 0.2, 11, t0, t_end)?;
-        let f = control.start(&mut ode, 8, x0)?;
-        let n = x0.len();
-        let zeros = vec![0.0; n];
-        let x_stage = zeros.clone();
-        Ok(Dop853 {
-            ode,
-            control,
-            dirty: false,
-            x: x0.to_vec(),
-            f,
-            x_stage,
+    /// Mutable access to the system; call [`Stepper::reset`] afterwards if the change alters
+    /// the derivative at the current state. Dense output of the last step is prepared first
+    /// (with the system as it was), so that it keeps describing that step.
+    ///
+    /// [`Stepper::reset`]: super::Stepper::reset
+    pub fn ode_mut(&mut self) -> Result<&mut O, RuntimeError> {
+        self.method
+            .prepare_dense(&mut self.ode, &mut self.control)?;
+        self.dirty = true;
+        Ok(&mut self.ode)
+    }
+}
+
+impl AdaptiveMethod for Dop853Method {
+    const ORDER: i32 = 8;
+    /// Stages 2–12; the derivative at the new point is evaluated on acceptance.
+    const EVALUATIONS_PER_TRIAL: usize = 11;
+
+    fn error_exponent(beta: f64) -> f64 {
+        0.125 - beta * 0.2
+    }
+
+    fn new(x0: &[f64]) -> Self {
+        let zeros = vec![0.0; x0.len()];
+        Dop853Method {
+            x_stage: zeros.clone(),
             x_start: x0.to_vec(),
             x_end: x0.to_vec(),
             f_end: zeros.clone(),
             k: std::array::from_fn(|_| zeros.clone()),
             cont: std::array::from_fn(|_| zeros.clone()),
             dense_ready: false,
-        })
-    }
-
-    /// The system being integrated.
-    pub fn ode(&self) -> &O {
-        &self.ode
-    }
-
-    /// Mutable access to the system; call [`Stepper::reset`] afterwards if the change alters
-    /// the derivative at the current state. Dense output of the last step is prepared first
-    /// (with the system as it was), so that it keeps describing that step.
-    pub fn ode_mut(&mut self) -> Result<&mut O, RuntimeError> {
-        self.prepare_dense()?;
-        self.dirty = true;
-        Ok(&mut self.ode)
-    }
-
-    /// Consumes the integrator, returning the system.
-    pub fn into_ode(self) -> O {
-        self.ode
-    }
-
-    /// The options in use.
-    pub fn options(&self) -> &AdaptiveOptions {
-        &self.control.opts
-    }
-
-    /// Step size that the next step will try (before clipping to the end time).
-    pub fn next_step_size(&self) -> f64 {
-        self.control.h
+        }
     }
 
     /// Computes stages 2–12 of a trial step of size `h` from `(t, x)` with `k[0] = f(t, x)`:
     /// `x_end` holds the 8th-order solution; returns the scaled error norm (NaN if anything
     /// is non-finite).
-    fn trial(&mut self, t: f64, h: f64) -> Result<f64, RuntimeError> {
-        let n = self.x.len();
-        let (x, xs, k) = (&self.x, &mut self.x_stage, &mut self.k);
+    fn trial<O: Ode>(
+        &mut self,
+        ode: &mut O,
+        opts: &AdaptiveOptions,
+        _stats: &mut Stats,
+        now: &Current,
+        t: f64,
+        h: f64,
+    ) -> Result<f64, RuntimeError> {
+        let n = now.x.len();
+        let (x, xs, k) = (&now.x, &mut self.x_stage, &mut self.k);
         // Stage i: x + h·Σ_j a_ij k_j, evaluated into k[i − 1].
         macro_rules! stage {
             ($dst:expr, $c:expr, $($a:expr => $j:expr),+) => {{
                 for i in 0..n {
                     xs[i] = x[i] + h * (0.0 $(+ $a * k[$j][i])+);
                 }
-                self.ode.rhs(t + $c * h, xs, &mut k[$dst])?;
+                ode.rhs(t + $c * h, xs, &mut k[$dst])?;
             }};
         }
-        k[0].copy_from_slice(&self.f);
+        k[0].copy_from_slice(&now.f);
         // Stage 2 associates as `dop853.f` does (`Y + H*A21*K1`), so steps match it exactly.
         for i in 0..n {
             xs[i] = x[i] + h * A21 * k[0][i];
         }
-        self.ode.rhs(t + C2 * h, xs, &mut k[1])?;
+        ode.rhs(t + C2 * h, xs, &mut k[1])?;
         stage!(2, C3, A31 => 0, A32 => 1);
         stage!(3, C4, A41 => 0, A43 => 2);
         stage!(4, C5, A51 => 0, A53 => 2, A54 => 3);
@@ -315,7 +300,7 @@ impl<O: Ode> Dop853<O> {
         stage!(11, 1.0, A121 => 0, A124 => 3, A125 => 4, A126 => 5, A127 => 6, A128 => 7,
             A129 => 8, A1210 => 9, A1211 => 10);
 
-        let (rtol, atol) = (self.control.opts.rtol, self.control.opts.atol);
+        let (rtol, atol) = (opts.rtol, opts.atol);
         let (mut err5, mut err3) = (0.0, 0.0);
         let mut finite = true;
         for i in 0..n {
@@ -350,13 +335,58 @@ impl<O: Ode> Dop853<O> {
         Ok(if finite { err } else { f64::NAN })
     }
 
+    fn accept<O: Ode>(
+        &mut self,
+        ode: &mut O,
+        control: &mut StepControl,
+        now: &mut Current,
+        h: f64,
+    ) -> Result<(), RuntimeError> {
+        // At `t_prev + h`, where the stages put the step's end (the controller sets the
+        // last step's `t` to `t_end` exactly).
+        ode.rhs(control.t_prev + h, &self.x_end, &mut self.f_end)?;
+        control.stats.rhs_evaluations += 1;
+        self.x_start.copy_from_slice(&now.x);
+        now.x.copy_from_slice(&self.x_end);
+        now.f.copy_from_slice(&self.f_end);
+        self.dense_ready = false;
+        if !all_finite(&now.f) {
+            return Err(RuntimeError::NonFiniteState { t: control.t });
+        }
+        Ok(())
+    }
+
+    fn interpolate<O: Ode>(
+        &mut self,
+        ode: &mut O,
+        control: &mut StepControl,
+        _t: f64,
+        s: f64,
+        out: &mut [f64],
+    ) -> Result<(), RuntimeError> {
+        self.prepare_dense(ode, control)?;
+        let s1 = 1.0 - s;
+        let [c0, c1, c2, c3, c4, c5, c6, c7] = &self.cont;
+        for (i, o) in out.iter_mut().enumerate() {
+            let conpar = c4[i] + s * (c5[i] + s1 * (c6[i] + s * c7[i]));
+            *o = c0[i] + s * (c1[i] + s1 * (c2[i] + s * (c3[i] + s1 * conpar)));
+        }
+        Ok(())
+    }
+}
+
+impl Dop853Method {
     /// Computes the continuous extension of the last step (3 evaluations), once.
-    fn prepare_dense(&mut self) -> Result<(), RuntimeError> {
-        if self.dense_ready || self.control.t == self.control.t_prev {
+    fn prepare_dense<O: Ode>(
+        &mut self,
+        ode: &mut O,
+        control: &mut StepControl,
+    ) -> Result<(), RuntimeError> {
+        if self.dense_ready || control.t == control.t_prev {
             return Ok(());
         }
-        let n = self.x.len();
-        let (t, h) = (self.control.t_prev, self.control.t - self.control.t_prev);
+        let n = self.x_start.len();
+        let (t, h) = (control.t_prev, control.t - control.t_prev);
         let (x, fe, xs) = (&self.x_start, &self.f_end, &mut self.x_stage);
         let k = &mut self.k;
         // The parts of rows 4–7 over stages 1 and 6–12, before k[1..4] are overwritten.
@@ -388,7 +418,7 @@ impl<O: Ode> Dop853<O> {
                     + A1412 * k[11][i]
                     + A1413 * fe[i]);
         }
-        self.ode.rhs(t + C14 * h, xs, &mut k[1])?;
+        ode.rhs(t + C14 * h, xs, &mut k[1])?;
         for i in 0..n {
             xs[i] = x[i]
                 + h * (A151 * k[0][i]
@@ -400,7 +430,7 @@ impl<O: Ode> Dop853<O> {
                     + A1513 * fe[i]
                     + A1514 * k[1][i]);
         }
-        self.ode.rhs(t + C15 * h, xs, &mut k[2])?;
+        ode.rhs(t + C15 * h, xs, &mut k[2])?;
         for i in 0..n {
             xs[i] = x[i]
                 + h * (A161 * k[0][i]
@@ -412,8 +442,8 @@ impl<O: Ode> Dop853<O> {
                     + A1614 * k[1][i]
                     + A1615 * k[2][i]);
         }
-        self.ode.rhs(t + C16 * h, xs, &mut k[3])?;
-        self.control.stats.rhs_evaluations += 3;
+        ode.rhs(t + C16 * h, xs, &mut k[3])?;
+        control.stats.rhs_evaluations += 3;
         for i in 0..n {
             // Summed left to right onto the first part, as `dop853.f` does.
             let tail = [fe[i], k[1][i], k[2][i], k[3][i]];
@@ -426,84 +456,5 @@ impl<O: Ode> Dop853<O> {
         }
         self.dense_ready = true;
         Ok(())
-    }
-}
-
-impl<O: Ode> Stepper for Dop853<O> {
-    fn step(&mut self) -> Result<(), RuntimeError> {
-        self.reset()?;
-        // The controller is `Copy`: step with a copy while `trial` borrows the stages.
-        let mut control = self.control;
-        let accepted = control.advance(|t, h| self.trial(t, h));
-        self.control = control;
-        if let Some(h) = accepted? {
-            let t_new = self.control.t_prev + h;
-            self.ode.rhs(t_new, &self.x_end, &mut self.f_end)?;
-            self.control.stats.rhs_evaluations += 1;
-            self.x_start.copy_from_slice(&self.x);
-            self.x.copy_from_slice(&self.x_end);
-            self.f.copy_from_slice(&self.f_end);
-            self.dense_ready = false;
-            if !all_finite(&self.f) {
-                return Err(RuntimeError::NonFiniteState { t: self.control.t });
-            }
-        }
-        Ok(())
-    }
-
-    fn t(&self) -> f64 {
-        self.control.t
-    }
-
-    fn t_prev(&self) -> f64 {
-        self.control.t_prev
-    }
-
-    fn t_end(&self) -> f64 {
-        self.control.t_end
-    }
-
-    fn state(&self) -> &[f64] {
-        &self.x
-    }
-
-    fn state_mut(&mut self) -> &mut [f64] {
-        self.dirty = true;
-        &mut self.x
-    }
-
-    fn reset(&mut self) -> Result<(), RuntimeError> {
-        if !self.dirty {
-            return Ok(());
-        }
-        self.control.stats.rhs_evaluations += 1;
-        derivative_at(&mut self.ode, self.control.t, &self.x, &mut self.f)?;
-        self.dirty = false;
-        Ok(())
-    }
-
-    fn interpolate(&mut self, t: f64, out: &mut [f64]) -> Result<(), RuntimeError> {
-        check_len("out", self.x.len(), out.len())?;
-        let s = interp_theta(t, self.control.t_prev, self.control.t)?;
-        if s == 1.0 {
-            out.copy_from_slice(&self.x);
-            return Ok(());
-        }
-        self.prepare_dense()?;
-        let s1 = 1.0 - s;
-        let [c0, c1, c2, c3, c4, c5, c6, c7] = &self.cont;
-        for (i, o) in out.iter_mut().enumerate() {
-            let conpar = c4[i] + s * (c5[i] + s1 * (c6[i] + s * c7[i]));
-            *o = c0[i] + s * (c1[i] + s1 * (c2[i] + s * (c3[i] + s1 * conpar)));
-        }
-        Ok(())
-    }
-
-    fn set_t_end(&mut self, t_end: f64) -> Result<(), RuntimeError> {
-        self.control.set_t_end(t_end)
-    }
-
-    fn stats(&self) -> Stats {
-        self.control.stats
     }
 }

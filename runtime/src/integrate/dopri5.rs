@@ -1,8 +1,11 @@
-//! Dormand–Prince 5(4) (Hairer's `DOPRI5`).
+//! Dormand–Prince 5(4) (Hairer's `DOPRI5`): the stages, error estimate and continuous
+//! extension that the adaptive shell ([`AdaptiveStepper`]) steps with.
+//!
+//! Consumes the right-hand side through the shell; produces the 5th-order solution of each
+//! step, its scaled error norm and the coefficients of Shampine's 4th-order dense output.
 
-use super::{
-    check_len, derivative_at, interp_theta, Adaptive, AdaptiveOptions, Ode, Stats, Stepper,
-};
+use super::adaptive::{error_norm, AdaptiveMethod, Current, DenseWithStep, StepControl};
+use super::{AdaptiveOptions, AdaptiveStepper, Ode, Stats};
 use crate::RuntimeError;
 
 // Dormand & Prince (1980) coefficients, as in Hairer's CDOPRI.
@@ -53,138 +56,100 @@ const D7: f64 = 69997945.0 / 29380423.0;
 ///
 /// Non-finite values produced by a trial step reject it and shrink the step by `fac_min`; if
 /// that drives the step to underflow, the error is [`RuntimeError::NonFiniteState`].
-pub struct Dopri5<O: Ode> {
-    ode: O,
-    control: Adaptive,
-    /// The state was modified through `state_mut`; `k1` is stale.
-    dirty: bool,
-    stages: Stages,
-}
+pub type Dopri5<O> = AdaptiveStepper<O, Dopri5Method>;
 
-/// The working vectors of one step.
-struct Stages {
-    x: Vec<f64>,
+/// The stages of [`Dopri5`]: the working vectors of one step and the dense output of the last.
+/// `k1 = f(t, x)` is the shell's current derivative.
+pub struct Dopri5Method {
     x_new: Vec<f64>,
     x_stage: Vec<f64>,
-    k1: Vec<f64>,
     k2: Vec<f64>,
     k3: Vec<f64>,
     k4: Vec<f64>,
     k5: Vec<f64>,
     k6: Vec<f64>,
+    /// `f(t + h, x_new)`.
     k7: Vec<f64>,
     /// Dense output coefficients of the last step.
     cont: [Vec<f64>; 5],
 }
 
 impl<O: Ode> Dopri5<O> {
-    /// Creates the integrator at `(t0, x0)`, integrating toward `t_end >= t0`, and evaluates
-    /// the derivative at `x0` (plus once more for the initial step-size heuristic).
-    pub fn new(
-        mut ode: O,
-        t0: f64,
-        x0: &[f64],
-        t_end: f64,
-        opts: AdaptiveOptions,
-    ) -> Result<Self, RuntimeError> {
-        let mut control = Adaptive::new(opts, 0.2 - opts.beta * 0.75, 6, t0, t_end)?;
-        let k1 = control.start(&mut ode, 5, x0)?;
-        let n = x0.len();
-        let zeros = vec![0.0; n];
-        let (x_stage, k2) = (zeros.clone(), zeros.clone());
-        Ok(Dopri5 {
-            ode,
-            control,
-            dirty: false,
-            stages: Stages {
-                x: x0.to_vec(),
-                x_new: zeros.clone(),
-                x_stage,
-                k1,
-                k2,
-                k3: zeros.clone(),
-                k4: zeros.clone(),
-                k5: zeros.clone(),
-                k6: zeros.clone(),
-                k7: zeros.clone(),
-                cont: [
-                    x0.to_vec(),
-                    zeros.clone(),
-                    zeros.clone(),
-                    zeros.clone(),
-                    zeros,
-                ],
-            },
-        })
-    }
-
-    /// The system being integrated.
-    pub fn ode(&self) -> &O {
-        &self.ode
-    }
-
-    /// Mutable access to the system (e.g. to change a parameter). Call [`Stepper::reset`]
-    /// afterwards if the change alters the derivative at the current state.
-    pub fn ode_mut(&mut self) -> &mut O {
-        self.dirty = true;
-        &mut self.ode
-    }
-
-    /// Consumes the integrator, returning the system.
-    pub fn into_ode(self) -> O {
-        self.ode
-    }
-
-    /// The options in use.
-    pub fn options(&self) -> &AdaptiveOptions {
-        &self.control.opts
-    }
-
-    /// Step size that the next step will try (before clipping to the end time).
-    pub fn next_step_size(&self) -> f64 {
-        self.control.h
-    }
-
     /// Derivative `f(t, x)` at the current state (stale between [`Stepper::state_mut`] and the
     /// next [`Stepper::reset`] or [`Stepper::step`]).
+    ///
+    /// [`Stepper::state_mut`]: super::Stepper::state_mut
+    /// [`Stepper::reset`]: super::Stepper::reset
+    /// [`Stepper::step`]: super::Stepper::step
     pub fn derivative(&self) -> &[f64] {
-        &self.stages.k1
+        &self.now.f
     }
 }
 
-impl Stages {
+impl DenseWithStep for Dopri5Method {}
+
+impl AdaptiveMethod for Dopri5Method {
+    const ORDER: i32 = 5;
+    const EVALUATIONS_PER_TRIAL: usize = 6;
+
+    fn error_exponent(beta: f64) -> f64 {
+        0.2 - beta * 0.75
+    }
+
+    fn new(x0: &[f64]) -> Self {
+        let zeros = vec![0.0; x0.len()];
+        Dopri5Method {
+            x_new: zeros.clone(),
+            x_stage: zeros.clone(),
+            k2: zeros.clone(),
+            k3: zeros.clone(),
+            k4: zeros.clone(),
+            k5: zeros.clone(),
+            k6: zeros.clone(),
+            k7: zeros.clone(),
+            cont: [
+                x0.to_vec(),
+                zeros.clone(),
+                zeros.clone(),
+                zeros.clone(),
+                zeros,
+            ],
+        }
+    }
+
     /// Computes the six stages of a trial step of size `h` from `(t, x)`: `x_new` holds the
-    /// 5th-order solution, `k7` its derivative, and the return value is the scaled error norm
-    /// (NaN if anything is non-finite).
+    /// 5th-order solution and `k7` its derivative.
     fn trial<O: Ode>(
         &mut self,
         ode: &mut O,
         opts: &AdaptiveOptions,
+        _stats: &mut Stats,
+        now: &Current,
         t: f64,
         h: f64,
     ) -> Result<f64, RuntimeError> {
-        let n = self.x.len();
+        let (x, k1) = (&now.x, &now.f);
+        let n = x.len();
         for i in 0..n {
-            self.x_stage[i] = self.x[i] + h * A21 * self.k1[i];
+            self.x_stage[i] = x[i] + h * A21 * k1[i];
         }
         ode.rhs(t + C2 * h, &self.x_stage, &mut self.k2)?;
         for i in 0..n {
-            self.x_stage[i] = self.x[i] + h * (A31 * self.k1[i] + A32 * self.k2[i]);
+            self.x_stage[i] = x[i] + h * (A31 * k1[i] + A32 * self.k2[i]);
         }
         ode.rhs(t + C3 * h, &self.x_stage, &mut self.k3)?;
         for i in 0..n {
-            self.x_stage[i] =
-                self.x[i] + h * (A41 * self.k1[i] + A42 * self.k2[i] + A43 * self.k3[i]);
+            self.x_stage[i] = x[i] + h * (A41 * k1[i] + A42 * self.k2[i] + A43 * self.k3[i]);
         }
         ode.rhs(t + C4 * h, &self.x_stage, &mut self.k4)?;
         for i in 0..n {
-            self.x_stage[i] = self.x[i]
-                + h * (A51 * self.k1[i] + A52 * self.k2[i] + A53 * self.k3[i] + A54 * self.k4[i]);
+            self.x_stage[i] =
+                x[i] + h * (A51 * k1[i] + A52 * self.k2[i] + A53 * self.k3[i] + A54 * self.k4[i]);
         }
         ode.rhs(t + C5 * h, &self.x_stage, &mut self.k5)?;
         for i in 0..n {
-            self.x_stage[i] = self.x[i]
-                + h * (A61 * self.k1[i]
+            self.x_stage[i] = x[i]
+                + h * (A61 * k1[i]
                     + A62 * self.k2[i]
                     + A63 * self.k3[i]
                     + A64 * self.k4[i]
@@ -193,8 +158,8 @@ impl Stages {
         let t_new = t + h;
         ode.rhs(t_new, &self.x_stage, &mut self.k6)?;
         for i in 0..n {
-            self.x_new[i] = self.x[i]
-                + h * (A71 * self.k1[i]
+            self.x_new[i] = x[i]
+                + h * (A71 * k1[i]
                     + A73 * self.k3[i]
                     + A74 * self.k4[i]
                     + A75 * self.k5[i]
@@ -202,117 +167,67 @@ impl Stages {
         }
         ode.rhs(t_new, &self.x_new, &mut self.k7)?;
 
-        let (rtol, atol) = (opts.rtol, opts.atol);
-        let mut sum = 0.0;
-        let mut finite = true;
-        for i in 0..n {
-            let err = (E1 * self.k1[i]
+        let error = |i: usize| {
+            (E1 * k1[i]
                 + E3 * self.k3[i]
                 + E4 * self.k4[i]
                 + E5 * self.k5[i]
                 + E6 * self.k6[i]
                 + E7 * self.k7[i])
-                * h;
-            let sk = atol + rtol * self.x[i].abs().max(self.x_new[i].abs());
-            sum += (err / sk).powi(2);
-            finite &= self.x_new[i].is_finite() && self.k7[i].is_finite();
-        }
-        let err = (sum / n.max(1) as f64).sqrt();
-        Ok(if finite { err } else { f64::NAN })
+                * h
+        };
+        Ok(error_norm(opts, x, &self.x_new, &self.k7, error))
     }
 
-    /// Stores the dense output coefficients of the step of size `h` from `x` to `x_new`.
-    fn store_dense(&mut self, h: f64) {
+    fn accept<O: Ode>(
+        &mut self,
+        _ode: &mut O,
+        _control: &mut StepControl,
+        now: &mut Current,
+        h: f64,
+    ) -> Result<(), RuntimeError> {
+        self.store_dense(now, h);
+        std::mem::swap(&mut now.x, &mut self.x_new);
+        std::mem::swap(&mut now.f, &mut self.k7);
+        Ok(())
+    }
+
+    fn interpolate<O: Ode>(
+        &mut self,
+        _ode: &mut O,
+        _control: &mut StepControl,
+        _t: f64,
+        theta: f64,
+        out: &mut [f64],
+    ) -> Result<(), RuntimeError> {
+        let theta1 = 1.0 - theta;
+        let [c0, c1, c2, c3, c4] = &self.cont;
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = c0[i] + theta * (c1[i] + theta1 * (c2[i] + theta * (c3[i] + theta1 * c4[i])));
+        }
+        Ok(())
+    }
+}
+
+impl Dopri5Method {
+    /// Stores the dense output coefficients of the step of size `h` from `now.x` to `x_new`.
+    fn store_dense(&mut self, now: &Current, h: f64) {
+        let (x, k1) = (&now.x, &now.f);
         let [c0, c1, c2, c3, c4] = &mut self.cont;
-        for i in 0..self.x.len() {
-            let ydiff = self.x_new[i] - self.x[i];
-            let bspl = h * self.k1[i] - ydiff;
-            c0[i] = self.x[i];
+        for i in 0..x.len() {
+            let ydiff = self.x_new[i] - x[i];
+            let bspl = h * k1[i] - ydiff;
+            c0[i] = x[i];
             c1[i] = ydiff;
             c2[i] = bspl;
             c3[i] = -h * self.k7[i] + ydiff - bspl;
             c4[i] = h
-                * (D1 * self.k1[i]
+                * (D1 * k1[i]
                     + D3 * self.k3[i]
                     + D4 * self.k4[i]
                     + D5 * self.k5[i]
                     + D6 * self.k6[i]
                     + D7 * self.k7[i]);
         }
-    }
-}
-
-impl<O: Ode> Stepper for Dopri5<O> {
-    fn step(&mut self) -> Result<(), RuntimeError> {
-        self.reset()?;
-        let Dopri5 {
-            ode,
-            control,
-            stages,
-            ..
-        } = self;
-        let opts = control.opts;
-        if let Some(h) = control.advance(|t, h| stages.trial(ode, &opts, t, h))? {
-            stages.store_dense(h);
-            std::mem::swap(&mut stages.x, &mut stages.x_new);
-            std::mem::swap(&mut stages.k1, &mut stages.k7);
-        }
-        Ok(())
-    }
-
-    fn t(&self) -> f64 {
-        self.control.t
-    }
-
-    fn t_prev(&self) -> f64 {
-        self.control.t_prev
-    }
-
-    fn t_end(&self) -> f64 {
-        self.control.t_end
-    }
-
-    fn state(&self) -> &[f64] {
-        &self.stages.x
-    }
-
-    fn state_mut(&mut self) -> &mut [f64] {
-        self.dirty = true;
-        &mut self.stages.x
-    }
-
-    fn reset(&mut self) -> Result<(), RuntimeError> {
-        if !self.dirty {
-            return Ok(());
-        }
-        self.control.stats.rhs_evaluations += 1;
-        let (t, s) = (self.control.t, &mut self.stages);
-        derivative_at(&mut self.ode, t, &s.x, &mut s.k1)?;
-        self.dirty = false;
-        Ok(())
-    }
-
-    fn interpolate(&mut self, t: f64, out: &mut [f64]) -> Result<(), RuntimeError> {
-        let s = &self.stages;
-        check_len("out", s.x.len(), out.len())?;
-        let theta = interp_theta(t, self.control.t_prev, self.control.t)?;
-        if theta == 1.0 {
-            out.copy_from_slice(&s.x);
-            return Ok(());
-        }
-        let theta1 = 1.0 - theta;
-        let [c0, c1, c2, c3, c4] = &s.cont;
-        for (i, o) in out.iter_mut().enumerate() {
-            *o = c0[i] + theta * (c1[i] + theta1 * (c2[i] + theta * (c3[i] + theta1 * c4[i])));
-        }
-        Ok(())
-    }
-
-    fn set_t_end(&mut self, t_end: f64) -> Result<(), RuntimeError> {
-        self.control.set_t_end(t_end)
-    }
-
-    fn stats(&self) -> Stats {
-        self.control.stats
     }
 }

@@ -1,10 +1,14 @@
-//! Exponential Rosenbrock method `exprb43` of Hochbruck, Ostermann & Schweitzer.
+//! Exponential Rosenbrock method `exprb43` of Hochbruck, Ostermann & Schweitzer: the stages,
+//! error estimate and continuous extension that the adaptive shell ([`AdaptiveStepper`]) steps
+//! with.
+//!
+//! Consumes the right-hand side through the shell (its finite-difference Jacobian, and the
+//! matrix φ-functions of [`PhiFunctions`]); produces the order-4 solution of each step, its
+//! scaled error norm and the dense output of the same variation-of-constants formula.
 
+use super::adaptive::{error_norm, AdaptiveMethod, Current, DenseWithStep, StepControl};
 use super::phi::PhiFunctions;
-use super::{
-    check_len, derivative_at, finite_difference_jacobian, interp_theta, Adaptive, AdaptiveOptions,
-    Ode, Stats, Stepper,
-};
+use super::{finite_difference_jacobian, AdaptiveOptions, AdaptiveStepper, Ode, Stats};
 use crate::RuntimeError;
 
 // M. Hochbruck, A. Ostermann and J. Schweitzer, "Exponential Rosenbrock-type methods",
@@ -38,20 +42,13 @@ use crate::RuntimeError;
 ///
 /// The exact Jacobian is part of the method's order, so it is evaluated at every step.
 /// Non-finite values reject the trial step and shrink the step by `fac_min`; if that drives
-/// the step to underflow, the error is [`RuntimeError::NonFiniteState`].
-pub struct ExpRosenbrock<O: Ode> {
-    ode: O,
-    control: Adaptive,
-    /// The state was modified through `state_mut`; `f0` is stale.
-    dirty: bool,
-    stages: Stages,
-}
+/// the step to underflow, the error is [`RuntimeError::NonFiniteState`]. Start from
+/// [`AdaptiveOptions::rosenbrock`] for the step-size controller's usual settings.
+pub type ExpRosenbrock<O> = AdaptiveStepper<O, ExpRosenbrockMethod>;
 
-/// The working vectors of one step (length `n`).
-struct Stages {
-    x: Vec<f64>,
-    /// `f(t, x)`.
-    f0: Vec<f64>,
+/// The working vectors of one step (length `n`); `F(y_n) = f(t, x)` is the shell's current
+/// derivative.
+pub struct ExpRosenbrockMethod {
     x_new: Vec<f64>,
     f_new: Vec<f64>,
     x_stage: Vec<f64>,
@@ -60,7 +57,6 @@ struct Stages {
     jacobian: Vec<f64>,
     dfdt: Vec<f64>,
     jacobian_current: bool,
-    jacobian_evaluations: usize,
     /// φ-functions of `h·∂f/∂x` for `phi_h` (NaN: none, or of another argument).
     phi: PhiFunctions,
     phi_h: f64,
@@ -78,81 +74,199 @@ struct Stages {
     cont_h: f64,
 }
 
-impl<O: Ode> ExpRosenbrock<O> {
-    /// Creates the integrator at `(t0, x0)`, integrating toward `t_end >= t0`, and evaluates
-    /// the derivative at `x0` (plus once more for the initial step-size heuristic). Use
-    /// [`AdaptiveOptions::rosenbrock`] for the step-size controller's usual settings.
-    pub fn new(
-        mut ode: O,
-        t0: f64,
-        x0: &[f64],
-        t_end: f64,
-        opts: AdaptiveOptions,
-    ) -> Result<Self, RuntimeError> {
-        // The error estimate is O(h⁴): exponent 1/4, less the Lund stabilisation.
-        let mut control = Adaptive::new(opts, 0.25 - 0.75 * opts.beta, 3, t0, t_end)?;
-        let f0 = control.start(&mut ode, 4, x0)?;
+impl DenseWithStep for ExpRosenbrockMethod {}
+
+impl AdaptiveMethod for ExpRosenbrockMethod {
+    const ORDER: i32 = 4;
+    const EVALUATIONS_PER_TRIAL: usize = 3;
+
+    /// The error estimate is O(h⁴): exponent 1/4, less the Lund stabilisation.
+    fn error_exponent(beta: f64) -> f64 {
+        0.25 - 0.75 * beta
+    }
+
+    fn new(x0: &[f64]) -> Self {
         let n = x0.len();
         let zeros = vec![0.0; n];
-        let (x_stage, f_stage) = (zeros.clone(), zeros.clone());
-        Ok(ExpRosenbrock {
-            ode,
-            control,
-            dirty: false,
-            stages: Stages {
-                x: x0.to_vec(),
-                f0,
-                x_new: zeros.clone(),
-                f_new: zeros.clone(),
-                x_stage,
-                f_stage,
-                jacobian: vec![0.0; n * n],
-                dfdt: zeros.clone(),
-                jacobian_current: false,
-                jacobian_evaluations: 0,
-                phi: PhiFunctions::new(n),
-                phi_h: f64::NAN,
-                phi_balanced: false,
-                d2: zeros.clone(),
-                d3: zeros.clone(),
-                flow: zeros.clone(),
-                work: zeros.clone(),
-                error: zeros.clone(),
-                cont: [x0.to_vec(), zeros.clone(), zeros.clone(), zeros],
-                cont_h: 0.0,
-            },
-        })
+        ExpRosenbrockMethod {
+            x_new: zeros.clone(),
+            f_new: zeros.clone(),
+            x_stage: zeros.clone(),
+            f_stage: zeros.clone(),
+            jacobian: vec![0.0; n * n],
+            dfdt: zeros.clone(),
+            jacobian_current: false,
+            phi: PhiFunctions::new(n),
+            phi_h: f64::NAN,
+            phi_balanced: false,
+            d2: zeros.clone(),
+            d3: zeros.clone(),
+            flow: zeros.clone(),
+            work: zeros.clone(),
+            error: zeros.clone(),
+            cont: [x0.to_vec(), zeros.clone(), zeros.clone(), zeros],
+            cont_h: 0.0,
+        }
     }
 
-    /// The system being integrated.
-    pub fn ode(&self) -> &O {
-        &self.ode
+    fn derivative_refreshed(&mut self) {
+        self.jacobian_current = false;
     }
 
-    /// Mutable access to the system (e.g. to change a parameter). Call [`Stepper::reset`]
-    /// afterwards if the change alters the derivative at the current state.
-    pub fn ode_mut(&mut self) -> &mut O {
-        self.dirty = true;
-        &mut self.ode
+    /// A trial step of size `h` from `(t, x)`: `x_new`, `f_new = f(t + h, x_new)` and the
+    /// scaled error norm. The Jacobian of the step, evaluated first, is counted in `stats`.
+    fn trial<O: Ode>(
+        &mut self,
+        ode: &mut O,
+        opts: &AdaptiveOptions,
+        stats: &mut Stats,
+        now: &Current,
+        t: f64,
+        h: f64,
+    ) -> Result<f64, RuntimeError> {
+        let n = now.x.len();
+        if !self.jacobian_current {
+            finite_difference_jacobian(
+                ode,
+                t,
+                &now.x,
+                &now.f,
+                &mut self.jacobian,
+                &mut self.dfdt,
+                &mut self.x_stage,
+                &mut self.f_stage,
+            )?;
+            stats.rhs_evaluations += n + 1;
+            stats.jacobian_evaluations += 1;
+            self.jacobian_current = true;
+            self.phi_h = f64::NAN;
+            self.phi_balanced = false;
+        }
+        if !self.phi_at(h) {
+            return Ok(f64::NAN);
+        }
+        // U2 = x + h/2·φ1(hJ/2)·F.
+        Self::linear_flow(
+            &mut self.phi,
+            true,
+            0.5 * h,
+            &now.f,
+            &self.dfdt,
+            &mut self.flow,
+            &mut self.work,
+        );
+        for i in 0..n {
+            self.x_stage[i] = now.x[i] + self.flow[i];
+        }
+        ode.rhs(t + 0.5 * h, &self.x_stage, &mut self.f_stage)?;
+        let mut d2 = std::mem::take(&mut self.d2);
+        self.remainder(now, 0.5 * h, &mut d2);
+        self.d2 = d2;
+
+        // The flow h·φ1·F, and U3 = x + h·φ1·F + h·φ1·D2.
+        Self::linear_flow(
+            &mut self.phi,
+            false,
+            h,
+            &now.f,
+            &self.dfdt,
+            &mut self.flow,
+            &mut self.work,
+        );
+        self.work.fill(0.0);
+        self.phi.add_apply(1, &self.d2, &mut self.work);
+        for i in 0..n {
+            self.x_stage[i] = now.x[i] + self.flow[i] + h * self.work[i];
+        }
+        ode.rhs(t + h, &self.x_stage, &mut self.f_stage)?;
+        let mut d3 = std::mem::take(&mut self.d3);
+        self.remainder(now, h, &mut d3);
+        self.d3 = d3;
+
+        // x_new = x + h·φ1·F + φ3·w3 + φ4·w4, error φ4·w4.
+        for i in 0..n {
+            self.work[i] = h * (16.0 * self.d2[i] - 2.0 * self.d3[i]);
+            self.x_new[i] = now.x[i] + self.flow[i];
+        }
+        self.error.fill(0.0);
+        self.phi.add_apply(3, &self.work, &mut self.error);
+        for i in 0..n {
+            self.x_new[i] += self.error[i];
+            self.work[i] = h * (-48.0 * self.d2[i] + 12.0 * self.d3[i]);
+        }
+        self.error.fill(0.0);
+        self.phi.add_apply(4, &self.work, &mut self.error);
+        for i in 0..n {
+            self.x_new[i] += self.error[i];
+        }
+        ode.rhs(t + h, &self.x_new, &mut self.f_new)?;
+
+        let error = |i: usize| self.error[i];
+        Ok(error_norm(opts, &now.x, &self.x_new, &self.f_new, error))
     }
 
-    /// Consumes the integrator, returning the system.
-    pub fn into_ode(self) -> O {
-        self.ode
+    fn accept<O: Ode>(
+        &mut self,
+        _ode: &mut O,
+        _control: &mut StepControl,
+        now: &mut Current,
+        h: f64,
+    ) -> Result<(), RuntimeError> {
+        self.store_dense(now, h);
+        std::mem::swap(&mut now.x, &mut self.x_new);
+        std::mem::swap(&mut now.f, &mut self.f_new);
+        // The Jacobian of the last step stays for its dense output; the next step starts
+        // with a new one.
+        self.jacobian_current = false;
+        Ok(())
     }
 
-    /// The options in use.
-    pub fn options(&self) -> &AdaptiveOptions {
-        &self.control.opts
-    }
-
-    /// Step size that the next step will try (before clipping to the end time).
-    pub fn next_step_size(&self) -> f64 {
-        self.control.h
+    fn interpolate<O: Ode>(
+        &mut self,
+        _ode: &mut O,
+        _control: &mut StepControl,
+        t: f64,
+        theta: f64,
+        out: &mut [f64],
+    ) -> Result<(), RuntimeError> {
+        let n = out.len();
+        out.copy_from_slice(&self.cont[0]);
+        if theta == 0.0 {
+            return Ok(());
+        }
+        let tau = theta * self.cont_h;
+        if !self.phi_at(tau) {
+            return Err(RuntimeError::NonFiniteState { t });
+        }
+        let [_, f, d2, d3] = &self.cont;
+        Self::linear_flow(
+            &mut self.phi,
+            false,
+            tau,
+            f,
+            &self.dfdt,
+            &mut self.flow,
+            &mut self.work,
+        );
+        for (o, w) in out.iter_mut().zip(&self.flow) {
+            *o += w;
+        }
+        let (a, b) = (2.0 * theta * theta * tau, 6.0 * theta.powi(3) * tau);
+        for (order, coefficients) in [(3, (8.0 * a, -a)), (4, (-8.0 * b, 2.0 * b))] {
+            for i in 0..n {
+                self.error[i] = coefficients.0 * d2[i] + coefficients.1 * d3[i];
+            }
+            self.work.fill(0.0);
+            self.phi.add_apply(order, &self.error, &mut self.work);
+            for (o, w) in out.iter_mut().zip(&self.work) {
+                *o += w;
+            }
+        }
+        Ok(())
     }
 }
 
-impl Stages {
+impl ExpRosenbrockMethod {
     /// The φ-functions of `τ·∂f/∂x`; false if not finite.
     fn phi_at(&mut self, tau: f64) -> bool {
         if self.phi_h == tau {
@@ -195,240 +309,26 @@ impl Stages {
     }
 
     /// `D = f(t + c·h, x_stage) − f0 − J (x_stage − x) − ∂f/∂t·c·h` into `d`, from `f_stage`.
-    fn remainder(&self, ch: f64, d: &mut [f64]) {
-        let n = self.x.len();
-        for (((d, f), f0), dfdt) in d
-            .iter_mut()
-            .zip(&self.f_stage)
-            .zip(&self.f0)
-            .zip(&self.dfdt)
-        {
+    fn remainder(&self, now: &Current, ch: f64, d: &mut [f64]) {
+        let n = now.x.len();
+        for (((d, f), f0), dfdt) in d.iter_mut().zip(&self.f_stage).zip(&now.f).zip(&self.dfdt) {
             *d = f - f0 - dfdt * ch;
         }
         for j in 0..n {
-            let dx = self.x_stage[j] - self.x[j];
+            let dx = self.x_stage[j] - now.x[j];
             for (i, di) in d.iter_mut().enumerate() {
                 *di -= self.jacobian[i + n * j] * dx;
             }
         }
     }
 
-    /// A trial step of size `h` from `(t, x)`: `x_new`, `f_new = f(t + h, x_new)` and the
-    /// scaled error norm (NaN if anything is non-finite). Returns the number of extra
-    /// evaluations spent on the Jacobian.
-    fn trial<O: Ode>(
-        &mut self,
-        ode: &mut O,
-        opts: &AdaptiveOptions,
-        t: f64,
-        h: f64,
-    ) -> Result<(f64, usize), RuntimeError> {
-        let n = self.x.len();
-        let mut extra = 0;
-        if !self.jacobian_current {
-            finite_difference_jacobian(
-                ode,
-                t,
-                &self.x,
-                &self.f0,
-                &mut self.jacobian,
-                &mut self.dfdt,
-                &mut self.x_stage,
-                &mut self.f_stage,
-            )?;
-            self.jacobian_evaluations += 1;
-            self.jacobian_current = true;
-            self.phi_h = f64::NAN;
-            self.phi_balanced = false;
-            extra = n + 1;
-        }
-        if !self.phi_at(h) {
-            return Ok((f64::NAN, extra));
-        }
-        // U2 = x + h/2·φ1(hJ/2)·F.
-        Self::linear_flow(
-            &mut self.phi,
-            true,
-            0.5 * h,
-            &self.f0,
-            &self.dfdt,
-            &mut self.flow,
-            &mut self.work,
-        );
-        for i in 0..n {
-            self.x_stage[i] = self.x[i] + self.flow[i];
-        }
-        ode.rhs(t + 0.5 * h, &self.x_stage, &mut self.f_stage)?;
-        let mut d2 = std::mem::take(&mut self.d2);
-        self.remainder(0.5 * h, &mut d2);
-        self.d2 = d2;
-
-        // The flow h·φ1·F, and U3 = x + h·φ1·F + h·φ1·D2.
-        Self::linear_flow(
-            &mut self.phi,
-            false,
-            h,
-            &self.f0,
-            &self.dfdt,
-            &mut self.flow,
-            &mut self.work,
-        );
-        self.work.fill(0.0);
-        self.phi.add_apply(1, &self.d2, &mut self.work);
-        for i in 0..n {
-            self.x_stage[i] = self.x[i] + self.flow[i] + h * self.work[i];
-        }
-        ode.rhs(t + h, &self.x_stage, &mut self.f_stage)?;
-        let mut d3 = std::mem::take(&mut self.d3);
-        self.remainder(h, &mut d3);
-        self.d3 = d3;
-
-        // x_new = x + h·φ1·F + φ3·w3 + φ4·w4, error φ4·w4.
-        for i in 0..n {
-            self.work[i] = h * (16.0 * self.d2[i] - 2.0 * self.d3[i]);
-            self.x_new[i] = self.x[i] + self.flow[i];
-        }
-        self.error.fill(0.0);
-        self.phi.add_apply(3, &self.work, &mut self.error);
-        for i in 0..n {
-            self.x_new[i] += self.error[i];
-            self.work[i] = h * (-48.0 * self.d2[i] + 12.0 * self.d3[i]);
-        }
-        self.error.fill(0.0);
-        self.phi.add_apply(4, &self.work, &mut self.error);
-        for i in 0..n {
-            self.x_new[i] += self.error[i];
-        }
-        ode.rhs(t + h, &self.x_new, &mut self.f_new)?;
-
-        let (rtol, atol) = (opts.rtol, opts.atol);
-        let mut sum = 0.0;
-        let mut finite = true;
-        for i in 0..n {
-            let sk = atol + rtol * self.x[i].abs().max(self.x_new[i].abs());
-            sum += (self.error[i] / sk).powi(2);
-            finite &= self.x_new[i].is_finite() && self.f_new[i].is_finite();
-        }
-        let err = (sum / n.max(1) as f64).sqrt();
-        Ok((if finite { err } else { f64::NAN }, extra))
-    }
-
     /// Keeps what the dense output of the accepted step of size `h` needs.
-    fn store_dense(&mut self, h: f64) {
+    fn store_dense(&mut self, now: &Current, h: f64) {
         let [x0, f, d2, d3] = &mut self.cont;
-        x0.copy_from_slice(&self.x);
-        f.copy_from_slice(&self.f0);
+        x0.copy_from_slice(&now.x);
+        f.copy_from_slice(&now.f);
         d2.copy_from_slice(&self.d2);
         d3.copy_from_slice(&self.d3);
         self.cont_h = h;
-    }
-}
-
-impl<O: Ode> Stepper for ExpRosenbrock<O> {
-    fn step(&mut self) -> Result<(), RuntimeError> {
-        self.reset()?;
-        let ExpRosenbrock {
-            ode,
-            control,
-            stages,
-            ..
-        } = self;
-        let opts = control.opts;
-        let mut extra = 0;
-        let accepted = control.advance(|t, h| {
-            let (err, spent) = stages.trial(ode, &opts, t, h)?;
-            extra += spent;
-            Ok(err)
-        });
-        control.stats.rhs_evaluations += extra;
-        if let Some(h) = accepted? {
-            stages.store_dense(h);
-            std::mem::swap(&mut stages.x, &mut stages.x_new);
-            std::mem::swap(&mut stages.f0, &mut stages.f_new);
-            // The Jacobian of the last step stays for its dense output; the next step starts
-            // with a new one.
-            stages.jacobian_current = false;
-        }
-        Ok(())
-    }
-
-    fn t(&self) -> f64 {
-        self.control.t
-    }
-
-    fn t_prev(&self) -> f64 {
-        self.control.t_prev
-    }
-
-    fn t_end(&self) -> f64 {
-        self.control.t_end
-    }
-
-    fn state(&self) -> &[f64] {
-        &self.stages.x
-    }
-
-    fn state_mut(&mut self) -> &mut [f64] {
-        self.dirty = true;
-        &mut self.stages.x
-    }
-
-    fn reset(&mut self) -> Result<(), RuntimeError> {
-        if !self.dirty {
-            return Ok(());
-        }
-        self.control.stats.rhs_evaluations += 1;
-        let (t, s) = (self.control.t, &mut self.stages);
-        derivative_at(&mut self.ode, t, &s.x, &mut s.f0)?;
-        s.jacobian_current = false;
-        self.dirty = false;
-        Ok(())
-    }
-
-    fn interpolate(&mut self, t: f64, out: &mut [f64]) -> Result<(), RuntimeError> {
-        let n = self.stages.x.len();
-        check_len("out", n, out.len())?;
-        let theta = interp_theta(t, self.control.t_prev, self.control.t)?;
-        let s = &mut self.stages;
-        if theta == 1.0 {
-            out.copy_from_slice(&s.x);
-            return Ok(());
-        }
-        out.copy_from_slice(&s.cont[0]);
-        if theta == 0.0 {
-            return Ok(());
-        }
-        let tau = theta * s.cont_h;
-        if !s.phi_at(tau) {
-            return Err(RuntimeError::NonFiniteState { t });
-        }
-        let [_, f, d2, d3] = &s.cont;
-        Stages::linear_flow(&mut s.phi, false, tau, f, &s.dfdt, &mut s.flow, &mut s.work);
-        for (o, w) in out.iter_mut().zip(&s.flow) {
-            *o += w;
-        }
-        let (a, b) = (2.0 * theta * theta * tau, 6.0 * theta.powi(3) * tau);
-        for (order, coefficients) in [(3, (8.0 * a, -a)), (4, (-8.0 * b, 2.0 * b))] {
-            for i in 0..n {
-                s.error[i] = coefficients.0 * d2[i] + coefficients.1 * d3[i];
-            }
-            s.work.fill(0.0);
-            s.phi.add_apply(order, &s.error, &mut s.work);
-            for (o, w) in out.iter_mut().zip(&s.work) {
-                *o += w;
-            }
-        }
-        Ok(())
-    }
-
-    fn set_t_end(&mut self, t_end: f64) -> Result<(), RuntimeError> {
-        self.control.set_t_end(t_end)
-    }
-
-    fn stats(&self) -> Stats {
-        Stats {
-            jacobian_evaluations: self.stages.jacobian_evaluations,
-            ..self.control.stats
-        }
     }
 }

@@ -1,6 +1,11 @@
 //! Classical fixed-step Runge–Kutta of order 4.
+//!
+//! Consumes an [`Ode`], a start, an end time and the step; produces the states on the step
+//! grid and the cubic Hermite interpolant between them.
 
-use super::{all_finite, check_len, check_times, derivative_at, interp_theta, Ode, Stats, Stepper};
+use super::{
+    all_finite, begin_interpolation, check_len, check_times, derivative_at, Ode, Stats, Stepper,
+};
 use crate::RuntimeError;
 
 /// Classical 4th-order Runge–Kutta with a fixed step `h`.
@@ -171,12 +176,9 @@ impl<O: Ode> Stepper for Rk4<O> {
     }
 
     fn interpolate(&mut self, t: f64, out: &mut [f64]) -> Result<(), RuntimeError> {
-        check_len("out", self.x.len(), out.len())?;
-        let s = interp_theta(t, self.t_prev, self.t)?;
-        if s == 1.0 {
-            out.copy_from_slice(&self.x);
+        let Some(s) = begin_interpolation(t, self.t_prev, self.t, &self.x, out)? else {
             return Ok(());
-        }
+        };
         let h = self.t - self.t_prev;
         let (s2, s3) = (s * s, s * s * s);
         let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;

@@ -1,9 +1,13 @@
-//! Linearly implicit Rosenbrock 2(3) of Shampine & Reichelt (MATLAB's `ode23s`).
+//! Linearly implicit Rosenbrock 2(3) of Shampine & Reichelt (MATLAB's `ode23s`): the stages,
+//! error estimate and continuous extension that the adaptive shell ([`AdaptiveStepper`]) steps
+//! with.
+//!
+//! Consumes the right-hand side through the shell (and its finite-difference Jacobian);
+//! produces the order-2 solution of each step, its scaled error norm and the quadratic dense
+//! output.
 
-use super::{
-    check_len, derivative_at, finite_difference_jacobian, interp_theta, Adaptive, AdaptiveOptions,
-    Ode, Stats, Stepper,
-};
+use super::adaptive::{error_norm, AdaptiveMethod, Current, DenseWithStep, StepControl};
+use super::{finite_difference_jacobian, AdaptiveOptions, AdaptiveStepper, Ode, Stats};
 use crate::{dense, RuntimeError};
 
 // L. F. Shampine and M. W. Reichelt, "The MATLAB ODE Suite", SIAM J. Sci. Comput. 18(1),
@@ -37,20 +41,13 @@ const E32: f64 = 7.414_213_562_373_095;
 ///
 /// Non-finite values (or a singular `W`) reject the trial step and shrink the step by
 /// `fac_min`; if that drives the step to underflow, the error is
-/// [`RuntimeError::NonFiniteState`].
-pub struct Rosenbrock<O: Ode> {
-    ode: O,
-    control: Adaptive,
-    /// The state was modified through `state_mut`; `f0` is stale.
-    dirty: bool,
-    stages: Stages,
-}
+/// [`RuntimeError::NonFiniteState`]. Start from [`AdaptiveOptions::rosenbrock`] for the
+/// step-size controller's usual settings.
+pub type Rosenbrock<O> = AdaptiveStepper<O, RosenbrockMethod>;
 
-/// The working vectors of one step, the Jacobian and the factor of `W`.
-struct Stages {
-    x: Vec<f64>,
-    /// `f(t, x)`.
-    f0: Vec<f64>,
+/// The working vectors of one step, the Jacobian and the factor of `W`; `F0 = f(t, x)` is
+/// the shell's current derivative.
+pub struct RosenbrockMethod {
     x_new: Vec<f64>,
     /// `f(t + h, x_new)`.
     f2: Vec<f64>,
@@ -74,129 +71,80 @@ struct Stages {
     factor: Vec<f64>,
     pivots: Vec<usize>,
     factor_h: f64,
-    jacobian_evaluations: usize,
     /// Dense output of the last step: `x_prev`, `h·k1/(1−2d)`, `h·k2/(1−2d)`.
     cont: [Vec<f64>; 3],
 }
 
 impl<O: Ode> Rosenbrock<O> {
-    /// Creates the integrator at `(t0, x0)`, integrating toward `t_end >= t0`, and evaluates
-    /// the derivative at `x0` (plus once more for the initial step-size heuristic). Use
-    /// [`AdaptiveOptions::rosenbrock`] for the step-size controller's usual settings.
-    pub fn new(
-        mut ode: O,
-        t0: f64,
-        x0: &[f64],
-        t_end: f64,
-        opts: AdaptiveOptions,
-    ) -> Result<Self, RuntimeError> {
-        // The error estimate is O(h³): exponent 1/3, less the Lund stabilisation.
-        let mut control = Adaptive::new(opts, 1.0 / 3.0 - 0.75 * opts.beta, 2, t0, t_end)?;
-        let f0 = control.start(&mut ode, 2, x0)?;
-        let n = x0.len();
-        let zeros = vec![0.0; n];
-        let (x_stage, f1) = (zeros.clone(), zeros.clone());
-        Ok(Rosenbrock {
-            ode,
-            control,
-            dirty: false,
-            stages: Stages {
-                x: x0.to_vec(),
-                f0,
-                x_new: zeros.clone(),
-                f2: zeros.clone(),
-                x_stage,
-                f1,
-                k1: zeros.clone(),
-                k2: zeros.clone(),
-                k3: zeros.clone(),
-                jacobian: vec![0.0; n * n],
-                dfdt: zeros.clone(),
-                jacobian_current: false,
-                jacobian_age: usize::MAX,
-                jacobian_reuse: 0,
-                attempts: 0,
-                factor: vec![0.0; n * n],
-                pivots: vec![0; n],
-                factor_h: f64::NAN,
-                jacobian_evaluations: 0,
-                cont: [x0.to_vec(), zeros.clone(), zeros],
-            },
-        })
-    }
-
     /// Lets a Jacobian serve `steps` accepted steps after the one it was evaluated for
     /// (default 0: a fresh `J` every step). Re-using it saves `n + 1` evaluations per step
     /// but weakens the error estimate (see the type's docs); a rejection still forces a
     /// fresh `J`.
     pub fn reuse_jacobian(&mut self, steps: usize) {
-        self.stages.jacobian_reuse = steps;
-    }
-
-    /// The system being integrated.
-    pub fn ode(&self) -> &O {
-        &self.ode
-    }
-
-    /// Mutable access to the system (e.g. to change a parameter). Call [`Stepper::reset`]
-    /// afterwards if the change alters the derivative at the current state.
-    pub fn ode_mut(&mut self) -> &mut O {
-        self.dirty = true;
-        &mut self.ode
-    }
-
-    /// Consumes the integrator, returning the system.
-    pub fn into_ode(self) -> O {
-        self.ode
-    }
-
-    /// The options in use.
-    pub fn options(&self) -> &AdaptiveOptions {
-        &self.control.opts
-    }
-
-    /// Step size that the next step will try (before clipping to the end time).
-    pub fn next_step_size(&self) -> f64 {
-        self.control.h
+        self.method.jacobian_reuse = steps;
     }
 }
 
-impl Stages {
-    /// `J` and `∂f/∂t` at the current `(t, x)`.
-    fn evaluate_jacobian<O: Ode>(&mut self, ode: &mut O, t: f64) -> Result<(), RuntimeError> {
-        finite_difference_jacobian(
-            ode,
-            t,
-            &self.x,
-            &self.f0,
-            &mut self.jacobian,
-            &mut self.dfdt,
-            &mut self.x_stage,
-            &mut self.f1,
-        )?;
-        self.jacobian_evaluations += 1;
-        self.jacobian_current = true;
-        self.jacobian_age = 0;
-        self.factor_h = f64::NAN;
-        Ok(())
+impl DenseWithStep for RosenbrockMethod {}
+
+impl AdaptiveMethod for RosenbrockMethod {
+    const ORDER: i32 = 2;
+    const EVALUATIONS_PER_TRIAL: usize = 2;
+
+    /// The error estimate is O(h³): exponent 1/3, less the Lund stabilisation.
+    fn error_exponent(beta: f64) -> f64 {
+        1.0 / 3.0 - 0.75 * beta
+    }
+
+    fn new(x0: &[f64]) -> Self {
+        let n = x0.len();
+        let zeros = vec![0.0; n];
+        RosenbrockMethod {
+            x_new: zeros.clone(),
+            f2: zeros.clone(),
+            x_stage: zeros.clone(),
+            f1: zeros.clone(),
+            k1: zeros.clone(),
+            k2: zeros.clone(),
+            k3: zeros.clone(),
+            jacobian: vec![0.0; n * n],
+            dfdt: zeros.clone(),
+            jacobian_current: false,
+            jacobian_age: usize::MAX,
+            jacobian_reuse: 0,
+            attempts: 0,
+            factor: vec![0.0; n * n],
+            pivots: vec![0; n],
+            factor_h: f64::NAN,
+            cont: [x0.to_vec(), zeros.clone(), zeros],
+        }
+    }
+
+    fn derivative_refreshed(&mut self) {
+        self.jacobian_current = false;
     }
 
     /// A trial step of size `h` from `(t, x)`: `x_new`, `f2 = f(t + h, x_new)`, and the scaled
-    /// error norm (NaN if anything is non-finite or `W` is singular). Returns the number of
-    /// extra evaluations spent on the Jacobian.
+    /// error norm (NaN also if `W` is singular). A Jacobian evaluated first is counted in
+    /// `stats`.
+    // Indexed loops, so that each line reads as the formula at the top of the file.
+    #[allow(clippy::needless_range_loop)]
     fn trial<O: Ode>(
         &mut self,
         ode: &mut O,
         opts: &AdaptiveOptions,
+        stats: &mut Stats,
+        now: &Current,
         t: f64,
         h: f64,
-    ) -> Result<(f64, usize), RuntimeError> {
-        let n = self.x.len();
-        let mut extra = 0;
+    ) -> Result<f64, RuntimeError> {
+        let (x, f0) = (&now.x, &now.f);
+        let n = x.len();
         let stale = self.attempts > 0 || self.jacobian_age > self.jacobian_reuse;
         if !self.jacobian_current && stale {
-            self.evaluate_jacobian(ode, t)?;
-            extra = n + 1;
+            self.evaluate_jacobian(ode, now, t)?;
+            stats.rhs_evaluations += n + 1;
+            stats.jacobian_evaluations += 1;
         }
         self.attempts += 1;
         if self.factor_h != h {
@@ -209,18 +157,18 @@ impl Stages {
             }
             if !dense::lu(&mut self.factor, n, &mut self.pivots) {
                 self.factor_h = f64::NAN;
-                return Ok((f64::NAN, extra));
+                return Ok(f64::NAN);
             }
             self.factor_h = h;
         }
         let hd = h * D;
         let (factor, pivots) = (&self.factor, &self.pivots);
         for i in 0..n {
-            self.k1[i] = self.f0[i] + hd * self.dfdt[i];
+            self.k1[i] = f0[i] + hd * self.dfdt[i];
         }
         dense::lu_solve(factor, n, pivots, &mut self.k1);
         for i in 0..n {
-            self.x_stage[i] = self.x[i] + 0.5 * h * self.k1[i];
+            self.x_stage[i] = x[i] + 0.5 * h * self.k1[i];
         }
         ode.rhs(t + 0.5 * h, &self.x_stage, &mut self.f1)?;
         for i in 0..n {
@@ -229,126 +177,84 @@ impl Stages {
         dense::lu_solve(factor, n, pivots, &mut self.k2);
         for i in 0..n {
             self.k2[i] += self.k1[i];
-            self.x_new[i] = self.x[i] + h * self.k2[i];
+            self.x_new[i] = x[i] + h * self.k2[i];
         }
         ode.rhs(t + h, &self.x_new, &mut self.f2)?;
         for i in 0..n {
-            self.k3[i] =
-                self.f2[i] - E32 * (self.k2[i] - self.f1[i]) - 2.0 * (self.k1[i] - self.f0[i])
-                    + hd * self.dfdt[i];
+            self.k3[i] = self.f2[i] - E32 * (self.k2[i] - self.f1[i]) - 2.0 * (self.k1[i] - f0[i])
+                + hd * self.dfdt[i];
         }
         dense::lu_solve(factor, n, pivots, &mut self.k3);
 
-        let (rtol, atol) = (opts.rtol, opts.atol);
-        let mut sum = 0.0;
-        let mut finite = true;
-        for i in 0..n {
-            let err = h / 6.0 * (self.k1[i] - 2.0 * self.k2[i] + self.k3[i]);
-            let sk = atol + rtol * self.x[i].abs().max(self.x_new[i].abs());
-            sum += (err / sk).powi(2);
-            finite &= self.x_new[i].is_finite() && self.f2[i].is_finite();
-        }
-        let err = (sum / n.max(1) as f64).sqrt();
-        Ok((if finite { err } else { f64::NAN }, extra))
+        let error = |i: usize| h / 6.0 * (self.k1[i] - 2.0 * self.k2[i] + self.k3[i]);
+        Ok(error_norm(opts, x, &self.x_new, &self.f2, error))
     }
 
-    /// Stores the dense output of the accepted step of size `h` from `x`.
-    fn store_dense(&mut self, h: f64) {
-        let [c0, c1, c2] = &mut self.cont;
-        let scale = h / (1.0 - 2.0 * D);
-        for i in 0..self.x.len() {
-            c0[i] = self.x[i];
-            c1[i] = scale * self.k1[i];
-            c2[i] = scale * self.k2[i];
-        }
-    }
-}
-
-impl<O: Ode> Stepper for Rosenbrock<O> {
-    fn step(&mut self) -> Result<(), RuntimeError> {
-        self.reset()?;
-        let Rosenbrock {
-            ode,
-            control,
-            stages,
-            ..
-        } = self;
-        let opts = control.opts;
-        let mut extra = 0;
-        let accepted = control.advance(|t, h| {
-            let (err, spent) = stages.trial(ode, &opts, t, h)?;
-            extra += spent;
-            Ok(err)
-        });
-        control.stats.rhs_evaluations += extra;
-        if let Some(h) = accepted? {
-            stages.store_dense(h);
-            std::mem::swap(&mut stages.x, &mut stages.x_new);
-            std::mem::swap(&mut stages.f0, &mut stages.f2);
-            stages.jacobian_current = false;
-            stages.jacobian_age = stages.jacobian_age.saturating_add(1);
-            stages.attempts = 0;
-        }
+    fn accept<O: Ode>(
+        &mut self,
+        _ode: &mut O,
+        _control: &mut StepControl,
+        now: &mut Current,
+        h: f64,
+    ) -> Result<(), RuntimeError> {
+        self.store_dense(now, h);
+        std::mem::swap(&mut now.x, &mut self.x_new);
+        std::mem::swap(&mut now.f, &mut self.f2);
+        self.jacobian_current = false;
+        self.jacobian_age = self.jacobian_age.saturating_add(1);
+        self.attempts = 0;
         Ok(())
     }
 
-    fn t(&self) -> f64 {
-        self.control.t
-    }
-
-    fn t_prev(&self) -> f64 {
-        self.control.t_prev
-    }
-
-    fn t_end(&self) -> f64 {
-        self.control.t_end
-    }
-
-    fn state(&self) -> &[f64] {
-        &self.stages.x
-    }
-
-    fn state_mut(&mut self) -> &mut [f64] {
-        self.dirty = true;
-        &mut self.stages.x
-    }
-
-    fn reset(&mut self) -> Result<(), RuntimeError> {
-        if !self.dirty {
-            return Ok(());
-        }
-        self.control.stats.rhs_evaluations += 1;
-        let (t, s) = (self.control.t, &mut self.stages);
-        derivative_at(&mut self.ode, t, &s.x, &mut s.f0)?;
-        s.jacobian_current = false;
-        self.dirty = false;
-        Ok(())
-    }
-
-    fn interpolate(&mut self, t: f64, out: &mut [f64]) -> Result<(), RuntimeError> {
-        let s = &self.stages;
-        check_len("out", s.x.len(), out.len())?;
-        let theta = interp_theta(t, self.control.t_prev, self.control.t)?;
-        if theta == 1.0 {
-            out.copy_from_slice(&s.x);
-            return Ok(());
-        }
-        let [c0, c1, c2] = &s.cont;
+    fn interpolate<O: Ode>(
+        &mut self,
+        _ode: &mut O,
+        _control: &mut StepControl,
+        _t: f64,
+        theta: f64,
+        out: &mut [f64],
+    ) -> Result<(), RuntimeError> {
+        let [c0, c1, c2] = &self.cont;
         let (a, b) = (theta * (1.0 - theta), theta * (theta - 2.0 * D));
         for (i, o) in out.iter_mut().enumerate() {
             *o = c0[i] + a * c1[i] + b * c2[i];
         }
         Ok(())
     }
+}
 
-    fn set_t_end(&mut self, t_end: f64) -> Result<(), RuntimeError> {
-        self.control.set_t_end(t_end)
+impl RosenbrockMethod {
+    /// Stores the dense output of the accepted step of size `h` from `now.x`.
+    fn store_dense(&mut self, now: &Current, h: f64) {
+        let [c0, c1, c2] = &mut self.cont;
+        let scale = h / (1.0 - 2.0 * D);
+        for i in 0..now.x.len() {
+            c0[i] = now.x[i];
+            c1[i] = scale * self.k1[i];
+            c2[i] = scale * self.k2[i];
+        }
     }
 
-    fn stats(&self) -> Stats {
-        Stats {
-            jacobian_evaluations: self.stages.jacobian_evaluations,
-            ..self.control.stats
-        }
+    /// `J` and `∂f/∂t` at the current `(t, x)`.
+    fn evaluate_jacobian<O: Ode>(
+        &mut self,
+        ode: &mut O,
+        now: &Current,
+        t: f64,
+    ) -> Result<(), RuntimeError> {
+        finite_difference_jacobian(
+            ode,
+            t,
+            &now.x,
+            &now.f,
+            &mut self.jacobian,
+            &mut self.dfdt,
+            &mut self.x_stage,
+            &mut self.f1,
+        )?;
+        self.jacobian_current = true;
+        self.jacobian_age = 0;
+        self.factor_h = f64::NAN;
+        Ok(())
     }
 }
