@@ -52,6 +52,7 @@ pub mod diag;
 pub mod front;
 pub mod ir;
 pub mod kane;
+pub mod physics;
 pub mod sym;
 
 use std::collections::BTreeMap;
@@ -198,7 +199,10 @@ impl Builder {
                     ),
                 )
                 .with_help("give one of them another name: `model NAME;`");
-                return Err(Errors::new(Arc::new(SourceFile::new(shown, "")), vec![diagnostic]));
+                return Err(Errors::new(
+                    Arc::new(SourceFile::new(shown, "")),
+                    vec![diagnostic],
+                ));
             }
             let options = RustOptions {
                 source_name: path.display().to_string(),
