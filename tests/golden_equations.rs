@@ -36,7 +36,12 @@ fn check(stem: &str) {
             .zip(expected.lines())
             .position(|(a, e)| a != e)
             .unwrap_or_else(|| actual.lines().count().min(expected.lines().count()));
-        let show = |text: &str| text.lines().nth(line).unwrap_or("(end of text)").to_string();
+        let show = |text: &str| {
+            text.lines()
+                .nth(line)
+                .unwrap_or("(end of text)")
+                .to_string()
+        };
         panic!(
             "{} differs from `mech derive models/{stem}.mech --emit equations` at line {} \
              (MECH_BLESS=1 to update):\nexpected: {}\nactual:   {}",
@@ -85,7 +90,12 @@ fn every_bundled_model_has_a_golden_test() {
         .expect("models/ exists")
         .map(|entry| entry.expect("readable directory entry").path())
         .filter(|path| path.extension().is_some_and(|e| e == "mech"))
-        .map(|path| path.file_stem().expect("a file stem").to_string_lossy().into_owned())
+        .map(|path| {
+            path.file_stem()
+                .expect("a file stem")
+                .to_string_lossy()
+                .into_owned()
+        })
         .collect();
     on_disk.sort();
     let mut listed: Vec<String> = MODELS.iter().map(|s| s.to_string()).collect();

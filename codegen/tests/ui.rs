@@ -129,7 +129,12 @@ fn stems(extension: &str) -> Vec<String> {
         .expect("tests/ui exists")
         .map(|entry| entry.expect("readable directory entry").path())
         .filter(|path| path.extension().is_some_and(|e| e == extension))
-        .map(|path| path.file_stem().expect("a file stem").to_string_lossy().into_owned())
+        .map(|path| {
+            path.file_stem()
+                .expect("a file stem")
+                .to_string_lossy()
+                .into_owned()
+        })
         .collect();
     stems.sort();
     stems
@@ -146,6 +151,10 @@ fn every_ui_file_has_a_test_and_a_golden_file() {
     );
     // Blessing writes the missing .stderr files, possibly after this test has listed them.
     if !blessing() {
-        assert_eq!(stems("stderr"), listed, "a .stderr without its .mech, or the reverse");
+        assert_eq!(
+            stems("stderr"),
+            listed,
+            "a .stderr without its .mech, or the reverse"
+        );
     }
 }
