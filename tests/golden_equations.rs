@@ -4,8 +4,13 @@
 //!
 //! Consumes: `models/<stem>.mech`. Produces: one test per model, named after it, comparing
 //! `describe::equations_text` with `tests/golden/equations/<stem>.txt`, plus one that fails
-//! when a model and the list in `golden_tests!` differ (so a new model cannot go unchecked).
-//! `MECH_BLESS=1 cargo test --test golden_equations` rewrites the golden files instead.
+//! when a model and the list in `tests_per_file!` differ (so a new model cannot go
+//! unchecked). `MECH_BLESS=1 cargo test --test golden_equations` rewrites the golden files
+//! instead.
+
+#[macro_use]
+#[path = "../codegen/tests/support/golden.rs"]
+mod support;
 
 use std::path::{Path, PathBuf};
 
@@ -23,7 +28,7 @@ fn check(stem: &str) {
         .unwrap_or_else(|errors| panic!("models/{stem}.mech does not compile:{errors:?}"));
     let actual = mech::describe::equations_text(&compiled);
     let golden = golden_dir().join(format!("{stem}.txt"));
-    if std::env::var_os("MECH_BLESS").is_some_and(|v| v == "1") {
+    if support::blessing() {
         std::fs::create_dir_all(golden_dir()).expect("writable tests/golden");
         std::fs::write(&golden, &actual).expect("writable golden file");
         return;
@@ -53,20 +58,8 @@ fn check(stem: &str) {
     }
 }
 
-/// One `#[test]` per model stem, and `MODELS`, the stems listed.
-macro_rules! golden_tests {
-    ($($stem:ident,)*) => {
-        const MODELS: &[&str] = &[$(stringify!($stem)),*];
-        $(
-            #[test]
-            fn $stem() {
-                check(stringify!($stem));
-            }
-        )*
-    };
-}
-
-golden_tests! {
+tests_per_file! {
+    check:
     cart_pendulum,
     chain1,
     chain2,
@@ -86,22 +79,6 @@ golden_tests! {
 
 #[test]
 fn every_bundled_model_has_a_golden_test() {
-    let mut on_disk: Vec<String> = std::fs::read_dir(root().join("models"))
-        .expect("models/ exists")
-        .map(|entry| entry.expect("readable directory entry").path())
-        .filter(|path| path.extension().is_some_and(|e| e == "mech"))
-        .map(|path| {
-            path.file_stem()
-                .expect("a file stem")
-                .to_string_lossy()
-                .into_owned()
-        })
-        .collect();
-    on_disk.sort();
-    let mut listed: Vec<String> = MODELS.iter().map(|s| s.to_string()).collect();
-    listed.sort();
-    assert_eq!(
-        on_disk, listed,
-        "models/*.mech and the list in `golden_tests!` (tests/golden_equations.rs) differ: add the new model's stem there"
-    );
+    let models = root().join("models");
+    support::assert_lists_every_file(LISTED, &models, "mech", "tests/golden_equations.rs");
 }

@@ -4,8 +4,12 @@
 //! Consumes: the `.mech` files in `codegen/tests/ui/` (paths shown relative to the crate root,
 //! so the goldens do not depend on the machine).
 //! Produces: one test per file, named after it, plus one that fails when a file and the
-//! list in `ui_tests!` differ (so a new file cannot go unchecked).
+//! list in `tests_per_file!` differ (so a new file cannot go unchecked).
 //! `MECH_BLESS=1 cargo test -p mech-codegen --test ui` rewrites the `.stderr` files instead.
+
+#[macro_use]
+#[path = "support/golden.rs"]
+mod support;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -15,11 +19,6 @@ use mech_codegen::front;
 
 fn ui_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/ui")
-}
-
-/// `MECH_BLESS=1`: rewrite the golden files instead of comparing.
-fn blessing() -> bool {
-    std::env::var_os("MECH_BLESS").is_some_and(|v| v == "1")
 }
 
 /// What `front::load` prints for a file, or a note that it unexpectedly loaded.
@@ -38,7 +37,7 @@ fn check(stem: &str) {
     let path = ui_dir().join(format!("{stem}.mech"));
     let actual = render(&path);
     let golden = path.with_extension("stderr");
-    if blessing() {
+    if support::blessing() {
         std::fs::write(&golden, &actual).expect("writable .stderr file");
         return;
     }
@@ -54,20 +53,8 @@ fn check(stem: &str) {
     );
 }
 
-/// One `#[test]` per file stem, and `UI_FILES`, the stems listed.
-macro_rules! ui_tests {
-    ($($stem:ident,)*) => {
-        const UI_FILES: &[&str] = &[$(stringify!($stem)),*];
-        $(
-            #[test]
-            fn $stem() {
-                check(stringify!($stem));
-            }
-        )*
-    };
-}
-
-ui_tests! {
+tests_per_file! {
+    check:
     actuator_missing_voltage,
     add_mass_and_length,
     axis_on_weld,
@@ -123,38 +110,11 @@ ui_tests! {
     zero_axis,
 }
 
-/// The sorted stems of `tests/ui/*.<extension>`.
-fn stems(extension: &str) -> Vec<String> {
-    let mut stems: Vec<String> = std::fs::read_dir(ui_dir())
-        .expect("tests/ui exists")
-        .map(|entry| entry.expect("readable directory entry").path())
-        .filter(|path| path.extension().is_some_and(|e| e == extension))
-        .map(|path| {
-            path.file_stem()
-                .expect("a file stem")
-                .to_string_lossy()
-                .into_owned()
-        })
-        .collect();
-    stems.sort();
-    stems
-}
-
 #[test]
 fn every_ui_file_has_a_test_and_a_golden_file() {
-    let mut listed: Vec<String> = UI_FILES.iter().map(|s| s.to_string()).collect();
-    listed.sort();
-    assert_eq!(
-        stems("mech"),
-        listed,
-        "tests/ui/*.mech and the list in `ui_tests!` (codegen/tests/ui.rs) differ: add the new file's stem there"
-    );
+    support::assert_lists_every_file(LISTED, &ui_dir(), "mech", "codegen/tests/ui.rs");
     // Blessing writes the missing .stderr files, possibly after this test has listed them.
-    if !blessing() {
-        assert_eq!(
-            stems("stderr"),
-            listed,
-            "a .stderr without its .mech, or the reverse"
-        );
+    if !support::blessing() {
+        support::assert_lists_every_file(LISTED, &ui_dir(), "stderr", "codegen/tests/ui.rs");
     }
 }
