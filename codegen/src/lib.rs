@@ -30,14 +30,32 @@
 //! `cargo:rerun-if-changed` for every `.mech` file it reads. Note that any
 //! `rerun-if-changed` line replaces cargo's default of re-running when any package file
 //! changes; a build script that also depends on other files must list them too.
+//!
+//! For many models, [`Builder::include_file`] also writes one file listing them all (like
+//! prost-build's `include_file`): a module per model, `NAMES`, and `compiled(name)`.
+//! ```no_run
+//! // build.rs
+//! fn main() -> Result<(), mech_codegen::Errors> {
+//!     mech_codegen::Builder::new()
+//!         .include_file("models.rs")
+//!         .compile(&["models/pendulum.mech", "models/cart_pendulum.mech"])
+//! }
+//! ```
+//! ```ignore
+//! // src/lib.rs
+//! pub mod models { include!(concat!(env!("OUT_DIR"), "/models.rs")); }
+//! // models::pendulum::Pendulum, models::NAMES, models::compiled("pendulum")
+//! ```
 
 pub mod back;
 pub mod diag;
 pub mod front;
 pub mod ir;
 pub mod kane;
+pub mod physics;
 pub mod sym;
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -95,6 +113,7 @@ pub struct Builder {
     out_dir: Option<PathBuf>,
     rust: RustOptions,
     emit_rerun_if_changed: bool,
+    include_file: Option<PathBuf>,
 }
 
 impl Default for Builder {
@@ -103,6 +122,7 @@ impl Default for Builder {
             out_dir: None,
             rust: RustOptions::default(),
             emit_rerun_if_changed: true,
+            include_file: None,
         }
     }
 }
@@ -137,8 +157,19 @@ impl Builder {
         self
     }
 
+    /// Also write `name` (relative to the output directory) listing every model of the
+    /// [`compile`](Builder::compile) call: `pub mod <model>` including `<model>.rs`,
+    /// `NAMES: &[&str]` (sorted) and `compiled(name) -> Option<Box<dyn Model>>` (see
+    /// [`back::include`]). Include it with
+    /// `include!(concat!(env!("OUT_DIR"), "/<name>"))`.
+    pub fn include_file(&mut self, name: impl Into<PathBuf>) -> &mut Self {
+        self.include_file = Some(name.into());
+        self
+    }
+
     /// Compiles every file; stops at the first file with errors and returns all of its
-    /// diagnostics.
+    /// diagnostics. Two files declaring the same model name are an error (`E0002`): the
+    /// second would overwrite the first's `<model>.rs`.
     pub fn compile(&self, paths: &[impl AsRef<Path>]) -> Result<(), Errors> {
         let out_dir = match &self.out_dir {
             Some(dir) => dir.clone(),
@@ -151,18 +182,41 @@ impl Builder {
                     Errors::io("OUT_DIR", &error)
                 })?,
         };
+        let mut written: BTreeMap<String, String> = BTreeMap::new();
         for path in paths {
             let path = path.as_ref();
             if self.emit_rerun_if_changed {
                 println!("cargo:rerun-if-changed={}", path.display());
             }
             let compiled = Compiled::from_path(path)?;
+            let shown = path.display().to_string();
+            if let Some(first) = written.insert(compiled.model.name.clone(), shown.clone()) {
+                let diagnostic = Diagnostic::error(
+                    "E0002",
+                    format!(
+                        "model `{}` is also declared by `{first}`",
+                        compiled.model.name
+                    ),
+                )
+                .with_help("give one of them another name: `model NAME;`");
+                return Err(Errors::new(
+                    Arc::new(SourceFile::new(shown, "")),
+                    vec![diagnostic],
+                ));
+            }
             let options = RustOptions {
                 source_name: path.display().to_string(),
                 ..self.rust.clone()
             };
             let source = compiled.rust(&options);
             let target = out_dir.join(format!("{}.rs", compiled.model.name));
+            write_if_changed(&target, source.as_bytes())
+                .map_err(|error| Errors::io(&target.display().to_string(), &error))?;
+        }
+        if let Some(name) = &self.include_file {
+            let names: Vec<String> = written.into_keys().collect();
+            let source = back::include::emit(&names, &self.rust.runtime_path);
+            let target = out_dir.join(name);
             write_if_changed(&target, source.as_bytes())
                 .map_err(|error| Errors::io(&target.display().to_string(), &error))?;
         }

@@ -3,8 +3,13 @@
 //!
 //! Consumes: the `.mech` files in `codegen/tests/ui/` (paths shown relative to the crate root,
 //! so the goldens do not depend on the machine).
-//! Produces: one test that reports every mismatching file. `MECH_BLESS=1 cargo test -p
-//! mech-codegen --test ui` rewrites the `.stderr` files instead.
+//! Produces: one test per file, named after it, plus one that fails when a file and the
+//! list in `tests_per_file!` differ (so a new file cannot go unchecked).
+//! `MECH_BLESS=1 cargo test -p mech-codegen --test ui` rewrites the `.stderr` files instead.
+
+#[macro_use]
+#[path = "support/golden.rs"]
+mod support;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -12,15 +17,8 @@ use std::sync::Arc;
 use mech_codegen::diag::SourceFile;
 use mech_codegen::front;
 
-fn ui_files() -> Vec<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/ui");
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .expect("tests/ui exists")
-        .map(|entry| entry.expect("readable directory entry").path())
-        .filter(|path| path.extension().is_some_and(|e| e == "mech"))
-        .collect();
-    files.sort();
-    files
+fn ui_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/ui")
 }
 
 /// What `front::load` prints for a file, or a note that it unexpectedly loaded.
@@ -34,35 +32,89 @@ fn render(path: &Path) -> String {
     }
 }
 
-#[test]
-fn diagnostics_match_the_golden_files() {
-    let bless = std::env::var_os("MECH_BLESS").is_some_and(|v| v == "1");
-    let files = ui_files();
-    assert!(
-        files.len() >= 20,
-        "expected the ui corpus, found {} files",
-        files.len()
-    );
-    let mut failures = Vec::new();
-    for path in &files {
-        let actual = render(path);
-        let golden = path.with_extension("stderr");
-        if bless {
-            std::fs::write(&golden, &actual).expect("writable .stderr file");
-            continue;
-        }
-        let expected = std::fs::read_to_string(&golden).unwrap_or_default();
-        if actual == "(loaded without errors)\n" || actual != expected {
-            failures.push(format!(
-                "── {} ──\nexpected:\n{expected}\nactual:\n{actual}",
-                golden.display()
-            ));
-        }
+/// Checks (or, with `MECH_BLESS=1`, rewrites) the golden file of `tests/ui/<stem>.mech`.
+fn check(stem: &str) {
+    let path = ui_dir().join(format!("{stem}.mech"));
+    let actual = render(&path);
+    let golden = path.with_extension("stderr");
+    if support::blessing() {
+        std::fs::write(&golden, &actual).expect("writable .stderr file");
+        return;
     }
+    let expected = std::fs::read_to_string(&golden).unwrap_or_default();
     assert!(
-        failures.is_empty(),
-        "{} ui test(s) failed (MECH_BLESS=1 to update):\n{}",
-        failures.len(),
-        failures.join("\n")
+        actual != "(loaded without errors)\n",
+        "tests/ui/{stem}.mech loaded without errors; a ui file must fail"
     );
+    assert!(
+        actual == expected,
+        "{} differs (MECH_BLESS=1 to update):\nexpected:\n{expected}\nactual:\n{actual}",
+        golden.display()
+    );
+}
+
+tests_per_file! {
+    check:
+    actuator_missing_voltage,
+    add_mass_and_length,
+    axis_on_weld,
+    detached_cycle,
+    disconnected_body,
+    division_by_zero,
+    duplicate_field,
+    expected_rotation,
+    expected_vector,
+    exponent_not_constant,
+    flexure_missing_frequency,
+    flexure_on_slider,
+    function_argument_dimension,
+    inertia_four_entries,
+    input_in_body_property,
+    joint_to_itself,
+    let_before_definition,
+    loop_bad_component,
+    loop_field_of_other_kind,
+    loop_missing_axis,
+    many_errors,
+    missing_axis,
+    missing_mass,
+    nested_too_deeply,
+    newtonian_child,
+    non_constant_axis,
+    non_integer_dimension,
+    not_a_number,
+    number_out_of_range,
+    param_not_constant,
+    point_on_wrong_body,
+    redefinition,
+    reserved_name,
+    scalar_output_in_frame,
+    syntax_expected_expression,
+    syntax_missing_semicolon,
+    syntax_unclosed_block,
+    twist_along_loop_axis,
+    two_parent_joints,
+    unknown_body,
+    unknown_field,
+    unknown_frame,
+    unknown_function,
+    unknown_joint_kind,
+    unknown_loop_kind,
+    unknown_material,
+    unknown_name,
+    unknown_point,
+    unknown_unit,
+    unterminated_comment,
+    wrong_component_count,
+    wrong_dimension,
+    zero_axis,
+}
+
+#[test]
+fn every_ui_file_has_a_test_and_a_golden_file() {
+    support::assert_lists_every_file(LISTED, &ui_dir(), "mech", "codegen/tests/ui.rs");
+    // Blessing writes the missing .stderr files, possibly after this test has listed them.
+    if !support::blessing() {
+        support::assert_lists_every_file(LISTED, &ui_dir(), "stderr", "codegen/tests/ui.rs");
+    }
 }

@@ -4,7 +4,10 @@
 //! voltage, or computed from a symmetric tapered bimorph's geometry by the closed form of
 //! Wood, Steltz & Fearing (2005) with the refinements of Jafferis, Smith & Wood (2015).
 //!
-//! Units: N, m, V, kg; energy density in J/kg.
+//! Units: N, m, V, kg; energy density in J/kg. The bimorph closed form is
+//! [`mech_codegen::physics::TaperedBimorph`], shared with the language's `actuator` lowering.
+
+use mech_codegen::physics::{Material, TaperedBimorph, UNTAPERED_BAND};
 
 /// Energy density of Eq. 1: `D_u = δ_f F_b / (2 m_a)` (J/kg): the area under the linear
 /// force–deflection curve per unit actuator mass (a quarter of the convention of the
@@ -103,8 +106,8 @@ impl PiezoCoefficients {
     pub const HAMR_VI: PiezoCoefficients = PiezoCoefficients {
         f31_blocked: 24.0,
         f31_free: 32.0,
-        pzt_modulus: 40e9,
-        core_modulus: 340e9,
+        pzt_modulus: Material::PZT.youngs_modulus,
+        core_modulus: Material::CARBON_FIBRE.youngs_modulus,
     };
 }
 
@@ -188,70 +191,65 @@ impl Bimorph {
         Ok(())
     }
 
+    /// The closed form of this geometry.
+    fn closed_form(&self) -> TaperedBimorph<f64> {
+        let c = &self.coefficients;
+        TaperedBimorph {
+            pzt_thickness: self.pzt_thickness,
+            core_thickness: self.core_thickness,
+            length: self.length,
+            extension: self.extension_length,
+            nominal_width: self.nominal_width,
+            width_ratio: self.width_ratio,
+            f31_blocked: c.f31_blocked,
+            f31_free: c.f31_free,
+            pzt_modulus: c.pzt_modulus,
+            core_modulus: c.core_modulus,
+        }
+    }
+
     /// Extension ratio l_r = l_ext / L.
     pub fn extension_ratio(&self) -> f64 {
-        self.extension_length / self.length
+        self.closed_form().extension_ratio()
     }
 
     /// Flexural rigidity per unit width (N·m):
     /// `D = ⅓ E_p t_p (1.5 t_cf² + 3 t_cf t_p + 2 t_p²) + E_cf t_cf³ / 12`.
     pub fn rigidity_per_width(&self) -> f64 {
-        let (tp, tcf) = (self.pzt_thickness, self.core_thickness);
-        let c = &self.coefficients;
-        c.pzt_modulus * tp * (1.5 * tcf * tcf + 3.0 * tcf * tp + 2.0 * tp * tp) / 3.0
-            + c.core_modulus * tcf.powi(3) / 12.0
+        self.closed_form().rigidity_per_width()
     }
 
-    /// Geometry factor GF of the taper and extension (→ 1 for w_r → 1 and l_r = 0):
-    /// `8(1 − w_r)³(1 + 2l_r) / [−6(w_r − 1)(−3 + 4l_r(w_r − 1) + 2w_r)
-    ///  + 3(−2 + 2l_r(w_r − 1) + w_r)² ln((2 − w_r)/w_r)]`.
+    /// Geometry factor GF of the taper and extension (→ 1 for w_r → 1 and l_r = 0), see
+    /// [`TaperedBimorph::geometry_factor_at`].
     ///
     /// Near `w_r = 1` the expression is 0/0; its limit there is
     /// `4(1 + 2l_r) / (3(1 + 2l_r)² + 1)`, and within 0.01 of 1 the value is interpolated
-    /// linearly between that limit and the formula at `1 ± 0.01` (error below 1e-5).
+    /// linearly between that limit and the formula at `1 ± 0.01` (error below 1e-5). (The
+    /// language, which cannot interpolate an expression, takes the limit in that band.)
     pub fn geometry_factor(&self) -> f64 {
-        let lr = self.extension_ratio();
-        let formula = |wr: f64| {
-            let numerator = 8.0 * (1.0 - wr).powi(3) * (1.0 + 2.0 * lr);
-            let denominator = -6.0 * (wr - 1.0) * (-3.0 + 4.0 * lr * (wr - 1.0) + 2.0 * wr)
-                + 3.0 * (-2.0 + 2.0 * lr * (wr - 1.0) + wr).powi(2) * ((2.0 - wr) / wr).ln();
-            numerator / denominator
-        };
+        let form = self.closed_form();
         let wr = self.width_ratio;
         let e = wr - 1.0;
-        const BAND: f64 = 0.01;
-        if e.abs() >= BAND {
-            return formula(wr);
+        if e.abs() >= UNTAPERED_BAND {
+            return form.geometry_factor_at(wr);
         }
-        let a = 1.0 + 2.0 * lr;
-        let limit = 4.0 * a / (3.0 * a * a + 1.0);
-        let edge = formula(1.0 + BAND.copysign(e));
-        limit + (edge - limit) * e.abs() / BAND
+        let limit = form.untapered_geometry_factor();
+        let edge = form.geometry_factor_at(1.0 + UNTAPERED_BAND.copysign(e));
+        limit + (edge - limit) * e.abs() / UNTAPERED_BAND
     }
 
     /// Free deflection at drive amplitude `voltage` (m):
     /// `δ_f = ¼ (1 + 2l_r) f31 (V/t_p) t_p (t_p + t_cf) L² / D`.
     pub fn free_deflection(&self, voltage: f64) -> f64 {
-        let (tp, tcf, l) = (self.pzt_thickness, self.core_thickness, self.length);
-        0.25 * (1.0 + 2.0 * self.extension_ratio())
-            * self.coefficients.f31_free
-            * (voltage / tp)
-            * tp
-            * (tp + tcf)
-            * l
-            * l
-            / self.rigidity_per_width()
+        self.closed_form().free_deflection_per_volt() * voltage
     }
 
     /// Blocked force at drive amplitude `voltage` (N):
     /// `F_b = ¾ f31 V w_nom (t_p + t_cf) GF / L`.
     pub fn blocked_force(&self, voltage: f64) -> f64 {
-        0.75 * self.coefficients.f31_blocked
+        self.closed_form()
+            .blocked_force_per_volt(self.geometry_factor())
             * voltage
-            * self.nominal_width
-            * (self.pzt_thickness + self.core_thickness)
-            * self.geometry_factor()
-            / self.length
     }
 
     /// The linear actuator model at `voltage`, with mass `mass` (kg, NaN if unknown).

@@ -16,23 +16,9 @@ use nalgebra::Complex;
 
 use super::materials::Material;
 
-/// Bending stiffness of a rectangular flexure, Eq. 2: `k = E w t³ / (12 l)` (N·m/rad).
-/// For castellated hinges `l` is the effective length `l_eff`.
-pub fn bending_stiffness(youngs_modulus: f64, width: f64, thickness: f64, length: f64) -> f64 {
-    youngs_modulus * width * thickness.powi(3) / (12.0 * length)
-}
-
-/// Equivalent viscous damping of a hysteretic hinge at angular frequency `omega`, Eq. 5:
-/// `b = k η / ω` (N·m·s/rad).
-pub fn hysteretic_damping(stiffness: f64, loss_factor: f64, omega: f64) -> f64 {
-    stiffness * loss_factor / omega
-}
-
-/// Ratio of twist to bending stiffness of a compliant flexure, Eq. 8: `2 / (1 + ν)`
-/// (≈ 1.49 for Kapton, ν = 0.34).
-pub fn twist_ratio(poisson_ratio: f64) -> f64 {
-    2.0 / (1.0 + poisson_ratio)
-}
+// Eq. 2 `k = E w t³ / (12 l)`, Eq. 5 `b = k η / ω` and Eq. 8 `2 / (1 + ν)`, shared with the
+// language's `flexure` lowering.
+pub use mech_codegen::physics::{bending_stiffness, hysteretic_damping, twist_ratio};
 
 /// Seed Sec. IV.B: HAMR's mirrored-castellated hinges are 25 µm thick (m).
 pub const HAMR_HINGE_THICKNESS: f64 = 25e-6;

@@ -4,9 +4,13 @@
 
 #[path = "../common/mod.rs"]
 mod common;
+#[macro_use]
+#[path = "../../codegen/tests/support/golden.rs"]
+mod support;
 
 mod backends;
 mod compliant_loops;
+mod golden_equations;
 mod hamr;
 mod linear;
 mod loops;

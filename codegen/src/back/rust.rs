@@ -68,6 +68,22 @@ pub fn emit(model: &Model, equations: &Equations, options: &RustOptions) -> Stri
     header + &prettyplease::unparse(&syntax)
 }
 
+/// The generated struct of model `name`: `cart_pendulum` → `CartPendulum`, prefixed with
+/// `Model` where that would not be an identifier (`2link` → `Model2link`).
+pub fn struct_name(name: &str) -> String {
+    let camel = upper_camel(name);
+    if camel.is_empty() || camel.starts_with(|c: char| c.is_ascii_digit()) {
+        format!("Model{camel}")
+    } else {
+        camel
+    }
+}
+
+/// The runtime crate's path as tokens (`::mech_runtime` if `path` does not parse).
+pub fn runtime_tokens(path: &str) -> TokenStream {
+    path.parse().unwrap_or_else(|_| quote!(::mech_runtime))
+}
+
 /// `cart_pendulum` → `CartPendulum`.
 pub fn upper_camel(name: &str) -> String {
     name.split('_')
@@ -171,21 +187,12 @@ impl Function {
 
 impl<'a> Emitter<'a> {
     fn new(model: &'a Model, equations: &'a Equations, options: &'a RustOptions) -> Emitter<'a> {
-        let runtime: TokenStream = options
-            .runtime_path
-            .parse()
-            .unwrap_or_else(|_| quote!(::mech_runtime));
-        let camel = upper_camel(&model.name);
-        let camel = if camel.is_empty() || camel.starts_with(|c: char| c.is_ascii_digit()) {
-            format!("Model{camel}")
-        } else {
-            camel
-        };
+        let camel = struct_name(&model.name);
         Emitter {
             model,
             equations,
             options,
-            runtime,
+            runtime: runtime_tokens(&options.runtime_path),
             struct_name: format_ident!("{camel}"),
             params_name: format_ident!("{camel}Params"),
         }

@@ -197,6 +197,20 @@ impl Expr {
     }
 }
 
+// Operators build the node as written, without folding constants: the closed forms of
+// `crate::physics` are written once for `f64` and for `Expr` through them.
+macro_rules! expr_operator {
+    ($($trait:ident $method:ident $variant:ident),*) => {$(
+        impl std::ops::$trait for Expr {
+            type Output = Expr;
+            fn $method(self, other: Expr) -> Expr {
+                Expr::$variant(Box::new(self), Box::new(other))
+            }
+        }
+    )*};
+}
+expr_operator!(Add add Add, Sub sub Sub, Mul mul Mul, Div div Div);
+
 /// Elementary functions allowed in expressions.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Function {

@@ -4,7 +4,8 @@
 //! Produces: springs, dampers and generalized forces in `model.loads`, flexure records in
 //! `model.flexures`, and `E02xx`/`E03xx`/`E04xx` errors.
 //!
-//! Physics (Doshi et al., "Model driven design for flexure-based microrobots"):
+//! Physics (Doshi et al., "Model driven design for flexure-based microrobots"), the closed
+//! forms and the built-in materials of [`crate::physics`] (shared with the `mech` CLI):
 //! - flexure bending stiffness `k = E w t³ / (12 l)` (Eq. 2), with `effective_length`
 //!   replacing `length` for castellated hinges; time-domain damping `b = k η / ω_ref`
 //!   (Eq. 5) with `ω_ref = 2π · reference_frequency`;
@@ -20,6 +21,7 @@ use std::collections::BTreeMap;
 use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, Ident};
 use crate::ir::{self, ClosureKind, Dimension, Expr, FlexureAngle, JointKind};
+use crate::physics::{self, Scalar, TaperedBimorph};
 use crate::sym::Number;
 
 use super::expr::{Ctx, Expect};
@@ -34,21 +36,25 @@ pub struct Material {
     pub loss_factor: Option<Expr>,
 }
 
-fn number(text: &str) -> Expr {
-    Expr::Number(Number::parse_decimal(text).unwrap_or(Number::ZERO))
+impl From<&physics::Material> for Material {
+    /// The table's constants as exact decimals; an unknown (NaN) property is absent.
+    fn from(material: &physics::Material) -> Material {
+        let known = |value: f64| (!value.is_nan()).then(|| Expr::constant(value));
+        Material {
+            modulus: known(material.youngs_modulus),
+            poisson: known(material.poisson_ratio),
+            density: known(material.density),
+            loss_factor: known(material.loss_factor),
+        }
+    }
 }
 
-/// Materials every model knows. Kapton HN: E = 2.56 GPa as measured by Doshi et al. (§IV.B;
-/// the datasheet gives 2.5 GPa), ν = 0.34, ρ = 1.42 g/cm³ (DuPont datasheet), η = 0.05 for
-/// uncastellated hinges (§IV.B; castellated HAMR hinges measured η' = 0.08).
+/// Materials every model knows: `kapton` ([`physics::Material::KAPTON_HN`], the seed's
+/// measured E = 2.56 GPa and η = 0.05 of uncastellated hinges). The table's other entries are
+/// not language names (`kapton-datasheet` is not an identifier).
 fn builtin_materials() -> BTreeMap<String, Material> {
-    let kapton = Material {
-        modulus: Some(number("2.56e9")),
-        poisson: Some(number("0.34")),
-        density: Some(number("1420")),
-        loss_factor: Some(number("0.05")),
-    };
-    BTreeMap::from([("kapton".to_string(), kapton)])
+    let kapton = &physics::Material::KAPTON_HN;
+    BTreeMap::from([(kapton.name.to_string(), Material::from(kapton))])
 }
 
 const MATERIAL_FIELDS: [&str; 4] = ["modulus", "poisson", "density", "loss_factor"];
@@ -382,7 +388,7 @@ impl<'a> Lowerer<'a> {
         };
         // b = k η / ω_ref, ω_ref = 2π f_ref
         let omega = mul(mul(Expr::Number(Number::int(2)), Expr::Pi), frequency);
-        let damping = div(mul(stiffness.clone(), loss_factor.clone()), omega);
+        let damping = physics::hysteretic_damping(stiffness.clone(), loss_factor.clone(), omega);
         let span = decl.span;
         match angle {
             FlexureAngle::Coordinate(coordinate) => {
@@ -461,11 +467,7 @@ impl<'a> Lowerer<'a> {
             );
             return;
         };
-        // 2/(1 + ν)
-        let ratio = div(
-            Expr::Number(Number::int(2)),
-            Expr::Add(Box::new(Expr::one()), Box::new(poisson)),
-        );
+        let ratio = physics::twist_ratio(poisson);
         let spring = |suffix: &str, factor: &Expr| ir::transform::HingeSpring {
             name: format!("{}_{suffix}", decl.name.name),
             stiffness: mul(factor.clone(), stiffness.clone()),
@@ -523,10 +525,8 @@ impl<'a> Lowerer<'a> {
             );
             return None;
         };
-        let cube = Expr::Pow(Box::new(thickness), Number::int(3));
-        Some(div(
-            mul(mul(modulus, width), cube),
-            mul(Expr::Number(Number::int(12)), length),
+        Some(physics::bending_stiffness(
+            modulus, width, thickness, length,
         ))
     }
 
@@ -634,13 +634,9 @@ impl<'a> Lowerer<'a> {
         Some((div(blocked, rated.clone()), div(deflection, rated)))
     }
 
-    /// `(F_b/V, δ_f/V)` of a tapered symmetric bimorph (Wood, Steltz & Fearing 2005; Jafferis,
-    /// Smith & Wood 2015), with `l_r = extension/length`:
-    /// `D = ⅓E_p t_p(1.5t_cf² + 3t_cf t_p + 2t_p²) + E_cf t_cf³/12`,
-    /// `δ_f/V = ¼(1 + 2l_r) f31_free (t_p + t_cf) L² / D`,
-    /// `F_b/V = ¾ f31_blocked w_nom (t_p + t_cf) GF / L`, with the geometry factor GF of the
-    /// taper (its limit `4(1 + 2l_r)/(3(1 + 2l_r)² + 1)` when `width_ratio` is within 0.01 of
-    /// 1 at the parameters' defaults, where the closed form is 0/0).
+    /// `(F_b/V, δ_f/V)` of a tapered symmetric bimorph: [`TaperedBimorph`] at 1 V, with the
+    /// geometry factor's limit when `width_ratio` is within [`physics::UNTAPERED_BAND`] of 1
+    /// at the parameters' defaults (where the closed form is 0/0).
     fn bimorph_per_volt(
         &mut self,
         decl: &ast::ElementDecl,
@@ -662,51 +658,20 @@ impl<'a> Lowerer<'a> {
             return None;
         }
         let get = |name: &str| values[name].0.clone();
-        let (tp, tcf, length, extension, width, wr) = (
-            get("pzt_thickness"),
-            get("core_thickness"),
-            get("length"),
-            get("extension"),
-            get("nominal_width"),
-            get("width_ratio"),
-        );
-        let n = |text: &str| number(text);
-        let add = |a: Expr, b: Expr| Expr::Add(Box::new(a), Box::new(b));
-        let sub = |a: Expr, b: Expr| Expr::Sub(Box::new(a), Box::new(b));
-        let square = |a: Expr| Expr::Pow(Box::new(a), Number::int(2));
-        let lr = div(extension, length.clone());
-        let one_plus_2lr = add(n("1"), mul(n("2"), lr.clone()));
-        let total = add(tp.clone(), tcf.clone());
-        // D = ⅓ E_p t_p (1.5 t_cf² + 3 t_cf t_p + 2 t_p²) + E_cf t_cf³ / 12
-        let bracket = add(
-            add(
-                mul(n("1.5"), square(tcf.clone())),
-                mul(mul(n("3"), tcf.clone()), tp.clone()),
-            ),
-            mul(n("2"), square(tp.clone())),
-        );
-        let rigidity = add(
-            div(mul(mul(get("pzt_modulus"), tp), bracket), n("3")),
-            div(
-                mul(
-                    get("core_modulus"),
-                    Expr::Pow(Box::new(tcf), Number::int(3)),
-                ),
-                n("12"),
-            ),
-        );
-        let deflection = div(
-            mul(
-                mul(
-                    mul(mul(n("0.25"), one_plus_2lr.clone()), get("f31_free")),
-                    total.clone(),
-                ),
-                square(length.clone()),
-            ),
-            rigidity,
-        );
+        let bimorph = TaperedBimorph {
+            pzt_thickness: get("pzt_thickness"),
+            core_thickness: get("core_thickness"),
+            length: get("length"),
+            extension: get("extension"),
+            nominal_width: get("nominal_width"),
+            width_ratio: get("width_ratio"),
+            f31_blocked: get("f31_blocked"),
+            f31_free: get("f31_free"),
+            pzt_modulus: get("pzt_modulus"),
+            core_modulus: get("core_modulus"),
+        };
         let (wr_value, wr_span) = (
-            self.evaluate(&wr, values["width_ratio"].1),
+            self.evaluate(&bimorph.width_ratio, values["width_ratio"].1),
             values["width_ratio"].1,
         );
         if !(wr_value > 0.0 && wr_value < 2.0) {
@@ -722,47 +687,14 @@ impl<'a> Lowerer<'a> {
             );
             return None;
         }
-        let geometry_factor = if (wr_value - 1.0).abs() < 0.01 {
-            div(
-                mul(n("4"), one_plus_2lr.clone()),
-                add(mul(n("3"), square(one_plus_2lr)), n("1")),
-            )
+        // The taper is chosen at the parameters' defaults: an expression cannot switch forms.
+        let geometry_factor = if (wr_value - 1.0).abs() < physics::UNTAPERED_BAND {
+            bimorph.untapered_geometry_factor()
         } else {
-            let wr_minus_1 = sub(wr.clone(), n("1"));
-            let numerator = mul(
-                mul(
-                    n("8"),
-                    Expr::Pow(Box::new(sub(n("1"), wr.clone())), Number::int(3)),
-                ),
-                one_plus_2lr,
-            );
-            let first = mul(
-                mul(n("-6"), wr_minus_1.clone()),
-                add(
-                    add(n("-3"), mul(mul(n("4"), lr.clone()), wr_minus_1.clone())),
-                    mul(n("2"), wr.clone()),
-                ),
-            );
-            let log = Expr::Call(
-                ir::Function::Ln,
-                vec![div(sub(n("2"), wr.clone()), wr.clone())],
-            );
-            let second = mul(
-                mul(
-                    n("3"),
-                    square(add(add(n("-2"), mul(mul(n("2"), lr), wr_minus_1)), wr)),
-                ),
-                log,
-            );
-            div(numerator, add(first, second))
+            bimorph.geometry_factor_at(bimorph.width_ratio.clone())
         };
-        let force = div(
-            mul(
-                mul(mul(mul(n("0.75"), get("f31_blocked")), width), total),
-                geometry_factor,
-            ),
-            length,
-        );
+        let force = bimorph.blocked_force_per_volt(geometry_factor);
+        let deflection = bimorph.free_deflection_per_volt();
         Some((force, deflection))
     }
 }

@@ -1,0 +1,54 @@
+//! Golden-file tests with one `#[test]` per input file, shared by `codegen/tests/ui.rs` and
+//! the `mech` crate's `tests/equations/` (included there by `#[path]`).
+//!
+//! Consumes: a directory of inputs and the list of their stems written in the test file.
+//! Produces: the tests (`tests_per_file!`) and the check that the list and the directory
+//! agree, so an input added without its test fails; `MECH_BLESS=1` selects bless mode.
+
+use std::path::Path;
+
+/// `MECH_BLESS=1`: rewrite the golden files instead of comparing.
+pub fn blessing() -> bool {
+    std::env::var_os("MECH_BLESS").is_some_and(|v| v == "1")
+}
+
+/// The sorted stems of `dir/*.<extension>`.
+pub fn stems(dir: &Path, extension: &str) -> Vec<String> {
+    let mut stems: Vec<String> = std::fs::read_dir(dir)
+        .unwrap_or_else(|error| panic!("cannot list {}: {error}", dir.display()))
+        .map(|entry| entry.expect("readable directory entry").path())
+        .filter(|path| path.extension().is_some_and(|e| e == extension))
+        .map(|path| {
+            let stem = path.file_stem().expect("a file stem");
+            stem.to_string_lossy().into_owned()
+        })
+        .collect();
+    stems.sort();
+    stems
+}
+
+/// Fails unless `listed` names exactly the files `dir/*.<extension>`.
+pub fn assert_lists_every_file(listed: &[&str], dir: &Path, extension: &str, list_in: &str) {
+    let mut listed: Vec<String> = listed.iter().map(|s| s.to_string()).collect();
+    listed.sort();
+    assert_eq!(
+        stems(dir, extension),
+        listed,
+        "{}/*.{extension} and the list in `tests_per_file!` ({list_in}) differ: add the new file's stem there",
+        dir.display()
+    );
+}
+
+/// `tests_per_file!(check: a, b,)`: `#[test] fn a() { check("a") }`, ..., and `LISTED`, the
+/// stems, for [`assert_lists_every_file`].
+macro_rules! tests_per_file {
+    ($check:ident: $($stem:ident,)*) => {
+        const LISTED: &[&str] = &[$(stringify!($stem)),*];
+        $(
+            #[test]
+            fn $stem() {
+                $check(stringify!($stem));
+            }
+        )*
+    };
+}

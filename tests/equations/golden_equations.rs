@@ -1,0 +1,87 @@
+//! Golden equations: what `mech derive MODEL --emit equations` prints for every bundled model
+//! stays as it is, so a change in the front end, the symbolic engine or Kane's method that
+//! alters any equation shows up as a diff.
+//!
+//! Consumes: `models/<stem>.mech`. Produces: one test per model, named after it, comparing
+//! `describe::equations_text` with `tests/golden/equations/<stem>.txt`, plus one that fails
+//! when a model and the list in `tests_per_file!` differ (so a new model cannot go
+//! unchecked). `MECH_BLESS=1 cargo test --test equations golden_equations` rewrites the golden files
+//! instead.
+
+use crate::support;
+
+use std::path::{Path, PathBuf};
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn golden_dir() -> PathBuf {
+    root().join("tests/golden/equations")
+}
+
+/// Checks (or, with `MECH_BLESS=1`, rewrites) the golden equations of `models/<stem>.mech`.
+fn check(stem: &str) {
+    let compiled = mech_codegen::Compiled::from_path(root().join(format!("models/{stem}.mech")))
+        .unwrap_or_else(|errors| panic!("models/{stem}.mech does not compile:{errors:?}"));
+    let actual = mech::describe::equations_text(&compiled);
+    let golden = golden_dir().join(format!("{stem}.txt"));
+    if support::blessing() {
+        std::fs::create_dir_all(golden_dir()).expect("writable tests/golden");
+        std::fs::write(&golden, &actual).expect("writable golden file");
+        return;
+    }
+    let expected = std::fs::read_to_string(&golden).unwrap_or_default();
+    if actual != expected {
+        // The texts run to 130 kB: show the first differing line, not both files.
+        let line = actual
+            .lines()
+            .zip(expected.lines())
+            .position(|(a, e)| a != e)
+            .unwrap_or_else(|| actual.lines().count().min(expected.lines().count()));
+        let show = |text: &str| {
+            text.lines()
+                .nth(line)
+                .unwrap_or("(end of text)")
+                .to_string()
+        };
+        panic!(
+            "{} differs from `mech derive models/{stem}.mech --emit equations` at line {} \
+             (MECH_BLESS=1 to update):\nexpected: {}\nactual:   {}",
+            golden.display(),
+            line + 1,
+            show(&expected),
+            show(&actual)
+        );
+    }
+}
+
+tests_per_file! {
+    check:
+    cart_pendulum,
+    chain1,
+    chain2,
+    chain4,
+    double_pendulum_3d,
+    flexure_rig,
+    four_bar,
+    hamr_v2,
+    hamr_vi,
+    mixed_chain,
+    pendulum,
+    slider_crank,
+    spherical_five_bar,
+    triple_pendulum_3d,
+    two_mass_chain,
+}
+
+#[test]
+fn every_bundled_model_has_a_golden_test() {
+    let models = root().join("models");
+    support::assert_lists_every_file(
+        LISTED,
+        &models,
+        "mech",
+        "tests/equations/golden_equations.rs",
+    );
+}
