@@ -7,15 +7,132 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use mech_codegen::Compiled;
+use mech_codegen::ir::Dimension;
+use mech_codegen::{Compiled, Errors};
 use mech_runtime::constraints::{choose_independent, complete_independent, jacobian};
 use mech_runtime::{
     assemble, assemble_speeds, linearize, mobility, solve_statics, AssemblyOptions, Equilibrium,
-    Fixture, Linearization, Mobility, Model, Signal, StaticsOptions,
+    Fixture, Linearization, Mobility, Model, RuntimeError, Signal, StaticsOptions,
 };
 
 use crate::signal_spec;
 use crate::tape_model::TapeModel;
+
+/// What a name refers to in a model, for [`Error::UnknownName`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NameKind {
+    Parameter,
+    Input,
+    Output,
+    Coordinate,
+}
+
+impl NameKind {
+    fn singular(self) -> &'static str {
+        match self {
+            NameKind::Parameter => "parameter",
+            NameKind::Input => "input",
+            NameKind::Output => "output",
+            NameKind::Coordinate => "coordinate",
+        }
+    }
+}
+
+/// Why a session cannot be opened, set up or analysed. Each message names the option (or
+/// the model) and says what was expected.
+#[derive(Debug)]
+pub enum Error {
+    /// The model does not compile: every diagnostic with file, line and column.
+    Compile(Errors),
+    /// A name the model does not have, with the names it has.
+    UnknownName {
+        /// The option that gave it (`--set`), if any.
+        option: Option<&'static str>,
+        kind: NameKind,
+        name: String,
+        model: String,
+        known: Vec<String>,
+    },
+    /// A setting whose text cannot be read (not `NAME=VALUE`, a bad quantity or signal).
+    Setting {
+        option: &'static str,
+        /// The name set, when the text got that far.
+        name: Option<String>,
+        message: String,
+    },
+    /// A quantity of the wrong dimension for what it sets.
+    WrongUnit {
+        option: &'static str,
+        name: String,
+        value: String,
+        found: Dimension,
+        expected: Dimension,
+    },
+    /// The loops could not be closed.
+    Assembly(RuntimeError),
+    /// No static equilibrium was found.
+    Statics { model: String, error: RuntimeError },
+    /// The linearization about the equilibrium failed.
+    Linearization(RuntimeError),
+}
+
+impl std::fmt::Display for Error {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Error::Compile(errors) => write!(f, "{errors}"),
+            Error::UnknownName {
+                option,
+                kind,
+                name,
+                model,
+                known,
+            } => {
+                if let Some(option) = option {
+                    write!(f, "{option}: ")?;
+                }
+                let known: Vec<&str> = known.iter().map(String::as_str).collect();
+                write!(
+                    f,
+                    "unknown {} `{name}`; {}s of `{model}`: {}",
+                    kind.singular(),
+                    kind.singular(),
+                    list(&known)
+                )
+            }
+            Error::Setting {
+                option,
+                name,
+                message,
+            } => match name {
+                Some(name) => write!(f, "{option} {name}: {message}"),
+                None => write!(f, "{option}: {message}"),
+            },
+            Error::WrongUnit {
+                option,
+                name,
+                value,
+                found,
+                expected,
+            } => write!(
+                f,
+                "{option} {name}: `{value}` has unit {found}, but `{name}` needs {expected}"
+            ),
+            Error::Assembly(error) => write!(f, "{error}"),
+            Error::Statics { model, error } => write!(f, "statics of `{model}`: {error}"),
+            Error::Linearization(error) => write!(f, "linearization failed: {error}"),
+        }
+    }
+}
+
+impl std::error::Error for Error {}
+
+/// The layers above still speak `String` errors; this lets them use `?` until they have
+/// typed errors of their own.
+impl From<Error> for String {
+    fn from(error: Error) -> String {
+        error.to_string()
+    }
+}
 
 /// A compiled model with its run-time settings.
 pub struct Session {
@@ -39,8 +156,8 @@ pub struct Assembled {
 
 impl Session {
     /// Compiles `path` and applies `--set NAME=VALUE` and `--input NAME=SIGNAL` strings.
-    pub fn open(path: &Path, sets: &[String], inputs: &[String]) -> Result<Session, String> {
-        let compiled = Compiled::from_path(path).map_err(|errors| errors.to_string())?;
+    pub fn open(path: &Path, sets: &[String], inputs: &[String]) -> Result<Session, Error> {
+        let compiled = Compiled::from_path(path).map_err(Error::Compile)?;
         Session::from_compiled(compiled, sets, inputs)
     }
 
@@ -49,7 +166,7 @@ impl Session {
         compiled: Compiled,
         sets: &[String],
         inputs: &[String],
-    ) -> Result<Session, String> {
+    ) -> Result<Session, Error> {
         let model = TapeModel::new(&compiled);
         let signals = mech_runtime::default_signals(&model);
         let mut session = Session {
@@ -67,19 +184,23 @@ impl Session {
     }
 
     /// `--set m=12 g`: checks the name and the unit against the parameter's dimension.
-    pub fn set(&mut self, assignment: &str) -> Result<(), String> {
-        let (name, value) = signal_spec::parse_assignment(assignment)?;
-        let model = &mut self.model;
-        let index = model.param_index(&name).ok_or_else(|| {
-            let known: Vec<&str> = (0..model.nparams()).map(|i| model.param_name(i)).collect();
-            format!(
-                "--set: unknown parameter `{name}`; parameters of `{}`: {}",
-                model.name(),
-                list(&known)
-            )
-        })?;
-        let (si, dimension) = mech_codegen::front::units::parse_quantity(&value)
-            .map_err(|e| format!("--set {name}: {e}"))?;
+    pub fn set(&mut self, assignment: &str) -> Result<(), Error> {
+        let option = "--set";
+        let (name, value) =
+            signal_spec::parse_assignment(assignment).map_err(|message| Error::Setting {
+                option,
+                name: None,
+                message,
+            })?;
+        let index = self.index_of(NameKind::Parameter, &name, Some(option))?;
+        let (si, dimension) =
+            mech_codegen::front::units::parse_quantity(&value).map_err(|message| {
+                Error::Setting {
+                    option,
+                    name: Some(name.clone()),
+                    message,
+                }
+            })?;
         let expected = self
             .compiled
             .model
@@ -89,26 +210,28 @@ impl Session {
             .map(|(_, p)| p.dimension)
             .unwrap_or_default();
         if dimension != expected {
-            return Err(format!(
-                "--set {name}: `{value}` has unit {dimension}, but `{name}` needs {expected}"
-            ));
+            return Err(Error::WrongUnit {
+                option,
+                name,
+                value,
+                found: dimension,
+                expected,
+            });
         }
-        model.set_param(index, si);
+        self.model.set_param(index, si);
         Ok(())
     }
 
     /// `--input drive=sine(...)`: checks the name and the signal's units.
-    pub fn input(&mut self, assignment: &str) -> Result<(), String> {
-        let (name, spec) = signal_spec::parse_assignment(assignment)?;
-        let model = &self.model;
-        let index = model.input_index(&name).ok_or_else(|| {
-            let known: Vec<&str> = (0..model.ninputs()).map(|i| model.input_name(i)).collect();
-            format!(
-                "--input: unknown input `{name}`; inputs of `{}`: {}",
-                model.name(),
-                list(&known)
-            )
-        })?;
+    pub fn input(&mut self, assignment: &str) -> Result<(), Error> {
+        let option = "--input";
+        let (name, spec) =
+            signal_spec::parse_assignment(assignment).map_err(|message| Error::Setting {
+                option,
+                name: None,
+                message,
+            })?;
+        let index = self.index_of(NameKind::Input, &name, Some(option))?;
         let expected = self
             .compiled
             .model
@@ -117,30 +240,65 @@ impl Session {
             .nth(index)
             .map(|(_, i)| i.dimension)
             .unwrap_or_default();
-        self.signals[index] = signal_spec::parse_signal(&spec, expected)
-            .map_err(|e| format!("--input {name}: {e}"))?;
+        self.signals[index] =
+            signal_spec::parse_signal(&spec, expected).map_err(|message| Error::Setting {
+                option,
+                name: Some(name),
+                message,
+            })?;
         Ok(())
     }
 
     /// Index of coordinate `name`, or an error listing the coordinates.
-    pub fn coordinate_index(&self, name: &str) -> Result<usize, String> {
+    pub fn coordinate_index(&self, name: &str) -> Result<usize, Error> {
+        self.index_of(NameKind::Coordinate, name, None)
+    }
+
+    /// Index of input `name`, or an error listing the inputs.
+    pub fn input_index(&self, name: &str) -> Result<usize, Error> {
+        self.index_of(NameKind::Input, name, None)
+    }
+
+    /// Index of output `name`, or an error listing the outputs.
+    pub fn output_index(&self, name: &str) -> Result<usize, Error> {
+        self.index_of(NameKind::Output, name, None)
+    }
+
+    /// The index of the `kind` called `name` (given by `option`, for the message).
+    fn index_of(
+        &self,
+        kind: NameKind,
+        name: &str,
+        option: Option<&'static str>,
+    ) -> Result<usize, Error> {
         let model = &self.model;
-        (0..model.nq())
-            .find(|&i| model.coordinate_name(i) == name)
-            .ok_or_else(|| {
-                let known: Vec<&str> = (0..model.nq()).map(|i| model.coordinate_name(i)).collect();
-                format!(
-                    "unknown coordinate `{name}`; coordinates of `{}`: {}",
-                    model.name(),
-                    list(&known)
-                )
+        let count = match kind {
+            NameKind::Parameter => model.nparams(),
+            NameKind::Input => model.ninputs(),
+            NameKind::Output => model.noutputs(),
+            NameKind::Coordinate => model.nq(),
+        };
+        let name_of = |i: usize| match kind {
+            NameKind::Parameter => model.param_name(i),
+            NameKind::Input => model.input_name(i),
+            NameKind::Output => model.output_name(i),
+            NameKind::Coordinate => model.coordinate_name(i),
+        };
+        (0..count)
+            .find(|&i| name_of(i) == name)
+            .ok_or_else(|| Error::UnknownName {
+                option,
+                kind,
+                name: name.to_string(),
+                model: model.name().to_string(),
+                known: (0..count).map(|i| name_of(i).to_string()).collect(),
             })
     }
 
     /// The initial state of the model, with `--independent NAME[=VALUE]` coordinates held
     /// (at VALUE, or at their `q0`) and the loops closed. Without independent coordinates,
     /// they are chosen by column pivoting on `J` at `q0`.
-    pub fn assemble(&self, independent: &[String]) -> Result<Assembled, String> {
+    pub fn assemble(&self, independent: &[String]) -> Result<Assembled, Error> {
         let model = &self.model;
         let mut q = vec![0.0; model.nq()];
         let mut u = vec![0.0; model.nu()];
@@ -162,8 +320,14 @@ impl Session {
             };
             let index = self.coordinate_index(name)?;
             if let Some(value) = value {
-                let (si, _) = mech_codegen::front::units::parse_quantity(value)
-                    .map_err(|e| format!("--independent {name}: {e}"))?;
+                let (si, _) =
+                    mech_codegen::front::units::parse_quantity(value).map_err(|message| {
+                        Error::Setting {
+                            option: "--independent",
+                            name: Some(name.to_string()),
+                            message,
+                        }
+                    })?;
                 q[index] = si;
             }
             fixed.push(index);
@@ -173,14 +337,14 @@ impl Session {
             // (minimum-norm), choose there, then hold the chosen coordinates at their q0.
             let written = q.clone();
             assemble(model, 0.0, &mut q, &[], &AssemblyOptions::default())
-                .map_err(|e| e.to_string())?;
+                .map_err(Error::Assembly)?;
             fixed = choose_independent(&jacobian(model, 0.0, &q));
             for &i in &fixed {
                 q[i] = written[i];
             }
         }
         let iterations = assemble(model, 0.0, &mut q, &fixed, &AssemblyOptions::default())
-            .map_err(|e| e.to_string())?;
+            .map_err(Error::Assembly)?;
         let mobility = mobility(model, 0.0, &q);
         if fixed.len() < mobility.dof() {
             // More freedom than named (e.g. a twist added by `mech diagnose`): complete the
@@ -206,7 +370,7 @@ impl Session {
         independent: &[String],
         inputs: &[f64],
         fixtures: &[Fixture],
-    ) -> Result<(Equilibrium, Vec<usize>), String> {
+    ) -> Result<(Equilibrium, Vec<usize>), Error> {
         let state = self.assemble(independent)?;
         let mut q = state.q.clone();
         let equilibrium = solve_statics(
@@ -217,7 +381,10 @@ impl Session {
             fixtures,
             &StaticsOptions::default(),
         )
-        .map_err(|e| format!("statics of `{}`: {e}", self.model.name()))?;
+        .map_err(|error| Error::Statics {
+            model: self.model.name().to_string(),
+            error,
+        })?;
         Ok((equilibrium, state.independent))
     }
 
@@ -227,10 +394,10 @@ impl Session {
         &self,
         independent: &[String],
         inputs: &[f64],
-    ) -> Result<Linearization, String> {
+    ) -> Result<Linearization, Error> {
         let (equilibrium, independent) = self.equilibrium(independent, inputs, &[])?;
         linearize(&self.model, 0.0, &equilibrium.q, inputs, &independent)
-            .map_err(|e| format!("linearization failed: {e}"))
+            .map_err(Error::Linearization)
     }
 }
 

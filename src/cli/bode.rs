@@ -62,26 +62,8 @@ pub enum Damping {
 pub fn run(args: &BodeArgs) -> Result<(), String> {
     let (session, inputs) = args.common.open()?;
     let model = &session.model;
-    let input = model.input_index(&args.drive).ok_or_else(|| {
-        let known: Vec<&str> = (0..model.ninputs()).map(|i| model.input_name(i)).collect();
-        format!(
-            "unknown input `{}`; inputs of `{}`: {}",
-            args.drive,
-            model.name(),
-            known.join(", ")
-        )
-    })?;
-    let output = model.output_index(&args.output).ok_or_else(|| {
-        let known: Vec<&str> = (0..model.noutputs())
-            .map(|i| model.output_name(i))
-            .collect();
-        format!(
-            "unknown output `{}`; outputs of `{}`: {}",
-            args.output,
-            model.name(),
-            known.join(", ")
-        )
-    })?;
+    let input = session.input_index(&args.drive)?;
+    let output = session.output_index(&args.output)?;
     let (from, to) = (
         frequency_value("--from", &args.from)?,
         frequency_value("--to", &args.to)?,
@@ -97,52 +79,22 @@ pub fn run(args: &BodeArgs) -> Result<(), String> {
     };
     let response = frequency::linear_response(&linear, input, output, &frequencies, damping)
         .ok_or("the linear model is singular at some frequency")?;
-    let losses = if model.nflexures() == 0 {
-        "no flexures"
-    } else if args.damping == Damping::Hysteretic {
-        "flexure losses as complex stiffness k(1 + iη)"
-    } else {
-        "flexure losses as viscous dampers b = kη/ω_ref"
-    };
-    let mut text = format!(
-        "frequency response of `{}` from `{}` to `{}`, {from} – {to} Hz ({losses})\n",
-        model.name(),
-        args.drive,
-        args.output
-    );
-    let found = frequency::resonances(&response);
-    if found.is_empty() {
-        text += "no resonance peak inside the sweep\n";
-    }
-    for resonance in &found {
-        let q = resonance
-            .quality_factor
-            .map_or("n/a (−3 dB points outside the sweep)".to_string(), |q| {
-                format!("{q:.4}")
-            });
-        let _ = writeln!(
-            text,
-            "resonance at {:.6} Hz, peak gain {:.6e}, Q = {q}",
-            resonance.frequency_hz, resonance.peak_magnitude
-        );
-    }
     let chirp = if args.chirp {
-        let amplitude = match &args.chirp_amplitude {
-            Some(text) => {
-                mech_codegen::front::units::parse_quantity(text)
-                    .map_err(|e| format!("--chirp-amplitude: {e}"))?
-                    .0
-            }
-            None => 1.0,
-        };
-        // Sweep slowly enough to pass each resonance in many cycles: 200 periods of the
-        // lowest frequency, at least 2 s.
         let sweep = ChirpSweep {
             input,
             output,
-            amplitude,
+            amplitude: match &args.chirp_amplitude {
+                Some(text) => {
+                    mech_codegen::front::units::parse_quantity(text)
+                        .map_err(|e| format!("--chirp-amplitude: {e}"))?
+                        .0
+                }
+                None => 1.0,
+            },
             from_hz: from,
             to_hz: to,
+            // Slow enough to pass each resonance in many cycles: 200 periods of the lowest
+            // frequency, at least 2 s.
             duration: (200.0 / from).max(2.0),
             rtol: 1e-8,
         };
@@ -160,31 +112,10 @@ pub fn run(args: &BodeArgs) -> Result<(), String> {
     } else {
         None
     };
-    print!("{text}");
+    print!("{}", resonances_text(args, model, (from, to), &response));
 
-    let mut header = vec![
-        "frequency_hz".to_string(),
-        "magnitude_db".to_string(),
-        "phase_deg".to_string(),
-    ];
-    if chirp.is_some() {
-        header.extend([
-            "chirp_magnitude_db".to_string(),
-            "chirp_phase_deg".to_string(),
-        ]);
-    }
-    let rows: Vec<Vec<f64>> = response
-        .iter()
-        .enumerate()
-        .map(|(k, p)| {
-            let mut row = vec![p.frequency_hz, p.magnitude_db(), p.phase_deg()];
-            if let Some(estimate) = &chirp {
-                row.extend([estimate[k].magnitude_db(), estimate[k].phase_deg()]);
-            }
-            row
-        })
-        .collect();
     if let Some(out) = &args.out {
+        let (header, rows) = response_table(&response, chirp.as_deref());
         output::write_csv(out, &header, &rows)
             .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
         println!("written to {}", out.display());
@@ -199,6 +130,67 @@ pub fn run(args: &BodeArgs) -> Result<(), String> {
         println!("plot written to {}", path.display());
     }
     Ok(())
+}
+
+/// The sweep, how losses enter, and each resonance with its peak gain and Q.
+fn resonances_text(
+    args: &BodeArgs,
+    model: &dyn Model,
+    (from, to): (f64, f64),
+    response: &[Point],
+) -> String {
+    let losses = if model.nflexures() == 0 {
+        "no flexures"
+    } else if args.damping == Damping::Hysteretic {
+        "flexure losses as complex stiffness k(1 + iη)"
+    } else {
+        "flexure losses as viscous dampers b = kη/ω_ref"
+    };
+    let mut text = format!(
+        "frequency response of `{}` from `{}` to `{}`, {from} – {to} Hz ({losses})\n",
+        model.name(),
+        args.drive,
+        args.output
+    );
+    let found = frequency::resonances(response);
+    if found.is_empty() {
+        text += "no resonance peak inside the sweep\n";
+    }
+    for resonance in &found {
+        let q = resonance
+            .quality_factor
+            .map_or("n/a (−3 dB points outside the sweep)".to_string(), |q| {
+                format!("{q:.4}")
+            });
+        let _ = writeln!(
+            text,
+            "resonance at {:.6} Hz, peak gain {:.6e}, Q = {q}",
+            resonance.frequency_hz, resonance.peak_magnitude
+        );
+    }
+    text
+}
+
+/// The CSV of `--out`: frequency, magnitude and phase, and the chirp estimate's if any.
+fn response_table(response: &[Point], chirp: Option<&[Point]>) -> (Vec<String>, Vec<Vec<f64>>) {
+    let mut header: Vec<String> = ["frequency_hz", "magnitude_db", "phase_deg"]
+        .map(String::from)
+        .to_vec();
+    if chirp.is_some() {
+        header.extend(["chirp_magnitude_db", "chirp_phase_deg"].map(String::from));
+    }
+    let rows = response
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let mut row = vec![p.frequency_hz, p.magnitude_db(), p.phase_deg()];
+            if let Some(estimate) = chirp {
+                row.extend([estimate[k].magnitude_db(), estimate[k].phase_deg()]);
+            }
+            row
+        })
+        .collect();
+    (header, rows)
 }
 
 fn bode_plot(

@@ -11,13 +11,13 @@ use std::path::PathBuf;
 use clap::Args;
 use serde_json::json;
 
-use crate::diagnose::candidates::{diagnose_causes, Holdout, Trial, Verdict};
+use crate::diagnose::candidates::{diagnose_causes, Diagnosis, Holdout, Trial};
 use crate::diagnose::data::MeasuredData;
-use crate::diagnose::experiment;
+use crate::diagnose::experiment::{self, Experiment};
 use crate::output;
 use crate::render::diagnosis::{
-    diagnosis_page, finite_or_null, fitted_text, flag_kinds, screening_json, screening_text,
-    tied_text, Comparison, PageSources,
+    diagnosis_page, finite_or_null, ranking_text, screening_json, screening_text, verdict_text,
+    Comparison, PageSources,
 };
 
 #[derive(Args, Clone, Debug)]
@@ -62,89 +62,38 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), String> {
         d.noise_band
     );
     print!("{}", screening_text(d.screening.as_ref()));
-    let per = |chi2: f64| chi2 / d.holdout_values as f64;
-    println!(
-        "\n{:<36} {:<16} {:>12} {:>12} {:>10}  fitted",
-        "cause", "where", "χ² fit", "χ²/value out", "ΔAICc"
-    );
-    let line = |t: &Trial| {
-        let fitted: Vec<String> = t.parameters.iter().map(fitted_text).collect();
-        println!(
-            "{:<36} {:<16} {:>12.1} {:>12.2} {:>10.1}  {}",
-            t.cause,
-            t.location,
-            t.train_chi2,
-            per(t.holdout_chi2),
-            t.aicc - d.base.aicc,
-            fitted.join(", ")
-        );
-    };
-    line(&d.base);
-    for t in &d.ranked {
-        line(t);
-    }
-    if !d.second_round.is_empty() {
-        println!(
-            "\nthe best leaves a residual above the noise; fitted together with each other candidate:"
-        );
-        for t in &d.second_round {
-            line(t);
-        }
-    }
-    if !d.inert.is_empty() {
-        println!("\ninert (cannot change the response, or failed):");
-        for t in &d.inert {
-            println!(
-                "  {} at {}{}",
-                t.cause,
-                t.location,
-                t.error.as_ref().map_or(String::new(), |e| format!(": {e}"))
-            );
-        }
-    }
-    let verdict = match (&d.verdict, d.combined.as_ref().or(d.ranked.first())) {
-        (Verdict::NoSignificantDiscrepancy, _) => {
-            "no significant discrepancy: the model as written explains the held-out data to the noise".to_string()
-        }
-        (Verdict::Explained, Some(best)) => format!(
-            "cause: {} at {} (held-out χ²/value {:.2} → {:.2}, {:+.0} %){}",
-            best.cause,
-            best.location,
-            per(d.base.holdout_chi2),
-            per(best.holdout_chi2),
-            100.0 * (best.holdout_chi2 / d.base.holdout_chi2 - 1.0),
-            tied_text(&d)
-        ),
-        (Verdict::PartlyExplained, Some(best)) => format!(
-            "partly explained by {} at {} (held-out χ²/value {:.2} → {:.2}); an unexplained \
-             residual above the noise remains",
-            best.cause,
-            best.location,
-            per(d.base.holdout_chi2),
-            per(best.holdout_chi2)
-        ),
-        (Verdict::Flagged, _) => format!(
-            "flagged ({}): the data show what no parameter of the model can produce, so no \
-             cause is named; the fits are reported with the flag{}",
-            d.screening.as_ref().map_or(String::new(), flag_kinds),
-            match d.ranked.first() {
-                Some(best) => format!(
-                    " (best fit: {} at {}, held-out χ²/value {:.2} → {:.2})",
-                    best.cause,
-                    best.location,
-                    per(d.base.holdout_chi2),
-                    per(best.holdout_chi2)
-                ),
-                None => String::new(),
-            }
-        ),
-        _ => "unexplained: the residual is above the noise and no candidate explains it".to_string(),
-    };
+    print!("{}", ranking_text(&d));
+    let verdict = verdict_text(&d);
     let comparison = Comparison::new(&experiment, &d);
     print!("{}", comparison.text());
     println!("\nverdict: {verdict}");
     std::fs::create_dir_all(&args.out_dir)
         .map_err(|e| format!("cannot create {}: {e}", args.out_dir.display()))?;
+    let summary = summary_json(args, &experiment, &d, &verdict, &comparison);
+    let path = args.out_dir.join("diagnosis.json");
+    let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
+    output::write_atomic(&path, text.as_bytes())
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    let sources = PageSources {
+        experiment: &args.experiment,
+        data: &args.data,
+        holdout: &args.holdout,
+        out_dir: &args.out_dir,
+    };
+    let html = diagnosis_page(&sources, &experiment, &d, &verdict, &comparison, path)?;
+    println!("wrote {} and its data", html.display());
+    Ok(())
+}
+
+/// `diagnosis.json`: every trial with its fitted values, the verdict, the features and the
+/// held-out residuals — the facts of the terminal text, for scripts.
+fn summary_json(
+    args: &DiagnoseArgs,
+    experiment: &Experiment,
+    d: &Diagnosis,
+    verdict: &str,
+    comparison: &Comparison,
+) -> serde_json::Value {
     let trial = |t: &Trial| {
         json!({
             "cause": t.cause, "location": t.location,
@@ -157,7 +106,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), String> {
         })
     };
     let (flags, screened) = screening_json(d.screening.as_ref());
-    let summary = json!({
+    json!({
         "experiment": experiment.title(),
         "data": args.data.display().to_string(),
         "flags": flags,
@@ -174,18 +123,5 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), String> {
         "best": comparison.best_label,
         "features": comparison.features_json(),
         "residual_rms_held_out": comparison.rms_json(),
-    });
-    let path = args.out_dir.join("diagnosis.json");
-    let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
-    output::write_atomic(&path, text.as_bytes())
-        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-    let sources = PageSources {
-        experiment: &args.experiment,
-        data: &args.data,
-        holdout: &args.holdout,
-        out_dir: &args.out_dir,
-    };
-    let html = diagnosis_page(&sources, &experiment, &d, &verdict, &comparison, path)?;
-    println!("wrote {} and its data", html.display());
-    Ok(())
+    })
 }

@@ -151,6 +151,16 @@ impl ModelArgs {
     }
 }
 
+/// A progress bar drawn with `template` (indicatif's syntax) on stderr.
+fn progress_bar(length: u64, template: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(length);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(template)
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar
+}
+
 // ------------------------------------------------------------------ quantities
 
 /// A time given with a unit (`2 s`, `500 ms`) or as plain seconds.

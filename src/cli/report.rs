@@ -26,12 +26,9 @@ pub struct ReportArgs {
 pub fn run(args: &ReportArgs) -> Result<(), String> {
     let start = Instant::now();
     let files = experiment_files(&args.experiments)?;
-    let bar = indicatif::ProgressBar::new(files.len() as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "experiments {bar:40} {pos}/{len} {msg} [{elapsed}]",
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    let bar = super::progress_bar(
+        files.len() as u64,
+        "experiments {bar:40} {pos}/{len} {msg} [{elapsed}]",
     );
     bar.tick();
     let outcomes = run_all(&files, &args.out_dir, &|name| {

@@ -7,7 +7,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
-use mech_runtime::{Method, Model, SimOptions};
+use mech_runtime::{Method, Model, SimOptions, Trajectory};
 
 use super::parse_time;
 use crate::output;
@@ -79,55 +79,26 @@ pub fn run(request: &SimulateArgs) -> Result<(), String> {
     }
     let (model, signals) = (&session.model, &session.signals);
     let t_end = parse_time("--t-end", &request.t_end)?;
-    let dt_out = match &request.dt_out {
-        Some(text) => parse_time("--dt-out", text)?,
-        None => t_end / 1000.0,
-    };
-    let method = match request.method {
-        Integrator::Dopri5 => Method::Dopri5 {
-            rtol: request.rtol,
-            atol: request.atol,
-            h_max: f64::INFINITY,
-        },
-        Integrator::Dop853 => Method::Dop853 {
-            rtol: request.rtol,
-            atol: request.atol,
-            h_max: f64::INFINITY,
-        },
-        Integrator::Rk4 => Method::Rk4 {
-            step: parse_time("--step", &request.step)?,
-        },
-        Integrator::Rosenbrock => Method::Rosenbrock {
-            rtol: request.rtol,
-            atol: request.atol,
-            h_max: f64::INFINITY,
-        },
-        Integrator::ExpRosenbrock => Method::ExpRosenbrock {
-            rtol: request.rtol,
-            atol: request.atol,
-            h_max: f64::INFINITY,
-        },
-    };
     let options = SimOptions {
         t_end,
-        output_interval: dt_out,
-        method,
+        output_interval: match &request.dt_out {
+            Some(text) => parse_time("--dt-out", text)?,
+            None => t_end / 1000.0,
+        },
+        method: method(request)?,
         ..SimOptions::default()
     };
 
     let (q0, u0) = (&state.q, &state.u);
-    let bar = indicatif::ProgressBar::new(1000);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "simulating {bar:40} {percent:>3}% t = {msg} [{elapsed} / ~{eta}]",
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    let bar = super::progress_bar(
+        1000,
+        "simulating {bar:40} {percent:>3}% t = {msg} [{elapsed} / ~{eta}]",
     );
     let mut progress = |t: f64| {
         bar.set_position((1000.0 * t / t_end) as u64);
         bar.set_message(format!("{t:.4} s"));
     };
-    let trajectory = if method.is_reduced() {
+    let trajectory = if options.method.is_reduced() {
         let independent = &state.independent;
         mech_runtime::simulate_reduced(model, q0, u0, independent, signals, &options, &mut progress)
     } else {
@@ -137,25 +108,7 @@ pub fn run(request: &SimulateArgs) -> Result<(), String> {
     let trajectory =
         trajectory.map_err(|e| format!("simulation of `{}` failed: {e}", model.name()))?;
 
-    let coordinate_names: Vec<String> = (0..model.nq())
-        .map(|i| model.coordinate_name(i).to_string())
-        .collect();
-    let output_names: Vec<String> = (0..model.noutputs())
-        .map(|i| model.output_name(i).to_string())
-        .collect();
-    let mut header = vec!["t".to_string()];
-    header.extend(coordinate_names.iter().map(|n| format!("q_{n}")));
-    header.extend(coordinate_names.iter().map(|n| format!("u_{n}")));
-    header.extend(output_names.iter().cloned());
-    let rows: Vec<Vec<f64>> = (0..trajectory.times.len())
-        .map(|k| {
-            let mut row = vec![trajectory.times[k]];
-            row.extend(&trajectory.q[k]);
-            row.extend(&trajectory.u[k]);
-            row.extend(&trajectory.outputs[k]);
-            row
-        })
-        .collect();
+    let (header, rows) = trajectory_table(model, &trajectory);
     output::write_csv(&request.out, &header, &rows)
         .map_err(|e| format!("cannot write {}: {e}", request.out.display()))?;
     println!(
@@ -164,44 +117,96 @@ pub fn run(request: &SimulateArgs) -> Result<(), String> {
         trajectory.times.len(),
         request.out.display()
     );
-
     if let Some(plot_path) = &request.plot {
-        let column = |values: &Vec<Vec<f64>>, i: usize| {
-            values.iter().map(|row| row[i]).collect::<Vec<f64>>()
-        };
-        let series = |names: &[String], values: &Vec<Vec<f64>>, prefix: &str| {
-            names
-                .iter()
-                .enumerate()
-                .map(|(i, n)| plot::Series {
-                    name: format!("{prefix}{n}"),
-                    values: column(values, i),
-                })
-                .collect::<Vec<_>>()
-        };
-        let mut panels = vec![
-            plot::Panel {
-                title: "coordinates".into(),
-                y_label: "q".into(),
-                series: series(&coordinate_names, &trajectory.q, "q_"),
-            },
-            plot::Panel {
-                title: "speeds".into(),
-                y_label: "u".into(),
-                series: series(&coordinate_names, &trajectory.u, "u_"),
-            },
-        ];
-        if !output_names.is_empty() {
-            panels.push(plot::Panel {
-                title: "outputs".into(),
-                y_label: "y".into(),
-                series: series(&output_names, &trajectory.outputs, ""),
-            });
-        }
         let title = format!("{} — {}", model.name(), path.display());
-        plot::plot_time_series(plot_path, &title, &trajectory.times, &panels)
-            .map_err(|e| format!("cannot plot: {e}"))?;
+        plot::plot_time_series(
+            plot_path,
+            &title,
+            &trajectory.times,
+            &trajectory_panels(model, &trajectory),
+        )
+        .map_err(|e| format!("cannot plot: {e}"))?;
         println!("plot written to {}", plot_path.display());
     }
     Ok(())
+}
+
+/// The integrator and its settings as `--method`, `--rtol`, `--atol` and `--step` give them.
+fn method(request: &SimulateArgs) -> Result<Method, String> {
+    let (rtol, atol, h_max) = (request.rtol, request.atol, f64::INFINITY);
+    Ok(match request.method {
+        Integrator::Dopri5 => Method::Dopri5 { rtol, atol, h_max },
+        Integrator::Dop853 => Method::Dop853 { rtol, atol, h_max },
+        Integrator::Rk4 => Method::Rk4 {
+            step: parse_time("--step", &request.step)?,
+        },
+        Integrator::Rosenbrock => Method::Rosenbrock { rtol, atol, h_max },
+        Integrator::ExpRosenbrock => Method::ExpRosenbrock { rtol, atol, h_max },
+    })
+}
+
+fn coordinate_names(model: &dyn Model) -> Vec<String> {
+    (0..model.nq())
+        .map(|i| model.coordinate_name(i).to_string())
+        .collect()
+}
+
+fn output_names(model: &dyn Model) -> Vec<String> {
+    (0..model.noutputs())
+        .map(|i| model.output_name(i).to_string())
+        .collect()
+}
+
+/// The CSV of a run: `t`, `q_NAME`…, `u_NAME`…, the outputs; one row per sample.
+fn trajectory_table(model: &dyn Model, trajectory: &Trajectory) -> (Vec<String>, Vec<Vec<f64>>) {
+    let coordinates = coordinate_names(model);
+    let mut header = vec!["t".to_string()];
+    header.extend(coordinates.iter().map(|n| format!("q_{n}")));
+    header.extend(coordinates.iter().map(|n| format!("u_{n}")));
+    header.extend(output_names(model));
+    let rows = (0..trajectory.times.len())
+        .map(|k| {
+            let mut row = vec![trajectory.times[k]];
+            row.extend(&trajectory.q[k]);
+            row.extend(&trajectory.u[k]);
+            row.extend(&trajectory.outputs[k]);
+            row
+        })
+        .collect();
+    (header, rows)
+}
+
+/// One panel each for the coordinates, the speeds and (if any) the outputs.
+fn trajectory_panels(model: &dyn Model, trajectory: &Trajectory) -> Vec<plot::Panel> {
+    let series = |names: &[String], values: &[Vec<f64>], prefix: &str| {
+        names
+            .iter()
+            .enumerate()
+            .map(|(i, n)| plot::Series {
+                name: format!("{prefix}{n}"),
+                values: values.iter().map(|row| row[i]).collect(),
+            })
+            .collect::<Vec<_>>()
+    };
+    let (coordinates, outputs) = (coordinate_names(model), output_names(model));
+    let mut panels = vec![
+        plot::Panel {
+            title: "coordinates".into(),
+            y_label: "q".into(),
+            series: series(&coordinates, &trajectory.q, "q_"),
+        },
+        plot::Panel {
+            title: "speeds".into(),
+            y_label: "u".into(),
+            series: series(&coordinates, &trajectory.u, "u_"),
+        },
+    ];
+    if !outputs.is_empty() {
+        panels.push(plot::Panel {
+            title: "outputs".into(),
+            y_label: "y".into(),
+            series: series(&outputs, &trajectory.outputs, ""),
+        });
+    }
+    panels
 }

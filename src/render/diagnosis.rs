@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use serde_json::json;
 
-use crate::diagnose::candidates::Diagnosis;
+use crate::diagnose::candidates::{Diagnosis, Trial, Verdict};
 use crate::diagnose::experiment::{Experiment, Observations};
 use crate::diagnose::features::{features, series_rms, Feature, SeriesResidual};
 use crate::diagnose::pendulum::Screening;
@@ -100,6 +100,94 @@ pub fn overlay_plots(
         paths.push(path);
     }
     Ok(paths)
+}
+
+/// The ranking as terminal text: the base model, the candidates best first, the second
+/// round and the inert candidates, each with its χ² and fitted values.
+pub fn ranking_text(d: &Diagnosis) -> String {
+    let per = |chi2: f64| chi2 / d.holdout_values as f64;
+    let mut text = format!(
+        "\n{:<36} {:<16} {:>12} {:>12} {:>10}  fitted\n",
+        "cause", "where", "χ² fit", "χ²/value out", "ΔAICc"
+    );
+    let line = |t: &Trial| {
+        let fitted: Vec<String> = t.parameters.iter().map(fitted_text).collect();
+        format!(
+            "{:<36} {:<16} {:>12.1} {:>12.2} {:>10.1}  {}\n",
+            t.cause,
+            t.location,
+            t.train_chi2,
+            per(t.holdout_chi2),
+            t.aicc - d.base.aicc,
+            fitted.join(", ")
+        )
+    };
+    text += &line(&d.base);
+    for t in &d.ranked {
+        text += &line(t);
+    }
+    if !d.second_round.is_empty() {
+        text += "\nthe best leaves a residual above the noise; fitted together with each other \
+                 candidate:\n";
+        for t in &d.second_round {
+            text += &line(t);
+        }
+    }
+    if !d.inert.is_empty() {
+        text += "\ninert (cannot change the response, or failed):\n";
+        for t in &d.inert {
+            text += &format!(
+                "  {} at {}{}\n",
+                t.cause,
+                t.location,
+                t.error.as_ref().map_or(String::new(), |e| format!(": {e}"))
+            );
+        }
+    }
+    text
+}
+
+/// The verdict in one sentence: the cause with its held-out gain, a tie, a flag, or none.
+pub fn verdict_text(d: &Diagnosis) -> String {
+    let per = |chi2: f64| chi2 / d.holdout_values as f64;
+    match (&d.verdict, d.combined.as_ref().or(d.ranked.first())) {
+        (Verdict::NoSignificantDiscrepancy, _) => {
+            "no significant discrepancy: the model as written explains the held-out data to the noise".to_string()
+        }
+        (Verdict::Explained, Some(best)) => format!(
+            "cause: {} at {} (held-out χ²/value {:.2} → {:.2}, {:+.0} %){}",
+            best.cause,
+            best.location,
+            per(d.base.holdout_chi2),
+            per(best.holdout_chi2),
+            100.0 * (best.holdout_chi2 / d.base.holdout_chi2 - 1.0),
+            tied_text(d)
+        ),
+        (Verdict::PartlyExplained, Some(best)) => format!(
+            "partly explained by {} at {} (held-out χ²/value {:.2} → {:.2}); an unexplained \
+             residual above the noise remains",
+            best.cause,
+            best.location,
+            per(d.base.holdout_chi2),
+            per(best.holdout_chi2)
+        ),
+        (Verdict::Flagged, _) => format!(
+            "flagged ({}): the data show what no parameter of the model can produce, so no \
+             cause is named; the fits are reported with the flag{}",
+            d.screening.as_ref().map_or(String::new(), flag_kinds),
+            match d.ranked.first() {
+                Some(best) => format!(
+                    " (best fit: {} at {}, held-out χ²/value {:.2} → {:.2})",
+                    best.cause,
+                    best.location,
+                    per(d.base.holdout_chi2),
+                    per(best.holdout_chi2)
+                ),
+                None => String::new(),
+            }
+        ),
+        _ => "unexplained: the residual is above the noise and no candidate explains it".to_string(),
+    }
 }
 
 /// `NAME = value ± σ (nominal …)` for a fitted parameter of a trial.
