@@ -10,6 +10,7 @@ use serde::Deserialize;
 use super::leg::Leg;
 use super::{csv, ModelSpec, Outcome, Table};
 use crate::frequency::{self, ChirpSweep, Point};
+use mech_runtime::Mode;
 use crate::parallel::{parallel, threads};
 use crate::quantity::{positive, quantity};
 use crate::render::plot;
@@ -62,6 +63,18 @@ pub struct Chirp {
 }
 
 impl Chirp {
+    /// Amplitude (V), duration (s) and the lowest frequency analysed (Hz, default 5 Hz).
+    fn settings(&self) -> Result<(f64, f64, f64), String> {
+        Ok((
+            positive("chirp.amplitude", &self.amplitude, Dimension::VOLTAGE)?,
+            positive("chirp.duration", &self.duration, Dimension::TIME)?,
+            match &self.analysis_from {
+                Some(t) => positive("chirp.analysis_from", t, Dimension::FREQUENCY)?,
+                None => 5.0,
+            },
+        ))
+    }
+
     pub fn cost(&self) -> f64 {
         quantity("chirp.duration", &self.duration, Dimension::TIME).unwrap_or(1.0) * 5.0
     }
@@ -93,7 +106,21 @@ fn q_text(q: Option<f64>) -> String {
     q.map_or("n/a".into(), |q| format!("{q:.1}"))
 }
 
-pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
+/// The responses of the model: its modes at rest and, per channel, `H(f)` from the linear
+/// model (hysteretic and viscous losses) and from the chirp simulation if asked for.
+pub struct Responses {
+    pub model_name: String,
+    pub from: f64,
+    pub to: f64,
+    pub frequencies: Vec<f64>,
+    pub modes: Vec<Mode>,
+    /// Per channel of the spec: (source, response) pairs.
+    pub channels: Vec<Vec<(&'static str, Vec<Point>)>>,
+}
+
+/// Linearizes the leg at rest and computes every channel's responses (chirps in parallel,
+/// one per channel).
+pub fn compute(spec: &Spec) -> Result<Responses, String> {
     let from = positive("from", &spec.from, Dimension::FREQUENCY)?;
     let to = positive("to", &spec.to, Dimension::FREQUENCY)?;
     let model_spec = ModelSpec {
@@ -111,87 +138,21 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
         .modes()
         .ok_or("the reduced mass matrix is not positive definite")?;
     let frequencies = frequency::log_space(from, to, spec.points);
-    let name = model.name().to_string();
-
-    let mut outcome = Outcome {
-        method: format!(
-            "Linearized about the rest equilibrium under gravity (minimal coordinates: the \
-             actuators), H = foot displacement / drive voltage, {from}–{to} Hz: with the \
-             flexure losses as complex stiffness k(1 + iη) (exact at every frequency) and as \
-             the time-domain viscous dampers b = kη/ω_ref (ω_ref = 2π·40 Hz). {}",
-            match &spec.chirp {
-                Some(c) => format!(
-                    "Chirp: the nonlinear model simulated (DOPRI5) from rest under a linear chirp \
-                     of {} from {from} to {to} Hz over {}, one input at a time; H estimated by \
-                     single-bin Fourier transforms of the whole record (rectangular window; viscous \
-                     losses, as in the time domain). Magnitudes in dB re 1 µm/V.",
-                    c.amplitude, c.duration
-                ),
-                None => "Magnitudes in dB re 1 µm/V.".into(),
+    let indices = spec
+        .channel
+        .iter()
+        .map(|channel| {
+            let input = leg.session.input_index(&channel.input);
+            let output = leg.session.output_index(&channel.output);
+            match (input, output) {
+                (Ok(input), Ok(output)) => Ok((input, output)),
+                (Err(e), _) | (_, Err(e)) => Err(format!("channel `{}`: {e}", channel.name)),
             }
-        ),
-        ..Outcome::default()
-    };
-    let mut modes_table = Table::new(
-        &format!("{name}: normal modes of the linearized model"),
-        &[
-            "mode",
-            "f [Hz]",
-            "ζ (viscous)",
-            "Q ≈ 1/(2ζ)",
-            "shape (qsact, qlact)",
-        ],
-    );
-    for (k, mode) in modes.iter().enumerate() {
-        modes_table.row(vec![
-            format!("{}", k + 1),
-            format!("{:.1}", mode.frequency_hz()),
-            format!("{:.4}", mode.damping_ratio),
-            format!("{:.1}", 1.0 / (2.0 * mode.damping_ratio)),
-            format!(
-                "[{}]",
-                mode.shape
-                    .iter()
-                    .map(|x| format!("{x:+.3}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        ]);
-        outcome
-            .values
-            .insert(format!("mode{}_hz", k + 1), mode.frequency_hz());
-    }
-
-    // Chirps in parallel, one per channel.
-    let chirp = match &spec.chirp {
-        Some(c) => Some((
-            positive("chirp.amplitude", &c.amplitude, Dimension::VOLTAGE)?,
-            positive("chirp.duration", &c.duration, Dimension::TIME)?,
-            match &c.analysis_from {
-                Some(t) => positive("chirp.analysis_from", t, Dimension::FREQUENCY)?,
-                None => 5.0,
-            },
-        )),
-        None => None,
-    };
-    let mut indices = Vec::new();
-    for channel in &spec.channel {
-        let input = model.input_index(&channel.input).ok_or_else(|| {
-            format!(
-                "channel `{}`: unknown input `{}`",
-                channel.name, channel.input
-            )
-        })?;
-        let output = model.output_index(&channel.output).ok_or_else(|| {
-            format!(
-                "channel `{}`: unknown output `{}`",
-                channel.name, channel.output
-            )
-        })?;
-        indices.push((input, output));
-    }
-    let estimates = match chirp {
-        Some((amplitude, duration, analysis_from)) => {
+        })
+        .collect::<Result<Vec<_>, String>>()?;
+    let estimates = match &spec.chirp {
+        Some(chirp) => {
+            let (amplitude, duration, analysis_from) = chirp.settings()?;
             parallel(indices.clone(), threads(), |(input, output)| {
                 let leg = Leg::open(&model_spec)?;
                 let sweep = ChirpSweep {
@@ -227,7 +188,49 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
         }
         None => vec![None; spec.channel.len()],
     };
+    let mut channels = Vec::new();
+    for (&(input, output), estimate) in indices.iter().zip(estimates) {
+        let linear_response = |damping| {
+            frequency::linear_response(&linear, input, output, &frequencies, damping)
+                .ok_or("the linear model is singular at some frequency")
+        };
+        let mut sources: Vec<(&'static str, Vec<Point>)> = vec![
+            (
+                "linear, hysteretic",
+                linear_response(mech_runtime::FlexureDamping::Hysteretic)?,
+            ),
+            (
+                "linear, viscous",
+                linear_response(mech_runtime::FlexureDamping::Viscous)?,
+            ),
+        ];
+        if let Some(e) = estimate {
+            sources.push(("chirp simulation", e));
+        }
+        channels.push(sources);
+    }
+    Ok(Responses {
+        model_name: model.name().to_string(),
+        from,
+        to,
+        frequencies,
+        modes,
+        channels,
+    })
+}
 
+pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
+    let responses = compute(spec)?;
+    let (from, to, name) = (responses.from, responses.to, &responses.model_name);
+    let mut outcome = Outcome {
+        method: method_text(spec, from, to),
+        ..Outcome::default()
+    };
+    for (k, mode) in responses.modes.iter().enumerate() {
+        outcome
+            .values
+            .insert(format!("mode{}_hz", k + 1), mode.frequency_hz());
+    }
     let mut table = Table::new(
         &format!("{name}: resonances and quality factors, {from}–{to} Hz"),
         &[
@@ -239,31 +242,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
             "lowest-f gain [µm/V]",
         ],
     );
-    for ((channel, &(input, output)), estimate) in spec.channel.iter().zip(&indices).zip(estimates)
-    {
-        let hysteretic = frequency::linear_response(
-            &linear,
-            input,
-            output,
-            &frequencies,
-            mech_runtime::FlexureDamping::Hysteretic,
-        )
-        .ok_or("the linear model is singular at some frequency")?;
-        let viscous = frequency::linear_response(
-            &linear,
-            input,
-            output,
-            &frequencies,
-            mech_runtime::FlexureDamping::Viscous,
-        )
-        .ok_or("the linear model is singular at some frequency")?;
-        let mut sources: Vec<(&str, Vec<Point>)> = vec![
-            ("linear, hysteretic", hysteretic),
-            ("linear, viscous", viscous),
-        ];
-        if let Some(e) = estimate {
-            sources.push(("chirp simulation", e));
-        }
+    for (channel, sources) in spec.channel.iter().zip(&responses.channels) {
         for (k, (source, response)) in sources.iter().enumerate() {
             let peak = frequency::resonances(response).into_iter().next();
             let low = response
@@ -292,59 +271,114 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
                 format!("{:.2}", low * 1e6),
             ]);
         }
-        let db = |p: &Point| 20.0 * (p.gain.norm() * 1e6).log10();
-        let f: Vec<f64> = frequencies.clone();
-        let magnitude: Vec<(String, Vec<f64>, Vec<f64>)> = sources
-            .iter()
-            .map(|(s, r)| (s.to_string(), f.clone(), r.iter().map(db).collect()))
-            .collect();
-        let phase: Vec<(String, Vec<f64>, Vec<f64>)> = sources
-            .iter()
-            .map(|(s, r)| {
-                (
-                    s.to_string(),
-                    f.clone(),
-                    r.iter().map(Point::phase_deg).collect(),
-                )
-            })
-            .collect();
-        let rows: Vec<Vec<f64>> = (0..f.len())
-            .map(|k| {
-                let mut row = vec![f[k]];
-                for (_, r) in &sources {
-                    row.extend([r[k].gain.norm(), r[k].phase_deg()]);
-                }
-                row
-            })
-            .collect();
-        let mut header = vec!["frequency_hz".to_string()];
-        for (s, _) in &sources {
-            let s = s.replace([',', ' '], "_").replace("__", "_");
-            header.extend([format!("{s}_magnitude_m_per_v"), format!("{s}_phase_deg")]);
-        }
-        let header: Vec<&str> = header.iter().map(String::as_str).collect();
-        csv(
-            &mut outcome,
-            dir,
-            &format!("bode_{}.csv", channel.name),
-            &header,
-            &rows,
-        )?;
-        let path = dir.join(format!("bode_{}.svg", channel.name));
-        plot::plot_bode(
-            &path,
-            &format!(
-                "{name}: {} → {} (dB re 1 µm/V)",
-                channel.input, channel.output
-            ),
-            &magnitude,
-            &phase,
-        )
-        .map_err(|e| e.to_string())?;
-        outcome.plots.push(path);
+        write_channel(&mut outcome, dir, name, channel, &responses.frequencies, sources)?;
     }
     outcome.tables.push(table);
-    outcome.tables.push(modes_table);
+    outcome.tables.push(modes_table(name, &responses.modes));
     outcome.notes = spec.notes.clone();
     Ok(outcome)
+}
+
+fn method_text(spec: &Spec, from: f64, to: f64) -> String {
+    format!(
+        "Linearized about the rest equilibrium under gravity (minimal coordinates: the \
+         actuators), H = foot displacement / drive voltage, {from}–{to} Hz: with the \
+         flexure losses as complex stiffness k(1 + iη) (exact at every frequency) and as \
+         the time-domain viscous dampers b = kη/ω_ref (ω_ref = 2π·40 Hz). {}",
+        match &spec.chirp {
+            Some(c) => format!(
+                "Chirp: the nonlinear model simulated (DOPRI5) from rest under a linear chirp \
+                 of {} from {from} to {to} Hz over {}, one input at a time; H estimated by \
+                 single-bin Fourier transforms of the whole record (rectangular window; viscous \
+                 losses, as in the time domain). Magnitudes in dB re 1 µm/V.",
+                c.amplitude, c.duration
+            ),
+            None => "Magnitudes in dB re 1 µm/V.".into(),
+        }
+    )
+}
+
+fn modes_table(name: &str, modes: &[Mode]) -> Table {
+    let mut table = Table::new(
+        &format!("{name}: normal modes of the linearized model"),
+        &[
+            "mode",
+            "f [Hz]",
+            "ζ (viscous)",
+            "Q ≈ 1/(2ζ)",
+            "shape (qsact, qlact)",
+        ],
+    );
+    for (k, mode) in modes.iter().enumerate() {
+        table.row(vec![
+            format!("{}", k + 1),
+            format!("{:.1}", mode.frequency_hz()),
+            format!("{:.4}", mode.damping_ratio),
+            format!("{:.1}", 1.0 / (2.0 * mode.damping_ratio)),
+            format!(
+                "[{}]",
+                mode.shape
+                    .iter()
+                    .map(|x| format!("{x:+.3}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        ]);
+    }
+    table
+}
+
+/// `bode_NAME.csv` (magnitude in m/V, phase) and `bode_NAME.svg` (dB re 1 µm/V) of one
+/// channel, every source side by side.
+fn write_channel(
+    outcome: &mut Outcome,
+    dir: &Path,
+    name: &str,
+    channel: &Channel,
+    frequencies: &[f64],
+    sources: &[(&str, Vec<Point>)],
+) -> Result<(), String> {
+    let db = |p: &Point| 20.0 * (p.gain.norm() * 1e6).log10();
+    let curves = |value: &dyn Fn(&Point) -> f64| -> Vec<(String, Vec<f64>, Vec<f64>)> {
+        sources
+            .iter()
+            .map(|(s, r)| (s.to_string(), frequencies.to_vec(), r.iter().map(value).collect()))
+            .collect()
+    };
+    let (magnitude, phase) = (curves(&db), curves(&Point::phase_deg));
+    let rows: Vec<Vec<f64>> = (0..frequencies.len())
+        .map(|k| {
+            let mut row = vec![frequencies[k]];
+            for (_, r) in sources {
+                row.extend([r[k].gain.norm(), r[k].phase_deg()]);
+            }
+            row
+        })
+        .collect();
+    let mut header = vec!["frequency_hz".to_string()];
+    for (s, _) in sources {
+        let s = s.replace([',', ' '], "_").replace("__", "_");
+        header.extend([format!("{s}_magnitude_m_per_v"), format!("{s}_phase_deg")]);
+    }
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
+    csv(
+        outcome,
+        dir,
+        &format!("bode_{}.csv", channel.name),
+        &header,
+        &rows,
+    )?;
+    let path = dir.join(format!("bode_{}.svg", channel.name));
+    plot::plot_bode(
+        &path,
+        &format!(
+            "{name}: {} → {} (dB re 1 µm/V)",
+            channel.input, channel.output
+        ),
+        &magnitude,
+        &phase,
+    )
+    .map_err(|e| e.to_string())?;
+    outcome.plots.push(path);
+    Ok(())
 }

@@ -213,10 +213,18 @@ fn keys(series: &[Series]) -> Vec<String> {
     keys
 }
 
-pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
+/// The sweep's results: per series its points (sorted by ratio, the chosen design among
+/// them), and the points left out because their equilibrium did not converge.
+pub struct Sweep {
+    pub voltage: f64,
+    pub curves: Vec<Vec<SweepPoint>>,
+    pub failed: Vec<String>,
+}
+
+/// Runs every (series, arm) point on all cores. The model is compiled per point
+/// (milliseconds), so that the points are independent.
+pub fn compute(spec: &Spec) -> Result<Sweep, String> {
     let voltage = positive("voltage", &spec.voltage, Dimension::VOLTAGE)?;
-    // Every (series, arm) pair is one job: the model is compiled per point (milliseconds),
-    // so that the points are independent and run on all cores.
     let mut jobs = Vec::new();
     for (k, series) in spec.series.iter().enumerate() {
         let (low, high) = series.arm_range(k)?;
@@ -230,7 +238,6 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
     let results = parallel(jobs, threads(), |(k, arm)| {
         (k, arm, sweep_point(&spec.series[k], voltage, arm))
     });
-    let keys = keys(&spec.series);
     let mut curves: Vec<Vec<SweepPoint>> = vec![Vec::new(); spec.series.len()];
     let mut failed: Vec<String> = Vec::new();
     for (k, arm, result) in results {
@@ -256,29 +263,21 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
     for curve in &mut curves {
         curve.sort_by(|a, b| a.ratio.total_cmp(&b.ratio));
     }
+    Ok(Sweep {
+        voltage,
+        curves,
+        failed,
+    })
+}
 
+pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
+    let sweep = compute(spec)?;
+    let voltage = sweep.voltage;
+    let keys = keys(&spec.series);
     let mut outcome = Outcome {
-        method: format!(
-            "For each curve, the model's crank arm ({} for lift, {} for swing; the crank-slider \
-             moves with the arm's input hinge, P and the leg stay, see the model headers) at {} \
-             values evenly spaced in 1/arm, plus the model's own arm (the chosen design, ★). At \
-             each arm: the transmission ratio T from the model's kinematics, foot displacement \
-             per actuator displacement at the zero configuration (lift: foot {}, the paper's \
-             T_l = s_o/l_i; swing: foot {}, T_s = s_o/s_i), and at {voltage} V the blocked \
-             force F and free deflection d along that axis, by the procedure of experiments 2 \
-             and 4 (foot held at its rest position along the axis by a frictionless sensor; \
-             free foot), F·d and F·d/(F_b δ_f) with the model's actuator. The geometric \
-             lever/arm uses the series' output lever (lift: l_o, the paper's T_l* = l_o/l_i; \
-             swing: s_o).",
-            Dof::Lift.arm(),
-            Dof::Swing.arm(),
-            spec.points,
-            AXES[Dof::Lift.axis()],
-            AXES[Dof::Swing.axis()],
-        ),
+        method: method_text(spec, voltage),
         ..Outcome::default()
     };
-
     let mut chosen_table = Table::new(
         "Chosen designs (the stars of Fig. 8): the models at their own crank arms",
         &[
@@ -296,62 +295,15 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
             "F·d/(F_b δ_f)",
         ],
     );
-    let mut plot_curves = Vec::new();
-    let mut styles = Vec::new();
-    let mut stars = Vec::new();
-    let mut robots: Vec<&str> = Vec::new();
-    let mut observations = Vec::new();
-    for (k, (series, curve)) in spec.series.iter().zip(&curves).enumerate() {
+    let mut figure = Figure::default();
+    for (k, (series, curve)) in spec.series.iter().zip(&sweep.curves).enumerate() {
         let key = &keys[k];
         let lever = series.lever(k)?;
-        let geometric = |p: &SweepPoint| lever.map_or(f64::NAN, |l| l / p.arm);
-        let show_geometric = |p: &SweepPoint| {
-            let g = geometric(p);
-            if g.is_finite() {
-                format!("{g:.2}")
-            } else {
-                "–".into()
-            }
-        };
         let chosen = curve
             .iter()
             .find(|p| p.chosen)
             .copied()
             .ok_or("the chosen design is missing")?;
-        let mut table = Table::new(
-            &format!(
-                "{} ({}): work at the foot against the {} ratio",
-                series.label(),
-                series.actuator,
-                series.dof.name()
-            ),
-            &[
-                "arm [mm]",
-                "T (kinematic)",
-                "T at rest",
-                "lever/arm",
-                "F [mN]",
-                "F·T [mN]",
-                "d [mm]",
-                "F·d [µJ]",
-                "F·d/(F_b δ_f)",
-                "",
-            ],
-        );
-        for p in curve {
-            table.row(vec![
-                format!("{:.3}", p.arm * 1e3),
-                format!("{:.2}", p.ratio),
-                format!("{:.2}", p.ratio_rest),
-                show_geometric(p),
-                format!("{:.2}", p.blocked_force * 1e3),
-                format!("{:.0}", p.blocked_force * p.ratio * 1e3),
-                format!("{:.3}", p.free_deflection * 1e3),
-                format!("{:.1}", p.work * 1e6),
-                format!("{:.3}", p.normalized),
-                if p.chosen { "★ chosen" } else { "" }.into(),
-            ]);
-        }
         chosen_table.row(vec![
             series.name.clone(),
             series.actuator.clone(),
@@ -360,7 +312,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
             format!("{:.2}", chosen.ratio),
             format!("{:.2}", chosen.ratio_rest),
             series.paper_ratio.map_or("–".into(), |r| format!("{r}")),
-            show_geometric(&chosen),
+            lever_text(lever, &chosen),
             format!("{:.2}", chosen.blocked_force * 1e3),
             format!("{:.3}", chosen.free_deflection * 1e3),
             format!("{:.1}", chosen.work * 1e6),
@@ -381,68 +333,10 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
         outcome
             .values
             .insert(format!("{key}_points"), curve.len() as f64);
-        observations.push(observe(series, curve));
-
-        let rows: Vec<Vec<f64>> = curve
-            .iter()
-            .map(|p| {
-                vec![
-                    p.arm,
-                    p.ratio,
-                    p.ratio_y,
-                    p.ratio_rest,
-                    geometric(p),
-                    p.blocked_force,
-                    p.free_deflection,
-                    p.work,
-                    p.normalized,
-                    if p.chosen { 1.0 } else { 0.0 },
-                ]
-            })
-            .collect();
-        csv(
-            &mut outcome,
-            dir,
-            &format!("{key}.csv"),
-            &[
-                "arm",
-                "ratio",
-                "ratio_y",
-                "ratio_rest",
-                "lever_over_arm",
-                "blocked_force",
-                "free_deflection",
-                "work",
-                "normalized",
-                "chosen",
-            ],
-            &rows,
-        )?;
-        outcome.tables.push(table);
-
-        // Fig. 8's conventions: one colour per robot (cyan first, then blue), lift dashed.
-        let robot = robots
-            .iter()
-            .position(|r| *r == series.name)
-            .unwrap_or_else(|| {
-                robots.push(&series.name);
-                robots.len() - 1
-            });
-        const COLOURS: [usize; 10] = [9, 0, 1, 2, 3, 4, 5, 6, 7, 8];
-        styles.push(CurveStyle {
-            color: COLOURS[robot % COLOURS.len()],
-            dashed: series.dof == Dof::Lift,
-        });
-        stars.push(Star {
-            curve: k,
-            x: chosen.ratio,
-            y: chosen.work * 1e6,
-        });
-        plot_curves.push((
-            format!("{} ({})", series.label(), series.actuator),
-            curve.iter().map(|p| p.ratio).collect(),
-            curve.iter().map(|p| p.work * 1e6).collect(),
-        ));
+        outcome.notes.push(observe(series, curve));
+        write_curve(&mut outcome, dir, key, lever, curve)?;
+        outcome.tables.push(curve_table(series, lever, curve));
+        figure.add(k, series, curve, &chosen);
     }
     outcome.tables.insert(0, chosen_table);
     let path = dir.join("ratio_sweep.svg");
@@ -451,21 +345,178 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
         &format!("Work done by the foot (F·d) against the transmission ratio at {voltage} V"),
         "transmission ratio T (foot per actuator displacement; lift: z, swing: x)",
         "F·d [µJ]",
-        &plot_curves,
-        &styles,
-        &stars,
+        &figure.curves,
+        &figure.styles,
+        &figure.stars,
     )
     .map_err(|e| e.to_string())?;
     outcome.plots.push(path);
-    outcome.notes = spec.notes.clone();
+    // The file's notes first, then what each curve shows.
+    let observations = std::mem::replace(&mut outcome.notes, spec.notes.clone());
     outcome.notes.extend(observations);
-    if !failed.is_empty() {
+    if !sweep.failed.is_empty() {
         outcome.notes.push(format!(
             "Left out (no converged equilibrium): {}",
-            failed.join("; ")
+            sweep.failed.join("; ")
         ));
     }
     Ok(outcome)
+}
+
+fn method_text(spec: &Spec, voltage: f64) -> String {
+    format!(
+        "For each curve, the model's crank arm ({} for lift, {} for swing; the crank-slider \
+         moves with the arm's input hinge, P and the leg stay, see the model headers) at {} \
+         values evenly spaced in 1/arm, plus the model's own arm (the chosen design, ★). At \
+         each arm: the transmission ratio T from the model's kinematics, foot displacement \
+         per actuator displacement at the zero configuration (lift: foot {}, the paper's \
+         T_l = s_o/l_i; swing: foot {}, T_s = s_o/s_i), and at {voltage} V the blocked \
+         force F and free deflection d along that axis, by the procedure of experiments 2 \
+         and 4 (foot held at its rest position along the axis by a frictionless sensor; \
+         free foot), F·d and F·d/(F_b δ_f) with the model's actuator. The geometric \
+         lever/arm uses the series' output lever (lift: l_o, the paper's T_l* = l_o/l_i; \
+         swing: s_o).",
+        Dof::Lift.arm(),
+        Dof::Swing.arm(),
+        spec.points,
+        AXES[Dof::Lift.axis()],
+        AXES[Dof::Swing.axis()],
+    )
+}
+
+/// The geometric ratio lever/arm at `point` (NaN without a lever).
+fn geometric_ratio(lever: Option<f64>, point: &SweepPoint) -> f64 {
+    lever.map_or(f64::NAN, |l| l / point.arm)
+}
+
+fn lever_text(lever: Option<f64>, point: &SweepPoint) -> String {
+    let ratio = geometric_ratio(lever, point);
+    if ratio.is_finite() {
+        format!("{ratio:.2}")
+    } else {
+        "–".into()
+    }
+}
+
+/// One curve's points as a table, the chosen design starred.
+fn curve_table(series: &Series, lever: Option<f64>, curve: &[SweepPoint]) -> Table {
+    let mut table = Table::new(
+        &format!(
+            "{} ({}): work at the foot against the {} ratio",
+            series.label(),
+            series.actuator,
+            series.dof.name()
+        ),
+        &[
+            "arm [mm]",
+            "T (kinematic)",
+            "T at rest",
+            "lever/arm",
+            "F [mN]",
+            "F·T [mN]",
+            "d [mm]",
+            "F·d [µJ]",
+            "F·d/(F_b δ_f)",
+            "",
+        ],
+    );
+    for p in curve {
+        table.row(vec![
+            format!("{:.3}", p.arm * 1e3),
+            format!("{:.2}", p.ratio),
+            format!("{:.2}", p.ratio_rest),
+            lever_text(lever, p),
+            format!("{:.2}", p.blocked_force * 1e3),
+            format!("{:.0}", p.blocked_force * p.ratio * 1e3),
+            format!("{:.3}", p.free_deflection * 1e3),
+            format!("{:.1}", p.work * 1e6),
+            format!("{:.3}", p.normalized),
+            if p.chosen { "★ chosen" } else { "" }.into(),
+        ]);
+    }
+    table
+}
+
+/// `KEY.csv`: one row per point, SI units.
+fn write_curve(
+    outcome: &mut Outcome,
+    dir: &Path,
+    key: &str,
+    lever: Option<f64>,
+    curve: &[SweepPoint],
+) -> Result<(), String> {
+    let rows: Vec<Vec<f64>> = curve
+        .iter()
+        .map(|p| {
+            vec![
+                p.arm,
+                p.ratio,
+                p.ratio_y,
+                p.ratio_rest,
+                geometric_ratio(lever, p),
+                p.blocked_force,
+                p.free_deflection,
+                p.work,
+                p.normalized,
+                if p.chosen { 1.0 } else { 0.0 },
+            ]
+        })
+        .collect();
+    csv(
+        outcome,
+        dir,
+        &format!("{key}.csv"),
+        &[
+            "arm",
+            "ratio",
+            "ratio_y",
+            "ratio_rest",
+            "lever_over_arm",
+            "blocked_force",
+            "free_deflection",
+            "work",
+            "normalized",
+            "chosen",
+        ],
+        &rows,
+    )
+}
+
+/// Fig. 8: work against ratio, one colour per robot (cyan first, then blue), lift dashed,
+/// the chosen designs starred.
+#[derive(Default)]
+struct Figure {
+    curves: Vec<(String, Vec<f64>, Vec<f64>)>,
+    styles: Vec<CurveStyle>,
+    stars: Vec<Star>,
+    robots: Vec<String>,
+}
+
+impl Figure {
+    fn add(&mut self, index: usize, series: &Series, curve: &[SweepPoint], chosen: &SweepPoint) {
+        let robot = match self.robots.iter().position(|r| *r == series.name) {
+            Some(robot) => robot,
+            None => {
+                self.robots.push(series.name.clone());
+                self.robots.len() - 1
+            }
+        };
+        const COLOURS: [usize; 10] = [9, 0, 1, 2, 3, 4, 5, 6, 7, 8];
+        self.styles.push(CurveStyle {
+            color: COLOURS[robot % COLOURS.len()],
+            dashed: series.dof == Dof::Lift,
+        });
+        self.stars.push(Star {
+            curve: index,
+            x: chosen.ratio,
+            y: chosen.work * 1e6,
+        });
+        self.curves.push((
+            format!("{} ({})", series.label(), series.actuator),
+            curve.iter().map(|p| p.ratio).collect(),
+            curve.iter().map(|p| p.work * 1e6).collect(),
+        ));
+    }
 }
 
 /// What one curve shows, in the paper's terms: does the work fall as T rises; how far the
