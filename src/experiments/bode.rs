@@ -10,10 +10,10 @@ use serde::Deserialize;
 use super::leg::Leg;
 use super::{csv, ModelSpec, Outcome, Table};
 use crate::frequency::{self, ChirpSweep, Point};
-use mech_runtime::Mode;
 use crate::parallel::{parallel, threads};
 use crate::quantity::{positive, quantity};
 use crate::render::plot;
+use mech_runtime::Mode;
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -271,7 +271,14 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
                 format!("{:.2}", low * 1e6),
             ]);
         }
-        write_channel(&mut outcome, dir, name, channel, &responses.frequencies, sources)?;
+        write_channel(
+            &mut outcome,
+            dir,
+            name,
+            channel,
+            &responses.frequencies,
+            sources,
+        )?;
     }
     outcome.tables.push(table);
     outcome.tables.push(modes_table(name, &responses.modes));
@@ -342,7 +349,13 @@ fn write_channel(
     let curves = |value: &dyn Fn(&Point) -> f64| -> Vec<(String, Vec<f64>, Vec<f64>)> {
         sources
             .iter()
-            .map(|(s, r)| (s.to_string(), frequencies.to_vec(), r.iter().map(value).collect()))
+            .map(|(s, r)| {
+                (
+                    s.to_string(),
+                    frequencies.to_vec(),
+                    r.iter().map(value).collect(),
+                )
+            })
             .collect()
     };
     let (magnitude, phase) = (curves(&db), curves(&Point::phase_deg));

@@ -9,7 +9,7 @@ use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
 use super::force::{actuator_work, check_paper, PaperRow};
-use super::leg::{force_deflection, Dof, Leg, Sensor};
+use super::leg::{force_deflection, Dof, ForceDeflection, Leg, Sensor};
 use super::{csv, ModelSpec, Outcome, Table};
 use crate::parallel::parallel;
 use crate::quantity::positive;
@@ -58,8 +58,49 @@ impl Spec {
     }
 }
 
+/// One robot's force/deflection tests, lift then swing, and its actuator's F_b·δ_f.
+pub struct RobotTests {
+    pub actuator_work: f64,
+    pub tests: [ForceDeflection; 2],
+}
+
+/// Runs each robot's lift and swing tests at `voltage` (one robot per thread).
+pub fn compute(spec: &Spec, voltage: f64) -> Result<Vec<RobotTests>, String> {
+    let results = parallel(
+        spec.robot.iter().collect(),
+        2,
+        |robot| -> Result<_, String> {
+            let leg = Leg::open(&ModelSpec {
+                model: robot.model.clone(),
+                set: robot.set.clone(),
+                independent: robot.independent.clone(),
+            })?;
+            let fbdf = actuator_work(&leg)?;
+            let tests = [Dof::Lift, Dof::Swing]
+                .map(|dof| force_deflection(&leg, dof, dof.axis(), voltage, Sensor::Blocked, 0.0));
+            Ok((fbdf, tests))
+        },
+    );
+    spec.robot
+        .iter()
+        .zip(results)
+        .map(|(robot, result)| {
+            let (actuator_work, [lift, swing]) =
+                result.map_err(|e| format!("robot `{}`: {e}", robot.name))?;
+            let named = |dof: Dof, test: Result<ForceDeflection, String>| {
+                test.map_err(|e| format!("robot `{}` {}: {e}", robot.name, dof.name()))
+            };
+            Ok(RobotTests {
+                actuator_work,
+                tests: [named(Dof::Lift, lift)?, named(Dof::Swing, swing)?],
+            })
+        })
+        .collect()
+}
+
 pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
     let voltage = positive("voltage", &spec.voltage, Dimension::VOLTAGE)?;
+    let robots = compute(spec, voltage)?;
     let mut outcome = Outcome {
         method: format!(
             "For each robot and degree of freedom, at {voltage} V: the free deflection d of the \
@@ -88,25 +129,9 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
     let mut work = [[0.0; 2]; 2];
     let mut paper_work = [[f64::NAN; 2]; 2];
     let mut rows = Vec::new();
-    let results = parallel(
-        spec.robot.iter().collect(),
-        2,
-        |robot| -> Result<_, String> {
-            let leg = Leg::open(&ModelSpec {
-                model: robot.model.clone(),
-                set: robot.set.clone(),
-                independent: robot.independent.clone(),
-            })?;
-            let fbdf = actuator_work(&leg)?;
-            let tests = [Dof::Lift, Dof::Swing]
-                .map(|dof| force_deflection(&leg, dof, dof.axis(), voltage, Sensor::Blocked, 0.0));
-            Ok((fbdf, tests))
-        },
-    );
-    for (r, (robot, result)) in spec.robot.iter().zip(results).enumerate() {
-        let (fbdf, tests) = result.map_err(|e| format!("robot `{}`: {e}", robot.name))?;
-        for (k, (dof, test)) in [Dof::Lift, Dof::Swing].iter().zip(tests).enumerate() {
-            let test = test.map_err(|e| format!("robot `{}` {}: {e}", robot.name, dof.name()))?;
+    for (r, (robot, tests)) in spec.robot.iter().zip(&robots).enumerate() {
+        let fbdf = tests.actuator_work;
+        for (k, (dof, test)) in [Dof::Lift, Dof::Swing].iter().zip(&tests.tests).enumerate() {
             let paper = robot
                 .paper
                 .get(dof.name())
@@ -114,11 +139,6 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
                 .transpose()?;
             let (d, f, w) = (test.free_deflection, test.blocked_force(), test.work());
             work[r][k] = w;
-            let show = |value: Option<(f64, f64)>, scale: f64, digits: usize| {
-                value.map_or("–".to_string(), |(m, s)| {
-                    format!("{:.*} ± {:.*}", digits, m * scale, digits, s * scale)
-                })
-            };
             if let Some(p) = &paper {
                 paper_work[r][k] = p.work.0;
             }
@@ -126,13 +146,13 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
                 robot.name.clone(),
                 dof.name().into(),
                 format!("{:.2}", d * 1e3),
-                show(paper.map(|p| p.d), 1e3, 1),
+                paper_text(paper.map(|p| p.d), 1e3, 1),
                 format!("{:.1}", f * 1e3),
-                show(paper.map(|p| p.force), 1e3, 1),
+                paper_text(paper.map(|p| p.force), 1e3, 1),
                 format!("{:.1}", w * 1e6),
-                show(paper.map(|p| p.work), 1e6, 1),
+                paper_text(paper.map(|p| p.work), 1e6, 1),
                 format!("{:.2}", w / fbdf),
-                show(paper.map(|p| p.normalized), 1.0, 2),
+                paper_text(paper.map(|p| p.normalized), 1.0, 2),
             ]);
             let key = format!("{}_{}", if r == 0 { "old" } else { "new" }, dof.name());
             for (name, value) in [
@@ -161,11 +181,26 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
         &rows,
     )?;
     outcome.tables.push(table);
+    let (increase, model_ratio) = increase_table(spec, work, paper_work);
+    outcome.values.insert("work_ratio".into(), model_ratio);
+    outcome.tables.push(increase);
+    outcome.notes = spec.notes.clone();
+    Ok(outcome)
+}
 
+/// `mean ± s.d.` of a paper value in display units, or `–`.
+fn paper_text(value: Option<(f64, f64)>, scale: f64, digits: usize) -> String {
+    value.map_or("–".to_string(), |(m, s)| {
+        format!("{:.*} ± {:.*}", digits, m * scale, digits, s * scale)
+    })
+}
+
+/// The work increase of the second robot over the first (lift + swing F·d), model against
+/// the paper's Table IV and its reported figure; and the model's ratio.
+fn increase_table(spec: &Spec, work: [[f64; 2]; 2], paper_work: [[f64; 2]; 2]) -> (Table, f64) {
     let total = |w: [f64; 2]| w[0] + w[1];
     let model_ratio = total(work[1]) / total(work[0]);
     let table_ratio = total(paper_work[1]) / total(paper_work[0]);
-    outcome.values.insert("work_ratio".into(), model_ratio);
     let mut increase = Table::new(
         &format!(
             "Work done by the foot, {} against {} (lift + swing F·d)",
@@ -198,7 +233,5 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
             format!("{p:.0} % (model {:.0} %)", 100.0 * (model_ratio - 1.0)),
         ]);
     }
-    outcome.tables.push(increase);
-    outcome.notes = spec.notes.clone();
-    Ok(outcome)
+    (increase, model_ratio)
 }

@@ -120,6 +120,36 @@ pub(crate) fn actuator_work(leg: &Leg) -> Result<f64, String> {
     }
 }
 
+/// The force/deflection tests of one degree of freedom: on-axis only, then with the
+/// off-axis load if the spec asks for one; each with its label.
+fn tests(
+    spec: &Spec,
+    leg: &Leg,
+    dof: Dof,
+    voltage: f64,
+    step: f64,
+) -> Result<Vec<(&'static str, ForceDeflection)>, String> {
+    let axis = dof.axis();
+    let mut cases = vec![(
+        "on-axis only",
+        force_deflection(leg, dof, axis, voltage, Sensor::Steps(step), 0.0)?,
+    )];
+    if let Some(c) = spec.off_axis_fraction {
+        if c > 0.0 {
+            let label = if (c - 0.3).abs() < 1e-12 {
+                "30 % off-axis"
+            } else {
+                "off-axis"
+            };
+            cases.push((
+                label,
+                force_deflection(leg, dof, axis, voltage, Sensor::Steps(step), c)?,
+            ));
+        }
+    }
+    Ok(cases)
+}
+
 pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
     let voltage = positive("voltage", &spec.voltage, Dimension::VOLTAGE)?;
     let step = positive("sensor_step", &spec.sensor_step, Dimension::LENGTH)?;
@@ -131,25 +161,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
     let fbdf = actuator_work(&leg)?;
     let model_name = leg.model().name().to_string();
     let mut outcome = Outcome {
-        method: format!(
-            "Static equilibria of `{}` at {voltage} V on one actuator, the foot against a \
-             frictionless plane sensor normal to the test axis (lift: z, swing: x) held by a \
-             fixture at 0, {:.0} µm, … from the foot's rest position along its free motion, \
-             until the free foot no longer reaches it. Force = the fixture's reaction on the \
-             sensor. Blocked force = force at distance 0; free deflection = the foot's one-way \
-             displacement at {voltage} V; F·d as in Table IV. {}",
-            spec.model.display(),
-            step * 1e6,
-            match spec.off_axis_fraction {
-                Some(c) => format!(
-                    "Repeated with an off-axis load: the sensor also pushes the foot along y \
-                     with {:.0} % of the on-axis force, opposing the foot's free y motion \
-                     (the paper's ~30 %, Sec. V.A; direction assumed).",
-                    c * 100.0
-                ),
-                None => String::new(),
-            }
-        ),
+        method: method_text(spec, voltage, step),
         ..Outcome::default()
     };
     let mut summary = Table::new(
@@ -166,78 +178,15 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
     );
     let mut curves = Vec::new();
     for &dof in &spec.dofs {
-        let axis = dof.axis();
-        let mut cases = vec![(
-            "on-axis only",
-            force_deflection(&leg, dof, axis, voltage, Sensor::Steps(step), 0.0)?,
-        )];
-        if let Some(c) = spec.off_axis_fraction {
-            if c > 0.0 {
-                let label = if (c - 0.3).abs() < 1e-12 {
-                    "30 % off-axis"
-                } else {
-                    "off-axis"
-                };
-                cases.push((
-                    label,
-                    force_deflection(&leg, dof, axis, voltage, Sensor::Steps(step), c)?,
-                ));
-            }
-        }
-        let mut points = Table::new(
-            &format!(
-                "{model_name} {}: force on the sensor along {} against sensor distance",
-                dof.name(),
-                AXES[axis]
-            ),
-            &[
-                "distance [µm]",
-                "F [mN]",
-                "F_y [mN]",
-                "F, off-axis load [mN]",
-                "F_y, off-axis load [mN]",
-            ],
-        );
-        for (k, p) in cases[0].1.points.iter().enumerate() {
-            let loaded = cases.get(1).and_then(|(_, t)| t.points.get(k));
-            points.row(vec![
-                format!("{:.0}", p.distance * 1e6),
-                format!("{:.2}", p.force * 1e3),
-                format!("{:+.2}", p.force_y * 1e3),
-                loaded.map_or("–".into(), |l| format!("{:.2}", l.force * 1e3)),
-                loaded.map_or("–".into(), |l| format!("{:+.2}", l.force_y * 1e3)),
-            ]);
-        }
+        let cases = tests(spec, &leg, dof, voltage, step)?;
+        outcome.tables.push(points_table(&model_name, dof, &cases));
         for (label, test) in &cases {
             record(&mut outcome, &mut summary, dof, label, test, fbdf);
-            let tag = if test.off_axis_fraction > 0.0 {
-                "_offaxis"
-            } else {
-                ""
-            };
-            let rows: Vec<Vec<f64>> = test
-                .points
-                .iter()
-                .map(|p| vec![p.distance, p.force, p.force_y, p.foot_y])
-                .chain(std::iter::once(vec![
-                    test.free_deflection,
-                    0.0,
-                    0.0,
-                    test.free[1] - test.rest[1],
-                ]))
-                .collect();
-            csv(
-                &mut outcome,
-                dir,
-                &format!("force_{}{tag}.csv", dof.name()),
-                &["distance", "force", "force_y", "foot_dy"],
-                &rows,
-            )?;
+            let rows = write_test(&mut outcome, dir, dof, test)?;
             let (xs, ys): (Vec<f64>, Vec<f64>) =
                 rows.iter().map(|r| (r[0] * 1e3, r[1] * 1e3)).unzip();
             curves.push((format!("{} ({label})", dof.name()), xs, ys));
         }
-        outcome.tables.push(points);
     }
     outcome.tables.insert(0, summary);
     if !spec.paper.is_empty() {
@@ -258,6 +207,90 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
     outcome.plots.push(path);
     outcome.notes = spec.notes.clone();
     Ok(outcome)
+}
+
+fn method_text(spec: &Spec, voltage: f64, step: f64) -> String {
+    format!(
+        "Static equilibria of `{}` at {voltage} V on one actuator, the foot against a \
+         frictionless plane sensor normal to the test axis (lift: z, swing: x) held by a \
+         fixture at 0, {:.0} µm, … from the foot's rest position along its free motion, \
+         until the free foot no longer reaches it. Force = the fixture's reaction on the \
+         sensor. Blocked force = force at distance 0; free deflection = the foot's one-way \
+         displacement at {voltage} V; F·d as in Table IV. {}",
+        spec.model.display(),
+        step * 1e6,
+        match spec.off_axis_fraction {
+            Some(c) => format!(
+                "Repeated with an off-axis load: the sensor also pushes the foot along y \
+                 with {:.0} % of the on-axis force, opposing the foot's free y motion \
+                 (the paper's ~30 %, Sec. V.A; direction assumed).",
+                c * 100.0
+            ),
+            None => String::new(),
+        }
+    )
+}
+
+/// The force on the sensor against its distance, with the off-axis case beside if any.
+fn points_table(model_name: &str, dof: Dof, cases: &[(&str, ForceDeflection)]) -> Table {
+    let mut points = Table::new(
+        &format!(
+            "{model_name} {}: force on the sensor along {} against sensor distance",
+            dof.name(),
+            AXES[dof.axis()]
+        ),
+        &[
+            "distance [µm]",
+            "F [mN]",
+            "F_y [mN]",
+            "F, off-axis load [mN]",
+            "F_y, off-axis load [mN]",
+        ],
+    );
+    for (k, p) in cases[0].1.points.iter().enumerate() {
+        let loaded = cases.get(1).and_then(|(_, t)| t.points.get(k));
+        points.row(vec![
+            format!("{:.0}", p.distance * 1e6),
+            format!("{:.2}", p.force * 1e3),
+            format!("{:+.2}", p.force_y * 1e3),
+            loaded.map_or("–".into(), |l| format!("{:.2}", l.force * 1e3)),
+            loaded.map_or("–".into(), |l| format!("{:+.2}", l.force_y * 1e3)),
+        ]);
+    }
+    points
+}
+
+/// `force_DOF[_offaxis].csv`: the sensor points and, last, the free foot; returns the rows.
+fn write_test(
+    outcome: &mut Outcome,
+    dir: &Path,
+    dof: Dof,
+    test: &ForceDeflection,
+) -> Result<Vec<Vec<f64>>, String> {
+    let tag = if test.off_axis_fraction > 0.0 {
+        "_offaxis"
+    } else {
+        ""
+    };
+    let rows: Vec<Vec<f64>> = test
+        .points
+        .iter()
+        .map(|p| vec![p.distance, p.force, p.force_y, p.foot_y])
+        .chain(std::iter::once(vec![
+            test.free_deflection,
+            0.0,
+            0.0,
+            test.free[1] - test.rest[1],
+        ]))
+        .collect();
+    csv(
+        outcome,
+        dir,
+        &format!("force_{}{tag}.csv", dof.name()),
+        &["distance", "force", "force_y", "foot_dy"],
+        &rows,
+    )?;
+    Ok(rows)
 }
 
 /// Adds a summary row and the key values `{dof}[_offaxis]_{blocked_force, free_deflection,

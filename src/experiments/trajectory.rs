@@ -12,6 +12,7 @@ use super::leg::Leg;
 use super::{csv, ModelSpec, Outcome, Table};
 use crate::quantity::positive;
 use crate::render::plot;
+use mech_codegen::ir::transform::AXES;
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -70,30 +71,81 @@ const CASES: [(&str, bool, bool); 3] = [
     ("both", true, true),
 ];
 
+/// The foot over one drive cycle of one case.
+pub struct Cycle {
+    /// Per sample: t, v_lift, v_swing, foot x, y, z, displacement dx, dy, dz (SI).
+    pub rows: Vec<Vec<f64>>,
+    /// Displacement from rest at the +peak of the drive (a quarter period in).
+    pub at_peak: [f64; 3],
+}
+
+impl Cycle {
+    /// The displacement along `axis` (0 = x) at every sample, in mm.
+    fn displacement_mm(&self, axis: usize) -> Vec<f64> {
+        self.rows.iter().map(|row| row[6 + axis] * 1e3).collect()
+    }
+}
+
+/// The drive case's cycle by continuation: each phase's equilibrium starts from the
+/// previous one's.
+fn cycle(
+    spec: &Spec,
+    leg: &Leg,
+    (lift_on, swing_on): (bool, bool),
+    (amplitude, frequency): (f64, f64),
+    rest_q: &[f64],
+) -> Result<Cycle, String> {
+    let rest = leg.foot_at(rest_q, &leg.inputs(0.0, 0.0));
+    let phase = spec.phase_deg.to_radians();
+    let mut q = rest_q.to_vec();
+    let mut rows = Vec::new();
+    let mut at_peak = [0.0; 3];
+    for k in 0..=spec.points {
+        let t = k as f64 / (spec.points as f64 * frequency);
+        let angle = std::f64::consts::TAU * frequency * t;
+        let lift = if lift_on {
+            amplitude * angle.sin()
+        } else {
+            0.0
+        };
+        let swing = match (lift_on, swing_on) {
+            (true, true) => amplitude * (angle + phase).sin(),
+            (false, true) => amplitude * angle.sin(),
+            _ => 0.0,
+        };
+        let inputs = leg.inputs(lift, swing);
+        q = leg
+            .equilibrium(&q, &inputs, &[])
+            .map_err(|e| format!("v_lift = {lift:.1} V, v_swing = {swing:.1} V: {e}"))?
+            .q;
+        let foot = leg.foot_at(&q, &inputs);
+        let d = [0, 1, 2].map(|i| foot[i] - rest[i]);
+        if 4 * k == spec.points {
+            at_peak = d;
+        }
+        rows.push(vec![
+            t, lift, swing, foot[0], foot[1], foot[2], d[0], d[1], d[2],
+        ]);
+    }
+    Ok(Cycle { rows, at_peak })
+}
+
+fn peak_to_peak(values: &[f64]) -> f64 {
+    let (lo, hi) = values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    hi - lo
+}
+
 pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
     let amplitude = positive("amplitude", &spec.amplitude, Dimension::VOLTAGE)?;
     let frequency = positive("frequency", &spec.frequency, Dimension::FREQUENCY)?;
     let leg = Leg::open(&spec.leg())?;
-    let rest_inputs = leg.inputs(0.0, 0.0);
-    let rest_q = leg.equilibrium(&leg.q0, &rest_inputs, &[])?.q;
-    let rest = leg.foot_at(&rest_q, &rest_inputs);
-
+    let rest_q = leg.equilibrium(&leg.q0, &leg.inputs(0.0, 0.0), &[])?.q;
     let mut outcome = Outcome {
-        method: format!(
-            "Quasi-static: {} static equilibria per cycle of a {frequency} Hz sinusoid of \
-             amplitude {amplitude} V on the model's drive inputs (the paper's 225 V \
-             peak-to-peak drive, which moves each actuator tip ± its peak one-way \
-             deflection), continuation from the previous phase; no time integration, since \
-             the drive is far below the first resonance. Model `{}`{}. Foot displacement \
-             from its rest position under gravity, chassis frame (x forward, y lateral, z up).",
-            spec.points,
-            spec.model.display(),
-            if spec.set.is_empty() {
-                String::new()
-            } else {
-                format!(" with {}", spec.set.join(", "))
-            }
-        ),
+        method: method_text(spec, amplitude, frequency),
         ..Outcome::default()
     };
     let mut table = Table::new(
@@ -108,44 +160,15 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
     );
     let mut sagittal = Vec::new();
     let mut frontal = Vec::new();
-    let phase = spec.phase_deg.to_radians();
     for (name, lift_on, swing_on) in CASES {
-        let mut q = rest_q.clone();
-        let mut rows = Vec::new();
-        let (mut xs, mut ys, mut zs) = (Vec::new(), Vec::new(), Vec::new());
-        let mut at_peak = [0.0; 3];
-        for k in 0..=spec.points {
-            let t = k as f64 / (spec.points as f64 * frequency);
-            let angle = std::f64::consts::TAU * frequency * t;
-            let lift = if lift_on {
-                amplitude * angle.sin()
-            } else {
-                0.0
-            };
-            let swing = match (lift_on, swing_on) {
-                (true, true) => amplitude * (angle + phase).sin(),
-                (false, true) => amplitude * angle.sin(),
-                _ => 0.0,
-            };
-            let inputs = leg.inputs(lift, swing);
-            q = leg
-                .equilibrium(&q, &inputs, &[])
-                .map_err(|e| {
-                    format!("{name} drive, v_lift = {lift:.1} V, v_swing = {swing:.1} V: {e}")
-                })?
-                .q;
-            let foot = leg.foot_at(&q, &inputs);
-            let d = [0, 1, 2].map(|i| foot[i] - rest[i]);
-            if 4 * k == spec.points {
-                at_peak = d;
-            }
-            rows.push(vec![
-                t, lift, swing, foot[0], foot[1], foot[2], d[0], d[1], d[2],
-            ]);
-            xs.push(d[0] * 1e3);
-            ys.push(d[1] * 1e3);
-            zs.push(d[2] * 1e3);
-        }
+        let cycle = cycle(
+            spec,
+            &leg,
+            (lift_on, swing_on),
+            (amplitude, frequency),
+            &rest_q,
+        )
+        .map_err(|e| format!("{name} drive, {e}"))?;
         csv(
             &mut outcome,
             dir,
@@ -153,23 +176,17 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
             &[
                 "t", "v_lift", "v_swing", "foot_x", "foot_y", "foot_z", "dx", "dy", "dz",
             ],
-            &rows,
+            &cycle.rows,
         )?;
-        let range = |v: &[f64]| {
-            let (lo, hi) = v
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-                    (a.min(x), b.max(x))
-                });
-            hi - lo
-        };
-        let ranges = [range(&xs), range(&ys), range(&zs)];
-        for (axis, r) in ["x", "y", "z"].iter().zip(ranges) {
+        let [xs, ys, zs] = [0, 1, 2].map(|axis| cycle.displacement_mm(axis));
+        let ranges = [&xs, &ys, &zs].map(|v| peak_to_peak(v));
+        for (axis, r) in AXES.iter().zip(ranges) {
             outcome.values.insert(format!("{name}_pp_{axis}"), r * 1e-3);
         }
-        for (axis, v) in ["x", "y", "z"].iter().zip(at_peak) {
+        for (axis, v) in AXES.iter().zip(cycle.at_peak) {
             outcome.values.insert(format!("{name}_peak_d{axis}"), v);
         }
+        let at_peak = cycle.at_peak;
         table.row(vec![
             name.to_string(),
             format!("{:.3}", ranges[0]),
@@ -189,7 +206,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
                 _ => "alone".into(),
             }
         );
-        sagittal.push((label.clone(), xs.clone(), zs.clone()));
+        sagittal.push((label.clone(), xs, zs.clone()));
         frontal.push((label, ys, zs));
     }
     outcome.tables.push(table);
@@ -222,4 +239,22 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
     }
     outcome.notes = spec.notes.clone();
     Ok(outcome)
+}
+
+fn method_text(spec: &Spec, amplitude: f64, frequency: f64) -> String {
+    format!(
+        "Quasi-static: {} static equilibria per cycle of a {frequency} Hz sinusoid of \
+         amplitude {amplitude} V on the model's drive inputs (the paper's 225 V \
+         peak-to-peak drive, which moves each actuator tip ± its peak one-way \
+         deflection), continuation from the previous phase; no time integration, since \
+         the drive is far below the first resonance. Model `{}`{}. Foot displacement \
+         from its rest position under gravity, chassis frame (x forward, y lateral, z up).",
+        spec.points,
+        spec.model.display(),
+        if spec.set.is_empty() {
+            String::new()
+        } else {
+            format!(" with {}", spec.set.join(", "))
+        }
+    )
 }
