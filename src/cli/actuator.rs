@@ -81,88 +81,105 @@ pub fn run(args: &ActuatorArgs) -> Result<(), String> {
         if args.bimorph.is_some() || geometry_given {
             return Err("give either --blocked-force and --free-deflection, or a bimorph geometry (--bimorph ...), not both".into());
         }
-        let (Some(force), Some(deflection)) = (&args.blocked_force, &args.free_deflection) else {
-            return Err("--blocked-force and --free-deflection must be given together".into());
-        };
-        let rated = voltage("--rated-voltage", &args.rated_voltage)?;
-        let base = Actuator {
-            blocked_force: positive(
-                "--blocked-force",
-                parse_si("--blocked-force", force, Dimension::FORCE, false)?,
-            )?,
-            free_deflection: length("--free-deflection", deflection)?,
-            rated_voltage: rated,
-            mass,
-        };
-        let _ = writeln!(
-            text,
-            "actuator: F_b = {force}, δ_f = {deflection} at {} V (linear in voltage)",
-            rated
-        );
-        match &args.voltage {
-            Some(v) => base.at_voltage(voltage("--voltage", v)?),
-            None => base,
-        }
+        from_datasheet(args, mass, &mut text)?
     } else {
-        let preset =
-            args.bimorph
-                .as_deref()
-                .unwrap_or(if geometry_given { "new-geometry" } else { "" });
-        let mut bimorph = match preset {
-            "new-geometry" | "new" => Bimorph::SEED_NEW_GEOMETRY,
-            "old-geometry" | "old" => Bimorph::SEED_OLD_GEOMETRY,
-            "" => {
-                return Err("give --blocked-force and --free-deflection, or --bimorph new-geometry|old-geometry (optionally with geometry overrides), or --seed-tables".into())
-            }
-            other => return Err(format!("--bimorph: unknown preset `{other}`; known: new-geometry, old-geometry (seed Table I)")),
-        };
-        if let Some(t) = &args.pzt_thickness {
-            bimorph.pzt_thickness = length("--pzt-thickness", t)?;
-        }
-        if let Some(t) = &args.core_thickness {
-            bimorph.core_thickness = length("--core-thickness", t)?;
-        }
-        if let Some(t) = &args.length {
-            bimorph.length = length("--length", t)?;
-        }
-        if let Some(t) = &args.extension {
-            bimorph.extension_length = parse_si("--extension", t, Dimension::LENGTH, false)?;
-        }
-        if let Some(t) = &args.width {
-            bimorph.nominal_width = length("--width", t)?;
-        }
-        if let Some(r) = args.width_ratio {
-            bimorph.width_ratio = r;
-        }
-        bimorph.validate()?;
-        let v = match &args.voltage {
-            Some(v) => voltage("--voltage", v)?,
-            None => voltage("--rated-voltage", &args.rated_voltage)?,
-        };
-        let c = &bimorph.coefficients;
-        let _ = writeln!(
-            text,
-            "bimorph ({preset}): t_p = {} µm, t_cf = {} µm, L = {} mm, l_ext = {} mm, w_nom = {} mm, w_r = {}\n  \
-             coefficients: f31 = {} / {} Pa·m/V (force / deflection), E_p = {} GPa, E_cf = {} GPa\n  \
-             D = {:.6e} N·m (rigidity per width), GF = {:.5}",
-            bimorph.pzt_thickness * 1e6,
-            bimorph.core_thickness * 1e6,
-            bimorph.length * 1e3,
-            bimorph.extension_length * 1e3,
-            bimorph.nominal_width * 1e3,
-            bimorph.width_ratio,
-            c.f31_blocked,
-            c.f31_free,
-            c.pzt_modulus * 1e-9,
-            c.core_modulus * 1e-9,
-            bimorph.rigidity_per_width(),
-            bimorph.geometry_factor()
-        );
-        bimorph.actuator(v, mass)
+        from_bimorph(args, geometry_given, mass, &mut text)?
     };
     actuator.validate()?;
     print!("{text}{}", actuator_text(&actuator));
     Ok(())
+}
+
+/// The actuator from `--blocked-force` and `--free-deflection` at the rated voltage, scaled
+/// to `--voltage`; describes it in `text`.
+fn from_datasheet(args: &ActuatorArgs, mass: f64, text: &mut String) -> Result<Actuator, String> {
+    let (Some(force), Some(deflection)) = (&args.blocked_force, &args.free_deflection) else {
+        return Err("--blocked-force and --free-deflection must be given together".into());
+    };
+    let rated = voltage("--rated-voltage", &args.rated_voltage)?;
+    let base = Actuator {
+        blocked_force: positive(
+            "--blocked-force",
+            parse_si("--blocked-force", force, Dimension::FORCE, false)?,
+        )?,
+        free_deflection: length("--free-deflection", deflection)?,
+        rated_voltage: rated,
+        mass,
+    };
+    let _ = writeln!(
+        text,
+        "actuator: F_b = {force}, δ_f = {deflection} at {} V (linear in voltage)",
+        rated
+    );
+    Ok(match &args.voltage {
+        Some(v) => base.at_voltage(voltage("--voltage", v)?),
+        None => base,
+    })
+}
+
+/// The actuator from a bimorph preset with the geometry overrides (seed Table I), at
+/// `--voltage`; describes the bimorph in `text`.
+fn from_bimorph(
+    args: &ActuatorArgs,
+    geometry_given: bool,
+    mass: f64,
+    text: &mut String,
+) -> Result<Actuator, String> {
+    let preset =
+        args.bimorph
+            .as_deref()
+            .unwrap_or(if geometry_given { "new-geometry" } else { "" });
+    let mut bimorph = match preset {
+        "new-geometry" | "new" => Bimorph::SEED_NEW_GEOMETRY,
+        "old-geometry" | "old" => Bimorph::SEED_OLD_GEOMETRY,
+        "" => {
+            return Err("give --blocked-force and --free-deflection, or --bimorph new-geometry|old-geometry (optionally with geometry overrides), or --seed-tables".into())
+        }
+        other => return Err(format!("--bimorph: unknown preset `{other}`; known: new-geometry, old-geometry (seed Table I)")),
+    };
+    if let Some(t) = &args.pzt_thickness {
+        bimorph.pzt_thickness = length("--pzt-thickness", t)?;
+    }
+    if let Some(t) = &args.core_thickness {
+        bimorph.core_thickness = length("--core-thickness", t)?;
+    }
+    if let Some(t) = &args.length {
+        bimorph.length = length("--length", t)?;
+    }
+    if let Some(t) = &args.extension {
+        bimorph.extension_length = parse_si("--extension", t, Dimension::LENGTH, false)?;
+    }
+    if let Some(t) = &args.width {
+        bimorph.nominal_width = length("--width", t)?;
+    }
+    if let Some(r) = args.width_ratio {
+        bimorph.width_ratio = r;
+    }
+    bimorph.validate()?;
+    let v = match &args.voltage {
+        Some(v) => voltage("--voltage", v)?,
+        None => voltage("--rated-voltage", &args.rated_voltage)?,
+    };
+    let c = &bimorph.coefficients;
+    let _ = writeln!(
+        text,
+        "bimorph ({preset}): t_p = {} µm, t_cf = {} µm, L = {} mm, l_ext = {} mm, w_nom = {} mm, w_r = {}\n  \
+         coefficients: f31 = {} / {} Pa·m/V (force / deflection), E_p = {} GPa, E_cf = {} GPa\n  \
+         D = {:.6e} N·m (rigidity per width), GF = {:.5}",
+        bimorph.pzt_thickness * 1e6,
+        bimorph.core_thickness * 1e6,
+        bimorph.length * 1e3,
+        bimorph.extension_length * 1e3,
+        bimorph.nominal_width * 1e3,
+        bimorph.width_ratio,
+        c.f31_blocked,
+        c.f31_free,
+        c.pzt_modulus * 1e-9,
+        c.core_modulus * 1e-9,
+        bimorph.rigidity_per_width(),
+        bimorph.geometry_factor()
+    );
+    Ok(bimorph.actuator(v, mass))
 }
 
 pub fn actuator_text(a: &Actuator) -> String {

@@ -210,19 +210,34 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
         frontal.push((label, ys, zs));
     }
     outcome.tables.push(table);
-    let model_name = leg.model().name().to_string();
+    plot_planes(&mut outcome, dir, leg.model().name(), &sagittal, &frontal)?;
+    outcome.notes = spec.notes.clone();
+    Ok(outcome)
+}
+
+type Curve = (String, Vec<f64>, Vec<f64>);
+
+/// `sagittal.svg` (x–z) and `frontal.svg` (y–z): the foot's path in each plane, one curve
+/// per drive case.
+fn plot_planes(
+    outcome: &mut Outcome,
+    dir: &Path,
+    model_name: &str,
+    sagittal: &[Curve],
+    frontal: &[Curve],
+) -> Result<(), String> {
     for (file, title, x_label, curves) in [
         (
             "sagittal.svg",
             "sagittal plane (x–z)",
             "foot Δx [mm] (forward)",
-            &sagittal,
+            sagittal,
         ),
         (
             "frontal.svg",
             "frontal plane (y–z)",
             "foot Δy [mm] (lateral)",
-            &frontal,
+            frontal,
         ),
     ] {
         let path = dir.join(file);
@@ -237,8 +252,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
         .map_err(|e| e.to_string())?;
         outcome.plots.push(path);
     }
-    outcome.notes = spec.notes.clone();
-    Ok(outcome)
+    Ok(())
 }
 
 fn method_text(spec: &Spec, amplitude: f64, frequency: f64) -> String {
