@@ -261,11 +261,12 @@ pub fn seed_table_iii() -> String {
 }
 
 fn fit(args: &FitArgs) -> Result<(), String> {
-    let files = specimen_files(&args.data)?;
+    let files = specimen_files(&args.data).map_err(|e| e.to_string())?;
     let specimens = files
         .iter()
         .map(|f| read_specimen(f))
-        .collect::<Result<Vec<_>, _>>()?;
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| e.to_string())?;
     let modulus = match &args.modulus {
         Some(text) => Some(positive(
             "--modulus",
@@ -285,11 +286,13 @@ fn fit(args: &FitArgs) -> Result<(), String> {
             args.plots
         ));
     }
-    let fit_report = fit_specimens(specimens, &options)?;
+    let fit_report = fit_specimens(specimens, &options).map_err(|e| e.to_string())?;
     print!("{}", report::text_report(&fit_report));
-    let mut written = report::write_csvs(&fit_report, &args.out_dir)?;
+    let mut written = report::write_csvs(&fit_report, &args.out_dir).map_err(|e| e.to_string())?;
     if plots != "none" {
-        written.extend(report::write_plots(&fit_report, &args.out_dir, &plots)?);
+        written.extend(
+            report::write_plots(&fit_report, &args.out_dir, &plots).map_err(|e| e.to_string())?,
+        );
     }
     println!(
         "\nwritten: {}",

@@ -3,10 +3,14 @@
 //! of uncastellated flexures the normalized fits for Young's modulus (Eq. 6) and the loss
 //! factor (Eq. 7); for castellated hinges of one thickness and length, the effective length
 //! and their own loss factor.
+//!
+//! Consumes: [`Specimen`]s (and reads their traces) or analysed traces. Produces: a
+//! [`FitReport`], or an [`Error`] naming the trace file that could not be used.
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
+use super::error::Error;
 use super::rig::{Kind, Pendulum, Specimen};
 use super::trace::{analyze_trace, TraceAnalysis, TraceOptions};
 
@@ -181,9 +185,11 @@ pub fn analyze_specimen_trace(
     pendulum: &Pendulum,
     file: PathBuf,
     options: &FitOptions,
-) -> Result<TraceResult, String> {
-    let analysis = analyze_trace(times, angles, &options.trace)
-        .map_err(|e| format!("`{}`: {e}", file.display()))?;
+) -> Result<TraceResult, Error> {
+    let analysis = match analyze_trace(times, angles, &options.trace) {
+        Ok(analysis) => analysis,
+        Err(error) => return Err(Error::Trace { path: file, error }),
+    };
     Ok(TraceResult {
         stiffness: measured_stiffness(&analysis, pendulum, options.small_angle),
         damping: measured_damping(&analysis, pendulum),
@@ -207,7 +213,7 @@ pub fn specimen_result(specimen: Specimen, traces: Vec<TraceResult>) -> Specimen
 }
 
 /// Reads and analyses every trace of `specimens` and fits across them.
-pub fn fit_specimens(specimens: Vec<Specimen>, options: &FitOptions) -> Result<FitReport, String> {
+pub fn fit_specimens(specimens: Vec<Specimen>, options: &FitOptions) -> Result<FitReport, Error> {
     let mut results = Vec::new();
     for specimen in specimens {
         let mut traces = Vec::new();

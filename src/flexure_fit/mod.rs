@@ -8,12 +8,15 @@
 //! - [`rig`]: the specimen description (flexure geometry, pendulum, trace files) in TOML;
 //! - [`fit`]: Eqs. 3–4 per trace, means per specimen, Eqs. 6–7 and the castellated fits;
 //! - [`report`]: tables, CSV and plots;
+//! - [`error`]: what can go wrong, as [`Error`], with messages for the user.
 
+pub mod error;
 pub mod fit;
 pub mod report;
 pub mod rig;
 pub mod trace;
 
+pub use error::{Error, SpecimenError};
 pub use fit::{fit_specimens, FitOptions, FitReport};
 pub use rig::{Pendulum, Specimen};
 pub use trace::{analyze_trace, TraceAnalysis, TraceError, TraceOptions};

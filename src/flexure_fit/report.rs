@@ -1,11 +1,15 @@
 //! Presentation of a [`FitReport`]: readable tables for the terminal, CSV files, and plots of
 //! each fit in the manner of the seed's Fig. 5 (data points and the fitted line through the
 //! origin).
+//!
+//! Consumes: a [`FitReport`] and the output directory. Produces: a `String`, and the files
+//! written (or an [`Error`] naming the file that could not be).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use super::fit::{FitReport, LineFit};
+use super::error::Error;
+use super::fit::{CastellatedFit, FitReport, LineFit, ModulusFit, SpecimenResult};
 use super::rig::Kind;
 use crate::output;
 use crate::render::plot;
@@ -27,6 +31,18 @@ fn kind_name(kind: Kind) -> &'static str {
 /// The report as text: per-trace table, per-specimen table, and the fits.
 pub fn text_report(report: &FitReport) -> String {
     let mut s = String::new();
+    write_trace_table(&mut s, report);
+    write_flexure_table(&mut s, report);
+    write_uncastellated_fit(&mut s, report.uncastellated.as_ref());
+    for fit in &report.castellated {
+        write_castellated_fit(&mut s, fit);
+    }
+    s
+}
+
+// Writing to a `String` cannot fail, hence the `let _ =` on every `writeln!` below.
+
+fn write_trace_table(s: &mut String, report: &FitReport) {
     let _ = writeln!(s, "per trace (Eqs. 3, 4):");
     let _ = writeln!(
         s,
@@ -61,6 +77,9 @@ pub fn text_report(report: &FitReport) -> String {
             );
         }
     }
+}
+
+fn write_flexure_table(s: &mut String, report: &FitReport) {
     let _ = writeln!(
         s,
         "\nper flexure (mean of its traces; Eqs. 6, 7 with the nominal length):"
@@ -94,7 +113,10 @@ pub fn text_report(report: &FitReport) -> String {
             sr.normalized_damping() * 1e-6
         );
     }
-    match &report.uncastellated {
+}
+
+fn write_uncastellated_fit(s: &mut String, fit: Option<&ModulusFit>) {
+    match fit {
         Some(fit) => {
             let _ = writeln!(
                 s,
@@ -111,43 +133,54 @@ pub fn text_report(report: &FitReport) -> String {
             let _ = writeln!(s, "\nuncastellated flexures: fewer than 2, no modulus fit");
         }
     }
-    for fit in &report.castellated {
-        let _ = writeln!(
-            s,
-            "\ncastellated hinges, t = {:.1} µm, l = {:.0} µm (n = {}; E = {:.4} GPa):\n  \
-             k_m = {:.4} µN·m/rad per mm of width   R² = {:.4}   → l_eff = {:.2} µm (Eq. 2)\n  \
-             b_m·ω_d = {:.4} µN·m per mm            R² = {:.4}   → η' = {:.4} (Eq. 5)",
-            fit.thickness * 1e6,
-            fit.length * 1e6,
-            fit.specimens.len(),
-            fit.youngs_modulus * 1e-9,
-            fit.stiffness_line.slope * 1e3,
-            fit.stiffness_line.r_squared,
-            fit.effective_length * 1e6,
-            fit.damping_line.slope * 1e3,
-            fit.damping_line.r_squared,
-            fit.loss_factor
-        );
-    }
-    s
 }
 
-fn write_text_csv(path: &Path, header: &[&str], rows: &[Vec<String>]) -> Result<(), String> {
+fn write_castellated_fit(s: &mut String, fit: &CastellatedFit) {
+    let _ = writeln!(
+        s,
+        "\ncastellated hinges, t = {:.1} µm, l = {:.0} µm (n = {}; E = {:.4} GPa):\n  \
+         k_m = {:.4} µN·m/rad per mm of width   R² = {:.4}   → l_eff = {:.2} µm (Eq. 2)\n  \
+         b_m·ω_d = {:.4} µN·m per mm            R² = {:.4}   → η' = {:.4} (Eq. 5)",
+        fit.thickness * 1e6,
+        fit.length * 1e6,
+        fit.specimens.len(),
+        fit.youngs_modulus * 1e-9,
+        fit.stiffness_line.slope * 1e3,
+        fit.stiffness_line.r_squared,
+        fit.effective_length * 1e6,
+        fit.damping_line.slope * 1e3,
+        fit.damping_line.r_squared,
+        fit.loss_factor
+    );
+}
+
+fn write_text_csv(path: &Path, header: &[&str], rows: &[Vec<String>]) -> Result<(), Error> {
+    let encode_failed = |message: String| Error::EncodeCsv {
+        path: path.to_path_buf(),
+        message,
+    };
     let mut writer = csv::Writer::from_writer(Vec::new());
-    let fail = |e: String| format!("cannot write `{}`: {e}", path.display());
     writer
         .write_record(header)
-        .map_err(|e| fail(e.to_string()))?;
+        .map_err(|e| encode_failed(e.to_string()))?;
     for row in rows {
-        writer.write_record(row).map_err(|e| fail(e.to_string()))?;
+        writer
+            .write_record(row)
+            .map_err(|e| encode_failed(e.to_string()))?;
     }
-    let bytes = writer.into_inner().map_err(|e| fail(e.to_string()))?;
-    output::write_atomic(path, &bytes).map_err(|e| e.to_string())
+    let bytes = writer
+        .into_inner()
+        .map_err(|e| encode_failed(e.to_string()))?;
+    output::write_atomic(path, &bytes).map_err(|e| Error::Write {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })
 }
 
 /// Writes `traces.csv` (one row per trace) and `flexures.csv` (one row per specimen, with the
 /// normalized values) into `dir`, in SI units. Returns the files written.
-pub fn write_csvs(report: &FitReport, dir: &Path) -> Result<Vec<PathBuf>, String> {
+pub fn write_csvs(report: &FitReport, dir: &Path) -> Result<Vec<PathBuf>, Error> {
+    // `{:?}` of an f64 is the shortest text that reads back to the same number.
     let num = |v: f64| format!("{v:?}");
     let mut trace_rows = Vec::new();
     for sr in &report.specimens {
@@ -259,136 +292,162 @@ fn markers(xs: &[f64], ys: &[f64], line_ys: &[f64]) -> (Vec<f64>, Vec<f64>) {
     (px, py)
 }
 
-/// One Fig. 5-style panel: data against width (mm) and the fitted line through the origin.
-#[allow(clippy::too_many_arguments)]
-fn fit_plot(
-    path: &Path,
-    title: &str,
-    y_label: &str,
+/// One Fig. 5-style panel: a quantity of the fitted specimens against their width, and its
+/// fitted line through the origin, all in the units of the axes.
+struct Panel {
+    /// File name without the extension.
+    stem: String,
+    title: String,
+    y_label: &'static str,
+    /// One value per point, in the order of the widths.
+    values: Vec<f64>,
+    /// The fit, its slope converted to the axes' units.
+    line: LineFit,
+    /// Legend of the line (its R² is appended).
+    fit_label: String,
+}
+
+/// The two panels of one fit (stiffness and damping), over the same widths (mm).
+struct FitPanels {
+    widths_mm: Vec<f64>,
+    stiffness: Panel,
+    damping: Panel,
+}
+
+/// `line` with its slope multiplied by `factor`, to read in the plot's units.
+fn rescaled(line: LineFit, factor: f64) -> LineFit {
+    LineFit {
+        slope: line.slope * factor,
+        ..line
+    }
+}
+
+/// `value` of each specimen `indices` names, in that order.
+fn specimen_values(
+    report: &FitReport,
+    indices: &[usize],
+    value: impl Fn(&SpecimenResult) -> f64,
+) -> Vec<f64> {
+    indices
+        .iter()
+        .map(|&i| value(&report.specimens[i]))
+        .collect()
+}
+
+/// Draws `panel` against `widths_mm` into `dir` as `<stem>.<extension>`; returns the file.
+fn draw_panel(
+    dir: &Path,
+    extension: &str,
     widths_mm: &[f64],
-    values: &[f64],
-    fit: &LineFit,
-    fit_label: &str,
-) -> Result<(), String> {
+    panel: Panel,
+) -> Result<PathBuf, Error> {
+    let path = dir.join(format!("{}.{extension}", panel.stem));
     let w_max = widths_mm.iter().fold(0.0_f64, |m, &w| m.max(w)) * 1.05;
     let line_x = vec![0.0, w_max];
-    let line_y: Vec<f64> = line_x.iter().map(|x| fit.slope * x).collect();
-    let (mx, my) = markers(widths_mm, values, &line_y);
+    let line_y: Vec<f64> = line_x.iter().map(|x| panel.line.slope * x).collect();
+    let (mx, my) = markers(widths_mm, &panel.values, &line_y);
     // The line first, so that the markers are drawn on top of it.
     let curves = vec![
         (
-            format!("{fit_label}, R² = {:.3}", fit.r_squared),
+            format!("{}, R² = {:.3}", panel.fit_label, panel.line.r_squared),
             line_x,
             line_y,
         ),
-        (format!("measured (n = {})", fit.points), mx, my),
+        (format!("measured (n = {})", panel.line.points), mx, my),
     ];
-    plot::plot_xy(path, title, "width w [mm]", y_label, &curves, false).map_err(|e| e.to_string())
+    plot::plot_xy(
+        &path,
+        &panel.title,
+        "width w [mm]",
+        panel.y_label,
+        &curves,
+        false,
+    )
+    .map_err(|e| Error::Plot {
+        path: path.clone(),
+        message: e.to_string(),
+    })?;
+    Ok(path)
 }
 
 /// Writes the plots of every fit into `dir` with extension `extension` (`svg` or `png`).
-pub fn write_plots(
-    report: &FitReport,
-    dir: &Path,
-    extension: &str,
-) -> Result<Vec<PathBuf>, String> {
-    let mut written = Vec::new();
+pub fn write_plots(report: &FitReport, dir: &Path, extension: &str) -> Result<Vec<PathBuf>, Error> {
+    let mut panels = Vec::new();
     if let Some(fit) = &report.uncastellated {
-        let widths: Vec<f64> = fit
-            .specimens
-            .iter()
-            .map(|&i| report.specimens[i].specimen.flexure.width * 1e3)
-            .collect();
-        // y in GPa·mm against w in mm: the slope reads directly in GPa.
-        let ys: Vec<f64> = fit
-            .specimens
-            .iter()
-            .map(|&i| report.specimens[i].normalized_stiffness() * 1e-6)
-            .collect();
-        let zs: Vec<f64> = fit
-            .specimens
-            .iter()
-            .map(|&i| report.specimens[i].normalized_damping() * 1e-6)
-            .collect();
-        let mut line = fit.stiffness_line;
-        line.slope *= 1e-9;
-        let path = dir.join(format!("fit_modulus.{extension}"));
-        fit_plot(
-            &path,
-            "Uncastellated flexures: stiffness (Eq. 6)",
-            "y = 12 l k_m / t³ [GPa·mm]",
-            &widths,
-            &ys,
-            &line,
-            &format!("y = E·w, E = {:.3} GPa", fit.youngs_modulus * 1e-9),
-        )?;
-        written.push(path);
-        let mut line = fit.damping_line;
-        line.slope *= 1e-9;
-        let path = dir.join(format!("fit_loss_factor.{extension}"));
-        fit_plot(
-            &path,
-            "Uncastellated flexures: damping (Eq. 7)",
-            "z = 12 l ω_d b_m / t³ [GPa·mm]",
-            &widths,
-            &zs,
-            &line,
-            &format!("z = η·E·w, η = {:.4}", fit.loss_factor),
-        )?;
-        written.push(path);
+        panels.push(uncastellated_panels(report, fit));
     }
     for (n, fit) in report.castellated.iter().enumerate() {
+        // Numbered only if there are several groups.
         let suffix = if report.castellated.len() > 1 {
             format!("_{}", n + 1)
         } else {
             String::new()
         };
-        let widths: Vec<f64> = fit
-            .specimens
-            .iter()
-            .map(|&i| report.specimens[i].specimen.flexure.width * 1e3)
-            .collect();
-        let ks: Vec<f64> = fit
-            .specimens
-            .iter()
-            .map(|&i| report.specimens[i].stiffness * 1e6)
-            .collect();
-        let bws: Vec<f64> = fit
-            .specimens
-            .iter()
-            .map(|&i| report.specimens[i].damping_times_omega * 1e6)
-            .collect();
-        let group = format!(
-            "t = {:.0} µm, l = {:.0} µm",
-            fit.thickness * 1e6,
-            fit.length * 1e6
-        );
-        let mut line = fit.stiffness_line;
-        line.slope *= 1e3; // µN·m/rad per mm
-        let path = dir.join(format!("fit_castellated_stiffness{suffix}.{extension}"));
-        fit_plot(
-            &path,
-            &format!("Castellated hinges ({group}): stiffness"),
-            "k_m [µN·m/rad]",
-            &widths,
-            &ks,
-            &line,
-            &format!("l_eff = {:.1} µm", fit.effective_length * 1e6),
-        )?;
-        written.push(path);
-        let mut line = fit.damping_line;
-        line.slope *= 1e3;
-        let path = dir.join(format!("fit_castellated_damping{suffix}.{extension}"));
-        fit_plot(
-            &path,
-            &format!("Castellated hinges ({group}): damping"),
-            "b_m·ω_d [µN·m]",
-            &widths,
-            &bws,
-            &line,
-            &format!("η' = {:.4}", fit.loss_factor),
-        )?;
-        written.push(path);
+        panels.push(castellated_panels(report, fit, &suffix));
+    }
+    let mut written = Vec::new();
+    for fit in panels {
+        written.push(draw_panel(dir, extension, &fit.widths_mm, fit.stiffness)?);
+        written.push(draw_panel(dir, extension, &fit.widths_mm, fit.damping)?);
     }
     Ok(written)
+}
+
+/// The panels of the uncastellated fit, Eq. 6 (stiffness) and Eq. 7 (damping), in GPa·mm
+/// against mm: the slopes read directly in GPa.
+fn uncastellated_panels(report: &FitReport, fit: &ModulusFit) -> FitPanels {
+    let widths_mm = specimen_values(report, &fit.specimens, |s| s.specimen.flexure.width * 1e3);
+    let stiffness = Panel {
+        stem: "fit_modulus".into(),
+        title: "Uncastellated flexures: stiffness (Eq. 6)".into(),
+        y_label: "y = 12 l k_m / t³ [GPa·mm]",
+        values: specimen_values(report, &fit.specimens, |s| s.normalized_stiffness() * 1e-6),
+        line: rescaled(fit.stiffness_line, 1e-9),
+        fit_label: format!("y = E·w, E = {:.3} GPa", fit.youngs_modulus * 1e-9),
+    };
+    let damping = Panel {
+        stem: "fit_loss_factor".into(),
+        title: "Uncastellated flexures: damping (Eq. 7)".into(),
+        y_label: "z = 12 l ω_d b_m / t³ [GPa·mm]",
+        values: specimen_values(report, &fit.specimens, |s| s.normalized_damping() * 1e-6),
+        line: rescaled(fit.damping_line, 1e-9),
+        fit_label: format!("z = η·E·w, η = {:.4}", fit.loss_factor),
+    };
+    FitPanels {
+        widths_mm,
+        stiffness,
+        damping,
+    }
+}
+
+/// The panels of one castellated group: k_m (µN·m/rad) and b_m·ω_d (µN·m) against mm, the
+/// slopes per mm of width.
+fn castellated_panels(report: &FitReport, fit: &CastellatedFit, suffix: &str) -> FitPanels {
+    let widths_mm = specimen_values(report, &fit.specimens, |s| s.specimen.flexure.width * 1e3);
+    let group = format!(
+        "t = {:.0} µm, l = {:.0} µm",
+        fit.thickness * 1e6,
+        fit.length * 1e6
+    );
+    let stiffness = Panel {
+        stem: format!("fit_castellated_stiffness{suffix}"),
+        title: format!("Castellated hinges ({group}): stiffness"),
+        y_label: "k_m [µN·m/rad]",
+        values: specimen_values(report, &fit.specimens, |s| s.stiffness * 1e6),
+        line: rescaled(fit.stiffness_line, 1e3),
+        fit_label: format!("l_eff = {:.1} µm", fit.effective_length * 1e6),
+    };
+    let damping = Panel {
+        stem: format!("fit_castellated_damping{suffix}"),
+        title: format!("Castellated hinges ({group}): damping"),
+        y_label: "b_m·ω_d [µN·m]",
+        values: specimen_values(report, &fit.specimens, |s| s.damping_times_omega * 1e6),
+        line: rescaled(fit.damping_line, 1e3),
+        fit_label: format!("η' = {:.4}", fit.loss_factor),
+    };
+    FitPanels {
+        widths_mm,
+        stiffness,
+        damping,
+    }
 }

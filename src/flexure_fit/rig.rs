@@ -23,12 +23,17 @@
 //! ```
 //!
 //! Quantities are strings with a unit (any unit of the `.mech` language) or plain numbers in SI.
+//!
+//! Consumes: the command line's DATA paths, the TOML text, the trace CSV files. Produces:
+//! [`Specimen`]s and `(times, angles)` in SI, or an [`Error`] naming the file and the key.
 
-use crate::quantity::parse_si;
 use std::path::{Path, PathBuf};
 
 use mech_codegen::ir::Dimension;
 use serde::Deserialize;
+
+use super::error::{Error, SpecimenError};
+use crate::quantity::parse_si;
 
 /// The pendulum of the rig (seed Sec. IV.A, Eqs. 3–4).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -131,85 +136,58 @@ enum Quantity {
     Text(String),
 }
 
-fn quantity(what: &str, q: &Quantity, expected: Dimension) -> Result<f64, String> {
+fn quantity(key: &'static str, q: &Quantity, expected: Dimension) -> Result<f64, SpecimenError> {
     let value = match q {
         Quantity::Number(v) => *v,
-        Quantity::Text(text) => parse_si(what, text, expected, true)?,
+        Quantity::Text(text) => {
+            parse_si(key, text, expected, true).map_err(|message| SpecimenError::Quantity {
+                key,
+                expected,
+                message,
+            })?
+        }
     };
     if !(value.is_finite() && value > 0.0) {
-        return Err(format!("{what} must be positive, got {value}"));
+        return Err(SpecimenError::NotPositive { key, value });
     }
     Ok(value)
 }
 
 /// Reads a specimen description. Errors name the file.
-pub fn read_specimen(path: &Path) -> Result<Specimen, String> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
+pub fn read_specimen(path: &Path) -> Result<Specimen, Error> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::ReadSpecimen {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
     parse_specimen(path, &text)
 }
 
 /// Parses a specimen description given as text; `path` names it and anchors relative trace
 /// paths.
-pub fn parse_specimen(path: &Path, text: &str) -> Result<Specimen, String> {
-    let file = path.display();
-    let raw: SpecimenFile = toml::from_str(text).map_err(|e| format!("`{file}`: {e}"))?;
-    let ctx = |e: String| format!("`{file}`: {e}");
-    let kind = match raw
-        .flexure
-        .kind
-        .as_deref()
-        .map(str::to_ascii_lowercase)
-        .as_deref()
-    {
-        None | Some("uncastellated") => Kind::Uncastellated,
-        Some("castellated") | Some("mirrored-castellated") => Kind::Castellated,
-        Some(other) => {
-            return Err(ctx(format!(
-                "flexure.kind `{other}`: expected `uncastellated` or `castellated`"
-            )))
-        }
-    };
-    let l = Dimension::LENGTH;
-    let flexure = FlexureGeometry {
-        kind,
-        width: quantity("flexure.width", &raw.flexure.width, l).map_err(ctx)?,
-        thickness: quantity("flexure.thickness", &raw.flexure.thickness, l).map_err(ctx)?,
-        length: quantity("flexure.length", &raw.flexure.length, l).map_err(ctx)?,
-        castellation_length: match &raw.flexure.castellation_length {
-            Some(q) => quantity("flexure.castellation_length", q, l).map_err(ctx)?,
-            None => f64::NAN,
-        },
-    };
-    let p = &raw.pendulum;
-    let pendulum = Pendulum {
-        mass: quantity("pendulum.mass", &p.mass, Dimension::MASS).map_err(ctx)?,
-        inertia: quantity("pendulum.inertia", &p.inertia, Dimension::INERTIA).map_err(ctx)?,
-        com_distance: quantity("pendulum.com_distance", &p.com_distance, l).map_err(ctx)?,
-        gravity: match &p.gravity {
-            Some(q) => quantity("pendulum.gravity", q, Dimension::ACCELERATION).map_err(ctx)?,
-            None => 9.81,
-        },
-    };
-    let point_mass_inertia = pendulum.mass * pendulum.com_distance.powi(2);
-    if pendulum.inertia < point_mass_inertia * (1.0 - 1e-9) {
-        return Err(ctx(format!(
-            "pendulum.inertia {:e} kg·m² is less than m·L_cm² = {:e} kg·m²: I_p must be the \
-             inertia about the pivot, not about the centre of mass",
-            pendulum.inertia, point_mass_inertia
-        )));
-    }
+pub fn parse_specimen(path: &Path, text: &str) -> Result<Specimen, Error> {
+    parse_specimen_text(path, text).map_err(|error| Error::Specimen {
+        path: path.to_path_buf(),
+        error,
+    })
+}
+
+fn parse_specimen_text(path: &Path, text: &str) -> Result<Specimen, SpecimenError> {
+    let raw: SpecimenFile = toml::from_str(text).map_err(|e| SpecimenError::Toml {
+        message: e.to_string(),
+    })?;
+    let flexure = flexure_geometry(&raw.flexure)?;
+    let pendulum = pendulum(&raw.pendulum)?;
     let angle_scale = match raw.angle_unit.as_deref() {
         None | Some("rad") => 1.0,
         Some("deg") => std::f64::consts::PI / 180.0,
         Some(other) => {
-            return Err(ctx(format!(
-                "angle_unit `{other}`: expected `rad` or `deg`"
-            )))
+            return Err(SpecimenError::UnknownAngleUnit {
+                unit: other.to_string(),
+            })
         }
     };
     if raw.traces.is_empty() {
-        return Err(ctx("`traces` is empty: list at least one CSV file".into()));
+        return Err(SpecimenError::NoTraces);
     }
     let dir = path.parent().unwrap_or(Path::new(""));
     let traces = raw.traces.iter().map(|t| dir.join(t)).collect();
@@ -228,55 +206,105 @@ pub fn parse_specimen(path: &Path, text: &str) -> Result<Specimen, String> {
     })
 }
 
+fn flexure_geometry(raw: &FlexureFile) -> Result<FlexureGeometry, SpecimenError> {
+    let kind = match raw.kind.as_deref().map(str::to_ascii_lowercase).as_deref() {
+        None | Some("uncastellated") => Kind::Uncastellated,
+        Some("castellated") | Some("mirrored-castellated") => Kind::Castellated,
+        Some(other) => {
+            return Err(SpecimenError::UnknownKind {
+                kind: other.to_string(),
+            })
+        }
+    };
+    let l = Dimension::LENGTH;
+    Ok(FlexureGeometry {
+        kind,
+        width: quantity("flexure.width", &raw.width, l)?,
+        thickness: quantity("flexure.thickness", &raw.thickness, l)?,
+        length: quantity("flexure.length", &raw.length, l)?,
+        castellation_length: match &raw.castellation_length {
+            Some(q) => quantity("flexure.castellation_length", q, l)?,
+            None => f64::NAN,
+        },
+    })
+}
+
+fn pendulum(raw: &PendulumFile) -> Result<Pendulum, SpecimenError> {
+    let pendulum = Pendulum {
+        mass: quantity("pendulum.mass", &raw.mass, Dimension::MASS)?,
+        inertia: quantity("pendulum.inertia", &raw.inertia, Dimension::INERTIA)?,
+        com_distance: quantity(
+            "pendulum.com_distance",
+            &raw.com_distance,
+            Dimension::LENGTH,
+        )?,
+        gravity: match &raw.gravity {
+            Some(q) => quantity("pendulum.gravity", q, Dimension::ACCELERATION)?,
+            None => 9.81,
+        },
+    };
+    // A common slip: the inertia about the centre of mass, which Eq. 4 does not want.
+    let point_mass_inertia = pendulum.mass * pendulum.com_distance.powi(2);
+    if pendulum.inertia < point_mass_inertia * (1.0 - 1e-9) {
+        return Err(SpecimenError::InertiaBelowPointMass {
+            inertia: pendulum.inertia,
+            point_mass_inertia,
+        });
+    }
+    Ok(pendulum)
+}
+
 /// Expands the command line's DATA arguments: `.toml` files as given, directories to the
 /// `.toml` files they contain (sorted).
-pub fn specimen_files(arguments: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
+pub fn specimen_files(arguments: &[PathBuf]) -> Result<Vec<PathBuf>, Error> {
     let mut files = Vec::new();
     for argument in arguments {
         if argument.is_dir() {
             let mut found: Vec<PathBuf> = std::fs::read_dir(argument)
-                .map_err(|e| format!("cannot read directory `{}`: {e}", argument.display()))?
+                .map_err(|e| Error::ReadDirectory {
+                    path: argument.clone(),
+                    message: e.to_string(),
+                })?
                 .filter_map(|entry| entry.ok().map(|e| e.path()))
                 .filter(|p| p.extension().is_some_and(|e| e == "toml"))
                 .collect();
             if found.is_empty() {
-                return Err(format!(
-                    "directory `{}` contains no `.toml` specimen files",
-                    argument.display()
-                ));
+                return Err(Error::NoSpecimenFiles {
+                    path: argument.clone(),
+                });
             }
             found.sort();
             files.extend(found);
         } else if argument.extension().is_some_and(|e| e == "toml") {
             files.push(argument.clone());
         } else {
-            return Err(format!(
-                "`{}`: expected a `.toml` specimen file (naming its CSV traces) or a directory \
-                 of them; see docs/flexure-and-actuator.md",
-                argument.display()
-            ));
+            return Err(Error::NotSpecimenFile {
+                path: argument.clone(),
+            });
         }
     }
     Ok(files)
 }
 
 /// Reads the angle trace `path` of `specimen`: `(times s, angles rad)`.
-pub fn read_trace(specimen: &Specimen, path: &Path) -> Result<(Vec<f64>, Vec<f64>), String> {
-    let table = crate::output::read_csv_table(path)?;
+pub fn read_trace(specimen: &Specimen, path: &Path) -> Result<(Vec<f64>, Vec<f64>), Error> {
+    let table = crate::output::read_csv_table(path).map_err(|message| Error::ReadTrace {
+        path: path.to_path_buf(),
+        message,
+    })?;
     let index = match &specimen.angle_column {
-        Some(column) => table.column_index(column).ok_or_else(|| {
-            format!(
-                "`{}` has no column `{column}`; its columns are {}",
-                path.display(),
-                table.header.join(", ")
-            )
-        })?,
+        Some(column) => table
+            .column_index(column)
+            .ok_or_else(|| Error::MissingAngleColumn {
+                path: path.to_path_buf(),
+                column: column.clone(),
+                columns: table.header.clone(),
+            })?,
         None => {
             if table.columns.len() < 2 {
-                return Err(format!(
-                    "`{}` needs two columns, time [s] and angle",
-                    path.display()
-                ));
+                return Err(Error::NoAngleColumn {
+                    path: path.to_path_buf(),
+                });
             }
             1
         }

@@ -175,30 +175,8 @@ pub fn analyze_trace(
     options: &TraceOptions,
 ) -> Result<TraceAnalysis, TraceError> {
     validate(times, angles)?;
-    let n = times.len();
     let noise = noise_level(angles);
-    let band = 3.0 * noise;
-
-    // Rough crossings with hysteresis: (index of the last sample beyond the band on the old
-    // side, index of the first sample beyond the band on the new side).
-    let brackets = hysteresis_crossings(angles, band);
-    if brackets.len() < MIN_CROSSINGS {
-        return Err(TraceError::TooFewCrossings {
-            found: brackets.len(),
-            needed: MIN_CROSSINGS,
-        });
-    }
-    // Rough crossing times: the last sign change inside each bracket, interpolated.
-    let rough: Vec<f64> = brackets
-        .iter()
-        .map(|&(a, b)| {
-            let mut k = b;
-            while k > a + 1 && angles[k - 1].signum() == angles[b].signum() {
-                k -= 1;
-            }
-            interpolate_zero(times[k - 1], angles[k - 1], times[k], angles[k])
-        })
-        .collect();
+    let rough = rough_crossings(times, angles, 3.0 * noise)?;
     let mut gaps: Vec<f64> = rough.windows(2).map(|w| w[1] - w[0]).collect();
     let half_period = median(&mut gaps);
 
@@ -214,9 +192,66 @@ pub fn analyze_trace(
     let first_peak = peaks.first().map_or(0.0, |p| p.1);
     let threshold =
         (options.min_amplitude_over_noise * noise).max(options.min_amplitude_relative * first_peak);
+    let (crossings, peaks) = clean_half_cycles(&crossings, &peaks, threshold, half_period);
+    if crossings.len() < MIN_CROSSINGS {
+        return Err(TraceError::TooFewCrossings {
+            found: crossings.len(),
+            needed: MIN_CROSSINGS,
+        });
+    }
 
-    // Keep half-cycles from the start while the peak is above the threshold and the
-    // half-cycle has a plausible length.
+    let omega_d = damped_frequency(&crossings);
+    let (sigma, log_fit_r2) = decay_rate(&peaks)?;
+    let omega_n = (sigma * sigma + omega_d * omega_d).sqrt();
+    Ok(TraceAnalysis {
+        samples: times.len(),
+        noise,
+        threshold,
+        gravity_softening: mean_gravity_softening(crossings.len(), &peaks),
+        crossings,
+        peaks,
+        omega_d,
+        sigma,
+        omega_n,
+        zeta: sigma / omega_n,
+        log_fit_r2,
+    })
+}
+
+/// Rough crossing times: crossings with hysteresis (a `band` either side of zero), each at
+/// the last sign change inside its bracket, interpolated. At least [`MIN_CROSSINGS`].
+fn rough_crossings(times: &[f64], angles: &[f64], band: f64) -> Result<Vec<f64>, TraceError> {
+    // (index of the last sample beyond the band on the old side, index of the first sample
+    // beyond the band on the new side).
+    let brackets = hysteresis_crossings(angles, band);
+    if brackets.len() < MIN_CROSSINGS {
+        return Err(TraceError::TooFewCrossings {
+            found: brackets.len(),
+            needed: MIN_CROSSINGS,
+        });
+    }
+    Ok(brackets
+        .iter()
+        .map(|&(a, b)| {
+            let mut k = b;
+            while k > a + 1 && angles[k - 1].signum() == angles[b].signum() {
+                k -= 1;
+            }
+            interpolate_zero(times[k - 1], angles[k - 1], times[k], angles[k])
+        })
+        .collect())
+}
+
+/// The leading half-cycles to use: from the start, while the peak is above `threshold` and
+/// the half-cycle's length is within 30 % of `half_period` (else a crossing was lost or
+/// spurious). Returns their crossings (one more than the peaks) and peaks; none if the first
+/// half-cycle already fails.
+fn clean_half_cycles(
+    crossings: &[f64],
+    peaks: &[(f64, f64)],
+    threshold: f64,
+    half_period: f64,
+) -> (Vec<f64>, Vec<(f64, f64)>) {
     let mut used = 0; // number of half-cycles kept
     for (j, peak) in peaks.iter().enumerate() {
         let length = crossings[j + 1] - crossings[j];
@@ -225,25 +260,24 @@ pub fn analyze_trace(
         }
         used = j + 1;
     }
-    let (crossings, peaks) = if used == 0 {
+    if used == 0 {
         (Vec::new(), Vec::new())
     } else {
         (crossings[..=used].to_vec(), peaks[..used].to_vec())
-    };
-    if crossings.len() < MIN_CROSSINGS {
-        return Err(TraceError::TooFewCrossings {
-            found: crossings.len(),
-            needed: MIN_CROSSINGS,
-        });
     }
+}
 
-    // ω_d: least squares slope of crossing time against index.
+/// ω_d = π / T½, with T½ the least squares slope of crossing time against its index.
+fn damped_frequency(crossings: &[f64]) -> f64 {
     let index: Vec<f64> = (0..crossings.len()).map(|i| i as f64).collect();
     let ones = vec![1.0; crossings.len()];
-    let (slope, _, _) = weighted_line(&index, &crossings, &ones);
-    let omega_d = PI / slope;
+    let (slope, _, _) = weighted_line(&index, crossings, &ones);
+    PI / slope
+}
 
-    // σ: weighted least squares on ln A.
+/// σ and the fit's R² from weighted least squares on ln A (weights A²); an error if the
+/// amplitude does not fall by at least 1 % over the peaks.
+fn decay_rate(peaks: &[(f64, f64)]) -> Result<(f64, f64), TraceError> {
     let peak_times: Vec<f64> = peaks.iter().map(|p| p.0).collect();
     let logs: Vec<f64> = peaks.iter().map(|p| p.1.ln()).collect();
     let weights: Vec<f64> = peaks.iter().map(|p| p.1 * p.1).collect();
@@ -253,31 +287,23 @@ pub fn analyze_trace(
     if sigma.is_nan() || sigma <= 0.0 || sigma * span < 0.01 {
         return Err(TraceError::NoDecay { sigma });
     }
-    let omega_n = (sigma * sigma + omega_d * omega_d).sqrt();
+    Ok((sigma, log_fit_r2))
+}
 
-    // Weights of the LS slope on the intervals between crossings: j (N − j), j = 1..N−1.
-    let nc = crossings.len();
+/// [`bessel_softening`] of the peaks averaged with the weights the ω_d fit gives the
+/// half-cycles between `crossing_count` crossings: `j (N − j)`, j = 1..N−1.
+fn mean_gravity_softening(crossing_count: usize, peaks: &[(f64, f64)]) -> f64 {
     let (mut num, mut den) = (0.0, 0.0);
     for (j, peak) in peaks.iter().enumerate() {
-        let c = ((j + 1) * (nc - j - 1)) as f64;
+        let c = ((j + 1) * (crossing_count - j - 1)) as f64;
         num += c * bessel_softening(peak.1);
         den += c;
     }
-    let gravity_softening = if den > 0.0 { num / den } else { 1.0 };
-
-    Ok(TraceAnalysis {
-        samples: n,
-        noise,
-        threshold,
-        crossings,
-        peaks,
-        omega_d,
-        sigma,
-        omega_n,
-        zeta: sigma / omega_n,
-        log_fit_r2,
-        gravity_softening,
-    })
+    if den > 0.0 {
+        num / den
+    } else {
+        1.0
+    }
 }
 
 fn validate(times: &[f64], angles: &[f64]) -> Result<(), TraceError> {

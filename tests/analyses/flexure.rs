@@ -641,6 +641,7 @@ fn table_iii_beside_eq_2() {
 #[test]
 fn specimen_files_are_read_and_checked() {
     use mech::flexure_fit::rig::parse_specimen;
+    use mech::flexure_fit::{Error, SpecimenError};
     let path = std::path::Path::new("/data/u01.toml");
     let text = r#"
         name = "U01"
@@ -665,12 +666,36 @@ fn specimen_files_are_read_and_checked() {
     let bad_unit = text.replace("\"3 mm\"", "\"3 g\"");
     let e = parse_specimen(path, &bad_unit).unwrap_err();
     assert!(
+        matches!(
+            &e,
+            Error::Specimen {
+                error: SpecimenError::Quantity {
+                    key: "pendulum.com_distance",
+                    ..
+                },
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let e = e.to_string();
+    assert!(
         e.contains("pendulum.com_distance") && e.contains("u01.toml"),
         "{e}"
     );
     let inertia_about_com = text.replace("2.4e-9", "1e-9");
     let e = parse_specimen(path, &inertia_about_com).unwrap_err();
-    assert!(e.contains("about the pivot"), "{e}");
+    assert!(
+        matches!(
+            &e,
+            Error::Specimen {
+                error: SpecimenError::InertiaBelowPointMass { .. },
+                ..
+            }
+        ),
+        "{e}"
+    );
+    assert!(e.to_string().contains("about the pivot"), "{e}");
     let typo = text.replace("com_distance", "com_distanse");
     assert!(parse_specimen(path, &typo).is_err());
 }
