@@ -279,116 +279,12 @@ impl Experiment {
     /// The measured values this experiment compares, in the order of [`Experiment::predict`].
     /// Errors name the data file and the column.
     pub fn observations(&self, leg: &Leg, data: &MeasuredData) -> Result<Observations, String> {
-        let model = leg.model();
-        let mut obs = Observations::default();
         match self {
-            Experiment::QuasiStatic(e) => {
-                leg.require_hamr()?;
-                let mut sigma = Vec::new();
-                for (k, name) in e.outputs.iter().enumerate() {
-                    model.output_index(name).ok_or_else(|| {
-                        format!("key `outputs`: the model has no output `{name}`")
-                    })?;
-                    let values = data
-                        .require(name, Dimension::LENGTH)
-                        .map_err(|e| e.to_string())?;
-                    let noise = match e.noise.get(k) {
-                        Some(text) => Some(noise_value("noise", text)?),
-                        None => None,
-                    };
-                    for (row, &v) in values.iter().enumerate() {
-                        obs.values.push(v);
-                        obs.series.push(name.clone());
-                        obs.abscissa.push(row as f64);
-                        obs.row.push(row);
-                        sigma.push(noise.unwrap_or(f64::NAN));
-                    }
-                }
-                obs.sigma = (!e.noise.is_empty()).then_some(sigma);
-            }
-            Experiment::FrequencyResponse(e) => {
-                leg.require_hamr()?;
-                let frequency = data
-                    .require("frequency", Dimension::FREQUENCY)
-                    .map_err(|e| e.to_string())?;
-                let gain_sigma = match &e.gain_noise {
-                    Some(t) => Some(noise_value("gain_noise", t)?),
-                    None => None,
-                };
-                let phase_sigma = match &e.phase_noise {
-                    Some(t) => Some(noise_value("phase_noise", t)?),
-                    None => None,
-                };
-                let mut sigma = Vec::new();
-                for (suffix, input, output) in e.channels() {
-                    model.input_index(&input).ok_or_else(|| {
-                        format!("channel `{suffix}`: the model has no input `{input}`")
-                    })?;
-                    model.output_index(&output).ok_or_else(|| {
-                        format!("channel `{suffix}`: the model has no output `{output}`")
-                    })?;
-                    let gain = data
-                        .require(&format!("gain{suffix}"), GAIN)
-                        .map_err(|e| e.to_string())?;
-                    let phase = data
-                        .require(&format!("phase{suffix}"), Dimension::NONE)
-                        .map_err(|e| e.to_string())?;
-                    if let Some(bad) = gain.iter().position(|&g| g <= 0.0) {
-                        return Err(format!(
-                            "`{}`, line {}: the gain must be positive (a magnitude)",
-                            data.path.display(),
-                            data.lines.get(bad).copied().unwrap_or(0)
-                        ));
-                    }
-                    for (row, (&f, &g)) in frequency.iter().zip(gain).enumerate() {
-                        obs.values.push(g.ln());
-                        obs.series.push(format!("ln|H|{suffix}"));
-                        obs.abscissa.push(f);
-                        obs.row.push(row);
-                        // A relative gain noise σ_g is σ_g on ln|H| to first order.
-                        sigma.push(gain_sigma.unwrap_or(f64::NAN));
-                    }
-                    for (row, (&f, &p)) in frequency.iter().zip(phase).enumerate() {
-                        obs.values.push(p);
-                        obs.series.push(format!("phase{suffix}"));
-                        obs.abscissa.push(f);
-                        obs.row.push(row);
-                        sigma.push(phase_sigma.unwrap_or(f64::NAN));
-                    }
-                }
-                obs.sigma = (gain_sigma.is_some() && phase_sigma.is_some()).then_some(sigma);
-            }
-            Experiment::ForceDeflection(e) => {
-                leg.require_hamr()?;
-                let distance = data
-                    .require("distance", Dimension::LENGTH)
-                    .map_err(|e| e.to_string())?;
-                let force = data
-                    .require("force", Dimension::FORCE)
-                    .map_err(|e| e.to_string())?;
-                if let Some(bad) = distance.iter().position(|&d| d < 0.0) {
-                    return Err(format!(
-                        "`{}`, line {}: the sensor distance must not be negative (it is measured \
-                         from the foot's rest position along its free motion)",
-                        data.path.display(),
-                        data.lines.get(bad).copied().unwrap_or(0)
-                    ));
-                }
-                let noise = match &e.noise {
-                    Some(text) => Some(noise_value("noise", text)?),
-                    None => None,
-                };
-                for (row, (&d, &f)) in distance.iter().zip(force).enumerate() {
-                    obs.values.push(f);
-                    obs.series.push("force".into());
-                    obs.abscissa.push(d);
-                    obs.row.push(row);
-                }
-                obs.sigma = noise.map(|sigma| vec![sigma; obs.values.len()]);
-            }
-            Experiment::Pendulum(e) => obs = e.observations(leg, data)?,
+            Experiment::QuasiStatic(e) => e.observations(leg, data),
+            Experiment::FrequencyResponse(e) => e.observations(leg, data),
+            Experiment::ForceDeflection(e) => e.observations(leg, data),
+            Experiment::Pendulum(e) => e.observations(leg, data),
         }
-        Ok(obs)
     }
 
     /// The model's prediction of [`Experiment::observations`] with the leg's current
@@ -413,98 +309,12 @@ impl Experiment {
         extensions: &Extensions,
         warm: &mut WarmStarts,
     ) -> Result<Vec<f64>, String> {
-        let model = leg.model();
         match self {
-            Experiment::QuasiStatic(e) => {
-                leg.require_hamr()?;
-                let rows = data.rows;
-                let column = |name: &str| data.column(name);
-                let v_lift = column(model.input_name(leg.v_lift()));
-                let v_swing = column(model.input_name(leg.v_swing()));
-                let outputs: Vec<usize> = e
-                    .outputs
-                    .iter()
-                    .map(|name| model.output_index(name).expect("checked by observations"))
-                    .collect();
-                let mut per_output = vec![Vec::with_capacity(rows); outputs.len()];
-                let mut q = leg.q0.clone();
-                let mut y = vec![0.0; model.noutputs()];
-                let u = vec![0.0; model.nu()];
-                for row in 0..rows {
-                    let inputs = leg.inputs(
-                        v_lift.map_or(0.0, |c| c[row]),
-                        v_swing.map_or(0.0, |c| c[row]),
-                    );
-                    q = leg
-                        .warm_equilibrium(warm, row, &q, &inputs, &[], &[])
-                        .map_err(|e| {
-                            format!("line {}: {e}", data.lines.get(row).copied().unwrap_or(0))
-                        })?
-                        .q;
-                    model.outputs(0.0, &q, &u, &inputs, &mut y);
-                    for (series, &o) in per_output.iter_mut().zip(&outputs) {
-                        series.push(y[o]);
-                    }
-                }
-                Ok(per_output.concat())
-            }
+            Experiment::QuasiStatic(e) => e.predict_warm(leg, data, warm),
             Experiment::FrequencyResponse(e) => {
-                leg.require_hamr()?;
-                let rest_inputs = leg.inputs(0.0, 0.0);
-                let rest = leg
-                    .warm_equilibrium(warm, 0, &leg.q0, &rest_inputs, &[], &[])?
-                    .q;
-                let linear =
-                    mech_runtime::linearize(model, 0.0, &rest, &rest_inputs, &leg.independent)
-                        .map_err(|e| format!("linearization failed: {e}"))?;
-                let rows = data.rows;
-                let frequencies = &measured.abscissa[..rows];
-                let damping = match (extensions.loss_exponent, e.damping) {
-                    (Some(exponent), _) => FlexureDamping::HystereticPowerLaw {
-                        exponent,
-                        reference_hz: geometric_mean(frequencies),
-                    },
-                    (None, Damping::Hysteretic) => FlexureDamping::Hysteretic,
-                    (None, Damping::Viscous) => FlexureDamping::Viscous,
-                };
-                // Per channel: `rows` values of ln|H|, then `rows` phases (as observed).
-                let mut predicted = Vec::with_capacity(measured.values.len());
-                for (c, (_, input, output)) in e.channels().iter().enumerate() {
-                    let (input, output) = (
-                        model.input_index(input).expect("checked"),
-                        model.output_index(output).expect("checked"),
-                    );
-                    let offset = 2 * rows * c;
-                    let mut phase = Vec::with_capacity(rows);
-                    for (k, &f) in frequencies.iter().enumerate() {
-                        let omega = 2.0 * std::f64::consts::PI * f;
-                        let h = linear
-                            .frequency_response(input, output, omega, damping)
-                            .ok_or_else(|| format!("the linear model is singular at {f} Hz"))?;
-                        predicted.push(h.norm().ln());
-                        // The measured phase picks the branch: model phase within ±π of it.
-                        phase.push(wrap_near(h.arg(), measured.values[offset + rows + k]));
-                    }
-                    predicted.extend(phase);
-                }
-                Ok(predicted)
+                e.predict_warm(leg, data, measured, extensions, warm)
             }
-            Experiment::ForceDeflection(e) => {
-                leg.require_hamr()?;
-                let fraction = extensions.off_axis_fraction.unwrap_or(e.off_axis_fraction);
-                let distances = measured.abscissa.clone();
-                let test = force_deflection_warm(
-                    leg,
-                    e.dof,
-                    e.dof.axis(),
-                    e.volts()?,
-                    Sensor::At(distances),
-                    fraction,
-                    warm,
-                )?;
-                // A sensor beyond the free foot's reach is not touched: it reads 0.
-                Ok(test.points.iter().map(|p| p.force.max(0.0)).collect())
-            }
+            Experiment::ForceDeflection(e) => e.predict_warm(leg, measured, extensions, warm),
             // A frequency-dependent loss factor has no meaning at the one frequency of a
             // ring-down (the catalog leaves it out for every kind but frequency responses).
             Experiment::Pendulum(e) => e.predict(leg, data),
@@ -512,7 +322,244 @@ impl Experiment {
     }
 }
 
+impl QuasiStatic {
+    /// The output columns, row by row, one series per output.
+    fn observations(&self, leg: &Leg, data: &MeasuredData) -> Result<Observations, String> {
+        let model = leg.model();
+        let mut obs = Observations::default();
+        leg.require_hamr()?;
+        let mut sigma = Vec::new();
+        for (k, name) in self.outputs.iter().enumerate() {
+            model
+                .output_index(name)
+                .ok_or_else(|| format!("key `outputs`: the model has no output `{name}`"))?;
+            let values = data
+                .require(name, Dimension::LENGTH)
+                .map_err(|e| e.to_string())?;
+            let noise = match self.noise.get(k) {
+                Some(text) => Some(noise_value("noise", text)?),
+                None => None,
+            };
+            for (row, &v) in values.iter().enumerate() {
+                obs.values.push(v);
+                obs.series.push(name.clone());
+                obs.abscissa.push(row as f64);
+                obs.row.push(row);
+                sigma.push(noise.unwrap_or(f64::NAN));
+            }
+        }
+        obs.sigma = (!self.noise.is_empty()).then_some(sigma);
+        Ok(obs)
+    }
+
+    /// The outputs at the static equilibrium under each row's drive voltages.
+    fn predict_warm(
+        &self,
+        leg: &Leg,
+        data: &MeasuredData,
+        warm: &mut WarmStarts,
+    ) -> Result<Vec<f64>, String> {
+        let model = leg.model();
+        leg.require_hamr()?;
+        let rows = data.rows;
+        let column = |name: &str| data.column(name);
+        let v_lift = column(model.input_name(leg.v_lift()));
+        let v_swing = column(model.input_name(leg.v_swing()));
+        let outputs: Vec<usize> = self
+            .outputs
+            .iter()
+            .map(|name| model.output_index(name).expect("checked by observations"))
+            .collect();
+        let mut per_output = vec![Vec::with_capacity(rows); outputs.len()];
+        let mut q = leg.q0.clone();
+        let mut y = vec![0.0; model.noutputs()];
+        let u = vec![0.0; model.nu()];
+        for row in 0..rows {
+            let inputs = leg.inputs(
+                v_lift.map_or(0.0, |c| c[row]),
+                v_swing.map_or(0.0, |c| c[row]),
+            );
+            q = leg
+                .warm_equilibrium(warm, row, &q, &inputs, &[], &[])
+                .map_err(|e| format!("line {}: {e}", data.lines.get(row).copied().unwrap_or(0)))?
+                .q;
+            model.outputs(0.0, &q, &u, &inputs, &mut y);
+            for (series, &o) in per_output.iter_mut().zip(&outputs) {
+                series.push(y[o]);
+            }
+        }
+        Ok(per_output.concat())
+    }
+}
+
+impl FrequencyResponse {
+    /// Per channel, `ln|H|` then the phase at every frequency of the data.
+    fn observations(&self, leg: &Leg, data: &MeasuredData) -> Result<Observations, String> {
+        let model = leg.model();
+        let mut obs = Observations::default();
+        leg.require_hamr()?;
+        let frequency = data
+            .require("frequency", Dimension::FREQUENCY)
+            .map_err(|e| e.to_string())?;
+        let gain_sigma = match &self.gain_noise {
+            Some(t) => Some(noise_value("gain_noise", t)?),
+            None => None,
+        };
+        let phase_sigma = match &self.phase_noise {
+            Some(t) => Some(noise_value("phase_noise", t)?),
+            None => None,
+        };
+        let mut sigma = Vec::new();
+        for (suffix, input, output) in self.channels() {
+            model
+                .input_index(&input)
+                .ok_or_else(|| format!("channel `{suffix}`: the model has no input `{input}`"))?;
+            model
+                .output_index(&output)
+                .ok_or_else(|| format!("channel `{suffix}`: the model has no output `{output}`"))?;
+            let gain = data
+                .require(&format!("gain{suffix}"), GAIN)
+                .map_err(|e| e.to_string())?;
+            let phase = data
+                .require(&format!("phase{suffix}"), Dimension::NONE)
+                .map_err(|e| e.to_string())?;
+            if let Some(bad) = gain.iter().position(|&g| g <= 0.0) {
+                return Err(format!(
+                    "`{}`, line {}: the gain must be positive (a magnitude)",
+                    data.path.display(),
+                    data.lines.get(bad).copied().unwrap_or(0)
+                ));
+            }
+            for (row, (&f, &g)) in frequency.iter().zip(gain).enumerate() {
+                obs.values.push(g.ln());
+                obs.series.push(format!("ln|H|{suffix}"));
+                obs.abscissa.push(f);
+                obs.row.push(row);
+                // A relative gain noise σ_g is σ_g on ln|H| to first order.
+                sigma.push(gain_sigma.unwrap_or(f64::NAN));
+            }
+            for (row, (&f, &p)) in frequency.iter().zip(phase).enumerate() {
+                obs.values.push(p);
+                obs.series.push(format!("phase{suffix}"));
+                obs.abscissa.push(f);
+                obs.row.push(row);
+                sigma.push(phase_sigma.unwrap_or(f64::NAN));
+            }
+        }
+        obs.sigma = (gain_sigma.is_some() && phase_sigma.is_some()).then_some(sigma);
+        Ok(obs)
+    }
+
+    /// `ln|H|` and the phase (on the measured phase's branch) of the linear model at rest.
+    fn predict_warm(
+        &self,
+        leg: &Leg,
+        data: &MeasuredData,
+        measured: &Observations,
+        extensions: &Extensions,
+        warm: &mut WarmStarts,
+    ) -> Result<Vec<f64>, String> {
+        let model = leg.model();
+        leg.require_hamr()?;
+        let rest_inputs = leg.inputs(0.0, 0.0);
+        let rest = leg
+            .warm_equilibrium(warm, 0, &leg.q0, &rest_inputs, &[], &[])?
+            .q;
+        let linear = mech_runtime::linearize(model, 0.0, &rest, &rest_inputs, &leg.independent)
+            .map_err(|e| format!("linearization failed: {e}"))?;
+        let rows = data.rows;
+        let frequencies = &measured.abscissa[..rows];
+        let damping = match (extensions.loss_exponent, self.damping) {
+            (Some(exponent), _) => FlexureDamping::HystereticPowerLaw {
+                exponent,
+                reference_hz: geometric_mean(frequencies),
+            },
+            (None, Damping::Hysteretic) => FlexureDamping::Hysteretic,
+            (None, Damping::Viscous) => FlexureDamping::Viscous,
+        };
+        // Per channel: `rows` values of ln|H|, then `rows` phases (as observed).
+        let mut predicted = Vec::with_capacity(measured.values.len());
+        for (c, (_, input, output)) in self.channels().iter().enumerate() {
+            let (input, output) = (
+                model.input_index(input).expect("checked"),
+                model.output_index(output).expect("checked"),
+            );
+            let offset = 2 * rows * c;
+            let mut phase = Vec::with_capacity(rows);
+            for (k, &f) in frequencies.iter().enumerate() {
+                let omega = 2.0 * std::f64::consts::PI * f;
+                let h = linear
+                    .frequency_response(input, output, omega, damping)
+                    .ok_or_else(|| format!("the linear model is singular at {f} Hz"))?;
+                predicted.push(h.norm().ln());
+                // The measured phase picks the branch: model phase within ±π of it.
+                phase.push(wrap_near(h.arg(), measured.values[offset + rows + k]));
+            }
+            predicted.extend(phase);
+        }
+        Ok(predicted)
+    }
+}
+
 impl ForceDeflectionTest {
+    /// The sensor force at each measured distance.
+    fn observations(&self, leg: &Leg, data: &MeasuredData) -> Result<Observations, String> {
+        let mut obs = Observations::default();
+        leg.require_hamr()?;
+        let distance = data
+            .require("distance", Dimension::LENGTH)
+            .map_err(|e| e.to_string())?;
+        let force = data
+            .require("force", Dimension::FORCE)
+            .map_err(|e| e.to_string())?;
+        if let Some(bad) = distance.iter().position(|&d| d < 0.0) {
+            return Err(format!(
+                "`{}`, line {}: the sensor distance must not be negative (it is measured \
+                 from the foot's rest position along its free motion)",
+                data.path.display(),
+                data.lines.get(bad).copied().unwrap_or(0)
+            ));
+        }
+        let noise = match &self.noise {
+            Some(text) => Some(noise_value("noise", text)?),
+            None => None,
+        };
+        for (row, (&d, &f)) in distance.iter().zip(force).enumerate() {
+            obs.values.push(f);
+            obs.series.push("force".into());
+            obs.abscissa.push(d);
+            obs.row.push(row);
+        }
+        obs.sigma = noise.map(|sigma| vec![sigma; obs.values.len()]);
+        Ok(obs)
+    }
+
+    /// The sensor force at the measured distances, warm-started along the sweep.
+    fn predict_warm(
+        &self,
+        leg: &Leg,
+        measured: &Observations,
+        extensions: &Extensions,
+        warm: &mut WarmStarts,
+    ) -> Result<Vec<f64>, String> {
+        leg.require_hamr()?;
+        let fraction = extensions
+            .off_axis_fraction
+            .unwrap_or(self.off_axis_fraction);
+        let distances = measured.abscissa.clone();
+        let test = force_deflection_warm(
+            leg,
+            self.dof,
+            self.dof.axis(),
+            self.volts()?,
+            Sensor::At(distances),
+            fraction,
+            warm,
+        )?;
+        // A sensor beyond the free foot's reach is not touched: it reads 0.
+        Ok(test.points.iter().map(|p| p.force.max(0.0)).collect())
+    }
+
     fn volts(&self) -> Result<f64, String> {
         let (value, dimension) = mech_codegen::front::units::parse_quantity(&self.voltage)
             .map_err(|e| format!("key `voltage`: `{}`: {e}", self.voltage))?;

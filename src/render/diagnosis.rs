@@ -277,34 +277,13 @@ pub fn diagnosis_page(
         files: vec![sources.data.to_path_buf(), json_path],
         ..Outcome::default()
     };
-    if let Some(s) = &d.screening {
+    if let Some(screening) = &d.screening {
         // First, above the ranking: what the fits cannot be trusted for.
-        let mut flags = Table::new(
-            "Screening before fitting: what no parameter of the model can produce",
-            &["flag", "finding"],
-        );
-        for flag in &s.flags {
-            flags.row(vec![flag.kind.to_string(), flag.message.clone()]);
-        }
-        if s.flags.is_empty() {
-            flags.row(vec!["none".into(), s.summary()]);
-        }
-        outcome.tables.insert(0, flags);
-        outcome.notes.push(s.summary());
+        outcome.tables.insert(0, flags_table(screening));
+        outcome.notes.push(screening.summary());
     }
     if !d.inert.is_empty() {
-        let mut inert = Table::new(
-            "Inert: cannot change the response beyond the noise, or the fit failed",
-            &["cause", "where", "note"],
-        );
-        for t in &d.inert {
-            inert.row(vec![
-                t.cause.clone(),
-                t.location.clone(),
-                t.error.clone().unwrap_or_default(),
-            ]);
-        }
-        outcome.tables.push(inert);
+        outcome.tables.push(inert_table(d));
     }
     let mut curves = vec![("base model".to_string(), d.base.predicted.as_slice())];
     if let Some(best) = d.ranked.first() {
@@ -330,6 +309,37 @@ pub fn diagnosis_page(
     output::write_atomic(&path, page.as_bytes())
         .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     Ok(path)
+}
+
+/// The screening's flags, or its summary when nothing was flagged.
+fn flags_table(screening: &Screening) -> Table {
+    let mut flags = Table::new(
+        "Screening before fitting: what no parameter of the model can produce",
+        &["flag", "finding"],
+    );
+    for flag in &screening.flags {
+        flags.row(vec![flag.kind.to_string(), flag.message.clone()]);
+    }
+    if screening.flags.is_empty() {
+        flags.row(vec!["none".into(), screening.summary()]);
+    }
+    flags
+}
+
+/// The candidates that could not change the response, or whose fit failed.
+fn inert_table(d: &Diagnosis) -> Table {
+    let mut inert = Table::new(
+        "Inert: cannot change the response beyond the noise, or the fit failed",
+        &["cause", "where", "note"],
+    );
+    for t in &d.inert {
+        inert.row(vec![
+            t.cause.clone(),
+            t.location.clone(),
+            t.error.clone().unwrap_or_default(),
+        ]);
+    }
+    inert
 }
 
 /// What the data show against what the base model and the best candidate predict: the
