@@ -186,13 +186,7 @@ impl Session {
     /// `--set m=12 g`: checks the name and the unit against the parameter's dimension.
     pub fn set(&mut self, assignment: &str) -> Result<(), Error> {
         let option = "--set";
-        let (name, value) =
-            signal_spec::parse_assignment(assignment).map_err(|message| Error::Setting {
-                option,
-                name: None,
-                message,
-            })?;
-        let index = self.index_of(NameKind::Parameter, &name, Some(option))?;
+        let (name, value, index) = self.assignment(option, NameKind::Parameter, assignment)?;
         let (si, dimension) =
             mech_codegen::front::units::parse_quantity(&value).map_err(|message| {
                 Error::Setting {
@@ -225,13 +219,7 @@ impl Session {
     /// `--input drive=sine(...)`: checks the name and the signal's units.
     pub fn input(&mut self, assignment: &str) -> Result<(), Error> {
         let option = "--input";
-        let (name, spec) =
-            signal_spec::parse_assignment(assignment).map_err(|message| Error::Setting {
-                option,
-                name: None,
-                message,
-            })?;
-        let index = self.index_of(NameKind::Input, &name, Some(option))?;
+        let (name, spec, index) = self.assignment(option, NameKind::Input, assignment)?;
         let expected = self
             .compiled
             .model
@@ -247,6 +235,24 @@ impl Session {
                 message,
             })?;
         Ok(())
+    }
+
+    /// `NAME=VALUE` given by `option`: the name, the value's text and the index of the
+    /// `kind` it names.
+    fn assignment(
+        &self,
+        option: &'static str,
+        kind: NameKind,
+        text: &str,
+    ) -> Result<(String, String, usize), Error> {
+        let (name, value) =
+            signal_spec::parse_assignment(text).map_err(|message| Error::Setting {
+                option,
+                name: None,
+                message,
+            })?;
+        let index = self.index_of(kind, &name, Some(option))?;
+        Ok((name, value, index))
     }
 
     /// Index of coordinate `name`, or an error listing the coordinates.

@@ -9,34 +9,24 @@ use std::path::PathBuf;
 use clap::Args;
 use mech_runtime::Model;
 
+use super::ModelArgs;
 use crate::output;
-use crate::session::{self, Session};
+use crate::session;
 
 #[derive(Args, Clone, Debug)]
 pub struct AssembleArgs {
-    pub model: PathBuf,
-    /// Set a parameter: `--set 'm=12 g'` (repeatable).
-    #[arg(long = "set", value_name = "NAME=VALUE")]
-    pub sets: Vec<String>,
-    /// Hold this coordinate (at VALUE, or its q0): `--independent crank_angle=1rad`.
-    #[arg(long = "independent", value_name = "NAME[=VALUE]")]
-    pub independent: Vec<String>,
+    #[command(flatten)]
+    pub common: ModelArgs,
     /// CSV file for the assembled coordinates and speeds.
     #[arg(long)]
     pub out: Option<PathBuf>,
 }
 
 pub fn run(args: &AssembleArgs) -> Result<(), String> {
-    let (path, sets, independent, out) = (
-        args.model.as_path(),
-        &args.sets,
-        &args.independent,
-        args.out.as_deref(),
-    );
-    let session = Session::open(path, sets, &[])?;
-    let state = session.assemble(independent)?;
+    let (session, _) = args.common.open()?;
+    let state = session.assemble(&args.common.independent)?;
     print!("{}", session::assembly_report(&session.model, &state));
-    if let Some(out) = out {
+    if let Some(out) = &args.out {
         let model = &session.model;
         let names: Vec<&str> = (0..model.nq()).map(|i| model.coordinate_name(i)).collect();
         let mut header: Vec<String> = names.iter().map(|n| format!("q_{n}")).collect();

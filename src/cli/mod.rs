@@ -133,7 +133,9 @@ pub struct ModelArgs {
     /// Set a parameter: `--set 'm=12 g'` (repeatable).
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub sets: Vec<String>,
-    /// Hold an input at a value: `--input 'drive=2 mN'` (a constant; repeatable).
+    /// Drive an input: a constant `--input 'drive=2 mN'`, or for `simulate` a signal
+    /// `--input drive='sine(amplitude=1 mN, frequency=10 Hz)'` (the other commands use its
+    /// value at t = 0; repeatable).
     #[arg(long = "input", value_name = "NAME=VALUE")]
     pub inputs: Vec<String>,
     /// For models with loops: a coordinate kept independent (`NAME` or `NAME=VALUE` for the

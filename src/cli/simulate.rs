@@ -9,24 +9,17 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 use mech_runtime::{Method, Model, SimOptions, Trajectory};
 
-use super::parse_time;
+use super::{parse_time, ModelArgs};
 use crate::output;
 use crate::render::plot;
-use crate::session::Session;
 
 #[derive(Args, Clone, Debug)]
 pub struct SimulateArgs {
-    /// The `.mech` file.
-    pub model: PathBuf,
+    #[command(flatten)]
+    pub common: ModelArgs,
     /// End time, with a unit (`2 s`, `500 ms`) or in seconds.
     #[arg(long)]
     pub t_end: String,
-    /// Set a parameter: `--set m=12 g` (repeatable).
-    #[arg(long = "set", value_name = "NAME=VALUE")]
-    pub sets: Vec<String>,
-    /// Drive an input: `--input drive='sine(amplitude=1 mN, frequency=10 Hz)'` (repeatable).
-    #[arg(long = "input", value_name = "NAME=SIGNAL")]
-    pub inputs: Vec<String>,
     /// CSV file for time, q, u and outputs.
     #[arg(long)]
     pub out: PathBuf,
@@ -48,11 +41,6 @@ pub struct SimulateArgs {
     /// Output sampling interval, with a unit or in seconds (default: t_end / 1000).
     #[arg(long)]
     pub dt_out: Option<String>,
-    /// For models with loops: hold this coordinate (at VALUE, or its q0) while closing
-    /// the loops, e.g. `--independent crank_angle=1rad` (repeatable; default: chosen by
-    /// pivoting on the constraint Jacobian).
-    #[arg(long = "independent", value_name = "NAME[=VALUE]")]
-    pub independent: Vec<String>,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -71,9 +59,9 @@ pub enum Integrator {
 }
 
 pub fn run(request: &SimulateArgs) -> Result<(), String> {
-    let path = request.model.as_path();
-    let session = Session::open(path, &request.sets, &request.inputs)?;
-    let state = session.assemble(&request.independent)?;
+    let path = request.common.model.as_path();
+    let (session, _) = request.common.open()?;
+    let state = session.assemble(&request.common.independent)?;
     if let Some(mobility) = &state.mobility {
         println!("assembled `{}`: {mobility}", session.model.name());
     }
