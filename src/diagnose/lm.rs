@@ -520,15 +520,208 @@ where
     F: FnMut(&[f64]) -> Result<Vec<f64>, E>,
 {
     let problem = Problem::new(parameters)?;
-    let mut eval = Evaluator {
-        f: residuals,
-        scales: problem.scales.clone(),
-        count: 0,
-        m: 0,
-    };
-    let mut state = State::start(&mut eval, &problem, options)?;
-    let reason = state.iterate(&mut eval, &problem, options)?;
-    conclude(eval, &problem, parameters, options, state, reason)
+    let mut fit = Fit::start(residuals, &problem, options)?;
+    let reason = fit.iterate()?;
+    fit.conclude(parameters, reason)
+}
+
+/// One run of the iteration: the residual function (counting its calls), the problem in
+/// scaled form, the options, and where the iteration stands.
+struct Fit<'a, F> {
+    eval: Evaluator<F>,
+    problem: &'a Problem,
+    options: &'a LmOptions,
+    state: State,
+}
+
+impl<'a, F, E> Fit<'a, F>
+where
+    F: FnMut(&[f64]) -> Result<Vec<f64>, E>,
+{
+    /// The residuals at the initial point; they fix the number of residuals `m`.
+    fn start(
+        residuals: F,
+        problem: &'a Problem,
+        options: &'a LmOptions,
+    ) -> Result<Self, LmError<E>> {
+        let mut eval = Evaluator {
+            f: residuals,
+            scales: problem.scales.clone(),
+            count: 0,
+            m: 0,
+        };
+        let x = problem.x0.clone();
+        let r = match eval.eval(&x) {
+            Ok(r) => r,
+            Err(failure) => return Err(failure.into_error(eval.params(&x))),
+        };
+        if r.is_empty() {
+            return Err(LmError::NoResiduals);
+        }
+        eval.m = r.len();
+        let state = State {
+            cost: half_norm_squared(&r),
+            lambda: options.initial_damping.max(f64::MIN_POSITIVE),
+            nu: 2.0,
+            d: vec![0.0f64; x.len()],
+            iterations: 0,
+            x,
+            r,
+        };
+        Ok(Fit {
+            eval,
+            problem,
+            options,
+            state,
+        })
+    }
+
+    /// Iterates until a stopping test is met: one Jacobian per iteration, then damped steps
+    /// until one is accepted.
+    fn iterate(&mut self) -> Result<StopReason, LmError<E>> {
+        loop {
+            if let Some(reason) = self.state.limit_reached(self.eval.count, self.options) {
+                return Ok(reason);
+            }
+            if let Some(reason) = self.iteration()? {
+                return Ok(reason);
+            }
+        }
+    }
+
+    /// One iteration: the Jacobian `J` and gradient `g = Jᵀr`, the active set, the gradient
+    /// test, then the damped steps on the free parameters. `None`: a step was accepted.
+    fn iteration(&mut self) -> Result<Option<StopReason>, LmError<E>> {
+        let (options, state) = (self.options, &mut self.state);
+        let jac = self.eval.jacobian(
+            &state.x,
+            &state.r,
+            options.difference,
+            options.relative_step,
+            self.problem,
+        )?;
+        state.iterations += 1;
+        let rv = DVector::from_column_slice(&state.r);
+        let g = jac.tr_mul(&rv);
+        let norms = column_norms(&jac);
+        for (dj, nj) in state.d.iter_mut().zip(&norms) {
+            *dj = dj.max(*nj);
+        }
+        let free = self.problem.free_parameters(&state.x, &g);
+        let r_norm = (2.0 * state.cost).sqrt();
+        if free.is_empty() || gradient_cosine(&free, &g, &norms, r_norm) <= options.gtol {
+            return Ok(Some(StopReason::Gradient));
+        }
+        match ScaledSystem::new(&jac, &rv, free, &state.d) {
+            Ok(system) => self.damped_steps(&jac, &g, &system),
+            Err(reason) => Ok(Some(reason)),
+        }
+    }
+
+    /// Trial steps of growing damping until one lowers the cost enough (`ρ > 10⁻⁴`: `None`)
+    /// or a stopping test is met.
+    fn damped_steps(
+        &mut self,
+        jac: &DMatrix<f64>,
+        g: &DVector<f64>,
+        system: &ScaledSystem,
+    ) -> Result<Option<StopReason>, LmError<E>> {
+        let (options, state) = (self.options, &mut self.state);
+        let n = state.x.len();
+        loop {
+            let x_new = system.trial_point(&state.x, self.problem, state.lambda);
+            let step = DVector::from_iterator(n, x_new.iter().zip(&state.x).map(|(a, b)| a - b));
+            if step.iter().all(|s| *s == 0.0) {
+                return Ok(Some(StopReason::StepSize));
+            }
+            // The model's reduction −(gᵀδ + ½‖Jδ‖²).
+            let j_step = jac * &step;
+            let predicted = -(g.dot(&step) + 0.5 * j_step.norm_squared());
+            let step_norm = weighted_norm(&state.d, step.as_slice());
+            let x_norm = weighted_norm(&state.d, &state.x);
+
+            let trial = self.eval.trial(&x_new)?;
+            let cost_new = trial.as_deref().map_or(f64::INFINITY, half_norm_squared);
+            let actual = state.cost - cost_new;
+            let rho = gain_ratio(actual, predicted);
+            let accepted = rho > ACCEPT_RATIO;
+            let small_reduction = predicted > 0.0
+                && predicted <= options.ftol * state.cost
+                && actual.abs() <= options.ftol * state.cost
+                && rho <= 2.0;
+            if accepted {
+                state.accept(x_new, trial, cost_new, rho);
+            } else {
+                state.reject();
+            }
+            if small_reduction {
+                return Ok(Some(StopReason::CostReduction));
+            }
+            if accepted && step_norm <= options.xtol * (x_norm + options.xtol) {
+                return Ok(Some(StopReason::StepSize));
+            }
+            if accepted {
+                return Ok(None);
+            }
+            if state.lambda > MAX_DAMPING || !state.lambda.is_finite() {
+                return Ok(Some(StopReason::NoProgress));
+            }
+            if self.eval.count >= options.max_evaluations {
+                return Ok(Some(StopReason::MaxEvaluations));
+            }
+        }
+    }
+
+    /// The result at the final point: the Jacobian again (with the covariance's difference
+    /// scheme), each parameter's status, the covariance `s² (JᵀJ)⁺` and the standard errors.
+    fn conclude(
+        mut self,
+        parameters: &[Parameter],
+        reason: StopReason,
+    ) -> Result<FitResult, LmError<E>> {
+        let (options, state) = (self.options, self.state);
+        let (m, n) = (state.r.len(), state.x.len());
+        let jac_x = self.eval.jacobian(
+            &state.x,
+            &state.r,
+            options.covariance_difference,
+            options.relative_step,
+            self.problem,
+        )?;
+        let params = self.eval.params(&state.x);
+        // ∂r/∂p = ∂r/∂x / s.
+        let jacobian = DMatrix::from_fn(m, n, |i, j| jac_x[(i, j)] / self.problem.scales[j]);
+        let status = self.problem.bound_status(&state.x);
+        let analysis = analyze(&jacobian, status, options.rank_tolerance);
+        let degrees_of_freedom = m.saturating_sub(analysis.rank);
+        let noise_variance = if options.residuals_normalized {
+            1.0
+        } else if degrees_of_freedom > 0 {
+            2.0 * state.cost / degrees_of_freedom as f64
+        } else {
+            f64::NAN
+        };
+        let covariance = analysis.covariance.map(|c| c * noise_variance);
+        Ok(FitResult {
+            names: parameters.iter().map(|p| p.name.clone()).collect(),
+            params,
+            cost: state.cost,
+            residual_rms: (2.0 * state.cost / m as f64).sqrt(),
+            residuals: state.r,
+            jacobian,
+            iterations: state.iterations,
+            evaluations: self.eval.count,
+            standard_errors: standard_errors(&analysis.status, &covariance),
+            covariance: zero_where_fixed(covariance, &analysis.status),
+            status: analysis.status,
+            rank: analysis.rank,
+            condition_number: analysis.condition_number,
+            degrees_of_freedom,
+            noise_variance,
+            converged: reason.converged(),
+            reason,
+        })
+    }
 }
 
 /// Where the iteration stands: the point `x` (scaled), its residuals and cost, the damping
@@ -547,56 +740,6 @@ struct State {
 }
 
 impl State {
-    /// The residuals at the initial point; they fix the number of residuals `m`.
-    fn start<F, E>(
-        eval: &mut Evaluator<F>,
-        problem: &Problem,
-        options: &LmOptions,
-    ) -> Result<State, LmError<E>>
-    where
-        F: FnMut(&[f64]) -> Result<Vec<f64>, E>,
-    {
-        let x = problem.x0.clone();
-        let r = match eval.eval(&x) {
-            Ok(r) => r,
-            Err(failure) => return Err(failure.into_error(eval.params(&x))),
-        };
-        if r.is_empty() {
-            return Err(LmError::NoResiduals);
-        }
-        eval.m = r.len();
-        Ok(State {
-            cost: half_norm_squared(&r),
-            lambda: options.initial_damping.max(f64::MIN_POSITIVE),
-            nu: 2.0,
-            d: vec![0.0f64; x.len()],
-            iterations: 0,
-            x,
-            r,
-        })
-    }
-
-    /// Iterates until a stopping test is met: one Jacobian per iteration, then damped steps
-    /// until one is accepted.
-    fn iterate<F, E>(
-        &mut self,
-        eval: &mut Evaluator<F>,
-        problem: &Problem,
-        options: &LmOptions,
-    ) -> Result<StopReason, LmError<E>>
-    where
-        F: FnMut(&[f64]) -> Result<Vec<f64>, E>,
-    {
-        loop {
-            if let Some(reason) = self.limit_reached(eval.count, options) {
-                return Ok(reason);
-            }
-            if let Some(reason) = self.iteration(eval, problem, options)? {
-                return Ok(reason);
-            }
-        }
-    }
-
     /// A zero residual, or no room left for another Jacobian (n forward or 2n central
     /// evaluations).
     fn limit_reached(&self, evaluations: usize, options: &LmOptions) -> Option<StopReason> {
@@ -608,101 +751,6 @@ impl State {
             Some(StopReason::MaxEvaluations)
         } else {
             None
-        }
-    }
-
-    /// One iteration: the Jacobian `J` and gradient `g = Jᵀr`, the active set, the gradient
-    /// test, then the damped steps on the free parameters. `None`: a step was accepted.
-    fn iteration<F, E>(
-        &mut self,
-        eval: &mut Evaluator<F>,
-        problem: &Problem,
-        options: &LmOptions,
-    ) -> Result<Option<StopReason>, LmError<E>>
-    where
-        F: FnMut(&[f64]) -> Result<Vec<f64>, E>,
-    {
-        let jac = eval.jacobian(
-            &self.x,
-            &self.r,
-            options.difference,
-            options.relative_step,
-            problem,
-        )?;
-        self.iterations += 1;
-        let rv = DVector::from_column_slice(&self.r);
-        let g = jac.tr_mul(&rv);
-        let norms = column_norms(&jac);
-        for (dj, nj) in self.d.iter_mut().zip(&norms) {
-            *dj = dj.max(*nj);
-        }
-        let free = problem.free_parameters(&self.x, &g);
-        let r_norm = (2.0 * self.cost).sqrt();
-        if free.is_empty() || gradient_cosine(&free, &g, &norms, r_norm) <= options.gtol {
-            return Ok(Some(StopReason::Gradient));
-        }
-        match ScaledSystem::new(&jac, &rv, free, &self.d) {
-            Ok(system) => self.damped_steps(eval, problem, options, &jac, &g, &system),
-            Err(reason) => Ok(Some(reason)),
-        }
-    }
-
-    /// Trial steps of growing damping until one lowers the cost enough (`ρ > 10⁻⁴`: `None`)
-    /// or a stopping test is met.
-    fn damped_steps<F, E>(
-        &mut self,
-        eval: &mut Evaluator<F>,
-        problem: &Problem,
-        options: &LmOptions,
-        jac: &DMatrix<f64>,
-        g: &DVector<f64>,
-        system: &ScaledSystem,
-    ) -> Result<Option<StopReason>, LmError<E>>
-    where
-        F: FnMut(&[f64]) -> Result<Vec<f64>, E>,
-    {
-        let n = self.x.len();
-        loop {
-            let x_new = system.trial_point(&self.x, problem, self.lambda);
-            let step = DVector::from_iterator(n, x_new.iter().zip(&self.x).map(|(a, b)| a - b));
-            if step.iter().all(|s| *s == 0.0) {
-                return Ok(Some(StopReason::StepSize));
-            }
-            // The model's reduction −(gᵀδ + ½‖Jδ‖²).
-            let j_step = jac * &step;
-            let predicted = -(g.dot(&step) + 0.5 * j_step.norm_squared());
-            let step_norm = weighted_norm(&self.d, step.as_slice());
-            let x_norm = weighted_norm(&self.d, &self.x);
-
-            let trial = eval.trial(&x_new)?;
-            let cost_new = trial.as_deref().map_or(f64::INFINITY, half_norm_squared);
-            let actual = self.cost - cost_new;
-            let rho = gain_ratio(actual, predicted);
-            let accepted = rho > ACCEPT_RATIO;
-            let small_reduction = predicted > 0.0
-                && predicted <= options.ftol * self.cost
-                && actual.abs() <= options.ftol * self.cost
-                && rho <= 2.0;
-            if accepted {
-                self.accept(x_new, trial, cost_new, rho);
-            } else {
-                self.reject();
-            }
-            if small_reduction {
-                return Ok(Some(StopReason::CostReduction));
-            }
-            if accepted && step_norm <= options.xtol * (x_norm + options.xtol) {
-                return Ok(Some(StopReason::StepSize));
-            }
-            if accepted {
-                return Ok(None);
-            }
-            if self.lambda > MAX_DAMPING || !self.lambda.is_finite() {
-                return Ok(Some(StopReason::NoProgress));
-            }
-            if eval.count >= options.max_evaluations {
-                return Ok(Some(StopReason::MaxEvaluations));
-            }
         }
     }
 
@@ -817,65 +865,6 @@ impl ScaledSystem {
         }
         x_new
     }
-}
-
-/// The result at the final point: the Jacobian again (with the covariance's difference
-/// scheme), each parameter's status, the covariance `s² (JᵀJ)⁺` and the standard errors.
-fn conclude<F, E>(
-    mut eval: Evaluator<F>,
-    problem: &Problem,
-    parameters: &[Parameter],
-    options: &LmOptions,
-    state: State,
-    reason: StopReason,
-) -> Result<FitResult, LmError<E>>
-where
-    F: FnMut(&[f64]) -> Result<Vec<f64>, E>,
-{
-    let (m, n) = (state.r.len(), state.x.len());
-    let jac_x = eval.jacobian(
-        &state.x,
-        &state.r,
-        options.covariance_difference,
-        options.relative_step,
-        problem,
-    )?;
-    let params = eval.params(&state.x);
-    // ∂r/∂p = ∂r/∂x / s.
-    let jacobian = DMatrix::from_fn(m, n, |i, j| jac_x[(i, j)] / problem.scales[j]);
-    let analysis = analyze(
-        &jacobian,
-        problem.bound_status(&state.x),
-        options.rank_tolerance,
-    );
-    let degrees_of_freedom = m.saturating_sub(analysis.rank);
-    let noise_variance = if options.residuals_normalized {
-        1.0
-    } else if degrees_of_freedom > 0 {
-        2.0 * state.cost / degrees_of_freedom as f64
-    } else {
-        f64::NAN
-    };
-    let covariance = analysis.covariance.map(|c| c * noise_variance);
-    Ok(FitResult {
-        names: parameters.iter().map(|p| p.name.clone()).collect(),
-        params,
-        cost: state.cost,
-        residual_rms: (2.0 * state.cost / m as f64).sqrt(),
-        residuals: state.r,
-        jacobian,
-        iterations: state.iterations,
-        evaluations: eval.count,
-        standard_errors: standard_errors(&analysis.status, &covariance),
-        covariance: zero_where_fixed(covariance, &analysis.status),
-        status: analysis.status,
-        rank: analysis.rank,
-        condition_number: analysis.condition_number,
-        degrees_of_freedom,
-        noise_variance,
-        converged: reason.converged(),
-        reason,
-    })
 }
 
 /// `√C_jj` for a free parameter; `+∞` unidentifiable, NaN at a bound, 0 fixed.
