@@ -34,7 +34,7 @@ use super::experiment::Experiment;
 use super::experiment::Extensions;
 use super::extend::Extension;
 use super::fit::{fit_values, residual, Target};
-use super::lm::{information_criteria, NoiseModel, Parameter};
+use super::lm::{information_criteria, FitResult, NoiseModel, Parameter};
 use crate::experiments::leg::{Leg, WarmStarts};
 use mech_codegen::ir::transform::AXES;
 
@@ -98,6 +98,35 @@ impl Candidate {
     fn defining(&self) -> &[(Target, Parameter)] {
         &self.parameters[..self.parameters.len() - self.supporting]
     }
+
+    /// A change of parameters the model already has: no change of form, nothing supporting.
+    fn parameter_change(
+        cause: &str,
+        location: String,
+        parameters: Vec<(Target, Parameter)>,
+    ) -> Candidate {
+        Candidate {
+            cause: cause.into(),
+            location,
+            parameters,
+            extension: None,
+            supporting: 0,
+            screen_at_upper: false,
+        }
+    }
+
+    /// A model-form extension fitted by its one new parameter alone.
+    fn extended(
+        cause: &str,
+        location: String,
+        parameter: (Target, Parameter),
+        extension: Extension,
+    ) -> Candidate {
+        Candidate {
+            extension: Some(extension),
+            ..Candidate::parameter_change(cause, location, vec![parameter])
+        }
+    }
 }
 
 /// The catalog for `leg`'s model and the experiment (see the module comment): only causes
@@ -105,6 +134,32 @@ impl Candidate {
 /// off-axis load at the foot a force/deflection test).
 pub fn catalog(leg: &Leg, experiment: &Experiment) -> Vec<Candidate> {
     let frequency_response = matches!(experiment, Experiment::FrequencyResponse(_));
+    let mut out = parameter_candidates(leg, frequency_response);
+    if let Experiment::ForceDeflection(test) = experiment {
+        out.push(Candidate::parameter_change(
+            "unmodelled off-axis load at the foot",
+            "foot (the sensor's y force)".into(),
+            vec![(
+                Target::OffAxisFraction,
+                Parameter::new("off_axis_fraction", test.off_axis_fraction)
+                    .bounded(-1.0, 1.0)
+                    .with_scale(0.1),
+            )],
+        ));
+    }
+    out.extend(modulus_candidates(leg));
+    // A ring-down swings in the hinge's plane: no twist to excite.
+    if !matches!(experiment, Experiment::Pendulum(_)) {
+        out.extend(hinge_candidates(leg));
+        out.extend(actuator_candidates(leg));
+    }
+    out
+}
+
+/// The candidates on the model's own parameters, by name: every torsional stiffness `k_*`
+/// off by a factor, the loss factor `eta` (and, in a frequency response, its frequency
+/// dependence), the actuator `preload`.
+fn parameter_candidates(leg: &Leg, frequency_response: bool) -> Vec<Candidate> {
     let model = leg.model();
     let compiled = &leg.session.compiled.model;
     let mut out = Vec::new();
@@ -112,99 +167,79 @@ pub fn catalog(leg: &Leg, experiment: &Experiment) -> Vec<Candidate> {
         let name = model.param_name(index);
         let value = model.param(index);
         if name.starts_with("k_") && param.dimension == Dimension::TORQUE && value > 0.0 {
-            out.push(Candidate {
-                cause: "flexure stiffness off by a factor".into(),
-                location: format!("flexure {}", &name[2..]),
-                parameters: vec![(
-                    Target::Param(index),
-                    Parameter::new(name, value).bounded(value / 4.0, value * 4.0),
-                )],
-                extension: None,
-                supporting: 0,
-                screen_at_upper: false,
-            });
+            let location = format!("flexure {}", &name[2..]);
+            out.push(stiffness_factor(location, index, name, value));
         } else if name == "eta" && value > 0.0 {
-            let eta = Parameter::new(name, value).bounded(value / 5.0, value * 5.0);
-            out.push(Candidate {
-                cause: "loss factor differs".into(),
-                location: "all flexures".into(),
-                parameters: vec![(Target::Param(index), eta.clone())],
-                extension: None,
-                supporting: 0,
-                screen_at_upper: false,
-            });
-            if !frequency_response {
-                continue;
-            }
-            // A model-form extension: η(f) = η·(f/f_ref)^α (frequency responses only).
-            out.push(Candidate {
-                cause: "frequency-dependent loss factor".into(),
-                location: "all flexures".into(),
-                parameters: vec![
-                    (Target::Param(index), eta),
-                    (
-                        Target::LossExponent,
-                        Parameter::new("loss_exponent", 0.0)
-                            .bounded(-1.5, 1.5)
-                            .with_scale(1.0),
-                    ),
-                ],
-                extension: None,
-                supporting: 0,
-                screen_at_upper: false,
-            });
+            out.extend(loss_factor_candidates(index, value, frequency_response));
         } else if name == "preload" {
-            out.push(Candidate {
-                cause: "actuator tip preload".into(),
-                location: "both actuators".into(),
-                parameters: vec![(
-                    Target::Param(index),
-                    Parameter::new(name, value)
-                        .bounded(-200e-6, 200e-6)
-                        .with_scale(50e-6),
-                )],
-                extension: None,
-                supporting: 0,
-                screen_at_upper: false,
-            });
+            out.push(Candidate::parameter_change(
+                "actuator tip preload",
+                "both actuators".into(),
+                vec![(Target::Param(index), preload(name, value))],
+            ));
         }
     }
-    if let Experiment::ForceDeflection(test) = experiment {
-        out.push(Candidate {
-            cause: "unmodelled off-axis load at the foot".into(),
-            location: "foot (the sensor's y force)".into(),
-            parameters: vec![(
-                Target::OffAxisFraction,
-                Parameter::new("off_axis_fraction", test.off_axis_fraction)
-                    .bounded(-1.0, 1.0)
-                    .with_scale(0.1),
-            )],
-            extension: None,
-            supporting: 0,
-            screen_at_upper: false,
-        });
-    }
-    // A flexure whose stiffness is E w h³/(12 l) of a material: the modulus stands for it.
-    for (index, flexures) in super::pendulum::stiffness_moduli(leg) {
-        let (name, value) = (model.param_name(index), model.param(index));
-        out.push(Candidate {
-            cause: "flexure stiffness off by a factor".into(),
-            location: format!("flexure {} (modulus {name})", flexures.join(", ")),
-            parameters: vec![(
-                Target::Param(index),
-                Parameter::new(name, value).bounded(value / 4.0, value * 4.0),
-            )],
-            extension: None,
-            supporting: 0,
-            screen_at_upper: false,
-        });
-    }
-    // A ring-down swings in the hinge's plane: no twist to excite.
-    if !matches!(experiment, Experiment::Pendulum(_)) {
-        out.extend(hinge_candidates(leg));
-        out.extend(actuator_candidates(leg));
+    out
+}
+
+/// A flexure's stiffness (parameter `index`, `name` = `value`) within a factor of 4 of the
+/// model's.
+fn stiffness_factor(location: String, index: usize, name: &str, value: f64) -> Candidate {
+    Candidate::parameter_change(
+        "flexure stiffness off by a factor",
+        location,
+        vec![(
+            Target::Param(index),
+            Parameter::new(name, value).bounded(value / 4.0, value * 4.0),
+        )],
+    )
+}
+
+/// An actuator's tip preload, up to ±200 µN.
+fn preload(name: &str, value: f64) -> Parameter {
+    Parameter::new(name, value)
+        .bounded(-200e-6, 200e-6)
+        .with_scale(50e-6)
+}
+
+/// The loss factor `eta` (parameter `index`) within a factor of 5, and in a frequency
+/// response also the model-form extension η(f) = η·(f/f_ref)^α.
+fn loss_factor_candidates(index: usize, value: f64, frequency_response: bool) -> Vec<Candidate> {
+    let eta = Parameter::new("eta", value).bounded(value / 5.0, value * 5.0);
+    let mut out = vec![Candidate::parameter_change(
+        "loss factor differs",
+        "all flexures".into(),
+        vec![(Target::Param(index), eta.clone())],
+    )];
+    if frequency_response {
+        out.push(Candidate::parameter_change(
+            "frequency-dependent loss factor",
+            "all flexures".into(),
+            vec![
+                (Target::Param(index), eta),
+                (
+                    Target::LossExponent,
+                    Parameter::new("loss_exponent", 0.0)
+                        .bounded(-1.5, 1.5)
+                        .with_scale(1.0),
+                ),
+            ],
+        ));
     }
     out
+}
+
+/// A flexure whose stiffness is E w h³/(12 l) of a material: the modulus stands for it.
+fn modulus_candidates(leg: &Leg) -> Vec<Candidate> {
+    let model = leg.model();
+    super::pendulum::stiffness_moduli(leg)
+        .into_iter()
+        .map(|(index, flexures)| {
+            let (name, value) = (model.param_name(index), model.param(index));
+            let location = format!("flexure {} (modulus {name})", flexures.join(", "));
+            stiffness_factor(location, index, name, value)
+        })
+        .collect()
 }
 
 /// Twist of each flexure hinge, and a tilt of its bending axis, about each coordinate axis of
@@ -283,7 +318,7 @@ fn hinge_candidates(leg: &Leg) -> Vec<Candidate> {
 /// effective tip mass is about a quarter of its ~60 mg).
 fn actuator_candidates(leg: &Leg) -> Vec<Candidate> {
     let model = &leg.session.compiled.model;
-    let first_new = model.params.len();
+    let new_parameter = Target::Param(model.params.len());
     let mut out = Vec::new();
     // A model with its own `preload` parameter has that candidate already.
     let has_preload = model.params.iter().any(|(_, p)| p.name == "preload");
@@ -292,19 +327,12 @@ fn actuator_candidates(leg: &Leg) -> Vec<Candidate> {
         .iter()
         .any(|load| matches!(load, mech_codegen::ir::Load::GeneralizedForce { .. }));
     if actuated && !has_preload {
-        out.push(Candidate {
-            cause: "actuator tip preload".into(),
-            location: "every actuator".into(),
-            parameters: vec![(
-                Target::Param(first_new),
-                Parameter::new(TIP_PRELOAD, 0.0)
-                    .bounded(-200e-6, 200e-6)
-                    .with_scale(50e-6),
-            )],
-            extension: Some(Extension::Preload),
-            supporting: 0,
-            screen_at_upper: false,
-        });
+        out.push(Candidate::extended(
+            "actuator tip preload",
+            "every actuator".into(),
+            (new_parameter, preload(TIP_PRELOAD, 0.0)),
+            Extension::Preload,
+        ));
     }
     for load in &model.loads {
         let mech_codegen::ir::Load::GeneralizedForce { coordinate, .. } = load else {
@@ -312,32 +340,28 @@ fn actuator_candidates(leg: &Leg) -> Vec<Candidate> {
         };
         let slider = model.coordinates[*coordinate].name.clone();
         let location = format!("actuator along {slider}");
-        out.push(Candidate {
-            cause: "actuator base compliance".into(),
-            location: location.clone(),
-            parameters: vec![(
-                Target::Param(first_new),
+        out.push(Candidate::extended(
+            "actuator base compliance",
+            location.clone(),
+            (
+                new_parameter,
                 Parameter::new(BASE_COMPLIANCE, 0.0)
                     .bounded(0.0, 2.0)
                     .with_scale(0.1),
-            )],
-            extension: Some(Extension::BaseCompliance(slider.clone())),
-            supporting: 0,
-            screen_at_upper: false,
-        });
-        out.push(Candidate {
-            cause: "actuator tip mass".into(),
+            ),
+            Extension::BaseCompliance(slider.clone()),
+        ));
+        out.push(Candidate::extended(
+            "actuator tip mass",
             location,
-            parameters: vec![(
-                Target::Param(first_new),
+            (
+                new_parameter,
                 Parameter::new(TIP_MASS, 0.0)
                     .bounded(0.0, 50e-6)
                     .with_scale(1e-5),
-            )],
-            extension: Some(Extension::TipMass(slider)),
-            supporting: 0,
-            screen_at_upper: false,
-        });
+            ),
+            Extension::TipMass(slider),
+        ));
     }
     out
 }
@@ -433,6 +457,59 @@ pub fn diagnose_causes(
     let leg = Leg::open_any(&spec, &[])?;
     let observations = experiment.observations(&leg, data)?;
     let screening = experiment.screen(data)?;
+    require_noise(&observations)?;
+    let (train, train_values, holdout_values) = split_values(&observations, data.rows, holdout)?;
+    let user = user_fit_parameters(&leg, user_parameters)?;
+    let jobs = jobs(&leg, experiment, &user, causes)?;
+    let trials = Trials {
+        experiment,
+        data,
+        spec: &spec,
+        user: &user,
+        observations: &observations,
+        train: &train,
+    };
+    let mut results = trials.run(jobs).into_iter();
+    let (_, base) = results.next().expect("the base trial");
+    let base = base.map_err(|e| format!("the base model: {e}"))?;
+    let band = NoiseBand::new(holdout_values);
+    let (ranked_pairs, inert) = sort_out(&base, results);
+    // Without user parameters the base model is not fitted, so every value tests it (a
+    // held-out subset alone may miss a narrow resonance).
+    let base_consistent = if user.is_empty() {
+        NoiseBand::new(train_values + holdout_values).holds_all(&base)
+    } else {
+        band.holds(&base)
+    };
+    let (second_round, combined) = if base_consistent {
+        (Vec::new(), None)
+    } else {
+        second_cause(&trials, &band, &base, &ranked_pairs)
+    };
+    let mut ranked: Vec<Trial> = ranked_pairs.into_iter().map(|(_, t)| t).collect();
+    let flagged = screening.as_ref().is_some_and(|s| !s.flags.is_empty());
+    let best = combined.as_ref().or(ranked.first());
+    let verdict = verdict(flagged, base_consistent, &band, &base, best);
+    let tied = order_ties(&mut ranked);
+    Ok(Diagnosis {
+        base,
+        ranked,
+        combined,
+        second_round,
+        inert,
+        verdict,
+        holdout_values,
+        train_values,
+        noise_band: band.per_value,
+        tied,
+        observations,
+        screening,
+        train,
+    })
+}
+
+/// Without noise levels no residual can be called significant.
+fn require_noise(observations: &super::experiment::Observations) -> Result<(), String> {
     if observations.sigma.is_none() {
         return Err(
             "`mech diagnose` needs the measurement noise in the experiment file \
@@ -441,10 +518,20 @@ pub fn diagnose_causes(
                 .into(),
         );
     }
+    Ok(())
+}
+
+/// Per observed value whether it is fitted (true) or held out, and how many of each (at
+/// least 2 of each).
+fn split_values(
+    observations: &super::experiment::Observations,
+    rows: usize,
+    holdout: Holdout,
+) -> Result<(Vec<bool>, usize, usize), String> {
     let train: Vec<bool> = observations
         .row
         .iter()
-        .map(|&row| !holdout.holds_out(row, data.rows))
+        .map(|&row| !holdout.holds_out(row, rows))
         .collect();
     let holdout_values = train.iter().filter(|t| !**t).count();
     let train_values = train.len() - holdout_values;
@@ -454,22 +541,36 @@ pub fn diagnose_causes(
              need at least 2 of each"
         ));
     }
-    let user: Vec<(Target, Parameter)> = {
-        let requests = user_parameters
-            .iter()
-            .map(|t| super::fit::FitRequest::parse(t))
-            .collect::<Result<Vec<_>, _>>()?;
-        super::fit::parameters(&leg, &requests)?
-    };
-    let mut jobs = vec![Candidate {
-        cause: "base model".into(),
-        location: "-".into(),
-        parameters: Vec::new(),
-        extension: None,
-        supporting: 0,
-        screen_at_upper: false,
-    }];
-    let catalog = catalog(&leg, experiment);
+    Ok((train, train_values, holdout_values))
+}
+
+/// The parameters the user fits with every candidate (`--fit NAME[=LO..HI UNIT]`).
+fn user_fit_parameters(
+    leg: &Leg,
+    user_parameters: &[String],
+) -> Result<Vec<(Target, Parameter)>, String> {
+    let requests = user_parameters
+        .iter()
+        .map(|t| super::fit::FitRequest::parse(t))
+        .collect::<Result<Vec<_>, _>>()?;
+    super::fit::parameters(leg, &requests)
+}
+
+/// The base model, then the catalog's candidates that `causes` asks for (all when empty)
+/// and that fit no parameter the user fits already; an error names a wanted cause the
+/// catalog does not have.
+fn jobs(
+    leg: &Leg,
+    experiment: &Experiment,
+    user: &[(Target, Parameter)],
+    causes: &[String],
+) -> Result<Vec<Candidate>, String> {
+    let mut jobs = vec![Candidate::parameter_change(
+        "base model",
+        "-".into(),
+        Vec::new(),
+    )];
+    let catalog = catalog(leg, experiment);
     if let Some(unknown) = causes
         .iter()
         .find(|wanted| catalog.iter().all(|c| !c.cause.contains(wanted.as_str())))
@@ -491,77 +592,85 @@ pub fn diagnose_causes(
         let wanted = causes.is_empty() || causes.iter().any(|w| c.cause.contains(w.as_str()));
         !fitted && wanted
     }));
-    let run = |jobs: Vec<Candidate>| {
-        crate::parallel::parallel(jobs, crate::parallel::threads(), |candidate| {
-            let started = std::time::Instant::now();
-            let trial = run_trial(
-                experiment,
-                data,
-                &spec,
-                &candidate,
-                &user,
-                &observations,
-                &train,
-            );
-            if std::env::var_os("MECH_DIAGNOSE_TIMING").is_some() {
-                eprintln!(
-                    "{:>8.2?}  {} at {}{}",
-                    started.elapsed(),
-                    candidate.cause,
-                    candidate.location,
-                    match &trial {
-                        Ok(t) if t.inert && t.parameters.is_empty() => " (screened: inert)",
-                        _ => "",
-                    }
-                );
-            }
-            (candidate, trial)
-        })
-    };
-    let mut trials = run(jobs).into_iter();
-    let (_, base) = trials.next().expect("the base trial");
-    let base = base.map_err(|e| format!("the base model: {e}"))?;
-    let m = holdout_values as f64;
-    let noise_band = 1.0 + 3.0 * (2.0 / m).sqrt();
-    let (ranked_pairs, inert) = sort_out(&base, trials);
-    let consistent = |t: &Trial| t.holdout_chi2 / m <= noise_band;
-    // Without user parameters the base model is not fitted, so every value tests it (a
-    // held-out subset alone may miss a narrow resonance).
-    let base_consistent = if user.is_empty() {
-        let all = (train_values + holdout_values) as f64;
-        (base.train_chi2 + base.holdout_chi2) / all <= 1.0 + 3.0 * (2.0 / all).sqrt()
-    } else {
-        consistent(&base)
-    };
-    // Significantly better than `than` (ΔAICc < −10: Burnham & Anderson's "essentially no
-    // support" for the other) and better on the held-out data.
-    let improves =
-        |t: &Trial, than: &Trial| than.aicc - t.aicc > 10.0 && t.holdout_chi2 < than.holdout_chi2;
-    // A second cause: when the best leaves a residual above the noise, every other candidate
-    // that moved the residual is fitted together with it (forward selection, one step).
-    let mut second_round = Vec::new();
-    let mut combined = None;
-    if let Some((best_candidate, best)) = ranked_pairs.first() {
-        if !base_consistent && improves(best, &base) && !consistent(best) {
-            let jobs: Vec<Candidate> = ranked_pairs[1..]
-                .iter()
-                .filter_map(|(other, _)| combine(best_candidate, other))
-                .collect();
-            let (pairs, _) = sort_out(best, run(jobs).into_iter());
-            second_round = pairs.into_iter().map(|(_, t)| t).collect();
-            combined = second_round.first().filter(|t| improves(t, best)).cloned();
+    Ok(jobs)
+}
+
+/// The noise band over `m` values: a χ² per value up to `1 + 3·√(2/m)` is consistent with
+/// the noise (χ²/m has mean 1 and standard deviation √(2/m)).
+struct NoiseBand {
+    values: f64,
+    per_value: f64,
+}
+
+impl NoiseBand {
+    fn new(m: usize) -> NoiseBand {
+        let values = m as f64;
+        NoiseBand {
+            values,
+            per_value: 1.0 + 3.0 * (2.0 / values).sqrt(),
         }
     }
-    let ranked: Vec<Trial> = ranked_pairs.into_iter().map(|(_, t)| t).collect();
-    let flagged = screening.as_ref().is_some_and(|s| !s.flags.is_empty());
-    let verdict = if flagged {
+
+    /// The held-out χ² of `trial` within the band.
+    fn holds(&self, trial: &Trial) -> bool {
+        trial.holdout_chi2 / self.values <= self.per_value
+    }
+
+    /// The χ² of `trial` on every value, fitted and held out, within the band.
+    fn holds_all(&self, trial: &Trial) -> bool {
+        (trial.train_chi2 + trial.holdout_chi2) / self.values <= self.per_value
+    }
+}
+
+/// Significantly better than `than` (ΔAICc < −10: Burnham & Anderson's "essentially no
+/// support" for the other) and better on the held-out data.
+fn improves(trial: &Trial, than: &Trial) -> bool {
+    than.aicc - trial.aicc > 10.0 && trial.holdout_chi2 < than.holdout_chi2
+}
+
+/// A second cause: when the best candidate improves on the base model but leaves a residual
+/// above the noise, every other candidate that moved the residual is fitted together with it
+/// (forward selection, one step). The pairs tried, best first, and the best pair if it
+/// improves on the best alone.
+fn second_cause(
+    trials: &Trials,
+    band: &NoiseBand,
+    base: &Trial,
+    ranked: &[(Candidate, Trial)],
+) -> (Vec<Trial>, Option<Trial>) {
+    let Some((best_candidate, best)) = ranked.first() else {
+        return (Vec::new(), None);
+    };
+    if !improves(best, base) || band.holds(best) {
+        return (Vec::new(), None);
+    }
+    let jobs: Vec<Candidate> = ranked[1..]
+        .iter()
+        .filter_map(|(other, _)| combine(best_candidate, other))
+        .collect();
+    let (pairs, _) = sort_out(best, trials.run(jobs).into_iter());
+    let second_round: Vec<Trial> = pairs.into_iter().map(|(_, t)| t).collect();
+    let combined = second_round.first().filter(|t| improves(t, best)).cloned();
+    (second_round, combined)
+}
+
+/// The verdict from the screening's flags, the base model and the best trial (a pair of
+/// causes when one was found, else the best alone).
+fn verdict(
+    flagged: bool,
+    base_consistent: bool,
+    band: &NoiseBand,
+    base: &Trial,
+    best: Option<&Trial>,
+) -> Verdict {
+    if flagged {
         Verdict::Flagged
     } else if base_consistent {
         Verdict::NoSignificantDiscrepancy
     } else {
-        match combined.as_ref().or(ranked.first()) {
-            Some(best) if improves(best, &base) => {
-                if consistent(best) {
+        match best {
+            Some(best) if improves(best, base) => {
+                if band.holds(best) {
                     Verdict::Explained
                 } else {
                     Verdict::PartlyExplained
@@ -569,7 +678,13 @@ pub fn diagnose_causes(
             }
             _ => Verdict::Unexplained,
         }
-    };
+    }
+}
+
+/// How many of `ranked`, from the top, the data support about equally (training AICc within
+/// 2 of the best's); among those, one whose fit ran into a bound (standard error NaN: the
+/// change it needs is outside the plausible range) goes after the others.
+fn order_ties(ranked: &mut [Trial]) -> usize {
     let tied = match ranked.first() {
         Some(best) => ranked
             .iter()
@@ -577,26 +692,9 @@ pub fn diagnose_causes(
             .count(),
         None => 0,
     };
-    let mut ranked = ranked;
-    // Among candidates the data support equally, one whose fit ran into a bound (standard
-    // error NaN: the change it needs is outside the plausible range) goes after the others.
     let at_bound = |t: &Trial| t.parameters.iter().any(|p| p.3.is_nan());
     ranked[..tied].sort_by_key(at_bound);
-    Ok(Diagnosis {
-        base,
-        ranked,
-        combined,
-        second_round,
-        inert,
-        verdict,
-        holdout_values,
-        train_values,
-        noise_band,
-        tied,
-        observations,
-        screening,
-        train,
-    })
+    tied
 }
 
 /// A candidate and its trial, or why the trial failed.
@@ -669,99 +767,128 @@ fn combine(first: &Candidate, second: &Candidate) -> Option<Candidate> {
     })
 }
 
-fn run_trial(
-    experiment: &Experiment,
-    data: &MeasuredData,
-    spec: &crate::experiments::ModelSpec,
-    candidate: &Candidate,
-    user: &[(Target, Parameter)],
-    observations: &super::experiment::Observations,
-    train: &[bool],
-) -> Result<Trial, String> {
-    let mut leg = match &candidate.extension {
-        Some(extension) => super::extend::open_leg(spec, extension),
-        None => Leg::open_any(spec, &[]),
-    }?;
-    let mut parameters = user.to_vec();
-    parameters.extend(candidate.parameters.iter().cloned());
-    let chi2 = |predicted: &[f64], keep: bool| -> f64 {
-        residual(predicted, observations)
-            .iter()
-            .zip(train)
-            .filter(|(_, &t)| t == keep)
-            .map(|(r, _)| r * r)
-            .sum()
-    };
-    if let Some(predicted) = cannot_move(experiment, data, &mut leg, candidate, user, observations)
-    {
-        let m = train.iter().filter(|t| **t).count();
-        let train_chi2 = chi2(&predicted, true);
-        return Ok(Trial {
+/// What every trial of one diagnosis shares: the experiment and its data, the model spec,
+/// the user's parameters, the observations and which of them are fitted.
+struct Trials<'a> {
+    experiment: &'a Experiment,
+    data: &'a MeasuredData,
+    spec: &'a crate::experiments::ModelSpec,
+    user: &'a [(Target, Parameter)],
+    observations: &'a super::experiment::Observations,
+    train: &'a [bool],
+}
+
+impl Trials<'_> {
+    /// Every candidate's trial, in parallel, in the order given (`MECH_DIAGNOSE_TIMING` set:
+    /// the time each took, on stderr).
+    fn run(&self, jobs: Vec<Candidate>) -> Vec<TrialResult> {
+        crate::parallel::parallel(jobs, crate::parallel::threads(), |candidate| {
+            let started = std::time::Instant::now();
+            let trial = self.trial(&candidate);
+            if std::env::var_os("MECH_DIAGNOSE_TIMING").is_some() {
+                eprintln!(
+                    "{:>8.2?}  {} at {}{}",
+                    started.elapsed(),
+                    candidate.cause,
+                    candidate.location,
+                    match &trial {
+                        Ok(t) if t.inert && t.parameters.is_empty() => " (screened: inert)",
+                        _ => "",
+                    }
+                );
+            }
+            (candidate, trial)
+        })
+    }
+
+    /// `candidate` fitted with the user's parameters on the training values (or, when the
+    /// screen finds it cannot move the predictions, not fitted and marked inert).
+    fn trial(&self, candidate: &Candidate) -> Result<Trial, String> {
+        let (experiment, data, observations) = (self.experiment, self.data, self.observations);
+        let mut leg = match &candidate.extension {
+            Some(extension) => super::extend::open_leg(self.spec, extension),
+            None => Leg::open_any(self.spec, &[]),
+        }?;
+        let mut parameters = self.user.to_vec();
+        parameters.extend(candidate.parameters.iter().cloned());
+        if let Some(predicted) = cannot_move(
+            experiment,
+            data,
+            &mut leg,
+            candidate,
+            self.user,
+            observations,
+        ) {
+            let mut trial = self.judge(candidate, predicted, parameters.len());
+            trial.inert = true;
+            return Ok(trial);
+        }
+        let (predicted, fitted) = if parameters.is_empty() {
+            let predicted = experiment.predict(&leg, data, observations, &Extensions::default())?;
+            (predicted, None)
+        } else {
+            let report = fit_values(
+                experiment,
+                data,
+                &mut leg,
+                &parameters,
+                observations.clone(),
+                self.train,
+            )?;
+            (report.after, Some(report.result))
+        };
+        let mut trial = self.judge(candidate, predicted, parameters.len());
+        if let Some(result) = &fitted {
+            trial.inert = all_unidentifiable(candidate, result);
+            trial.parameters = parameters
+                .iter()
+                .filter_map(|(_, p)| {
+                    result
+                        .parameter(&p.name)
+                        .map(|(value, se)| (p.name.clone(), p.initial, value, se))
+                })
+                .collect();
+        }
+        Ok(trial)
+    }
+
+    /// The trial of `candidate` predicting `predicted` with `k` fitted parameters: χ² on the
+    /// fitted and the held-out values, and the training AICc (no parameters listed yet).
+    fn judge(&self, candidate: &Candidate, predicted: Vec<f64>, k: usize) -> Trial {
+        let chi2 = |keep: bool| -> f64 {
+            residual(&predicted, self.observations)
+                .iter()
+                .zip(self.train)
+                .filter(|(_, &t)| t == keep)
+                .map(|(r, _)| r * r)
+                .sum()
+        };
+        let (train_chi2, holdout_chi2) = (chi2(true), chi2(false));
+        let m = self.train.iter().filter(|t| **t).count();
+        let aicc = information_criteria(train_chi2 / 2.0, m, k, NoiseModel::Normalized).aicc;
+        Trial {
             cause: candidate.cause.clone(),
             location: candidate.location.clone(),
             parameters: Vec::new(),
             train_chi2,
-            holdout_chi2: chi2(&predicted, false),
-            aicc: information_criteria(
-                train_chi2 / 2.0,
-                m,
-                parameters.len(),
-                NoiseModel::Normalized,
-            )
-            .aicc,
-            inert: true,
+            holdout_chi2,
+            aicc,
+            inert: false,
             error: None,
             predicted,
-        });
+        }
     }
-    let (predicted, fitted) = if parameters.is_empty() {
-        let predicted = experiment.predict(&leg, data, observations, &Extensions::default())?;
-        (predicted, None)
-    } else {
-        let report = fit_values(
-            experiment,
-            data,
-            &mut leg,
-            &parameters,
-            observations.clone(),
-            train,
-        )?;
-        (report.after, Some(report.result))
-    };
-    let train_chi2 = chi2(&predicted, true);
-    let holdout_chi2 = chi2(&predicted, false);
-    let m = train.iter().filter(|t| **t).count();
-    let k = parameters.len();
-    let aicc = information_criteria(train_chi2 / 2.0, m, k, NoiseModel::Normalized).aicc;
-    let inert = fitted.as_ref().is_some_and(|r| {
-        let flagged = r.unidentifiable();
-        !candidate.parameters.is_empty()
-            && candidate
-                .parameters
-                .iter()
-                .all(|(_, p)| flagged.contains(&p.name.as_str()))
-    });
-    let parameters = match &fitted {
-        Some(r) => parameters
+}
+
+/// Whether the fit flagged every one of the candidate's own parameters unidentifiable (it
+/// cannot move the residual).
+fn all_unidentifiable(candidate: &Candidate, result: &FitResult) -> bool {
+    let flagged = result.unidentifiable();
+    !candidate.parameters.is_empty()
+        && candidate
+            .parameters
             .iter()
-            .filter_map(|(_, p)| {
-                r.parameter(&p.name)
-                    .map(|(value, se)| (p.name.clone(), p.initial, value, se))
-            })
-            .collect(),
-        None => Vec::new(),
-    };
-    Ok(Trial {
-        cause: candidate.cause.clone(),
-        location: candidate.location.clone(),
-        parameters,
-        train_chi2,
-        holdout_chi2,
-        aicc,
-        inert,
-        error: None,
-        predicted,
-    })
+            .all(|(_, p)| flagged.contains(&p.name.as_str()))
 }
 
 /// Screens a candidate before fitting it: moving each of its defining parameters alone to

@@ -588,156 +588,168 @@ fn example_unit(dimension: Dimension) -> Option<&'static str> {
 }
 
 impl fmt::Display for DataError {
+    /// `` `path`, line L, column I (`name`): problem ``, as much of the place as applies.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            DataError::Io { path, message } => {
-                write!(f, "`{}`: cannot read the file: {message}", path.display())
-            }
-            DataError::Empty { path } => write!(
-                f,
-                "`{}`: the file is empty: the first line that is not a `#` comment must be \
-                 the header, e.g. `t [s], foot.x [mm]`",
-                path.display()
-            ),
-            DataError::NoRows { path, header_line } => write!(
-                f,
-                "`{}`, line {header_line}: a header but no data rows",
-                path.display()
-            ),
+        let separator = match self {
+            DataError::MissingColumn { .. } => " ",
+            _ => ": ",
+        };
+        write!(f, "{}{separator}{}", self.place(), self.problem())
+    }
+}
+
+impl DataError {
+    /// Where the problem is: the file, then the line and the column where they apply.
+    fn place(&self) -> String {
+        let (path, line, column) = match self {
+            DataError::Io { path, .. }
+            | DataError::Empty { path }
+            | DataError::MissingColumn { path, .. } => (path, None, None),
+            DataError::NoRows { path, header_line } => (path, Some(*header_line), None),
+            DataError::FieldCount { path, line, .. } => (path, Some(*line), None),
             DataError::BadHeader {
                 path,
                 line,
                 index,
-                text,
-                message,
-            } => write!(
-                f,
-                "`{}`, line {line}, column {index} (`{text}`): {message}",
-                path.display()
-            ),
-            DataError::DuplicateColumn {
-                path,
-                line,
-                name,
-                first,
-                second,
-            } => write!(
-                f,
-                "`{}`, line {line}, column {second} (`{name}`): the name of column {first} \
-                 again; column names must be unique",
-                path.display()
-            ),
-            DataError::FieldCount {
-                path,
-                line,
-                found,
-                expected,
-            } => write!(
-                f,
-                "`{}`, line {line}: {found} field{}, but the header has {expected} column{}",
-                path.display(),
-                plural(*found),
-                plural(*expected)
-            ),
-            DataError::BadNumber {
-                path,
-                line,
-                index,
-                column,
-                text,
-            } => {
-                let what = if text.is_empty() {
-                    "the field is empty".to_string()
-                } else {
-                    format!("`{text}` is not a number")
-                };
-                write!(
-                    f,
-                    "`{}`, line {line}, column {index} (`{column}`): {what}",
-                    path.display()
-                )
+                text: name,
+                ..
             }
-            DataError::NonFinite {
+            | DataError::DuplicateColumn {
                 path,
                 line,
-                index,
-                column,
-                text,
-            } => write!(
-                f,
-                "`{}`, line {line}, column {index} (`{column}`): `{text}` is not finite \
-                 (NaN, infinite or out of range in SI units); remove the row or fill the gap",
-                path.display()
-            ),
-            DataError::NotIncreasing {
-                path,
-                line,
-                previous_line,
-                index,
-                column,
-                previous,
-                value,
-            } => write!(
-                f,
-                "`{}`, line {line}, column {index} (`{column}`): {value} (SI) does not increase \
-                 from {previous} on line {previous_line}; `{column}` must increase strictly \
-                 (sort the rows, remove repeated samples)",
-                path.display()
-            ),
-            DataError::MissingColumn {
-                path,
+                second: index,
                 name,
-                available,
-                suggestion,
-            } => {
-                let list = available
-                    .iter()
-                    .map(|a| format!("`{a}`"))
-                    .collect::<Vec<_>>()
-                    .join(", ");
-                write!(
-                    f,
-                    "`{}` has no column `{name}`; its columns are {list}",
-                    path.display()
-                )?;
-                match suggestion {
-                    Some(s) => write!(f, "; did you mean `{s}`?"),
-                    None => write!(
-                        f,
-                        "; add a column with the header `{name} [unit]` or rename one"
-                    ),
-                }
+                ..
             }
+            | DataError::BadNumber {
+                path,
+                line,
+                index,
+                column: name,
+                ..
+            }
+            | DataError::NonFinite {
+                path,
+                line,
+                index,
+                column: name,
+                ..
+            }
+            | DataError::NotIncreasing {
+                path,
+                line,
+                index,
+                column: name,
+                ..
+            } => (path, Some(*line), Some((*index, name))),
             DataError::DimensionMismatch {
                 path,
                 index,
                 column,
+                ..
+            } => (path, None, Some((*index, column))),
+        };
+        let mut place = format!("`{}`", path.display());
+        if let Some(line) = line {
+            place.push_str(&format!(", line {line}"));
+        }
+        if let Some((index, name)) = column {
+            place.push_str(&format!(", column {index} (`{name}`)"));
+        }
+        place
+    }
+
+    /// What is wrong there, and how to mend it where that is not obvious.
+    fn problem(&self) -> String {
+        match self {
+            DataError::Io { message, .. } => format!("cannot read the file: {message}"),
+            DataError::Empty { .. } => "the file is empty: the first line that is not a `#` \
+                                        comment must be the header, e.g. `t [s], foot.x [mm]`"
+                .to_string(),
+            DataError::NoRows { .. } => "a header but no data rows".to_string(),
+            DataError::BadHeader { message, .. } => message.clone(),
+            DataError::DuplicateColumn { first, .. } => {
+                format!("the name of column {first} again; column names must be unique")
+            }
+            DataError::FieldCount {
+                found, expected, ..
+            } => format!(
+                "{found} field{}, but the header has {expected} column{}",
+                plural(*found),
+                plural(*expected)
+            ),
+            DataError::BadNumber { text, .. } if text.is_empty() => {
+                "the field is empty".to_string()
+            }
+            DataError::BadNumber { text, .. } => format!("`{text}` is not a number"),
+            DataError::NonFinite { text, .. } => format!(
+                "`{text}` is not finite (NaN, infinite or out of range in SI units); remove \
+                 the row or fill the gap"
+            ),
+            DataError::NotIncreasing {
+                previous_line,
+                column,
+                previous,
+                value,
+                ..
+            } => format!(
+                "{value} (SI) does not increase from {previous} on line {previous_line}; \
+                 `{column}` must increase strictly (sort the rows, remove repeated samples)"
+            ),
+            DataError::MissingColumn {
+                name,
+                available,
+                suggestion,
+                ..
+            } => missing_column(name, available, suggestion.as_deref()),
+            DataError::DimensionMismatch {
+                column,
                 unit_text,
                 expected,
                 found,
-            } => {
-                let unit = if unit_text.is_empty() {
-                    "no unit".to_string()
-                } else {
-                    format!("`[{unit_text}]`")
-                };
-                write!(
-                    f,
-                    "`{}`, column {index} (`{column}`): expected {}, found {} ({unit})",
-                    path.display(),
-                    units::describe(*expected),
-                    units::describe(*found)
-                )?;
-                if let Some(example) = example_unit(*expected) {
-                    write!(
-                        f,
-                        "; give the unit in the header, e.g. `{column} [{example}]`"
-                    )?;
-                }
-                Ok(())
-            }
+                ..
+            } => dimension_mismatch(column, unit_text, *expected, *found),
         }
     }
+}
+
+/// `has no column …; its columns are …`, with a suggestion or how to add the column.
+fn missing_column(name: &str, available: &[String], suggestion: Option<&str>) -> String {
+    let list = available
+        .iter()
+        .map(|a| format!("`{a}`"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let mend = match suggestion {
+        Some(s) => format!("did you mean `{s}`?"),
+        None => format!("add a column with the header `{name} [unit]` or rename one"),
+    };
+    format!("has no column `{name}`; its columns are {list}; {mend}")
+}
+
+/// `expected D, found D (unit)`, and a unit of the expected dimension to write.
+fn dimension_mismatch(
+    column: &str,
+    unit_text: &str,
+    expected: Dimension,
+    found: Dimension,
+) -> String {
+    let unit = if unit_text.is_empty() {
+        "no unit".to_string()
+    } else {
+        format!("`[{unit_text}]`")
+    };
+    let mut problem = format!(
+        "expected {}, found {} ({unit})",
+        units::describe(expected),
+        units::describe(found)
+    );
+    if let Some(example) = example_unit(expected) {
+        problem.push_str(&format!(
+            "; give the unit in the header, e.g. `{column} [{example}]`"
+        ));
+    }
+    problem
 }
 
 fn plural(n: usize) -> &'static str {

@@ -61,125 +61,137 @@ pub fn features(
     if values.len() != observations.values.len() {
         return Vec::new();
     }
-    let series = |name: &str| -> (Vec<f64>, Vec<f64>) {
-        observations
+    let curves = Curves {
+        observations,
+        values,
+    };
+    match experiment {
+        Experiment::FrequencyResponse(_) => observations
+            .series_names()
+            .into_iter()
+            .filter_map(|name| name.strip_prefix("ln|H|"))
+            .flat_map(|suffix| channel_features(&curves, suffix))
+            .collect(),
+        Experiment::ForceDeflection(_) => force_deflection_features(&curves),
+        Experiment::QuasiStatic(_) => observations
+            .series_names()
+            .into_iter()
+            .map(|name| peak_to_peak(&curves, name))
+            .collect(),
+        Experiment::Pendulum(_) => ring_down_features(&curves),
+    }
+}
+
+/// One vector of values laid out as the observations.
+struct Curves<'a> {
+    observations: &'a Observations,
+    values: &'a [f64],
+}
+
+impl Curves<'_> {
+    /// The abscissae and values of the series `name`.
+    fn series(&self, name: &str) -> (Vec<f64>, Vec<f64>) {
+        self.observations
             .series
             .iter()
-            .zip(&observations.abscissa)
-            .zip(values)
+            .zip(&self.observations.abscissa)
+            .zip(self.values)
             .filter(|((s, _), _)| s.as_str() == name)
             .map(|((_, &x), &y)| (x, y))
             .unzip()
-    };
-    let mut out = Vec::new();
-    match experiment {
-        Experiment::FrequencyResponse(_) => {
-            for name in observations.series_names() {
-                let Some(suffix) = name.strip_prefix("ln|H|") else {
-                    continue;
-                };
-                let (frequency, ln_gain) = series(name);
-                let (_, phase) = series(&format!("phase{suffix}"));
-                let channel = suffix.trim_start_matches('.');
-                let of = |what: &str| match channel {
-                    "" => what.to_string(),
-                    _ => format!("{what} ({channel})"),
-                };
-                let gain: Vec<f64> = ln_gain.iter().map(|l| l.exp()).collect();
-                let lowest =
-                    (0..frequency.len()).min_by(|&a, &b| frequency[a].total_cmp(&frequency[b]));
-                out.push(Feature::new(
-                    of("low-frequency gain"),
-                    lowest.map(|k| gain[k]),
-                    "µm/V",
-                    1e6,
-                ));
-                // −η for a hysteretic loss well below resonance.
-                out.push(Feature::new(
-                    of("low-frequency phase"),
-                    lowest.and_then(|k| phase.get(k).copied()),
-                    "deg",
-                    180.0 / std::f64::consts::PI,
-                ));
-                let peak = resonance(&frequency, &gain);
-                out.push(Feature::new(
-                    of("resonance frequency"),
-                    peak.map(|p| p.frequency),
-                    "Hz",
-                    1.0,
-                ));
-                out.push(Feature::new(
-                    of("largest gain"),
-                    peak.map(|p| p.gain),
-                    "µm/V",
-                    1e6,
-                ));
-                out.push(Feature::new(
-                    of("quality factor"),
-                    peak.and_then(|p| p.quality),
-                    "",
-                    1.0,
-                ));
-            }
-        }
-        Experiment::ForceDeflection(_) => {
-            let (distance, force) = series("force");
-            let line = force_line(&distance, &force);
-            out.push(Feature::new(
-                "blocked force",
-                line.map(|(at_zero, _)| at_zero),
-                "mN",
-                1e3,
-            ));
-            out.push(Feature::new(
-                "free deflection",
-                line.map(|(_, reach)| reach),
-                "µm",
-                1e6,
-            ));
-        }
-        Experiment::QuasiStatic(_) => {
-            for name in observations.series_names() {
-                let (_, y) = series(name);
-                let range = y
-                    .iter()
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
-                        (lo.min(v), hi.max(v))
-                    });
-                out.push(Feature::new(
-                    format!("{name} peak-to-peak"),
-                    Some(range.1 - range.0),
-                    "µm",
-                    1e6,
-                ));
-            }
-        }
-        Experiment::Pendulum(_) => {
-            let name = observations.series_names().first().map(|s| s.to_string());
-            let (time, angle) = series(name.as_deref().unwrap_or(""));
-            let trace = crate::flexure_fit::trace::analyze_trace(
-                &time,
-                &angle,
-                &crate::flexure_fit::trace::TraceOptions::default(),
-            )
-            .ok();
-            out.push(Feature::new(
-                "natural frequency",
-                trace
-                    .as_ref()
-                    .map(|t| t.omega_n / (2.0 * std::f64::consts::PI)),
-                "Hz",
-                1.0,
-            ));
-            out.push(Feature::new(
-                "quality factor",
-                trace.as_ref().map(|t| 1.0 / (2.0 * t.zeta)),
-                "",
-                1.0,
-            ));
-        }
     }
-    out
+}
+
+/// One frequency-response channel (the series `ln|H|{suffix}` and `phase{suffix}`): the
+/// gain and phase at the lowest frequency, and the resonance.
+fn channel_features(curves: &Curves, suffix: &str) -> Vec<Feature> {
+    let (frequency, ln_gain) = curves.series(&format!("ln|H|{suffix}"));
+    let (_, phase) = curves.series(&format!("phase{suffix}"));
+    let channel = suffix.trim_start_matches('.');
+    let of = |what: &str| match channel {
+        "" => what.to_string(),
+        _ => format!("{what} ({channel})"),
+    };
+    let gain: Vec<f64> = ln_gain.iter().map(|l| l.exp()).collect();
+    let lowest = (0..frequency.len()).min_by(|&a, &b| frequency[a].total_cmp(&frequency[b]));
+    let peak = resonance(&frequency, &gain);
+    vec![
+        Feature::new(
+            of("low-frequency gain"),
+            lowest.map(|k| gain[k]),
+            "µm/V",
+            1e6,
+        ),
+        // −η for a hysteretic loss well below resonance.
+        Feature::new(
+            of("low-frequency phase"),
+            lowest.and_then(|k| phase.get(k).copied()),
+            "deg",
+            180.0 / std::f64::consts::PI,
+        ),
+        Feature::new(
+            of("resonance frequency"),
+            peak.map(|p| p.frequency),
+            "Hz",
+            1.0,
+        ),
+        Feature::new(of("largest gain"), peak.map(|p| p.gain), "µm/V", 1e6),
+        Feature::new(of("quality factor"), peak.and_then(|p| p.quality), "", 1.0),
+    ]
+}
+
+/// The blocked force and the free deflection of the force/deflection line.
+fn force_deflection_features(curves: &Curves) -> Vec<Feature> {
+    let (distance, force) = curves.series("force");
+    let line = force_line(&distance, &force);
+    vec![
+        Feature::new("blocked force", line.map(|(at_zero, _)| at_zero), "mN", 1e3),
+        Feature::new("free deflection", line.map(|(_, reach)| reach), "µm", 1e6),
+    ]
+}
+
+/// The range of a quasi-static output.
+fn peak_to_peak(curves: &Curves, name: &str) -> Feature {
+    let (_, y) = curves.series(name);
+    let (lo, hi) = y
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
+        });
+    Feature::new(format!("{name} peak-to-peak"), Some(hi - lo), "µm", 1e6)
+}
+
+/// The natural frequency and quality factor of the (first) ring-down trace, by `mech flexure
+/// fit`'s trace analysis (`Q = 1/2ζ`).
+fn ring_down_features(curves: &Curves) -> Vec<Feature> {
+    let name = curves
+        .observations
+        .series_names()
+        .first()
+        .map(|s| s.to_string());
+    let (time, angle) = curves.series(name.as_deref().unwrap_or(""));
+    let trace = crate::flexure_fit::trace::analyze_trace(
+        &time,
+        &angle,
+        &crate::flexure_fit::trace::TraceOptions::default(),
+    )
+    .ok();
+    vec![
+        Feature::new(
+            "natural frequency",
+            trace
+                .as_ref()
+                .map(|t| t.omega_n / (2.0 * std::f64::consts::PI)),
+            "Hz",
+            1.0,
+        ),
+        Feature::new(
+            "quality factor",
+            trace.as_ref().map(|t| 1.0 / (2.0 * t.zeta)),
+            "",
+            1.0,
+        ),
+    ]
 }
 
 /// The peak of a measured gain curve.

@@ -125,6 +125,17 @@ pub enum Difference {
     Central,
 }
 
+impl Difference {
+    /// The step relative to `max(|x|, 1)` that balances truncation and rounding error: `√ε`
+    /// forward, `ε^⅓` central.
+    fn default_relative_step(self) -> f64 {
+        match self {
+            Difference::Forward => f64::EPSILON.sqrt(),
+            Difference::Central => f64::EPSILON.cbrt(),
+        }
+    }
+}
+
 /// Tuning of [`levenberg_marquardt`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct LmOptions {
@@ -509,226 +520,377 @@ where
     F: FnMut(&[f64]) -> Result<Vec<f64>, E>,
 {
     let problem = Problem::new(parameters)?;
-    let n = parameters.len();
-    let mut eval = Evaluator {
-        f: residuals,
-        scales: problem.scales.clone(),
-        count: 0,
-        m: 0,
-    };
-    let mut x = problem.x0.clone();
-    let mut r = match eval.eval(&x) {
-        Ok(r) => r,
-        Err(failure) => return Err(failure.into_error(eval.params(&x))),
-    };
-    if r.is_empty() {
-        return Err(LmError::NoResiduals);
-    }
-    eval.m = r.len();
-    let m = r.len();
-    let mut cost = half_norm_squared(&r);
-    let mut lambda = options.initial_damping.max(f64::MIN_POSITIVE);
-    let mut nu = 2.0;
-    let mut d = vec![0.0f64; n];
-    let mut iterations = 0;
+    let mut fit = Fit::start(residuals, &problem, options)?;
+    let reason = fit.iterate()?;
+    fit.conclude(parameters, reason)
+}
 
-    let reason = 'outer: loop {
-        if cost == 0.0 {
-            break StopReason::ZeroResidual;
+/// One run of the iteration: the residual function (counting its calls), the problem in
+/// scaled form, the options, and where the iteration stands.
+struct Fit<'a, F> {
+    eval: Evaluator<F>,
+    problem: &'a Problem,
+    options: &'a LmOptions,
+    state: State,
+}
+
+impl<'a, F, E> Fit<'a, F>
+where
+    F: FnMut(&[f64]) -> Result<Vec<f64>, E>,
+{
+    /// The residuals at the initial point; they fix the number of residuals `m`.
+    fn start(
+        residuals: F,
+        problem: &'a Problem,
+        options: &'a LmOptions,
+    ) -> Result<Self, LmError<E>> {
+        let mut eval = Evaluator {
+            f: residuals,
+            scales: problem.scales.clone(),
+            count: 0,
+            m: 0,
+        };
+        let x = problem.x0.clone();
+        let r = match eval.eval(&x) {
+            Ok(r) => r,
+            Err(failure) => return Err(failure.into_error(eval.params(&x))),
+        };
+        if r.is_empty() {
+            return Err(LmError::NoResiduals);
         }
-        if iterations >= options.max_iterations {
-            break StopReason::MaxIterations;
+        eval.m = r.len();
+        let state = State {
+            cost: half_norm_squared(&r),
+            lambda: options.initial_damping.max(f64::MIN_POSITIVE),
+            nu: 2.0,
+            d: vec![0.0f64; x.len()],
+            iterations: 0,
+            x,
+            r,
+        };
+        Ok(Fit {
+            eval,
+            problem,
+            options,
+            state,
+        })
+    }
+
+    /// Iterates until a stopping test is met: one Jacobian per iteration, then damped steps
+    /// until one is accepted.
+    fn iterate(&mut self) -> Result<StopReason, LmError<E>> {
+        loop {
+            if let Some(reason) = self.state.limit_reached(self.eval.count, self.options) {
+                return Ok(reason);
+            }
+            if let Some(reason) = self.iteration()? {
+                return Ok(reason);
+            }
         }
-        if eval.count.saturating_add(2 * n) > options.max_evaluations {
-            break StopReason::MaxEvaluations;
-        }
-        let jac = eval.jacobian(&x, &r, options.difference, options.relative_step, &problem)?;
-        iterations += 1;
-        let rv = DVector::from_column_slice(&r);
+    }
+
+    /// One iteration: the Jacobian `J` and gradient `g = Jᵀr`, the active set, the gradient
+    /// test, then the damped steps on the free parameters. `None`: a step was accepted.
+    fn iteration(&mut self) -> Result<Option<StopReason>, LmError<E>> {
+        let (options, state) = (self.options, &mut self.state);
+        let jac = self.eval.jacobian(
+            &state.x,
+            &state.r,
+            options.difference,
+            options.relative_step,
+            self.problem,
+        )?;
+        state.iterations += 1;
+        let rv = DVector::from_column_slice(&state.r);
         let g = jac.tr_mul(&rv);
-        let norms: Vec<f64> = (0..n).map(|j| jac.column(j).norm()).collect();
-        for (dj, nj) in d.iter_mut().zip(&norms) {
+        let norms = column_norms(&jac);
+        for (dj, nj) in state.d.iter_mut().zip(&norms) {
             *dj = dj.max(*nj);
         }
-        // Active set: on a bound with the gradient pushing outward, or fixed.
-        let free: Vec<usize> = (0..n)
-            .filter(|&j| {
-                let (lo, hi) = (problem.lower[j], problem.upper[j]);
-                lo < hi && !(x[j] <= lo && g[j] > 0.0) && !(x[j] >= hi && g[j] < 0.0)
-            })
-            .collect();
-        let r_norm = (2.0 * cost).sqrt();
-        let gradient_cosine = free
-            .iter()
-            .filter(|&&j| norms[j] > 0.0)
-            .map(|&j| g[j].abs() / (norms[j] * r_norm))
-            .fold(0.0, f64::max);
-        if free.is_empty() || gradient_cosine <= options.gtol {
-            break StopReason::Gradient;
+        let free = self.problem.free_parameters(&state.x, &g);
+        let r_norm = (2.0 * state.cost).sqrt();
+        if free.is_empty() || gradient_cosine(&free, &g, &norms, r_norm) <= options.gtol {
+            return Ok(Some(StopReason::Gradient));
         }
-        let d_max = free.iter().map(|&j| d[j]).fold(0.0, f64::max);
-        if d_max == 0.0 {
-            // No free parameter changes the residuals.
-            break StopReason::Gradient;
+        match ScaledSystem::new(&jac, &rv, free, &state.d) {
+            Ok(system) => self.damped_steps(&jac, &g, &system),
+            Err(reason) => Ok(Some(reason)),
         }
-        let d_free: Vec<f64> = free.iter().map(|&j| d[j].max(1e-12 * d_max)).collect();
-        let k = free.len();
-        let scaled = DMatrix::from_fn(m, k, |i, c| jac[(i, free[c])] / d_free[c]);
-        let Some(svd) = nalgebra::SVD::try_new(scaled, true, true, f64::EPSILON, 10_000) else {
-            break StopReason::NoProgress;
-        };
-        let (Some(u), Some(v_t)) = (svd.u.as_ref(), svd.v_t.as_ref()) else {
-            break StopReason::NoProgress;
-        };
-        let sv = &svd.singular_values;
-        let s_max = sv.iter().copied().fold(0.0, f64::max);
-        let cutoff = s_max * f64::EPSILON * (m.max(k) as f64);
-        let ur = u.tr_mul(&rv);
+    }
 
+    /// Trial steps of growing damping until one lowers the cost enough (`ρ > 10⁻⁴`: `None`)
+    /// or a stopping test is met.
+    fn damped_steps(
+        &mut self,
+        jac: &DMatrix<f64>,
+        g: &DVector<f64>,
+        system: &ScaledSystem,
+    ) -> Result<Option<StopReason>, LmError<E>> {
+        let (options, state) = (self.options, &mut self.state);
+        let n = state.x.len();
         loop {
-            // δ̃ = −Σ v_i σ_i (u_iᵀ r) / (σ_i² + λ), δ = D⁻¹ δ̃, then project onto the box.
-            let mut step_scaled = DVector::<f64>::zeros(k);
-            for (i, &s) in sv.iter().enumerate() {
-                if s > cutoff {
-                    let coefficient = -s * ur[i] / (s * s + lambda);
-                    step_scaled += v_t.row(i).transpose() * coefficient;
-                }
-            }
-            let mut x_new = x.clone();
-            for (c, &j) in free.iter().enumerate() {
-                x_new[j] =
-                    (x[j] + step_scaled[c] / d_free[c]).clamp(problem.lower[j], problem.upper[j]);
-            }
-            let step = DVector::from_iterator(n, x_new.iter().zip(&x).map(|(a, b)| a - b));
+            let x_new = system.trial_point(&state.x, self.problem, state.lambda);
+            let step = DVector::from_iterator(n, x_new.iter().zip(&state.x).map(|(a, b)| a - b));
             if step.iter().all(|s| *s == 0.0) {
-                break 'outer StopReason::StepSize;
+                return Ok(Some(StopReason::StepSize));
             }
-            let j_step = &jac * &step;
+            // The model's reduction −(gᵀδ + ½‖Jδ‖²).
+            let j_step = jac * &step;
             let predicted = -(g.dot(&step) + 0.5 * j_step.norm_squared());
-            let step_norm = weighted_norm(&d, step.as_slice());
-            let x_norm = weighted_norm(&d, &x);
+            let step_norm = weighted_norm(&state.d, step.as_slice());
+            let x_norm = weighted_norm(&state.d, &state.x);
 
-            let trial = match eval.eval(&x_new) {
-                Ok(r_new) => Some(r_new),
-                Err(Failure::Count { found }) => {
-                    return Err(LmError::ResidualCountChanged {
-                        params: eval.params(&x_new),
-                        expected: m,
-                        found,
-                    })
-                }
-                Err(_) => None,
-            };
+            let trial = self.eval.trial(&x_new)?;
             let cost_new = trial.as_deref().map_or(f64::INFINITY, half_norm_squared);
-            let actual = cost - cost_new;
-            let rho = if predicted > 0.0 {
-                actual / predicted
-            } else {
-                f64::NEG_INFINITY
-            };
+            let actual = state.cost - cost_new;
+            let rho = gain_ratio(actual, predicted);
             let accepted = rho > ACCEPT_RATIO;
             let small_reduction = predicted > 0.0
-                && predicted <= options.ftol * cost
-                && actual.abs() <= options.ftol * cost
+                && predicted <= options.ftol * state.cost
+                && actual.abs() <= options.ftol * state.cost
                 && rho <= 2.0;
             if accepted {
-                if let Some(r_new) = trial {
-                    x = x_new;
-                    r = r_new;
-                    cost = cost_new;
-                }
-                lambda = (lambda * (1.0 / 3.0f64).max(1.0 - (2.0 * rho - 1.0).powi(3)))
-                    .max(f64::MIN_POSITIVE);
-                nu = 2.0;
+                state.accept(x_new, trial, cost_new, rho);
             } else {
-                lambda *= nu;
-                nu *= 2.0;
+                state.reject();
             }
             if small_reduction {
-                break 'outer StopReason::CostReduction;
+                return Ok(Some(StopReason::CostReduction));
             }
             if accepted && step_norm <= options.xtol * (x_norm + options.xtol) {
-                break 'outer StopReason::StepSize;
+                return Ok(Some(StopReason::StepSize));
             }
             if accepted {
-                break;
+                return Ok(None);
             }
-            if lambda > MAX_DAMPING || !lambda.is_finite() {
-                break 'outer StopReason::NoProgress;
+            if state.lambda > MAX_DAMPING || !state.lambda.is_finite() {
+                return Ok(Some(StopReason::NoProgress));
             }
-            if eval.count >= options.max_evaluations {
-                break 'outer StopReason::MaxEvaluations;
+            if self.eval.count >= options.max_evaluations {
+                return Ok(Some(StopReason::MaxEvaluations));
             }
         }
-    };
+    }
 
-    let jac_x = eval.jacobian(
-        &x,
-        &r,
-        options.covariance_difference,
-        options.relative_step,
-        &problem,
-    )?;
-    let params = eval.params(&x);
-    // ∂r/∂p = ∂r/∂x / s.
-    let jacobian = DMatrix::from_fn(m, n, |i, j| jac_x[(i, j)] / problem.scales[j]);
-    let status: Vec<ParameterStatus> = (0..n)
-        .map(|j| {
-            if problem.lower[j] == problem.upper[j] {
-                ParameterStatus::Fixed
-            } else if x[j] <= problem.lower[j] {
-                ParameterStatus::AtLower
-            } else if x[j] >= problem.upper[j] {
-                ParameterStatus::AtUpper
-            } else {
-                ParameterStatus::Free
-            }
+    /// The result at the final point: the Jacobian again (with the covariance's difference
+    /// scheme), each parameter's status, the covariance `s² (JᵀJ)⁺` and the standard errors.
+    fn conclude(
+        mut self,
+        parameters: &[Parameter],
+        reason: StopReason,
+    ) -> Result<FitResult, LmError<E>> {
+        let (options, state) = (self.options, self.state);
+        let (m, n) = (state.r.len(), state.x.len());
+        let jac_x = self.eval.jacobian(
+            &state.x,
+            &state.r,
+            options.covariance_difference,
+            options.relative_step,
+            self.problem,
+        )?;
+        let params = self.eval.params(&state.x);
+        // ∂r/∂p = ∂r/∂x / s.
+        let jacobian = DMatrix::from_fn(m, n, |i, j| jac_x[(i, j)] / self.problem.scales[j]);
+        let status = self.problem.bound_status(&state.x);
+        let analysis = analyze(&jacobian, status, options.rank_tolerance);
+        let degrees_of_freedom = m.saturating_sub(analysis.rank);
+        let noise_variance = if options.residuals_normalized {
+            1.0
+        } else if degrees_of_freedom > 0 {
+            2.0 * state.cost / degrees_of_freedom as f64
+        } else {
+            f64::NAN
+        };
+        let covariance = analysis.covariance.map(|c| c * noise_variance);
+        Ok(FitResult {
+            names: parameters.iter().map(|p| p.name.clone()).collect(),
+            params,
+            cost: state.cost,
+            residual_rms: (2.0 * state.cost / m as f64).sqrt(),
+            residuals: state.r,
+            jacobian,
+            iterations: state.iterations,
+            evaluations: self.eval.count,
+            standard_errors: standard_errors(&analysis.status, &covariance),
+            covariance: zero_where_fixed(covariance, &analysis.status),
+            status: analysis.status,
+            rank: analysis.rank,
+            condition_number: analysis.condition_number,
+            degrees_of_freedom,
+            noise_variance,
+            converged: reason.converged(),
+            reason,
         })
-        .collect();
-    let analysis = analyze(&jacobian, status, options.rank_tolerance);
-    let degrees_of_freedom = m.saturating_sub(analysis.rank);
-    let noise_variance = if options.residuals_normalized {
-        1.0
-    } else if degrees_of_freedom > 0 {
-        2.0 * cost / degrees_of_freedom as f64
+    }
+}
+
+/// Where the iteration stands: the point `x` (scaled), its residuals and cost, the damping
+/// λ with Nielsen's factor ν, and the column scaling `D`.
+struct State {
+    x: Vec<f64>,
+    r: Vec<f64>,
+    /// `½‖r‖²`.
+    cost: f64,
+    lambda: f64,
+    nu: f64,
+    /// `D = diag(‖J_j‖)`, the largest column norms seen so far.
+    d: Vec<f64>,
+    /// Jacobian evaluations so far.
+    iterations: usize,
+}
+
+impl State {
+    /// A zero residual, or no room left for another Jacobian (n forward or 2n central
+    /// evaluations).
+    fn limit_reached(&self, evaluations: usize, options: &LmOptions) -> Option<StopReason> {
+        if self.cost == 0.0 {
+            Some(StopReason::ZeroResidual)
+        } else if self.iterations >= options.max_iterations {
+            Some(StopReason::MaxIterations)
+        } else if evaluations.saturating_add(2 * self.x.len()) > options.max_evaluations {
+            Some(StopReason::MaxEvaluations)
+        } else {
+            None
+        }
+    }
+
+    /// Moves to the trial point and relaxes the damping (Nielsen: `λ ← λ·max(⅓, 1 − (2ρ −
+    /// 1)³)`, `ν ← 2`).
+    fn accept(&mut self, x_new: Vec<f64>, trial: Option<Vec<f64>>, cost_new: f64, rho: f64) {
+        if let Some(r_new) = trial {
+            self.x = x_new;
+            self.r = r_new;
+            self.cost = cost_new;
+        }
+        self.lambda = (self.lambda * (1.0 / 3.0f64).max(1.0 - (2.0 * rho - 1.0).powi(3)))
+            .max(f64::MIN_POSITIVE);
+        self.nu = 2.0;
+    }
+
+    /// Stays and damps harder (Nielsen: `λ ← λ·ν`, `ν ← 2ν`).
+    fn reject(&mut self) {
+        self.lambda *= self.nu;
+        self.nu *= 2.0;
+    }
+}
+
+/// `ρ = actual / predicted` reduction; `−∞` when the model predicts no reduction.
+fn gain_ratio(actual: f64, predicted: f64) -> f64 {
+    if predicted > 0.0 {
+        actual / predicted
     } else {
-        f64::NAN
-    };
-    let covariance = analysis.covariance.map(|c| c * noise_variance);
-    let standard_errors = (0..n)
-        .map(|j| match analysis.status[j] {
+        f64::NEG_INFINITY
+    }
+}
+
+/// MINPACK's gradient test: `max_j |g_j| / (‖J_j‖ ‖r‖)` over the free columns that move the
+/// residuals (the cosine of the angle between `r` and each column).
+fn gradient_cosine(free: &[usize], g: &DVector<f64>, norms: &[f64], r_norm: f64) -> f64 {
+    free.iter()
+        .filter(|&&j| norms[j] > 0.0)
+        .map(|&j| g[j].abs() / (norms[j] * r_norm))
+        .fold(0.0, f64::max)
+}
+
+/// `‖J_j‖` of each column.
+fn column_norms(jac: &DMatrix<f64>) -> Vec<f64> {
+    (0..jac.ncols()).map(|j| jac.column(j).norm()).collect()
+}
+
+/// The step equation `(JᵀJ + λ DᵀD) δ = −Jᵀr` on the free parameters, through the SVD
+/// `J D⁻¹ = U Σ Vᵀ` (one per Jacobian; then every trial λ costs O(n²)).
+struct ScaledSystem {
+    /// The free parameters' indices.
+    free: Vec<usize>,
+    /// `D` of the free parameters, floored at 10⁻¹² of the largest.
+    d_free: Vec<f64>,
+    singular_values: DVector<f64>,
+    v_t: DMatrix<f64>,
+    /// `Uᵀr`.
+    ur: DVector<f64>,
+    /// Singular values at or below this are left out (numerically zero).
+    cutoff: f64,
+}
+
+impl ScaledSystem {
+    /// `Err(reason)`: no free parameter changes the residuals (a gradient stop), or the SVD
+    /// failed (no progress).
+    fn new(
+        jac: &DMatrix<f64>,
+        rv: &DVector<f64>,
+        free: Vec<usize>,
+        d: &[f64],
+    ) -> Result<ScaledSystem, StopReason> {
+        let d_max = free.iter().map(|&j| d[j]).fold(0.0, f64::max);
+        if d_max == 0.0 {
+            return Err(StopReason::Gradient);
+        }
+        let d_free: Vec<f64> = free.iter().map(|&j| d[j].max(1e-12 * d_max)).collect();
+        let (m, k) = (jac.nrows(), free.len());
+        let scaled = DMatrix::from_fn(m, k, |i, c| jac[(i, free[c])] / d_free[c]);
+        let svd = nalgebra::SVD::try_new(scaled, true, true, f64::EPSILON, 10_000)
+            .ok_or(StopReason::NoProgress)?;
+        let nalgebra::SVD {
+            u,
+            v_t,
+            singular_values,
+        } = svd;
+        let (Some(u), Some(v_t)) = (u, v_t) else {
+            return Err(StopReason::NoProgress);
+        };
+        let s_max = singular_values.iter().copied().fold(0.0, f64::max);
+        Ok(ScaledSystem {
+            free,
+            d_free,
+            singular_values,
+            v_t,
+            ur: u.tr_mul(rv),
+            cutoff: s_max * f64::EPSILON * (m.max(k) as f64),
+        })
+    }
+
+    /// `x + D⁻¹ δ̃` projected onto the box, with `δ̃ = −Σ v_i σ_i (u_iᵀ r) / (σ_i² + λ)`.
+    fn trial_point(&self, x: &[f64], problem: &Problem, lambda: f64) -> Vec<f64> {
+        let mut step_scaled = DVector::<f64>::zeros(self.free.len());
+        for (i, &s) in self.singular_values.iter().enumerate() {
+            if s > self.cutoff {
+                let coefficient = -s * self.ur[i] / (s * s + lambda);
+                step_scaled += self.v_t.row(i).transpose() * coefficient;
+            }
+        }
+        let mut x_new = x.to_vec();
+        for (c, &j) in self.free.iter().enumerate() {
+            x_new[j] =
+                (x[j] + step_scaled[c] / self.d_free[c]).clamp(problem.lower[j], problem.upper[j]);
+        }
+        x_new
+    }
+}
+
+/// `√C_jj` for a free parameter; `+∞` unidentifiable, NaN at a bound, 0 fixed.
+fn standard_errors(status: &[ParameterStatus], covariance: &DMatrix<f64>) -> Vec<f64> {
+    status
+        .iter()
+        .enumerate()
+        .map(|(j, status)| match status {
             ParameterStatus::Free => covariance[(j, j)].sqrt(),
             ParameterStatus::Unidentifiable => f64::INFINITY,
             ParameterStatus::AtLower | ParameterStatus::AtUpper => f64::NAN,
             ParameterStatus::Fixed => 0.0,
         })
-        .collect();
-    let covariance = DMatrix::from_fn(n, n, |i, j| {
-        let held = |s: ParameterStatus| s == ParameterStatus::Fixed;
-        if held(analysis.status[i]) || held(analysis.status[j]) {
+        .collect()
+}
+
+/// The covariance with the rows and columns of fixed parameters 0 (they do not vary).
+fn zero_where_fixed(covariance: DMatrix<f64>, status: &[ParameterStatus]) -> DMatrix<f64> {
+    let n = status.len();
+    let held = |s: ParameterStatus| s == ParameterStatus::Fixed;
+    DMatrix::from_fn(n, n, |i, j| {
+        if held(status[i]) || held(status[j]) {
             0.0
         } else {
             covariance[(i, j)]
         }
-    });
-    Ok(FitResult {
-        names: parameters.iter().map(|p| p.name.clone()).collect(),
-        params,
-        cost,
-        residual_rms: (2.0 * cost / m as f64).sqrt(),
-        residuals: r,
-        jacobian,
-        iterations,
-        evaluations: eval.count,
-        covariance,
-        standard_errors,
-        status: analysis.status,
-        rank: analysis.rank,
-        condition_number: analysis.condition_number,
-        degrees_of_freedom,
-        noise_variance,
-        converged: reason.converged(),
-        reason,
     })
 }
 
@@ -790,6 +952,34 @@ impl Problem {
         }
         Ok(problem)
     }
+
+    /// The parameters the step may move: not fixed, and not on a bound with the gradient `g`
+    /// of the cost pushing outward (the active set's complement).
+    fn free_parameters(&self, x: &[f64], g: &DVector<f64>) -> Vec<usize> {
+        (0..x.len())
+            .filter(|&j| {
+                let (lo, hi) = (self.lower[j], self.upper[j]);
+                lo < hi && !(x[j] <= lo && g[j] > 0.0) && !(x[j] >= hi && g[j] < 0.0)
+            })
+            .collect()
+    }
+
+    /// Fixed, on a bound, or free, as `x` stands.
+    fn bound_status(&self, x: &[f64]) -> Vec<ParameterStatus> {
+        (0..x.len())
+            .map(|j| {
+                if self.lower[j] == self.upper[j] {
+                    ParameterStatus::Fixed
+                } else if x[j] <= self.lower[j] {
+                    ParameterStatus::AtLower
+                } else if x[j] >= self.upper[j] {
+                    ParameterStatus::AtUpper
+                } else {
+                    ParameterStatus::Free
+                }
+            })
+            .collect()
+    }
 }
 
 /// The power of two nearest to `value > 0` (in the log sense), kept in the normal range.
@@ -849,6 +1039,24 @@ where
         Ok(r)
     }
 
+    /// The residuals at a trial point; `None` when they are unusable there (an error or a
+    /// non-finite value: the step is rejected), an error when their number changed.
+    fn trial(&mut self, x: &[f64]) -> Result<Option<Vec<f64>>, LmError<E>> {
+        match self.eval(x) {
+            Ok(r) => Ok(Some(r)),
+            Err(Failure::Count { found }) => Err(self.count_changed(x, found)),
+            Err(_) => Ok(None),
+        }
+    }
+
+    fn count_changed(&self, x: &[f64], found: usize) -> LmError<E> {
+        LmError::ResidualCountChanged {
+            params: self.params(x),
+            expected: self.m,
+            found,
+        }
+    }
+
     /// `∂r/∂x` by finite differences at `x` (where the residuals are `r`). Steps stay inside
     /// the box: a central difference that would leave it becomes one-sided, a one-sided one
     /// goes the other way; a failed evaluation is retried on the other side.
@@ -861,82 +1069,26 @@ where
         problem: &Problem,
     ) -> Result<DMatrix<f64>, LmError<E>> {
         let m = r.len();
-        let n = x.len();
         let relative = relative_step
             .filter(|h| h.is_finite() && *h > 0.0)
-            .unwrap_or(match kind {
-                Difference::Forward => f64::EPSILON.sqrt(),
-                Difference::Central => f64::EPSILON.cbrt(),
-            });
-        let mut jac = DMatrix::zeros(m, n);
-        for j in 0..n {
+            .unwrap_or(kind.default_relative_step());
+        let mut jac = DMatrix::zeros(m, x.len());
+        for j in 0..x.len() {
             let (lo, hi) = (problem.lower[j], problem.upper[j]);
             if lo == hi {
                 continue;
             }
             let h = relative * x[j].abs().max(1.0);
-            let room_up = hi - x[j];
-            let room_down = x[j] - lo;
-            let mut column = None;
-            let mut last_failure = None;
-            if kind == Difference::Central && room_up >= h && room_down >= h {
-                match (self.shifted(x, j, h), self.shifted(x, j, -h)) {
-                    (Ok((rp, xp)), Ok((rm, xm))) => {
-                        column = Some(difference(&rp, &rm, xp - xm));
-                    }
-                    (Ok((rp, xp)), Err(e)) => {
-                        last_failure = Some(e);
-                        column = Some(difference(&rp, r, xp - x[j]));
-                    }
-                    (Err(e), Ok((rm, xm))) => {
-                        last_failure = Some(e);
-                        column = Some(difference(r, &rm, x[j] - xm));
-                    }
-                    (Err(e), Err(_)) => last_failure = Some(e),
-                }
-            } else {
-                // One-sided: forward if there is room, else backward, else whichever side has
-                // more room (a box narrower than the step).
-                let first = if room_up >= h {
-                    h
-                } else if room_down >= h {
-                    -h
-                } else if room_up >= room_down {
-                    room_up
+            let (room_up, room_down) = (hi - x[j], x[j] - lo);
+            let (column, last_failure) =
+                if kind == Difference::Central && room_up >= h && room_down >= h {
+                    self.central_column(x, r, j, h)
                 } else {
-                    -room_down
+                    self.one_sided_column(x, r, j, one_sided_steps(h, room_up, room_down))
                 };
-                let second = if first > 0.0 {
-                    -h.min(room_down)
-                } else {
-                    h.min(room_up)
-                };
-                for step in [first, second] {
-                    if step == 0.0 {
-                        continue;
-                    }
-                    match self.shifted(x, j, step) {
-                        Ok((rs, xs)) => {
-                            column = Some(if step > 0.0 {
-                                difference(&rs, r, xs - x[j])
-                            } else {
-                                difference(r, &rs, x[j] - xs)
-                            });
-                            break;
-                        }
-                        Err(e) => last_failure = Some(e),
-                    }
-                }
-            }
             match (column, last_failure) {
                 (Some(column), _) => jac.set_column(j, &column),
-                (None, Some(Failure::Count { found })) => {
-                    return Err(LmError::ResidualCountChanged {
-                        params: self.params(x),
-                        expected: m,
-                        found,
-                    })
-                }
+                (None, Some(Failure::Count { found })) => return Err(self.count_changed(x, found)),
                 (None, Some(failure)) => {
                     let mut at = x.to_vec();
                     at[j] += h.min(room_up.max(0.0));
@@ -954,6 +1106,44 @@ where
         Ok(jac)
     }
 
+    /// Column `j` by `(r(x + h) − r(x − h)) / 2h`, or one-sided where one side fails.
+    fn central_column(&mut self, x: &[f64], r: &[f64], j: usize, h: f64) -> ColumnAttempt<E> {
+        match (self.shifted(x, j, h), self.shifted(x, j, -h)) {
+            (Ok((rp, xp)), Ok((rm, xm))) => (Some(difference(&rp, &rm, xp - xm)), None),
+            (Ok((rp, xp)), Err(e)) => (Some(difference(&rp, r, xp - x[j])), Some(e)),
+            (Err(e), Ok((rm, xm))) => (Some(difference(r, &rm, x[j] - xm)), Some(e)),
+            (Err(e), Err(_)) => (None, Some(e)),
+        }
+    }
+
+    /// Column `j` by a one-sided difference: the first of `steps` whose evaluation succeeds.
+    fn one_sided_column(
+        &mut self,
+        x: &[f64],
+        r: &[f64],
+        j: usize,
+        steps: [f64; 2],
+    ) -> ColumnAttempt<E> {
+        let mut last_failure = None;
+        for step in steps {
+            if step == 0.0 {
+                continue;
+            }
+            match self.shifted(x, j, step) {
+                Ok((rs, xs)) => {
+                    let column = if step > 0.0 {
+                        difference(&rs, r, xs - x[j])
+                    } else {
+                        difference(r, &rs, x[j] - xs)
+                    };
+                    return (Some(column), last_failure);
+                }
+                Err(e) => last_failure = Some(e),
+            }
+        }
+        (None, last_failure)
+    }
+
     /// Residuals at `x` with `x_j` moved by `step` (within the box), and the `x_j` actually
     /// used (the representable neighbour).
     fn shifted(&mut self, x: &[f64], j: usize, step: f64) -> Result<(Vec<f64>, f64), Failure<E>> {
@@ -962,6 +1152,29 @@ where
         let xj = moved[j];
         self.eval(&moved).map(|r| (r, xj))
     }
+}
+
+/// A Jacobian column, if one was found, and the last evaluation that failed on the way.
+type ColumnAttempt<E> = (Option<DVector<f64>>, Option<Failure<E>>);
+
+/// The one-sided steps to try, in order: forward if there is room, else backward, else
+/// whichever side has more room (a box narrower than the step); then the other side.
+fn one_sided_steps(h: f64, room_up: f64, room_down: f64) -> [f64; 2] {
+    let first = if room_up >= h {
+        h
+    } else if room_down >= h {
+        -h
+    } else if room_up >= room_down {
+        room_up
+    } else {
+        -room_down
+    };
+    let second = if first > 0.0 {
+        -h.min(room_down)
+    } else {
+        h.min(room_up)
+    };
+    [first, second]
 }
 
 /// `(a − b) / h` as a column.
@@ -993,7 +1206,7 @@ struct Analysis {
 fn analyze(jacobian: &DMatrix<f64>, mut status: Vec<ParameterStatus>, tolerance: f64) -> Analysis {
     let (m, n) = jacobian.shape();
     let mut covariance = DMatrix::from_element(n, n, f64::NAN);
-    let norms: Vec<f64> = (0..n).map(|j| jacobian.column(j).norm()).collect();
+    let norms = column_norms(jacobian);
     // A free parameter that does not change the residuals at all.
     for j in 0..n {
         if status[j] == ParameterStatus::Free && norms[j] == 0.0 {

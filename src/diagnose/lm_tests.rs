@@ -52,6 +52,15 @@ fn line_data(seed: u64) -> (Vec<f64>, Vec<f64>) {
     (x, y)
 }
 
+/// The line `a + b x` fitted to `(x, y)`, from `a = 0` and `b` as given (with its bounds).
+fn line_fit(x: &[f64], y: &[f64], b: Parameter) -> FitResult {
+    fit(
+        |p| Ok(x.iter().zip(y).map(|(x, y)| p[0] + p[1] * x - y).collect()),
+        &[Parameter::new("a", 0.0), b],
+        &LmOptions::default(),
+    )
+}
+
 #[test]
 fn linear_fit_matches_closed_form_ols() {
     let (x, y) = line_data(1);
@@ -72,11 +81,7 @@ fn linear_fit_matches_closed_form_ols() {
     let se_b = (s2 / sxx).sqrt();
     let cov_ab = -s2 * x_mean / sxx;
 
-    let result = fit(
-        |p| Ok(x.iter().zip(&y).map(|(x, y)| p[0] + p[1] * x - y).collect()),
-        &[Parameter::new("a", 0.0), Parameter::new("b", 0.0)],
-        &LmOptions::default(),
-    );
+    let result = line_fit(&x, &y, Parameter::new("b", 0.0));
     assert!(result.converged, "{result}");
     let errors = [
         relative_error(result.params[0], a),
@@ -228,38 +233,17 @@ fn active_bound_is_respected_and_reported() {
     assert_eq!(result.degrees_of_freedom, x.len() - 1);
 
     // A lower bound, on the other side, with the bound met from a start far inside.
-    let result = fit(
-        |p| Ok(x.iter().zip(&y).map(|(x, y)| p[0] + p[1] * x - y).collect()),
-        &[
-            Parameter::new("a", 0.0),
-            Parameter::new("b", 5.0).bounded(1.0, 10.0),
-        ],
-        &LmOptions::default(),
-    );
+    let result = line_fit(&x, &y, Parameter::new("b", 5.0).bounded(1.0, 10.0));
     assert_eq!(result.params[1], 1.0);
     assert_eq!(result.status[1], ParameterStatus::AtLower);
 
     // An inactive bound changes nothing.
-    let free = fit(
-        |p| Ok(x.iter().zip(&y).map(|(x, y)| p[0] + p[1] * x - y).collect()),
-        &[
-            Parameter::new("a", 0.0),
-            Parameter::new("b", 0.1).bounded(0.0, 2.0),
-        ],
-        &LmOptions::default(),
-    );
+    let free = line_fit(&x, &y, Parameter::new("b", 0.1).bounded(0.0, 2.0));
     assert_eq!(free.status, vec![ParameterStatus::Free; 2]);
     assert!(free.standard_errors.iter().all(|s| s.is_finite()));
 
     // lower == upper holds a parameter fixed.
-    let fixed = fit(
-        |p| Ok(x.iter().zip(&y).map(|(x, y)| p[0] + p[1] * x - y).collect()),
-        &[
-            Parameter::new("a", 0.0),
-            Parameter::new("b", 0.7).bounded(0.7, 0.7),
-        ],
-        &LmOptions::default(),
-    );
+    let fixed = line_fit(&x, &y, Parameter::new("b", 0.7).bounded(0.7, 0.7));
     assert_eq!(fixed.params[1], 0.7);
     assert_eq!(fixed.status[1], ParameterStatus::Fixed);
     assert_eq!(fixed.standard_errors[1], 0.0);
@@ -295,11 +279,7 @@ fn duplicated_parameter_is_flagged_unidentifiable() {
     assert_eq!(result.rank, 2);
     assert!(result.condition_number > 1e7, "{}", result.condition_number);
     // The identifiable combination and the offset still equal the OLS line.
-    let ols = fit(
-        |p| Ok(x.iter().zip(&y).map(|(x, y)| p[0] + p[1] * x - y).collect()),
-        &[Parameter::new("a", 0.0), Parameter::new("b", 0.0)],
-        &LmOptions::default(),
-    );
+    let ols = line_fit(&x, &y, Parameter::new("b", 0.0));
     assert!(relative_error(result.params[0] + result.params[1], ols.params[1]) < 1e-8);
     assert!(relative_error(result.params[2], ols.params[0]) < 1e-8);
     // The offset is orthogonal to the null direction (1, −1, 0), so its standard error is
@@ -524,11 +504,7 @@ fn information_criteria_follow_the_gaussian_likelihood() {
         .iter()
         .map(|x| 0.2 + 0.5 * x + 0.8 * x * x + 0.05 * rng.normal())
         .collect();
-    let linear = fit(
-        |p| Ok(x.iter().zip(&y).map(|(x, y)| p[0] + p[1] * x - y).collect()),
-        &[Parameter::new("a", 0.0), Parameter::new("b", 0.0)],
-        &LmOptions::default(),
-    );
+    let linear = line_fit(&x, &y, Parameter::new("b", 0.0));
     let quadratic = fit(
         |p| {
             Ok(x.iter()
