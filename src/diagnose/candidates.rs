@@ -807,7 +807,7 @@ impl Trials<'_> {
         let (experiment, data, observations) = (self.experiment, self.data, self.observations);
         let mut leg = match &candidate.extension {
             Some(extension) => super::extend::open_leg(self.spec, extension),
-            None => Leg::open_any(self.spec, &[]),
+            None => Leg::open_any(self.spec, &[]).map_err(String::from),
         }?;
         let mut parameters = self.user.to_vec();
         parameters.extend(candidate.parameters.iter().cloned());

@@ -65,7 +65,7 @@ pub fn open_leg(spec: &ModelSpec, extension: &Extension) -> Result<Leg, String> 
     apply(&mut model, extension).map_err(|e| format!("model `{shown}`: {e}"))?;
     let session = Session::from_compiled(Compiled::from_model(model), &spec.set, &[])
         .map_err(|e| format!("model `{shown}` extended ({}): {e}", extension.location()))?;
-    Leg::from_session(session, spec, &[])
+    Ok(Leg::from_session(session, spec, &[])?)
 }
 
 /// Transforms `model` in place by the IR transform of [`hinge`] or [`actuator`]; the new

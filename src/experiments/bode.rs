@@ -7,11 +7,12 @@ use std::path::{Path, PathBuf};
 use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
+use super::keys::{positive, quantity};
 use super::leg::Leg;
+use super::Error;
 use super::{csv, ModelSpec, Outcome, Table};
 use crate::frequency::{self, ChirpSweep, Point};
 use crate::parallel::{parallel, threads};
-use crate::quantity::{positive, quantity};
 use crate::render::plot;
 use mech_runtime::Mode;
 
@@ -64,7 +65,7 @@ pub struct Chirp {
 
 impl Chirp {
     /// Amplitude (V), duration (s) and the lowest frequency analysed (Hz, default 5 Hz).
-    fn settings(&self) -> Result<(f64, f64, f64), String> {
+    fn settings(&self) -> Result<(f64, f64, f64), Error> {
         Ok((
             positive("chirp.amplitude", &self.amplitude, Dimension::VOLTAGE)?,
             positive("chirp.duration", &self.duration, Dimension::TIME)?,
@@ -81,18 +82,19 @@ impl Chirp {
 }
 
 impl Spec {
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), Error> {
         let from = positive("from", &self.from, Dimension::FREQUENCY)?;
         let to = positive("to", &self.to, Dimension::FREQUENCY)?;
         if to <= from {
-            return Err(format!(
-                "key `to`: {to} Hz must be above `from` ({from} Hz)"
-            ));
+            return Err(Error::Key {
+                message: format!("key `to`: {to} Hz must be above `from` ({from} Hz)"),
+            });
         }
         if self.channel.is_empty() {
-            return Err(
-                "key `channel`: give at least one [[channel]] (name, input, output)".into(),
-            );
+            return Err(Error::Key {
+                message: "key `channel`: give at least one [[channel]] (name, input, output)"
+                    .into(),
+            });
         }
         if let Some(chirp) = &self.chirp {
             positive("chirp.amplitude", &chirp.amplitude, Dimension::VOLTAGE)?;
@@ -120,7 +122,7 @@ pub struct Responses {
 
 /// Linearizes the leg at rest and computes every channel's responses (chirps in parallel,
 /// one per channel).
-pub fn compute(spec: &Spec) -> Result<Responses, String> {
+pub fn compute(spec: &Spec) -> Result<Responses, Error> {
     let from = positive("from", &spec.from, Dimension::FREQUENCY)?;
     let to = positive("to", &spec.to, Dimension::FREQUENCY)?;
     let model_spec = ModelSpec {
@@ -133,10 +135,8 @@ pub fn compute(spec: &Spec) -> Result<Responses, String> {
     let rest_inputs = leg.inputs(0.0, 0.0);
     let rest_q = leg.equilibrium(&leg.q0, &rest_inputs, &[])?.q;
     let linear = mech_runtime::linearize(model, 0.0, &rest_q, &rest_inputs, &leg.independent)
-        .map_err(|e| format!("linearization failed: {e}"))?;
-    let modes = linear
-        .modes()
-        .ok_or("the reduced mass matrix is not positive definite")?;
+        .map_err(Error::Linearization)?;
+    let modes = linear.modes().ok_or(Error::NoModes)?;
     let frequencies = frequency::log_space(from, to, spec.points);
     let indices = spec
         .channel
@@ -146,10 +146,12 @@ pub fn compute(spec: &Spec) -> Result<Responses, String> {
             let output = leg.session.output_index(&channel.output);
             match (input, output) {
                 (Ok(input), Ok(output)) => Ok((input, output)),
-                (Err(e), _) | (_, Err(e)) => Err(format!("channel `{}`: {e}", channel.name)),
+                (Err(e), _) | (_, Err(e)) => {
+                    Err(Error::from(e).within(format!("channel `{}`", channel.name)))
+                }
             }
         })
-        .collect::<Result<Vec<_>, String>>()?;
+        .collect::<Result<Vec<_>, Error>>()?;
     let estimates = match &spec.chirp {
         Some(chirp) => {
             let (amplitude, duration, analysis_from) = chirp.settings()?;
@@ -173,7 +175,7 @@ pub fn compute(spec: &Spec) -> Result<Responses, String> {
                     &sweep,
                     &frequencies,
                 )
-                .map_err(|e| format!("chirp simulation failed: {e}"))?;
+                .map_err(Error::Chirp)?;
                 // Blank the start of the sweep (NaN: not drawn, not searched).
                 for point in estimate
                     .iter_mut()
@@ -184,7 +186,7 @@ pub fn compute(spec: &Spec) -> Result<Responses, String> {
                 Ok(Some(estimate))
             })
             .into_iter()
-            .collect::<Result<Vec<_>, String>>()?
+            .collect::<Result<Vec<_>, Error>>()?
         }
         None => vec![None; spec.channel.len()],
     };
@@ -192,7 +194,7 @@ pub fn compute(spec: &Spec) -> Result<Responses, String> {
     for (&(input, output), estimate) in indices.iter().zip(estimates) {
         let linear_response = |damping| {
             frequency::linear_response(&linear, input, output, &frequencies, damping)
-                .ok_or("the linear model is singular at some frequency")
+                .ok_or(Error::SingularResponse)
         };
         let mut sources: Vec<(&'static str, Vec<Point>)> = vec![
             (
@@ -219,7 +221,7 @@ pub fn compute(spec: &Spec) -> Result<Responses, String> {
     })
 }
 
-pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
+pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     let responses = compute(spec)?;
     let (from, to, name) = (responses.from, responses.to, &responses.model_name);
     let mut outcome = Outcome {
@@ -344,7 +346,7 @@ fn write_channel(
     channel: &Channel,
     frequencies: &[f64],
     sources: &[(&str, Vec<Point>)],
-) -> Result<(), String> {
+) -> Result<(), Error> {
     let db = |p: &Point| 20.0 * (p.gain.norm() * 1e6).log10();
     let curves = |value: &dyn Fn(&Point) -> f64| -> Vec<(String, Vec<f64>, Vec<f64>)> {
         sources
@@ -390,8 +392,7 @@ fn write_channel(
         ),
         &magnitude,
         &phase,
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     outcome.plots.push(path);
     Ok(())
 }

@@ -9,10 +9,11 @@ use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
 use super::force::{actuator_work, check_paper, PaperRow};
+use super::keys::positive;
 use super::leg::{force_deflection, Dof, ForceDeflection, Leg, Sensor};
+use super::Error;
 use super::{csv, ModelSpec, Outcome, Table};
 use crate::parallel::parallel;
-use crate::quantity::positive;
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -43,13 +44,15 @@ pub struct Robot {
 }
 
 impl Spec {
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), Error> {
         positive("voltage", &self.voltage, Dimension::VOLTAGE)?;
         if self.robot.len() != 2 {
-            return Err(format!(
-                "key `robot`: expected exactly two [[robot]] tables (old, new), got {}",
-                self.robot.len()
-            ));
+            return Err(Error::Key {
+                message: format!(
+                    "key `robot`: expected exactly two [[robot]] tables (old, new), got {}",
+                    self.robot.len()
+                ),
+            });
         }
         for (k, robot) in self.robot.iter().enumerate() {
             check_paper(&robot.paper, &format!("robot[{k}]."))?;
@@ -65,11 +68,11 @@ pub struct RobotTests {
 }
 
 /// Runs each robot's lift and swing tests at `voltage` (one robot per thread).
-pub fn compute(spec: &Spec, voltage: f64) -> Result<Vec<RobotTests>, String> {
+pub fn compute(spec: &Spec, voltage: f64) -> Result<Vec<RobotTests>, Error> {
     let results = parallel(
         spec.robot.iter().collect(),
         2,
-        |robot| -> Result<_, String> {
+        |robot| -> Result<_, Error> {
             let leg = Leg::open(&ModelSpec {
                 model: robot.model.clone(),
                 set: robot.set.clone(),
@@ -86,9 +89,9 @@ pub fn compute(spec: &Spec, voltage: f64) -> Result<Vec<RobotTests>, String> {
         .zip(results)
         .map(|(robot, result)| {
             let (actuator_work, [lift, swing]) =
-                result.map_err(|e| format!("robot `{}`: {e}", robot.name))?;
-            let named = |dof: Dof, test: Result<ForceDeflection, String>| {
-                test.map_err(|e| format!("robot `{}` {}: {e}", robot.name, dof.name()))
+                result.map_err(|e| e.within(format!("robot `{}`", robot.name)))?;
+            let named = |dof: Dof, test: Result<ForceDeflection, Error>| {
+                test.map_err(|e| e.within(format!("robot `{}` {}", robot.name, dof.name())))
             };
             Ok(RobotTests {
                 actuator_work,
@@ -98,7 +101,7 @@ pub fn compute(spec: &Spec, voltage: f64) -> Result<Vec<RobotTests>, String> {
         .collect()
 }
 
-pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
+pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     let voltage = positive("voltage", &spec.voltage, Dimension::VOLTAGE)?;
     let robots = compute(spec, voltage)?;
     let mut outcome = Outcome {

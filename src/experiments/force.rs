@@ -9,9 +9,10 @@ use std::path::{Path, PathBuf};
 use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
+use super::keys::{paper_value, positive};
 use super::leg::{force_deflection, Dof, ForceDeflection, Leg, Sensor};
+use super::Error;
 use super::{csv, percent_diff, ModelSpec, Outcome, Table};
-use crate::quantity::{paper_value, positive};
 use crate::render::plot;
 use mech_codegen::ir::transform::AXES;
 
@@ -64,7 +65,7 @@ pub struct Paper {
 }
 
 impl PaperRow {
-    pub fn parse(&self, key: &str) -> Result<Paper, String> {
+    pub fn parse(&self, key: &str) -> Result<Paper, Error> {
         Ok(Paper {
             d: paper_value(&format!("{key}.d"), &self.d, Dimension::LENGTH)?,
             force: paper_value(&format!("{key}.force"), &self.force, Dimension::FORCE)?,
@@ -78,12 +79,12 @@ impl PaperRow {
     }
 }
 
-pub(crate) fn check_paper(paper: &BTreeMap<String, PaperRow>, prefix: &str) -> Result<(), String> {
+pub(crate) fn check_paper(paper: &BTreeMap<String, PaperRow>, prefix: &str) -> Result<(), Error> {
     for (key, row) in paper {
         if key != "lift" && key != "swing" {
-            return Err(format!(
-                "key `{prefix}paper.{key}`: expected `lift` or `swing`"
-            ));
+            return Err(Error::Key {
+                message: format!("key `{prefix}paper.{key}`: expected `lift` or `swing`"),
+            });
         }
         row.parse(&format!("{prefix}paper.{key}"))?;
     }
@@ -95,14 +96,16 @@ fn default_dofs() -> Vec<Dof> {
 }
 
 impl Spec {
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), Error> {
         positive("voltage", &self.voltage, Dimension::VOLTAGE)?;
         positive("sensor_step", &self.sensor_step, Dimension::LENGTH)?;
         if let Some(c) = self.off_axis_fraction {
             if !(0.0..=2.0).contains(&c) {
-                return Err(format!(
-                    "key `off_axis_fraction`: expected a fraction between 0 and 2, got {c}"
-                ));
+                return Err(Error::Key {
+                    message: format!(
+                        "key `off_axis_fraction`: expected a fraction between 0 and 2, got {c}"
+                    ),
+                });
             }
         }
         check_paper(&self.paper, "")
@@ -110,13 +113,15 @@ impl Spec {
 }
 
 /// `F_b δ_f` of the model's actuator (parameters `F_b`, `delta_f`).
-pub(crate) fn actuator_work(leg: &Leg) -> Result<f64, String> {
+pub(crate) fn actuator_work(leg: &Leg) -> Result<f64, Error> {
     match (leg.param("F_b"), leg.param("delta_f")) {
         (Some(f), Some(d)) => Ok(f * d),
-        _ => Err(format!(
+        _ => Err(Error::Key {
+ message: format!(
             "model `{}` has no parameters `F_b` and `delta_f` (the actuator's blocked force and free deflection)",
             leg.model().name()
-        )),
+        ),
+ }),
     }
 }
 
@@ -128,7 +133,7 @@ fn tests(
     dof: Dof,
     voltage: f64,
     step: f64,
-) -> Result<Vec<(&'static str, ForceDeflection)>, String> {
+) -> Result<Vec<(&'static str, ForceDeflection)>, Error> {
     let axis = dof.axis();
     let mut cases = vec![(
         "on-axis only",
@@ -150,7 +155,7 @@ fn tests(
     Ok(cases)
 }
 
-pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
+pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     let voltage = positive("voltage", &spec.voltage, Dimension::VOLTAGE)?;
     let step = positive("sensor_step", &spec.sensor_step, Dimension::LENGTH)?;
     let leg = Leg::open(&ModelSpec {
@@ -202,8 +207,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
         "on-axis force [mN]",
         &curves,
         false,
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     outcome.plots.push(path);
     outcome.notes = spec.notes.clone();
     Ok(outcome)
@@ -266,7 +270,7 @@ fn write_test(
     dir: &Path,
     dof: Dof,
     test: &ForceDeflection,
-) -> Result<Vec<Vec<f64>>, String> {
+) -> Result<Vec<Vec<f64>>, Error> {
     let tag = if test.off_axis_fraction > 0.0 {
         "_offaxis"
     } else {
@@ -337,7 +341,7 @@ fn paper_table(
     model_name: &str,
     paper: &BTreeMap<String, PaperRow>,
     outcome: &Outcome,
-) -> Result<Table, String> {
+) -> Result<Table, Error> {
     let mut table = Table::new(
         &format!("{model_name}: model against the paper's measurements (seed Table IV, mean ± s.d., n = 2)"),
         &["DOF", "quantity", "model", "paper", "model vs paper"],

@@ -14,6 +14,7 @@ use mech_runtime::{
 };
 use serde::Deserialize;
 
+use super::Error;
 use super::ModelSpec;
 use crate::session::Session;
 
@@ -83,13 +84,13 @@ struct Ports {
 }
 
 impl Leg {
-    pub fn open(spec: &ModelSpec) -> Result<Leg, String> {
+    pub fn open(spec: &ModelSpec) -> Result<Leg, Error> {
         Leg::open_with(spec, &[])
     }
 
     /// As [`Leg::open`], with `params` (name, SI value) set after `spec.set`: sweeps set
     /// their values directly, without a round trip through text.
-    pub fn open_with(spec: &ModelSpec, params: &[(&str, f64)]) -> Result<Leg, String> {
+    pub fn open_with(spec: &ModelSpec, params: &[(&str, f64)]) -> Result<Leg, Error> {
         let session = open_session(spec)?;
         // Checked before the assembly, whose default independent coordinates are HAMR's.
         hamr_ports(&session.model, &spec.model.display().to_string())?;
@@ -99,7 +100,7 @@ impl Leg {
     /// As [`Leg::open_with`] for any model: the HAMR drive and foot are optional (a model
     /// without them, e.g. the flexure pendulum rig, only serves the experiments that do not
     /// drive it; those that do check [`Leg::require_hamr`]).
-    pub fn open_any(spec: &ModelSpec, params: &[(&str, f64)]) -> Result<Leg, String> {
+    pub fn open_any(spec: &ModelSpec, params: &[(&str, f64)]) -> Result<Leg, Error> {
         Leg::from_session(open_session(spec)?, spec, params)
     }
 
@@ -109,11 +110,16 @@ impl Leg {
         mut session: Session,
         spec: &ModelSpec,
         params: &[(&str, f64)],
-    ) -> Result<Leg, String> {
+    ) -> Result<Leg, Error> {
         for &(name, value) in params {
-            let index = session.model.param_index(name).ok_or_else(|| {
-                format!("model `{}` has no parameter `{name}`", spec.model.display())
-            })?;
+            let index = session
+                .model
+                .param_index(name)
+                .ok_or_else(|| Error::NoParameter {
+                    model: spec.model.display().to_string(),
+                    name: name.to_string(),
+                    purpose: None,
+                })?;
             session.model.set_param(index, value);
         }
         let ports = hamr_ports(&session.model, "").ok();
@@ -128,7 +134,7 @@ impl Leg {
 
     /// An error naming the model unless the leg has HAMR's drive inputs `v_lift` and
     /// `v_swing` and the foot position output `foot`, which the HAMR-only methods use.
-    pub fn require_hamr(&self) -> Result<(), String> {
+    pub fn require_hamr(&self) -> Result<(), Error> {
         hamr_ports(self.model(), self.model().name()).map(|_| ())
     }
 
@@ -195,7 +201,7 @@ impl Leg {
         start: &[f64],
         inputs: &[f64],
         fixtures: &[Fixture],
-    ) -> Result<Equilibrium, String> {
+    ) -> Result<Equilibrium, Error> {
         self.loaded_equilibrium(start, inputs, fixtures, &[])
     }
 
@@ -206,7 +212,7 @@ impl Leg {
         inputs: &[f64],
         fixtures: &[Fixture],
         loads: &[SideLoad],
-    ) -> Result<Equilibrium, String> {
+    ) -> Result<Equilibrium, Error> {
         let mut q = start.to_vec();
         solve_statics_with_loads(
             self.model(),
@@ -217,7 +223,10 @@ impl Leg {
             loads,
             &StaticsOptions::default(),
         )
-        .map_err(|e| format!("statics of `{}`: {e}", self.model().name()))
+        .map_err(|error| Error::Statics {
+            model: self.model().name().to_string(),
+            error,
+        })
     }
 
     /// [`Leg::loaded_equilibrium`] started from the solution `warm` holds in `slot` (a
@@ -231,7 +240,7 @@ impl Leg {
         inputs: &[f64],
         fixtures: &[Fixture],
         loads: &[SideLoad],
-    ) -> Result<Equilibrium, String> {
+    ) -> Result<Equilibrium, Error> {
         let solved = match warm.slots.get(slot) {
             Some(Some(previous)) if previous.len() == start.len() => self
                 .loaded_equilibrium(previous, inputs, fixtures, loads)
@@ -257,11 +266,11 @@ impl Leg {
 
     /// Small-motion ratio of foot displacement along `axis` to the actuator's displacement,
     /// from the loop kinematics at `q` (central differences of the assembled foot position).
-    pub fn kinematic_ratio(&self, q: &[f64], dof: Dof, axis: usize) -> Result<f64, String> {
+    pub fn kinematic_ratio(&self, q: &[f64], dof: Dof, axis: usize) -> Result<f64, Error> {
         let actuator = self.session.coordinate_index(dof.actuator())?;
         let h = 1e-7;
         let inputs = self.inputs(0.0, 0.0);
-        let at = |delta: f64| -> Result<f64, String> {
+        let at = |delta: f64| -> Result<f64, Error> {
             let mut q = q.to_vec();
             q[actuator] += delta;
             assemble(
@@ -271,23 +280,31 @@ impl Leg {
                 &self.independent,
                 &AssemblyOptions::default(),
             )
-            .map_err(|e| e.to_string())?;
+            .map_err(Error::Assembly)?;
             Ok(self.foot_at(&q, &inputs)[axis])
         };
         Ok((at(h)? - at(-h)?) / (2.0 * h))
     }
 }
 
-fn open_session(spec: &ModelSpec) -> Result<Session, String> {
-    Session::open(&spec.model, &spec.set, &[])
-        .map_err(|e| format!("model `{}`: {e}", spec.model.display()))
+fn open_session(spec: &ModelSpec) -> Result<Session, Error> {
+    Session::open(&spec.model, &spec.set, &[]).map_err(|error| Error::Model {
+        model: spec.model.clone(),
+        error,
+    })
 }
 
 /// The HAMR ports of `model` (named `shown` in errors), or what is missing.
-fn hamr_ports(model: &dyn Model, shown: &str) -> Result<Ports, String> {
+fn hamr_ports(model: &dyn Model, shown: &str) -> Result<Ports, Error> {
+    let missing = |what: String| Error::NotHamr {
+        model: shown.to_string(),
+        missing: what,
+    };
     let input = |name: &str| {
         model.input_index(name).ok_or_else(|| {
-            format!("model `{shown}` has no input `{name}` (a HAMR leg needs v_lift and v_swing)")
+            missing(format!(
+                "input `{name}` (a HAMR leg needs v_lift and v_swing)"
+            ))
         })
     };
     let (v_lift, v_swing) = (input("v_lift")?, input("v_swing")?);
@@ -295,7 +312,7 @@ fn hamr_ports(model: &dyn Model, shown: &str) -> Result<Ports, String> {
     for (slot, axis) in foot.iter_mut().zip(AXES) {
         *slot = model
             .output_index(&format!("foot.{axis}"))
-            .ok_or_else(|| format!("model `{shown}` has no position output `foot`"))?;
+            .ok_or_else(|| missing("position output `foot`".into()))?;
     }
     Ok(Ports {
         v_lift,
@@ -384,7 +401,7 @@ pub fn force_deflection(
     voltage: f64,
     sensor: Sensor,
     off_axis_fraction: f64,
-) -> Result<ForceDeflection, String> {
+) -> Result<ForceDeflection, Error> {
     let mut cold = WarmStarts::default();
     force_deflection_warm(
         leg,
@@ -407,9 +424,11 @@ pub fn force_deflection_warm(
     sensor: Sensor,
     off_axis_fraction: f64,
     warm: &mut WarmStarts,
-) -> Result<ForceDeflection, String> {
+) -> Result<ForceDeflection, Error> {
     if off_axis_fraction != 0.0 && axis == 1 {
-        return Err("an off-axis (y) load needs an on-axis direction x or z".into());
+        return Err(Error::Test(
+            "an off-axis (y) load needs an on-axis direction x or z",
+        ));
     }
     let rest_inputs = leg.inputs(0.0, 0.0);
     let rest_q = leg
@@ -483,7 +502,9 @@ pub fn force_deflection_warm(
         points.push(point);
         k += 1;
         if matches!(sensor, Sensor::Steps(_)) && points.len() > 1000 {
-            return Err("more than 1000 sensor positions: is the step too small?".into());
+            return Err(Error::Test(
+                "more than 1000 sensor positions: is the step too small?",
+            ));
         }
     }
     Ok(ForceDeflection {

@@ -12,6 +12,7 @@
 
 pub mod bode;
 pub mod compare;
+pub mod error;
 pub mod force;
 pub mod leg;
 pub mod sweep;
@@ -21,6 +22,28 @@ use std::path::{Path, PathBuf};
 
 use crate::parallel::{parallel, threads};
 use serde::Deserialize;
+
+pub use error::Error;
+
+/// [`crate::quantity`]'s parsers of the keys' values, their messages as
+/// [`Error::Quantity`].
+mod keys {
+    use mech_codegen::ir::Dimension;
+
+    use super::Error;
+
+    pub fn quantity(key: &str, text: &str, expected: Dimension) -> Result<f64, Error> {
+        crate::quantity::quantity(key, text, expected).map_err(Error::Quantity)
+    }
+
+    pub fn positive(key: &str, text: &str, expected: Dimension) -> Result<f64, Error> {
+        crate::quantity::positive(key, text, expected).map_err(Error::Quantity)
+    }
+
+    pub fn paper_value(key: &str, text: &str, expected: Dimension) -> Result<(f64, f64), Error> {
+        crate::quantity::paper_value(key, text, expected).map_err(Error::Quantity)
+    }
+}
 
 pub use crate::render::report::Outcome;
 pub use crate::render::table::Table;
@@ -55,22 +78,25 @@ pub(crate) fn default_independent() -> Vec<String> {
 }
 
 /// Reads and checks an experiment file. Errors name the file and the key.
-pub fn load(path: &Path) -> Result<Experiment, String> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| format!("cannot read experiment `{}`: {e}", path.display()))?;
-    parse(&text).map_err(|e| format!("experiment `{}`: {e}", path.display()))
+pub fn load(path: &Path) -> Result<Experiment, Error> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::Read {
+        what: "experiment",
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    parse(&text).map_err(|e| e.in_file(path))
 }
 
 /// Parses an experiment from TOML text.
-pub fn parse(text: &str) -> Result<Experiment, String> {
+pub fn parse(text: &str) -> Result<Experiment, Error> {
     let experiment: Experiment = toml::from_str(text).map_err(|e| {
         let message = e.to_string();
         if message.contains("missing field `kind`") {
-            "missing key `kind`: expected one of \"trajectory\", \"force_deflection\", \
-             \"ratio_sweep\", \"compare\", \"bode\""
-                .to_string()
+            Error::MissingKind
         } else {
-            message.trim_end().to_string()
+            Error::Toml {
+                message: message.trim_end().to_string(),
+            }
         }
     })?;
     experiment.check()?;
@@ -89,7 +115,7 @@ impl Experiment {
     }
 
     /// Checks the quantities (units, signs) before anything runs.
-    fn check(&self) -> Result<(), String> {
+    fn check(&self) -> Result<(), Error> {
         match self {
             Experiment::Trajectory(s) => s.check(),
             Experiment::ForceDeflection(s) => s.check(),
@@ -109,7 +135,7 @@ impl Experiment {
     }
 
     /// Runs the experiment, writing its files under `out_dir` (named by `name`).
-    pub fn run(&self, name: &str, out_dir: &Path) -> Result<Outcome, String> {
+    pub fn run(&self, name: &str, out_dir: &Path) -> Result<Outcome, Error> {
         let mut outcome = match self {
             Experiment::Trajectory(s) => trajectory::run(s, out_dir)?,
             Experiment::ForceDeflection(s) => force::run(s, out_dir)?,
@@ -124,12 +150,11 @@ impl Experiment {
 }
 
 /// The experiment files of a folder, sorted by name.
-pub fn experiment_files(folder: &Path) -> Result<Vec<PathBuf>, String> {
-    let entries = std::fs::read_dir(folder).map_err(|e| {
-        format!(
-            "cannot read the experiments folder `{}`: {e}",
-            folder.display()
-        )
+pub fn experiment_files(folder: &Path) -> Result<Vec<PathBuf>, Error> {
+    let entries = std::fs::read_dir(folder).map_err(|e| Error::Read {
+        what: "the experiments folder",
+        path: folder.to_path_buf(),
+        message: e.to_string(),
     })?;
     let mut files: Vec<PathBuf> = entries
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -137,10 +162,9 @@ pub fn experiment_files(folder: &Path) -> Result<Vec<PathBuf>, String> {
         .collect();
     files.sort();
     if files.is_empty() {
-        return Err(format!(
-            "no `*.toml` experiment files in `{}`",
-            folder.display()
-        ));
+        return Err(Error::NoExperimentFiles {
+            folder: folder.to_path_buf(),
+        });
     }
     Ok(files)
 }
@@ -151,33 +175,33 @@ pub fn run_all(
     files: &[PathBuf],
     out_dir: &Path,
     progress: &(dyn Fn(&str) + Sync),
-) -> Result<Vec<Outcome>, String> {
+) -> Result<Vec<Outcome>, Error> {
     let experiments: Vec<(usize, String, Experiment)> = files
         .iter()
         .enumerate()
         .map(|(k, f)| Ok((k, stem(f), load(f)?)))
-        .collect::<Result<_, String>>()?;
+        .collect::<Result<_, Error>>()?;
     let mut jobs = experiments;
     jobs.sort_by(|a, b| b.2.cost().total_cmp(&a.2.cost()));
     let results = parallel(jobs, threads(), |(k, name, experiment)| {
         let result = experiment
             .run(&name, &out_dir.join(&name))
-            .map_err(|e| format!("experiment `{}`: {e}", files[k].display()));
+            .map_err(|e| e.in_file(&files[k]));
         progress(&name);
         (k, result)
     });
-    let mut results: Vec<(usize, Result<Outcome, String>)> = results;
+    let mut results: Vec<(usize, Result<Outcome, Error>)> = results;
     results.sort_by_key(|(k, _)| *k);
     results.into_iter().map(|(_, r)| r).collect()
 }
 
 /// Runs one experiment file, its outputs in `out_dir/<stem>/`.
-pub fn run_file(path: &Path, out_dir: &Path) -> Result<Outcome, String> {
+pub fn run_file(path: &Path, out_dir: &Path) -> Result<Outcome, Error> {
     let experiment = load(path)?;
     let name = stem(path);
     experiment
         .run(&name, &out_dir.join(&name))
-        .map_err(|e| format!("experiment `{}`: {e}", path.display()))
+        .map_err(|e| e.in_file(path))
 }
 
 pub(crate) fn stem(path: &Path) -> String {
@@ -195,11 +219,13 @@ pub(crate) fn csv(
     file: &str,
     header: &[&str],
     rows: &[Vec<f64>],
-) -> Result<(), String> {
+) -> Result<(), Error> {
     let path = dir.join(file);
     let header: Vec<String> = header.iter().map(|s| s.to_string()).collect();
-    crate::output::write_csv(&path, &header, rows)
-        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    crate::output::write_csv(&path, &header, rows).map_err(|e| Error::Write {
+        path: path.clone(),
+        message: e.to_string(),
+    })?;
     outcome.files.push(path);
     Ok(())
 }

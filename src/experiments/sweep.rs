@@ -11,10 +11,11 @@ use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
 use super::force::actuator_work;
+use super::keys::positive;
 use super::leg::{force_deflection, Dof, Leg, Sensor};
+use super::Error;
 use super::{csv, ModelSpec, Outcome, Table};
 use crate::parallel::{parallel, threads};
-use crate::quantity::positive;
 use crate::render::plot::{self, CurveStyle, Star};
 use mech_codegen::ir::transform::AXES;
 
@@ -67,24 +68,28 @@ impl Series {
         format!("{} {}", self.name, self.dof.name())
     }
     /// The swept arm range `(low, high)` in SI, checked.
-    fn arm_range(&self, k: usize) -> Result<(f64, f64), String> {
+    fn arm_range(&self, k: usize) -> Result<(f64, f64), Error> {
         let key = format!("series[{k}].arm");
         let [a, b] = self.arm.as_slice() else {
-            return Err(format!(
+            return Err(Error::Key {
+                message: format!(
                 "key `{key}`: expected two lengths, e.g. [\"0.25 mm\", \"1.2 mm\"], got {} values",
                 self.arm.len()
-            ));
+            ),
+            });
         };
         let (a, b) = (
             positive(&key, a, Dimension::LENGTH)?,
             positive(&key, b, Dimension::LENGTH)?,
         );
         if a == b {
-            return Err(format!("key `{key}`: the two ends are equal"));
+            return Err(Error::Key {
+                message: format!("key `{key}`: the two ends are equal"),
+            });
         }
         Ok((a.min(b), a.max(b)))
     }
-    fn lever(&self, k: usize) -> Result<Option<f64>, String> {
+    fn lever(&self, k: usize) -> Result<Option<f64>, Error> {
         self.lever
             .as_deref()
             .map(|l| positive(&format!("series[{k}].lever"), l, Dimension::LENGTH))
@@ -100,25 +105,31 @@ impl Series {
 }
 
 impl Spec {
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), Error> {
         positive("voltage", &self.voltage, Dimension::VOLTAGE)?;
         if !(2..=200).contains(&self.points) {
-            return Err(format!(
-                "key `points`: expected 2 to 200 arm values per series, got {}",
-                self.points
-            ));
+            return Err(Error::Key {
+                message: format!(
+                    "key `points`: expected 2 to 200 arm values per series, got {}",
+                    self.points
+                ),
+            });
         }
         if self.series.is_empty() {
-            return Err("key `series`: expected at least one [[series]] table".into());
+            return Err(Error::Key {
+                message: "key `series`: expected at least one [[series]] table".into(),
+            });
         }
         for (k, series) in self.series.iter().enumerate() {
             series.arm_range(k)?;
             series.lever(k)?;
             if let Some(r) = series.paper_ratio {
                 if !(r.is_finite() && r > 0.0) {
-                    return Err(format!(
-                        "key `series[{k}].paper_ratio`: expected a positive ratio, got {r}"
-                    ));
+                    return Err(Error::Key {
+                        message: format!(
+                            "key `series[{k}].paper_ratio`: expected a positive ratio, got {r}"
+                        ),
+                    });
                 }
             }
         }
@@ -154,17 +165,14 @@ pub struct SweepPoint {
 
 /// The leg of `series` with the crank arm at `arm` (`None`: the model's own) at `voltage`:
 /// the ratio from the kinematics and the blocked force and free deflection of experiment 2.
-pub fn sweep_point(series: &Series, voltage: f64, arm: Option<f64>) -> Result<SweepPoint, String> {
+pub fn sweep_point(series: &Series, voltage: f64, arm: Option<f64>) -> Result<SweepPoint, Error> {
     let dof = series.dof;
     let set: Vec<(&str, f64)> = arm.map(|a| (dof.arm(), a)).into_iter().collect();
     let leg = Leg::open_with(&series.leg(), &set)?;
-    let arm = leg.param(dof.arm()).ok_or_else(|| {
-        format!(
-            "model `{}` has no parameter `{}` (the crank arm that sets the {} ratio)",
-            series.model.display(),
-            dof.arm(),
-            dof.name()
-        )
+    let arm = leg.param(dof.arm()).ok_or_else(|| Error::NoParameter {
+        model: series.model.display().to_string(),
+        name: dof.arm().to_string(),
+        purpose: Some(format!("the crank arm that sets the {} ratio", dof.name())),
     })?;
     let ratio = leg.kinematic_ratio(&leg.q0, dof, dof.axis())?.abs();
     let ratio_y = leg.kinematic_ratio(&leg.q0, dof, 1)?.abs();
@@ -223,7 +231,7 @@ pub struct Sweep {
 
 /// Runs every (series, arm) point on all cores. The model is compiled per point
 /// (milliseconds), so that the points are independent.
-pub fn compute(spec: &Spec) -> Result<Sweep, String> {
+pub fn compute(spec: &Spec) -> Result<Sweep, Error> {
     let voltage = positive("voltage", &spec.voltage, Dimension::VOLTAGE)?;
     let mut jobs = Vec::new();
     for (k, series) in spec.series.iter().enumerate() {
@@ -245,10 +253,9 @@ pub fn compute(spec: &Spec) -> Result<Sweep, String> {
         match (result, arm) {
             (Ok(point), _) => curves[k].push(point),
             (Err(e), None) => {
-                return Err(format!(
-                    "series `{}` at the model's own arm: {e}",
-                    series.label()
-                ))
+                return Err(Error::Key {
+                    message: format!("series `{}` at the model's own arm: {e}", series.label()),
+                })
             }
             // A sweep point that does not converge is left out and reported, not fatal: the
             // range may reach arms where the leg folds over.
@@ -270,7 +277,7 @@ pub fn compute(spec: &Spec) -> Result<Sweep, String> {
     })
 }
 
-pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
+pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     let sweep = compute(spec)?;
     let voltage = sweep.voltage;
     let keys = keys(&spec.series);
@@ -303,7 +310,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
             .iter()
             .find(|p| p.chosen)
             .copied()
-            .ok_or("the chosen design is missing")?;
+            .ok_or(Error::ChosenDesignMissing)?;
         chosen_table.row(vec![
             series.name.clone(),
             series.actuator.clone(),
@@ -348,8 +355,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
         &figure.curves,
         &figure.styles,
         &figure.stars,
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     outcome.plots.push(path);
     // The file's notes first, then what each curve shows.
     let observations = std::mem::replace(&mut outcome.notes, spec.notes.clone());
@@ -444,7 +450,7 @@ fn write_curve(
     key: &str,
     lever: Option<f64>,
     curve: &[SweepPoint],
-) -> Result<(), String> {
+) -> Result<(), Error> {
     let rows: Vec<Vec<f64>> = curve
         .iter()
         .map(|p| {

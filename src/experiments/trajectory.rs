@@ -8,9 +8,10 @@ use std::path::{Path, PathBuf};
 use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
+use super::keys::positive;
 use super::leg::Leg;
+use super::Error;
 use super::{csv, ModelSpec, Outcome, Table};
-use crate::quantity::positive;
 use crate::render::plot;
 use mech_codegen::ir::transform::AXES;
 
@@ -47,11 +48,13 @@ fn default_points() -> usize {
 }
 
 impl Spec {
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), Error> {
         positive("amplitude", &self.amplitude, Dimension::VOLTAGE)?;
         positive("frequency", &self.frequency, Dimension::FREQUENCY)?;
         if self.points < 4 {
-            return Err("key `points`: expected at least 4 equilibria per cycle".into());
+            return Err(Error::Key {
+                message: "key `points`: expected at least 4 equilibria per cycle".into(),
+            });
         }
         Ok(())
     }
@@ -94,7 +97,7 @@ fn cycle(
     (lift_on, swing_on): (bool, bool),
     (amplitude, frequency): (f64, f64),
     rest_q: &[f64],
-) -> Result<Cycle, String> {
+) -> Result<Cycle, Error> {
     let rest = leg.foot_at(rest_q, &leg.inputs(0.0, 0.0));
     let phase = spec.phase_deg.to_radians();
     let mut q = rest_q.to_vec();
@@ -116,7 +119,7 @@ fn cycle(
         let inputs = leg.inputs(lift, swing);
         q = leg
             .equilibrium(&q, &inputs, &[])
-            .map_err(|e| format!("v_lift = {lift:.1} V, v_swing = {swing:.1} V: {e}"))?
+            .map_err(|e| e.within(format!("v_lift = {lift:.1} V, v_swing = {swing:.1} V")))?
             .q;
         let foot = leg.foot_at(&q, &inputs);
         let d = [0, 1, 2].map(|i| foot[i] - rest[i]);
@@ -139,7 +142,7 @@ fn peak_to_peak(values: &[f64]) -> f64 {
     hi - lo
 }
 
-pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
+pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     let amplitude = positive("amplitude", &spec.amplitude, Dimension::VOLTAGE)?;
     let frequency = positive("frequency", &spec.frequency, Dimension::FREQUENCY)?;
     let leg = Leg::open(&spec.leg())?;
@@ -168,7 +171,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, String> {
             (amplitude, frequency),
             &rest_q,
         )
-        .map_err(|e| format!("{name} drive, {e}"))?;
+        .map_err(|e| e.within(format!("{name} drive")))?;
         csv(
             &mut outcome,
             dir,
@@ -225,7 +228,7 @@ fn plot_planes(
     model_name: &str,
     sagittal: &[Curve],
     frontal: &[Curve],
-) -> Result<(), String> {
+) -> Result<(), Error> {
     for (file, title, x_label, curves) in [
         (
             "sagittal.svg",
@@ -248,8 +251,7 @@ fn plot_planes(
             "foot Δz [mm] (up)",
             curves,
             false,
-        )
-        .map_err(|e| e.to_string())?;
+        )?;
         outcome.plots.push(path);
     }
     Ok(())

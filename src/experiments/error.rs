@@ -1,0 +1,178 @@
+//! Why an experiment cannot run: the errors of the HAMR experiments and of the leg they
+//! drive, each naming the file, key, model or part of the experiment it concerns.
+//!
+//! Consumes: the typed errors of the layers below ([`session::Error`], [`RuntimeError`],
+//! [`PlotError`]). Produces: [`Error`], whose `Display` is the message users read.
+
+use std::fmt;
+use std::path::PathBuf;
+
+use mech_runtime::RuntimeError;
+
+use crate::render::plot::PlotError;
+use crate::session;
+
+#[derive(Debug)]
+pub enum Error {
+    /// A file or folder could not be read (`what`: `experiment`, `the experiments folder`).
+    Read {
+        what: &'static str,
+        path: PathBuf,
+        message: String,
+    },
+    NoExperimentFiles {
+        folder: PathBuf,
+    },
+    /// The file is not TOML of any experiment kind (the parser's message, with its line).
+    Toml {
+        message: String,
+    },
+    MissingKind,
+    /// A key's value is unreadable or out of range (the message names the key).
+    Key {
+        message: String,
+    },
+    /// A quantity with units that does not parse or has the wrong dimension (the message
+    /// names the key; `quantity` has no typed error yet).
+    Quantity(String),
+    /// In the experiment file at `path`.
+    InFile {
+        path: PathBuf,
+        error: Box<Error>,
+    },
+    /// In a named part of an experiment: `robot `HAMR-VI``, `channel `lift``, `lift drive`.
+    In {
+        part: String,
+        error: Box<Error>,
+    },
+    /// The model could not be opened (`model` as the experiment names it).
+    Model {
+        model: PathBuf,
+        error: session::Error,
+    },
+    Session(session::Error),
+    /// The model lacks a port the HAMR experiments drive or read.
+    NotHamr {
+        model: String,
+        missing: String,
+    },
+    NoParameter {
+        model: String,
+        name: String,
+        /// What the experiment needs it for, if it says.
+        purpose: Option<String>,
+    },
+    /// No static equilibrium (of `model`).
+    Statics {
+        model: String,
+        error: RuntimeError,
+    },
+    Assembly(RuntimeError),
+    Linearization(RuntimeError),
+    /// The reduced mass matrix is not positive definite: no modes.
+    NoModes,
+    /// The linear model is singular at a frequency of the sweep.
+    SingularResponse,
+    Chirp(RuntimeError),
+    /// A force/deflection test that cannot be set up or does not end.
+    Test(&'static str),
+    /// A sweep whose own design point is missing from its results.
+    ChosenDesignMissing,
+    Write {
+        path: PathBuf,
+        message: String,
+    },
+    Plot(PlotError),
+}
+
+impl Error {
+    /// This error, in the experiment file at `path`.
+    pub fn in_file(self, path: &std::path::Path) -> Error {
+        Error::InFile {
+            path: path.to_path_buf(),
+            error: Box::new(self),
+        }
+    }
+
+    /// This error, in the named part of an experiment.
+    pub fn within(self, part: impl Into<String>) -> Error {
+        Error::In {
+            part: part.into(),
+            error: Box::new(self),
+        }
+    }
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::Read {
+                what,
+                path,
+                message,
+            } => write!(f, "cannot read {what} `{}`: {message}", path.display()),
+            Error::NoExperimentFiles { folder } => {
+                write!(f, "no `*.toml` experiment files in `{}`", folder.display())
+            }
+            Error::Toml { message } => f.write_str(message),
+            Error::MissingKind => f.write_str(
+                "missing key `kind`: expected one of \"trajectory\", \"force_deflection\", \
+                 \"ratio_sweep\", \"compare\", \"bode\"",
+            ),
+            Error::Key { message } | Error::Quantity(message) => f.write_str(message),
+            Error::InFile { path, error } => {
+                write!(f, "experiment `{}`: {error}", path.display())
+            }
+            Error::In { part, error } => write!(f, "{part}: {error}"),
+            Error::Model { model, error } => write!(f, "model `{}`: {error}", model.display()),
+            Error::Session(error) => write!(f, "{error}"),
+            Error::NotHamr { model, missing } => write!(f, "model `{model}` has no {missing}"),
+            Error::NoParameter {
+                model,
+                name,
+                purpose,
+            } => {
+                write!(f, "model `{model}` has no parameter `{name}`")?;
+                match purpose {
+                    Some(purpose) => write!(f, " ({purpose})"),
+                    None => Ok(()),
+                }
+            }
+            Error::Statics { model, error } => write!(f, "statics of `{model}`: {error}"),
+            Error::Assembly(error) => write!(f, "{error}"),
+            Error::Linearization(error) => write!(f, "linearization failed: {error}"),
+            Error::NoModes => f.write_str("the reduced mass matrix is not positive definite"),
+            Error::SingularResponse => {
+                f.write_str("the linear model is singular at some frequency")
+            }
+            Error::Chirp(error) => write!(f, "chirp simulation failed: {error}"),
+            Error::Test(message) => f.write_str(message),
+            Error::ChosenDesignMissing => f.write_str("the chosen design is missing"),
+            Error::Write { path, message } => {
+                write!(f, "cannot write {}: {message}", path.display())
+            }
+            Error::Plot(error) => write!(f, "{error}"),
+        }
+    }
+}
+
+impl std::error::Error for Error {}
+
+impl From<session::Error> for Error {
+    fn from(error: session::Error) -> Error {
+        Error::Session(error)
+    }
+}
+
+impl From<PlotError> for Error {
+    fn from(error: PlotError) -> Error {
+        Error::Plot(error)
+    }
+}
+
+/// The layers above that still speak `String` errors use `?` through this.
+impl From<Error> for String {
+    fn from(error: Error) -> String {
+        error.to_string()
+    }
+}
