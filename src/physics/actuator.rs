@@ -7,6 +7,7 @@
 //! Units: N, m, V, kg; energy density in J/kg. The bimorph closed form is
 //! [`mech_codegen::physics::TaperedBimorph`], shared with the language's `actuator` lowering.
 
+use super::error::{require_non_negative, require_positive, Invalid};
 use mech_codegen::physics::{Material, TaperedBimorph, UNTAPERED_BAND};
 
 /// Energy density of Eq. 1: `D_u = δ_f F_b / (2 m_a)` (J/kg): the area under the linear
@@ -67,20 +68,16 @@ impl Actuator {
     }
 
     /// Checks that the constants are finite and positive (the mass may be NaN: unknown).
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), Invalid> {
         for (what, value) in [
             ("blocked force", self.blocked_force),
             ("free deflection", self.free_deflection),
             ("rated voltage", self.rated_voltage),
         ] {
-            if !(value.is_finite() && value > 0.0) {
-                return Err(format!(
-                    "actuator {what} must be positive and finite, got {value}"
-                ));
-            }
+            require_positive("actuator", what, value)?;
         }
         if !(self.mass.is_nan() || (self.mass.is_finite() && self.mass > 0.0)) {
-            return Err(format!("actuator mass must be positive, got {}", self.mass));
+            return Err(Invalid::ActuatorMass(self.mass));
         }
         Ok(())
     }
@@ -158,7 +155,7 @@ impl Bimorph {
     };
 
     /// Checks that the geometry is positive and finite and `0 < w_r < 2`.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), Invalid> {
         let c = &self.coefficients;
         for (what, value) in [
             ("PZT thickness", self.pzt_thickness),
@@ -170,23 +167,11 @@ impl Bimorph {
             ("PZT modulus", c.pzt_modulus),
             ("core modulus", c.core_modulus),
         ] {
-            if !(value.is_finite() && value > 0.0) {
-                return Err(format!(
-                    "bimorph {what} must be positive and finite, got {value}"
-                ));
-            }
+            require_positive("bimorph", what, value)?;
         }
-        if !(self.extension_length.is_finite() && self.extension_length >= 0.0) {
-            return Err(format!(
-                "bimorph extension length must be finite and ≥ 0, got {}",
-                self.extension_length
-            ));
-        }
+        require_non_negative("bimorph", "extension length", self.extension_length)?;
         if !(self.width_ratio > 0.0 && self.width_ratio < 2.0) {
-            return Err(format!(
-                "bimorph width ratio must lie in (0, 2) (the tip width is (2 − w_r)·w_nom), got {}",
-                self.width_ratio
-            ));
+            return Err(Invalid::WidthRatio(self.width_ratio));
         }
         Ok(())
     }

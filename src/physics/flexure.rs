@@ -12,6 +12,7 @@
 //! transmission model a drive frequency. In the frequency domain use
 //! [`Flexure::complex_stiffness`], which is exact at every frequency.
 
+use super::error::{require_non_negative, require_positive, Invalid};
 use nalgebra::Complex;
 
 use super::materials::Material;
@@ -153,7 +154,7 @@ impl Flexure {
         castellation_length: f64,
         effective_length: f64,
         loss_factor: f64,
-    ) -> Result<Flexure, String> {
+    ) -> Result<Flexure, Invalid> {
         let flexure = Flexure {
             width,
             thickness,
@@ -189,7 +190,7 @@ impl Flexure {
 
     /// Checks that every dimension and constant is finite and positive (η ≥ 0, −1 < ν ≤ 0.5)
     /// and, for castellated hinges, that `l − l_c ≤ l_eff ≤ l`.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), Invalid> {
         let positive = [
             ("width", self.width),
             ("thickness", self.thickness),
@@ -197,23 +198,11 @@ impl Flexure {
             ("Young's modulus", self.youngs_modulus),
         ];
         for (what, value) in positive {
-            if !(value.is_finite() && value > 0.0) {
-                return Err(format!(
-                    "flexure {what} must be positive and finite, got {value}"
-                ));
-            }
+            require_positive("flexure", what, value)?;
         }
-        if !(self.loss_factor.is_finite() && self.loss_factor >= 0.0) {
-            return Err(format!(
-                "flexure loss factor must be finite and ≥ 0, got {}",
-                self.loss_factor
-            ));
-        }
+        require_non_negative("flexure", "loss factor", self.loss_factor)?;
         if !(self.poisson_ratio > -1.0 && self.poisson_ratio <= 0.5) {
-            return Err(format!(
-                "Poisson's ratio must lie in (−1, 0.5], got {}",
-                self.poisson_ratio
-            ));
+            return Err(Invalid::PoissonRatio(self.poisson_ratio));
         }
         if let HingeKind::Castellated {
             length,
@@ -225,15 +214,17 @@ impl Flexure {
             // Allow for rounding of values given in µm.
             let slack = 1e-9 * length.abs();
             if !(length > 0.0 && castellation_length >= 0.0 && castellation_length <= length) {
-                return Err(format!(
-                    "castellated hinge: need 0 ≤ l_c ≤ l, got l = {length} m, l_c = {castellation_length} m"
-                ));
+                return Err(Invalid::Castellation {
+                    length,
+                    castellation_length,
+                });
             }
             if l_eff < lower - slack || l_eff > length + slack {
-                return Err(format!(
-                    "castellated hinge: the effective length {l_eff} m lies outside \
-                     [l − l_c, l] = [{lower}, {length}] m (seed Sec. IV)"
-                ));
+                return Err(Invalid::EffectiveLength {
+                    effective_length: l_eff,
+                    lower,
+                    length,
+                });
             }
         }
         Ok(())

@@ -12,9 +12,11 @@
 //! `docs/flexure-and-actuator.md`.
 
 pub mod actuator;
+pub mod error;
 pub mod flexure;
 pub mod materials;
 
 pub use actuator::{Actuator, Bimorph, PiezoCoefficients};
+pub use error::Invalid;
 pub use flexure::{Flexure, HingeKind};
 pub use materials::Material;
