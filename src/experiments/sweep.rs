@@ -89,6 +89,7 @@ impl Series {
             .as_deref()
             .map(|l| positive(&format!("series[{k}].lever"), l, Dimension::LENGTH))
             .transpose()
+            .map_err(String::from)
     }
     fn leg(&self) -> ModelSpec {
         ModelSpec {

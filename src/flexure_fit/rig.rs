@@ -140,10 +140,10 @@ fn quantity(key: &'static str, q: &Quantity, expected: Dimension) -> Result<f64,
     let value = match q {
         Quantity::Number(v) => *v,
         Quantity::Text(text) => {
-            parse_si(key, text, expected, true).map_err(|message| SpecimenError::Quantity {
+            parse_si(key, text, expected, true).map_err(|error| SpecimenError::Quantity {
                 key,
                 expected,
-                message,
+                message: error.to_string(),
             })?
         }
     };
