@@ -325,10 +325,10 @@ pub fn read_csv_column(path: &Path, column: &str) -> Result<(Vec<f64>, Vec<f64>)
 }
 
 /// `` `a`, `b`, `c` ``.
-pub(crate) fn quoted_list(names: &[String]) -> String {
+pub(crate) fn quoted_list(names: &[impl AsRef<str>]) -> String {
     names
         .iter()
-        .map(|n| format!("`{n}`"))
+        .map(|n| format!("`{}`", n.as_ref()))
         .collect::<Vec<_>>()
         .join(", ")
 }

@@ -187,10 +187,10 @@ impl Session {
     pub fn set(&mut self, assignment: &str) -> Result<(), Error> {
         let option = "--set";
         let (name, value) =
-            signal_spec::parse_assignment(assignment).map_err(|message| Error::Setting {
+            signal_spec::parse_assignment(assignment).map_err(|error| Error::Setting {
                 option,
                 name: None,
-                message,
+                message: error.to_string(),
             })?;
         let index = self.index_of(NameKind::Parameter, &name, Some(option))?;
         let (si, dimension) =
@@ -226,10 +226,10 @@ impl Session {
     pub fn input(&mut self, assignment: &str) -> Result<(), Error> {
         let option = "--input";
         let (name, spec) =
-            signal_spec::parse_assignment(assignment).map_err(|message| Error::Setting {
+            signal_spec::parse_assignment(assignment).map_err(|error| Error::Setting {
                 option,
                 name: None,
-                message,
+                message: error.to_string(),
             })?;
         let index = self.index_of(NameKind::Input, &name, Some(option))?;
         let expected = self
@@ -241,10 +241,10 @@ impl Session {
             .map(|(_, i)| i.dimension)
             .unwrap_or_default();
         self.signals[index] =
-            signal_spec::parse_signal(&spec, expected).map_err(|message| Error::Setting {
+            signal_spec::parse_signal(&spec, expected).map_err(|error| Error::Setting {
                 option,
                 name: Some(name),
-                message,
+                message: error.to_string(),
             })?;
         Ok(())
     }
