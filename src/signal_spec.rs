@@ -1176,6 +1176,41 @@ mod tests {
     }
 
     #[test]
+    fn errors_carry_the_facts() {
+        assert_eq!(
+            parse_assignment("drive").unwrap_err(),
+            AssignmentError::NoEquals {
+                text: "drive".to_string()
+            }
+        );
+        assert_eq!(
+            parse_signal("sine(amplitude=1 mN)", FORCE).unwrap_err(),
+            Error::MissingArgument {
+                function: "sine",
+                parameter: "frequency"
+            }
+        );
+        assert_eq!(
+            parse_signal("sine(amplitude=1 mm, frequency=10 Hz)", FORCE).unwrap_err(),
+            Error::Argument {
+                name: "amplitude",
+                text: "1 mm".to_string(),
+                problem: ArgumentProblem::WrongDimension {
+                    kind: QuantityKind::Value,
+                    found: Dimension::LENGTH,
+                    expected: FORCE
+                }
+            }
+        );
+        let missing = std::env::temp_dir().join("mech-signal-spec-no-such-file.csv");
+        let error = parse_signal(&format!("csv({}, unit=N)", missing.display()), FORCE);
+        assert!(
+            matches!(&error, Err(Error::Csv(csv)) if csv.path == missing),
+            "{error:?}"
+        );
+    }
+
+    #[test]
     fn helpers() {
         assert_eq!(edit_distance("freqency", "frequency"), 1);
         assert_eq!(edit_distance("", "abc"), 3);
