@@ -3,7 +3,8 @@
 //! Consumes: bytes to store (plots, reports), a header and rows of numbers to store as CSV
 //! (simulation results), and CSV files named on the command line (`--input x=csv(...)`).
 //! Produces: files that are either completely written or untouched (never half-written), and
-//! `(times, values)` columns read back from CSV with errors that name file, line and column.
+//! `(times, values)` columns read back from CSV, or a [`CsvError`] that names file, line and
+//! column. Writing fails with an [`io::Error`] that names the file.
 
 use std::fs;
 use std::io::{self, Write};
@@ -128,98 +129,208 @@ impl CsvTable {
     }
 }
 
+/// Why a CSV file named on the command line cannot be read as a numeric table; every message
+/// names the file, and the line and column where there is one.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CsvError {
+    /// The file.
+    pub path: PathBuf,
+    /// What is wrong with it.
+    pub kind: CsvErrorKind,
+}
+
+/// What is wrong with a CSV file, for [`CsvError`].
+#[derive(Debug, Clone, PartialEq)]
+pub enum CsvErrorKind {
+    /// The file cannot be opened or read, or is not CSV.
+    Read {
+        /// The operating system's or the CSV reader's reason.
+        reason: String,
+    },
+    /// The bytes are not UTF-8.
+    NotUtf8 {
+        /// The line, when the reader knows it.
+        line: Option<u64>,
+    },
+    /// The first line names no column.
+    NoHeader,
+    /// A row whose number of fields differs from the header's.
+    RaggedRow {
+        line: u64,
+        fields: usize,
+        columns: usize,
+    },
+    /// A field that does not parse as a number.
+    NotANumber {
+        line: u64,
+        /// 1-based.
+        column: usize,
+        /// The column's name in the header.
+        name: String,
+        /// The field as written.
+        field: String,
+    },
+    /// A header and nothing else.
+    NoDataRows,
+    /// The column asked for is not in the header.
+    MissingColumn {
+        column: String,
+        /// The header's columns.
+        columns: Vec<String>,
+    },
+}
+
+impl CsvError {
+    fn new(path: &Path, kind: CsvErrorKind) -> CsvError {
+        CsvError {
+            path: path.to_path_buf(),
+            kind,
+        }
+    }
+
+    /// A failure of the `csv` reader: I/O, UTF-8, or anything else it reports.
+    fn reading(path: &Path, error: &csv::Error) -> CsvError {
+        let kind = match error.kind() {
+            csv::ErrorKind::Io(e) => CsvErrorKind::Read {
+                reason: e.to_string(),
+            },
+            csv::ErrorKind::Utf8 { pos, .. } => CsvErrorKind::NotUtf8 {
+                line: pos.as_ref().map(csv::Position::line),
+            },
+            _ => CsvErrorKind::Read {
+                reason: error.to_string(),
+            },
+        };
+        CsvError::new(path, kind)
+    }
+}
+
+impl std::fmt::Display for CsvError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let file = self.path.display();
+        match &self.kind {
+            CsvErrorKind::Read { reason } => write!(f, "cannot read `{file}`: {reason}"),
+            CsvErrorKind::NotUtf8 { line: Some(line) } => {
+                write!(f, "cannot read `{file}`: line {line}: not valid UTF-8")
+            }
+            CsvErrorKind::NotUtf8 { line: None } => {
+                write!(f, "cannot read `{file}`: not valid UTF-8")
+            }
+            CsvErrorKind::NoHeader => write!(
+                f,
+                "`{file}` has no header row: the first line must name the columns, e.g. `t,voltage`"
+            ),
+            CsvErrorKind::RaggedRow {
+                line,
+                fields,
+                columns,
+            } => write!(
+                f,
+                "`{file}`, line {line}: {fields} fields, but the header has {columns} columns"
+            ),
+            CsvErrorKind::NotANumber {
+                line,
+                column,
+                name,
+                field,
+            } => write!(
+                f,
+                "`{file}`, line {line}, column {column} (`{name}`): `{field}` is not a number"
+            ),
+            CsvErrorKind::NoDataRows => write!(f, "`{file}` has a header but no data rows"),
+            CsvErrorKind::MissingColumn { column, columns } => write!(
+                f,
+                "`{file}` has no column `{column}`; its columns are {}",
+                quoted_list(columns)
+            ),
+        }
+    }
+}
+
+impl std::error::Error for CsvError {}
+
+/// The layers above still speak `String` errors; this lets them use `?`.
+impl From<CsvError> for String {
+    fn from(error: CsvError) -> String {
+        error.to_string()
+    }
+}
+
 /// Reads a CSV file of numbers with a header row. Fields are trimmed; lines starting with `#`
 /// are comments; `NaN` and `inf` are accepted as numbers. Every row must have as many fields as
 /// the header, and there must be at least one column and one data row.
-///
-/// Errors are one line and name the file, and the line and column where applicable.
-pub fn read_csv_table(path: &Path) -> Result<CsvTable, String> {
-    let file = path.display();
+pub fn read_csv_table(path: &Path) -> Result<CsvTable, CsvError> {
+    let reading = |e: csv::Error| CsvError::reading(path, &e);
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(true)
         .flexible(true)
         .trim(csv::Trim::All)
         .comment(Some(b'#'))
         .from_path(path)
-        .map_err(|e| format!("cannot read `{file}`: {}", csv_error_text(&e)))?;
+        .map_err(reading)?;
     let header: Vec<String> = reader
         .headers()
-        .map_err(|e| format!("cannot read `{file}`: {}", csv_error_text(&e)))?
+        .map_err(reading)?
         .iter()
         .map(str::to_string)
         .collect();
     if header.is_empty() || header.iter().all(String::is_empty) {
-        return Err(format!(
-            "`{file}` has no header row: the first line must name the columns, e.g. `t,voltage`"
-        ));
+        return Err(CsvError::new(path, CsvErrorKind::NoHeader));
     }
     let mut columns = vec![Vec::new(); header.len()];
     let mut record = csv::StringRecord::new();
-    loop {
-        match reader.read_record(&mut record) {
-            Ok(false) => break,
-            Ok(true) => {}
-            Err(e) => return Err(format!("cannot read `{file}`: {}", csv_error_text(&e))),
-        }
+    while reader.read_record(&mut record).map_err(reading)? {
         let line = record.position().map_or(0, |p| p.line());
         if record.len() != header.len() {
-            return Err(format!(
-                "`{file}`, line {line}: {} fields, but the header has {} columns",
-                record.len(),
-                header.len()
-            ));
+            let kind = CsvErrorKind::RaggedRow {
+                line,
+                fields: record.len(),
+                columns: header.len(),
+            };
+            return Err(CsvError::new(path, kind));
         }
-        for (j, cell) in record.iter().enumerate() {
-            let value: f64 = cell.parse().map_err(|_| {
-                format!(
-                    "`{file}`, line {line}, column {} (`{}`): `{cell}` is not a number",
-                    j + 1,
-                    header[j]
-                )
+        for (j, field) in record.iter().enumerate() {
+            let value: f64 = field.parse().map_err(|_| {
+                let kind = CsvErrorKind::NotANumber {
+                    line,
+                    column: j + 1,
+                    name: header[j].clone(),
+                    field: field.to_string(),
+                };
+                CsvError::new(path, kind)
             })?;
             columns[j].push(value);
         }
     }
     if columns[0].is_empty() {
-        return Err(format!("`{file}` has a header but no data rows"));
+        return Err(CsvError::new(path, CsvErrorKind::NoDataRows));
     }
     Ok(CsvTable { header, columns })
 }
 
 /// Reads one column of a CSV file (see [`read_csv_table`]) together with the first column,
 /// which is time whatever its name: returns `(times, values)`.
-pub fn read_csv_column(path: &Path, column: &str) -> Result<(Vec<f64>, Vec<f64>), String> {
+pub fn read_csv_column(path: &Path, column: &str) -> Result<(Vec<f64>, Vec<f64>), CsvError> {
     let mut table = read_csv_table(path)?;
-    let index = table.column_index(column).ok_or_else(|| {
-        format!(
-            "`{}` has no column `{column}`; its columns are {}",
-            path.display(),
-            quoted_list(&table.header)
-        )
-    })?;
+    let Some(index) = table.column_index(column) else {
+        let kind = CsvErrorKind::MissingColumn {
+            column: column.to_string(),
+            columns: table.header,
+        };
+        return Err(CsvError::new(path, kind));
+    };
     let values = table.columns[index].clone();
     let times = table.columns.swap_remove(0);
     Ok((times, values))
 }
 
 /// `` `a`, `b`, `c` ``.
-pub(crate) fn quoted_list(names: &[String]) -> String {
+pub(crate) fn quoted_list(names: &[impl AsRef<str>]) -> String {
     names
         .iter()
-        .map(|n| format!("`{n}`"))
+        .map(|n| format!("`{}`", n.as_ref()))
         .collect::<Vec<_>>()
         .join(", ")
-}
-
-fn csv_error_text(error: &csv::Error) -> String {
-    match error.kind() {
-        csv::ErrorKind::Io(e) => e.to_string(),
-        csv::ErrorKind::Utf8 { pos, .. } => match pos {
-            Some(p) => format!("line {}: not valid UTF-8", p.line()),
-            None => "not valid UTF-8".to_string(),
-        },
-        _ => error.to_string(),
-    }
 }
 
 #[cfg(test)]
@@ -363,35 +474,48 @@ mod tests {
 
         fs::write(&path, "t,v\n0,1\n1,abc\n").unwrap();
         let error = read_csv_column(&path, "v").unwrap_err();
+        assert_eq!(error.path, path);
         assert_eq!(
-            error,
+            error.kind,
+            CsvErrorKind::NotANumber {
+                line: 3,
+                column: 2,
+                name: "v".to_string(),
+                field: "abc".to_string()
+            }
+        );
+        assert_eq!(
+            error.to_string(),
             format!("`{name}`, line 3, column 2 (`v`): `abc` is not a number")
         );
 
         fs::write(&path, "t,v\n0,1\n1,2,3\n").unwrap();
         let error = read_csv_column(&path, "v").unwrap_err();
         assert_eq!(
-            error,
+            error.to_string(),
             format!("`{name}`, line 3: 3 fields, but the header has 2 columns")
         );
 
         fs::write(&path, "t,v\n0,1\n").unwrap();
         let error = read_csv_column(&path, "w").unwrap_err();
         assert_eq!(
-            error,
+            error.to_string(),
             format!("`{name}` has no column `w`; its columns are `t`, `v`")
         );
 
         fs::write(&path, "t,v\n").unwrap();
         let error = read_csv_column(&path, "v").unwrap_err();
-        assert_eq!(error, format!("`{name}` has a header but no data rows"));
+        assert_eq!(
+            error.to_string(),
+            format!("`{name}` has a header but no data rows")
+        );
 
         fs::write(&path, "").unwrap();
-        let error = read_csv_column(&path, "v").unwrap_err();
+        let error = read_csv_column(&path, "v").unwrap_err().to_string();
         assert!(error.contains("has no header row"), "{error}");
 
         let missing = dir.0.join("missing.csv");
-        let error = read_csv_column(&missing, "v").unwrap_err();
+        let error = read_csv_column(&missing, "v").unwrap_err().to_string();
         assert!(
             error.starts_with(&format!("cannot read `{}`", missing.display())),
             "{error}"

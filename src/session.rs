@@ -229,10 +229,10 @@ impl Session {
             .map(|(_, i)| i.dimension)
             .unwrap_or_default();
         self.signals[index] =
-            signal_spec::parse_signal(&spec, expected).map_err(|message| Error::Setting {
+            signal_spec::parse_signal(&spec, expected).map_err(|error| Error::Setting {
                 option,
                 name: Some(name),
-                message,
+                message: error.to_string(),
             })?;
         Ok(())
     }
@@ -246,10 +246,10 @@ impl Session {
         text: &str,
     ) -> Result<(String, String, usize), Error> {
         let (name, value) =
-            signal_spec::parse_assignment(text).map_err(|message| Error::Setting {
+            signal_spec::parse_assignment(text).map_err(|error| Error::Setting {
                 option,
                 name: None,
-                message,
+                message: error.to_string(),
             })?;
         let index = self.index_of(kind, &name, Some(option))?;
         Ok((name, value, index))

@@ -1,9 +1,10 @@
 //! Input signals written on the command line: `--input NAME=SPEC`.
 //!
 //! Consumes: the text of a signal specification and the dimension of the input it drives.
-//! Produces: a [`Signal`] with every value in SI units, or a one-line error saying what is
-//! wrong and what to write instead. Callers prefix errors with the input, e.g.
-//! ``input `drive`: sine() is missing `frequency` ``.
+//! Produces: a [`Signal`] with every value in SI units, or an [`Error`] whose message is one
+//! line saying what is wrong and what to write instead. Callers prefix errors with the input,
+//! e.g. ``input `drive`: sine() is missing `frequency` ``. `NAME=VALUE` settings are split by
+//! [`parse_assignment`] (errors: [`AssignmentError`]).
 //!
 //! # Grammar
 //!
@@ -29,52 +30,391 @@
 //!   dimensionless. See [`crate::output::read_csv_table`] for the file format.
 
 use std::f64::consts::TAU;
+use std::fmt;
 use std::path::Path;
 
 use mech_codegen::front::units;
 use mech_codegen::ir::Dimension;
 use mech_runtime::signal::{Signal, Table};
+use mech_runtime::RuntimeError;
 
-use crate::output;
+use crate::output::{self, quoted_list, CsvError};
+use crate::quantity::{example_quantity, leading_number, unit_hint};
+
+/// Why a `NAME=VALUE` setting cannot be split.
+#[derive(Debug, Clone, PartialEq)]
+pub enum AssignmentError {
+    /// There is no `=`.
+    NoEquals { text: String },
+    /// Nothing precedes the `=`.
+    NoName { text: String },
+    /// What precedes the `=` is not a name.
+    NotAName { text: String, name: String },
+    /// Nothing follows the `=`.
+    NoValue { name: String },
+}
+
+impl fmt::Display for AssignmentError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            AssignmentError::NoEquals { text } => {
+                write!(f, "expected NAME=VALUE, found `{text}` (no `=`)")
+            }
+            AssignmentError::NoName { text } => {
+                write!(
+                    f,
+                    "expected NAME=VALUE, found `{text}` (no name before `=`)"
+                )
+            }
+            AssignmentError::NotAName { text, name } => {
+                write!(
+                    f,
+                    "expected NAME=VALUE, found `{text}`: `{name}` is not a name"
+                )
+            }
+            AssignmentError::NoValue { name } => write!(f, "`{name}=` has no value after `=`"),
+        }
+    }
+}
+
+impl std::error::Error for AssignmentError {}
+
+/// The layers above still speak `String` errors; this lets them use `?`.
+impl From<AssignmentError> for String {
+    fn from(error: AssignmentError) -> String {
+        error.to_string()
+    }
+}
+
+/// Why a signal specification cannot be read (see the module documentation for what can).
+/// Functions are named as written by the user where the error comes before the function is
+/// known, and by their canonical name after.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Error {
+    /// Only white space.
+    Empty,
+    /// Starts with a letter but is no `name(...)` call.
+    NotASignal { spec: String },
+    /// A signal function written without its arguments: `sine`.
+    MissingParentheses {
+        name: String,
+        /// The function `name` is (or is close to), for the example.
+        function: &'static str,
+    },
+    /// `name(...` without the closing `)`.
+    MissingClosingParenthesis { spec: String },
+    /// `name(...)` where `name` is no signal function.
+    UnknownFunction {
+        function: String,
+        /// The function meant, if `function` looks like a typo of one.
+        suggestion: Option<&'static str>,
+    },
+    /// A `(` or `)` without its partner among the arguments.
+    UnmatchedParenthesis { function: String, parenthesis: char },
+    /// A quote opened among the arguments and never closed.
+    UnterminatedQuote { function: String, quote: char },
+    /// `f(a,, b)`.
+    EmptyArgument {
+        function: String,
+        /// 1-based.
+        position: usize,
+    },
+    /// `key=` with nothing after it.
+    KeyWithoutValue { function: String, key: String },
+    /// A positional argument after a `key=value` one.
+    PositionalAfterKeyword {
+        function: &'static str,
+        value: String,
+    },
+    /// More positional arguments than the function has parameters.
+    TooManyArguments {
+        function: &'static str,
+        parameters: Vec<&'static str>,
+        given: usize,
+    },
+    /// A key the function does not have.
+    UnknownKey {
+        function: &'static str,
+        key: String,
+        /// The parameter meant, if `key` looks like a typo of one of its names.
+        suggestion: Option<&'static str>,
+        parameters: Vec<&'static str>,
+    },
+    /// A parameter given twice (by position and key, or under two of its names).
+    GivenTwice {
+        function: &'static str,
+        parameter: &'static str,
+    },
+    /// A required parameter that is not given.
+    MissingArgument {
+        function: &'static str,
+        parameter: &'static str,
+    },
+    /// A quantity argument that cannot be used.
+    Argument {
+        /// The parameter, e.g. `amplitude`.
+        name: &'static str,
+        /// The argument as written.
+        text: String,
+        problem: ArgumentProblem,
+    },
+    /// The file of `csv(...)` cannot be read as a numeric table.
+    Csv(CsvError),
+    /// `csv(...)` without `column=` on a file with more than one column besides time.
+    AmbiguousColumn { path: String, columns: Vec<String> },
+    /// `unit=` that is not a unit; the unit parser's reason.
+    BadUnit { unit: String, reason: String },
+    /// `unit=` of another dimension than the input's.
+    WrongUnit {
+        unit: String,
+        found: Dimension,
+        expected: Dimension,
+    },
+    /// No `unit=` for an input that has a dimension.
+    MissingUnit { expected: Dimension },
+    /// The table of `csv(...)` is not a signal (e.g. times not increasing).
+    Table { path: String, error: RuntimeError },
+    /// The signal's values are out of range.
+    Invalid(RuntimeError),
+}
+
+/// What is wrong with a quantity argument, for [`Error::Argument`].
+#[derive(Debug, Clone, PartialEq)]
+pub enum ArgumentProblem {
+    /// It does not start like a number.
+    NotAQuantity {
+        expected: Dimension,
+    },
+    /// It starts like a number but is not a quantity; the unit parser's reason.
+    BadSyntax(String),
+    /// A unit of another dimension (`found` is dimensionless for a bare number).
+    WrongDimension {
+        kind: QuantityKind,
+        found: Dimension,
+        expected: Dimension,
+    },
+    NegativeFrequency,
+    NotPositiveDuration,
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::Empty => write!(f, "the signal is empty; {FORMS}"),
+            Error::NotASignal { spec } => write!(f, "`{spec}` is not a signal; {FORMS}"),
+            Error::MissingParentheses { name, function } => write!(
+                f,
+                "`{name}` needs arguments in parentheses, e.g. `{}`",
+                example_call(function)
+            ),
+            Error::MissingClosingParenthesis { spec } => {
+                write!(f, "`{spec}` is missing the closing `)`")
+            }
+            Error::UnknownFunction {
+                function,
+                suggestion: Some(near),
+            } => write!(
+                f,
+                "unknown signal `{function}(...)`, did you mean `{near}(...)`?"
+            ),
+            Error::UnknownFunction {
+                function,
+                suggestion: None,
+            } => write!(f, "unknown signal `{function}(...)`; {FORMS}"),
+            Error::UnmatchedParenthesis {
+                function,
+                parenthesis,
+            } => write!(f, "{function}(...) has an unmatched `{parenthesis}`"),
+            Error::UnterminatedQuote { function, quote: q } => {
+                write!(f, "{function}(...) has an unterminated {q}quote{q}")
+            }
+            Error::EmptyArgument { function, position } => {
+                write!(f, "{function}(...): argument {position} is empty")
+            }
+            Error::KeyWithoutValue { function, key } => {
+                write!(f, "{function}(...): `{key}=` has no value")
+            }
+            Error::PositionalAfterKeyword { function, value } => write!(
+                f,
+                "{function}(...): `{value}` needs a key (positional arguments must come before \
+                 `key=value` ones)"
+            ),
+            Error::TooManyArguments {
+                function,
+                parameters,
+                given,
+            } => write!(
+                f,
+                "{function}(...) takes at most {} argument{} ({}), but got {given}",
+                parameters.len(),
+                if parameters.len() == 1 { "" } else { "s" },
+                quoted_list(parameters)
+            ),
+            Error::UnknownKey {
+                function,
+                key,
+                suggestion: Some(near),
+                ..
+            } => write!(
+                f,
+                "unknown key `{key}` in {function}(...), did you mean `{near}`?"
+            ),
+            Error::UnknownKey {
+                function,
+                key,
+                suggestion: None,
+                parameters,
+            } => write!(
+                f,
+                "unknown key `{key}` in {function}(...); its keys are {}",
+                quoted_list(parameters)
+            ),
+            Error::GivenTwice {
+                function,
+                parameter,
+            } => write!(f, "{function}(...): `{parameter}` is given twice"),
+            Error::MissingArgument {
+                function,
+                parameter,
+            } => write!(
+                f,
+                "{function}() is missing `{parameter}`, e.g. `{}`",
+                example_call(function)
+            ),
+            Error::Argument {
+                name,
+                text,
+                problem,
+            } => {
+                write!(f, "{name} `{text}`")?;
+                write_argument_problem(f, text, problem)
+            }
+            Error::Csv(error) => write!(f, "{error}"),
+            Error::AmbiguousColumn { path, columns } => write!(
+                f,
+                "csv(...): `{path}` has the columns {}; choose one with `column=NAME`",
+                quoted_list(columns)
+            ),
+            Error::BadUnit { unit, reason } => write!(f, "csv(...): `unit={unit}`: {reason}"),
+            Error::WrongUnit {
+                unit,
+                found,
+                expected,
+            } => write!(
+                f,
+                "csv(...): `unit={unit}` is {}, but the input needs {}{}",
+                units::describe(*found),
+                units::describe(*expected),
+                unit_hint(*expected).map_or(String::new(), |u| format!(" (e.g. `unit={u}`)"))
+            ),
+            Error::MissingUnit { expected } => write!(
+                f,
+                "csv(...): give the unit of the values, e.g. `unit={}`: the input needs {expected}",
+                unit_hint(*expected).unwrap_or_else(|| expected.to_string()),
+            ),
+            Error::Table { path, error } => write!(f, "`{path}`: {error}"),
+            Error::Invalid(error) => write!(f, "{error}"),
+        }
+    }
+}
+
+/// What follows ``amplitude `1 mm` `` in a message about a quantity argument.
+fn write_argument_problem(
+    f: &mut fmt::Formatter<'_>,
+    text: &str,
+    problem: &ArgumentProblem,
+) -> fmt::Result {
+    match problem {
+        ArgumentProblem::NotAQuantity { expected } => write!(
+            f,
+            " is not a quantity: expected a number with an optional unit, such as `{}`",
+            example_quantity("1", *expected)
+        ),
+        ArgumentProblem::BadSyntax(reason) => write!(f, ": {reason}"),
+        ArgumentProblem::WrongDimension {
+            kind,
+            found,
+            expected,
+        } => {
+            let needed = match kind {
+                QuantityKind::Value if *expected == Dimension::NONE => {
+                    "the input is dimensionless".to_string()
+                }
+                QuantityKind::Value => format!("the input needs {expected}"),
+                QuantityKind::Frequency => "a frequency needs 1/s".to_string(),
+                QuantityKind::Phase => "a phase is an angle (dimensionless)".to_string(),
+                QuantityKind::Duration => "a duration needs s".to_string(),
+            };
+            let given = if *found == Dimension::NONE {
+                "has no unit".to_string()
+            } else {
+                format!("is in {found}")
+            };
+            let number = leading_number(text).unwrap_or("1");
+            let example = match kind {
+                QuantityKind::Phase => format!("{number} deg"),
+                _ => example_quantity(number, *expected),
+            };
+            write!(f, " {given}, but {needed}: write e.g. `{example}`")
+        }
+        ArgumentProblem::NegativeFrequency => f.write_str(
+            " is negative; frequencies must be >= 0 (use a negative amplitude or a phase to \
+             invert the signal)",
+        ),
+        ArgumentProblem::NotPositiveDuration => f.write_str(" must be > 0"),
+    }
+}
+
+impl std::error::Error for Error {}
+
+/// The layers above still speak `String` errors; this lets them use `?`.
+impl From<Error> for String {
+    fn from(error: Error) -> String {
+        error.to_string()
+    }
+}
+
+impl From<CsvError> for Error {
+    fn from(error: CsvError) -> Error {
+        Error::Csv(error)
+    }
+}
 
 /// Splits `name=value` at the first `=` into trimmed `(name, value)`, as used by `--set` and
 /// `--input`. The name must be non-empty and made of letters, digits, `_` and `.`; the value
 /// must be non-empty.
-pub fn parse_assignment(text: &str) -> Result<(String, String), String> {
+pub fn parse_assignment(text: &str) -> Result<(String, String), AssignmentError> {
+    let whole = || text.trim().to_string();
     let Some((name, value)) = text.split_once('=') else {
-        return Err(format!(
-            "expected NAME=VALUE, found `{}` (no `=`)",
-            text.trim()
-        ));
+        return Err(AssignmentError::NoEquals { text: whole() });
     };
     let (name, value) = (name.trim(), value.trim());
     if name.is_empty() {
-        return Err(format!(
-            "expected NAME=VALUE, found `{}` (no name before `=`)",
-            text.trim()
-        ));
+        return Err(AssignmentError::NoName { text: whole() });
     }
     if !name
         .chars()
         .all(|c| c.is_alphanumeric() || c == '_' || c == '.')
     {
-        return Err(format!(
-            "expected NAME=VALUE, found `{}`: `{name}` is not a name",
-            text.trim()
-        ));
+        return Err(AssignmentError::NotAName {
+            text: whole(),
+            name: name.to_string(),
+        });
     }
     if value.is_empty() {
-        return Err(format!("`{name}=` has no value after `=`"));
+        return Err(AssignmentError::NoValue {
+            name: name.to_string(),
+        });
     }
     Ok((name.to_string(), value.to_string()))
 }
 
 /// Parses a signal specification (see the module documentation) for an input of dimension
 /// `expected`.
-pub fn parse_signal(spec: &str, expected: Dimension) -> Result<Signal, String> {
+pub fn parse_signal(spec: &str, expected: Dimension) -> Result<Signal, Error> {
     let spec = spec.trim();
     if spec.is_empty() {
-        return Err(format!("the signal is empty; {FORMS}"));
+        return Err(Error::Empty);
     }
     let signal = match split_call(spec)? {
         None => Signal::Constant(quantity(spec, "value", expected, QuantityKind::Value)?),
@@ -86,17 +426,15 @@ pub fn parse_signal(spec: &str, expected: Dimension) -> Result<Signal, String> {
                 "chirp" => chirp(&args, expected)?,
                 "csv" => csv(&args, expected)?,
                 _ => {
-                    return Err(match suggest(function, FUNCTIONS) {
-                        Some(near) => {
-                            format!("unknown signal `{function}(...)`, did you mean `{near}(...)`?")
-                        }
-                        None => format!("unknown signal `{function}(...)`; {FORMS}"),
+                    return Err(Error::UnknownFunction {
+                        function: function.to_string(),
+                        suggestion: suggest(function, FUNCTIONS),
                     })
                 }
             }
         }
     };
-    signal.validate().map_err(|e| e.to_string())?;
+    signal.validate().map_err(Error::Invalid)?;
     Ok(signal)
 }
 
@@ -110,7 +448,7 @@ const FUNCTIONS: &[&str] = &["constant", "sine", "chirp", "csv"];
 
 /// `name(args)` → `Some((name, args))`; a spec not starting with a letter → `None` (a
 /// quantity). Anything else that starts with a letter is an error.
-fn split_call(spec: &str) -> Result<Option<(&str, &str)>, String> {
+fn split_call(spec: &str) -> Result<Option<(&str, &str)>, Error> {
     if !spec.starts_with(|c: char| c.is_ascii_alphabetic()) {
         return Ok(None);
     }
@@ -121,15 +459,19 @@ fn split_call(spec: &str) -> Result<Option<(&str, &str)>, String> {
     let rest = spec[name_end..].trim_start();
     let Some(inner) = rest.strip_prefix('(') else {
         return Err(match suggest(name, FUNCTIONS) {
-            Some(function) if rest.is_empty() => format!(
-                "`{name}` needs arguments in parentheses, e.g. `{}`",
-                example_call(function)
-            ),
-            _ => format!("`{spec}` is not a signal; {FORMS}"),
+            Some(function) if rest.is_empty() => Error::MissingParentheses {
+                name: name.to_string(),
+                function,
+            },
+            _ => Error::NotASignal {
+                spec: spec.to_string(),
+            },
         });
     };
     let Some(args) = inner.trim_end().strip_suffix(')') else {
-        return Err(format!("`{spec}` is missing the closing `)`"));
+        return Err(Error::MissingClosingParenthesis {
+            spec: spec.to_string(),
+        });
     };
     Ok(Some((name, args)))
 }
@@ -152,7 +494,11 @@ struct Argument<'a> {
 
 /// Splits `a, key=b, ...` at top-level commas (outside parentheses and quotes). A trailing
 /// comma is allowed; an empty argument elsewhere is an error.
-fn split_arguments<'a>(function: &str, text: &'a str) -> Result<Vec<Argument<'a>>, String> {
+fn split_arguments<'a>(function: &str, text: &'a str) -> Result<Vec<Argument<'a>>, Error> {
+    let unmatched = |parenthesis| Error::UnmatchedParenthesis {
+        function: function.to_string(),
+        parenthesis,
+    };
     let mut pieces = Vec::new();
     let (mut depth, mut quote, mut start) = (0i32, None, 0);
     for (i, c) in text.char_indices() {
@@ -169,14 +515,17 @@ fn split_arguments<'a>(function: &str, text: &'a str) -> Result<Vec<Argument<'a>
             _ => {}
         }
         if depth < 0 {
-            return Err(format!("{function}(...) has an unmatched `)`"));
+            return Err(unmatched(')'));
         }
     }
-    if let Some(q) = quote {
-        return Err(format!("{function}(...) has an unterminated {q}quote{q}"));
+    if let Some(quote) = quote {
+        return Err(Error::UnterminatedQuote {
+            function: function.to_string(),
+            quote,
+        });
     }
     if depth != 0 {
-        return Err(format!("{function}(...) has an unmatched `(`"));
+        return Err(unmatched('('));
     }
     pieces.push(&text[start..]);
     if pieces.len() > 1 && pieces.last().is_some_and(|p| p.trim().is_empty()) {
@@ -191,7 +540,10 @@ fn split_arguments<'a>(function: &str, text: &'a str) -> Result<Vec<Argument<'a>
         .map(|(i, piece)| {
             let piece = piece.trim();
             if piece.is_empty() {
-                return Err(format!("{function}(...): argument {} is empty", i + 1));
+                return Err(Error::EmptyArgument {
+                    function: function.to_string(),
+                    position: i + 1,
+                });
             }
             // `key=value` only if what precedes the first `=` is a plain key (so a quoted
             // path containing `=` stays positional).
@@ -200,7 +552,10 @@ fn split_arguments<'a>(function: &str, text: &'a str) -> Result<Vec<Argument<'a>
                 if !key.is_empty() && key.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
                     let value = value.trim();
                     if value.is_empty() {
-                        return Err(format!("{function}(...): `{key}=` has no value"));
+                        return Err(Error::KeyWithoutValue {
+                            function: function.to_string(),
+                            key: key.to_string(),
+                        });
                     }
                     return Ok(Argument {
                         key: Some(key),
@@ -235,30 +590,27 @@ const fn param(name: &'static str, aliases: &'static [&'static str], required: b
 /// Matches `args` to `params` (positional ones in order, then by key) and returns one value
 /// text per parameter, `None` for optional ones not given.
 fn bind<'a>(
-    function: &str,
+    function: &'static str,
     params: &[Param],
     args: &[Argument<'a>],
-) -> Result<Vec<Option<&'a str>>, String> {
+) -> Result<Vec<Option<&'a str>>, Error> {
     let mut values: Vec<Option<&'a str>> = vec![None; params.len()];
     let mut seen_keyword = false;
     for (position, arg) in args.iter().enumerate() {
         let index = match arg.key {
             None => {
                 if seen_keyword {
-                    return Err(format!(
-                        "{function}(...): `{}` needs a key (positional arguments must come \
-                         before `key=value` ones)",
-                        arg.value
-                    ));
+                    return Err(Error::PositionalAfterKeyword {
+                        function,
+                        value: arg.value.to_string(),
+                    });
                 }
                 if position >= params.len() {
-                    return Err(format!(
-                        "{function}(...) takes at most {} argument{} ({}), but got {}",
-                        params.len(),
-                        if params.len() == 1 { "" } else { "s" },
-                        names_of(params),
-                        args.len()
-                    ));
+                    return Err(Error::TooManyArguments {
+                        function,
+                        parameters: params.iter().map(|p| p.name).collect(),
+                        given: args.len(),
+                    });
                 }
                 position
             }
@@ -271,57 +623,47 @@ fn bind<'a>(
             }
         };
         if values[index].is_some() {
-            return Err(format!(
-                "{function}(...): `{}` is given twice",
-                params[index].name
-            ));
+            return Err(Error::GivenTwice {
+                function,
+                parameter: params[index].name,
+            });
         }
         values[index] = Some(arg.value);
     }
-    if let Some(missing) = params
+    if let Some((missing, _)) = params
         .iter()
         .zip(&values)
         .find(|(p, v)| p.required && v.is_none())
     {
-        return Err(format!(
-            "{function}() is missing `{}`, e.g. `{}`",
-            missing.0.name,
-            example_call(function)
-        ));
+        return Err(Error::MissingArgument {
+            function,
+            parameter: missing.name,
+        });
     }
     Ok(values)
 }
 
-fn names_of(params: &[Param]) -> String {
-    params
-        .iter()
-        .map(|p| format!("`{}`", p.name))
-        .collect::<Vec<_>>()
-        .join(", ")
-}
-
-fn unknown_key(function: &str, key: &str, params: &[Param]) -> String {
-    let candidates: Vec<&str> = params
+fn unknown_key(function: &'static str, key: &str, params: &[Param]) -> Error {
+    let candidates: Vec<&'static str> = params
         .iter()
         .flat_map(|p| std::iter::once(p.name).chain(p.aliases.iter().copied()))
         .collect();
-    match suggest(key, &candidates) {
-        Some(near) => {
-            // Suggest the canonical name even when the near match is an alias.
-            let canonical = params
-                .iter()
-                .find(|p| p.name == near || p.aliases.contains(&near))
-                .map_or(near, |p| p.name);
-            format!("unknown key `{key}` in {function}(...), did you mean `{canonical}`?")
-        }
-        None => format!(
-            "unknown key `{key}` in {function}(...); its keys are {}",
-            names_of(params)
-        ),
+    // Suggest the canonical name even when the near match is an alias.
+    let suggestion = suggest(key, &candidates).map(|near| {
+        params
+            .iter()
+            .find(|p| p.name == near || p.aliases.contains(&near))
+            .map_or(near, |p| p.name)
+    });
+    Error::UnknownKey {
+        function,
+        key: key.to_string(),
+        suggestion,
+        parameters: params.iter().map(|p| p.name).collect(),
     }
 }
 
-fn constant(args: &[Argument], expected: Dimension) -> Result<Signal, String> {
+fn constant(args: &[Argument], expected: Dimension) -> Result<Signal, Error> {
     const PARAMS: &[Param] = &[param("value", &[], true)];
     let values = bind("constant", PARAMS, args)?;
     let value = quantity(
@@ -333,7 +675,7 @@ fn constant(args: &[Argument], expected: Dimension) -> Result<Signal, String> {
     Ok(Signal::Constant(value))
 }
 
-fn sine(args: &[Argument], expected: Dimension) -> Result<Signal, String> {
+fn sine(args: &[Argument], expected: Dimension) -> Result<Signal, Error> {
     const PARAMS: &[Param] = &[
         param("amplitude", &["amp"], true),
         param("frequency", &["freq"], true),
@@ -362,7 +704,7 @@ fn sine(args: &[Argument], expected: Dimension) -> Result<Signal, String> {
     })
 }
 
-fn chirp(args: &[Argument], expected: Dimension) -> Result<Signal, String> {
+fn chirp(args: &[Argument], expected: Dimension) -> Result<Signal, Error> {
     const PARAMS: &[Param] = &[
         param("amplitude", &["amp"], true),
         param("f0", &[], true),
@@ -385,7 +727,7 @@ fn chirp(args: &[Argument], expected: Dimension) -> Result<Signal, String> {
     })
 }
 
-fn csv(args: &[Argument], expected: Dimension) -> Result<Signal, String> {
+fn csv(args: &[Argument], expected: Dimension) -> Result<Signal, Error> {
     const PARAMS: &[Param] = &[
         param("path", &["file"], true),
         param("column", &["col"], false),
@@ -399,10 +741,10 @@ fn csv(args: &[Argument], expected: Dimension) -> Result<Signal, String> {
         None => {
             let mut table = output::read_csv_table(path)?;
             if table.columns.len() != 2 {
-                return Err(format!(
-                    "csv(...): `{path_text}` has the columns {}; choose one with `column=NAME`",
-                    output::quoted_list(&table.header)
-                ));
+                return Err(Error::AmbiguousColumn {
+                    path: path_text.to_string(),
+                    columns: table.header,
+                });
             }
             let values = table.columns.pop().unwrap_or_default();
             (table.columns.pop().unwrap_or_default(), values)
@@ -411,29 +753,28 @@ fn csv(args: &[Argument], expected: Dimension) -> Result<Signal, String> {
     let scale = match v[2] {
         Some(unit) => {
             let unit = unquote(unit);
-            let (scale, dimension) = units::parse_quantity(&format!("1 {unit}"))
-                .map_err(|e| format!("csv(...): `unit={unit}`: {e}"))?;
-            if dimension != expected {
-                return Err(format!(
-                    "csv(...): `unit={unit}` is {}, but the input needs {}{}",
-                    units::describe(dimension),
-                    units::describe(expected),
-                    unit_hint(expected).map_or(String::new(), |u| format!(" (e.g. `unit={u}`)"))
-                ));
+            let (scale, found) =
+                units::parse_quantity(&format!("1 {unit}")).map_err(|reason| Error::BadUnit {
+                    unit: unit.to_string(),
+                    reason,
+                })?;
+            if found != expected {
+                return Err(Error::WrongUnit {
+                    unit: unit.to_string(),
+                    found,
+                    expected,
+                });
             }
             scale
         }
         None if expected == Dimension::NONE => 1.0,
-        None => {
-            return Err(format!(
-                "csv(...): give the unit of the values, e.g. `unit={}`: the input needs {}",
-                unit_hint(expected).unwrap_or_else(|| expected.to_string()),
-                expected
-            ))
-        }
+        None => return Err(Error::MissingUnit { expected }),
     };
     values.iter_mut().for_each(|v| *v *= scale);
-    let table = Table::new(times, values).map_err(|e| format!("`{path_text}`: {e}"))?;
+    let table = Table::new(times, values).map_err(|error| Error::Table {
+        path: path_text.to_string(),
+        error,
+    })?;
     Ok(Signal::Table(table))
 }
 
@@ -448,8 +789,8 @@ fn unquote(text: &str) -> &str {
 }
 
 /// What a quantity argument is, which fixes its dimension and conversion.
-#[derive(Clone, Copy, PartialEq)]
-enum QuantityKind {
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum QuantityKind {
     /// A value of the input: amplitude, offset, constant.
     Value,
     /// A frequency, converted to Hz.
@@ -462,47 +803,35 @@ enum QuantityKind {
 
 /// Parses the quantity `text` given for argument `name` and checks its dimension; returns
 /// the SI value (frequencies in Hz).
-fn quantity(text: &str, name: &str, input: Dimension, kind: QuantityKind) -> Result<f64, String> {
-    let per_second = Dimension::TIME.powi(-1);
+fn quantity(
+    text: &str,
+    name: &'static str,
+    input: Dimension,
+    kind: QuantityKind,
+) -> Result<f64, Error> {
     let expected = match kind {
         QuantityKind::Value => input,
-        QuantityKind::Frequency => per_second,
+        QuantityKind::Frequency => Dimension::FREQUENCY,
         QuantityKind::Phase => Dimension::NONE,
         QuantityKind::Duration => Dimension::TIME,
     };
     let text = text.trim();
+    let error = |problem| Error::Argument {
+        name,
+        text: text.to_string(),
+        problem,
+    };
     if !text.starts_with(|c: char| c.is_ascii_digit() || c == '-' || c == '.') {
-        return Err(format!(
-            "{name} `{text}` is not a quantity: expected a number with an optional unit, \
-             such as `{}`",
-            example_quantity("1", expected)
-        ));
+        return Err(error(ArgumentProblem::NotAQuantity { expected }));
     }
-    let (value, dimension) =
-        units::parse_quantity(text).map_err(|e| format!("{name} `{text}`: {e}"))?;
-    if dimension != expected {
-        let needed = match kind {
-            QuantityKind::Value if input == Dimension::NONE => {
-                "the input is dimensionless".to_string()
-            }
-            QuantityKind::Value => format!("the input needs {input}"),
-            QuantityKind::Frequency => "a frequency needs 1/s".to_string(),
-            QuantityKind::Phase => "a phase is an angle (dimensionless)".to_string(),
-            QuantityKind::Duration => "a duration needs s".to_string(),
-        };
-        let given = if dimension == Dimension::NONE {
-            "has no unit".to_string()
-        } else {
-            format!("is in {dimension}")
-        };
-        let number = leading_number(text).unwrap_or("1");
-        let example = match kind {
-            QuantityKind::Phase => format!("{number} deg"),
-            _ => example_quantity(number, expected),
-        };
-        return Err(format!(
-            "{name} `{text}` {given}, but {needed}: write e.g. `{example}`"
-        ));
+    let (value, found) =
+        units::parse_quantity(text).map_err(|reason| error(ArgumentProblem::BadSyntax(reason)))?;
+    if found != expected {
+        return Err(error(ArgumentProblem::WrongDimension {
+            kind,
+            found,
+            expected,
+        }));
     }
     // A frequency in rad/s or deg/s is angular: convert to cycles per second.
     let value = if kind == QuantityKind::Frequency && mentions_angle_unit(text) {
@@ -511,13 +840,10 @@ fn quantity(text: &str, name: &str, input: Dimension, kind: QuantityKind) -> Res
         value
     };
     if kind == QuantityKind::Frequency && value < 0.0 {
-        return Err(format!(
-            "{name} `{text}` is negative; frequencies must be >= 0 (use a negative amplitude \
-             or a phase to invert the signal)"
-        ));
+        return Err(error(ArgumentProblem::NegativeFrequency));
     }
     if kind == QuantityKind::Duration && value <= 0.0 {
-        return Err(format!("{name} `{text}` must be > 0"));
+        return Err(error(ArgumentProblem::NotPositiveDuration));
     }
     Ok(value)
 }
@@ -528,55 +854,6 @@ fn mentions_angle_unit(text: &str) -> bool {
     text.split(|c: char| !c.is_alphabetic())
         .filter(|word| !word.is_empty())
         .any(|word| units::lookup(word).is_some_and(|u| u.dimension == Dimension::NONE))
-}
-
-/// The longest prefix of `text` that is a plain number (`2.5` of `2.5mN`).
-fn leading_number(text: &str) -> Option<&str> {
-    text.char_indices()
-        .map(|(i, c)| i + c.len_utf8())
-        .rfind(|&end| text[..end].parse::<f64>().is_ok())
-        .map(|end| &text[..end])
-}
-
-/// `number` with a unit of `dimension`: `1 N`, `10 Hz`, `0.5` (dimensionless).
-fn example_quantity(number: &str, dimension: Dimension) -> String {
-    match unit_hint(dimension) {
-        Some(unit) => format!("{number} {unit}"),
-        None if dimension == Dimension::NONE => number.to_string(),
-        None => format!("{number} {dimension}"),
-    }
-}
-
-/// A familiar unit for common dimensions (`N` rather than `kg*m/s^2`).
-fn unit_hint(dimension: Dimension) -> Option<String> {
-    let named = [
-        (Dimension::FORCE, "N"),
-        (Dimension::TORQUE, "N*m"),
-        (Dimension::LENGTH, "m"),
-        (Dimension::MASS, "kg"),
-        (Dimension::TIME, "s"),
-        (Dimension::CURRENT, "A"),
-        (Dimension::TIME.powi(-1), "Hz"),
-        (Dimension::ACCELERATION, "m/s^2"),
-        (
-            Dimension {
-                mass: 1,
-                length: 2,
-                time: -3,
-                current: -1,
-            },
-            "V",
-        ),
-    ];
-    if dimension == Dimension::NONE {
-        return None;
-    }
-    Some(
-        named
-            .iter()
-            .find(|(d, _)| *d == dimension)
-            .map_or_else(|| dimension.to_string(), |(_, unit)| unit.to_string()),
-    )
 }
 
 /// The candidate closest to `word` by edit distance, if it is close enough to be a typo.
@@ -622,7 +899,7 @@ mod tests {
     fn err(spec: &str) -> String {
         match parse_signal(spec, FORCE) {
             Ok(signal) => panic!("`{spec}` parsed as {signal:?}"),
-            Err(e) => e,
+            Err(e) => e.to_string(),
         }
     }
 
@@ -644,19 +921,19 @@ mod tests {
             ("arm.length".to_string(), "2 mm".to_string())
         );
         assert_eq!(
-            parse_assignment("drive").unwrap_err(),
+            parse_assignment("drive").unwrap_err().to_string(),
             "expected NAME=VALUE, found `drive` (no `=`)"
         );
         assert_eq!(
-            parse_assignment("=1 mN").unwrap_err(),
+            parse_assignment("=1 mN").unwrap_err().to_string(),
             "expected NAME=VALUE, found `=1 mN` (no name before `=`)"
         );
         assert_eq!(
-            parse_assignment("drive= ").unwrap_err(),
+            parse_assignment("drive= ").unwrap_err().to_string(),
             "`drive=` has no value after `=`"
         );
         assert_eq!(
-            parse_assignment("sine(amp=1 mN)").unwrap_err(),
+            parse_assignment("sine(amp=1 mN)").unwrap_err().to_string(),
             "expected NAME=VALUE, found `sine(amp=1 mN)`: `sine(amp` is not a name"
         );
     }
@@ -809,7 +1086,9 @@ mod tests {
             "duration `2` has no unit, but a duration needs s: write e.g. `2 s`"
         );
         assert_eq!(
-            parse_signal("1 N", Dimension::NONE).unwrap_err(),
+            parse_signal("1 N", Dimension::NONE)
+                .unwrap_err()
+                .to_string(),
             "value `1 N` is in kg*m/s^2, but the input is dimensionless: write e.g. `1`"
         );
         let voltage = Dimension {
@@ -819,7 +1098,7 @@ mod tests {
             current: -1,
         };
         assert_eq!(
-            parse_signal("3", voltage).unwrap_err(),
+            parse_signal("3", voltage).unwrap_err().to_string(),
             "value `3` has no unit, but the input needs kg*m^2/s^3/A: write e.g. `3 V`"
         );
     }
@@ -893,6 +1172,41 @@ mod tests {
         assert_eq!(
             err("constant(1 N, 2 N)"),
             "constant(...) takes at most 1 argument (`value`), but got 2"
+        );
+    }
+
+    #[test]
+    fn errors_carry_the_facts() {
+        assert_eq!(
+            parse_assignment("drive").unwrap_err(),
+            AssignmentError::NoEquals {
+                text: "drive".to_string()
+            }
+        );
+        assert_eq!(
+            parse_signal("sine(amplitude=1 mN)", FORCE).unwrap_err(),
+            Error::MissingArgument {
+                function: "sine",
+                parameter: "frequency"
+            }
+        );
+        assert_eq!(
+            parse_signal("sine(amplitude=1 mm, frequency=10 Hz)", FORCE).unwrap_err(),
+            Error::Argument {
+                name: "amplitude",
+                text: "1 mm".to_string(),
+                problem: ArgumentProblem::WrongDimension {
+                    kind: QuantityKind::Value,
+                    found: Dimension::LENGTH,
+                    expected: FORCE
+                }
+            }
+        );
+        let missing = std::env::temp_dir().join("mech-signal-spec-no-such-file.csv");
+        let error = parse_signal(&format!("csv({}, unit=N)", missing.display()), FORCE);
+        assert!(
+            matches!(&error, Err(Error::Csv(csv)) if csv.path == missing),
+            "{error:?}"
         );
     }
 

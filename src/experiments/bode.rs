@@ -7,12 +7,12 @@ use std::path::{Path, PathBuf};
 use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
-use super::keys::{positive, quantity};
 use super::leg::Leg;
 use super::Error;
 use super::{csv, ModelSpec, Outcome, Table};
 use crate::frequency::{self, ChirpSweep, Point};
 use crate::parallel::{parallel, threads};
+use crate::quantity::{positive, quantity};
 use crate::render::plot;
 use mech_runtime::Mode;
 

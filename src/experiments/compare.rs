@@ -9,11 +9,11 @@ use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
 use super::force::{actuator_work, check_paper, PaperRow};
-use super::keys::positive;
 use super::leg::{force_deflection, Dof, ForceDeflection, Leg, Sensor};
 use super::Error;
 use super::{csv, ModelSpec, Outcome, Table};
 use crate::parallel::parallel;
+use crate::quantity::positive;
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]

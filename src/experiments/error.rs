@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use mech_runtime::RuntimeError;
 
 use crate::render::plot::PlotError;
-use crate::session;
+use crate::{quantity, session};
 
 #[derive(Debug)]
 pub enum Error {
@@ -32,9 +32,8 @@ pub enum Error {
     Key {
         message: String,
     },
-    /// A quantity with units that does not parse or has the wrong dimension (the message
-    /// names the key; `quantity` has no typed error yet).
-    Quantity(String),
+    /// A quantity with units that does not parse, has the wrong dimension or sign.
+    Quantity(quantity::Error),
     /// In the experiment file at `path`.
     InFile {
         path: PathBuf,
@@ -119,7 +118,8 @@ impl fmt::Display for Error {
                 "missing key `kind`: expected one of \"trajectory\", \"force_deflection\", \
                  \"ratio_sweep\", \"compare\", \"bode\"",
             ),
-            Error::Key { message } | Error::Quantity(message) => f.write_str(message),
+            Error::Key { message } => f.write_str(message),
+            Error::Quantity(error) => write!(f, "{error}"),
             Error::InFile { path, error } => {
                 write!(f, "experiment `{}`: {error}", path.display())
             }
@@ -161,6 +161,12 @@ impl std::error::Error for Error {}
 impl From<session::Error> for Error {
     fn from(error: session::Error) -> Error {
         Error::Session(error)
+    }
+}
+
+impl From<quantity::Error> for Error {
+    fn from(error: quantity::Error) -> Error {
+        Error::Quantity(error)
     }
 }
 

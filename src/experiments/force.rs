@@ -9,10 +9,10 @@ use std::path::{Path, PathBuf};
 use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
-use super::keys::{paper_value, positive};
 use super::leg::{force_deflection, Dof, ForceDeflection, Leg, Sensor};
 use super::Error;
 use super::{csv, percent_diff, ModelSpec, Outcome, Table};
+use crate::quantity::{paper_value, positive};
 use crate::render::plot;
 use mech_codegen::ir::transform::AXES;
 

@@ -25,26 +25,6 @@ use serde::Deserialize;
 
 pub use error::Error;
 
-/// [`crate::quantity`]'s parsers of the keys' values, their messages as
-/// [`Error::Quantity`].
-mod keys {
-    use mech_codegen::ir::Dimension;
-
-    use super::Error;
-
-    pub fn quantity(key: &str, text: &str, expected: Dimension) -> Result<f64, Error> {
-        crate::quantity::quantity(key, text, expected).map_err(Error::Quantity)
-    }
-
-    pub fn positive(key: &str, text: &str, expected: Dimension) -> Result<f64, Error> {
-        crate::quantity::positive(key, text, expected).map_err(Error::Quantity)
-    }
-
-    pub fn paper_value(key: &str, text: &str, expected: Dimension) -> Result<(f64, f64), Error> {
-        crate::quantity::paper_value(key, text, expected).map_err(Error::Quantity)
-    }
-}
-
 pub use crate::render::report::Outcome;
 pub use crate::render::table::Table;
 

@@ -11,11 +11,11 @@ use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
 use super::force::actuator_work;
-use super::keys::positive;
 use super::leg::{force_deflection, Dof, Leg, Sensor};
 use super::Error;
 use super::{csv, ModelSpec, Outcome, Table};
 use crate::parallel::{parallel, threads};
+use crate::quantity::positive;
 use crate::render::plot::{self, CurveStyle, Star};
 use mech_codegen::ir::transform::AXES;
 
@@ -94,6 +94,7 @@ impl Series {
             .as_deref()
             .map(|l| positive(&format!("series[{k}].lever"), l, Dimension::LENGTH))
             .transpose()
+            .map_err(Error::from)
     }
     fn leg(&self) -> ModelSpec {
         ModelSpec {

@@ -8,10 +8,10 @@ use std::path::{Path, PathBuf};
 use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
-use super::keys::positive;
 use super::leg::Leg;
 use super::Error;
 use super::{csv, ModelSpec, Outcome, Table};
+use crate::quantity::positive;
 use crate::render::plot;
 use mech_codegen::ir::transform::AXES;
 

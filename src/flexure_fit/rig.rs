@@ -140,10 +140,10 @@ fn quantity(key: &'static str, q: &Quantity, expected: Dimension) -> Result<f64,
     let value = match q {
         Quantity::Number(v) => *v,
         Quantity::Text(text) => {
-            parse_si(key, text, expected, true).map_err(|message| SpecimenError::Quantity {
+            parse_si(key, text, expected, true).map_err(|error| SpecimenError::Quantity {
                 key,
                 expected,
-                message,
+                message: error.to_string(),
             })?
         }
     };
@@ -288,9 +288,9 @@ pub fn specimen_files(arguments: &[PathBuf]) -> Result<Vec<PathBuf>, Error> {
 
 /// Reads the angle trace `path` of `specimen`: `(times s, angles rad)`.
 pub fn read_trace(specimen: &Specimen, path: &Path) -> Result<(Vec<f64>, Vec<f64>), Error> {
-    let table = crate::output::read_csv_table(path).map_err(|message| Error::ReadTrace {
+    let table = crate::output::read_csv_table(path).map_err(|error| Error::ReadTrace {
         path: path.to_path_buf(),
-        message,
+        message: error.to_string(),
     })?;
     let index = match &specimen.angle_column {
         Some(column) => table
