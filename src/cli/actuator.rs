@@ -8,7 +8,7 @@ use std::fmt::Write as _;
 use clap::Args;
 use mech_codegen::ir::Dimension;
 
-use super::{length, positive, voltage};
+use super::{length, positive, voltage, Error};
 use crate::physics::actuator::{
     energy_density, SEED_DRIVE_VOLTAGE, SEED_TABLE_II, SEED_TABLE_I_MODEL,
 };
@@ -60,7 +60,7 @@ pub struct ActuatorArgs {
     pub seed_tables: bool,
 }
 
-pub fn run(args: &ActuatorArgs) -> Result<(), String> {
+pub fn run(args: &ActuatorArgs) -> Result<(), Error> {
     if args.seed_tables {
         print!("{}", seed_tables_i_ii());
         return Ok(());
@@ -79,7 +79,7 @@ pub fn run(args: &ActuatorArgs) -> Result<(), String> {
     let mut text = String::new();
     let actuator = if direct {
         if args.bimorph.is_some() || geometry_given {
-            return Err("give either --blocked-force and --free-deflection, or a bimorph geometry (--bimorph ...), not both".into());
+            return Err(Error::Usage("give either --blocked-force and --free-deflection, or a bimorph geometry (--bimorph ...), not both".into()));
         }
         from_datasheet(args, mass, &mut text)?
     } else {
@@ -92,9 +92,11 @@ pub fn run(args: &ActuatorArgs) -> Result<(), String> {
 
 /// The actuator from `--blocked-force` and `--free-deflection` at the rated voltage, scaled
 /// to `--voltage`; describes it in `text`.
-fn from_datasheet(args: &ActuatorArgs, mass: f64, text: &mut String) -> Result<Actuator, String> {
+fn from_datasheet(args: &ActuatorArgs, mass: f64, text: &mut String) -> Result<Actuator, Error> {
     let (Some(force), Some(deflection)) = (&args.blocked_force, &args.free_deflection) else {
-        return Err("--blocked-force and --free-deflection must be given together".into());
+        return Err(Error::Usage(
+            "--blocked-force and --free-deflection must be given together".into(),
+        ));
     };
     let rated = voltage("--rated-voltage", &args.rated_voltage)?;
     let base = Actuator {
@@ -124,7 +126,7 @@ fn from_bimorph(
     geometry_given: bool,
     mass: f64,
     text: &mut String,
-) -> Result<Actuator, String> {
+) -> Result<Actuator, Error> {
     let preset =
         args.bimorph
             .as_deref()
@@ -133,9 +135,9 @@ fn from_bimorph(
         "new-geometry" | "new" => Bimorph::SEED_NEW_GEOMETRY,
         "old-geometry" | "old" => Bimorph::SEED_OLD_GEOMETRY,
         "" => {
-            return Err("give --blocked-force and --free-deflection, or --bimorph new-geometry|old-geometry (optionally with geometry overrides), or --seed-tables".into())
+            return Err(Error::Usage("give --blocked-force and --free-deflection, or --bimorph new-geometry|old-geometry (optionally with geometry overrides), or --seed-tables".into()))
         }
-        other => return Err(format!("--bimorph: unknown preset `{other}`; known: new-geometry, old-geometry (seed Table I)")),
+        other => return Err(Error::Usage(format!("--bimorph: unknown preset `{other}`; known: new-geometry, old-geometry (seed Table I)"))),
     };
     if let Some(t) = &args.pzt_thickness {
         bimorph.pzt_thickness = length("--pzt-thickness", t)?;

@@ -4,6 +4,7 @@
 //! Consumes: the model path, `--set` values and the coordinates held independent. Produces:
 //! the assembly report on stdout and, with `--out`, the state as CSV.
 
+use super::Error;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -22,7 +23,7 @@ pub struct AssembleArgs {
     pub out: Option<PathBuf>,
 }
 
-pub fn run(args: &AssembleArgs) -> Result<(), String> {
+pub fn run(args: &AssembleArgs) -> Result<(), Error> {
     let (session, _) = args.common.open()?;
     let state = session.assemble(&args.common.independent)?;
     print!("{}", session::assembly_report(&session.model, &state));
@@ -32,8 +33,7 @@ pub fn run(args: &AssembleArgs) -> Result<(), String> {
         let mut header: Vec<String> = names.iter().map(|n| format!("q_{n}")).collect();
         header.extend(names.iter().map(|n| format!("u_{n}")));
         let row: Vec<f64> = state.q.iter().chain(&state.u).copied().collect();
-        output::write_csv(out, &header, &[row])
-            .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+        output::write_csv(out, &header, &[row]).map_err(|e| Error::write(out, e))?;
         println!("\nwritten to {}", out.display());
     }
     Ok(())

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use mech_runtime::Model;
 
-use super::{frequency_value, ModelArgs};
+use super::{frequency_value, Error, ModelArgs};
 use crate::frequency::{self, ChirpSweep, Point};
 use crate::output;
 use crate::render::plot;
@@ -59,7 +59,7 @@ pub enum Damping {
     Viscous,
 }
 
-pub fn run(args: &BodeArgs) -> Result<(), String> {
+pub fn run(args: &BodeArgs) -> Result<(), Error> {
     let (session, inputs) = args.common.open()?;
     let model = &session.model;
     let input = session.input_index(&args.drive)?;
@@ -69,7 +69,9 @@ pub fn run(args: &BodeArgs) -> Result<(), String> {
         frequency_value("--to", &args.to)?,
     );
     if to <= from {
-        return Err(format!("--to ({to} Hz) must be above --from ({from} Hz)"));
+        return Err(Error::Usage(format!(
+            "--to ({to} Hz) must be above --from ({from} Hz)"
+        )));
     }
     let linear = session.linearization(&args.common.independent, &inputs)?;
     let frequencies = frequency::log_space(from, to, args.points);
@@ -78,7 +80,7 @@ pub fn run(args: &BodeArgs) -> Result<(), String> {
         Damping::Viscous => mech_runtime::FlexureDamping::Viscous,
     };
     let response = frequency::linear_response(&linear, input, output, &frequencies, damping)
-        .ok_or("the linear model is singular at some frequency")?;
+        .ok_or(Error::SingularResponse)?;
     let chirp = if args.chirp {
         let sweep = ChirpSweep {
             input,
@@ -86,7 +88,7 @@ pub fn run(args: &BodeArgs) -> Result<(), String> {
             amplitude: match &args.chirp_amplitude {
                 Some(text) => {
                     mech_codegen::front::units::parse_quantity(text)
-                        .map_err(|e| format!("--chirp-amplitude: {e}"))?
+                        .map_err(|e| Error::Usage(format!("--chirp-amplitude: {e}")))?
                         .0
                 }
                 None => 1.0,
@@ -107,7 +109,7 @@ pub fn run(args: &BodeArgs) -> Result<(), String> {
             &sweep,
             &frequencies,
         )
-        .map_err(|e| format!("chirp simulation failed: {e}"))?;
+        .map_err(Error::Chirp)?;
         Some(estimate)
     } else {
         None
@@ -116,8 +118,7 @@ pub fn run(args: &BodeArgs) -> Result<(), String> {
 
     if let Some(out) = &args.out {
         let (header, rows) = response_table(&response, chirp.as_deref());
-        output::write_csv(out, &header, &rows)
-            .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+        output::write_csv(out, &header, &rows).map_err(|e| Error::write(out, e))?;
         println!("written to {}", out.display());
     }
     if let Some(path) = &args.plot {
@@ -198,7 +199,7 @@ fn bode_plot(
     title: &str,
     response: &[Point],
     chirp: Option<&[Point]>,
-) -> Result<(), String> {
+) -> Result<(), Error> {
     let frequencies: Vec<f64> = response.iter().map(|p| p.frequency_hz).collect();
     let mut magnitude = vec![(
         "linear model".to_string(),
@@ -222,5 +223,5 @@ fn bode_plot(
             chirp.iter().map(Point::phase_deg).collect(),
         ));
     }
-    plot::plot_bode(path, title, &magnitude, &phase).map_err(|e| format!("cannot plot: {e}"))
+    plot::plot_bode(path, title, &magnitude, &phase).map_err(Error::Plot)
 }

@@ -3,6 +3,7 @@
 //!
 //! Consumes: the model path. Produces: text on stdout.
 
+use super::Error;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -15,7 +16,7 @@ pub struct CheckArgs {
     pub model: PathBuf,
 }
 
-pub fn run(args: &CheckArgs) -> Result<(), String> {
+pub fn run(args: &CheckArgs) -> Result<(), Error> {
     let path = args.model.as_path();
     let session = Session::open(path, &[], &[])?;
     let compiled = &session.compiled;

@@ -4,6 +4,7 @@
 //! Consumes: the model path and what to emit. Produces: text on stdout or a file written
 //! atomically.
 
+use super::Error;
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
@@ -32,9 +33,9 @@ pub enum Emit {
     Tape,
 }
 
-pub fn run(args: &DeriveArgs) -> Result<(), String> {
+pub fn run(args: &DeriveArgs) -> Result<(), Error> {
     let (path, emit, out) = (args.model.as_path(), args.emit, args.out.as_deref());
-    let compiled = Compiled::from_path(path).map_err(|errors| errors.to_string())?;
+    let compiled = Compiled::from_path(path)?;
     let text = match emit {
         Emit::Rust => {
             let options = mech_codegen::RustOptions {
@@ -47,8 +48,9 @@ pub fn run(args: &DeriveArgs) -> Result<(), String> {
         Emit::Equations => describe::equations_text(&compiled),
     };
     match out {
-        Some(file) => output::write_atomic(file, text.as_bytes())
-            .map_err(|e| format!("cannot write {}: {e}", file.display())),
+        Some(file) => {
+            output::write_atomic(file, text.as_bytes()).map_err(|e| Error::write(file, e))
+        }
         None => {
             print!("{text}");
             Ok(())

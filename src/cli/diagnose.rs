@@ -6,6 +6,7 @@
 //! cause filters. Produces: the ranking and verdict on stdout, and `diagnosis.json`,
 //! `diagnosis.html` and plots in the output folder.
 
+use super::Error;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -45,14 +46,15 @@ pub struct DiagnoseArgs {
     pub out_dir: PathBuf,
 }
 
-pub fn run(args: &DiagnoseArgs) -> Result<(), String> {
-    let mut experiment = experiment::load(&args.experiment)?;
+pub fn run(args: &DiagnoseArgs) -> Result<(), Error> {
+    let mut experiment = experiment::load(&args.experiment).map_err(Error::Diagnose)?;
     if let Some(model) = &args.model {
         experiment.set_model(model.clone());
     }
-    let data = MeasuredData::load(&args.data).map_err(|e| e.to_string())?;
-    let holdout = Holdout::parse(&args.holdout)?;
-    let d = diagnose_causes(&experiment, &data, &args.fit, holdout, &args.causes)?;
+    let data = MeasuredData::load(&args.data).map_err(|e| Error::Diagnose(e.to_string()))?;
+    let holdout = Holdout::parse(&args.holdout).map_err(Error::Diagnose)?;
+    let d = diagnose_causes(&experiment, &data, &args.fit, holdout, &args.causes)
+        .map_err(Error::Diagnose)?;
     println!(
         "{}: {} values fitted, {} held out ({}); noise band: held-out χ²/value ≤ {:.2}",
         experiment.title(),
@@ -67,13 +69,11 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), String> {
     let comparison = Comparison::new(&experiment, &d);
     print!("{}", comparison.text());
     println!("\nverdict: {verdict}");
-    std::fs::create_dir_all(&args.out_dir)
-        .map_err(|e| format!("cannot create {}: {e}", args.out_dir.display()))?;
+    std::fs::create_dir_all(&args.out_dir).map_err(|e| Error::write(&args.out_dir, e))?;
     let summary = summary_json(args, &experiment, &d, &verdict, &comparison);
     let path = args.out_dir.join("diagnosis.json");
-    let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
-    output::write_atomic(&path, text.as_bytes())
-        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    let text = serde_json::to_string_pretty(&summary)?;
+    output::write_atomic(&path, text.as_bytes()).map_err(|e| Error::write(&path, e))?;
     let sources = PageSources {
         experiment: &args.experiment,
         data: &args.data,

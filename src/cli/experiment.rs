@@ -3,6 +3,7 @@
 //!
 //! Consumes: the experiment file. Produces: text on stdout, files from the experiment.
 
+use super::Error;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -19,7 +20,7 @@ pub struct ExperimentArgs {
     pub out_dir: PathBuf,
 }
 
-pub fn run(args: &ExperimentArgs) -> Result<(), String> {
+pub fn run(args: &ExperimentArgs) -> Result<(), Error> {
     let outcome = experiments::run_file(&args.file, &args.out_dir)?;
     print!("{}", outcome_text(&outcome));
     Ok(())

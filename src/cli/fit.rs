@@ -5,6 +5,7 @@
 //! Produces: the table on stdout, and in the output folder `fit.json` (the same facts for
 //! scripts), `fit.csv` (measured, before, after per value) and one plot per measured series.
 
+use super::Error;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -37,19 +38,22 @@ pub struct FitArgs {
     pub out_dir: PathBuf,
 }
 
-pub fn run(args: &FitArgs) -> Result<(), String> {
-    let experiment = experiment::load(&args.experiment)?;
-    let data = MeasuredData::load(&args.data).map_err(|e| e.to_string())?;
+pub fn run(args: &FitArgs) -> Result<(), Error> {
+    let experiment = experiment::load(&args.experiment).map_err(Error::Diagnose)?;
+    let data = MeasuredData::load(&args.data).map_err(|e| Error::Diagnose(e.to_string()))?;
     let mut leg = Leg::open_any(&experiment.model_spec(), &[])?;
     let requests = args
         .fit
         .iter()
         .map(|text| FitRequest::parse(text))
-        .collect::<Result<Vec<_>, _>>()?;
-    let fitted = parameters(&leg, &requests)?;
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(Error::Diagnose)?;
+    let fitted = parameters(&leg, &requests).map_err(Error::Diagnose)?;
     // Checked before the screening, which reads the same columns.
-    experiment.observations(&leg, &data)?;
-    let screening = experiment.screen(&data)?;
+    experiment
+        .observations(&leg, &data)
+        .map_err(Error::Diagnose)?;
+    let screening = experiment.screen(&data).map_err(Error::Diagnose)?;
     println!(
         "{}: {} rows of `{}`, fitting {}",
         experiment.title(),
@@ -63,7 +67,7 @@ pub fn run(args: &FitArgs) -> Result<(), String> {
     );
     print!("{}", screening_text(screening.as_ref()));
     let report = fit(&experiment, &data, &mut leg, &fitted)
-        .map_err(|e| format!("fit to `{}`: {e}", args.data.display()))?;
+        .map_err(|e| Error::Diagnose(format!("fit to `{}`: {e}", args.data.display())))?;
     println!("\n{}", report.result);
     println!("residual RMS per series (SI units; ln|H| relative):");
     for s in &report.residuals {
@@ -90,9 +94,9 @@ fn write_outputs(
     experiment: &Experiment,
     report: &FitReport,
     screening: Option<&Screening>,
-) -> Result<(), String> {
+) -> Result<(), Error> {
     let dir = &args.out_dir;
-    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    std::fs::create_dir_all(dir).map_err(|e| Error::write(dir, e))?;
     let r = &report.result;
     let (flags, screened) = screening_json(screening);
     let summary = json!({
@@ -114,10 +118,9 @@ fn write_outputs(
             "series": s.series, "before": s.before, "after": s.after,
         })).collect::<Vec<_>>(),
     });
-    let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
+    let text = serde_json::to_string_pretty(&summary)?;
     let json_path = dir.join("fit.json");
-    output::write_atomic(&json_path, text.as_bytes())
-        .map_err(|e| format!("cannot write {}: {e}", json_path.display()))?;
+    output::write_atomic(&json_path, text.as_bytes()).map_err(|e| Error::write(&json_path, e))?;
 
     let obs = &report.observations;
     let names = obs.series_names();
@@ -138,8 +141,7 @@ fn write_outputs(
         .map(|s| s.to_string())
         .collect();
     let csv_path = dir.join("fit.csv");
-    output::write_csv(&csv_path, &header, &rows)
-        .map_err(|e| format!("cannot write {}: {e}", csv_path.display()))?;
+    output::write_csv(&csv_path, &header, &rows).map_err(|e| Error::write(&csv_path, e))?;
     let curves = [
         ("model before".to_string(), report.before.as_slice()),
         ("model after fit".to_string(), report.after.as_slice()),

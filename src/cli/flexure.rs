@@ -11,7 +11,7 @@ use std::path::PathBuf;
 use clap::{Args, Subcommand};
 use mech_codegen::ir::Dimension;
 
-use super::{angular_frequency, length, positive};
+use super::{angular_frequency, length, positive, Error};
 use crate::flexure_fit::fit::{fit_specimens, FitOptions};
 use crate::flexure_fit::report;
 use crate::flexure_fit::rig::{read_specimen, specimen_files};
@@ -89,7 +89,7 @@ pub struct FitArgs {
 }
 
 /// Runs a `mech flexure` subcommand.
-pub fn run(command: FlexureCommand) -> Result<(), String> {
+pub fn run(command: FlexureCommand) -> Result<(), Error> {
     match command {
         FlexureCommand::Stiffness(args) => stiffness(&args),
         FlexureCommand::Fit(args) => fit(&args),
@@ -100,13 +100,13 @@ pub fn run(command: FlexureCommand) -> Result<(), String> {
     }
 }
 
-fn stiffness(args: &StiffnessArgs) -> Result<(), String> {
+fn stiffness(args: &StiffnessArgs) -> Result<(), Error> {
     let mut material = Material::by_name(&args.material).ok_or_else(|| {
-        format!(
+        Error::Usage(format!(
             "--material: unknown material `{}`; known: {}",
             args.material,
             Material::names().join(", ")
-        )
+        ))
     })?;
     if let Some(text) = &args.modulus {
         material.youngs_modulus = positive(
@@ -142,7 +142,7 @@ fn stiffness(args: &StiffnessArgs) -> Result<(), String> {
         }
         None => {
             if args.castellation_length.is_some() {
-                return Err("--castellation-length needs --effective-length (Eq. 2 uses l_eff for castellated hinges)".into());
+                return Err(Error::Usage("--castellation-length needs --effective-length (Eq. 2 uses l_eff for castellated hinges)".into()));
             }
             Flexure::uncastellated(&material, width, thickness, nominal)
         }
@@ -260,13 +260,12 @@ pub fn seed_table_iii() -> String {
     s
 }
 
-fn fit(args: &FitArgs) -> Result<(), String> {
-    let files = specimen_files(&args.data).map_err(|e| e.to_string())?;
+fn fit(args: &FitArgs) -> Result<(), Error> {
+    let files = specimen_files(&args.data)?;
     let specimens = files
         .iter()
         .map(|f| read_specimen(f))
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(|e| e.to_string())?;
+        .collect::<Result<Vec<_>, _>>()?;
     let modulus = match &args.modulus {
         Some(text) => Some(positive(
             "--modulus",
@@ -281,18 +280,16 @@ fn fit(args: &FitArgs) -> Result<(), String> {
     };
     let plots = args.plots.to_ascii_lowercase();
     if !matches!(plots.as_str(), "svg" | "png" | "none") {
-        return Err(format!(
+        return Err(Error::Usage(format!(
             "--plots: expected `svg`, `png` or `none`, got `{}`",
             args.plots
-        ));
+        )));
     }
-    let fit_report = fit_specimens(specimens, &options).map_err(|e| e.to_string())?;
+    let fit_report = fit_specimens(specimens, &options)?;
     print!("{}", report::text_report(&fit_report));
-    let mut written = report::write_csvs(&fit_report, &args.out_dir).map_err(|e| e.to_string())?;
+    let mut written = report::write_csvs(&fit_report, &args.out_dir)?;
     if plots != "none" {
-        written.extend(
-            report::write_plots(&fit_report, &args.out_dir, &plots).map_err(|e| e.to_string())?,
-        );
+        written.extend(report::write_plots(&fit_report, &args.out_dir, &plots)?);
     }
     println!(
         "\nwritten: {}",

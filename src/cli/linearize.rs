@@ -4,6 +4,7 @@
 //! Consumes: [`ModelArgs`]. Produces: the matrices and modes on stdout and, with `--out`,
 //! the modes as CSV.
 
+use super::Error;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -33,7 +34,7 @@ fn matrix_text(name: &str, matrix: &mech_runtime::nalgebra::DMatrix<f64>) -> Str
     text
 }
 
-pub fn run(args: &LinearizeArgs) -> Result<(), String> {
+pub fn run(args: &LinearizeArgs) -> Result<(), Error> {
     let (session, inputs) = args.common.open()?;
     let model = &session.model;
     let linear = session.linearization(&args.common.independent, &inputs)?;
@@ -55,9 +56,7 @@ pub fn run(args: &LinearizeArgs) -> Result<(), String> {
         let inputs: Vec<&str> = (0..model.ninputs()).map(|i| model.input_name(i)).collect();
         text += &matrix_text(&format!("B (inputs {})", inputs.join(", ")), &linear.input);
     }
-    let modes = linear
-        .modes()
-        .ok_or("the reduced mass matrix is not positive definite")?;
+    let modes = linear.modes().ok_or(Error::NoModes)?;
     let _ = writeln!(
         text,
         "\n{:>4} {:>14} {:>14} {:>12}  shape",
@@ -96,8 +95,7 @@ pub fn run(args: &LinearizeArgs) -> Result<(), String> {
             "damping_ratio".to_string(),
         ];
         header.extend(names.iter().map(|n| format!("shape_{n}")));
-        output::write_csv(out, &header, &rows)
-            .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+        output::write_csv(out, &header, &rows).map_err(|e| Error::write(out, e))?;
         println!("written to {}", out.display());
     }
     Ok(())

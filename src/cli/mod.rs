@@ -11,6 +11,7 @@ pub mod bode;
 pub mod check;
 pub mod derive;
 pub mod diagnose;
+pub mod error;
 pub mod experiment;
 pub mod fit;
 pub mod flexure;
@@ -28,6 +29,8 @@ use mech_codegen::ir::Dimension;
 
 use crate::quantity::parse_si;
 use crate::session::Session;
+
+pub use error::Error;
 
 #[derive(Parser)]
 #[command(
@@ -119,7 +122,7 @@ pub fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(message) => {
-            eprintln!("{}", message.trim_end());
+            eprintln!("{}", message.to_string().trim_end());
             ExitCode::FAILURE
         }
     }
@@ -146,7 +149,7 @@ pub struct ModelArgs {
 
 impl ModelArgs {
     /// Opens the model with constant inputs, and returns it with the input values.
-    fn open(&self) -> Result<(Session, Vec<f64>), String> {
+    fn open(&self) -> Result<(Session, Vec<f64>), Error> {
         let session = Session::open(&self.model, &self.sets, &self.inputs)?;
         let inputs: Vec<f64> = session.signals.iter().map(|s| s.value(0.0)).collect();
         Ok((session, inputs))
@@ -166,23 +169,23 @@ fn progress_bar(length: u64, template: &str) -> indicatif::ProgressBar {
 // ------------------------------------------------------------------ quantities
 
 /// A time given with a unit (`2 s`, `500 ms`) or as plain seconds.
-pub(crate) fn parse_time(what: &str, text: &str) -> Result<f64, String> {
-    let (value, dimension) =
-        mech_codegen::front::units::parse_quantity(text).map_err(|e| format!("{what}: {e}"))?;
+pub(crate) fn parse_time(what: &str, text: &str) -> Result<f64, Error> {
+    let (value, dimension) = mech_codegen::front::units::parse_quantity(text)
+        .map_err(|e| Error::Usage(format!("{what}: {e}")))?;
     let seconds_ok = dimension == mech_codegen::ir::Dimension::TIME
         || dimension == mech_codegen::ir::Dimension::NONE;
     if !seconds_ok || !value.is_finite() || value <= 0.0 {
-        return Err(format!(
+        return Err(Error::Usage(format!(
             "{what}: expected a positive time such as `2 s` or `500 ms`, got `{text}`"
-        ));
+        )));
     }
     Ok(value)
 }
 
 /// A positive frequency such as `10 Hz` (or plain hertz).
-pub(crate) fn frequency_value(what: &str, text: &str) -> Result<f64, String> {
-    let (value, dimension) =
-        mech_codegen::front::units::parse_quantity(text).map_err(|e| format!("{what}: {e}"))?;
+pub(crate) fn frequency_value(what: &str, text: &str) -> Result<f64, Error> {
+    let (value, dimension) = mech_codegen::front::units::parse_quantity(text)
+        .map_err(|e| Error::Usage(format!("{what}: {e}")))?;
     let hertz = mech_codegen::ir::Dimension {
         time: -1,
         ..mech_codegen::ir::Dimension::NONE
@@ -191,29 +194,31 @@ pub(crate) fn frequency_value(what: &str, text: &str) -> Result<f64, String> {
         || value.is_nan()
         || value <= 0.0
     {
-        return Err(format!(
+        return Err(Error::Usage(format!(
             "{what}: expected a positive frequency such as `10 Hz`, got `{text}`"
-        ));
+        )));
     }
     Ok(value)
 }
 
 /// A positive length such as `25 um`.
-pub(crate) fn length(what: &str, text: &str) -> Result<f64, String> {
+pub(crate) fn length(what: &str, text: &str) -> Result<f64, Error> {
     positive(what, parse_si(what, text, Dimension::LENGTH, false)?)
 }
 
 /// `value` itself if it is positive and finite.
-pub(crate) fn positive(what: &str, value: f64) -> Result<f64, String> {
+pub(crate) fn positive(what: &str, value: f64) -> Result<f64, Error> {
     if value > 0.0 && value.is_finite() {
         Ok(value)
     } else {
-        Err(format!("{what} must be positive, got {value}"))
+        Err(Error::Usage(format!(
+            "{what} must be positive, got {value}"
+        )))
     }
 }
 
 /// An angular frequency (rad/s) from `40 Hz` (cycles per second) or `250 rad/s`.
-pub(crate) fn angular_frequency(what: &str, text: &str) -> Result<f64, String> {
+pub(crate) fn angular_frequency(what: &str, text: &str) -> Result<f64, Error> {
     let frequency = Dimension::TIME.powi(-1);
     let value = parse_si(what, text, frequency, false)?;
     let angular = text.contains("rad") || text.contains("deg");
@@ -227,7 +232,7 @@ pub(crate) fn angular_frequency(what: &str, text: &str) -> Result<f64, String> {
 }
 
 /// A positive voltage such as `225 V`.
-pub(crate) fn voltage(what: &str, text: &str) -> Result<f64, String> {
+pub(crate) fn voltage(what: &str, text: &str) -> Result<f64, Error> {
     let volt = Dimension::MASS
         .mul(Dimension::LENGTH.powi(2))
         .div(Dimension::TIME.powi(3))

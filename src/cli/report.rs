@@ -4,6 +4,7 @@
 //! Consumes: the experiments folder. Produces: text on stdout, the two report files written
 //! atomically, and each experiment's files.
 
+use super::Error;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -23,7 +24,7 @@ pub struct ReportArgs {
     pub out_dir: PathBuf,
 }
 
-pub fn run(args: &ReportArgs) -> Result<(), String> {
+pub fn run(args: &ReportArgs) -> Result<(), Error> {
     let start = Instant::now();
     let files = experiment_files(&args.experiments)?;
     let bar = super::progress_bar(
@@ -50,13 +51,11 @@ pub fn run(args: &ReportArgs) -> Result<(), String> {
     output::write_atomic(
         &html,
         render_html(&outcomes, &args.out_dir, elapsed)?.as_bytes(),
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     output::write_atomic(
         &markdown,
         render_markdown(&outcomes, &args.out_dir, elapsed).as_bytes(),
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     println!(
         "{} experiments in {elapsed:.1} s; report written to {} and {}",
         outcomes.len(),

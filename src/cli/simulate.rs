@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 use mech_runtime::{Method, Model, SimOptions, Trajectory};
 
-use super::{parse_time, ModelArgs};
+use super::{parse_time, Error, ModelArgs};
 use crate::output;
 use crate::render::plot;
 
@@ -58,7 +58,7 @@ pub enum Integrator {
     ExpRosenbrock,
 }
 
-pub fn run(request: &SimulateArgs) -> Result<(), String> {
+pub fn run(request: &SimulateArgs) -> Result<(), Error> {
     let path = request.common.model.as_path();
     let (session, _) = request.common.open()?;
     let state = session.assemble(&request.common.independent)?;
@@ -93,12 +93,13 @@ pub fn run(request: &SimulateArgs) -> Result<(), String> {
         mech_runtime::simulate(model, q0, u0, signals, &options, &mut progress)
     };
     bar.finish_and_clear();
-    let trajectory =
-        trajectory.map_err(|e| format!("simulation of `{}` failed: {e}", model.name()))?;
+    let trajectory = trajectory.map_err(|error| Error::Simulation {
+        model: model.name().to_string(),
+        error,
+    })?;
 
     let (header, rows) = trajectory_table(model, &trajectory);
-    output::write_csv(&request.out, &header, &rows)
-        .map_err(|e| format!("cannot write {}: {e}", request.out.display()))?;
+    output::write_csv(&request.out, &header, &rows).map_err(|e| Error::write(&request.out, e))?;
     println!(
         "simulated `{}` to t = {t_end} s: {} samples written to {}",
         model.name(),
@@ -113,14 +114,14 @@ pub fn run(request: &SimulateArgs) -> Result<(), String> {
             &trajectory.times,
             &trajectory_panels(model, &trajectory),
         )
-        .map_err(|e| format!("cannot plot: {e}"))?;
+        .map_err(Error::Plot)?;
         println!("plot written to {}", plot_path.display());
     }
     Ok(())
 }
 
 /// The integrator and its settings as `--method`, `--rtol`, `--atol` and `--step` give them.
-fn method(request: &SimulateArgs) -> Result<Method, String> {
+fn method(request: &SimulateArgs) -> Result<Method, Error> {
     let (rtol, atol, h_max) = (request.rtol, request.atol, f64::INFINITY);
     Ok(match request.method {
         Integrator::Dopri5 => Method::Dopri5 { rtol, atol, h_max },

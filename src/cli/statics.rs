@@ -4,6 +4,7 @@
 //! Consumes: [`ModelArgs`] and fixture strings. Produces: a table on stdout and, with
 //! `--out`, the equilibrium as CSV.
 
+use super::Error;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -87,13 +88,13 @@ fn parse_fixture(model: &dyn Model, text: &str) -> Result<Fixture, String> {
     })
 }
 
-pub fn run(args: &StaticsArgs) -> Result<(), String> {
+pub fn run(args: &StaticsArgs) -> Result<(), Error> {
     let (session, inputs) = args.common.open()?;
     let model = &session.model;
     let fixtures: Vec<Fixture> = args
         .fixtures
         .iter()
-        .map(|f| parse_fixture(model, f))
+        .map(|f| parse_fixture(model, f).map_err(Error::Usage))
         .collect::<Result<_, _>>()?;
     let (equilibrium, _) = session.equilibrium(&args.common.independent, &inputs, &fixtures)?;
     let mut text = format!(
@@ -141,8 +142,7 @@ pub fn run(args: &StaticsArgs) -> Result<(), String> {
                 row.push(*value);
             }
         }
-        output::write_csv(out, &header, &[row])
-            .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+        output::write_csv(out, &header, &[row]).map_err(|e| Error::write(out, e))?;
         println!("written to {}", out.display());
     }
     Ok(())

@@ -18,6 +18,7 @@ use crate::output;
 use crate::render::plot;
 use crate::render::report::{render_page, Outcome};
 use crate::render::table::Table;
+use crate::render::Error;
 
 /// The screening's summary and, prominently, its flags (empty for unscreened kinds).
 pub fn screening_text(screening: Option<&Screening>) -> String {
@@ -63,7 +64,7 @@ pub fn overlay_plots(
     experiment: &Experiment,
     obs: &Observations,
     curves: &[(String, &[f64])],
-) -> Result<Vec<PathBuf>, String> {
+) -> Result<Vec<PathBuf>, Error> {
     let log_x = matches!(experiment, Experiment::FrequencyResponse(_));
     // Axis labels and the SI → plotted unit factors.
     let (x_label, x_scale, y_unit, y_scale) = match experiment {
@@ -95,8 +96,7 @@ pub fn overlay_plots(
         let path = dir.join(format!("{prefix}_{}.svg", name.replace(['|', '.'], "_")));
         let title = format!("{}: {name}", experiment.title());
         let y_label = format!("{name}{y_unit}");
-        plot::plot_xy(&path, &title, x_label, &y_label, &lines, log_x)
-            .map_err(|e| e.to_string())?;
+        plot::plot_xy(&path, &title, x_label, &y_label, &lines, log_x)?;
         paths.push(path);
     }
     Ok(paths)
@@ -237,7 +237,7 @@ pub fn diagnosis_page(
     verdict: &str,
     comparison: &Comparison,
     json_path: PathBuf,
-) -> Result<PathBuf, String> {
+) -> Result<PathBuf, Error> {
     let per = |chi2: f64| chi2 / d.holdout_values as f64;
     let mut ranking = Table::new(
         "Candidates, best first (χ² on the fitted values; χ² per value on the held-out ones)",
@@ -306,8 +306,10 @@ pub fn diagnosis_page(
         sources.out_dir,
     )?;
     let path = sources.out_dir.join("diagnosis.html");
-    output::write_atomic(&path, page.as_bytes())
-        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    output::write_atomic(&path, page.as_bytes()).map_err(|e| Error::Write {
+        path: path.clone(),
+        message: e.to_string(),
+    })?;
     Ok(path)
 }
 

@@ -2,7 +2,50 @@
 //! Markdown, HTML), the experiment report and the diagnosis page. Shared by `mech report`,
 //! `mech experiment`, `mech fit` and `mech diagnose`; analyses never call it.
 
+use std::fmt;
+use std::path::PathBuf;
+
 pub mod diagnosis;
 pub mod plot;
 pub mod report;
 pub mod table;
+
+pub use plot::PlotError;
+
+/// Why a page or its figures could not be made: a plot, or a file read (a plot to inline)
+/// or written.
+#[derive(Debug)]
+pub enum Error {
+    Plot(PlotError),
+    Read { path: PathBuf, message: String },
+    Write { path: PathBuf, message: String },
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::Plot(error) => write!(f, "{error}"),
+            Error::Read { path, message } => {
+                write!(f, "cannot read plot {}: {message}", path.display())
+            }
+            Error::Write { path, message } => {
+                write!(f, "cannot write {}: {message}", path.display())
+            }
+        }
+    }
+}
+
+impl std::error::Error for Error {}
+
+impl From<PlotError> for Error {
+    fn from(error: PlotError) -> Error {
+        Error::Plot(error)
+    }
+}
+
+/// The layers above that still speak `String` errors use `?` through this.
+impl From<Error> for String {
+    fn from(error: Error) -> String {
+        error.to_string()
+    }
+}

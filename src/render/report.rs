@@ -9,6 +9,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use super::table::{escape_html, Table};
+use super::Error;
 
 /// What an experiment produced.
 #[derive(Debug, Clone, Default)]
@@ -102,7 +103,7 @@ pub fn render_markdown(outcomes: &[Outcome], base: &Path, seconds: f64) -> Strin
 }
 
 /// The HTML report, self-contained: the SVG plots are inlined.
-pub fn render_html(outcomes: &[Outcome], base: &Path, seconds: f64) -> Result<String, String> {
+pub fn render_html(outcomes: &[Outcome], base: &Path, seconds: f64) -> Result<String, Error> {
     render_page(
         "HAMR experiments: model against the paper",
         INTRO,
@@ -121,7 +122,7 @@ pub fn render_page(
     footer: &str,
     outcomes: &[Outcome],
     base: &Path,
-) -> Result<String, String> {
+) -> Result<String, Error> {
     let mut body = String::new();
     let mut toc = String::new();
     for outcome in outcomes {
@@ -148,8 +149,10 @@ pub fn render_page(
             body += &table.html();
         }
         for plot in &outcome.plots {
-            let svg = std::fs::read_to_string(plot)
-                .map_err(|e| format!("cannot read plot {}: {e}", plot.display()))?;
+            let svg = std::fs::read_to_string(plot).map_err(|e| Error::Read {
+                path: plot.clone(),
+                message: e.to_string(),
+            })?;
             let svg = match svg.find("<svg") {
                 Some(start) => &svg[start..],
                 None => svg.as_str(),
