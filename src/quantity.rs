@@ -111,7 +111,7 @@ pub fn parse_si(
         kind,
     };
     let (value, found) = mech_codegen::front::units::parse_quantity(text)
-        .map_err(|e| error(ErrorKind::BadSyntax(e)))?;
+        .map_err(|e| error(ErrorKind::BadSyntax(e.to_string())))?;
     if found != expected && !(bare_is_si && found == Dimension::NONE) {
         return Err(error(ErrorKind::WrongDimension { found, expected }));
     }
@@ -126,7 +126,7 @@ pub fn parse_si(
 pub fn quantity(key: &str, text: &str, expected: Dimension) -> Result<f64, Error> {
     let error = |kind| key_error(key, text, kind);
     let (value, found) = mech_codegen::front::units::parse_quantity(text)
-        .map_err(|e| error(ErrorKind::BadSyntax(e)))?;
+        .map_err(|e| error(ErrorKind::BadSyntax(e.to_string())))?;
     if found != expected {
         return Err(error(ErrorKind::WrongDimension { found, expected }));
     }

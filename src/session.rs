@@ -192,7 +192,7 @@ impl Session {
                 Error::Setting {
                     option,
                     name: Some(name.clone()),
-                    message,
+                    message: message.to_string(),
                 }
             })?;
         let expected = self
@@ -331,7 +331,7 @@ impl Session {
                         Error::Setting {
                             option: "--independent",
                             name: Some(name.to_string()),
-                            message,
+                            message: message.to_string(),
                         }
                     })?;
                 q[index] = si;

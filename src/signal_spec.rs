@@ -756,7 +756,7 @@ fn csv(args: &[Argument], expected: Dimension) -> Result<Signal, Error> {
             let (scale, found) =
                 units::parse_quantity(&format!("1 {unit}")).map_err(|reason| Error::BadUnit {
                     unit: unit.to_string(),
-                    reason,
+                    reason: reason.to_string(),
                 })?;
             if found != expected {
                 return Err(Error::WrongUnit {
@@ -824,8 +824,8 @@ fn quantity(
     if !text.starts_with(|c: char| c.is_ascii_digit() || c == '-' || c == '.') {
         return Err(error(ArgumentProblem::NotAQuantity { expected }));
     }
-    let (value, found) =
-        units::parse_quantity(text).map_err(|reason| error(ArgumentProblem::BadSyntax(reason)))?;
+    let (value, found) = units::parse_quantity(text)
+        .map_err(|reason| error(ArgumentProblem::BadSyntax(reason.to_string())))?;
     if found != expected {
         return Err(error(ArgumentProblem::WrongDimension {
             kind,

@@ -554,6 +554,7 @@ fn parse_unit(unit: &str) -> Result<(f64, Dimension), String> {
         ));
     }
     let (scale, dimension) = units::parse_quantity(&format!("1 {unit}")).map_err(|e| {
+        let e = e.to_string();
         let mut message = if e.contains(unit) {
             e
         } else {

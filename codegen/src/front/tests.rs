@@ -286,9 +286,14 @@ fn parse_quantity_gives_si_values() {
             current: -1
         }
     );
-    assert!(units::parse_quantity("2 furlongs")
-        .unwrap_err()
-        .contains("furlongs"));
+    let unknown = units::parse_quantity("2 furlongs").unwrap_err();
+    assert_eq!(
+        unknown,
+        units::QuantityError::UnknownUnit {
+            name: "furlongs".into()
+        }
+    );
+    assert!(unknown.to_string().contains("furlongs"));
     assert!(units::parse_quantity("1e999").is_err());
     assert!(units::parse_quantity("").is_err());
 }

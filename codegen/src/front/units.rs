@@ -222,27 +222,80 @@ pub fn parse_literal(text: &str) -> Option<Number> {
     Number::parse_decimal(text)
 }
 
+/// Why a quantity such as `10 mN` could not be read.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum QuantityError {
+    /// Not a number with an optional unit (the grammar's message).
+    Syntax(String),
+    NumberOutOfRange {
+        literal: String,
+    },
+    UnknownUnit {
+        name: String,
+    },
+    /// A unit's exponent that is not an integer in range.
+    BadExponent {
+        name: String,
+    },
+    DimensionOverflow,
+    /// The value in SI is not finite.
+    ValueOutOfRange {
+        text: String,
+    },
+}
+
+impl std::fmt::Display for QuantityError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            QuantityError::Syntax(message) => f.write_str(message),
+            QuantityError::NumberOutOfRange { literal } => {
+                write!(f, "number `{literal}` is out of range")
+            }
+            QuantityError::UnknownUnit { name } => write!(f, "unknown unit `{name}`"),
+            QuantityError::BadExponent { name } => write!(
+                f,
+                "the exponent of `{name}` must be an integer between -{MAX_EXPONENT} and {MAX_EXPONENT}"
+            ),
+            QuantityError::DimensionOverflow => f.write_str("the unit's dimension is out of range"),
+            QuantityError::ValueOutOfRange { text } => write!(f, "`{text}` is out of range"),
+        }
+    }
+}
+
+impl std::error::Error for QuantityError {}
+
+/// Callers that still speak `String` errors use `?` through this.
+impl From<QuantityError> for String {
+    fn from(error: QuantityError) -> String {
+        error.to_string()
+    }
+}
+
 /// Parses a quantity such as `10 mN`, `30 deg`, `2.5`, `-1e-3 kg*m^2` into its SI value and
 /// dimension (used by the command line for `--set name=value`).
-pub fn parse_quantity(text: &str) -> Result<(f64, Dimension), String> {
-    let (negative, literal, unit) = super::parse::parse_quantity_text(text.trim())?;
-    let number =
-        parse_literal(&literal).ok_or_else(|| format!("number `{literal}` is out of range"))?;
+pub fn parse_quantity(text: &str) -> Result<(f64, Dimension), QuantityError> {
+    let (negative, literal, unit) =
+        super::parse::parse_quantity_text(text.trim()).map_err(QuantityError::Syntax)?;
+    let number = parse_literal(&literal).ok_or_else(|| QuantityError::NumberOutOfRange {
+        literal: literal.clone(),
+    })?;
     let unit = match &unit {
         None => Unit {
             scale: Number::ONE,
             dimension: Dimension::NONE,
         },
-        Some(unit) => evaluate(unit).map_err(|error| unit_error_message(unit, &error))?,
+        Some(unit) => evaluate(unit).map_err(|error| quantity_unit_error(unit, &error))?,
     };
     let value = number.mul(unit.scale).to_f64();
     if !value.is_finite() {
-        return Err(format!("`{}` is out of range", text.trim()));
+        return Err(QuantityError::ValueOutOfRange {
+            text: text.trim().to_string(),
+        });
     }
     Ok((if negative { -value } else { value }, unit.dimension))
 }
 
-fn unit_error_message(unit: &ast::Unit, error: &UnitError) -> String {
+fn quantity_unit_error(unit: &ast::Unit, error: &UnitError) -> QuantityError {
     let factor_name = |i: usize| {
         unit.factors
             .get(i)
@@ -250,11 +303,12 @@ fn unit_error_message(unit: &ast::Unit, error: &UnitError) -> String {
             .to_string()
     };
     match error {
-        UnitError::Unknown(i) => format!("unknown unit `{}`", factor_name(*i)),
-        UnitError::BadExponent(i) => format!(
-            "the exponent of `{}` must be an integer between -{MAX_EXPONENT} and {MAX_EXPONENT}",
-            factor_name(*i)
-        ),
-        UnitError::Overflow => "the unit's dimension is out of range".to_string(),
+        UnitError::Unknown(i) => QuantityError::UnknownUnit {
+            name: factor_name(*i),
+        },
+        UnitError::BadExponent(i) => QuantityError::BadExponent {
+            name: factor_name(*i),
+        },
+        UnitError::Overflow => QuantityError::DimensionOverflow,
     }
 }
