@@ -14,6 +14,42 @@ use std::fmt::Write;
 use super::expr::{ExprId, ExprPool, Func, Node, Symbol};
 use super::Number;
 
+/// Why s-expression text could not be read.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum SexprError {
+    UnexpectedEnd,
+    UnexpectedClose,
+    MissingClose,
+    MissingOperator,
+    /// A token after the complete expression.
+    Trailing(String),
+    UnknownOperator(String),
+    Arity {
+        operator: String,
+        expected: &'static str,
+    },
+    ExponentNotANumber,
+}
+
+impl std::fmt::Display for SexprError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SexprError::UnexpectedEnd => f.write_str("unexpected end of input"),
+            SexprError::UnexpectedClose => f.write_str("unexpected `)`"),
+            SexprError::MissingClose => f.write_str("missing `)`"),
+            SexprError::MissingOperator => f.write_str("missing operator after `(`"),
+            SexprError::Trailing(token) => write!(f, "unexpected `{token}` after the expression"),
+            SexprError::UnknownOperator(name) => write!(f, "unknown operator `{name}`"),
+            SexprError::Arity { operator, expected } => {
+                write!(f, "`{operator}` takes {expected}")
+            }
+            SexprError::ExponentNotANumber => f.write_str("the exponent of `^` must be a number"),
+        }
+    }
+}
+
+impl std::error::Error for SexprError {}
+
 impl ExprPool {
     /// The s-expression of `id`.
     pub fn sexpr(&self, id: ExprId) -> String {
@@ -95,40 +131,41 @@ impl ExprPool {
     }
 
     /// Builds an expression from s-expression text.
-    pub fn parse_sexpr(&mut self, text: &str) -> Result<ExprId, String> {
+    pub fn parse_sexpr(&mut self, text: &str) -> Result<ExprId, SexprError> {
         let tokens = tokenize(text);
         let mut position = 0;
         let id = self.parse_tokens(&tokens, &mut position)?;
         if position != tokens.len() {
-            return Err(format!(
-                "unexpected `{}` after the expression",
-                tokens[position]
-            ));
+            return Err(SexprError::Trailing(tokens[position].clone()));
         }
         Ok(id)
     }
 
-    fn parse_tokens(&mut self, tokens: &[String], position: &mut usize) -> Result<ExprId, String> {
+    fn parse_tokens(
+        &mut self,
+        tokens: &[String],
+        position: &mut usize,
+    ) -> Result<ExprId, SexprError> {
         let token = tokens
             .get(*position)
-            .ok_or("unexpected end of input")?
+            .ok_or(SexprError::UnexpectedEnd)?
             .clone();
         *position += 1;
         if token == ")" {
-            return Err("unexpected `)`".to_string());
+            return Err(SexprError::UnexpectedClose);
         }
         if token != "(" {
             return self.parse_atom(&token);
         }
         let head = tokens
             .get(*position)
-            .ok_or("missing operator after `(`")?
+            .ok_or(SexprError::MissingOperator)?
             .clone();
         *position += 1;
         let mut args = Vec::new();
         while tokens.get(*position).map(String::as_str) != Some(")") {
             if *position >= tokens.len() {
-                return Err("missing `)`".to_string());
+                return Err(SexprError::MissingClose);
             }
             args.push(self.parse_tokens(tokens, position)?);
         }
@@ -136,7 +173,7 @@ impl ExprPool {
         self.apply_operator(&head, &args)
     }
 
-    fn parse_atom(&mut self, token: &str) -> Result<ExprId, String> {
+    fn parse_atom(&mut self, token: &str) -> Result<ExprId, SexprError> {
         if let Some(number) = parse_number(token) {
             return Ok(self.number(number));
         }
@@ -147,10 +184,13 @@ impl ExprPool {
         Ok(self.symbol(symbol))
     }
 
-    fn apply_operator(&mut self, head: &str, args: &[ExprId]) -> Result<ExprId, String> {
+    fn apply_operator(&mut self, head: &str, args: &[ExprId]) -> Result<ExprId, SexprError> {
         let unary = |args: &[ExprId]| match args {
             [x] => Ok(*x),
-            _ => Err(format!("`{head}` takes one argument")),
+            _ => Err(SexprError::Arity {
+                operator: head.to_string(),
+                expected: "one argument",
+            }),
         };
         Ok(match head {
             "+" => self.add_all(args),
@@ -158,20 +198,33 @@ impl ExprPool {
             "-" => match args {
                 [x] => self.neg(*x),
                 [a, b] => self.sub(*a, *b),
-                _ => return Err("`-` takes one or two arguments".to_string()),
+                _ => {
+                    return Err(SexprError::Arity {
+                        operator: "-".into(),
+                        expected: "one or two arguments",
+                    })
+                }
             },
             "/" => match args {
                 [a, b] => self.div(*a, *b),
-                _ => return Err("`/` takes two arguments".to_string()),
+                _ => {
+                    return Err(SexprError::Arity {
+                        operator: "/".into(),
+                        expected: "two arguments",
+                    })
+                }
             },
             "^" => match args {
                 [a, n] => {
-                    let e = self
-                        .as_number(*n)
-                        .ok_or("the exponent of `^` must be a number")?;
+                    let e = self.as_number(*n).ok_or(SexprError::ExponentNotANumber)?;
                     self.pow(*a, e)
                 }
-                _ => return Err("`^` takes two arguments".to_string()),
+                _ => {
+                    return Err(SexprError::Arity {
+                        operator: "^".into(),
+                        expected: "two arguments",
+                    })
+                }
             },
             "sqrt" => {
                 let x = unary(args)?;
@@ -179,7 +232,12 @@ impl ExprPool {
             }
             "atan2" => match args {
                 [y, x] => self.atan2(*y, *x),
-                _ => return Err("`atan2` takes two arguments".to_string()),
+                _ => {
+                    return Err(SexprError::Arity {
+                        operator: "atan2".into(),
+                        expected: "two arguments",
+                    })
+                }
             },
             name => {
                 let func = [
@@ -192,7 +250,7 @@ impl ExprPool {
                 ]
                 .into_iter()
                 .find(|f| f.name() == name)
-                .ok_or_else(|| format!("unknown operator `{name}`"))?;
+                .ok_or_else(|| SexprError::UnknownOperator(name.to_string()))?;
                 let x = unary(args)?;
                 self.call(func, x)
             }
