@@ -33,6 +33,7 @@ use std::f64::consts::TAU;
 use std::fmt;
 use std::path::Path;
 
+use mech_codegen::diag::edit_distance;
 use mech_codegen::front::units;
 use mech_codegen::ir::Dimension;
 use mech_runtime::signal::{Signal, Table};
@@ -856,7 +857,8 @@ fn mentions_angle_unit(text: &str) -> bool {
         .any(|word| units::lookup(word).is_some_and(|u| u.dimension == Dimension::NONE))
 }
 
-/// The candidate closest to `word` by edit distance, if it is close enough to be a typo.
+/// The candidate closest to `word` by edit distance, if it is close enough to be a typo
+/// (more lenient than the language's `closest`: signal names are few and long).
 fn suggest<'a>(word: &str, candidates: &[&'a str]) -> Option<&'a str> {
     let limit = word.chars().count().div_ceil(3).clamp(1, 3);
     candidates
@@ -865,24 +867,6 @@ fn suggest<'a>(word: &str, candidates: &[&'a str]) -> Option<&'a str> {
         .filter(|&(d, _)| d <= limit)
         .min_by_key(|&(d, _)| d)
         .map(|(_, c)| c)
-}
-
-/// Levenshtein distance (insertions, deletions, substitutions).
-fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut diagonal = row[0];
-        row[0] = i + 1;
-        for (j, &cb) in b.iter().enumerate() {
-            let next = (diagonal + usize::from(ca != cb))
-                .min(row[j] + 1)
-                .min(row[j + 1] + 1);
-            diagonal = row[j + 1];
-            row[j + 1] = next;
-        }
-    }
-    row[b.len()]
 }
 
 #[cfg(test)]
@@ -1212,8 +1196,6 @@ mod tests {
 
     #[test]
     fn helpers() {
-        assert_eq!(edit_distance("freqency", "frequency"), 1);
-        assert_eq!(edit_distance("", "abc"), 3);
         assert_eq!(leading_number("2.5mN"), Some("2.5"));
         assert_eq!(leading_number("-1e-3 N"), Some("-1e-3"));
         assert_eq!(leading_number("abc"), None);

@@ -237,6 +237,49 @@ impl fmt::Debug for Errors {
 
 impl std::error::Error for Errors {}
 
+/// The candidate closest to `name` by edit distance, if it is close enough to be a typo.
+pub fn closest<'c>(name: &str, candidates: &[&'c str]) -> Option<&'c str> {
+    const LONGEST: usize = 64;
+    let length = name.chars().count();
+    if length > LONGEST {
+        return None;
+    }
+    // Short names only match up to case (`mn` → `mN`); longer ones allow a typo per 3 chars.
+    let limit = if length < 3 { 0 } else { (length / 3).max(1) };
+    let lower = name.to_lowercase();
+    candidates
+        .iter()
+        .filter(|c| c.chars().count() <= LONGEST && **c != name)
+        .map(|c| {
+            (
+                (
+                    edit_distance(&lower, &c.to_lowercase()),
+                    edit_distance(name, c),
+                ),
+                *c,
+            )
+        })
+        .filter(|((folded, _), _)| *folded <= limit)
+        .min_by_key(|(key, _)| *key)
+        .map(|(_, c)| c)
+}
+
+/// Levenshtein distance over characters.
+pub fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let substitution = diagonal + usize::from(ca != *cb);
+            diagonal = row[j + 1];
+            row[j + 1] = substitution.min(row[j] + 1).min(row[j + 1] + 1);
+        }
+    }
+    row[b.len()]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

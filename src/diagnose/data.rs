@@ -29,7 +29,8 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use mech_codegen::front::{closest, units};
+use mech_codegen::diag::closest;
+use mech_codegen::front::units;
 use mech_codegen::ir::Dimension;
 
 /// At most this many errors are reported for one file; the rest are counted.

@@ -15,7 +15,6 @@ pub mod ast;
 mod lower;
 
 /// "Did you mean …?": the candidate closest to a misspelt name (also used for data files).
-pub use lower::closest;
 mod parse;
 pub mod units;
 

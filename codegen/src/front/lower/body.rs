@@ -585,7 +585,7 @@ impl<'a> Lowerer<'a> {
         };
         let plural = format!("{kind}s of `{owner_name}`");
         let mut diagnostic = names::unknown(code, kind, &plural, &full, name.span, &candidates);
-        if let Some(best) = names::closest(&name.name, &candidates) {
+        if let Some(best) = crate::diag::closest(&name.name, &candidates) {
             diagnostic = diagnostic.with_help(format!("did you mean `{owner_name}.{best}`?"));
         }
         self.error(diagnostic);

@@ -755,7 +755,7 @@ fn unknown_unit(literal: &str, unit: &ast::Unit, factor: &ast::UnitFactor) -> Di
     let candidates: Vec<&str> = all.iter().map(String::as_str).collect();
     let mut diagnostic = Diagnostic::error("E0206", format!("unknown unit `{name}`"))
         .with_label(factor.name.span, "not a unit");
-    if let Some(best) = names::closest(name, &candidates) {
+    if let Some(best) = crate::diag::closest(name, &candidates) {
         diagnostic = diagnostic.with_note(format!("did you mean `{best}`?"));
     }
     if unit.factors.len() == 1 && factor.exponent.is_none() {

@@ -17,7 +17,6 @@ mod loads;
 mod loops;
 mod names;
 
-pub use names::closest;
 mod tree;
 
 use std::collections::BTreeMap;
