@@ -410,12 +410,14 @@ impl<E: fmt::Display> fmt::Display for LmError<E> {
             }
             LmError::Residual { params, error } => write!(
                 f,
-                "the residuals could not be evaluated at p = {params:?}: {error}"
+                "the residuals could not be evaluated at p = {}: {error}",
+                Point(params)
             ),
             LmError::NonFiniteResidual { params, index } => write!(
                 f,
-                "residual {index} is NaN or infinite at p = {params:?}; check the model and \
-                 the starting values"
+                "residual {index} is NaN or infinite at p = {}; check the model and the \
+                 starting values",
+                Point(params)
             ),
             LmError::NoResiduals => write!(f, "the residual function returned no residuals"),
             LmError::ResidualCountChanged {
@@ -424,10 +426,33 @@ impl<E: fmt::Display> fmt::Display for LmError<E> {
                 found,
             } => write!(
                 f,
-                "the residual function returned {found} residuals at p = {params:?}, but \
-                 {expected} before; it must always return the same number"
+                "the residual function returned {found} residuals at p = {}, but {expected} \
+                 before; it must always return the same number",
+                Point(params)
             ),
         }
+    }
+}
+
+/// Parameter values for messages: `[1, 0.25, 2.5e-6]` (plain where that is short, else in
+/// exponent form).
+struct Point<'a>(&'a [f64]);
+
+impl fmt::Display for Point<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("[")?;
+        for (i, value) in self.0.iter().enumerate() {
+            if i > 0 {
+                f.write_str(", ")?;
+            }
+            let magnitude = value.abs();
+            if *value == 0.0 || !value.is_finite() || (1e-3..1e6).contains(&magnitude) {
+                write!(f, "{value}")?;
+            } else {
+                write!(f, "{value:e}")?;
+            }
+        }
+        f.write_str("]")
     }
 }
 

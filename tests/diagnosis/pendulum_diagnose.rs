@@ -386,7 +386,10 @@ fn bad_pendulum_data_are_clear_errors() {
         std::fs::write(&path, text).unwrap();
         let error = match MeasuredData::load(&path) {
             Err(e) => e.to_string(),
-            Ok(data) => experiment.observations(&leg, &data).unwrap_err(),
+            Ok(data) => experiment
+                .observations(&leg, &data)
+                .unwrap_err()
+                .to_string(),
         };
         assert!(error.contains(name), "{error}");
         error
@@ -429,12 +432,13 @@ fn bad_pendulum_data_are_clear_errors() {
         ),
     )
     .unwrap();
-    let e = experiment::load(&path).unwrap_err();
+    let e = experiment::load(&path).unwrap_err().to_string();
     assert!(e.contains("bad.toml") && e.contains("release"), "{e}");
     let other = experiment_in(&dir, "angle = \"foot.x\"\n");
     let e = other
         .observations(&leg, &load_text(&dir, &trace_csv(Extra::default(), 1, 0.0)))
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("no output or coordinate `foot.x`"), "{e}");
     // A HAMR experiment on the rig is an error, not a panic.
     std::fs::write(
@@ -448,7 +452,8 @@ fn bad_pendulum_data_are_clear_errors() {
     let hamr = experiment::load(&path).unwrap();
     let e = hamr
         .observations(&leg, &load_text(&dir, "angle [deg]\n1\n"))
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("no input `v_lift`"), "{e}");
 }
 
