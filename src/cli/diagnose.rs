@@ -112,7 +112,7 @@ fn summary_json(
         "flags": flags,
         "screening": screened,
         "holdout": args.holdout,
-        "verdict": format!("{:?}", d.verdict),
+        "verdict": d.verdict,
         "summary": verdict,
         "tied_with_best": d.tied.saturating_sub(1),
         "base": trial(&d.base),

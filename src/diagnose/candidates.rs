@@ -28,6 +28,7 @@ use mech_codegen::ir::Dimension;
 use mech_codegen::ir::transform::actuator::{BASE_COMPLIANCE, TIP_MASS, TIP_PRELOAD};
 use mech_codegen::ir::transform::hinge::{MISALIGNMENT, OFF_AXIS_COMPLIANCE, TWIST_FACTOR};
 use mech_codegen::ir::transform::{constant_direction, hinge_axis};
+use serde::Serialize;
 
 use super::data::MeasuredData;
 use super::error::Error;
@@ -382,14 +383,16 @@ pub struct Trial {
     pub aicc: f64,
     /// Cannot change the response (reported, not ranked).
     pub inert: bool,
-    /// The fit failed (reported, not ranked).
+    /// The fit failed (reported, not ranked): the message of its [`Error`].
     pub error: Option<String>,
     /// The prediction of every observed value with the fitted parameters.
     pub predicted: Vec<f64>,
 }
 
-/// What `mech diagnose` concludes.
-#[derive(Debug, Clone, PartialEq)]
+/// What `mech diagnose` concludes; in `diagnosis.json` by its snake_case name
+/// (`no_significant_discrepancy`, `explained`, …).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Verdict {
     /// The base model explains the held-out data to the noise.
     NoSignificantDiscrepancy,

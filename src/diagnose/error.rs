@@ -391,7 +391,8 @@ impl From<LmError<Error>> for Error {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::diagnose::candidates::Holdout;
+    use crate::diagnose::candidates::{Holdout, Verdict};
+    use crate::diagnose::lm::StopReason;
     use crate::diagnose::observations::noise_value;
 
     /// The messages users see name the key or option and the value as written.
@@ -439,6 +440,20 @@ mod tests {
             error.to_string(),
             "residual 3 is NaN or infinite at p = [1, 0.25, 2.5e-6, 0]; check the model and \
              the starting values"
+        );
+    }
+
+    /// The JSON names of verdicts and stop reasons are snake_case, not Rust's variant names.
+    #[test]
+    fn json_names_are_snake_case() {
+        let json = |v: serde_json::Value| v.as_str().unwrap().to_string();
+        assert_eq!(
+            json(serde_json::json!(Verdict::NoSignificantDiscrepancy)),
+            "no_significant_discrepancy"
+        );
+        assert_eq!(
+            json(serde_json::json!(StopReason::CostReduction)),
+            "cost_reduction"
         );
     }
 }

@@ -72,6 +72,7 @@
 use std::fmt;
 
 use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
 
 /// One parameter to fit.
 #[derive(Clone, Debug, PartialEq)]
@@ -187,8 +188,9 @@ impl Default for LmOptions {
     }
 }
 
-/// Why the iteration stopped.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// Why the iteration stopped; in JSON by its snake_case name (`cost_reduction`, …).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum StopReason {
     /// The gradient is orthogonal to the residual within `gtol` (or every free parameter is
     /// held by a bound).
@@ -237,8 +239,9 @@ impl fmt::Display for StopReason {
     }
 }
 
-/// What the fit says about one parameter.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// What the fit says about one parameter; in JSON by its snake_case name (`at_lower`, …).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum ParameterStatus {
     /// Estimated, with a finite standard error.
     Free,

@@ -264,7 +264,7 @@ fn diagnose_command_writes_the_page_and_the_summary() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out_dir.join("diagnosis.json")).unwrap())
             .unwrap();
-    assert_eq!(json["verdict"], "Explained");
+    assert_eq!(json["verdict"], "explained");
     assert!(json["summary"].as_str().unwrap().contains("loss factor"));
     // The features, read the same way off the data and both models: the best candidate's
     // resonance and largest gain are closer to the data's than the base model's (the data

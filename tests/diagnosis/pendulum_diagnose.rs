@@ -500,8 +500,8 @@ fn write_the_docs_examples() {
 }
 
 /// `mech fit` and `mech diagnose` on the worked example: the clean trace is explained by the
-/// loss factor (JSON verdict `Explained`, no flags); the trace with air damping gets the
-/// verdict `Flagged` and an `amplitude_dependent_damping` flag in diagnosis.json, fit.json and
+/// loss factor (JSON verdict `explained`, no flags); the trace with air damping gets the
+/// verdict `flagged` and an `amplitude_dependent_damping` flag in diagnosis.json, fit.json and
 /// the page.
 #[test]
 fn pendulum_commands_report_flags() {
@@ -512,8 +512,8 @@ fn pendulum_commands_report_flags() {
         serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
     };
     for (data, verdict, flags) in [
-        ("flexure_rig_ringdown.csv", "Explained", 0),
-        ("flexure_rig_ringdown_air.csv", "Flagged", 1),
+        ("flexure_rig_ringdown.csv", "explained", 0),
+        ("flexure_rig_ringdown_air.csv", "flagged", 1),
     ] {
         let out_dir = scratch_dir(&format!("pendulum_command_{verdict}"));
         let args = mech::cli::diagnose::DiagnoseArgs {
