@@ -249,13 +249,6 @@ impl std::fmt::Display for CsvError {
 
 impl std::error::Error for CsvError {}
 
-/// The layers above still speak `String` errors; this lets them use `?`.
-impl From<CsvError> for String {
-    fn from(error: CsvError) -> String {
-        error.to_string()
-    }
-}
-
 /// Reads a CSV file of numbers with a header row. Fields are trimmed; lines starting with `#`
 /// are comments; `NaN` and `inf` are accepted as numbers. Every row must have as many fields as
 /// the header, and there must be at least one column and one data row.

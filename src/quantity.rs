@@ -89,13 +89,6 @@ impl fmt::Display for Error {
 
 impl std::error::Error for Error {}
 
-/// The layers above still speak `String` errors; this lets them use `?`.
-impl From<Error> for String {
-    fn from(error: Error) -> String {
-        error.to_string()
-    }
-}
-
 /// Parses `text` (`2 mm`, `25 um`, `0.2 g`) as a quantity of dimension `expected` and returns
 /// its SI value. A bare number is accepted only for dimensionless quantities unless
 /// `bare_is_si`. `what` names the option or key in errors.

@@ -126,14 +126,6 @@ impl std::fmt::Display for Error {
 
 impl std::error::Error for Error {}
 
-/// The layers above still speak `String` errors; this lets them use `?` until they have
-/// typed errors of their own.
-impl From<Error> for String {
-    fn from(error: Error) -> String {
-        error.to_string()
-    }
-}
-
 /// A compiled model with its run-time settings.
 pub struct Session {
     pub compiled: Compiled,

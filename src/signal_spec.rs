@@ -80,13 +80,6 @@ impl fmt::Display for AssignmentError {
 
 impl std::error::Error for AssignmentError {}
 
-/// The layers above still speak `String` errors; this lets them use `?`.
-impl From<AssignmentError> for String {
-    fn from(error: AssignmentError) -> String {
-        error.to_string()
-    }
-}
-
 /// Why a signal specification cannot be read (see the module documentation for what can).
 /// Functions are named as written by the user where the error comes before the function is
 /// known, and by their canonical name after.
@@ -367,13 +360,6 @@ fn write_argument_problem(
 }
 
 impl std::error::Error for Error {}
-
-/// The layers above still speak `String` errors; this lets them use `?`.
-impl From<Error> for String {
-    fn from(error: Error) -> String {
-        error.to_string()
-    }
-}
 
 impl From<CsvError> for Error {
     fn from(error: CsvError) -> Error {

@@ -47,14 +47,13 @@ pub struct DiagnoseArgs {
 }
 
 pub fn run(args: &DiagnoseArgs) -> Result<(), Error> {
-    let mut experiment = experiment::load(&args.experiment).map_err(Error::Diagnose)?;
+    let mut experiment = experiment::load(&args.experiment)?;
     if let Some(model) = &args.model {
         experiment.set_model(model.clone());
     }
-    let data = MeasuredData::load(&args.data).map_err(|e| Error::Diagnose(e.to_string()))?;
-    let holdout = Holdout::parse(&args.holdout).map_err(Error::Diagnose)?;
-    let d = diagnose_causes(&experiment, &data, &args.fit, holdout, &args.causes)
-        .map_err(Error::Diagnose)?;
+    let data = MeasuredData::load(&args.data)?;
+    let holdout = Holdout::parse(&args.holdout)?;
+    let d = diagnose_causes(&experiment, &data, &args.fit, holdout, &args.causes)?;
     println!(
         "{}: {} values fitted, {} held out ({}); noise band: held-out χ²/value ≤ {:.2}",
         experiment.title(),
@@ -112,7 +111,7 @@ fn summary_json(
         "flags": flags,
         "screening": screened,
         "holdout": args.holdout,
-        "verdict": format!("{:?}", d.verdict),
+        "verdict": d.verdict,
         "summary": verdict,
         "tied_with_best": d.tied.saturating_sub(1),
         "base": trial(&d.base),

@@ -9,8 +9,9 @@ use std::path::{Path, PathBuf};
 
 use mech_runtime::RuntimeError;
 
+use crate::diagnose::DataErrors;
 use crate::render::PlotError;
-use crate::{experiments, flexure_fit, physics, quantity, render, session};
+use crate::{diagnose, experiments, flexure_fit, physics, quantity, render, session};
 
 #[derive(Debug)]
 pub enum Error {
@@ -23,8 +24,15 @@ pub enum Error {
     FlexureFit(flexure_fit::Error),
     Physics(physics::Invalid),
     Quantity(quantity::Error),
-    /// Measured data or a diagnosis (the diagnosis layer's message).
-    Diagnose(String),
+    /// Measured data that cannot be read (every problem of the file).
+    Data(DataErrors),
+    /// Boxed: the diagnosis error is large and commands return errors often by value.
+    Diagnose(Box<diagnose::Error>),
+    /// A fit to the data in `data` failed.
+    Fit {
+        data: PathBuf,
+        error: Box<diagnose::Error>,
+    },
     /// A JSON summary could not be encoded.
     Json(serde_json::Error),
     Render(render::Error),
@@ -60,7 +68,10 @@ impl Error {
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Error::Usage(message) | Error::Diagnose(message) => f.write_str(message),
+            Error::Usage(message) => f.write_str(message),
+            Error::Data(errors) => write!(f, "{errors}"),
+            Error::Diagnose(error) => write!(f, "{error}"),
+            Error::Fit { data, error } => write!(f, "fit to `{}`: {error}", data.display()),
             Error::Io(error) => write!(f, "{error}"),
             Error::Json(error) => write!(f, "cannot encode the JSON summary: {error}"),
             Error::Compile(errors) => write!(f, "{errors}"),
@@ -111,4 +122,11 @@ from_layer!(
     Plot(PlotError),
     Json(serde_json::Error),
     Io(std::io::Error),
+    Data(DataErrors),
 );
+
+impl From<diagnose::Error> for Error {
+    fn from(error: diagnose::Error) -> Error {
+        Error::Diagnose(Box::new(error))
+    }
+}

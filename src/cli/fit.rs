@@ -39,21 +39,18 @@ pub struct FitArgs {
 }
 
 pub fn run(args: &FitArgs) -> Result<(), Error> {
-    let experiment = experiment::load(&args.experiment).map_err(Error::Diagnose)?;
-    let data = MeasuredData::load(&args.data).map_err(|e| Error::Diagnose(e.to_string()))?;
+    let experiment = experiment::load(&args.experiment)?;
+    let data = MeasuredData::load(&args.data)?;
     let mut leg = Leg::open_any(&experiment.model_spec(), &[])?;
     let requests = args
         .fit
         .iter()
         .map(|text| FitRequest::parse(text))
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(Error::Diagnose)?;
-    let fitted = parameters(&leg, &requests).map_err(Error::Diagnose)?;
+        .collect::<Result<Vec<_>, _>>()?;
+    let fitted = parameters(&leg, &requests)?;
     // Checked before the screening, which reads the same columns.
-    experiment
-        .observations(&leg, &data)
-        .map_err(Error::Diagnose)?;
-    let screening = experiment.screen(&data).map_err(Error::Diagnose)?;
+    experiment.observations(&leg, &data)?;
+    let screening = experiment.screen(&data)?;
     println!(
         "{}: {} rows of `{}`, fitting {}",
         experiment.title(),
@@ -66,8 +63,10 @@ pub fn run(args: &FitArgs) -> Result<(), Error> {
             .join(", ")
     );
     print!("{}", screening_text(screening.as_ref()));
-    let report = fit(&experiment, &data, &mut leg, &fitted)
-        .map_err(|e| Error::Diagnose(format!("fit to `{}`: {e}", args.data.display())))?;
+    let report = fit(&experiment, &data, &mut leg, &fitted).map_err(|error| Error::Fit {
+        data: args.data.clone(),
+        error: Box::new(error),
+    })?;
     println!("\n{}", report.result);
     println!("residual RMS per series (SI units; ln|H| relative):");
     for s in &report.residuals {
@@ -105,12 +104,12 @@ fn write_outputs(
         "flags": flags,
         "screening": screened,
         "converged": r.converged,
-        "reason": format!("{:?}", r.reason),
+        "reason": r.reason,
         "parameters": r.names.iter().enumerate().map(|(k, name)| json!({
             "name": name,
             "value": r.params[k],
             "standard_error": finite_or_null(r.standard_errors[k]),
-            "status": format!("{:?}", r.status[k]),
+            "status": r.status[k],
         })).collect::<Vec<_>>(),
         "cost": r.cost,
         "degrees_of_freedom": r.degrees_of_freedom,

@@ -28,8 +28,10 @@ use mech_codegen::ir::Dimension;
 use mech_codegen::ir::transform::actuator::{BASE_COMPLIANCE, TIP_MASS, TIP_PRELOAD};
 use mech_codegen::ir::transform::hinge::{MISALIGNMENT, OFF_AXIS_COMPLIANCE, TWIST_FACTOR};
 use mech_codegen::ir::transform::{constant_direction, hinge_axis};
+use serde::Serialize;
 
 use super::data::MeasuredData;
+use super::error::Error;
 use super::experiment::Experiment;
 use super::experiment::Extensions;
 use super::extend::Extension;
@@ -49,9 +51,10 @@ pub enum Holdout {
 
 impl Holdout {
     /// `every:3` or `last:30%`.
-    pub fn parse(text: &str) -> Result<Holdout, String> {
-        let bad =
-            || format!("--holdout `{text}`: expected `every:N` (N ≥ 2) or `last:P%` (0 < P < 100)");
+    pub fn parse(text: &str) -> Result<Holdout, Error> {
+        let bad = || Error::HoldoutSyntax {
+            text: text.to_string(),
+        };
         match text.split_once(':') {
             Some(("every", n)) => match n.trim().parse::<usize>() {
                 Ok(n) if n >= 2 => Ok(Holdout::Every(n)),
@@ -380,14 +383,16 @@ pub struct Trial {
     pub aicc: f64,
     /// Cannot change the response (reported, not ranked).
     pub inert: bool,
-    /// The fit failed (reported, not ranked).
+    /// The fit failed (reported, not ranked): the message of its [`Error`].
     pub error: Option<String>,
     /// The prediction of every observed value with the fitted parameters.
     pub predicted: Vec<f64>,
 }
 
-/// What `mech diagnose` concludes.
-#[derive(Debug, Clone, PartialEq)]
+/// What `mech diagnose` concludes; in `diagnosis.json` by its snake_case name
+/// (`no_significant_discrepancy`, `explained`, …).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Verdict {
     /// The base model explains the held-out data to the noise.
     NoSignificantDiscrepancy,
@@ -440,7 +445,7 @@ pub fn diagnose(
     data: &MeasuredData,
     user_parameters: &[String],
     holdout: Holdout,
-) -> Result<Diagnosis, String> {
+) -> Result<Diagnosis, Error> {
     diagnose_causes(experiment, data, user_parameters, holdout, &[])
 }
 
@@ -452,9 +457,9 @@ pub fn diagnose_causes(
     user_parameters: &[String],
     holdout: Holdout,
     causes: &[String],
-) -> Result<Diagnosis, String> {
+) -> Result<Diagnosis, Error> {
     let spec = experiment.model_spec();
-    let leg = Leg::open_any(&spec, &[])?;
+    let leg = Leg::open_any(&spec, &[]).map_err(Error::leg)?;
     let observations = experiment.observations(&leg, data)?;
     let screening = experiment.screen(data)?;
     require_noise(&observations)?;
@@ -471,7 +476,7 @@ pub fn diagnose_causes(
     };
     let mut results = trials.run(jobs).into_iter();
     let (_, base) = results.next().expect("the base trial");
-    let base = base.map_err(|e| format!("the base model: {e}"))?;
+    let base = base.map_err(|e| Error::BaseModel(Box::new(e)))?;
     let band = NoiseBand::new(holdout_values);
     let (ranked_pairs, inert) = sort_out(&base, results);
     // Without user parameters the base model is not fitted, so every value tests it (a
@@ -509,16 +514,11 @@ pub fn diagnose_causes(
 }
 
 /// Without noise levels no residual can be called significant.
-fn require_noise(observations: &super::experiment::Observations) -> Result<(), String> {
-    if observations.sigma.is_none() {
-        return Err(
-            "`mech diagnose` needs the measurement noise in the experiment file \
-                    (`noise`, or `gain_noise` and `phase_noise`): without it no residual can \
-                    be called significant"
-                .into(),
-        );
+fn require_noise(observations: &super::experiment::Observations) -> Result<(), Error> {
+    match observations.sigma {
+        Some(_) => Ok(()),
+        None => Err(Error::NoNoise),
     }
-    Ok(())
 }
 
 /// Per observed value whether it is fitted (true) or held out, and how many of each (at
@@ -527,7 +527,7 @@ fn split_values(
     observations: &super::experiment::Observations,
     rows: usize,
     holdout: Holdout,
-) -> Result<(Vec<bool>, usize, usize), String> {
+) -> Result<(Vec<bool>, usize, usize), Error> {
     let train: Vec<bool> = observations
         .row
         .iter()
@@ -536,10 +536,10 @@ fn split_values(
     let holdout_values = train.iter().filter(|t| !**t).count();
     let train_values = train.len() - holdout_values;
     if holdout_values < 2 || train_values < 2 {
-        return Err(format!(
-            "the hold-out rule leaves {train_values} values to fit and {holdout_values} to test; \
-             need at least 2 of each"
-        ));
+        return Err(Error::HoldoutTooSmall {
+            train: train_values,
+            holdout: holdout_values,
+        });
     }
     Ok((train, train_values, holdout_values))
 }
@@ -548,7 +548,7 @@ fn split_values(
 fn user_fit_parameters(
     leg: &Leg,
     user_parameters: &[String],
-) -> Result<Vec<(Target, Parameter)>, String> {
+) -> Result<Vec<(Target, Parameter)>, Error> {
     let requests = user_parameters
         .iter()
         .map(|t| super::fit::FitRequest::parse(t))
@@ -564,7 +564,7 @@ fn jobs(
     experiment: &Experiment,
     user: &[(Target, Parameter)],
     causes: &[String],
-) -> Result<Vec<Candidate>, String> {
+) -> Result<Vec<Candidate>, Error> {
     let mut jobs = vec![Candidate::parameter_change(
         "base model",
         "-".into(),
@@ -575,13 +575,12 @@ fn jobs(
         .iter()
         .find(|wanted| catalog.iter().all(|c| !c.cause.contains(wanted.as_str())))
     {
-        let mut names: Vec<&str> = catalog.iter().map(|c| c.cause.as_str()).collect();
+        let mut names: Vec<String> = catalog.iter().map(|c| c.cause.clone()).collect();
         names.dedup();
-        return Err(format!(
-            "--cause `{unknown}`: no cause of the catalog for this experiment contains it \
-             (the catalog: {})",
-            names.join(", ")
-        ));
+        return Err(Error::UnknownCause {
+            cause: unknown.clone(),
+            catalog: names,
+        });
     }
     jobs.extend(catalog.into_iter().filter(|c| {
         // A candidate on a parameter the user already fits adds nothing.
@@ -698,7 +697,7 @@ fn order_ties(ranked: &mut [Trial]) -> usize {
 }
 
 /// A candidate and its trial, or why the trial failed.
-type TrialResult = (Candidate, Result<Trial, String>);
+type TrialResult = (Candidate, Result<Trial, Error>);
 
 /// Splits trials into those that moved the residual (best first, lowest held-out χ²) and the
 /// inert ones (no change beyond the noise, or a failed fit), compared with `reference`.
@@ -718,7 +717,7 @@ fn sort_out(
             holdout_chi2: f64::NAN,
             aicc: f64::NAN,
             inert: true,
-            error: Some(e),
+            error: Some(e.to_string()),
             predicted: Vec::new(),
         });
         // Fitting it must lower the training χ² by at least 1 (one σ² in total): a smaller
@@ -803,11 +802,11 @@ impl Trials<'_> {
 
     /// `candidate` fitted with the user's parameters on the training values (or, when the
     /// screen finds it cannot move the predictions, not fitted and marked inert).
-    fn trial(&self, candidate: &Candidate) -> Result<Trial, String> {
+    fn trial(&self, candidate: &Candidate) -> Result<Trial, Error> {
         let (experiment, data, observations) = (self.experiment, self.data, self.observations);
         let mut leg = match &candidate.extension {
             Some(extension) => super::extend::open_leg(self.spec, extension),
-            None => Leg::open_any(self.spec, &[]).map_err(String::from),
+            None => Leg::open_any(self.spec, &[]).map_err(Error::leg),
         }?;
         let mut parameters = self.user.to_vec();
         parameters.extend(candidate.parameters.iter().cloned());

@@ -31,6 +31,7 @@ use mech_runtime::FlexureDamping;
 use serde::Deserialize;
 
 use super::data::MeasuredData;
+use super::error::{Error, KeyError};
 use super::observations::noise_value;
 pub use super::observations::Observations;
 use super::pendulum::{self, Pendulum, Screening};
@@ -159,19 +160,20 @@ pub struct Extensions {
 }
 
 /// Reads and checks a diagnosis experiment file.
-pub fn load(path: &Path) -> Result<Experiment, String> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| format!("cannot read experiment `{}`: {e}", path.display()))?;
-    let experiment: Experiment = toml::from_str(&text).map_err(|e| {
-        format!(
-            "experiment `{}`: {}",
-            path.display(),
-            e.to_string().trim_end()
-        )
+pub fn load(path: &Path) -> Result<Experiment, Error> {
+    let path_buf = || path.to_path_buf();
+    let text = std::fs::read_to_string(path).map_err(|error| Error::ReadExperiment {
+        path: path_buf(),
+        error,
     })?;
-    experiment
-        .check()
-        .map_err(|e| format!("experiment `{}`: {e}", path.display()))?;
+    let experiment: Experiment = toml::from_str(&text).map_err(|error| Error::ExperimentToml {
+        path: path_buf(),
+        error,
+    })?;
+    experiment.check().map_err(|error| Error::Experiment {
+        path: path_buf(),
+        error,
+    })?;
     Ok(experiment)
 }
 
@@ -179,7 +181,7 @@ impl Experiment {
     /// The screening of a pendulum experiment's trace (nothing for the other kinds): see
     /// [`pendulum`]. Errors only for unreadable data (missing column, bad unit, time not
     /// increasing), which the observations report too.
-    pub fn screen(&self, data: &MeasuredData) -> Result<Option<Screening>, String> {
+    pub fn screen(&self, data: &MeasuredData) -> Result<Option<Screening>, Error> {
         match self {
             Experiment::Pendulum(e) => {
                 let (times, angles) = e.trace(data)?;
@@ -223,18 +225,18 @@ impl Experiment {
         }
     }
 
-    fn check(&self) -> Result<(), String> {
+    /// The keys that do not need the model or the data.
+    fn check(&self) -> Result<(), KeyError> {
         match self {
             Experiment::QuasiStatic(e) => {
                 if e.outputs.is_empty() {
-                    return Err("key `outputs`: name at least one measured output".into());
+                    return Err(KeyError::NoOutputs);
                 }
                 if !e.noise.is_empty() && e.noise.len() != e.outputs.len() {
-                    return Err(format!(
-                        "key `noise`: {} values for {} outputs (give one per output, or none)",
-                        e.noise.len(),
-                        e.outputs.len()
-                    ));
+                    return Err(KeyError::NoiseCount {
+                        values: e.noise.len(),
+                        outputs: e.outputs.len(),
+                    });
                 }
                 for text in &e.noise {
                     noise_value("noise", text)?;
@@ -243,14 +245,10 @@ impl Experiment {
             Experiment::FrequencyResponse(e) => {
                 let single = e.input.is_some() || e.output.is_some();
                 if single && (e.input.is_none() || e.output.is_none() || !e.channel.is_empty()) {
-                    return Err(
-                        "give both `input` and `output` for one transfer function, or \
-                                `[[channel]]` tables (name, input, output) for several, not both"
-                            .into(),
-                    );
+                    return Err(KeyError::ChannelForms);
                 }
                 if !single && e.channel.is_empty() {
-                    return Err("missing `input` and `output` (or `[[channel]]` tables)".into());
+                    return Err(KeyError::NoChannels);
                 }
                 if let Some(text) = &e.gain_noise {
                     noise_value("gain_noise", text)?;
@@ -265,10 +263,9 @@ impl Experiment {
                     noise_value("noise", text)?;
                 }
                 if !(e.off_axis_fraction.is_finite() && e.off_axis_fraction.abs() <= 1.0) {
-                    return Err(format!(
-                        "key `off_axis_fraction`: expected a fraction between -1 and 1, got {}",
-                        e.off_axis_fraction
-                    ));
+                    return Err(KeyError::OffAxisFraction {
+                        value: e.off_axis_fraction,
+                    });
                 }
             }
             Experiment::Pendulum(e) => e.check()?,
@@ -278,7 +275,7 @@ impl Experiment {
 
     /// The measured values this experiment compares, in the order of [`Experiment::predict`].
     /// Errors name the data file and the column.
-    pub fn observations(&self, leg: &Leg, data: &MeasuredData) -> Result<Observations, String> {
+    pub fn observations(&self, leg: &Leg, data: &MeasuredData) -> Result<Observations, Error> {
         match self {
             Experiment::QuasiStatic(e) => e.observations(leg, data),
             Experiment::FrequencyResponse(e) => e.observations(leg, data),
@@ -295,7 +292,7 @@ impl Experiment {
         data: &MeasuredData,
         measured: &Observations,
         extensions: &Extensions,
-    ) -> Result<Vec<f64>, String> {
+    ) -> Result<Vec<f64>, Error> {
         self.predict_warm(leg, data, measured, extensions, &mut WarmStarts::default())
     }
 
@@ -308,7 +305,7 @@ impl Experiment {
         measured: &Observations,
         extensions: &Extensions,
         warm: &mut WarmStarts,
-    ) -> Result<Vec<f64>, String> {
+    ) -> Result<Vec<f64>, Error> {
         match self {
             Experiment::QuasiStatic(e) => e.predict_warm(leg, data, warm),
             Experiment::FrequencyResponse(e) => {
@@ -324,18 +321,16 @@ impl Experiment {
 
 impl QuasiStatic {
     /// The output columns, row by row, one series per output.
-    fn observations(&self, leg: &Leg, data: &MeasuredData) -> Result<Observations, String> {
+    fn observations(&self, leg: &Leg, data: &MeasuredData) -> Result<Observations, Error> {
         let model = leg.model();
         let mut obs = Observations::default();
-        leg.require_hamr()?;
+        leg.require_hamr().map_err(Error::leg)?;
         let mut sigma = Vec::new();
         for (k, name) in self.outputs.iter().enumerate() {
             model
                 .output_index(name)
-                .ok_or_else(|| format!("key `outputs`: the model has no output `{name}`"))?;
-            let values = data
-                .require(name, Dimension::LENGTH)
-                .map_err(|e| e.to_string())?;
+                .ok_or_else(|| KeyError::UnknownOutput { name: name.clone() })?;
+            let values = data.require(name, Dimension::LENGTH)?;
             let noise = match self.noise.get(k) {
                 Some(text) => Some(noise_value("noise", text)?),
                 None => None,
@@ -358,9 +353,9 @@ impl QuasiStatic {
         leg: &Leg,
         data: &MeasuredData,
         warm: &mut WarmStarts,
-    ) -> Result<Vec<f64>, String> {
+    ) -> Result<Vec<f64>, Error> {
         let model = leg.model();
-        leg.require_hamr()?;
+        leg.require_hamr().map_err(Error::leg)?;
         let rows = data.rows;
         let column = |name: &str| data.column(name);
         let v_lift = column(model.input_name(leg.v_lift()));
@@ -381,7 +376,10 @@ impl QuasiStatic {
             );
             q = leg
                 .warm_equilibrium(warm, row, &q, &inputs, &[], &[])
-                .map_err(|e| format!("line {}: {e}", data.lines.get(row).copied().unwrap_or(0)))?
+                .map_err(|error| Error::Equilibrium {
+                    line: data.lines.get(row).copied().unwrap_or(0),
+                    error: Box::new(error),
+                })?
                 .q;
             model.outputs(0.0, &q, &u, &inputs, &mut y);
             for (series, &o) in per_output.iter_mut().zip(&outputs) {
@@ -394,13 +392,11 @@ impl QuasiStatic {
 
 impl FrequencyResponse {
     /// Per channel, `ln|H|` then the phase at every frequency of the data.
-    fn observations(&self, leg: &Leg, data: &MeasuredData) -> Result<Observations, String> {
+    fn observations(&self, leg: &Leg, data: &MeasuredData) -> Result<Observations, Error> {
         let model = leg.model();
         let mut obs = Observations::default();
-        leg.require_hamr()?;
-        let frequency = data
-            .require("frequency", Dimension::FREQUENCY)
-            .map_err(|e| e.to_string())?;
+        leg.require_hamr().map_err(Error::leg)?;
+        let frequency = data.require("frequency", Dimension::FREQUENCY)?;
         let gain_sigma = match &self.gain_noise {
             Some(t) => Some(noise_value("gain_noise", t)?),
             None => None,
@@ -411,24 +407,24 @@ impl FrequencyResponse {
         };
         let mut sigma = Vec::new();
         for (suffix, input, output) in self.channels() {
+            let unknown = |port: &'static str, name: &str| KeyError::UnknownChannelPort {
+                channel: suffix.strip_prefix('.').map(str::to_string),
+                port,
+                name: name.to_string(),
+            };
             model
                 .input_index(&input)
-                .ok_or_else(|| format!("channel `{suffix}`: the model has no input `{input}`"))?;
+                .ok_or_else(|| unknown("input", &input))?;
             model
                 .output_index(&output)
-                .ok_or_else(|| format!("channel `{suffix}`: the model has no output `{output}`"))?;
-            let gain = data
-                .require(&format!("gain{suffix}"), GAIN)
-                .map_err(|e| e.to_string())?;
-            let phase = data
-                .require(&format!("phase{suffix}"), Dimension::NONE)
-                .map_err(|e| e.to_string())?;
+                .ok_or_else(|| unknown("output", &output))?;
+            let gain = data.require(&format!("gain{suffix}"), GAIN)?;
+            let phase = data.require(&format!("phase{suffix}"), Dimension::NONE)?;
             if let Some(bad) = gain.iter().position(|&g| g <= 0.0) {
-                return Err(format!(
-                    "`{}`, line {}: the gain must be positive (a magnitude)",
-                    data.path.display(),
-                    data.lines.get(bad).copied().unwrap_or(0)
-                ));
+                return Err(Error::GainNotPositive {
+                    path: data.path.clone(),
+                    line: data.lines.get(bad).copied().unwrap_or(0),
+                });
             }
             for (row, (&f, &g)) in frequency.iter().zip(gain).enumerate() {
                 obs.values.push(g.ln());
@@ -458,15 +454,16 @@ impl FrequencyResponse {
         measured: &Observations,
         extensions: &Extensions,
         warm: &mut WarmStarts,
-    ) -> Result<Vec<f64>, String> {
+    ) -> Result<Vec<f64>, Error> {
         let model = leg.model();
-        leg.require_hamr()?;
+        leg.require_hamr().map_err(Error::leg)?;
         let rest_inputs = leg.inputs(0.0, 0.0);
         let rest = leg
-            .warm_equilibrium(warm, 0, &leg.q0, &rest_inputs, &[], &[])?
+            .warm_equilibrium(warm, 0, &leg.q0, &rest_inputs, &[], &[])
+            .map_err(Error::leg)?
             .q;
         let linear = mech_runtime::linearize(model, 0.0, &rest, &rest_inputs, &leg.independent)
-            .map_err(|e| format!("linearization failed: {e}"))?;
+            .map_err(Error::Linearization)?;
         let rows = data.rows;
         let frequencies = &measured.abscissa[..rows];
         let damping = match (extensions.loss_exponent, self.damping) {
@@ -490,7 +487,7 @@ impl FrequencyResponse {
                 let omega = 2.0 * std::f64::consts::PI * f;
                 let h = linear
                     .frequency_response(input, output, omega, damping)
-                    .ok_or_else(|| format!("the linear model is singular at {f} Hz"))?;
+                    .ok_or(Error::Singular { frequency: f })?;
                 predicted.push(h.norm().ln());
                 // The measured phase picks the branch: model phase within ±π of it.
                 phase.push(wrap_near(h.arg(), measured.values[offset + rows + k]));
@@ -503,22 +500,16 @@ impl FrequencyResponse {
 
 impl ForceDeflectionTest {
     /// The sensor force at each measured distance.
-    fn observations(&self, leg: &Leg, data: &MeasuredData) -> Result<Observations, String> {
+    fn observations(&self, leg: &Leg, data: &MeasuredData) -> Result<Observations, Error> {
         let mut obs = Observations::default();
-        leg.require_hamr()?;
-        let distance = data
-            .require("distance", Dimension::LENGTH)
-            .map_err(|e| e.to_string())?;
-        let force = data
-            .require("force", Dimension::FORCE)
-            .map_err(|e| e.to_string())?;
+        leg.require_hamr().map_err(Error::leg)?;
+        let distance = data.require("distance", Dimension::LENGTH)?;
+        let force = data.require("force", Dimension::FORCE)?;
         if let Some(bad) = distance.iter().position(|&d| d < 0.0) {
-            return Err(format!(
-                "`{}`, line {}: the sensor distance must not be negative (it is measured \
-                 from the foot's rest position along its free motion)",
-                data.path.display(),
-                data.lines.get(bad).copied().unwrap_or(0)
-            ));
+            return Err(Error::NegativeDistance {
+                path: data.path.clone(),
+                line: data.lines.get(bad).copied().unwrap_or(0),
+            });
         }
         let noise = match &self.noise {
             Some(text) => Some(noise_value("noise", text)?),
@@ -541,8 +532,8 @@ impl ForceDeflectionTest {
         measured: &Observations,
         extensions: &Extensions,
         warm: &mut WarmStarts,
-    ) -> Result<Vec<f64>, String> {
-        leg.require_hamr()?;
+    ) -> Result<Vec<f64>, Error> {
+        leg.require_hamr().map_err(Error::leg)?;
         let fraction = extensions
             .off_axis_fraction
             .unwrap_or(self.off_axis_fraction);
@@ -555,19 +546,23 @@ impl ForceDeflectionTest {
             Sensor::At(distances),
             fraction,
             warm,
-        )?;
+        )
+        .map_err(Error::leg)?;
         // A sensor beyond the free foot's reach is not touched: it reads 0.
         Ok(test.points.iter().map(|p| p.force.max(0.0)).collect())
     }
 
-    fn volts(&self) -> Result<f64, String> {
+    fn volts(&self) -> Result<f64, KeyError> {
+        let key = "voltage";
+        let text = || self.voltage.clone();
         let (value, dimension) = mech_codegen::front::units::parse_quantity(&self.voltage)
-            .map_err(|e| format!("key `voltage`: `{}`: {e}", self.voltage))?;
+            .map_err(|message| KeyError::Quantity {
+                key,
+                text: text(),
+                message,
+            })?;
         if dimension != Dimension::VOLTAGE || !value.is_finite() {
-            return Err(format!(
-                "key `voltage`: `{}` is not a voltage (e.g. \"225 V\")",
-                self.voltage
-            ));
+            return Err(KeyError::NotVoltage { key, text: text() });
         }
         Ok(value)
     }

@@ -10,6 +10,7 @@ use mech_codegen::ir;
 use mech_codegen::ir::transform::{actuator, hinge, TransformError, AXES};
 use mech_codegen::Compiled;
 
+use super::error::Error;
 use crate::experiments::leg::Leg;
 use crate::experiments::ModelSpec;
 use crate::session::Session;
@@ -58,14 +59,26 @@ impl Extension {
 }
 
 /// Opens `spec`'s model with `extension` applied.
-pub fn open_leg(spec: &ModelSpec, extension: &Extension) -> Result<Leg, String> {
-    let shown = spec.model.display();
-    let base = Compiled::from_path(&spec.model).map_err(|e| format!("model `{shown}`: {e}"))?;
+pub fn open_leg(spec: &ModelSpec, extension: &Extension) -> Result<Leg, Error> {
+    let path = || spec.model.clone();
+    let base = Compiled::from_path(&spec.model).map_err(|errors| Error::Compile {
+        model: path(),
+        errors,
+    })?;
     let mut model = base.model;
-    apply(&mut model, extension).map_err(|e| format!("model `{shown}`: {e}"))?;
-    let session = Session::from_compiled(Compiled::from_model(model), &spec.set, &[])
-        .map_err(|e| format!("model `{shown}` extended ({}): {e}", extension.location()))?;
-    Ok(Leg::from_session(session, spec, &[])?)
+    apply(&mut model, extension).map_err(|error| Error::Transform {
+        model: path(),
+        error,
+    })?;
+    let session =
+        Session::from_compiled(Compiled::from_model(model), &spec.set, &[]).map_err(|error| {
+            Error::ExtendedSession {
+                model: path(),
+                location: extension.location(),
+                error: Box::new(error),
+            }
+        })?;
+    Leg::from_session(session, spec, &[]).map_err(Error::leg)
 }
 
 /// Transforms `model` in place by the IR transform of [`hinge`] or [`actuator`]; the new

@@ -14,6 +14,7 @@ use mech_codegen::ir::Dimension;
 use mech_runtime::Model;
 
 use super::data::MeasuredData;
+use super::error::Error;
 use super::experiment::{Experiment, Extensions, Observations};
 use super::features::series_rms;
 pub use super::features::SeriesResidual;
@@ -49,7 +50,7 @@ pub struct FitRequest {
 impl FitRequest {
     /// Parses `NAME` or `NAME=LO..HI UNIT`; the unit applies to both bounds and is checked
     /// against the parameter's dimension by [`parameters`].
-    pub fn parse(text: &str) -> Result<(FitRequest, Option<Dimension>), String> {
+    pub fn parse(text: &str) -> Result<(FitRequest, Option<Dimension>), Error> {
         let Some((name, range)) = text.split_once('=') else {
             return Ok((
                 FitRequest {
@@ -59,10 +60,8 @@ impl FitRequest {
                 None,
             ));
         };
-        let (lo, hi) = range.split_once("..").ok_or_else(|| {
-            format!(
-                "--fit `{text}`: expected NAME or NAME=LO..HI UNIT, e.g. `k_s3=10..100 uN*m/rad`"
-            )
+        let (lo, hi) = range.split_once("..").ok_or_else(|| Error::FitSyntax {
+            text: text.to_string(),
         })?;
         // `10..100 uN*m/rad`: the unit follows the upper bound and applies to both.
         let hi = hi.trim();
@@ -72,13 +71,16 @@ impl FitRequest {
         let (hi_number, unit) = hi.split_at(split);
         let parse = |number: &str| {
             mech_codegen::front::units::parse_quantity(&format!("{} {unit}", number.trim()))
-                .map_err(|e| format!("--fit `{text}`: {e}"))
+                .map_err(|message| Error::FitBound {
+                    text: text.to_string(),
+                    message,
+                })
         };
         let ((lo, dimension), (hi, _)) = (parse(lo)?, parse(hi_number)?);
         if lo >= hi || lo.is_nan() || hi.is_nan() {
-            return Err(format!(
-                "--fit `{text}`: the lower bound must be below the upper bound"
-            ));
+            return Err(Error::FitBoundsOrder {
+                text: text.to_string(),
+            });
         }
         Ok((
             FitRequest {
@@ -95,21 +97,22 @@ impl FitRequest {
 pub fn parameters(
     leg: &Leg,
     requests: &[(FitRequest, Option<Dimension>)],
-) -> Result<Vec<(Target, Parameter)>, String> {
+) -> Result<Vec<(Target, Parameter)>, Error> {
     let model = leg.model();
     let compiled = &leg.session.compiled.model;
     requests
         .iter()
         .map(|(request, dimension)| {
-            let index = model.param_index(&request.name).ok_or_else(|| {
-                let known: Vec<&str> = (0..model.nparams()).map(|i| model.param_name(i)).collect();
-                format!(
-                    "--fit: unknown parameter `{}`; parameters of `{}`: {}",
-                    request.name,
-                    model.name(),
-                    known.join(", ")
-                )
-            })?;
+            let index =
+                model
+                    .param_index(&request.name)
+                    .ok_or_else(|| Error::UnknownParameter {
+                        name: request.name.clone(),
+                        model: model.name().to_string(),
+                        known: (0..model.nparams())
+                            .map(|i| model.param_name(i).to_string())
+                            .collect(),
+                    })?;
             let expected = compiled
                 .params
                 .iter()
@@ -118,10 +121,11 @@ pub fn parameters(
                 .unwrap_or_default();
             if let Some(d) = dimension {
                 if *d != expected {
-                    return Err(format!(
-                        "--fit {}: the bounds have unit {d}, but `{}` needs {expected}",
-                        request.name, request.name
-                    ));
+                    return Err(Error::BoundUnit {
+                        name: request.name.clone(),
+                        found: *d,
+                        expected,
+                    });
                 }
             }
             let initial = model.param(index);
@@ -154,7 +158,7 @@ pub fn fit(
     data: &MeasuredData,
     leg: &mut Leg,
     fitted: &[(Target, Parameter)],
-) -> Result<FitReport, String> {
+) -> Result<FitReport, Error> {
     let observations = experiment.observations(leg, data)?;
     let train = vec![true; observations.values.len()];
     fit_values(experiment, data, leg, fitted, observations, &train)
@@ -169,7 +173,7 @@ pub fn fit_values(
     fitted: &[(Target, Parameter)],
     observations: Observations,
     train: &[bool],
-) -> Result<FitReport, String> {
+) -> Result<FitReport, Error> {
     let mut extensions = Extensions::default();
     for (target, parameter) in fitted {
         target.apply(leg, &mut extensions, parameter.initial);
@@ -197,7 +201,7 @@ pub fn fit_values(
         ..LmOptions::default()
     };
     let result = {
-        let mut residuals = |p: &[f64]| -> Result<Vec<f64>, String> {
+        let mut residuals = |p: &[f64]| -> Result<Vec<f64>, Error> {
             for (&(target, _), &value) in fitted.iter().zip(p) {
                 target.apply(leg, &mut extensions, value);
             }
@@ -211,7 +215,7 @@ pub fn fit_values(
                 .map(|(r, _)| r)
                 .collect())
         };
-        levenberg_marquardt(&mut residuals, &parameters, &options).map_err(|e| e.to_string())?
+        levenberg_marquardt(&mut residuals, &parameters, &options)?
     };
     for (&(target, _), &value) in fitted.iter().zip(&result.params) {
         target.apply(leg, &mut extensions, value);

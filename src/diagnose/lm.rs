@@ -72,6 +72,7 @@
 use std::fmt;
 
 use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
 
 /// One parameter to fit.
 #[derive(Clone, Debug, PartialEq)]
@@ -187,8 +188,9 @@ impl Default for LmOptions {
     }
 }
 
-/// Why the iteration stopped.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// Why the iteration stopped; in JSON by its snake_case name (`cost_reduction`, …).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum StopReason {
     /// The gradient is orthogonal to the residual within `gtol` (or every free parameter is
     /// held by a bound).
@@ -237,8 +239,9 @@ impl fmt::Display for StopReason {
     }
 }
 
-/// What the fit says about one parameter.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// What the fit says about one parameter; in JSON by its snake_case name (`at_lower`, …).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum ParameterStatus {
     /// Estimated, with a finite standard error.
     Free,
@@ -410,12 +413,14 @@ impl<E: fmt::Display> fmt::Display for LmError<E> {
             }
             LmError::Residual { params, error } => write!(
                 f,
-                "the residuals could not be evaluated at p = {params:?}: {error}"
+                "the residuals could not be evaluated at p = {}: {error}",
+                Point(params)
             ),
             LmError::NonFiniteResidual { params, index } => write!(
                 f,
-                "residual {index} is NaN or infinite at p = {params:?}; check the model and \
-                 the starting values"
+                "residual {index} is NaN or infinite at p = {}; check the model and the \
+                 starting values",
+                Point(params)
             ),
             LmError::NoResiduals => write!(f, "the residual function returned no residuals"),
             LmError::ResidualCountChanged {
@@ -424,10 +429,33 @@ impl<E: fmt::Display> fmt::Display for LmError<E> {
                 found,
             } => write!(
                 f,
-                "the residual function returned {found} residuals at p = {params:?}, but \
-                 {expected} before; it must always return the same number"
+                "the residual function returned {found} residuals at p = {}, but {expected} \
+                 before; it must always return the same number",
+                Point(params)
             ),
         }
+    }
+}
+
+/// Parameter values for messages: `[1, 0.25, 2.5e-6]` (plain where that is short, else in
+/// exponent form).
+struct Point<'a>(&'a [f64]);
+
+impl fmt::Display for Point<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("[")?;
+        for (i, value) in self.0.iter().enumerate() {
+            if i > 0 {
+                f.write_str(", ")?;
+            }
+            let magnitude = value.abs();
+            if *value == 0.0 || !value.is_finite() || (1e-3..1e6).contains(&magnitude) {
+                write!(f, "{value}")?;
+            } else {
+                write!(f, "{value:e}")?;
+            }
+        }
+        f.write_str("]")
     }
 }
 

@@ -16,12 +16,14 @@
 //! - [`features`]: a response (data or prediction) → what a designer reads off it (resonance
 //!   frequency, quality factor, blocked force, …) and the residual RMS per series;
 //! - [`candidates`]: experiment + data + hold-out rule → every catalog candidate fitted and
-//!   ranked on held-out data, and a verdict (`mech diagnose`).
+//!   ranked on held-out data, and a verdict (`mech diagnose`);
+//! - [`error`]: what can go wrong in all of these, as [`Error`] (with a message for users).
 //!
 //! The file format and the fitting method are documented in `docs/diagnose.md`.
 
 pub mod candidates;
 pub mod data;
+pub mod error;
 pub mod experiment;
 pub mod extend;
 pub mod features;
@@ -31,6 +33,7 @@ pub mod observations;
 pub mod pendulum;
 
 pub use data::{Column, DataError, DataErrors, MeasuredData};
+pub use error::{Error, KeyError};
 pub use lm::{
     information_criteria, levenberg_marquardt, Difference, FitResult, InformationCriteria, LmError,
     LmOptions, NoiseModel, Parameter, ParameterStatus, StopReason,

@@ -1,8 +1,10 @@
 //! The measured side of a residual, shared by every experiment kind: the observed values
 //! with their σ, series and abscissa, and the noise levels experiment files give.
 //!
-//! Consumes: nothing of the other diagnosis modules. Produces: [`Observations`] and
-//! [`noise_value`].
+//! Consumes: nothing of the other diagnosis modules but their error type. Produces:
+//! [`Observations`] and [`noise_value`].
+
+use super::error::KeyError;
 
 /// The measured side of the residual: one flat vector of values, their σ (if known) and a
 /// label per value (`foot.x @ line 12`) for reports.
@@ -32,28 +34,37 @@ impl Observations {
     }
 }
 
-/// A noise level: a quantity (`5 um`, `3 deg`) or a percentage (`5 %`), as an SI number.
-pub fn noise_value(key: &str, text: &str) -> Result<f64, String> {
+/// A noise level: a quantity (`5 um`, `3 deg`) or a percentage (`5 %`), as an SI number;
+/// `key` names the experiment file's key it is read from.
+pub fn noise_value(key: &'static str, text: &str) -> Result<f64, KeyError> {
     let text = text.trim();
-    if let Some(percent) = text.strip_suffix('%') {
-        let value: f64 = percent
-            .trim()
-            .parse()
-            .map_err(|_| format!("key `{key}`: `{text}` is not a percentage"))?;
-        if value > 0.0 && value.is_finite() {
-            return Ok(value / 100.0);
+    let value = match text.strip_suffix('%') {
+        Some(percent) => {
+            let value: f64 = percent
+                .trim()
+                .parse()
+                .map_err(|_| KeyError::NotPercentage {
+                    key,
+                    text: text.to_string(),
+                })?;
+            value / 100.0
         }
-        return Err(format!(
-            "key `{key}`: expected a positive noise, got `{text}`"
-        ));
-    }
-    let (value, _) = mech_codegen::front::units::parse_quantity(text)
-        .map_err(|e| format!("key `{key}`: `{text}`: {e}"))?;
+        None => {
+            mech_codegen::front::units::parse_quantity(text)
+                .map_err(|message| KeyError::Quantity {
+                    key,
+                    text: text.to_string(),
+                    message,
+                })?
+                .0
+        }
+    };
     if value > 0.0 && value.is_finite() {
         Ok(value)
     } else {
-        Err(format!(
-            "key `{key}`: expected a positive noise, got `{text}`"
-        ))
+        Err(KeyError::NoiseNotPositive {
+            key,
+            text: text.to_string(),
+        })
     }
 }

@@ -41,10 +41,11 @@ use std::path::PathBuf;
 
 use mech_codegen::ir::{Dimension, Expr};
 use mech_runtime::integrate::{AdaptiveOptions, Dop853, Stepper};
-use mech_runtime::Reduced;
+use mech_runtime::{Reduced, RuntimeError};
 use serde::Deserialize;
 
 use super::data::MeasuredData;
+use super::error::{Error, KeyError};
 use super::lm::{levenberg_marquardt, LmOptions, Parameter};
 use super::observations::{noise_value, Observations};
 use crate::experiments::leg::Leg;
@@ -111,7 +112,7 @@ enum Measured {
 
 impl Pendulum {
     /// Checks the keys that do not need the model.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), KeyError> {
         if let Some(text) = &self.noise {
             noise_value("noise", text)?;
         }
@@ -121,7 +122,7 @@ impl Pendulum {
         Ok(())
     }
 
-    fn measured(&self, leg: &Leg) -> Result<Measured, String> {
+    fn measured(&self, leg: &Leg) -> Result<Measured, KeyError> {
         let model = leg.model();
         if let Some(index) = model.output_index(&self.angle) {
             return Ok(Measured::Output(index));
@@ -129,52 +130,44 @@ impl Pendulum {
         if let Ok(index) = leg.session.coordinate_index(&self.angle) {
             return Ok(Measured::Coordinate(index));
         }
-        let outputs: Vec<&str> = (0..model.noutputs())
-            .map(|i| model.output_name(i))
-            .collect();
-        Err(format!(
-            "key `angle`: the model has no output or coordinate `{}`; its outputs: {}",
-            self.angle,
-            outputs.join(", ")
-        ))
+        Err(KeyError::UnknownAngle {
+            angle: self.angle.clone(),
+            outputs: (0..model.noutputs())
+                .map(|i| model.output_name(i).to_string())
+                .collect(),
+        })
     }
 
     /// The released coordinate (an independent one).
-    fn coordinate(&self, leg: &Leg) -> Result<usize, String> {
+    fn coordinate(&self, leg: &Leg) -> Result<usize, KeyError> {
         let index = match &self.coordinate {
             Some(name) => leg
                 .session
                 .coordinate_index(name)
-                .map_err(|e| format!("key `coordinate`: {e}"))?,
+                .map_err(|error| KeyError::UnknownCoordinate(Box::new(error)))?,
             None => match leg.independent.as_slice() {
                 [only] => *only,
                 several => {
-                    return Err(format!(
-                        "key `coordinate`: model `{}` has {} degrees of freedom; name the \
-                         released one",
-                        leg.model().name(),
-                        several.len()
-                    ))
+                    return Err(KeyError::CoordinateAmbiguous {
+                        model: leg.model().name().to_string(),
+                        dofs: several.len(),
+                    })
                 }
             },
         };
         if !leg.independent.contains(&index) {
-            return Err(format!(
-                "key `coordinate`: `{}` is not an independent coordinate of the assembly; \
-                 list it in `independent`",
-                leg.model().coordinate_name(index)
-            ));
+            return Err(KeyError::CoordinateNotIndependent {
+                coordinate: leg.model().coordinate_name(index).to_string(),
+            });
         }
         Ok(index)
     }
 
     /// The sample times and measured angles (SI), checked: errors name the data file, the
     /// line and the column.
-    pub fn trace<'a>(&self, data: &'a MeasuredData) -> Result<(&'a [f64], &'a [f64]), String> {
-        let times = data
-            .require(TIME, Dimension::TIME)
-            .map_err(|e| e.to_string())?;
-        data.check_time_monotonic(TIME).map_err(|e| e.to_string())?;
+    pub fn trace<'a>(&self, data: &'a MeasuredData) -> Result<(&'a [f64], &'a [f64]), Error> {
+        let times = data.require(TIME, Dimension::TIME)?;
+        data.check_time_monotonic(TIME)?;
         // The unit first: a length or a bare number is no angle (and `require` alone would
         // accept any dimensionless column, a percentage too).
         if let Some((index, column)) = data
@@ -184,36 +177,27 @@ impl Pendulum {
             .find(|(_, c)| c.name == self.angle)
         {
             if !is_angle_unit(&column.unit_text) {
-                let found = if column.unit_text.is_empty() {
-                    "no unit".to_string()
-                } else {
-                    format!("`[{}]`", column.unit_text)
-                };
-                return Err(format!(
-                    "`{}`, column {} (`{}`): expected an angle unit, `[deg]` or `[rad]`, \
-                     found {found}",
-                    data.path.display(),
-                    index + 1,
-                    column.name,
-                ));
+                return Err(Error::NotAngleUnit {
+                    path: data.path.clone(),
+                    index: index + 1,
+                    column: column.name.clone(),
+                    unit_text: column.unit_text.clone(),
+                });
             }
         }
-        let angles = data
-            .require(&self.angle, Dimension::NONE)
-            .map_err(|e| e.to_string())?;
+        let angles = data.require(&self.angle, Dimension::NONE)?;
         Ok((times, angles))
     }
 
     /// The measured angles, one per row, with the time as abscissa.
-    pub fn observations(&self, leg: &Leg, data: &MeasuredData) -> Result<Observations, String> {
+    pub fn observations(&self, leg: &Leg, data: &MeasuredData) -> Result<Observations, Error> {
         self.measured(leg)?;
         self.coordinate(leg)?;
         let (times, angles) = self.trace(data)?;
         if data.rows < 2 {
-            return Err(format!(
-                "`{}`: a ring-down needs more than one sample",
-                data.path.display()
-            ));
+            return Err(Error::TooFewSamples {
+                path: data.path.clone(),
+            });
         }
         let noise = match &self.noise {
             Some(text) => Some(noise_value("noise", text)?),
@@ -229,9 +213,9 @@ impl Pendulum {
     }
 
     /// The release angle (rad): the file's, or the data's estimate ([`estimated_release`]).
-    pub fn release_angle(&self, data: &MeasuredData) -> Result<f64, String> {
+    pub fn release_angle(&self, data: &MeasuredData) -> Result<f64, Error> {
         match &self.release {
-            Some(text) => release_value(text),
+            Some(text) => Ok(release_value(text)?),
             None => {
                 let (times, angles) = self.trace(data)?;
                 Ok(estimated_release(times, angles))
@@ -240,13 +224,15 @@ impl Pendulum {
     }
 
     /// The model's ring-down at the data times, from rest at the release angle.
-    pub fn predict(&self, leg: &Leg, data: &MeasuredData) -> Result<Vec<f64>, String> {
+    pub fn predict(&self, leg: &Leg, data: &MeasuredData) -> Result<Vec<f64>, Error> {
         let measured = self.measured(leg)?;
         let coordinate = self.coordinate(leg)?;
         let release = self.release_angle(data)?;
         let (times, _) = self.trace(data)?;
-        ring_down(leg, coordinate, release, times, measured)
-            .map_err(|e| format!("ring-down of `{}`: {e}", leg.model().name()))
+        ring_down(leg, coordinate, release, times, measured).map_err(|error| Error::RingDown {
+            model: leg.model().name().to_string(),
+            error,
+        })
     }
 }
 
@@ -257,13 +243,19 @@ fn is_angle_unit(unit: &str) -> bool {
     )
 }
 
-fn release_value(text: &str) -> Result<f64, String> {
-    let (value, dimension) = mech_codegen::front::units::parse_quantity(text)
-        .map_err(|e| format!("key `release`: `{text}`: {e}"))?;
+fn release_value(text: &str) -> Result<f64, KeyError> {
+    let key = "release";
+    let (value, dimension) =
+        mech_codegen::front::units::parse_quantity(text).map_err(|message| KeyError::Quantity {
+            key,
+            text: text.to_string(),
+            message,
+        })?;
     if dimension != Dimension::NONE || !value.is_finite() {
-        return Err(format!(
-            "key `release`: expected an angle such as `10 deg`, got `{text}`"
-        ));
+        return Err(KeyError::NotAngle {
+            key,
+            text: text.to_string(),
+        });
     }
     Ok(value)
 }
@@ -303,7 +295,7 @@ fn ring_down(
     release: f64,
     times: &[f64],
     measured: Measured,
-) -> Result<Vec<f64>, String> {
+) -> Result<Vec<f64>, RuntimeError> {
     let model = leg.model();
     let (t0, t1) = (times[0], times[times.len() - 1]);
     let mut q = leg.q0.clone();
@@ -311,11 +303,9 @@ fn ring_down(
     let signals = &leg.session.signals;
     let independent = &leg.independent;
     let tolerance = 1e-12;
-    let ode =
-        Reduced::new(model, signals, t0, &q, independent, tolerance).map_err(|e| e.to_string())?;
+    let ode = Reduced::new(model, signals, t0, &q, independent, tolerance)?;
     // A second instance maps each sample's (z, ż) back to (q, u).
-    let mut sampler =
-        Reduced::new(model, signals, t0, &q, independent, tolerance).map_err(|e| e.to_string())?;
+    let mut sampler = Reduced::new(model, signals, t0, &q, independent, tolerance)?;
     let nz = independent.len();
     let mut x0: Vec<f64> = independent.iter().map(|&i| q[i]).collect();
     x0.resize(2 * nz, 0.0);
@@ -324,22 +314,22 @@ fn ring_down(
         atol: ATOL,
         ..AdaptiveOptions::dop853()
     };
-    let mut stepper = Dop853::new(ode, t0, &x0, t1, options).map_err(|e| e.to_string())?;
+    let mut stepper = Dop853::new(ode, t0, &x0, t1, options)?;
     let mut x = x0.clone();
     let mut inputs = vec![0.0; model.ninputs()];
     let mut y = vec![0.0; model.noutputs()];
     let mut out = Vec::with_capacity(times.len());
     for &t in times {
         while stepper.t() < t {
-            stepper.step().map_err(|e| e.to_string())?;
+            stepper.step()?;
         }
         if t == t0 {
             x.copy_from_slice(&x0);
         } else {
-            stepper.interpolate(t, &mut x).map_err(|e| e.to_string())?;
+            stepper.interpolate(t, &mut x)?;
         }
         let (z, zdot) = x.split_at(nz);
-        sampler.state(t, z, zdot).map_err(|e| e.to_string())?;
+        sampler.state(t, z, zdot)?;
         out.push(match measured {
             Measured::Coordinate(i) => sampler.q()[i],
             Measured::Output(i) => {
@@ -486,7 +476,7 @@ fn screening_fit(times: &[f64], angles: &[f64], analysis: &TraceAnalysis) -> Opt
         });
     }
     // ln A_j(measured) = ln(A_j · g(s_j c(τ_j)/A_j)), ln A_j = a − σ₀τ_j − σ₁∫A dt.
-    let residuals = |p: &[f64]| -> Result<Vec<f64>, String> {
+    let residuals = |p: &[f64]| -> Result<Vec<f64>, &'static str> {
         let [a, sigma0, sigma1, c0, c1] = [p[0], p[1], p[2], p[3], p[4]];
         half_cycles
             .iter()

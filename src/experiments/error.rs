@@ -47,9 +47,10 @@ pub enum Error {
     /// The model could not be opened (`model` as the experiment names it).
     Model {
         model: PathBuf,
-        error: session::Error,
+        error: Box<session::Error>,
     },
-    Session(session::Error),
+    /// Boxed, as in `Model`: a session error is large and these errors travel by value.
+    Session(Box<session::Error>),
     /// The model lacks a port the HAMR experiments drive or read.
     NotHamr {
         model: String,
@@ -160,7 +161,7 @@ impl std::error::Error for Error {}
 
 impl From<session::Error> for Error {
     fn from(error: session::Error) -> Error {
-        Error::Session(error)
+        Error::Session(Box::new(error))
     }
 }
 
@@ -173,12 +174,5 @@ impl From<quantity::Error> for Error {
 impl From<PlotError> for Error {
     fn from(error: PlotError) -> Error {
         Error::Plot(error)
-    }
-}
-
-/// The layers above that still speak `String` errors use `?` through this.
-impl From<Error> for String {
-    fn from(error: Error) -> String {
-        error.to_string()
     }
 }

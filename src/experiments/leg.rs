@@ -290,7 +290,7 @@ impl Leg {
 fn open_session(spec: &ModelSpec) -> Result<Session, Error> {
     Session::open(&spec.model, &spec.set, &[]).map_err(|error| Error::Model {
         model: spec.model.clone(),
-        error,
+        error: Box::new(error),
     })
 }
 

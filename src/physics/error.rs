@@ -75,13 +75,6 @@ impl fmt::Display for Invalid {
 
 impl std::error::Error for Invalid {}
 
-/// The command line still speaks `String` errors; this lets it use `?`.
-impl From<Invalid> for String {
-    fn from(error: Invalid) -> String {
-        error.to_string()
-    }
-}
-
 /// `Ok` if `value` is positive and finite.
 pub(crate) fn require_positive(
     part: &'static str,

@@ -42,10 +42,3 @@ impl From<PlotError> for Error {
         Error::Plot(error)
     }
 }
-
-/// The layers above that still speak `String` errors use `?` through this.
-impl From<Error> for String {
-    fn from(error: Error) -> String {
-        error.to_string()
-    }
-}

@@ -211,9 +211,13 @@ fn fit_requests_and_data_are_checked() {
         independent: vec!["qsact".into(), "qlact".into()],
     })
     .unwrap();
-    let unknown = parameters(&leg, &[FitRequest::parse("k_s9").unwrap()]).unwrap_err();
+    let unknown = parameters(&leg, &[FitRequest::parse("k_s9").unwrap()])
+        .unwrap_err()
+        .to_string();
     assert!(unknown.contains("unknown parameter `k_s9`") && unknown.contains("k_s3"));
-    let unit = parameters(&leg, &[FitRequest::parse("k_s3=1..2 mm").unwrap()]).unwrap_err();
+    let unit = parameters(&leg, &[FitRequest::parse("k_s3=1..2 mm").unwrap()])
+        .unwrap_err()
+        .to_string();
     assert!(unit.contains("needs"), "{unit}");
     assert!(FitRequest::parse("k_s3=2..1 uN*m/rad").is_err());
 
@@ -225,7 +229,10 @@ fn fit_requests_and_data_are_checked() {
     let data_path = dir.join("measured.csv");
     write(&data_path, "v_lift [V], foot.x [mm]\n1, 0.1\n");
     let data = MeasuredData::load(&data_path).unwrap();
-    let missing = experiment.observations(&leg, &data).unwrap_err();
+    let missing = experiment
+        .observations(&leg, &data)
+        .unwrap_err()
+        .to_string();
     assert!(missing.contains("foot.y"), "{missing}");
 }
 
@@ -257,7 +264,7 @@ fn diagnose_command_writes_the_page_and_the_summary() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out_dir.join("diagnosis.json")).unwrap())
             .unwrap();
-    assert_eq!(json["verdict"], "Explained");
+    assert_eq!(json["verdict"], "explained");
     assert!(json["summary"].as_str().unwrap().contains("loss factor"));
     // The features, read the same way off the data and both models: the best candidate's
     // resonance and largest gain are closer to the data's than the base model's (the data

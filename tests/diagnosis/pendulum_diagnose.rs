@@ -386,7 +386,10 @@ fn bad_pendulum_data_are_clear_errors() {
         std::fs::write(&path, text).unwrap();
         let error = match MeasuredData::load(&path) {
             Err(e) => e.to_string(),
-            Ok(data) => experiment.observations(&leg, &data).unwrap_err(),
+            Ok(data) => experiment
+                .observations(&leg, &data)
+                .unwrap_err()
+                .to_string(),
         };
         assert!(error.contains(name), "{error}");
         error
@@ -429,12 +432,13 @@ fn bad_pendulum_data_are_clear_errors() {
         ),
     )
     .unwrap();
-    let e = experiment::load(&path).unwrap_err();
+    let e = experiment::load(&path).unwrap_err().to_string();
     assert!(e.contains("bad.toml") && e.contains("release"), "{e}");
     let other = experiment_in(&dir, "angle = \"foot.x\"\n");
     let e = other
         .observations(&leg, &load_text(&dir, &trace_csv(Extra::default(), 1, 0.0)))
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("no output or coordinate `foot.x`"), "{e}");
     // A HAMR experiment on the rig is an error, not a panic.
     std::fs::write(
@@ -448,7 +452,8 @@ fn bad_pendulum_data_are_clear_errors() {
     let hamr = experiment::load(&path).unwrap();
     let e = hamr
         .observations(&leg, &load_text(&dir, "angle [deg]\n1\n"))
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("no input `v_lift`"), "{e}");
 }
 
@@ -495,8 +500,8 @@ fn write_the_docs_examples() {
 }
 
 /// `mech fit` and `mech diagnose` on the worked example: the clean trace is explained by the
-/// loss factor (JSON verdict `Explained`, no flags); the trace with air damping gets the
-/// verdict `Flagged` and an `amplitude_dependent_damping` flag in diagnosis.json, fit.json and
+/// loss factor (JSON verdict `explained`, no flags); the trace with air damping gets the
+/// verdict `flagged` and an `amplitude_dependent_damping` flag in diagnosis.json, fit.json and
 /// the page.
 #[test]
 fn pendulum_commands_report_flags() {
@@ -507,8 +512,8 @@ fn pendulum_commands_report_flags() {
         serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
     };
     for (data, verdict, flags) in [
-        ("flexure_rig_ringdown.csv", "Explained", 0),
-        ("flexure_rig_ringdown_air.csv", "Flagged", 1),
+        ("flexure_rig_ringdown.csv", "explained", 0),
+        ("flexure_rig_ringdown_air.csv", "flagged", 1),
     ] {
         let out_dir = scratch_dir(&format!("pendulum_command_{verdict}"));
         let args = mech::cli::diagnose::DiagnoseArgs {

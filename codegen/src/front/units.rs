@@ -264,13 +264,6 @@ impl std::fmt::Display for QuantityError {
 
 impl std::error::Error for QuantityError {}
 
-/// Callers that still speak `String` errors use `?` through this.
-impl From<QuantityError> for String {
-    fn from(error: QuantityError) -> String {
-        error.to_string()
-    }
-}
-
 /// Parses a quantity such as `10 mN`, `30 deg`, `2.5`, `-1e-3 kg*m^2` into its SI value and
 /// dimension (used by the command line for `--set name=value`).
 pub fn parse_quantity(text: &str) -> Result<(f64, Dimension), QuantityError> {
