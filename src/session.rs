@@ -126,7 +126,9 @@ impl std::fmt::Display for Error {
 
 impl std::error::Error for Error {}
 
-/// A compiled model with its run-time settings.
+/// A compiled model with its run-time settings. Cloning one is cheaper than compiling the
+/// text again (a diagnosis opens the same model once per candidate).
+#[derive(Clone)]
 pub struct Session {
     pub compiled: Compiled,
     pub model: TapeModel,

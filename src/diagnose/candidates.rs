@@ -28,6 +28,7 @@ use mech_codegen::ir::Dimension;
 use mech_codegen::ir::transform::actuator::{BASE_COMPLIANCE, TIP_MASS, TIP_PRELOAD};
 use mech_codegen::ir::transform::hinge::{MISALIGNMENT, OFF_AXIS_COMPLIANCE, TWIST_FACTOR};
 use mech_codegen::ir::transform::{constant_direction, hinge_axis};
+use mech_codegen::Compiled;
 use serde::Serialize;
 
 use super::data::MeasuredData;
@@ -468,6 +469,7 @@ pub fn diagnose_causes(
     let jobs = jobs(&leg, experiment, &user, causes)?;
     let trials = Trials {
         experiment,
+        base: &leg.session.compiled,
         data,
         spec: &spec,
         user: &user,
@@ -770,6 +772,9 @@ fn combine(first: &Candidate, second: &Candidate) -> Option<Candidate> {
 /// the user's parameters, the observations and which of them are fitted.
 struct Trials<'a> {
     experiment: &'a Experiment,
+    /// The base model, compiled once: each candidate starts from a copy of it (a session
+    /// holds a tape with scratch space, so each thread builds its own).
+    base: &'a Compiled,
     data: &'a MeasuredData,
     spec: &'a crate::experiments::ModelSpec,
     user: &'a [(Target, Parameter)],
@@ -805,8 +810,8 @@ impl Trials<'_> {
     fn trial(&self, candidate: &Candidate) -> Result<Trial, Error> {
         let (experiment, data, observations) = (self.experiment, self.data, self.observations);
         let mut leg = match &candidate.extension {
-            Some(extension) => super::extend::open_leg(self.spec, extension),
-            None => Leg::open_any(self.spec, &[]).map_err(Error::leg),
+            Some(extension) => super::extend::extend_leg(self.base, self.spec, extension),
+            None => super::extend::base_leg(self.base, self.spec),
         }?;
         let mut parameters = self.user.to_vec();
         parameters.extend(candidate.parameters.iter().cloned());

@@ -60,12 +60,25 @@ impl Extension {
 
 /// Opens `spec`'s model with `extension` applied.
 pub fn open_leg(spec: &ModelSpec, extension: &Extension) -> Result<Leg, Error> {
-    let path = || spec.model.clone();
     let base = Compiled::from_path(&spec.model).map_err(|errors| Error::Compile {
-        model: path(),
+        model: spec.model.clone(),
         errors,
     })?;
-    let mut model = base.model;
+    extend_leg(&base, spec, extension)
+}
+
+/// `base` (`spec`'s model, compiled once) as it is, without reading the text again.
+pub fn base_leg(base: &Compiled, spec: &ModelSpec) -> Result<Leg, Error> {
+    let session = Session::from_compiled(base.clone(), &spec.set, &[])
+        .map_err(|error| Error::leg(error.into()))?;
+    Leg::from_session(session, spec, &[]).map_err(Error::leg)
+}
+
+/// `base` (`spec`'s model, compiled once) with `extension` applied to a copy of its IR,
+/// re-derived without reading the text again.
+pub fn extend_leg(base: &Compiled, spec: &ModelSpec, extension: &Extension) -> Result<Leg, Error> {
+    let path = || spec.model.clone();
+    let mut model = base.model.clone();
     apply(&mut model, extension).map_err(|error| Error::Transform {
         model: path(),
         error,
