@@ -29,6 +29,17 @@ pub struct TapeModel {
 }
 
 impl TapeModel {
+    /// The tape's environment at `(t, q, u, inputs)` with the current parameter values.
+    fn env<'a>(&'a self, t: f64, q: &'a [f64], u: &'a [f64], inputs: &'a [f64]) -> Env<'a> {
+        Env {
+            t,
+            q,
+            u,
+            params: &self.params,
+            inputs,
+        }
+    }
+
     pub fn new(compiled: &Compiled) -> TapeModel {
         let model = &compiled.model;
         TapeModel {
@@ -120,46 +131,22 @@ impl mech_runtime::Model for TapeModel {
         }
     }
     fn mass_matrix(&self, t: f64, q: &[f64], inputs: &[f64], out: &mut [f64]) {
-        let env = Env {
-            t,
-            q,
-            u: &[],
-            params: &self.params,
-            inputs,
-        };
+        let env = self.env(t, q, &[], inputs);
         self.run(&self.tape.mass_matrix, &env, out);
     }
     fn forcing(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]) {
-        let env = Env {
-            t,
-            q,
-            u,
-            params: &self.params,
-            inputs,
-        };
+        let env = self.env(t, q, u, inputs);
         self.run(&self.tape.forcing, &env, out);
     }
     fn static_forcing(&self, t: f64, q: &[f64], inputs: &[f64], out: &mut [f64]) {
         let Some(program) = &self.tape.static_forcing else {
             return self.forcing(t, q, &vec![0.0; self.tape.nu], inputs, out);
         };
-        let env = Env {
-            t,
-            q,
-            u: &[],
-            params: &self.params,
-            inputs,
-        };
+        let env = self.env(t, q, &[], inputs);
         self.run(program, &env, out);
     }
     fn outputs(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]) {
-        let env = Env {
-            t,
-            q,
-            u,
-            params: &self.params,
-            inputs,
-        };
+        let env = self.env(t, q, u, inputs);
         self.run(&self.tape.outputs, &env, out);
     }
     fn selected_outputs(
@@ -171,13 +158,7 @@ impl mech_runtime::Model for TapeModel {
         which: &[usize],
         out: &mut [f64],
     ) -> bool {
-        let env = Env {
-            t,
-            q,
-            u,
-            params: &self.params,
-            inputs,
-        };
+        let env = self.env(t, q, u, inputs);
         for (&row, value) in which.iter().zip(out.iter_mut()) {
             self.run(
                 &self.tape.output_rows[row],
@@ -194,33 +175,15 @@ impl mech_runtime::Model for TapeModel {
         name_at(&self.constraint_names, i)
     }
     fn constraints(&self, t: f64, q: &[f64], out: &mut [f64]) {
-        let env = Env {
-            t,
-            q,
-            u: &[],
-            params: &self.params,
-            inputs: &[],
-        };
+        let env = self.env(t, q, &[], &[]);
         self.run(&self.tape.constraints, &env, out);
     }
     fn constraint_jacobian(&self, t: f64, q: &[f64], out: &mut [f64]) {
-        let env = Env {
-            t,
-            q,
-            u: &[],
-            params: &self.params,
-            inputs: &[],
-        };
+        let env = self.env(t, q, &[], &[]);
         self.run(&self.tape.constraint_jacobian, &env, out);
     }
     fn constraint_bias(&self, t: f64, q: &[f64], u: &[f64], out: &mut [f64]) {
-        let env = Env {
-            t,
-            q,
-            u,
-            params: &self.params,
-            inputs: &[],
-        };
+        let env = self.env(t, q, u, &[]);
         self.run(&self.tape.constraint_bias, &env, out);
     }
     fn nflexures(&self) -> usize {
@@ -230,13 +193,7 @@ impl mech_runtime::Model for TapeModel {
         name_at(&self.flexure_names, i)
     }
     fn flexures(&self, t: f64, q: &[f64], out: &mut [f64]) {
-        let env = Env {
-            t,
-            q,
-            u: &[],
-            params: &self.params,
-            inputs: &[],
-        };
+        let env = self.env(t, q, &[], &[]);
         self.run(&self.tape.flexures, &env, out);
     }
 }

@@ -211,21 +211,18 @@ fn increase_table(spec: &Spec, work: [[f64; 2]; 2], paper_work: [[f64; 2]; 2]) -
         ),
         &["", "old [µJ]", "new [µJ]", "ratio new/old", "increase"],
     );
-    increase.row(vec![
-        "model".into(),
-        format!("{:.1}", total(work[0]) * 1e6),
-        format!("{:.1}", total(work[1]) * 1e6),
-        format!("{model_ratio:.2}"),
-        format!("{:.0} %", 100.0 * (model_ratio - 1.0)),
-    ]);
+    let row = |label: &str, work: [[f64; 2]; 2], ratio: f64| {
+        vec![
+            label.to_string(),
+            format!("{:.1}", total(work[0]) * 1e6),
+            format!("{:.1}", total(work[1]) * 1e6),
+            format!("{ratio:.2}"),
+            format!("{:.0} %", 100.0 * (ratio - 1.0)),
+        ]
+    };
+    increase.row(row("model", work, model_ratio));
     if table_ratio.is_finite() {
-        increase.row(vec![
-            "paper, from Table IV".into(),
-            format!("{:.1}", total(paper_work[0]) * 1e6),
-            format!("{:.1}", total(paper_work[1]) * 1e6),
-            format!("{table_ratio:.2}"),
-            format!("{:.0} %", 100.0 * (table_ratio - 1.0)),
-        ]);
+        increase.row(row("paper, from Table IV", paper_work, table_ratio));
     }
     if let Some(p) = spec.paper_work_increase_percent {
         increase.row(vec![
