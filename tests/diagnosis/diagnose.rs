@@ -4,7 +4,7 @@
 
 use crate::common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use common::Rng;
 use mech::diagnose::candidates::{diagnose, Diagnosis, Holdout, Verdict};
@@ -13,18 +13,6 @@ use mech::diagnose::experiment::{self, Experiment};
 use mech::diagnose::fit::{fit, parameters, FitRequest};
 use mech::experiments::leg::Leg;
 use mech_runtime::Model;
-
-/// A standard normal variate (Box–Muller) from the shared test generator.
-fn normal(rng: &mut Rng) -> f64 {
-    let (a, b) = (rng.uniform(1e-12, 1.0), rng.uniform(0.0, 1.0));
-    (-2.0 * a.ln()).sqrt() * (2.0 * std::f64::consts::PI * b).cos()
-}
-
-fn scratch_dir(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 fn write(path: &Path, text: &str) {
     std::fs::write(path, text).unwrap();
@@ -36,13 +24,9 @@ fn experiment_in(dir: &Path, toml: &str) -> Experiment {
     let path = dir.join("experiment.toml");
     write(
         &path,
-        &format!("model = \"{}\"\n{toml}", model_path("hamr_vi")),
+        &format!("model = \"{}\"\n{toml}", common::bundled_path("hamr_vi")),
     );
     experiment::load(&path).unwrap()
-}
-
-fn model_path(name: &str) -> String {
-    format!("{}/models/{name}.mech", env!("CARGO_MANIFEST_DIR"))
 }
 
 fn set_param(leg: &mut Leg, name: &str, value: f64) {
@@ -59,7 +43,7 @@ fn param(leg: &Leg, name: &str) -> f64 {
 /// 1 µm noise. Fitting `k_s3` alone recovers 1.3 × the nominal value.
 #[test]
 fn quasi_static_fit_recovers_a_hidden_stiffness() {
-    let dir = scratch_dir("diagnose_quasi_static");
+    let dir = common::scratch_dir("diagnose_quasi_static");
     let experiment = experiment_in(
         &dir,
         "kind = \"quasi_static\"\ntitle = \"hidden k_s3\"\n\
@@ -80,8 +64,8 @@ fn quasi_static_fit_recovers_a_hidden_stiffness() {
         let inputs = truth.inputs(lift, swing);
         q = truth.equilibrium(&q, &inputs, &[]).unwrap().q;
         let foot = truth.foot_at(&q, &inputs);
-        let x = foot[0] + 1e-6 * normal(&mut rng);
-        let z = foot[2] + 1e-6 * normal(&mut rng);
+        let x = foot[0] + 1e-6 * rng.normal();
+        let z = foot[2] + 1e-6 * rng.normal();
         text += &format!("{lift}, {swing}, {}, {}\n", x * 1e3, z * 1e3);
     }
     let data_path = dir.join("measured.csv");
@@ -117,7 +101,7 @@ fn quasi_static_fit_recovers_a_hidden_stiffness() {
 /// recovers it.
 #[test]
 fn frequency_response_fit_recovers_the_loss_factor() {
-    let dir = scratch_dir("diagnose_frequency_response");
+    let dir = common::scratch_dir("diagnose_frequency_response");
     let experiment = bode_experiment(&dir);
     let Experiment::FrequencyResponse(_) = &experiment else {
         panic!("a frequency-response experiment");
@@ -158,8 +142,8 @@ fn bode_data(experiment: &Experiment, eta: f64, delay: f64, seed: u64) -> String
         let h = linear
             .frequency_response(truth.v_lift(), truth.foot()[2], omega, damping)
             .unwrap();
-        let gain = h.norm() * (1.0 + 0.02 * normal(&mut rng));
-        let phase = (h.arg() - omega * delay).to_degrees() + normal(&mut rng);
+        let gain = h.norm() * (1.0 + 0.02 * rng.normal());
+        let phase = (h.arg() - omega * delay).to_degrees() + rng.normal();
         text += &format!("{f}, {}, {phase}\n", gain * 1e3);
     }
     text
@@ -174,7 +158,7 @@ fn bode_experiment(dir: &Path) -> Experiment {
 }
 
 fn diagnose_text(name: &str, text: &str) -> Diagnosis {
-    let dir = scratch_dir(name);
+    let dir = common::scratch_dir(name);
     let experiment = bode_experiment(&dir);
     let data_path = dir.join("measured.csv");
     write(&data_path, text);
@@ -185,7 +169,7 @@ fn diagnose_text(name: &str, text: &str) -> Diagnosis {
 /// Clean data (the model as written, noise only): "no significant discrepancy".
 #[test]
 fn diagnose_finds_no_discrepancy_in_clean_data() {
-    let experiment = bode_experiment(&scratch_dir("diagnose_clean_setup"));
+    let experiment = bode_experiment(&common::scratch_dir("diagnose_clean_setup"));
     let d = diagnose_text("diagnose_clean", &bode_data(&experiment, 0.08, 0.0, 9));
     assert_eq!(d.verdict, Verdict::NoSignificantDiscrepancy, "{d:#?}");
 }
@@ -194,7 +178,7 @@ fn diagnose_finds_no_discrepancy_in_clean_data() {
 /// produce): the diagnosis must not force a cause.
 #[test]
 fn diagnose_reports_an_uncovered_effect_as_unexplained() {
-    let experiment = bode_experiment(&scratch_dir("diagnose_delay_setup"));
+    let experiment = bode_experiment(&common::scratch_dir("diagnose_delay_setup"));
     let d = diagnose_text("diagnose_delay", &bode_data(&experiment, 0.08, 1e-3, 11));
     assert!(
         matches!(d.verdict, Verdict::Unexplained | Verdict::PartlyExplained),
@@ -206,7 +190,7 @@ fn diagnose_reports_an_uncovered_effect_as_unexplained() {
 #[test]
 fn fit_requests_and_data_are_checked() {
     let leg = Leg::open(&mech::experiments::ModelSpec {
-        model: model_path("hamr_vi").into(),
+        model: common::bundled_path("hamr_vi").into(),
         set: Vec::new(),
         independent: vec!["qsact".into(), "qlact".into()],
     })
@@ -217,7 +201,7 @@ fn fit_requests_and_data_are_checked() {
     assert!(unit.contains("needs"), "{unit}");
     assert!(FitRequest::parse("k_s3=2..1 uN*m/rad").is_err());
 
-    let dir = scratch_dir("diagnose_checks");
+    let dir = common::scratch_dir("diagnose_checks");
     let experiment = experiment_in(
         &dir,
         "kind = \"quasi_static\"\ntitle = \"t\"\noutputs = [\"foot.y\"]\n",
@@ -234,7 +218,7 @@ fn fit_requests_and_data_are_checked() {
 #[test]
 fn diagnose_command_writes_the_page_and_the_summary() {
     let root = env!("CARGO_MANIFEST_DIR");
-    let out_dir = scratch_dir("diagnose_command");
+    let out_dir = common::scratch_dir("diagnose_command");
     let args = mech::cli::diagnose::DiagnoseArgs {
         // The model named on the command line, as `mech diagnose MODEL --experiment …`.
         model: Some(format!("{root}/models/hamr_vi.mech").into()),

@@ -9,7 +9,7 @@
 
 use crate::common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use common::Rng;
 use mech::diagnose::candidates::{diagnose, Diagnosis, Holdout, Trial, Verdict};
@@ -22,22 +22,10 @@ use mech_codegen::ir::transform::actuator::{BASE_COMPLIANCE, TIP_MASS, TIP_PRELO
 use mech_codegen::ir::transform::hinge::{MISALIGNMENT, OFF_AXIS_COMPLIANCE, TWIST_FACTOR};
 use mech_runtime::Model;
 
-/// A standard normal variate (Box–Muller) from the shared test generator.
-fn normal(rng: &mut Rng) -> f64 {
-    let (a, b) = (rng.uniform(1e-12, 1.0), rng.uniform(0.0, 1.0));
-    (-2.0 * a.ln()).sqrt() * (2.0 * std::f64::consts::PI * b).cos()
-}
-
-fn scratch_dir(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 /// The diagnosis experiment `toml` (HAMR-VI) written into `dir` and loaded.
 fn experiment_in(dir: &Path, toml: &str) -> Experiment {
     let path = dir.join("experiment.toml");
-    let model = format!("{}/models/hamr_vi.mech", env!("CARGO_MANIFEST_DIR"));
+    let model = common::bundled_path("hamr_vi");
     std::fs::write(&path, format!("model = \"{model}\"\n{toml}")).unwrap();
     experiment::load(&path).unwrap()
 }
@@ -110,7 +98,7 @@ fn force_case(
     .unwrap();
     let mut text = String::from("distance [um], force [mN]\n");
     for point in &test.points {
-        let force = point.force + FORCE_NOISE * normal(rng);
+        let force = point.force + FORCE_NOISE * rng.normal();
         text += &format!("{}, {}\n", point.distance * 1e6, force * 1e3);
     }
     let name = dof.name();
@@ -287,7 +275,7 @@ fn misalignment_case(dir: &Path, rng: &mut Rng) {
         let volts = 225.0 * k as f64 / 16.0;
         let inputs = truth.inputs(volts, 0.0);
         q = truth.equilibrium(&q, &inputs, &[]).unwrap().q;
-        let z = truth.foot_at(&q, &inputs)[2] + 2e-6 * normal(rng);
+        let z = truth.foot_at(&q, &inputs)[2] + 2e-6 * rng.normal();
         text += &format!("{volts}, {}\n", z * 1e3);
     }
     let d = diagnose_data(dir, &experiment, &text);
@@ -365,8 +353,8 @@ fn bode_case(
             let h = linear
                 .frequency_response(input, output, omega, damping)
                 .unwrap();
-            let gain = h.norm() * (1.0 + 0.02 * normal(rng));
-            let phase = h.arg().to_degrees() + normal(rng);
+            let gain = h.norm() * (1.0 + 0.02 * rng.normal());
+            let phase = h.arg().to_degrees() + rng.normal();
             text += &format!(", {}, {phase}", gain * 1e3);
         }
         text += "\n";
@@ -438,7 +426,7 @@ fn preload_case(dir: &Path, rng: &mut Rng) {
         let foot = truth.foot_at(&q, &inputs);
         let noisy: Vec<String> = foot
             .iter()
-            .map(|x| format!("{}", (x + 2e-6 * normal(rng)) * 1e3))
+            .map(|x| format!("{}", (x + 2e-6 * rng.normal()) * 1e3))
             .collect();
         text += &format!("{lift}, {swing}, {}\n", noisy.join(", "));
     }
@@ -614,7 +602,7 @@ fn draw(seed: u64) -> (Entry, Rng) {
 fn hidden_effect(seed: u64) {
     let (entry, mut rng) = draw(seed);
     eprintln!("seed {seed}: {entry:?}");
-    let dir = scratch_dir(&format!("hidden_effect_{seed}"));
+    let dir = common::scratch_dir(&format!("hidden_effect_{seed}"));
     let case = match entry {
         Entry::Twist => twist_case,
         Entry::OffAxisLoad => off_axis_load_case,
@@ -688,7 +676,7 @@ fn the_seeds_draw_every_catalog_entry() {
 /// of fb3 removes 45–60 % of the swing force (asserted below) — as much as the paper reports.
 #[test]
 fn the_papers_story_twist_and_a_frequency_dependent_loss_factor() {
-    let dir = scratch_dir("paper_story");
+    let dir = common::scratch_dir("paper_story");
     let mut rng = Rng::new(2024);
     let base = blocked_swing_force(&Leg::open(&hamr_spec()).unwrap());
     let mut truth = open_leg(&hamr_spec(), &Extension::Twist(vec![("fb3".into(), 1)])).unwrap();
@@ -719,7 +707,7 @@ fn the_papers_story_twist_and_a_frequency_dependent_loss_factor() {
     );
 
     // The chirp: swing resonance low and Q over-estimated → twist and η(f), together.
-    let bode_dir = scratch_dir("paper_story_bode");
+    let bode_dir = common::scratch_dir("paper_story_bode");
     let damping = mech_runtime::FlexureDamping::HystereticPowerLaw {
         exponent: 0.3,
         reference_hz: 5.0,

@@ -5,7 +5,6 @@ use crate::common;
 
 use mech::diagnose::extend::{open_leg, Extension};
 use mech::experiments::ModelSpec;
-use mech::tape_model::TapeModel;
 use mech_runtime::Model;
 
 /// A plate on two pins (x, then y) whose revolute closure to the ground about x is compliant
@@ -48,8 +47,8 @@ const TREE: &str = "
 
 #[test]
 fn a_loop_twist_spring_equals_the_joint_springs_it_reduces_to() {
-    let looped = TapeModel::new(&common::compile_text("loop_twist", LOOP_TWIST));
-    let tree = TapeModel::new(&common::compile_text("tree", TREE));
+    let looped = common::tape_from_text("loop_twist", LOOP_TWIST);
+    let tree = common::tape_from_text("tree", TREE);
     // 3 position rows only: the compliant closure drops both alignment rows.
     assert_eq!(looped.nc(), 3);
     assert_eq!(looped.nflexures(), 3, "bending, twist and lateral");

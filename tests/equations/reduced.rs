@@ -151,7 +151,7 @@ struct Drive {
 
 impl Drive {
     fn new() -> Drive {
-        let path = format!("{}/models/hamr_vi.mech", env!("CARGO_MANIFEST_DIR"));
+        let path = common::bundled_path("hamr_vi");
         let spec = ModelSpec {
             model: Path::new(&path).to_path_buf(),
             set: Vec::new(),

@@ -25,7 +25,7 @@ const DRIVES: [(f64, f64); 4] = [
 
 fn hamr_vi() -> Leg {
     Leg::open(&ModelSpec {
-        model: format!("{}/models/hamr_vi.mech", env!("CARGO_MANIFEST_DIR")).into(),
+        model: common::bundled_path("hamr_vi").into(),
         set: Vec::new(),
         independent: vec!["qsact".into(), "qlact".into()],
     })
@@ -421,7 +421,7 @@ fn side_load_on_a_held_pendulum_matches_the_closed_form() {
 #[test]
 fn reduced_stiffness_on_the_extended_leg_matches_differences_of_the_generalized_force() {
     let spec = ModelSpec {
-        model: format!("{}/models/hamr_vi.mech", env!("CARGO_MANIFEST_DIR")).into(),
+        model: common::bundled_path("hamr_vi").into(),
         set: Vec::new(),
         independent: vec!["qsact".into(), "qlact".into()],
     };
@@ -548,7 +548,7 @@ fn selected_outputs_equal_the_outputs() {
 #[test]
 fn static_forcing_is_the_forcing_at_zero_speed() {
     let spec = ModelSpec {
-        model: format!("{}/models/hamr_vi.mech", env!("CARGO_MANIFEST_DIR")).into(),
+        model: common::bundled_path("hamr_vi").into(),
         set: Vec::new(),
         independent: vec!["qsact".into(), "qlact".into()],
     };
