@@ -4,6 +4,9 @@
 
 use std::path::{Path, PathBuf};
 
+use mech::diagnose::data::MeasuredData;
+use mech::diagnose::experiment::{self, Experiment};
+use mech::experiments::leg::Leg;
 use mech::tape_model::TapeModel;
 use mech_codegen::Compiled;
 use mech_runtime::{Method, Model, SimOptions, Trajectory};
@@ -12,6 +15,21 @@ use serde_json::Value;
 /// The path of a bundled model, `models/NAME.mech`.
 pub fn bundled_path(name: &str) -> String {
     format!("{}/models/{name}.mech", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The text of a bundled model.
+pub fn bundled_source(name: &str) -> String {
+    std::fs::read_to_string(bundled_path(name)).unwrap()
+}
+
+/// HAMR-VI as a leg (`models/hamr_vi.mech`), the actuator coordinates (swing and lift)
+/// held independent.
+pub fn hamr_vi_spec() -> mech::experiments::ModelSpec {
+    mech::experiments::ModelSpec {
+        model: bundled_path("hamr_vi").into(),
+        set: Vec::new(),
+        independent: vec!["qsact".into(), "qlact".into()],
+    }
 }
 
 /// Compiles a bundled model from `models/`.
@@ -110,6 +128,11 @@ impl Rng {
     pub fn vector(&mut self, n: usize, lo: f64, hi: f64) -> Vec<f64> {
         (0..n).map(|_| self.uniform(lo, hi)).collect()
     }
+}
+
+/// `(value − reference) / reference`.
+pub fn relative_error(value: f64, reference: f64) -> f64 {
+    (value - reference) / reference
 }
 
 /// `|a − b| ≤ tol · scale` with `scale = max(|b|, floor)`.
@@ -216,4 +239,43 @@ pub fn upward_crossings(times: &[f64], signal: &[f64]) -> Vec<f64> {
         }
     }
     crossings
+}
+
+// The diagnosis experiments on HAMR-VI.
+
+/// A diagnosis experiment on HAMR-VI: `toml` (without its `model` line) written into `dir`
+/// as `experiment.toml` and loaded.
+pub fn hamr_vi_experiment_in(dir: &Path, toml: &str) -> Experiment {
+    let path = dir.join("experiment.toml");
+    let model = bundled_path("hamr_vi");
+    std::fs::write(&path, format!("model = \"{model}\"\n{toml}")).unwrap();
+    experiment::load(&path).unwrap()
+}
+
+/// `text` written into `dir` as `measured.csv` and loaded.
+pub fn measured_data(dir: &Path, text: &str) -> MeasuredData {
+    let path = dir.join("measured.csv");
+    std::fs::write(&path, text).unwrap();
+    MeasuredData::load(&path).unwrap()
+}
+
+/// Sets the parameter `name` of the leg's model.
+pub fn set_leg_param(leg: &mut Leg, name: &str, value: f64) {
+    let index = leg.model().param_index(name).unwrap();
+    leg.session.model.set_param(index, value);
+}
+
+/// `leg`'s quasi-static foot positions at 8 points of the paper's 225 V drive (lift
+/// 225 sin φ, swing 225 cos φ), each equilibrium started from the last: `(lift, swing, foot)`.
+pub fn feet_along_the_drive(leg: &Leg) -> Vec<(f64, f64, [f64; 3])> {
+    let mut q = leg.q0.clone();
+    (0..8)
+        .map(|k| {
+            let phase = 2.0 * std::f64::consts::PI * k as f64 / 8.0;
+            let (lift, swing) = (225.0 * phase.sin(), 225.0 * phase.cos());
+            let inputs = leg.inputs(lift, swing);
+            q = leg.equilibrium(&q, &inputs, &[]).unwrap().q;
+            (lift, swing, leg.foot_at(&q, &inputs))
+        })
+        .collect()
 }

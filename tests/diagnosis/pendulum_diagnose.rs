@@ -115,12 +115,6 @@ fn trace_csv(extra: Extra, seed: u64, noise_deg: f64) -> String {
     text
 }
 
-fn load_text(dir: &Path, text: &str) -> MeasuredData {
-    let path = dir.join("measured.csv");
-    std::fs::write(&path, text).unwrap();
-    MeasuredData::load(&path).unwrap()
-}
-
 fn experiment_in(dir: &Path, extra_keys: &str) -> Experiment {
     let path = dir.join("experiment.toml");
     std::fs::write(
@@ -176,7 +170,7 @@ fn kinds(s: &Screening) -> Vec<&'static str> {
 fn clean_traces_raise_no_flags() {
     let dir = common::scratch_dir("pendulum_clean_screen");
     for seed in 1..=8 {
-        let data = load_text(&dir, &trace_csv(Extra::default(), seed, NOISE_DEG));
+        let data = common::measured_data(&dir, &trace_csv(Extra::default(), seed, NOISE_DEG));
         let s = screen_data(&data);
         assert!(s.flags.is_empty(), "seed {seed}: {:?}", s.flags);
         let fit = s.fit.as_ref().expect("screened");
@@ -207,7 +201,7 @@ fn amplitude_dependent_damping_is_flagged() {
         ("coulomb", coulomb_friction(), false),
     ] {
         for seed in 1..=3 {
-            let data = load_text(&dir, &trace_csv(extra, seed, NOISE_DEG));
+            let data = common::measured_data(&dir, &trace_csv(extra, seed, NOISE_DEG));
             let s = screen_data(&data);
             assert_eq!(
                 kinds(&s),
@@ -237,7 +231,7 @@ fn baseline_drift_is_flagged() {
         ..Extra::default()
     };
     for seed in 1..=3 {
-        let data = load_text(&dir, &trace_csv(extra, seed, NOISE_DEG));
+        let data = common::measured_data(&dir, &trace_csv(extra, seed, NOISE_DEG));
         let s = screen_data(&data);
         assert_eq!(kinds(&s), ["baseline_drift"], "seed {seed}: {s:?}");
         let fit = s.fit.as_ref().unwrap();
@@ -256,7 +250,7 @@ fn baseline_drift_is_flagged() {
             _ => format!("{line}\n"),
         })
         .collect();
-    let s = screen_data(&load_text(&dir, &shifted));
+    let s = screen_data(&common::measured_data(&dir, &shifted));
     assert_eq!(kinds(&s), ["baseline_offset"], "{s:?}");
 }
 
@@ -286,7 +280,7 @@ fn fit_recovers_the_loss_factor_and_modulus() {
             },
         ),
     ] {
-        let data = load_text(&dir, &trace_csv(extra, 21, NOISE_DEG));
+        let data = common::measured_data(&dir, &trace_csv(extra, 21, NOISE_DEG));
         let mut leg = Leg::open_any(&experiment.model_spec(), &[]).unwrap();
         let expected: Vec<f64> = fits
             .iter()
@@ -320,7 +314,7 @@ fn diagnose_ring_downs() {
     let dir = common::scratch_dir("pendulum_diagnose");
     let experiment = experiment_in(&dir, "");
     let run = |extra: Extra, seed: u64| {
-        let data = load_text(&dir, &trace_csv(extra, seed, NOISE_DEG));
+        let data = common::measured_data(&dir, &trace_csv(extra, seed, NOISE_DEG));
         diagnose(&experiment, &data, &[], Holdout::Every(3)).unwrap()
     };
     let clean = run(Extra::default(), 31);
@@ -421,7 +415,10 @@ fn bad_pendulum_data_are_clear_errors() {
     assert!(e.contains("bad.toml") && e.contains("release"), "{e}");
     let other = experiment_in(&dir, "angle = \"foot.x\"\n");
     let e = other
-        .observations(&leg, &load_text(&dir, &trace_csv(Extra::default(), 1, 0.0)))
+        .observations(
+            &leg,
+            &common::measured_data(&dir, &trace_csv(Extra::default(), 1, 0.0)),
+        )
         .unwrap_err();
     assert!(e.contains("no output or coordinate `foot.x`"), "{e}");
     // A HAMR experiment on the rig is an error, not a panic.
@@ -435,7 +432,7 @@ fn bad_pendulum_data_are_clear_errors() {
     .unwrap();
     let hamr = experiment::load(&path).unwrap();
     let e = hamr
-        .observations(&leg, &load_text(&dir, "angle [deg]\n1\n"))
+        .observations(&leg, &common::measured_data(&dir, "angle [deg]\n1\n"))
         .unwrap_err();
     assert!(e.contains("no input `v_lift`"), "{e}");
 }
@@ -537,7 +534,7 @@ fn pendulum_commands_report_flags() {
 #[test]
 fn release_angle_from_the_file_or_the_data() {
     let dir = common::scratch_dir("pendulum_release");
-    let data = load_text(&dir, &trace_csv(Extra::default(), 51, NOISE_DEG));
+    let data = common::measured_data(&dir, &trace_csv(Extra::default(), 51, NOISE_DEG));
     let given = experiment_in(&dir, "release = \"10 deg\"\n");
     let leg = Leg::open_any(&given.model_spec(), &[]).unwrap();
     let observations = given.observations(&leg, &data).unwrap();
@@ -549,7 +546,7 @@ fn release_angle_from_the_file_or_the_data() {
         panic!("a pendulum experiment");
     };
     for seed in 52..56 {
-        let data = load_text(&dir, &trace_csv(Extra::default(), seed, NOISE_DEG));
+        let data = common::measured_data(&dir, &trace_csv(Extra::default(), seed, NOISE_DEG));
         let release = pendulum.release_angle(&data).unwrap();
         assert!(
             (release.to_degrees() - RELEASE_DEG).abs() < 0.02,

@@ -142,7 +142,7 @@ fn hamr_vi_closes_at_zero_with_two_degrees_of_freedom() {
 /// the rest, so that the rank depends on the tolerance; the moved ones leave none.
 #[test]
 fn hamr_vi_fb2_fix_removes_the_fragile_singular_value() {
-    let text = std::fs::read_to_string(common::bundled_path("hamr_vi")).unwrap();
+    let text = common::bundled_source("hamr_vi");
     let published = text
         .replace(
             "[-2.05236486487, 5.98079552649, 0] * 1 mm",

@@ -199,7 +199,7 @@ fn slider_crank_position_and_velocity_match_the_analytic_expressions() {
 /// as with the minimal (x, y) closure.
 #[test]
 fn redundant_closure_reports_mobility_and_simulates() {
-    let source = std::fs::read_to_string(common::bundled_path("four_bar")).unwrap();
+    let source = common::bundled_source("four_bar");
     let redundant = source.replace(
         "loop tip = coincident(coupler, rocker) {",
         "loop tip = revolute(coupler, rocker) {\n    axis = z;",
@@ -281,7 +281,7 @@ fn jacobian_and_bias_match_finite_differences() {
 /// A loop that cannot close names the row and the residual.
 #[test]
 fn impossible_assembly_is_a_clear_error() {
-    let source = std::fs::read_to_string(common::bundled_path("four_bar")).unwrap();
+    let source = common::bundled_source("four_bar");
     let too_short = source.replace(
         "param coupler_length = 2.5 m;",
         "param coupler_length = 0.5 m;",
