@@ -499,11 +499,28 @@ def main():
     print(f'wrote {a.out}')
 
 
+def analysis_path(name):
+    """The hand-written interpretation bench/NAME.md, kept next to this script."""
+    return os.path.join(os.path.dirname(os.path.abspath(__file__)), f'{name}.md')
+
+
+def analysis_text(path):
+    """The text of `path` without its HTML comments (notes to whoever edits it)."""
+    with open(path) as f:
+        return re.sub(r'<!--.*?-->\s*', '', f.read(), flags=re.S)
+
+
+class Missing(dict):
+    """Placeholder values: a placeholder with no measurement reads '-'."""
+    def __missing__(self, key):
+        return '-'
+
+
 def analyse(mech, sympy_ops, sympy_derive, pin, pin_cpp, mech_eval):
     """Prose derived from the measured numbers (see ANALYSIS.md-style notes in run output)."""
     L = []
     w = L.append
-    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'analysis.md')
+    path = analysis_path('analysis')
     # Hand-written interpretation kept in bench/analysis.md, with {placeholders} filled from
     # the measurements, so that the explanation stays next to the numbers it explains.
     if os.path.exists(path):
@@ -537,14 +554,7 @@ def analyse(mech, sympy_ops, sympy_derive, pin, pin_cpp, mech_eval):
             if n == 8:
                 values['speedup_ref_8'] = fmt(ratio(13.4, r['derive_s']['median']))
             values[f'udot_ratio_{n}'] = fmt(ratio(e['udot_ns']['median'], chol * 1e3 if chol else None))
-        with open(path) as f:
-            text = f.read()
-
-        class Missing(dict):
-            def __missing__(self, key):
-                return '-'
-        text = re.sub(r'<!--.*?-->\s*', '', text, flags=re.S)
-        L.append(text.format_map(Missing(values)).rstrip('\n'))
+        L.append(analysis_text(path).format_map(Missing(values)).rstrip('\n'))
     return L
 
 
@@ -743,7 +753,7 @@ def loop_sections(loops, paired_loops, sympy_loops, paired_sympy_fourbar, target
     w('')
     w('## 8. Where the loop targets stand, and why')
     w('')
-    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'analysis_loops.md')
+    path = analysis_path('analysis_loops')
     if os.path.exists(path):
         fb = loops.get('four_bar')
         n = nums.get('four_bar', {})
@@ -803,13 +813,7 @@ def loop_sections(loops, paired_loops, sympy_loops, paired_sympy_fourbar, target
                 five_ratio=fmt(ratio(n5.get('sympy_dop'), five['sim1s']['wall_s']['median'])),
                 five_nfev=fmt_int(n5.get('sympy_nfev_dop')))
 
-        class Missing(dict):
-            def __missing__(self, key):
-                return '-'
-        with open(path) as f:
-            text = f.read()
-        text = re.sub(r'<!--.*?-->\s*', '', text, flags=re.S)
-        L.append(text.format_map(Missing(values)).rstrip('\n'))
+        L.append(analysis_text(path).format_map(Missing(values)).rstrip('\n'))
         w('')
     return L
 
@@ -829,10 +833,9 @@ def hamr_section(R):
     with open(table) as f:
         L.extend(line.rstrip('\n') for line in f if line.startswith('|'))
     L.append('')
-    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'analysis_hamr.md')
+    path = analysis_path('analysis_hamr')
     if os.path.exists(path):
-        with open(path) as f:
-            L.append(re.sub(r'<!--.*?-->\s*', '', f.read(), flags=re.S).rstrip('\n'))
+        L.append(analysis_text(path).rstrip('\n'))
     return L
 
 
@@ -858,10 +861,9 @@ def statics_section(R):
                 L.append('')
             L.append(line)
     L.append('')
-    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'analysis_statics.md')
+    path = analysis_path('analysis_statics')
     if os.path.exists(path):
-        with open(path) as f:
-            L.append(re.sub(r'<!--.*?-->\s*', '', f.read(), flags=re.S).rstrip('\n'))
+        L.append(analysis_text(path).rstrip('\n'))
     return L
 
 
@@ -869,10 +871,9 @@ def diagnose_section():
     """Section 11: `mech diagnose` over the whole catalog (measured by hand with the commands
     it shows: bench/analysis_diagnose.md)."""
     L = ['', '## 11. `mech diagnose`: the whole catalog on the HAMR leg', '']
-    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'analysis_diagnose.md')
+    path = analysis_path('analysis_diagnose')
     if os.path.exists(path):
-        with open(path) as f:
-            L.append(re.sub(r'<!--.*?-->\s*', '', f.read(), flags=re.S).rstrip('\n'))
+        L.append(analysis_text(path).rstrip('\n'))
     return L
 
 

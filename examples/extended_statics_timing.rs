@@ -10,20 +10,14 @@
 //! cargo run --release --example extended_statics_timing
 //! ```
 
-use std::path::Path;
-use std::time::Instant;
-
 use mech::diagnose::extend::{open_leg, Extension};
 use mech::experiments::leg::{force_deflection, Dof, Leg, Sensor};
-use mech::experiments::ModelSpec;
+
+mod common;
+use common::{fastest, leg_spec};
 
 fn main() {
-    let path = format!("{}/models/hamr_vi.mech", env!("CARGO_MANIFEST_DIR"));
-    let spec = ModelSpec {
-        model: Path::new(&path).to_path_buf(),
-        set: Vec::new(),
-        independent: vec!["qsact".into(), "qlact".into()],
-    };
+    let spec = leg_spec("hamr_vi");
     let legs: [(&str, Leg); 2] = [
         ("HAMR-VI", Leg::open(&spec).expect("the leg opens")),
         (
@@ -39,16 +33,11 @@ fn main() {
     for (name, leg) in &legs {
         for (dof, axis) in [(Dof::Swing, 0), (Dof::Lift, 2)] {
             for fraction in [0.0, 0.3] {
-                let mut best = f64::INFINITY;
-                let mut points = 0;
-                for _ in 0..5 {
-                    let start = Instant::now();
-                    let test =
-                        force_deflection(leg, dof, axis, 225.0, Sensor::Steps(127e-6), fraction)
-                            .expect("the sweep runs");
-                    best = best.min(start.elapsed().as_secs_f64());
-                    points = test.points.len();
-                }
+                let (best, test) = fastest(5, || {
+                    force_deflection(leg, dof, axis, 225.0, Sensor::Steps(127e-6), fraction)
+                        .expect("the sweep runs")
+                });
+                let points = test.points.len();
                 println!(
                     "| {name} | {}, off-axis load {:.0} % | {points} | {:.2} | {:.1} |",
                     dof.name(),

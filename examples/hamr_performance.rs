@@ -15,15 +15,15 @@
 //! quasi-static for the model.
 
 use std::hint::black_box;
-use std::path::Path;
 use std::time::{Duration, Instant};
 
 use mech::experiments::leg::Leg;
-use mech::experiments::ModelSpec;
 use mech_codegen::{Compiled, RustOptions};
 use mech_runtime::{
     ConstrainedSolver, FlexureDamping, Method, Model, Signal, SimOptions, Trajectory,
 };
+
+mod common;
 
 /// Median wall time of `work` over at least `min_runs` runs and at least `budget`.
 fn median_time<T>(min_runs: usize, budget: Duration, mut work: impl FnMut() -> T) -> (f64, T) {
@@ -134,12 +134,7 @@ fn main() {
             format!("{} kB / {} lines", rust.len() / 1000, rust.lines().count()),
         );
 
-        let spec = ModelSpec {
-            model: Path::new(&path).to_path_buf(),
-            set: Vec::new(),
-            independent: vec!["qsact".into(), "qlact".into()],
-        };
-        let leg = Leg::open(&spec).expect("the leg opens");
+        let leg = Leg::open(&common::leg_spec(name)).expect("the leg opens");
         let model = mech::models::compiled(name).expect("bundled");
         let amplitude = 225.0;
         let signals = drive(&leg, amplitude);

@@ -9,33 +9,14 @@
 //! cargo run --release --example statics_timing
 //! ```
 
-use std::path::Path;
-use std::time::Instant;
-
 use mech::experiments::leg::{force_deflection, Dof, Leg};
-use mech::experiments::ModelSpec;
 use mech_runtime::{solve_statics_with_loads, Fixture, SideLoad, StaticsOptions};
 
-/// The fastest of `runs` runs of `work`, in seconds, with its last result.
-fn fastest<T>(runs: usize, mut work: impl FnMut() -> T) -> (f64, T) {
-    let mut best = f64::INFINITY;
-    let mut last = None;
-    for _ in 0..runs {
-        let t0 = Instant::now();
-        last = Some(work());
-        best = best.min(t0.elapsed().as_secs_f64());
-    }
-    (best, last.expect("at least one run"))
-}
+mod common;
+use common::{fastest, leg_spec};
 
 fn main() {
-    let path = format!("{}/models/hamr_vi.mech", env!("CARGO_MANIFEST_DIR"));
-    let spec = ModelSpec {
-        model: Path::new(&path).to_path_buf(),
-        set: Vec::new(),
-        independent: vec!["qsact".into(), "qlact".into()],
-    };
-    let leg = Leg::open(&spec).expect("the leg opens");
+    let leg = Leg::open(&leg_spec("hamr_vi")).expect("the leg opens");
     let rest_inputs = leg.inputs(0.0, 0.0);
     let rest = leg
         .equilibrium(&leg.q0, &rest_inputs, &[])

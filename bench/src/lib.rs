@@ -127,6 +127,14 @@ mod tests {
         (q, u)
     }
 
+    /// `M` and `F` of two compilations agree at the state `(q, u)`.
+    fn assert_same_equations(a: &Compiled, b: &Compiled, q: &[f64], u: &[f64]) {
+        let (m1, f1) = eval_equations(a, q, u);
+        let (m2, f2) = eval_equations(b, q, u);
+        assert_close(&m1, &m2, "M");
+        assert_close(&f1, &f2, "F");
+    }
+
     fn assert_close(a: &[f64], b: &[f64], what: &str) {
         assert_eq!(a.len(), b.len(), "{what}: lengths");
         for (i, (x, y)) in a.iter().zip(b).enumerate() {
@@ -152,10 +160,7 @@ mod tests {
         assert_eq!(generated.equations.nu, 4);
         for seed in [1, 2, 3] {
             let (q, u) = random_state(4, 0x9E37_79B9_7F4A_7C15 ^ seed);
-            let (m1, f1) = eval_equations(&bundled, &q, &u);
-            let (m2, f2) = eval_equations(&generated, &q, &u);
-            assert_close(&m1, &m2, "M");
-            assert_close(&f1, &f2, "F");
+            assert_same_equations(&bundled, &generated, &q, &u);
         }
     }
 
@@ -166,10 +171,7 @@ mod tests {
             let per_link = compile("per_link.mech", chain_source_per_link(n));
             assert_eq!(per_link.model.params.len(), 9 * n + 1);
             let (q, u) = random_state(n, 7 + n as u64);
-            let (m1, f1) = eval_equations(&shared, &q, &u);
-            let (m2, f2) = eval_equations(&per_link, &q, &u);
-            assert_close(&m1, &m2, "M");
-            assert_close(&f1, &f2, "F");
+            assert_same_equations(&shared, &per_link, &q, &u);
         }
     }
 

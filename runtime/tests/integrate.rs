@@ -6,6 +6,9 @@
 use mech_runtime::integrate::{AdaptiveOptions, Dop853, Dopri5, Ode, Rk4, Stepper};
 use mech_runtime::RuntimeError;
 
+mod common;
+use common::{run_to_end, worst_dense_error};
+
 /// y' = -y, y(0) = 1.
 struct Decay;
 impl Ode for Decay {
@@ -71,12 +74,6 @@ fn tol(rtol: f64, atol: f64) -> AdaptiveOptions {
         rtol,
         atol,
         ..Default::default()
-    }
-}
-
-fn run_to_end<S: Stepper>(s: &mut S) {
-    while !s.is_finished() {
-        s.step().unwrap();
     }
 }
 
@@ -504,16 +501,8 @@ fn dop853_converges_and_interpolates() {
     let run = |tol: f64| {
         let opts = AdaptiveOptions::dop853().with_tolerances(tol, tol);
         let mut s = Dop853::new(Oscillator, 0.0, &[1.0, 0.0], 20.0, opts).unwrap();
-        let (mut worst_dense, mut out) = (0.0f64, [0.0; 2]);
-        while !s.is_finished() {
-            s.step().unwrap();
-            let (a, b) = (s.t_prev(), s.t());
-            for k in 1..4 {
-                let t = a + (b - a) * k as f64 / 4.0;
-                s.interpolate(t, &mut out).unwrap();
-                worst_dense = worst_dense.max((out[0] - t.cos()).abs());
-            }
-        }
+        let worst_dense =
+            worst_dense_error(&mut s, &[0.25, 0.5, 0.75], |t, x| (x[0] - t.cos()).abs());
         let error = (s.state()[0] - 20f64.cos()).abs();
         (error, s.stats().accepted_steps, worst_dense)
     };

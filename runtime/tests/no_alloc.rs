@@ -7,6 +7,9 @@ use mech_runtime::{
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
+mod common;
+use common::model_metadata;
+
 /// Counts allocations made by the current thread while `COUNTING` is set.
 struct CountingAlloc;
 
@@ -46,46 +49,13 @@ struct Coupled {
 }
 
 impl Model for Coupled {
-    fn name(&self) -> &str {
-        "coupled"
-    }
-    fn nq(&self) -> usize {
-        2
-    }
-    fn nu(&self) -> usize {
-        2
-    }
-    fn ninputs(&self) -> usize {
-        1
-    }
-    fn noutputs(&self) -> usize {
-        0
-    }
-    fn nparams(&self) -> usize {
-        0
-    }
-    fn coordinate_name(&self, _i: usize) -> &str {
-        "q"
-    }
-    fn input_name(&self, _i: usize) -> &str {
-        "torque"
-    }
-    fn output_name(&self, _i: usize) -> &str {
-        unreachable!()
-    }
-    fn param_name(&self, _i: usize) -> &str {
-        unreachable!()
-    }
-    fn param(&self, _i: usize) -> f64 {
-        unreachable!()
-    }
-    fn set_param(&mut self, _i: usize, _value: f64) {}
-    fn input_default(&self, _i: usize) -> f64 {
-        0.0
-    }
-    fn initial_state(&self, q: &mut [f64], u: &mut [f64]) {
-        q.fill(0.0);
-        u.fill(0.0);
+    model_metadata! {
+        name: "coupled",
+        coordinates: ["q", "q"],
+        initial_q: [0.0, 0.0],
+        inputs: ["torque"],
+        outputs: [],
+        params: [],
     }
     fn mass_matrix(&self, _t: f64, q: &[f64], _inputs: &[f64], out: &mut [f64]) {
         let c = 0.5 * (q[0] - q[1]).cos();

@@ -2,9 +2,12 @@
 
 use mech_runtime::{
     accelerations, default_signals, simulate, Method, Model, ModelOde, RuntimeError, Signal,
-    SimOptions,
+    SimOptions, Trajectory,
 };
 use std::f64::consts::{PI, TAU};
+
+mod common;
+use common::model_metadata;
 
 /// Planar pendulum: q = angle from the downward vertical, M = m l², F = −m g l sin q.
 /// Input 0 is a torque at the pivot (default 0). Outputs: kinetic + potential energy, and the
@@ -22,48 +25,13 @@ impl Pendulum {
 }
 
 impl Model for Pendulum {
-    fn name(&self) -> &str {
-        "pendulum"
-    }
-    fn nq(&self) -> usize {
-        1
-    }
-    fn nu(&self) -> usize {
-        1
-    }
-    fn ninputs(&self) -> usize {
-        1
-    }
-    fn noutputs(&self) -> usize {
-        2
-    }
-    fn nparams(&self) -> usize {
-        3
-    }
-    fn coordinate_name(&self, _i: usize) -> &str {
-        "theta"
-    }
-    fn input_name(&self, _i: usize) -> &str {
-        "torque"
-    }
-    fn output_name(&self, i: usize) -> &str {
-        ["energy", "torque"][i]
-    }
-    fn param_name(&self, i: usize) -> &str {
-        ["m", "l", "g"][i]
-    }
-    fn param(&self, i: usize) -> f64 {
-        [self.m, self.l, self.g][i]
-    }
-    fn set_param(&mut self, i: usize, value: f64) {
-        *[&mut self.m, &mut self.l, &mut self.g][i] = value;
-    }
-    fn input_default(&self, _i: usize) -> f64 {
-        0.0
-    }
-    fn initial_state(&self, q: &mut [f64], u: &mut [f64]) {
-        q[0] = 0.1;
-        u[0] = 0.0;
+    model_metadata! {
+        name: "pendulum",
+        coordinates: ["theta"],
+        initial_q: [0.1],
+        inputs: ["torque"],
+        outputs: ["energy", "torque"],
+        params: [m, l, g],
     }
     fn mass_matrix(&self, _t: f64, _q: &[f64], _inputs: &[f64], out: &mut [f64]) {
         out[0] = self.m * self.l * self.l;
@@ -134,7 +102,7 @@ fn exact_period(p: &Pendulum, theta0: f64) -> f64 {
     TAU * (p.l / p.g).sqrt() / a
 }
 
-fn simulate_pendulum(theta0: f64, t_end: f64, method: Method) -> mech_runtime::Trajectory {
+fn simulate_pendulum(theta0: f64, t_end: f64, method: Method) -> Trajectory {
     let options = SimOptions {
         t_end,
         output_interval: 1e-3,
@@ -152,7 +120,23 @@ fn simulate_pendulum(theta0: f64, t_end: f64, method: Method) -> mech_runtime::T
     .unwrap()
 }
 
-fn period_from(traj: &mech_runtime::Trajectory) -> f64 {
+/// PENDULUM released from rest at `theta0` under the pivot torque `torque`.
+fn pendulum_from_rest(
+    theta0: f64,
+    torque: Signal,
+    options: &SimOptions,
+) -> Result<Trajectory, RuntimeError> {
+    simulate(
+        &PENDULUM,
+        &[theta0],
+        &[0.0],
+        &[torque],
+        options,
+        &mut no_progress(),
+    )
+}
+
+fn period_from(traj: &Trajectory) -> f64 {
     let q: Vec<f64> = traj.q.iter().map(|v| v[0]).collect();
     let u: Vec<f64> = traj.u.iter().map(|v| v[0]).collect();
     let roots = zero_crossings(&traj.times, &q, &u);
@@ -257,15 +241,7 @@ fn output_grid_and_progress() {
         method: dopri(1e-6, 1e-8),
         ..options
     };
-    let traj = simulate(
-        &PENDULUM,
-        &[0.5],
-        &[0.0],
-        &[Signal::Constant(0.0)],
-        &fine,
-        &mut no_progress(),
-    )
-    .unwrap();
+    let traj = pendulum_from_rest(0.5, Signal::Constant(0.0), &fine).unwrap();
     assert_eq!(traj.len(), 10_001);
     assert_eq!(*traj.times.last().unwrap(), 2.0);
     assert!(traj.stats.accepted_steps < 200, "{:?}", traj.stats);
@@ -276,15 +252,7 @@ fn output_grid_and_progress() {
         output_interval: 0.25,
         ..SimOptions::default()
     };
-    let traj = simulate(
-        &PENDULUM,
-        &[0.5],
-        &[0.0],
-        &[Signal::Constant(0.0)],
-        &options,
-        &mut no_progress(),
-    )
-    .unwrap();
+    let traj = pendulum_from_rest(0.5, Signal::Constant(0.0), &options).unwrap();
     assert_eq!(traj.times, vec![0.0, 0.25, 0.5, 0.75, 1.0]);
 }
 
@@ -295,48 +263,13 @@ struct ForcedMass {
 }
 
 impl Model for ForcedMass {
-    fn name(&self) -> &str {
-        "forced_mass"
-    }
-    fn nq(&self) -> usize {
-        1
-    }
-    fn nu(&self) -> usize {
-        1
-    }
-    fn ninputs(&self) -> usize {
-        1
-    }
-    fn noutputs(&self) -> usize {
-        1
-    }
-    fn nparams(&self) -> usize {
-        1
-    }
-    fn coordinate_name(&self, _i: usize) -> &str {
-        "x"
-    }
-    fn input_name(&self, _i: usize) -> &str {
-        "force"
-    }
-    fn output_name(&self, _i: usize) -> &str {
-        "momentum"
-    }
-    fn param_name(&self, _i: usize) -> &str {
-        "m"
-    }
-    fn param(&self, _i: usize) -> f64 {
-        self.m
-    }
-    fn set_param(&mut self, _i: usize, value: f64) {
-        self.m = value;
-    }
-    fn input_default(&self, _i: usize) -> f64 {
-        0.0
-    }
-    fn initial_state(&self, q: &mut [f64], u: &mut [f64]) {
-        q[0] = 0.0;
-        u[0] = 0.0;
+    model_metadata! {
+        name: "forced_mass",
+        coordinates: ["x"],
+        initial_q: [0.0],
+        inputs: ["force"],
+        outputs: ["momentum"],
+        params: [m],
     }
     fn mass_matrix(&self, _t: f64, _q: &[f64], _inputs: &[f64], out: &mut [f64]) {
         out[0] = self.m;
@@ -393,48 +326,13 @@ struct TwoDof {
 }
 
 impl Model for TwoDof {
-    fn name(&self) -> &str {
-        "two_dof"
-    }
-    fn nq(&self) -> usize {
-        2
-    }
-    fn nu(&self) -> usize {
-        2
-    }
-    fn ninputs(&self) -> usize {
-        0
-    }
-    fn noutputs(&self) -> usize {
-        0
-    }
-    fn nparams(&self) -> usize {
-        0
-    }
-    fn coordinate_name(&self, i: usize) -> &str {
-        ["a", "b"][i]
-    }
-    fn input_name(&self, _i: usize) -> &str {
-        unreachable!()
-    }
-    fn output_name(&self, _i: usize) -> &str {
-        unreachable!()
-    }
-    fn param_name(&self, _i: usize) -> &str {
-        unreachable!()
-    }
-    fn param(&self, _i: usize) -> f64 {
-        unreachable!()
-    }
-    fn set_param(&mut self, _i: usize, _value: f64) {
-        unreachable!()
-    }
-    fn input_default(&self, _i: usize) -> f64 {
-        unreachable!()
-    }
-    fn initial_state(&self, q: &mut [f64], u: &mut [f64]) {
-        q.fill(0.0);
-        u.fill(0.0);
+    model_metadata! {
+        name: "two_dof",
+        coordinates: ["a", "b"],
+        initial_q: [0.0, 0.0],
+        inputs: [],
+        outputs: [],
+        params: [],
     }
     fn mass_matrix(&self, _t: f64, _q: &[f64], _inputs: &[f64], out: &mut [f64]) {
         out.copy_from_slice(&self.mass);
@@ -578,14 +476,7 @@ fn step_budget_and_non_finite_states_are_errors() {
         max_steps: 50,
         ..SimOptions::default()
     };
-    let result = simulate(
-        &PENDULUM,
-        &[1.0],
-        &[0.0],
-        &[Signal::Constant(0.0)],
-        &options,
-        &mut no_progress(),
-    );
+    let result = pendulum_from_rest(1.0, Signal::Constant(0.0), &options);
     assert!(
         matches!(result, Err(RuntimeError::TooManySteps { steps: 50, .. })),
         "{result:?}"
@@ -596,14 +487,7 @@ fn step_budget_and_non_finite_states_are_errors() {
         method: Method::Rk4 { step: 0.01 },
         ..SimOptions::default()
     };
-    let result = simulate(
-        &PENDULUM,
-        &[1.0],
-        &[0.0],
-        &[Signal::Constant(0.0)],
-        &options,
-        &mut no_progress(),
-    );
+    let result = pendulum_from_rest(1.0, Signal::Constant(0.0), &options);
     assert!(
         matches!(result, Err(RuntimeError::TooManySteps { steps: 50, .. })),
         "{result:?}"
@@ -614,14 +498,7 @@ fn step_budget_and_non_finite_states_are_errors() {
         t_end: 1.0,
         ..SimOptions::default()
     };
-    let result = simulate(
-        &PENDULUM,
-        &[1.0],
-        &[0.0],
-        &[nan_after],
-        &options,
-        &mut no_progress(),
-    );
+    let result = pendulum_from_rest(1.0, nan_after, &options);
     assert!(
         matches!(
             result,

@@ -5,6 +5,9 @@
 use mech_runtime::integrate::{AdaptiveOptions, ExpRosenbrock, Ode, Rosenbrock, Stepper};
 use mech_runtime::RuntimeError;
 
+mod common;
+use common::{run_to_end, worst_dense_error};
+
 /// `y' = −2t·y²` (`y = 1/(1 + t²)`) and `x'' = −x` (`x = cos t`): nonlinear, time-dependent.
 struct Smooth;
 
@@ -63,12 +66,6 @@ fn fixed(h: f64) -> AdaptiveOptions {
         h_init: Some(h),
         h_max: h,
         ..AdaptiveOptions::rosenbrock()
-    }
-}
-
-fn run_to_end(stepper: &mut dyn Stepper) {
-    while !stepper.is_finished() {
-        stepper.step().unwrap();
     }
 }
 
@@ -154,16 +151,9 @@ fn exp_rosenbrock_follows_a_fast_mode_over_long_steps() {
     let (h, t_end) = (0.02, 0.5);
     let (_, transient) = resonator_exact(0.0);
     let mut exp = ExpRosenbrock::new(Resonator, 0.0, &[0.0, 0.0], t_end, fixed(h)).unwrap();
-    let mut out = [0.0; 2];
-    let mut worst: f64 = 0.0;
-    while !exp.is_finished() {
-        exp.step().unwrap();
-        for theta in [0.13, 0.5, 0.77, 1.0] {
-            let t = exp.t_prev() + theta * (exp.t() - exp.t_prev());
-            exp.interpolate(t, &mut out).unwrap();
-            worst = worst.max((out[0] - resonator_exact(t).0).abs());
-        }
-    }
+    let worst = worst_dense_error(&mut exp, &[0.13, 0.5, 0.77, 1.0], |t, x| {
+        (x[0] - resonator_exact(t).0).abs()
+    });
     println!(
         "ExpRosenbrock at ωh = {:.1}: worst error {worst:e} (transient {transient:e})",
         OMEGA * h

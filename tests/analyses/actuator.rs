@@ -2,6 +2,8 @@
 //! bimorph closed form (HAMR-VI coefficients) against Table I's model rows, and the linear
 //! actuator model (force source in parallel with k_a = F_b/δ_f).
 
+use crate::common;
+
 use mech::physics::actuator::{
     energy_density, SEED_DRIVE_VOLTAGE, SEED_TABLE_II, SEED_TABLE_I_MODEL,
 };
@@ -40,8 +42,8 @@ fn table_ii_energy_density_from_its_own_columns() {
 fn table_i_new_geometry_from_the_bimorph_formulas() {
     let a = Bimorph::SEED_NEW_GEOMETRY.actuator(SEED_DRIVE_VOLTAGE, f64::NAN);
     let (_, deflection, force) = SEED_TABLE_I_MODEL[1];
-    let e_d = (a.free_deflection - deflection) / deflection;
-    let e_f = (a.blocked_force - force) / force;
+    let e_d = common::relative_error(a.free_deflection, deflection);
+    let e_f = common::relative_error(a.blocked_force, force);
     println!(
         "new geometry: δ_f = {:.1} µm ({:+.1} %), F_b = {:.1} mN ({:+.1} %), k_a = {:.4} N/mm",
         a.free_deflection * 1e6,
@@ -70,8 +72,8 @@ fn table_i_new_geometry_from_the_bimorph_formulas() {
         old.free_deflection * 1e6,
         old.blocked_force * 1e3
     );
-    assert!(((old.free_deflection - deflection) / deflection).abs() < 0.10);
-    assert!(((old.blocked_force - force) / force).abs() < 0.10);
+    assert!(common::relative_error(old.free_deflection, deflection).abs() < 0.10);
+    assert!(common::relative_error(old.blocked_force, force).abs() < 0.10);
 }
 
 #[test]

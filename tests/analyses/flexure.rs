@@ -8,6 +8,8 @@
 use std::f64::consts::{PI, TAU};
 use std::path::PathBuf;
 
+use crate::common::{self, Rng};
+
 use mech::flexure_fit::fit::{
     analyze_specimen_trace, fit_results, specimen_result, FitOptions, SpecimenResult,
 };
@@ -16,7 +18,7 @@ use mech::flexure_fit::{analyze_trace, TraceError, TraceOptions};
 use mech::physics::flexure::{bending_stiffness, twist_ratio, SEED_TABLE_III};
 use mech::physics::{Flexure, Material};
 use mech::tape_model::TapeModel;
-use mech_runtime::{Method, Model, SimOptions};
+use mech_runtime::{Model, SimOptions};
 
 /// The "true" material of the synthetic experiment.
 const E_TRUE: f64 = 2.56e9;
@@ -27,24 +29,11 @@ const L_EFF_TRUE: f64 = 66e-6;
 /// Angle noise: 0.05° standard deviation.
 const NOISE: f64 = 0.05 * PI / 180.0;
 
-/// Deterministic Gaussian noise: SplitMix64 and Box–Muller.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn uniform(&mut self) -> f64 {
-        ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    fn gaussian(&mut self) -> f64 {
-        let (u1, u2) = (self.uniform(), self.uniform());
-        (-2.0 * u1.ln()).sqrt() * (TAU * u2).cos()
-    }
+/// Deterministic Gaussian noise: Box–Muller on two open uniforms (this file's draw, not
+/// `Rng::normal`, so that the synthetic data stay those the tolerances were set on).
+fn gaussian(rng: &mut Rng) -> f64 {
+    let (u1, u2) = (rng.uniform_open(), rng.uniform_open());
+    common::box_muller(u1, u2)
 }
 
 /// Pendulums of the rig, from light to heavy: a bob on a light arm (mass m, centre of mass
@@ -95,9 +84,7 @@ fn damping_at_own_frequency(k: f64, eta: f64, rig: &Pendulum) -> (f64, f64) {
 }
 
 fn rig_model() -> TapeModel {
-    let path = format!("{}/models/flexure_rig.mech", env!("CARGO_MANIFEST_DIR"));
-    let compiled = mech_codegen::Compiled::from_path(&path).unwrap_or_else(|e| panic!("{e}"));
-    TapeModel::new(&compiled)
+    common::tape("flexure_rig")
 }
 
 fn set(model: &mut TapeModel, name: &str, value: f64) {
@@ -154,15 +141,13 @@ fn simulate_specimen(
     let sigma = b / (2.0 * rig.inertia);
     let period = TAU / omega_d;
     let options = SimOptions {
-        t_end: t_end_decays / sigma,
-        output_interval: (1e-3_f64).min(period / 40.0),
-        method: Method::Dopri5 {
-            rtol: 1e-10,
-            atol: 1e-13,
-            h_max: f64::INFINITY,
-        },
         max_steps: 5_000_000,
-        ..SimOptions::default()
+        ..common::dopri5_options(
+            t_end_decays / sigma,
+            (1e-3_f64).min(period / 40.0),
+            1e-10,
+            1e-13,
+        )
     };
     let signals = mech_runtime::default_signals(model);
     let traces = angles
@@ -175,7 +160,7 @@ fn simulate_specimen(
             let noisy: Vec<f64> = run
                 .outputs
                 .iter()
-                .map(|o| o[angle_index] + NOISE * rng.gaussian())
+                .map(|o| o[angle_index] + NOISE * gaussian(rng))
                 .collect();
             (run.times, noisy)
         })
@@ -279,7 +264,7 @@ fn uncastellated_set(rng: &mut Rng) -> Vec<Synthetic> {
 
 #[test]
 fn pendulum_fit_recovers_modulus_loss_factor_and_stiffness() {
-    let mut rng = Rng(20_150_928);
+    let mut rng = Rng::new(20_150_928);
     let set = uncastellated_set(&mut rng);
     let frequencies: Vec<f64> = set
         .iter()
@@ -308,7 +293,7 @@ fn pendulum_fit_recovers_modulus_loss_factor_and_stiffness() {
         let mut worst_k = 0.0_f64;
         for (s, r) in set.iter().zip(&results) {
             for t in &r.traces {
-                let error = (t.stiffness - s.k_true) / s.k_true;
+                let error = common::relative_error(t.stiffness, s.k_true);
                 worst_k = worst_k.max(error.abs());
                 if !small_angle {
                     assert!(
@@ -325,8 +310,8 @@ fn pendulum_fit_recovers_modulus_loss_factor_and_stiffness() {
         }
         let report = fit_results(results, &options);
         let fit = report.uncastellated.expect("25 uncastellated specimens");
-        let e_error = (fit.youngs_modulus - E_TRUE) / E_TRUE;
-        let eta_error = (fit.loss_factor - ETA_TRUE) / ETA_TRUE;
+        let e_error = common::relative_error(fit.youngs_modulus, E_TRUE);
+        let eta_error = common::relative_error(fit.loss_factor, ETA_TRUE);
         println!(
             "{}: E = {:.5} GPa ({:+.4} %), η = {:.5} ({:+.3} %), R² = {:.6} / {:.6}, \
              worst per-trace k_m error {:.4} %",
@@ -357,7 +342,7 @@ fn pendulum_fit_recovers_modulus_loss_factor_and_stiffness() {
 
 #[test]
 fn castellated_fit_recovers_effective_length_and_loss_factor() {
-    let mut rng = Rng(66);
+    let mut rng = Rng::new(66);
     let mut model = rig_model();
     // The widths of seed Table III, 25 µm thick, 120 µm long, 100 µm castellations.
     let set: Vec<Synthetic> = SEED_TABLE_III
@@ -393,15 +378,15 @@ fn castellated_fit_recovers_effective_length_and_loss_factor() {
     let results: Vec<SpecimenResult> = set.iter().map(|s| analyse(s, &options)).collect();
     for (s, r) in set.iter().zip(&results) {
         for t in &r.traces {
-            assert!(((t.stiffness - s.k_true) / s.k_true).abs() < 0.01);
+            assert!(common::relative_error(t.stiffness, s.k_true).abs() < 0.01);
         }
     }
     let report = fit_results(results, &options);
     assert!(report.uncastellated.is_none());
     assert_eq!(report.castellated.len(), 1);
     let fit = &report.castellated[0];
-    let l_error = (fit.effective_length - L_EFF_TRUE) / L_EFF_TRUE;
-    let eta_error = (fit.loss_factor - ETA_CASTELLATED) / ETA_CASTELLATED;
+    let l_error = common::relative_error(fit.effective_length, L_EFF_TRUE);
+    let eta_error = common::relative_error(fit.loss_factor, ETA_CASTELLATED);
     println!(
         "castellated: l_eff = {:.3} µm ({:+.4} %), η' = {:.5} ({:+.3} %), R² = {:.6} / {:.6}",
         fit.effective_length * 1e6,
@@ -429,7 +414,7 @@ fn a_long_noisy_tail_does_not_bias_the_frequency() {
     };
     let mut model = rig_model();
     let mut run = |decays: f64| {
-        let mut rng = Rng(7);
+        let mut rng = Rng::new(7);
         let s = simulate_specimen(
             &mut model,
             "tail",
@@ -449,12 +434,12 @@ fn a_long_noisy_tail_does_not_bias_the_frequency() {
     let sigma = b / (2.0 * s.specimen.pendulum.inertia);
     for a in [&short, &long] {
         assert!(
-            ((a.omega_d - omega_d) / omega_d).abs() < 2e-4,
+            common::relative_error(a.omega_d, omega_d).abs() < 2e-4,
             "ω_d {} vs {omega_d}",
             a.omega_d
         );
         assert!(
-            ((a.sigma - sigma) / sigma).abs() < 0.01,
+            common::relative_error(a.sigma, sigma).abs() < 0.01,
             "σ {} vs {sigma}",
             a.sigma
         );
@@ -462,7 +447,7 @@ fn a_long_noisy_tail_does_not_bias_the_frequency() {
     assert!((long.omega_d - short.omega_d).abs() < 1e-4 * omega_d);
     // The noise estimate is right to 10 %.
     assert!(
-        ((long.noise - NOISE) / NOISE).abs() < 0.1,
+        common::relative_error(long.noise, NOISE).abs() < 0.1,
         "noise {}",
         long.noise
     );
@@ -478,34 +463,10 @@ fn gravity_stiffens_the_hanging_rig() {
     let p = |n: &str| model.param(idx(n));
     let k = bending_stiffness(p("E"), p("w"), p("h"), p("l"));
     let omega = ((k + p("m") * p("g") * p("L_cm")) / p("I_p")).sqrt();
-    let options = SimOptions {
-        t_end: 20.0 * TAU / omega,
-        output_interval: TAU / omega / 200.0,
-        method: Method::Dopri5 {
-            rtol: 1e-11,
-            atol: 1e-14,
-            h_max: f64::INFINITY,
-        },
-        ..SimOptions::default()
-    };
-    let signals = mech_runtime::default_signals(&model);
-    let run = mech_runtime::simulate(
-        &model,
-        &[0.5f64.to_radians()],
-        &[0.0],
-        &signals,
-        &options,
-        &mut |_| {},
-    )
-    .unwrap();
+    let options = common::dopri5_options(20.0 * TAU / omega, TAU / omega / 200.0, 1e-11, 1e-14);
+    let run = common::simulate_at_default_inputs(&model, &[0.5f64.to_radians()], &[0.0], &options);
     let angle: Vec<f64> = run.q.iter().map(|q| q[0]).collect();
-    let mut up = Vec::new();
-    for i in 1..angle.len() {
-        if angle[i - 1] < 0.0 && angle[i] >= 0.0 {
-            let f = -angle[i - 1] / (angle[i] - angle[i - 1]);
-            up.push(run.times[i - 1] + f * (run.times[i] - run.times[i - 1]));
-        }
-    }
+    let up = common::upward_crossings(&run.times, &angle);
     let period = (up[up.len() - 1] - up[0]) / (up.len() - 1) as f64;
     assert!(((TAU / period - omega) / omega).abs() < 1e-4);
 }
@@ -563,9 +524,9 @@ fn bad_traces_get_clear_errors() {
     assert!(matches!(e, TraceError::TooFewCrossings { .. }), "{e}");
 
     // Noise only.
-    let mut rng = Rng(3);
+    let mut rng = Rng::new(3);
     let t: Vec<f64> = (0..2000).map(|i| i as f64 * 1e-3).collect();
-    let a: Vec<f64> = t.iter().map(|_| 1e-3 * rng.gaussian()).collect();
+    let a: Vec<f64> = t.iter().map(|_| 1e-3 * gaussian(&mut rng)).collect();
     assert!(analyze_trace(&t, &a, &options).is_err());
 
     let e = analyze_trace(&t, &a[..1999], &options).unwrap_err();
@@ -633,7 +594,7 @@ fn table_iii_beside_eq_2() {
         let k = f.stiffness();
         assert!((k / row.width - 2.56e9 * 25e-6_f64.powi(3) / (12.0 * 66e-6)).abs() < 1e-9);
         assert!((f.damping_times_omega() - 0.08 * k).abs() < 1e-18);
-        worst = worst.max(((row.stiffness - k) / k).abs());
+        worst = worst.max(common::relative_error(row.stiffness, k).abs());
     }
     // The table scatters around Eq. 2: L2 lists 31.9 where Eq. 2 gives 40.4, 21 % below it
     // (Eq. 2 is 27 % above the listed value). Reproduced as published, nothing tuned.
@@ -718,12 +679,12 @@ fn example_data_fit_end_to_end() {
     let report = mech::flexure_fit::fit_specimens(specimens, &FitOptions::default()).unwrap();
     let fit = report.uncastellated.as_ref().unwrap();
     assert!(
-        ((fit.youngs_modulus - E_TRUE) / E_TRUE).abs() < 0.01,
+        common::relative_error(fit.youngs_modulus, E_TRUE).abs() < 0.01,
         "{}",
         fit.youngs_modulus
     );
     assert!(
-        ((fit.loss_factor - ETA_TRUE) / ETA_TRUE).abs() < 0.05,
+        common::relative_error(fit.loss_factor, ETA_TRUE).abs() < 0.05,
         "{}",
         fit.loss_factor
     );

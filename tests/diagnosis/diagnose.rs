@@ -4,51 +4,13 @@
 
 use crate::common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use common::Rng;
 use mech::diagnose::candidates::{diagnose, Diagnosis, Holdout, Verdict};
-use mech::diagnose::data::MeasuredData;
-use mech::diagnose::experiment::{self, Experiment};
+use mech::diagnose::experiment::Experiment;
 use mech::diagnose::fit::{fit, parameters, FitRequest};
 use mech::experiments::leg::Leg;
-use mech_runtime::Model;
-
-/// A standard normal variate (Box–Muller) from the shared test generator.
-fn normal(rng: &mut Rng) -> f64 {
-    let (a, b) = (rng.uniform(1e-12, 1.0), rng.uniform(0.0, 1.0));
-    (-2.0 * a.ln()).sqrt() * (2.0 * std::f64::consts::PI * b).cos()
-}
-
-fn scratch_dir(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn write(path: &Path, text: &str) {
-    std::fs::write(path, text).unwrap();
-}
-
-/// The diagnosis experiment `toml` (without its `model` line: HAMR-VI) written into `dir`
-/// and loaded.
-fn experiment_in(dir: &Path, toml: &str) -> Experiment {
-    let path = dir.join("experiment.toml");
-    write(
-        &path,
-        &format!("model = \"{}\"\n{toml}", model_path("hamr_vi")),
-    );
-    experiment::load(&path).unwrap()
-}
-
-fn model_path(name: &str) -> String {
-    format!("{}/models/{name}.mech", env!("CARGO_MANIFEST_DIR"))
-}
-
-fn set_param(leg: &mut Leg, name: &str, value: f64) {
-    let index = leg.model().param_index(name).unwrap();
-    leg.session.model.set_param(index, value);
-}
 
 fn param(leg: &Leg, name: &str) -> f64 {
     leg.param(name).unwrap()
@@ -59,34 +21,26 @@ fn param(leg: &Leg, name: &str) -> f64 {
 /// 1 µm noise. Fitting `k_s3` alone recovers 1.3 × the nominal value.
 #[test]
 fn quasi_static_fit_recovers_a_hidden_stiffness() {
-    let dir = scratch_dir("diagnose_quasi_static");
-    let experiment = experiment_in(
+    let dir = common::scratch_dir("diagnose_quasi_static");
+    let experiment = common::hamr_vi_experiment_in(
         &dir,
         "kind = \"quasi_static\"\ntitle = \"hidden k_s3\"\n\
              outputs = [\"foot.x\", \"foot.z\"]\nnoise = [\"1 um\", \"1 um\"]\n",
     );
     let mut truth = Leg::open(&experiment.model_spec()).unwrap();
     let nominal = param(&truth, "k_s3");
-    set_param(&mut truth, "k_s3", 1.3 * nominal);
+    common::set_leg_param(&mut truth, "k_s3", 1.3 * nominal);
 
     // "Measured": the true model's equilibria along the drive, plus noise.
     let mut rng = Rng::new(7);
     let mut text = String::from("# synthetic: k_s3 = 1.3 x nominal, 1 um noise\n");
     text += "v_lift [V], v_swing [V], foot.x [mm], foot.z [mm]\n";
-    let mut q = truth.q0.clone();
-    for k in 0..8 {
-        let phase = 2.0 * std::f64::consts::PI * k as f64 / 8.0;
-        let (lift, swing) = (225.0 * phase.sin(), 225.0 * phase.cos());
-        let inputs = truth.inputs(lift, swing);
-        q = truth.equilibrium(&q, &inputs, &[]).unwrap().q;
-        let foot = truth.foot_at(&q, &inputs);
-        let x = foot[0] + 1e-6 * normal(&mut rng);
-        let z = foot[2] + 1e-6 * normal(&mut rng);
+    for (lift, swing, foot) in common::feet_along_the_drive(&truth) {
+        let x = foot[0] + 1e-6 * rng.normal();
+        let z = foot[2] + 1e-6 * rng.normal();
         text += &format!("{lift}, {swing}, {}, {}\n", x * 1e3, z * 1e3);
     }
-    let data_path = dir.join("measured.csv");
-    write(&data_path, &text);
-    let data = MeasuredData::load(&data_path).unwrap();
+    let data = common::measured_data(&dir, &text);
 
     let mut leg = Leg::open(&experiment.model_spec()).unwrap();
     let requests = [FitRequest::parse("k_s3").unwrap()];
@@ -117,15 +71,13 @@ fn quasi_static_fit_recovers_a_hidden_stiffness() {
 /// recovers it.
 #[test]
 fn frequency_response_fit_recovers_the_loss_factor() {
-    let dir = scratch_dir("diagnose_frequency_response");
+    let dir = common::scratch_dir("diagnose_frequency_response");
     let experiment = bode_experiment(&dir);
     let Experiment::FrequencyResponse(_) = &experiment else {
         panic!("a frequency-response experiment");
     };
     let text = bode_data(&experiment, 0.12, 0.0, 3);
-    let data_path = dir.join("measured.csv");
-    write(&data_path, &text);
-    let data = MeasuredData::load(&data_path).unwrap();
+    let data = common::measured_data(&dir, &text);
 
     let mut leg = Leg::open(&experiment.model_spec()).unwrap();
     let requests = [FitRequest::parse("eta=0.01..0.5").unwrap()];
@@ -144,7 +96,7 @@ fn frequency_response_fit_recovers_the_loss_factor() {
 fn bode_data(experiment: &Experiment, eta: f64, delay: f64, seed: u64) -> String {
     let (damping, from_hz) = (mech_runtime::FlexureDamping::Hysteretic, 20.0_f64);
     let mut truth = Leg::open(&experiment.model_spec()).unwrap();
-    set_param(&mut truth, "eta", eta);
+    common::set_leg_param(&mut truth, "eta", eta);
     let rest_inputs = truth.inputs(0.0, 0.0);
     let rest = truth.equilibrium(&truth.q0, &rest_inputs, &[]).unwrap().q;
     let linear =
@@ -158,15 +110,15 @@ fn bode_data(experiment: &Experiment, eta: f64, delay: f64, seed: u64) -> String
         let h = linear
             .frequency_response(truth.v_lift(), truth.foot()[2], omega, damping)
             .unwrap();
-        let gain = h.norm() * (1.0 + 0.02 * normal(&mut rng));
-        let phase = (h.arg() - omega * delay).to_degrees() + normal(&mut rng);
+        let gain = h.norm() * (1.0 + 0.02 * rng.normal());
+        let phase = (h.arg() - omega * delay).to_degrees() + rng.normal();
         text += &format!("{f}, {}, {phase}\n", gain * 1e3);
     }
     text
 }
 
 fn bode_experiment(dir: &Path) -> Experiment {
-    experiment_in(
+    common::hamr_vi_experiment_in(
         dir,
         "kind = \"frequency_response\"\ntitle = \"lift\"\n\
              input = \"v_lift\"\noutput = \"foot.z\"\ngain_noise = \"2 %\"\nphase_noise = \"1 deg\"\n",
@@ -174,18 +126,16 @@ fn bode_experiment(dir: &Path) -> Experiment {
 }
 
 fn diagnose_text(name: &str, text: &str) -> Diagnosis {
-    let dir = scratch_dir(name);
+    let dir = common::scratch_dir(name);
     let experiment = bode_experiment(&dir);
-    let data_path = dir.join("measured.csv");
-    write(&data_path, text);
-    let data = MeasuredData::load(&data_path).unwrap();
+    let data = common::measured_data(&dir, text);
     diagnose(&experiment, &data, &[], Holdout::Every(3)).unwrap()
 }
 
 /// Clean data (the model as written, noise only): "no significant discrepancy".
 #[test]
 fn diagnose_finds_no_discrepancy_in_clean_data() {
-    let experiment = bode_experiment(&scratch_dir("diagnose_clean_setup"));
+    let experiment = bode_experiment(&common::scratch_dir("diagnose_clean_setup"));
     let d = diagnose_text("diagnose_clean", &bode_data(&experiment, 0.08, 0.0, 9));
     assert_eq!(d.verdict, Verdict::NoSignificantDiscrepancy, "{d:#?}");
 }
@@ -194,7 +144,7 @@ fn diagnose_finds_no_discrepancy_in_clean_data() {
 /// produce): the diagnosis must not force a cause.
 #[test]
 fn diagnose_reports_an_uncovered_effect_as_unexplained() {
-    let experiment = bode_experiment(&scratch_dir("diagnose_delay_setup"));
+    let experiment = bode_experiment(&common::scratch_dir("diagnose_delay_setup"));
     let d = diagnose_text("diagnose_delay", &bode_data(&experiment, 0.08, 1e-3, 11));
     assert!(
         matches!(d.verdict, Verdict::Unexplained | Verdict::PartlyExplained),
@@ -205,12 +155,7 @@ fn diagnose_reports_an_uncovered_effect_as_unexplained() {
 /// Bounds with the wrong unit, unknown parameters and missing columns are clear errors.
 #[test]
 fn fit_requests_and_data_are_checked() {
-    let leg = Leg::open(&mech::experiments::ModelSpec {
-        model: model_path("hamr_vi").into(),
-        set: Vec::new(),
-        independent: vec!["qsact".into(), "qlact".into()],
-    })
-    .unwrap();
+    let leg = Leg::open(&common::hamr_vi_spec()).unwrap();
     let unknown = parameters(&leg, &[FitRequest::parse("k_s9").unwrap()])
         .unwrap_err()
         .to_string();
@@ -221,14 +166,12 @@ fn fit_requests_and_data_are_checked() {
     assert!(unit.contains("needs"), "{unit}");
     assert!(FitRequest::parse("k_s3=2..1 uN*m/rad").is_err());
 
-    let dir = scratch_dir("diagnose_checks");
-    let experiment = experiment_in(
+    let dir = common::scratch_dir("diagnose_checks");
+    let experiment = common::hamr_vi_experiment_in(
         &dir,
         "kind = \"quasi_static\"\ntitle = \"t\"\noutputs = [\"foot.y\"]\n",
     );
-    let data_path = dir.join("measured.csv");
-    write(&data_path, "v_lift [V], foot.x [mm]\n1, 0.1\n");
-    let data = MeasuredData::load(&data_path).unwrap();
+    let data = common::measured_data(&dir, "v_lift [V], foot.x [mm]\n1, 0.1\n");
     let missing = experiment
         .observations(&leg, &data)
         .unwrap_err()
@@ -241,7 +184,7 @@ fn fit_requests_and_data_are_checked() {
 #[test]
 fn diagnose_command_writes_the_page_and_the_summary() {
     let root = env!("CARGO_MANIFEST_DIR");
-    let out_dir = scratch_dir("diagnose_command");
+    let out_dir = common::scratch_dir("diagnose_command");
     let args = mech::cli::diagnose::DiagnoseArgs {
         // The model named on the command line, as `mech diagnose MODEL --experiment …`.
         model: Some(format!("{root}/models/hamr_vi.mech").into()),

@@ -9,49 +9,20 @@
 
 use crate::common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use common::Rng;
 use mech::diagnose::candidates::{diagnose, Diagnosis, Holdout, Trial, Verdict};
-use mech::diagnose::data::MeasuredData;
-use mech::diagnose::experiment::{self, Experiment};
+use mech::diagnose::experiment::Experiment;
 use mech::diagnose::extend::{open_leg, Extension};
 use mech::diagnose::features::features;
 use mech::experiments::leg::{force_deflection, Dof, Leg, Sensor};
 use mech_codegen::ir::transform::actuator::{BASE_COMPLIANCE, TIP_MASS, TIP_PRELOAD};
 use mech_codegen::ir::transform::hinge::{MISALIGNMENT, OFF_AXIS_COMPLIANCE, TWIST_FACTOR};
-use mech_runtime::Model;
-
-/// A standard normal variate (Box–Muller) from the shared test generator.
-fn normal(rng: &mut Rng) -> f64 {
-    let (a, b) = (rng.uniform(1e-12, 1.0), rng.uniform(0.0, 1.0));
-    (-2.0 * a.ln()).sqrt() * (2.0 * std::f64::consts::PI * b).cos()
-}
-
-fn scratch_dir(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-/// The diagnosis experiment `toml` (HAMR-VI) written into `dir` and loaded.
-fn experiment_in(dir: &Path, toml: &str) -> Experiment {
-    let path = dir.join("experiment.toml");
-    let model = format!("{}/models/hamr_vi.mech", env!("CARGO_MANIFEST_DIR"));
-    std::fs::write(&path, format!("model = \"{model}\"\n{toml}")).unwrap();
-    experiment::load(&path).unwrap()
-}
-
-fn set_param(leg: &mut Leg, name: &str, value: f64) {
-    let index = leg.model().param_index(name).unwrap();
-    leg.session.model.set_param(index, value);
-}
 
 /// Runs the diagnosis of `text` (CSV) under `experiment` with the default hold-out.
 fn diagnose_data(dir: &Path, experiment: &Experiment, text: &str) -> Diagnosis {
-    let data_path = dir.join("measured.csv");
-    std::fs::write(&data_path, text).unwrap();
-    let data = MeasuredData::load(&data_path).unwrap();
+    let data = common::measured_data(dir, text);
     diagnose(experiment, &data, &[], Holdout::Every(3)).unwrap()
 }
 
@@ -110,11 +81,11 @@ fn force_case(
     .unwrap();
     let mut text = String::from("distance [um], force [mN]\n");
     for point in &test.points {
-        let force = point.force + FORCE_NOISE * normal(rng);
+        let force = point.force + FORCE_NOISE * rng.normal();
         text += &format!("{}, {}\n", point.distance * 1e6, force * 1e3);
     }
     let name = dof.name();
-    let experiment = experiment_in(
+    let experiment = common::hamr_vi_experiment_in(
         dir,
         &format!(
             "kind = \"force_deflection\"\ntitle = \"{name} force\"\ndof = \"{name}\"\n\
@@ -122,14 +93,6 @@ fn force_case(
         ),
     );
     (experiment, text)
-}
-
-fn hamr_spec() -> mech::experiments::ModelSpec {
-    mech::experiments::ModelSpec {
-        model: Path::new(env!("CARGO_MANIFEST_DIR")).join("models/hamr_vi.mech"),
-        set: Vec::new(),
-        independent: vec!["qsact".into(), "qlact".into()],
-    }
 }
 
 fn blocked_swing_force(leg: &Leg) -> f64 {
@@ -143,11 +106,15 @@ fn blocked_swing_force(leg: &Leg) -> f64 {
 /// the blocked swing force falls by 30–50 %. The diagnosis must name the twist of fb3 about y
 /// and recover the off-axis compliance within 30 %.
 fn twist_case(dir: &Path, rng: &mut Rng) {
-    let base = blocked_swing_force(&Leg::open(&hamr_spec()).unwrap());
-    let mut truth = open_leg(&hamr_spec(), &Extension::Twist(vec![("fb3".into(), 1)])).unwrap();
-    set_param(&mut truth, TWIST_FACTOR, 1.0);
+    let base = blocked_swing_force(&Leg::open(&common::hamr_vi_spec()).unwrap());
+    let mut truth = open_leg(
+        &common::hamr_vi_spec(),
+        &Extension::Twist(vec![("fb3".into(), 1)]),
+    )
+    .unwrap();
+    common::set_leg_param(&mut truth, TWIST_FACTOR, 1.0);
     let compliance = 10f64.powf(rng.uniform(-3.6, -3.2));
-    set_param(&mut truth, OFF_AXIS_COMPLIANCE, compliance);
+    common::set_leg_param(&mut truth, OFF_AXIS_COMPLIANCE, compliance);
     let loss = 1.0 - blocked_swing_force(&truth) / base;
     assert!(
         (0.3..=0.5).contains(&loss),
@@ -229,7 +196,7 @@ fn top(d: &Diagnosis, cause: &str, location: &str, parameter: &str) -> f64 {
 /// fraction recovered within 0.05.
 fn off_axis_load_case(dir: &Path, rng: &mut Rng) {
     let fraction = rng.uniform(0.2, 0.4);
-    let truth = Leg::open(&hamr_spec()).unwrap();
+    let truth = Leg::open(&common::hamr_vi_spec()).unwrap();
     let (experiment, text) = force_case(dir, &truth, Dof::Lift, fraction, 0.0, rng);
     let d = diagnose_data(dir, &experiment, &text);
     let fitted = top(
@@ -245,8 +212,12 @@ fn off_axis_load_case(dir: &Path, rng: &mut Rng) {
 /// and stroke fall by 1/(1 + c)). Lift force data; c recovered within 15 %.
 fn base_compliance_case(dir: &Path, rng: &mut Rng) {
     let compliance = rng.uniform(0.2, 0.5);
-    let mut truth = open_leg(&hamr_spec(), &Extension::BaseCompliance("qlact".into())).unwrap();
-    set_param(&mut truth, BASE_COMPLIANCE, compliance);
+    let mut truth = open_leg(
+        &common::hamr_vi_spec(),
+        &Extension::BaseCompliance("qlact".into()),
+    )
+    .unwrap();
+    common::set_leg_param(&mut truth, BASE_COMPLIANCE, compliance);
     let (experiment, text) = force_case(dir, &truth, Dof::Lift, 0.0, 0.0, rng);
     let d = diagnose_data(dir, &experiment, &text);
     let fitted = top(
@@ -273,10 +244,10 @@ fn misalignment_case(dir: &Path, rng: &mut Rng) {
         flexure: "l2".into(),
         about: 1,
     };
-    let mut truth = open_leg(&hamr_spec(), &extension).unwrap();
-    set_param(&mut truth, MISALIGNMENT, angle);
-    set_param(&mut truth, OFF_AXIS_COMPLIANCE, 1e-4);
-    let experiment = experiment_in(
+    let mut truth = open_leg(&common::hamr_vi_spec(), &extension).unwrap();
+    common::set_leg_param(&mut truth, MISALIGNMENT, angle);
+    common::set_leg_param(&mut truth, OFF_AXIS_COMPLIANCE, 1e-4);
+    let experiment = common::hamr_vi_experiment_in(
         dir,
         "kind = \"quasi_static\"\ntitle = \"lift sweep\"\n\
          outputs = [\"foot.z\"]\nnoise = [\"2 um\"]\n",
@@ -287,7 +258,7 @@ fn misalignment_case(dir: &Path, rng: &mut Rng) {
         let volts = 225.0 * k as f64 / 16.0;
         let inputs = truth.inputs(volts, 0.0);
         q = truth.equilibrium(&q, &inputs, &[]).unwrap().q;
-        let z = truth.foot_at(&q, &inputs)[2] + 2e-6 * normal(rng);
+        let z = truth.foot_at(&q, &inputs)[2] + 2e-6 * rng.normal();
         text += &format!("{volts}, {}\n", z * 1e3);
     }
     let d = diagnose_data(dir, &experiment, &text);
@@ -338,7 +309,7 @@ fn bode_case(
     damping: mech_runtime::FlexureDamping,
     rng: &mut Rng,
 ) -> (Experiment, String) {
-    let experiment = experiment_in(
+    let experiment = common::hamr_vi_experiment_in(
         dir,
         "kind = \"frequency_response\"\ntitle = \"lift and swing\"\n\
          gain_noise = \"2 %\"\nphase_noise = \"1 deg\"\n\
@@ -365,8 +336,8 @@ fn bode_case(
             let h = linear
                 .frequency_response(input, output, omega, damping)
                 .unwrap();
-            let gain = h.norm() * (1.0 + 0.02 * normal(rng));
-            let phase = h.arg().to_degrees() + normal(rng);
+            let gain = h.norm() * (1.0 + 0.02 * rng.normal());
+            let phase = h.arg().to_degrees() + rng.normal();
             text += &format!(", {}, {phase}", gain * 1e3);
         }
         text += "\n";
@@ -384,8 +355,8 @@ fn bode_case(
 /// candidate's own fit is consistent with the truth within 3 standard errors.
 fn tip_mass_case(dir: &Path, rng: &mut Rng) {
     let mass = rng.uniform(10e-6, 20e-6);
-    let mut truth = open_leg(&hamr_spec(), &Extension::TipMass("qlact".into())).unwrap();
-    set_param(&mut truth, TIP_MASS, mass);
+    let mut truth = open_leg(&common::hamr_vi_spec(), &Extension::TipMass("qlact".into())).unwrap();
+    common::set_leg_param(&mut truth, TIP_MASS, mass);
     let (experiment, text) = bode_case(dir, &truth, mech_runtime::FlexureDamping::Hysteretic, rng);
     let d = diagnose_data(dir, &experiment, &text);
     let is_tip_mass =
@@ -421,24 +392,18 @@ fn tip_mass_case(dir: &Path, rng: &mut Rng) {
 /// preload recovered within 10 µm.
 fn preload_case(dir: &Path, rng: &mut Rng) {
     let preload = -50e-6;
-    let mut truth = open_leg(&hamr_spec(), &Extension::Preload).unwrap();
-    set_param(&mut truth, TIP_PRELOAD, preload);
-    let experiment = experiment_in(
+    let mut truth = open_leg(&common::hamr_vi_spec(), &Extension::Preload).unwrap();
+    common::set_leg_param(&mut truth, TIP_PRELOAD, preload);
+    let experiment = common::hamr_vi_experiment_in(
         dir,
         "kind = \"quasi_static\"\ntitle = \"1 Hz trajectory\"\n\
          outputs = [\"foot.x\", \"foot.y\", \"foot.z\"]\nnoise = [\"2 um\", \"2 um\", \"2 um\"]\n",
     );
     let mut text = String::from("v_lift [V], v_swing [V], foot.x [mm], foot.y [mm], foot.z [mm]\n");
-    let mut q = truth.q0.clone();
-    for k in 0..8 {
-        let phase = 2.0 * std::f64::consts::PI * k as f64 / 8.0;
-        let (lift, swing) = (225.0 * phase.sin(), 225.0 * phase.cos());
-        let inputs = truth.inputs(lift, swing);
-        q = truth.equilibrium(&q, &inputs, &[]).unwrap().q;
-        let foot = truth.foot_at(&q, &inputs);
+    for (lift, swing, foot) in common::feet_along_the_drive(&truth) {
         let noisy: Vec<String> = foot
             .iter()
-            .map(|x| format!("{}", (x + 2e-6 * normal(rng)) * 1e3))
+            .map(|x| format!("{}", (x + 2e-6 * rng.normal()) * 1e3))
             .collect();
         text += &format!("{lift}, {swing}, {}\n", noisy.join(", "));
     }
@@ -457,9 +422,9 @@ fn stiffness_case(dir: &Path, rng: &mut Rng) {
     let flexures = ["s1", "s2", "s3", "l1", "l2", "l3", "fb1", "fb2", "fb3"];
     let pick = flexures[rng.index(flexures.len())];
     let name = format!("k_{pick}");
-    let mut truth = Leg::open(&hamr_spec()).unwrap();
+    let mut truth = Leg::open(&common::hamr_vi_spec()).unwrap();
     let nominal = truth.param(&name).unwrap();
-    set_param(&mut truth, &name, 1.2 * nominal);
+    common::set_leg_param(&mut truth, &name, 1.2 * nominal);
     let damping = mech_runtime::FlexureDamping::Hysteretic;
     let (experiment, text) = bode_case(dir, &truth, damping, rng);
     let d = diagnose_data(dir, &experiment, &text);
@@ -505,8 +470,8 @@ fn stiffness_case(dir: &Path, rng: &mut Rng) {
 /// they may tie), recover η within 0.01 and 3σ, and show the held-out gain.
 fn loss_factor_case(dir: &Path, rng: &mut Rng) {
     let eta = rng.uniform(0.11, 0.13);
-    let mut truth = Leg::open(&hamr_spec()).unwrap();
-    set_param(&mut truth, "eta", eta);
+    let mut truth = Leg::open(&common::hamr_vi_spec()).unwrap();
+    common::set_leg_param(&mut truth, "eta", eta);
     let damping = mech_runtime::FlexureDamping::Hysteretic;
     let (experiment, text) = bode_case(dir, &truth, damping, rng);
     let d = diagnose_data(dir, &experiment, &text);
@@ -543,7 +508,7 @@ fn loss_factor_case(dir: &Path, rng: &mut Rng) {
 /// (σ at least 0.01).
 fn frequency_dependent_loss_case(dir: &Path, rng: &mut Rng) {
     let exponent = rng.uniform(0.12, 0.22);
-    let truth = Leg::open(&hamr_spec()).unwrap();
+    let truth = Leg::open(&common::hamr_vi_spec()).unwrap();
     let damping = mech_runtime::FlexureDamping::HystereticPowerLaw {
         exponent,
         reference_hz: 10.0,
@@ -614,7 +579,7 @@ fn draw(seed: u64) -> (Entry, Rng) {
 fn hidden_effect(seed: u64) {
     let (entry, mut rng) = draw(seed);
     eprintln!("seed {seed}: {entry:?}");
-    let dir = scratch_dir(&format!("hidden_effect_{seed}"));
+    let dir = common::scratch_dir(&format!("hidden_effect_{seed}"));
     let case = match entry {
         Entry::Twist => twist_case,
         Entry::OffAxisLoad => off_axis_load_case,
@@ -688,12 +653,16 @@ fn the_seeds_draw_every_catalog_entry() {
 /// of fb3 removes 45–60 % of the swing force (asserted below) — as much as the paper reports.
 #[test]
 fn the_papers_story_twist_and_a_frequency_dependent_loss_factor() {
-    let dir = scratch_dir("paper_story");
+    let dir = common::scratch_dir("paper_story");
     let mut rng = Rng::new(2024);
-    let base = blocked_swing_force(&Leg::open(&hamr_spec()).unwrap());
-    let mut truth = open_leg(&hamr_spec(), &Extension::Twist(vec![("fb3".into(), 1)])).unwrap();
-    set_param(&mut truth, TWIST_FACTOR, 1.0);
-    set_param(&mut truth, OFF_AXIS_COMPLIANCE, 6.25e-4);
+    let base = blocked_swing_force(&Leg::open(&common::hamr_vi_spec()).unwrap());
+    let mut truth = open_leg(
+        &common::hamr_vi_spec(),
+        &Extension::Twist(vec![("fb3".into(), 1)]),
+    )
+    .unwrap();
+    common::set_leg_param(&mut truth, TWIST_FACTOR, 1.0);
+    common::set_leg_param(&mut truth, OFF_AXIS_COMPLIANCE, 6.25e-4);
     let loss = 1.0 - blocked_swing_force(&truth) / base;
     assert!(
         (0.45..=0.6).contains(&loss),
@@ -719,7 +688,7 @@ fn the_papers_story_twist_and_a_frequency_dependent_loss_factor() {
     );
 
     // The chirp: swing resonance low and Q over-estimated → twist and η(f), together.
-    let bode_dir = scratch_dir("paper_story_bode");
+    let bode_dir = common::scratch_dir("paper_story_bode");
     let damping = mech_runtime::FlexureDamping::HystereticPowerLaw {
         exponent: 0.3,
         reference_hz: 5.0,

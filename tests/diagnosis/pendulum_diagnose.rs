@@ -18,20 +18,8 @@ use mech::diagnose::fit::{fit, parameters, FitRequest};
 use mech::diagnose::pendulum::{screen, Screening};
 use mech::experiments::leg::Leg;
 
-/// A standard normal variate (Box–Muller).
-fn normal(rng: &mut Rng) -> f64 {
-    let (a, b) = (rng.uniform(1e-12, 1.0), rng.uniform(0.0, 1.0));
-    (-2.0 * a.ln()).sqrt() * (2.0 * std::f64::consts::PI * b).cos()
-}
-
-fn scratch_dir(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 fn rig_path() -> String {
-    format!("{}/models/flexure_rig.mech", env!("CARGO_MANIFEST_DIR"))
+    common::bundled_path("flexure_rig")
 }
 
 /// Noise of the synthetic camera, 0.05° (one standard deviation).
@@ -107,7 +95,7 @@ fn trace_csv(extra: Extra, seed: u64, noise_deg: f64) -> String {
     for n in 0..samples {
         let t = n as f64 / RATE;
         let measured = theta + extra.drift * t / DURATION;
-        let angle = measured.to_degrees() + noise_deg * normal(&mut rng);
+        let angle = measured.to_degrees() + noise_deg * rng.normal();
         text += &format!("{t:.6}, {angle:.6}\n");
         for _ in 0..per_sample {
             let (k1x, k1v) = (omega, accel(theta, omega));
@@ -125,12 +113,6 @@ fn trace_csv(extra: Extra, seed: u64, noise_deg: f64) -> String {
         }
     }
     text
-}
-
-fn load_text(dir: &Path, text: &str) -> MeasuredData {
-    let path = dir.join("measured.csv");
-    std::fs::write(&path, text).unwrap();
-    MeasuredData::load(&path).unwrap()
 }
 
 fn experiment_in(dir: &Path, extra_keys: &str) -> Experiment {
@@ -186,9 +168,9 @@ fn kinds(s: &Screening) -> Vec<&'static str> {
 /// that does not trend (within 3.5σ) and a centre within 0.01° of the rest angle.
 #[test]
 fn clean_traces_raise_no_flags() {
-    let dir = scratch_dir("pendulum_clean_screen");
+    let dir = common::scratch_dir("pendulum_clean_screen");
     for seed in 1..=8 {
-        let data = load_text(&dir, &trace_csv(Extra::default(), seed, NOISE_DEG));
+        let data = common::measured_data(&dir, &trace_csv(Extra::default(), seed, NOISE_DEG));
         let s = screen_data(&data);
         assert!(s.flags.is_empty(), "seed {seed}: {:?}", s.flags);
         let fit = s.fit.as_ref().expect("screened");
@@ -213,13 +195,13 @@ fn clean_traces_raise_no_flags() {
 /// baseline problem.
 #[test]
 fn amplitude_dependent_damping_is_flagged() {
-    let dir = scratch_dir("pendulum_amplitude_screen");
+    let dir = common::scratch_dir("pendulum_amplitude_screen");
     for (name, extra, falls) in [
         ("quadratic", quadratic_damping(), true),
         ("coulomb", coulomb_friction(), false),
     ] {
         for seed in 1..=3 {
-            let data = load_text(&dir, &trace_csv(extra, seed, NOISE_DEG));
+            let data = common::measured_data(&dir, &trace_csv(extra, seed, NOISE_DEG));
             let s = screen_data(&data);
             assert_eq!(
                 kinds(&s),
@@ -243,13 +225,13 @@ fn amplitude_dependent_damping_is_flagged() {
 /// as amplitude-dependent damping.
 #[test]
 fn baseline_drift_is_flagged() {
-    let dir = scratch_dir("pendulum_drift_screen");
+    let dir = common::scratch_dir("pendulum_drift_screen");
     let extra = Extra {
         drift: 0.5f64.to_radians(),
         ..Extra::default()
     };
     for seed in 1..=3 {
-        let data = load_text(&dir, &trace_csv(extra, seed, NOISE_DEG));
+        let data = common::measured_data(&dir, &trace_csv(extra, seed, NOISE_DEG));
         let s = screen_data(&data);
         assert_eq!(kinds(&s), ["baseline_drift"], "seed {seed}: {s:?}");
         let fit = s.fit.as_ref().unwrap();
@@ -268,7 +250,7 @@ fn baseline_drift_is_flagged() {
             _ => format!("{line}\n"),
         })
         .collect();
-    let s = screen_data(&load_text(&dir, &shifted));
+    let s = screen_data(&common::measured_data(&dir, &shifted));
     assert_eq!(kinds(&s), ["baseline_offset"], "{s:?}");
 }
 
@@ -278,7 +260,7 @@ fn baseline_drift_is_flagged() {
 /// only η changed recovers it the same way.
 #[test]
 fn fit_recovers_the_loss_factor_and_modulus() {
-    let dir = scratch_dir("pendulum_fit");
+    let dir = common::scratch_dir("pendulum_fit");
     let experiment = experiment_in(&dir, "");
     let truth = |leg: &Leg, name: &str, factor: f64| leg.param(name).unwrap() * factor;
     for (fits, extra) in [
@@ -298,7 +280,7 @@ fn fit_recovers_the_loss_factor_and_modulus() {
             },
         ),
     ] {
-        let data = load_text(&dir, &trace_csv(extra, 21, NOISE_DEG));
+        let data = common::measured_data(&dir, &trace_csv(extra, 21, NOISE_DEG));
         let mut leg = Leg::open_any(&experiment.model_spec(), &[]).unwrap();
         let expected: Vec<f64> = fits
             .iter()
@@ -329,10 +311,10 @@ fn fit_recovers_the_loss_factor_and_modulus() {
 /// the dedicated "flagged" verdict (no cause named), with the flag in the diagnosis.
 #[test]
 fn diagnose_ring_downs() {
-    let dir = scratch_dir("pendulum_diagnose");
+    let dir = common::scratch_dir("pendulum_diagnose");
     let experiment = experiment_in(&dir, "");
     let run = |extra: Extra, seed: u64| {
-        let data = load_text(&dir, &trace_csv(extra, seed, NOISE_DEG));
+        let data = common::measured_data(&dir, &trace_csv(extra, seed, NOISE_DEG));
         diagnose(&experiment, &data, &[], Holdout::Every(3)).unwrap()
     };
     let clean = run(Extra::default(), 31);
@@ -378,7 +360,7 @@ fn diagnose_ring_downs() {
 /// Bad data: errors name the file, the line and the column.
 #[test]
 fn bad_pendulum_data_are_clear_errors() {
-    let dir = scratch_dir("pendulum_bad_data");
+    let dir = common::scratch_dir("pendulum_bad_data");
     let experiment = experiment_in(&dir, "");
     let leg = Leg::open_any(&experiment.model_spec(), &[]).unwrap();
     let check = |name: &str, text: &str| -> String {
@@ -436,7 +418,10 @@ fn bad_pendulum_data_are_clear_errors() {
     assert!(e.contains("bad.toml") && e.contains("release"), "{e}");
     let other = experiment_in(&dir, "angle = \"foot.x\"\n");
     let e = other
-        .observations(&leg, &load_text(&dir, &trace_csv(Extra::default(), 1, 0.0)))
+        .observations(
+            &leg,
+            &common::measured_data(&dir, &trace_csv(Extra::default(), 1, 0.0)),
+        )
         .unwrap_err()
         .to_string();
     assert!(e.contains("no output or coordinate `foot.x`"), "{e}");
@@ -451,7 +436,7 @@ fn bad_pendulum_data_are_clear_errors() {
     .unwrap();
     let hamr = experiment::load(&path).unwrap();
     let e = hamr
-        .observations(&leg, &load_text(&dir, "angle [deg]\n1\n"))
+        .observations(&leg, &common::measured_data(&dir, "angle [deg]\n1\n"))
         .unwrap_err()
         .to_string();
     assert!(e.contains("no input `v_lift`"), "{e}");
@@ -515,7 +500,7 @@ fn pendulum_commands_report_flags() {
         ("flexure_rig_ringdown.csv", "explained", 0),
         ("flexure_rig_ringdown_air.csv", "flagged", 1),
     ] {
-        let out_dir = scratch_dir(&format!("pendulum_command_{verdict}"));
+        let out_dir = common::scratch_dir(&format!("pendulum_command_{verdict}"));
         let args = mech::cli::diagnose::DiagnoseArgs {
             model: None,
             causes: Vec::new(),
@@ -553,8 +538,8 @@ fn pendulum_commands_report_flags() {
 /// the prediction starts at it.
 #[test]
 fn release_angle_from_the_file_or_the_data() {
-    let dir = scratch_dir("pendulum_release");
-    let data = load_text(&dir, &trace_csv(Extra::default(), 51, NOISE_DEG));
+    let dir = common::scratch_dir("pendulum_release");
+    let data = common::measured_data(&dir, &trace_csv(Extra::default(), 51, NOISE_DEG));
     let given = experiment_in(&dir, "release = \"10 deg\"\n");
     let leg = Leg::open_any(&given.model_spec(), &[]).unwrap();
     let observations = given.observations(&leg, &data).unwrap();
@@ -566,7 +551,7 @@ fn release_angle_from_the_file_or_the_data() {
         panic!("a pendulum experiment");
     };
     for seed in 52..56 {
-        let data = load_text(&dir, &trace_csv(Extra::default(), seed, NOISE_DEG));
+        let data = common::measured_data(&dir, &trace_csv(Extra::default(), seed, NOISE_DEG));
         let release = pendulum.release_angle(&data).unwrap();
         assert!(
             (release.to_degrees() - RELEASE_DEG).abs() < 0.02,

@@ -4,8 +4,6 @@
 use crate::common;
 
 use mech::diagnose::extend::{open_leg, Extension};
-use mech::experiments::ModelSpec;
-use mech::tape_model::TapeModel;
 use mech_runtime::Model;
 
 /// A plate on two pins (x, then y) whose revolute closure to the ground about x is compliant
@@ -48,8 +46,8 @@ const TREE: &str = "
 
 #[test]
 fn a_loop_twist_spring_equals_the_joint_springs_it_reduces_to() {
-    let looped = TapeModel::new(&common::compile_text("loop_twist", LOOP_TWIST));
-    let tree = TapeModel::new(&common::compile_text("tree", TREE));
+    let looped = common::tape_from_text("loop_twist", LOOP_TWIST);
+    let tree = common::tape_from_text("tree", TREE);
     // 3 position rows only: the compliant closure drops both alignment rows.
     assert_eq!(looped.nc(), 3);
     assert_eq!(looped.nflexures(), 3, "bending, twist and lateral");
@@ -93,21 +91,17 @@ fn a_loop_twist_axis_along_the_hinge_axis_is_rejected() {
     );
 }
 
-fn hamr_spec() -> ModelSpec {
-    ModelSpec {
-        model: std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models/hamr_vi.mech"),
-        set: Vec::new(),
-        independent: vec!["qsact".into(), "qlact".into()],
-    }
-}
-
 /// The twist extension on the HAMR leg: s3 twists about x (Eq. 8) and every hinge becomes
 /// compliant off its axis (stiff springs), so the loops can deform. Its generalized forces
 /// are the gradient of its potential energy (the new closure springs are conservative and
 /// consistent with the energy), and the mobility grows by the new coordinates.
 #[test]
 fn the_twist_extension_is_conservative_and_frees_the_loops() {
-    let leg = open_leg(&hamr_spec(), &Extension::Twist(vec![("s3".into(), 0)])).unwrap();
+    let leg = open_leg(
+        &common::hamr_vi_spec(),
+        &Extension::Twist(vec![("s3".into(), 0)]),
+    )
+    .unwrap();
     let model = leg.model();
     let nq = model.nq();
     // 8 tree coordinates, 2 per pin flexure (6 pins): 20; 3 position rows per closure.
@@ -162,7 +156,7 @@ fn a_tilted_hinge_equals_one_written_tilted() {
     use mech_codegen::sym::Number;
     use mech_codegen::Compiled;
 
-    let spec = hamr_spec();
+    let spec = common::hamr_vi_spec();
     let alpha = 0.03_f64;
     let leg_of = |model: mech_codegen::ir::Model, tilt: f64| {
         let session = Session::from_compiled(Compiled::from_model(model), &[], &[]).unwrap();

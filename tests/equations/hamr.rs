@@ -5,21 +5,12 @@
 //! decoupling of lift and swing by the spherical five-bar, the quasi-static response to the
 //! drive voltages and the normal modes.
 
-use mech::tape_model::TapeModel;
-use mech_codegen::Compiled;
+use crate::common;
+
 use mech_runtime::{
     assemble, assemble_speeds, linearize, mobility, solve_statics, AssemblyOptions, Model,
     StaticsOptions,
 };
-
-fn source_path(name: &str) -> String {
-    format!("{}/models/{name}.mech", env!("CARGO_MANIFEST_DIR"))
-}
-
-fn load(name: &str) -> TapeModel {
-    let compiled = Compiled::from_path(source_path(name)).unwrap_or_else(|e| panic!("{e}"));
-    TapeModel::new(&compiled)
-}
 
 fn coordinate(model: &dyn Model, name: &str) -> usize {
     (0..model.nq())
@@ -47,6 +38,20 @@ fn assembled(model: &dyn Model, swing: f64, lift: f64) -> Vec<f64> {
     q[fixed[0]] = swing;
     q[fixed[1]] = lift;
     assemble(model, 0.0, &mut q, &fixed, &AssemblyOptions::default()).unwrap();
+    q
+}
+
+/// HAMR-VI assembled at the zero configuration, checked: all link frames are parallel to the
+/// chassis there and the loops close (assembly barely moves q), with the foot at rest at
+/// (12.75466, 17.37, −12.54) mm in the chassis (reference notes).
+fn assert_closes_at_zero_with_the_foot_at_rest(model: &dyn Model) -> Vec<f64> {
+    let q = assembled(model, 0.0, 0.0);
+    let largest = q.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    assert!(largest < 1e-10, "assembly moved q by {largest:e}");
+    let rest = foot(model, &q, &[0.0, 0.0]);
+    for (value, expected) in rest.iter().zip([12.754659815390e-3, 17.37e-3, -12.54e-3]) {
+        assert!((value - expected).abs() < 1e-12, "foot {rest:?}");
+    }
     q
 }
 
@@ -84,17 +89,9 @@ fn close(a: f64, b: f64, tolerance: f64) -> bool {
 
 #[test]
 fn hamr_vi_closes_at_zero_with_two_degrees_of_freedom() {
-    let model = load("hamr_vi");
+    let model = common::tape("hamr_vi");
     assert_eq!((model.nq(), model.nc(), model.nflexures()), (8, 15, 9));
-    let q = assembled(&model, 0.0, 0.0);
-    // All link frames are parallel to the chassis at q = 0 and the loops close there.
-    let largest = q.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-    assert!(largest < 1e-10, "assembly moved q by {largest:e}");
-    // The foot at rest: (12.75466, 17.37, −12.54) mm in the chassis (reference notes).
-    let rest = foot(&model, &q, &[0.0, 0.0]);
-    for (value, expected) in rest.iter().zip([12.754659815390e-3, 17.37e-3, -12.54e-3]) {
-        assert!((value - expected).abs() < 1e-12, "foot {rest:?}");
-    }
+    let q = assert_closes_at_zero_with_the_foot_at_rest(&model);
 
     let m = mobility(&model, 0.0, &q);
     println!("{m}");
@@ -145,7 +142,7 @@ fn hamr_vi_closes_at_zero_with_two_degrees_of_freedom() {
 /// the rest, so that the rank depends on the tolerance; the moved ones leave none.
 #[test]
 fn hamr_vi_fb2_fix_removes_the_fragile_singular_value() {
-    let text = std::fs::read_to_string(source_path("hamr_vi")).unwrap();
+    let text = common::bundled_source("hamr_vi");
     let published = text
         .replace(
             "[-2.05236486487, 5.98079552649, 0] * 1 mm",
@@ -156,9 +153,7 @@ fn hamr_vi_fb2_fix_removes_the_fragile_singular_value() {
             "[0, 5.98079552649, 1.64999985615] * 1 mm",
         );
     assert_ne!(published, text);
-    let compiled = Compiled::from_source(mech_codegen::SourceFile::new("hamr_vi.mech", published))
-        .unwrap_or_else(|e| panic!("{e}"));
-    let model = TapeModel::new(&compiled);
+    let model = common::tape_from_text("hamr_vi", &published);
     let q = vec![0.0; model.nq()];
     let m = mobility(&model, 0.0, &q);
     let s = &m.singular_values;
@@ -169,7 +164,7 @@ fn hamr_vi_fb2_fix_removes_the_fragile_singular_value() {
     println!("published fb2 points: max |φ(0)| = {open:e} m");
     assert!(open > 1e-10 && open < 2e-10, "{phi:?}");
     // The 6 structural values are unchanged; a 7th appears, many decades below them.
-    let fixed = mobility(&load("hamr_vi"), 0.0, &q);
+    let fixed = mobility(&common::tape("hamr_vi"), 0.0, &q);
     for (published, moved) in s.iter().zip(&fixed.singular_values).take(6) {
         assert!(close(*published, *moved, 1e-6));
     }
@@ -183,7 +178,7 @@ fn hamr_vi_fb2_fix_removes_the_fragile_singular_value() {
 
 #[test]
 fn hamr_vi_small_motion_transmission_ratios() {
-    let model = load("hamr_vi");
+    let model = common::tape("hamr_vi");
     let t = transmission(&model);
     print_transmission("HAMR-VI", &t);
     let [x, y, z] = t;
@@ -221,7 +216,7 @@ fn hamr_vi_small_motion_transmission_ratios() {
 /// (s_o/l_i, l_o/l_i, s_o/s_i), while the defaults are the URDF's geometry (checked above).
 #[test]
 fn hamr_vi_crank_arms_set_the_transmission_ratios() {
-    let mut model = load("hamr_vi");
+    let mut model = common::tape("hamr_vi");
     for (name, default) in [("lift_arm", 0.58e-3), ("swing_arm", 0.53e-3)] {
         let index = model.param_index(name).unwrap();
         assert!(close(model.param(index), default, 1e-12), "{name}");
@@ -231,13 +226,7 @@ fn hamr_vi_crank_arms_set_the_transmission_ratios() {
         let index = model.param_index(name).unwrap();
         model.set_param(index, value);
     }
-    let q = assembled(&model, 0.0, 0.0);
-    let largest = q.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-    assert!(largest < 1e-10, "assembly moved q by {largest:e}");
-    let rest = foot(&model, &q, &[0.0, 0.0]);
-    for (value, expected) in rest.iter().zip([12.754659815390e-3, 17.37e-3, -12.54e-3]) {
-        assert!((value - expected).abs() < 1e-12, "foot {rest:?}");
-    }
+    let q = assert_closes_at_zero_with_the_foot_at_rest(&model);
     let m = mobility(&model, 0.0, &q);
     assert_eq!((m.rank, m.dof()), (6, 2), "{m}");
     let [x, y, z] = transmission(&model);
@@ -250,7 +239,7 @@ fn hamr_vi_crank_arms_set_the_transmission_ratios() {
 
 #[test]
 fn hamr_vi_quasi_static_response_and_modes() {
-    let model = load("hamr_vi");
+    let model = common::tape("hamr_vi");
     let (v_lift, v_swing) = (
         model.input_index("v_lift").unwrap(),
         model.input_index("v_swing").unwrap(),
@@ -316,7 +305,7 @@ fn hamr_vi_quasi_static_response_and_modes() {
 
 #[test]
 fn hamr_v2_transmission_ratio_and_mobility() {
-    let model = load("hamr_v2");
+    let model = common::tape("hamr_v2");
     let q = assembled(&model, 0.0, 0.0);
     let m = mobility(&model, 0.0, &q);
     println!("HAMR-V2.0: {m}; singular values {:?}", m.singular_values);
@@ -343,9 +332,7 @@ fn hamr_v2_transmission_ratio_and_mobility() {
 /// less than their free deflection (the transmission's flexures resist).
 #[test]
 fn statics_at_full_voltage_converges_by_continuation() {
-    let path = format!("{}/models/hamr_vi.mech", env!("CARGO_MANIFEST_DIR"));
-    let model =
-        mech::tape_model::TapeModel::new(&mech_codegen::Compiled::from_path(&path).unwrap());
+    let model = common::tape("hamr_vi");
     let independent: Vec<usize> = ["qsact", "qlact"]
         .iter()
         .map(|n| {

@@ -2,6 +2,7 @@
 
 use crate::common;
 
+use mech::tape_model::TapeModel;
 use mech_runtime::{
     linearize, solve_statics, Fixture, FlexureDamping, Method, Model, SimOptions, StaticsOptions,
 };
@@ -73,16 +74,7 @@ fn four_bar_statics_and_small_oscillation_frequency() {
         solve_statics(&model, 0.0, &mut q, &[], &[], &StaticsOptions::default()).unwrap();
     assert!(equilibrium.constraint_residual < 1e-12);
     let at_rest = vec![0.0; 3];
-    let options = SimOptions {
-        t_end: 2.0,
-        output_interval: 0.001,
-        method: Method::Dopri5 {
-            rtol: 1e-12,
-            atol: 1e-13,
-            h_max: f64::INFINITY,
-        },
-        ..SimOptions::default()
-    };
+    let options = common::dopri5_options(2.0, 0.001, 1e-12, 1e-13);
     let still = mech_runtime::simulate(&model, &q, &at_rest, &[], &options, &mut |_| {}).unwrap();
     let moved = still
         .q
@@ -112,13 +104,7 @@ fn four_bar_statics_and_small_oscillation_frequency() {
     };
     let swing = mech_runtime::simulate(&model, &start, &at_rest, &[], &long, &mut |_| {}).unwrap();
     let offset: Vec<f64> = swing.q.iter().map(|s| s[0] - q[0]).collect();
-    let mut crossings = Vec::new();
-    for k in 1..offset.len() {
-        if offset[k - 1] < 0.0 && offset[k] >= 0.0 {
-            let fraction = -offset[k - 1] / (offset[k] - offset[k - 1]);
-            crossings.push(swing.times[k - 1] + fraction * (swing.times[k] - swing.times[k - 1]));
-        }
-    }
+    let crossings = common::upward_crossings(&swing.times, &offset);
     assert!(crossings.len() >= 3, "too few oscillations");
     let period = (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64;
     let measured = std::f64::consts::TAU / period;
@@ -192,7 +178,7 @@ fn flexure_losses_as_complex_stiffness_or_viscous_damper() {
         torque drive on bob = [0, 0, torque];
         output angle = hinge.q;
     ";
-    let model = mech::tape_model::TapeModel::new(&common::compile_text("flexure_pendulum", source));
+    let model = common::tape_from_text("flexure_pendulum", source);
     assert_eq!(
         (model.nflexures(), model.flexure_name(0)),
         (1, "hinge_flexure")
@@ -224,6 +210,24 @@ fn flexure_losses_as_complex_stiffness_or_viscous_damper() {
             "ω = {omega}: {ours} vs {viscous}"
         );
     }
+}
+
+/// A 1 mg tip on a slider along y, moved by an actuator `lift` with the given `properties`
+/// and the voltage of the input `drive` (0 V by default); the output `tip` is its position.
+fn slider_actuator(name: &str, properties: &str) -> TapeModel {
+    let source = format!(
+        "
+        input drive = 0 V;
+        body tip {{ mass = 1 mg; }}
+        joint slide = slider(newtonian, tip) {{ axis = y; }}
+        actuator lift on slide {{
+            {properties}
+            voltage = drive;
+        }}
+        output tip = position(tip) in newtonian;
+    "
+    );
+    common::tape_from_text(name, &source)
 }
 
 /// Free deflection (statics with no load) and blocked force (statics with the slider held at
@@ -269,17 +273,10 @@ fn free_and_blocked(model: &dyn Model, volts: f64) -> (f64, f64) {
 /// k_a = F_b/δ_f).
 #[test]
 fn actuator_free_deflection_and_blocked_force() {
-    let source = "
-        input drive = 0 V;
-        body tip { mass = 1 mg; }
-        joint slide = slider(newtonian, tip) { axis = y; }
-        actuator lift on slide {
-            blocked_force = 320 mN; free_deflection = 300 um; rated_voltage = 225 V;
-            voltage = drive;
-        }
-        output tip = position(tip) in newtonian;
-    ";
-    let model = mech::tape_model::TapeModel::new(&common::compile_text("actuator", source));
+    let model = slider_actuator(
+        "actuator",
+        "blocked_force = 320 mN; free_deflection = 300 um; rated_voltage = 225 V;",
+    );
     let volts = 150.0;
     let (free, blocked) = free_and_blocked(&model, volts);
     // Statics converges to 1e-10 of the initial force imbalance.
@@ -307,7 +304,7 @@ fn flexure_twist_adds_a_degree_of_freedom_with_eq_8_stiffness() {
         }
         output tip = position(paddle.com) in newtonian;
     ";
-    let model = mech::tape_model::TapeModel::new(&common::compile_text("twisting_flexure", source));
+    let model = common::tape_from_text("twisting_flexure", source);
     assert_eq!(model.nq(), 2);
     assert_eq!(
         (model.coordinate_name(0), model.coordinate_name(1)),
@@ -348,19 +345,12 @@ fn flexure_twist_adds_a_degree_of_freedom_with_eq_8_stiffness() {
 /// free deflection and blocked force at 225 V.
 #[test]
 fn bimorph_actuator_matches_the_closed_form() {
-    let source = "
-        input drive = 0 V;
-        body tip { mass = 1 mg; }
-        joint slide = slider(newtonian, tip) { axis = y; }
-        actuator lift on slide {
-            pzt_thickness = 135 um; core_thickness = 55 um; length = 9.2 mm; extension = 1 mm;
-            nominal_width = 3.5 mm; width_ratio = 1.5;
-            f31_blocked = 24 Pa*m/V; f31_free = 32 Pa*m/V; pzt_modulus = 40 GPa; core_modulus = 340 GPa;
-            voltage = drive;
-        }
-        output tip = position(tip) in newtonian;
-    ";
-    let model = mech::tape_model::TapeModel::new(&common::compile_text("bimorph", source));
+    let model = slider_actuator(
+        "bimorph",
+        "pzt_thickness = 135 um; core_thickness = 55 um; length = 9.2 mm; extension = 1 mm;
+        nominal_width = 3.5 mm; width_ratio = 1.5;
+        f31_blocked = 24 Pa*m/V; f31_free = 32 Pa*m/V; pzt_modulus = 40 GPa; core_modulus = 340 GPa;",
+    );
     let bimorph = mech::physics::actuator::Bimorph::SEED_NEW_GEOMETRY;
     let volts = 225.0;
     let (free, blocked) = free_and_blocked(&model, volts);
@@ -390,7 +380,7 @@ fn chirp_estimate_agrees_with_the_linear_response() {
         output x = x.q;
     ";
     // f_n = √(k/m)/2π = 10 Hz, ζ = c/(2√(km)) = 0.05, Q ≈ 1/(2ζ) = 10.
-    let model = mech::tape_model::TapeModel::new(&common::compile_text("oscillator", source));
+    let model = common::tape_from_text("oscillator", source);
     let output = model.output_index("x").unwrap();
     let linear = linearize(&model, 0.0, &[0.0], &[0.0], &[0]).unwrap();
     let frequencies = mech::frequency::log_space(4.0, 30.0, 200);
@@ -455,17 +445,10 @@ fn chirp_estimate_agrees_with_the_linear_response() {
 /// An actuator's `rest` offsets its tip: free deflection δ_f·V/V_rated + rest.
 #[test]
 fn actuator_rest_offsets_the_free_deflection() {
-    let source = "
-        input drive = 0 V;
-        body tip { mass = 1 mg; }
-        joint slide = slider(newtonian, tip) { axis = y; }
-        actuator lift on slide {
-            blocked_force = 270 mN; free_deflection = 247 um; rated_voltage = 225 V;
-            voltage = drive; rest = -50 um;
-        }
-        output tip = position(tip) in newtonian;
-    ";
-    let model = mech::tape_model::TapeModel::new(&common::compile_text("preloaded", source));
+    let model = slider_actuator(
+        "preloaded",
+        "blocked_force = 270 mN; free_deflection = 247 um; rated_voltage = 225 V; rest = -50 um;",
+    );
     let (free, _) = free_and_blocked(&model, 100.0);
     let expected = 247e-6 * 100.0 / 225.0 - 50e-6;
     assert!(

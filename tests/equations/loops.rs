@@ -5,7 +5,6 @@
 use crate::common;
 
 use common::Rng;
-use mech::tape_model::TapeModel;
 use mech_runtime::{
     assemble, assemble_speeds, mobility, AssemblyOptions, Method, Model, SimOptions,
 };
@@ -20,16 +19,7 @@ fn assembled(model: &dyn Model, fixed: &[usize]) -> (Vec<f64>, Vec<f64>) {
 }
 
 fn tight(t_end: f64, output_interval: f64) -> SimOptions {
-    SimOptions {
-        t_end,
-        output_interval,
-        method: Method::Dopri5 {
-            rtol: 1e-11,
-            atol: 1e-12,
-            h_max: f64::INFINITY,
-        },
-        ..SimOptions::default()
-    }
+    common::dopri5_options(t_end, output_interval, 1e-11, 1e-12)
 }
 
 /// Values printed by `sympy_fourbar.py` (SymPy KanesMethod with dependent coordinates,
@@ -110,21 +100,8 @@ fn four_bar_conserves_energy_and_controls_drift_over_ten_seconds() {
     let (q, u) = assembled(model.as_ref(), &[0]);
     let run = mech_runtime::simulate(model.as_ref(), &q, &u, &[], &tight(10.0, 0.01), &mut |_| {})
         .unwrap();
-    let (ke, pe) = (
-        model.output_index("ke").unwrap(),
-        model.output_index("pe").unwrap(),
-    );
-    let energy: Vec<f64> = run.outputs.iter().map(|y| y[ke] + y[pe]).collect();
-    let scale = run.outputs.iter().map(|y| y[ke]).fold(0.0, f64::max);
-    let drift = energy
-        .iter()
-        .map(|e| (e - energy[0]).abs())
-        .fold(0.0, f64::max);
-    assert!(
-        drift / scale < 1e-8,
-        "relative energy drift {:e}",
-        drift / scale
-    );
+    let (_, drift) = common::energy_drift(model.as_ref(), &run);
+    assert!(drift < 1e-8, "relative energy drift {drift:e}");
     let (nc, nq) = (model.nc(), model.nq());
     for (q, u) in run.q.iter().zip(&run.u) {
         let mut phi = vec![0.0; nc];
@@ -222,18 +199,14 @@ fn slider_crank_position_and_velocity_match_the_analytic_expressions() {
 /// as with the minimal (x, y) closure.
 #[test]
 fn redundant_closure_reports_mobility_and_simulates() {
-    let source = std::fs::read_to_string(format!(
-        "{}/models/four_bar.mech",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .unwrap();
+    let source = common::bundled_source("four_bar");
     let redundant = source.replace(
         "loop tip = coincident(coupler, rocker) {",
         "loop tip = revolute(coupler, rocker) {\n    axis = z;",
     );
     let redundant = redundant.replace("    components = [x, y];\n", "");
     assert!(redundant.contains("revolute(coupler, rocker)"));
-    let model = TapeModel::new(&common::compile_text("four_bar_redundant", &redundant));
+    let model = common::tape_from_text("four_bar_redundant", &redundant);
     let (q, u) = assembled(&model, &[0]);
     let report = mobility(&model, 0.0, &q);
     assert_eq!(
@@ -308,16 +281,12 @@ fn jacobian_and_bias_match_finite_differences() {
 /// A loop that cannot close names the row and the residual.
 #[test]
 fn impossible_assembly_is_a_clear_error() {
-    let source = std::fs::read_to_string(format!(
-        "{}/models/four_bar.mech",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .unwrap();
+    let source = common::bundled_source("four_bar");
     let too_short = source.replace(
         "param coupler_length = 2.5 m;",
         "param coupler_length = 0.5 m;",
     );
-    let model = TapeModel::new(&common::compile_text("four_bar_open", &too_short));
+    let model = common::tape_from_text("four_bar_open", &too_short);
     let mut q = vec![0.0; 3];
     let mut u = vec![0.0; 3];
     model.initial_state(&mut q, &mut u);
@@ -343,22 +312,9 @@ fn spherical_five_bar_mobility_and_motion() {
         "4 coordinates, 5 constraint rows, rank 2: 2 degrees of freedom"
     );
     let run = mech_runtime::simulate(&model, &q, &u, &[], &tight(0.5, 0.001), &mut |_| {}).unwrap();
-    let (ke, pe) = (
-        model.output_index("ke").unwrap(),
-        model.output_index("pe").unwrap(),
-    );
-    let energy: Vec<f64> = run.outputs.iter().map(|y| y[ke] + y[pe]).collect();
-    let scale = run.outputs.iter().map(|y| y[ke]).fold(0.0, f64::max);
+    let (scale, drift) = common::energy_drift(&model, &run);
     assert!(scale > 0.0, "the five-bar should move");
-    let drift = energy
-        .iter()
-        .map(|e| (e - energy[0]).abs())
-        .fold(0.0, f64::max);
-    assert!(
-        drift / scale < 1e-8,
-        "relative energy drift {:e}",
-        drift / scale
-    );
+    assert!(drift < 1e-8, "relative energy drift {drift:e}");
     for q in &run.q {
         let mut phi = vec![0.0; model.nc()];
         model.constraints(0.0, q, &mut phi);

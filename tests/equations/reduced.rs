@@ -5,11 +5,8 @@
 
 use crate::common;
 
-use std::path::Path;
-
 use common::Rng;
 use mech::experiments::leg::Leg;
-use mech::experiments::ModelSpec;
 use mech_runtime::constraints::choose_independent;
 use mech_runtime::{
     assemble, assemble_speeds, AssemblyOptions, ConstrainedSolver, Method, Model, Reduced, Signal,
@@ -151,13 +148,7 @@ struct Drive {
 
 impl Drive {
     fn new() -> Drive {
-        let path = format!("{}/models/hamr_vi.mech", env!("CARGO_MANIFEST_DIR"));
-        let spec = ModelSpec {
-            model: Path::new(&path).to_path_buf(),
-            set: Vec::new(),
-            independent: vec!["qsact".into(), "qlact".into()],
-        };
-        let leg = Leg::open(&spec).unwrap();
+        let leg = Leg::open(&common::hamr_vi_spec()).unwrap();
         let mut signals = leg.session.signals.clone();
         for (input, phase_rad) in [
             (leg.v_lift(), 0.0),

@@ -8,7 +8,6 @@ use crate::common;
 
 use mech::diagnose::extend::{open_leg, Extension};
 use mech::experiments::leg::{Dof, Leg};
-use mech::experiments::ModelSpec;
 use mech_runtime::nalgebra::{DMatrix, DVector, Matrix2, Vector2};
 use mech_runtime::{
     assemble, reduced_equilibrium, solve_statics, solve_statics_with_loads, AssemblyOptions,
@@ -24,12 +23,7 @@ const DRIVES: [(f64, f64); 4] = [
 ];
 
 fn hamr_vi() -> Leg {
-    Leg::open(&ModelSpec {
-        model: format!("{}/models/hamr_vi.mech", env!("CARGO_MANIFEST_DIR")).into(),
-        set: Vec::new(),
-        independent: vec!["qsact".into(), "qlact".into()],
-    })
-    .unwrap()
+    Leg::open(&common::hamr_vi_spec()).unwrap()
 }
 
 /// The leg at rest (no drive), the equilibrium every test starts from.
@@ -420,11 +414,7 @@ fn side_load_on_a_held_pendulum_matches_the_closed_form() {
 /// the stiffness reach ~0.1, the off-axis springs), so dropping either term fails the test.
 #[test]
 fn reduced_stiffness_on_the_extended_leg_matches_differences_of_the_generalized_force() {
-    let spec = ModelSpec {
-        model: format!("{}/models/hamr_vi.mech", env!("CARGO_MANIFEST_DIR")).into(),
-        set: Vec::new(),
-        independent: vec!["qsact".into(), "qlact".into()],
-    };
+    let spec = common::hamr_vi_spec();
     let leg = open_leg(&spec, &Extension::Twist(vec![("fb3".into(), 1)])).unwrap();
     let model = leg.model();
     let (nq, nc) = (model.nq(), model.nc());
@@ -547,11 +537,7 @@ fn selected_outputs_equal_the_outputs() {
 /// (so the comparison would see a velocity term left in or a spring dropped).
 #[test]
 fn static_forcing_is_the_forcing_at_zero_speed() {
-    let spec = ModelSpec {
-        model: format!("{}/models/hamr_vi.mech", env!("CARGO_MANIFEST_DIR")).into(),
-        set: Vec::new(),
-        independent: vec!["qsact".into(), "qlact".into()],
-    };
+    let spec = common::hamr_vi_spec();
     let extended = open_leg(&spec, &Extension::Twist(vec![("fb3".into(), 1)])).unwrap();
     for leg in [hamr_vi(), extended] {
         let model = leg.model();

@@ -5,46 +5,28 @@
 
 use crate::common;
 
-use common::{assert_close, forcing, mass_matrix, output};
+use common::{
+    assert_close, forcing, json_numbers, json_strings, mass_matrix, output, sympy_fixture,
+};
 use mech_runtime::Model;
-use serde_json::Value;
 
 const TOLERANCE: f64 = 1e-10;
 
-fn fixture() -> Value {
-    let path = format!("{}/tests/peers/fixture.json", env!("CARGO_MANIFEST_DIR"));
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
-
-fn numbers(value: &Value) -> Vec<f64> {
-    value
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect()
-}
-
 fn check_model(name: &str) {
-    let fixture = fixture();
+    let fixture = sympy_fixture();
     let reference = &fixture["models"][name];
-    let coordinates: Vec<&str> = reference["coordinates"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|c| c.as_str().unwrap())
-        .collect();
+    let coordinates = json_strings(&reference["coordinates"]);
     let tape = common::tape(name);
     let compiled = mech::models::compiled(name).unwrap();
     for model in [&tape as &dyn Model, compiled.as_ref()] {
         let ours: Vec<&str> = (0..model.nq()).map(|i| model.coordinate_name(i)).collect();
         assert_eq!(ours, coordinates, "{name}: coordinate order");
         for (k, state) in reference["states"].as_array().unwrap().iter().enumerate() {
-            let (q, u) = (numbers(&state["q"]), numbers(&state["u"]));
+            let (q, u) = (json_numbers(&state["q"]), json_numbers(&state["u"]));
             let m = mass_matrix(model, &q);
             let f = forcing(model, &q, &u);
             for (r, row) in state["mass_matrix"].as_array().unwrap().iter().enumerate() {
-                let row = numbers(row);
+                let row = json_numbers(row);
                 let floor = row.iter().fold(0.0_f64, |a, b| a.max(b.abs()));
                 for (c, expected) in row.iter().enumerate() {
                     assert_close(
@@ -56,7 +38,7 @@ fn check_model(name: &str) {
                     );
                 }
             }
-            let expected_f = numbers(&state["forcing"]);
+            let expected_f = json_numbers(&state["forcing"]);
             let floor = expected_f.iter().fold(0.0_f64, |a, b| a.max(b.abs()));
             for (r, expected) in expected_f.iter().enumerate() {
                 assert_close(

@@ -7,34 +7,13 @@
 
 use crate::common;
 
-use common::{assert_close, forcing, mass_matrix, output};
+use common::{
+    assert_close, forcing, json_numbers, json_strings, mass_matrix, output, sympy_fixture,
+};
 use mech_runtime::Model;
 use serde_json::Value;
 
 const TOLERANCE: f64 = 1e-10;
-
-fn fixture() -> Value {
-    let path = format!("{}/tests/peers/fixture.json", env!("CARGO_MANIFEST_DIR"));
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
-
-fn numbers(value: &Value) -> Vec<f64> {
-    value
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect()
-}
-
-fn strings(value: &Value) -> Vec<&str> {
-    value
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_str().unwrap())
-        .collect()
-}
 
 fn max_abs(values: &[f64]) -> f64 {
     values.iter().fold(0.0_f64, |a, b| a.max(b.abs()))
@@ -54,15 +33,15 @@ fn check_rows(what: &str, ours: &[Vec<f64>], expected: &Value) {
     let expected = expected.as_array().unwrap();
     assert_eq!(ours.len(), expected.len(), "{what}: rows");
     for (r, row) in expected.iter().enumerate() {
-        check_vector(&format!("{what}[{r}]"), &ours[r], &numbers(row));
+        check_vector(&format!("{what}[{r}]"), &ours[r], &json_numbers(row));
     }
 }
 
 fn check_model(name: &str) {
-    let fixture = fixture();
+    let fixture = sympy_fixture();
     let reference = &fixture["models"][name];
-    let coordinates = strings(&reference["coordinates"]);
-    let constraint_names = strings(&reference["constraint_names"]);
+    let coordinates = json_strings(&reference["coordinates"]);
+    let constraint_names = json_strings(&reference["constraint_names"]);
     let tape = common::tape(name);
     let compiled = mech::models::compiled(name).unwrap();
     for (backend, model) in [
@@ -79,13 +58,13 @@ fn check_model(name: &str) {
         let (nq, nc) = (model.nq(), model.nc());
         for (k, state) in reference["states"].as_array().unwrap().iter().enumerate() {
             let what = |quantity: &str| format!("{name} ({backend}) state {k} {quantity}");
-            let (q, u) = (numbers(&state["q"]), numbers(&state["u"]));
+            let (q, u) = (json_numbers(&state["q"]), json_numbers(&state["u"]));
 
             check_rows(&what("M"), &mass_matrix(model, &q), &state["mass_matrix"]);
             check_vector(
                 &what("F"),
                 &forcing(model, &q, &u),
-                &numbers(&state["forcing"]),
+                &json_numbers(&state["forcing"]),
             );
             let ke = state["kinetic_energy"].as_f64().unwrap();
             let pe = state["potential_energy"].as_f64().unwrap();
@@ -109,7 +88,7 @@ fn check_model(name: &str) {
 
             let mut phi = vec![0.0; nc];
             model.constraints(0.0, &q, &mut phi);
-            check_vector(&what("phi"), &phi, &numbers(&state["constraints"]));
+            check_vector(&what("phi"), &phi, &json_numbers(&state["constraints"]));
 
             let mut jacobian = vec![0.0; nc * nq]; // column-major nc × nq
             model.constraint_jacobian(0.0, &q, &mut jacobian);
@@ -120,7 +99,11 @@ fn check_model(name: &str) {
 
             let mut bias = vec![0.0; nc];
             model.constraint_bias(0.0, &q, &u, &mut bias);
-            check_vector(&what("J'u"), &bias, &numbers(&state["constraint_bias"]));
+            check_vector(
+                &what("J'u"),
+                &bias,
+                &json_numbers(&state["constraint_bias"]),
+            );
         }
     }
 }

@@ -4,7 +4,7 @@
 use crate::common;
 
 use common::{assert_close, mass_matrix, output, Rng};
-use mech_runtime::{Method, Model, SimOptions};
+use mech_runtime::Model;
 use nalgebra::DMatrix;
 
 #[test]
@@ -40,36 +40,12 @@ fn energy_is_conserved_over_ten_seconds() {
     let mut q0 = [0.0; 3];
     let mut u0 = [0.0; 3];
     model.initial_state(&mut q0, &mut u0);
-    let options = SimOptions {
-        t_end: 10.0,
-        output_interval: 0.01,
-        method: Method::Dopri5 {
-            rtol: 1e-12,
-            atol: 1e-14,
-            h_max: f64::INFINITY,
-        },
-        ..SimOptions::default()
-    };
-    let signals = mech_runtime::default_signals(&model);
-    let run = mech_runtime::simulate(&model, &q0, &u0, &signals, &options, &mut |_| {}).unwrap();
-    let (ke, pe) = (
-        model.output_index("ke").unwrap(),
-        model.output_index("pe").unwrap(),
-    );
-    let energy: Vec<f64> = run.outputs.iter().map(|y| y[ke] + y[pe]).collect();
-    // Scale: the largest kinetic energy reached (E itself may be near zero).
-    let scale = run.outputs.iter().map(|y| y[ke]).fold(0.0_f64, f64::max);
+    let options = common::dopri5_options(10.0, 0.01, 1e-12, 1e-14);
+    let run = common::simulate_at_default_inputs(&model, &q0, &u0, &options);
+    let (scale, drift) = common::energy_drift(&model, &run);
     assert!(
         scale > 1.0,
         "the pendulum should swing vigorously (max KE {scale})"
     );
-    let drift = energy
-        .iter()
-        .map(|e| (e - energy[0]).abs())
-        .fold(0.0_f64, f64::max);
-    assert!(
-        drift / scale < 1e-8,
-        "relative energy drift {:e}",
-        drift / scale
-    );
+    assert!(drift < 1e-8, "relative energy drift {drift:e}");
 }
