@@ -108,7 +108,7 @@ pub enum Error {
     /// The extended model cannot be set up (`--set`, assembly).
     ExtendedSession {
         model: PathBuf,
-        /// Where the extension acts ([`super::extend::Extension::location`]).
+        /// Where the extension acts (the extension's `location`).
         location: String,
         error: Box<session::Error>,
     },

@@ -389,6 +389,18 @@ pub enum Sensor {
     At(Vec<f64>),
 }
 
+impl Sensor {
+    /// The sensor's `k`-th distance from the foot's rest position, or `None` after the last.
+    fn position(&self, k: usize, free_deflection: f64) -> Option<f64> {
+        match self {
+            Sensor::Blocked => (k == 0).then_some(0.0),
+            Sensor::Steps(step) if k > 0 && k as f64 * step >= free_deflection => None,
+            Sensor::Steps(step) => Some(k as f64 * step),
+            Sensor::At(distances) => distances.get(k).copied(),
+        }
+    }
+}
+
 /// The paper's force/deflection test (seed Sec. V.A, Fig. 7): the leg driven at `voltage`
 /// on `dof` pushes against a sensor (a frictionless plane normal to `axis`) placed as
 /// `sensor` says. With `off_axis_fraction = c > 0` the sensor also pushes on the foot along y with `c`
@@ -447,15 +459,8 @@ pub fn force_deflection_warm(
     let mut q = rest_q.clone();
     let mut k = 0usize;
     loop {
-        let distance = match &sensor {
-            Sensor::Blocked if k > 0 => break,
-            Sensor::Blocked => 0.0,
-            Sensor::Steps(step) if k > 0 && k as f64 * step >= free_deflection => break,
-            Sensor::Steps(step) => k as f64 * step,
-            Sensor::At(distances) => match distances.get(k) {
-                Some(&d) => d,
-                None => break,
-            },
+        let Some(distance) = sensor.position(k, free_deflection) else {
+            break;
         };
         if distance > free_deflection {
             // Beyond the free foot's reach the sensor is not touched: no equilibrium to solve
