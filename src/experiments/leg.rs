@@ -458,10 +458,7 @@ pub fn force_deflection_warm(
     let mut points = Vec::new();
     let mut q = rest_q.clone();
     let mut k = 0usize;
-    loop {
-        let Some(distance) = sensor.position(k, free_deflection) else {
-            break;
-        };
+    while let Some(distance) = sensor.position(k, free_deflection) {
         if distance > free_deflection {
             // Beyond the free foot's reach the sensor is not touched: no equilibrium to solve
             // (holding the foot there would pull on it, and such a pulled leg far from its
