@@ -191,12 +191,12 @@ pub fn verdict_text(d: &Diagnosis) -> String {
 }
 
 /// `NAME = value ± σ (nominal …)` for a fitted parameter of a trial.
-pub fn fitted_text((name, nominal, value, se): &(String, f64, f64, f64)) -> String {
+fn fitted_text((name, nominal, value, se): &(String, f64, f64, f64)) -> String {
     format!("{name} = {value:.4e} ± {se:.1e} (nominal {nominal:.4e})")
 }
 
 /// `; the data support equally: …` when several candidates tie with the best.
-pub fn tied_text(d: &Diagnosis) -> String {
+fn tied_text(d: &Diagnosis) -> String {
     if d.tied <= 1 {
         return String::new();
     }

@@ -17,15 +17,22 @@ pub use plot::PlotError;
 #[derive(Debug)]
 pub enum Error {
     Plot(PlotError),
-    Read { path: PathBuf, message: String },
-    Write { path: PathBuf, message: String },
+    /// A plot to inline in a page could not be read.
+    ReadPlot {
+        path: PathBuf,
+        message: String,
+    },
+    Write {
+        path: PathBuf,
+        message: String,
+    },
 }
 
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Error::Plot(error) => write!(f, "{error}"),
-            Error::Read { path, message } => {
+            Error::ReadPlot { path, message } => {
                 write!(f, "cannot read plot {}: {message}", path.display())
             }
             Error::Write { path, message } => {

@@ -149,7 +149,7 @@ pub fn render_page(
             body += &table.html();
         }
         for plot in &outcome.plots {
-            let svg = std::fs::read_to_string(plot).map_err(|e| Error::Read {
+            let svg = std::fs::read_to_string(plot).map_err(|e| Error::ReadPlot {
                 path: plot.clone(),
                 message: e.to_string(),
             })?;
