@@ -11,7 +11,7 @@
 //! ```
 
 use mech::diagnose::extend::{open_leg, Extension};
-use mech::experiments::leg::{force_deflection, Dof, Leg, Sensor};
+use mech::experiments::leg::{Dof, ForceTest, Leg, Sensor};
 
 mod common;
 use common::{fastest, leg_spec};
@@ -31,10 +31,12 @@ fn main() {
     );
     println!("|---|---|---|---|---|");
     for (name, leg) in &legs {
-        for (dof, axis) in [(Dof::Swing, 0), (Dof::Lift, 2)] {
+        for dof in [Dof::Swing, Dof::Lift] {
             for fraction in [0.0, 0.3] {
                 let (best, test) = fastest(5, || {
-                    force_deflection(leg, dof, axis, 225.0, Sensor::Steps(127e-6), fraction)
+                    ForceTest::new(dof, 225.0, Sensor::Steps(127e-6))
+                        .off_axis(fraction)
+                        .run(leg)
                         .expect("the sweep runs")
                 });
                 let points = test.points.len();

@@ -9,7 +9,7 @@
 //! cargo run --release --example statics_timing
 //! ```
 
-use mech::experiments::leg::{force_deflection, Dof, Leg};
+use mech::experiments::leg::{Dof, ForceTest, Leg, Sensor};
 use mech_runtime::{solve_statics_with_loads, Fixture, SideLoad, StaticsOptions};
 
 mod common;
@@ -86,18 +86,13 @@ fn main() {
     println!();
     println!("| force/deflection sweep, 225 V, 127 µm steps | sensor points | ms per point |");
     println!("|---|---|---|");
-    for (dof, axis) in [(Dof::Lift, 2), (Dof::Swing, 0)] {
+    for dof in [Dof::Lift, Dof::Swing] {
         for fraction in [0.0, 0.3] {
             let (time, test) = fastest(5, || {
-                force_deflection(
-                    &leg,
-                    dof,
-                    axis,
-                    225.0,
-                    mech::experiments::leg::Sensor::Steps(127e-6),
-                    fraction,
-                )
-                .expect("the sweep runs")
+                ForceTest::new(dof, 225.0, Sensor::Steps(127e-6))
+                    .off_axis(fraction)
+                    .run(&leg)
+                    .expect("the sweep runs")
             });
             println!(
                 "| {}, off-axis load {:.0} % | {} | {:.3} |",

@@ -482,26 +482,27 @@ mod tests {
             format!("`{name}`, line 3, column 2 (`v`): `abc` is not a number")
         );
 
-        fs::write(&path, "t,v\n0,1\n1,2,3\n").unwrap();
-        let error = read_csv_column(&path, "v").unwrap_err();
-        assert_eq!(
-            error.to_string(),
-            format!("`{name}`, line 3: 3 fields, but the header has 2 columns")
-        );
-
-        fs::write(&path, "t,v\n0,1\n").unwrap();
-        let error = read_csv_column(&path, "w").unwrap_err();
-        assert_eq!(
-            error.to_string(),
-            format!("`{name}` has no column `w`; its columns are `t`, `v`")
-        );
-
-        fs::write(&path, "t,v\n").unwrap();
-        let error = read_csv_column(&path, "v").unwrap_err();
-        assert_eq!(
-            error.to_string(),
-            format!("`{name}` has a header but no data rows")
-        );
+        for (contents, column, expected) in [
+            (
+                "t,v\n0,1\n1,2,3\n",
+                "v",
+                "line 3: 3 fields, but the header has 2 columns",
+            ),
+            (
+                "t,v\n0,1\n",
+                "w",
+                " has no column `w`; its columns are `t`, `v`",
+            ),
+            ("t,v\n", "v", " has a header but no data rows"),
+        ] {
+            fs::write(&path, contents).unwrap();
+            let error = read_csv_column(&path, column).unwrap_err().to_string();
+            let expected = match expected.strip_prefix(' ') {
+                Some(rest) => format!("`{name}` {rest}"),
+                None => format!("`{name}`, {expected}"),
+            };
+            assert_eq!(error, expected);
+        }
 
         fs::write(&path, "").unwrap();
         let error = read_csv_column(&path, "v").unwrap_err().to_string();

@@ -5,7 +5,7 @@
 //! the tape model, its signals, and an [`Assembled`] consistent state.
 
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use mech_codegen::ir::Dimension;
 use mech_codegen::{Compiled, Errors};
@@ -17,6 +17,24 @@ use mech_runtime::{
 
 use crate::signal_spec;
 use crate::tape_model::TapeModel;
+use serde::Deserialize;
+
+/// A model as an experiment file names it: the `.mech` file, its parameter settings, and
+/// the coordinates held independent when closing its loops. The keys `model`, `set` and
+/// `independent` of every experiment file (flattened into each kind's keys).
+#[derive(Debug, Clone, Deserialize)]
+pub struct ModelSpec {
+    /// Path of the `.mech` file, relative to the current directory (or absolute).
+    #[serde(rename = "model")]
+    pub path: PathBuf,
+    /// Parameter settings, `NAME=VALUE` as for `--set`.
+    #[serde(default)]
+    pub set: Vec<String>,
+    /// Coordinates held independent when closing the loops; empty: the analysis chooses
+    /// (a HAMR leg holds its actuator coordinates).
+    #[serde(default)]
+    pub independent: Vec<String>,
+}
 
 /// What a name refers to in a model, for [`Error::UnknownName`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

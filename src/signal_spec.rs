@@ -890,22 +890,20 @@ mod tests {
             parse_assignment("arm.length=2 mm").unwrap(),
             ("arm.length".to_string(), "2 mm".to_string())
         );
-        assert_eq!(
-            parse_assignment("drive").unwrap_err().to_string(),
-            "expected NAME=VALUE, found `drive` (no `=`)"
-        );
-        assert_eq!(
-            parse_assignment("=1 mN").unwrap_err().to_string(),
-            "expected NAME=VALUE, found `=1 mN` (no name before `=`)"
-        );
-        assert_eq!(
-            parse_assignment("drive= ").unwrap_err().to_string(),
-            "`drive=` has no value after `=`"
-        );
-        assert_eq!(
-            parse_assignment("sine(amp=1 mN)").unwrap_err().to_string(),
-            "expected NAME=VALUE, found `sine(amp=1 mN)`: `sine(amp` is not a name"
-        );
+        for (text, message) in [
+            ("drive", "expected NAME=VALUE, found `drive` (no `=`)"),
+            (
+                "=1 mN",
+                "expected NAME=VALUE, found `=1 mN` (no name before `=`)",
+            ),
+            ("drive= ", "`drive=` has no value after `=`"),
+            (
+                "sine(amp=1 mN)",
+                "expected NAME=VALUE, found `sine(amp=1 mN)`: `sine(amp` is not a name",
+            ),
+        ] {
+            assert_eq!(parse_assignment(text).unwrap_err().to_string(), message);
+        }
     }
 
     #[test]

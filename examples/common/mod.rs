@@ -5,13 +5,13 @@
 
 use std::time::Instant;
 
-use mech::experiments::ModelSpec;
+use mech::session::ModelSpec;
 
 /// A bundled HAMR leg model (`models/NAME.mech`) with the actuator coordinates, swing and
 /// lift, held independent.
 pub fn leg_spec(name: &str) -> ModelSpec {
     ModelSpec {
-        model: format!("{}/models/{name}.mech", env!("CARGO_MANIFEST_DIR")).into(),
+        path: format!("{}/models/{name}.mech", env!("CARGO_MANIFEST_DIR")).into(),
         set: Vec::new(),
         independent: vec!["qsact".into(), "qlact".into()],
     }

@@ -13,46 +13,61 @@ use crate::diagnose::DataErrors;
 use crate::render::PlotError;
 use crate::{diagnose, experiments, flexure_fit, physics, quantity, render, session};
 
-#[derive(Debug)]
+/// A failed command. The layers' errors display as they are (their messages name the file,
+/// option or key); the variants with fields add what the command was doing.
+#[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// A command-line value that cannot be used; the message names the option and the
     /// expected form.
+    #[error("{0}")]
     Usage(String),
-    Compile(mech_codegen::Errors),
-    Session(session::Error),
-    Experiments(experiments::Error),
-    FlexureFit(flexure_fit::Error),
-    Physics(physics::Invalid),
-    Quantity(quantity::Error),
+    #[error(transparent)]
+    Compile(#[from] mech_codegen::Errors),
+    #[error(transparent)]
+    Session(#[from] session::Error),
+    #[error(transparent)]
+    Experiments(#[from] experiments::Error),
+    #[error(transparent)]
+    FlexureFit(#[from] flexure_fit::Error),
+    #[error(transparent)]
+    Physics(#[from] physics::Invalid),
+    #[error(transparent)]
+    Quantity(#[from] quantity::Error),
     /// Measured data that cannot be read (every problem of the file).
-    Data(DataErrors),
+    #[error(transparent)]
+    Data(#[from] DataErrors),
     /// Boxed: the diagnosis error is large and commands return errors often by value.
+    #[error(transparent)]
     Diagnose(Box<diagnose::Error>),
     /// A fit to the data in `data` failed.
+    #[error("fit to `{}`: {error}", data.display())]
     Fit {
         data: PathBuf,
         error: Box<diagnose::Error>,
     },
     /// A JSON summary could not be encoded.
-    Json(serde_json::Error),
-    Render(render::Error),
-    Plot(PlotError),
-    Simulation {
-        model: String,
-        error: RuntimeError,
-    },
+    #[error("cannot encode the JSON summary: {0}")]
+    Json(#[from] serde_json::Error),
+    #[error(transparent)]
+    Render(#[from] render::Error),
+    #[error("cannot plot: {0}")]
+    Plot(#[from] PlotError),
+    #[error("simulation of `{model}` failed: {error}")]
+    Simulation { model: String, error: RuntimeError },
+    #[error("chirp simulation failed: {0}")]
     Chirp(RuntimeError),
     /// The reduced mass matrix is not positive definite: no modes.
+    #[error("the reduced mass matrix is not positive definite")]
     NoModes,
     /// The linear model is singular at a frequency of the sweep.
+    #[error("the linear model is singular at some frequency")]
     SingularResponse,
     /// A file written atomically could not be (the message names the file).
-    Io(std::io::Error),
+    #[error(transparent)]
+    Io(#[from] std::io::Error),
     /// An output file or folder could not be written.
-    Write {
-        path: PathBuf,
-        message: String,
-    },
+    #[error("cannot write {}: {message}", path.display())]
+    Write { path: PathBuf, message: String },
 }
 
 impl Error {
@@ -64,66 +79,6 @@ impl Error {
         }
     }
 }
-
-impl fmt::Display for Error {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Error::Usage(message) => f.write_str(message),
-            Error::Data(errors) => write!(f, "{errors}"),
-            Error::Diagnose(error) => write!(f, "{error}"),
-            Error::Fit { data, error } => write!(f, "fit to `{}`: {error}", data.display()),
-            Error::Io(error) => write!(f, "{error}"),
-            Error::Json(error) => write!(f, "cannot encode the JSON summary: {error}"),
-            Error::Compile(errors) => write!(f, "{errors}"),
-            Error::Session(error) => write!(f, "{error}"),
-            Error::Experiments(error) => write!(f, "{error}"),
-            Error::FlexureFit(error) => write!(f, "{error}"),
-            Error::Physics(error) => write!(f, "{error}"),
-            Error::Quantity(error) => write!(f, "{error}"),
-            Error::Render(error) => write!(f, "{error}"),
-            Error::Plot(error) => write!(f, "cannot plot: {error}"),
-            Error::Simulation { model, error } => {
-                write!(f, "simulation of `{model}` failed: {error}")
-            }
-            Error::Chirp(error) => write!(f, "chirp simulation failed: {error}"),
-            Error::NoModes => f.write_str("the reduced mass matrix is not positive definite"),
-            Error::SingularResponse => {
-                f.write_str("the linear model is singular at some frequency")
-            }
-            Error::Write { path, message } => {
-                write!(f, "cannot write {}: {message}", path.display())
-            }
-        }
-    }
-}
-
-impl std::error::Error for Error {}
-
-macro_rules! from_layer {
-    ($($variant:ident($error:ty)),* $(,)?) => {
-        $(
-            impl From<$error> for Error {
-                fn from(error: $error) -> Error {
-                    Error::$variant(error)
-                }
-            }
-        )*
-    };
-}
-
-from_layer!(
-    Compile(mech_codegen::Errors),
-    Session(session::Error),
-    Experiments(experiments::Error),
-    FlexureFit(flexure_fit::Error),
-    Physics(physics::Invalid),
-    Quantity(quantity::Error),
-    Render(render::Error),
-    Plot(PlotError),
-    Json(serde_json::Error),
-    Io(std::io::Error),
-    Data(DataErrors),
-);
 
 impl From<diagnose::Error> for Error {
     fn from(error: diagnose::Error) -> Error {

@@ -41,7 +41,7 @@ pub struct FitArgs {
 pub fn run(args: &FitArgs) -> Result<(), Error> {
     let experiment = experiment::load(&args.experiment)?;
     let data = MeasuredData::load(&args.data)?;
-    let mut leg = Leg::open_any(&experiment.model_spec(), &[])?;
+    let mut leg = Leg::open_any(experiment.model_spec(), &[])?;
     let requests = args
         .fit
         .iter()

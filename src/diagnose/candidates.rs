@@ -460,7 +460,7 @@ pub fn diagnose_causes(
     causes: &[String],
 ) -> Result<Diagnosis, Error> {
     let spec = experiment.model_spec();
-    let leg = Leg::open_any(&spec, &[]).map_err(Error::leg)?;
+    let leg = Leg::open_any(spec, &[]).map_err(Error::leg)?;
     let observations = experiment.observations(&leg, data)?;
     let screening = experiment.screen(data)?;
     require_noise(&observations)?;
@@ -471,7 +471,7 @@ pub fn diagnose_causes(
         experiment,
         base: &leg.session.compiled,
         data,
-        spec: &spec,
+        spec,
         user: &user,
         observations: &observations,
         train: &train,
@@ -776,7 +776,7 @@ struct Trials<'a> {
     /// holds a tape with scratch space, so each thread builds its own).
     base: &'a Compiled,
     data: &'a MeasuredData,
-    spec: &'a crate::experiments::ModelSpec,
+    spec: &'a crate::session::ModelSpec,
     user: &'a [(Target, Parameter)],
     observations: &'a super::experiment::Observations,
     train: &'a [bool],

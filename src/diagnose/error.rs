@@ -189,12 +189,14 @@ impl fmt::Display for Error {
             Error::ReadExperiment { path, error } => {
                 write!(f, "cannot read experiment `{}`: {error}", path.display())
             }
-            Error::ExperimentToml { path, error } => write!(
-                f,
-                "experiment `{}`: {}",
-                path.display(),
-                error.to_string().trim_end()
-            ),
+            Error::ExperimentToml { path, error } => {
+                let message = error.to_string();
+                write!(f, "experiment `{}`: {}", path.display(), message.trim_end())?;
+                if message.starts_with("unknown field") && !message.contains("expected") {
+                    f.write_str("\n  hint: docs/diagnose.md lists the keys of each kind")?;
+                }
+                Ok(())
+            }
             Error::Experiment { path, error } => {
                 write!(f, "experiment `{}`: {error}", path.display())
             }

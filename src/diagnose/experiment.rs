@@ -35,8 +35,8 @@ use super::error::{Error, KeyError};
 use super::observations::noise_value;
 pub use super::observations::Observations;
 use super::pendulum::{self, Pendulum, Screening};
-use crate::experiments::leg::{force_deflection_warm, Dof, Leg, Sensor, WarmStarts};
-use crate::experiments::ModelSpec;
+use crate::experiments::leg::{Dof, ForceTest, Leg, Sensor, WarmStarts};
+use crate::session::ModelSpec;
 
 /// One diagnosis experiment file.
 #[derive(Debug, Clone, Deserialize)]
@@ -52,11 +52,8 @@ pub enum Experiment {
 #[serde(deny_unknown_fields)]
 pub struct ForceDeflectionTest {
     pub title: String,
-    pub model: PathBuf,
-    #[serde(default)]
-    pub set: Vec<String>,
-    #[serde(default = "crate::experiments::default_independent")]
-    pub independent: Vec<String>,
+    #[serde(flatten)]
+    pub model: ModelSpec,
     /// The driven degree of freedom: `lift` (force along z) or `swing` (along x).
     pub dof: Dof,
     /// Drive voltage of the model input, e.g. `"225 V"`.
@@ -74,11 +71,8 @@ pub struct ForceDeflectionTest {
 #[serde(deny_unknown_fields)]
 pub struct QuasiStatic {
     pub title: String,
-    pub model: PathBuf,
-    #[serde(default)]
-    pub set: Vec<String>,
-    #[serde(default = "crate::experiments::default_independent")]
-    pub independent: Vec<String>,
+    #[serde(flatten)]
+    pub model: ModelSpec,
     /// The measured outputs (model output names = data column names).
     pub outputs: Vec<String>,
     /// Measurement noise (one standard deviation) of each output, e.g. `"5 um"`; omitted: the
@@ -91,11 +85,8 @@ pub struct QuasiStatic {
 #[serde(deny_unknown_fields)]
 pub struct FrequencyResponse {
     pub title: String,
-    pub model: PathBuf,
-    #[serde(default)]
-    pub set: Vec<String>,
-    #[serde(default = "crate::experiments::default_independent")]
-    pub independent: Vec<String>,
+    #[serde(flatten)]
+    pub model: ModelSpec,
     /// One transfer function: model input and output, e.g. `v_lift` → `foot.z` (data
     /// columns `gain`, `phase`). Or several as `[[channel]]` tables below.
     #[serde(default)]
@@ -192,36 +183,32 @@ impl Experiment {
     }
 
     pub fn title(&self) -> &str {
-        match self {
-            Experiment::QuasiStatic(e) => &e.title,
-            Experiment::FrequencyResponse(e) => &e.title,
-            Experiment::ForceDeflection(e) => &e.title,
-            Experiment::Pendulum(e) => &e.title,
-        }
+        self.header().0
     }
 
     /// The model and its settings.
-    pub fn model_spec(&self) -> ModelSpec {
-        let (model, set, independent) = match self {
-            Experiment::QuasiStatic(e) => (&e.model, &e.set, &e.independent),
-            Experiment::FrequencyResponse(e) => (&e.model, &e.set, &e.independent),
-            Experiment::ForceDeflection(e) => (&e.model, &e.set, &e.independent),
-            Experiment::Pendulum(e) => (&e.model, &e.set, &e.independent),
-        };
-        ModelSpec {
-            model: model.clone(),
-            set: set.clone(),
-            independent: independent.clone(),
-        }
+    pub fn model_spec(&self) -> &ModelSpec {
+        self.header().1
     }
 
     /// The same experiment on another model file (`mech diagnose MODEL …`).
     pub fn set_model(&mut self, path: PathBuf) {
+        let model = match self {
+            Experiment::QuasiStatic(e) => &mut e.model,
+            Experiment::FrequencyResponse(e) => &mut e.model,
+            Experiment::ForceDeflection(e) => &mut e.model,
+            Experiment::Pendulum(e) => &mut e.model,
+        };
+        model.path = path;
+    }
+
+    /// The keys every kind has: title and model.
+    fn header(&self) -> (&str, &ModelSpec) {
         match self {
-            Experiment::QuasiStatic(e) => e.model = path,
-            Experiment::FrequencyResponse(e) => e.model = path,
-            Experiment::ForceDeflection(e) => e.model = path,
-            Experiment::Pendulum(e) => e.model = path,
+            Experiment::QuasiStatic(e) => (&e.title, &e.model),
+            Experiment::FrequencyResponse(e) => (&e.title, &e.model),
+            Experiment::ForceDeflection(e) => (&e.title, &e.model),
+            Experiment::Pendulum(e) => (&e.title, &e.model),
         }
     }
 
@@ -538,16 +525,10 @@ impl ForceDeflectionTest {
             .off_axis_fraction
             .unwrap_or(self.off_axis_fraction);
         let distances = measured.abscissa.clone();
-        let test = force_deflection_warm(
-            leg,
-            self.dof,
-            self.dof.axis(),
-            self.volts()?,
-            Sensor::At(distances),
-            fraction,
-            warm,
-        )
-        .map_err(Error::leg)?;
+        let test = ForceTest::new(self.dof, self.volts()?, Sensor::At(distances))
+            .off_axis(fraction)
+            .run_warm(leg, warm)
+            .map_err(Error::leg)?;
         // A sensor beyond the free foot's reach is not touched: it reads 0.
         Ok(test.points.iter().map(|p| p.force.max(0.0)).collect())
     }

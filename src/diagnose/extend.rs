@@ -12,7 +12,7 @@ use mech_codegen::Compiled;
 
 use super::error::Error;
 use crate::experiments::leg::Leg;
-use crate::experiments::ModelSpec;
+use crate::session::ModelSpec;
 use crate::session::Session;
 
 /// A change of the model's form.
@@ -60,8 +60,8 @@ impl Extension {
 
 /// Opens `spec`'s model with `extension` applied.
 pub fn open_leg(spec: &ModelSpec, extension: &Extension) -> Result<Leg, Error> {
-    let base = Compiled::from_path(&spec.model).map_err(|errors| Error::Compile {
-        model: spec.model.clone(),
+    let base = Compiled::from_path(&spec.path).map_err(|errors| Error::Compile {
+        model: spec.path.clone(),
         errors,
     })?;
     extend_leg(&base, spec, extension)
@@ -77,7 +77,7 @@ pub fn base_leg(base: &Compiled, spec: &ModelSpec) -> Result<Leg, Error> {
 /// `base` (`spec`'s model, compiled once) with `extension` applied to a copy of its IR,
 /// re-derived without reading the text again.
 pub fn extend_leg(base: &Compiled, spec: &ModelSpec, extension: &Extension) -> Result<Leg, Error> {
-    let path = || spec.model.clone();
+    let path = || spec.path.clone();
     let mut model = base.model.clone();
     apply(&mut model, extension).map_err(|error| Error::Transform {
         model: path(),

@@ -37,7 +37,6 @@
 //! effect is flagged beyond [`FLAG_SIGMA`] standard errors.
 
 use std::f64::consts::PI;
-use std::path::PathBuf;
 
 use mech_codegen::ir::{Dimension, Expr};
 use mech_runtime::integrate::{AdaptiveOptions, Dop853, Stepper};
@@ -50,6 +49,7 @@ use super::lm::{levenberg_marquardt, LmOptions, Parameter};
 use super::observations::{noise_value, Observations};
 use crate::experiments::leg::Leg;
 use crate::flexure_fit::trace::{analyze_trace, TraceAnalysis, TraceOptions};
+use crate::session::ModelSpec;
 
 /// An effect is flagged when its estimate exceeds this many standard errors. Three effects
 /// are tested per trace; with Gaussian noise 3.5σ gives a false flag on about 0.14 % of
@@ -73,12 +73,8 @@ const ATOL: f64 = 1e-12;
 #[serde(deny_unknown_fields)]
 pub struct Pendulum {
     pub title: String,
-    pub model: PathBuf,
-    #[serde(default)]
-    pub set: Vec<String>,
-    /// Coordinates held independent when closing loops (none for the rig).
-    #[serde(default)]
-    pub independent: Vec<String>,
+    #[serde(flatten)]
+    pub model: ModelSpec,
     /// The measured angle: a model output or coordinate, and the data column of that name
     /// (default `angle`, the rig's output).
     #[serde(default = "default_angle")]

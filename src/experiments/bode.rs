@@ -2,29 +2,27 @@
 //! voltage to foot displacement, lift and swing, from the linearized model (hysteretic and
 //! viscous flexure losses) and from a simulated linear chirp; resonances and quality factors.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
 use super::leg::Leg;
 use super::Error;
-use super::{csv, ModelSpec, Outcome, Table};
+use super::{csv, Outcome, Table};
 use crate::frequency::{self, ChirpSweep, Point};
 use crate::parallel::{parallel, threads};
 use crate::quantity::{positive, quantity};
 use crate::render::plot;
+use crate::session::ModelSpec;
 use mech_runtime::Mode;
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Spec {
     pub title: String,
-    pub model: PathBuf,
-    #[serde(default)]
-    pub set: Vec<String>,
-    #[serde(default = "super::default_independent")]
-    pub independent: Vec<String>,
+    #[serde(flatten)]
+    pub model: ModelSpec,
     /// Lowest and highest frequency (`1 Hz`, `150 Hz`).
     pub from: String,
     pub to: String,
@@ -125,12 +123,7 @@ pub struct Responses {
 pub fn compute(spec: &Spec) -> Result<Responses, Error> {
     let from = positive("from", &spec.from, Dimension::FREQUENCY)?;
     let to = positive("to", &spec.to, Dimension::FREQUENCY)?;
-    let model_spec = ModelSpec {
-        model: spec.model.clone(),
-        set: spec.set.clone(),
-        independent: spec.independent.clone(),
-    };
-    let leg = Leg::open(&model_spec)?;
+    let leg = Leg::open(&spec.model)?;
     let model = leg.model();
     let rest_inputs = leg.inputs(0.0, 0.0);
     let rest_q = leg.equilibrium(&leg.q0, &rest_inputs, &[])?.q;
@@ -156,7 +149,7 @@ pub fn compute(spec: &Spec) -> Result<Responses, Error> {
         Some(chirp) => {
             let (amplitude, duration, analysis_from) = chirp.settings()?;
             parallel(indices.clone(), threads(), |(input, output)| {
-                let leg = Leg::open(&model_spec)?;
+                let leg = Leg::open(&spec.model)?;
                 let sweep = ChirpSweep {
                     input,
                     output,

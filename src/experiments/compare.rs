@@ -3,17 +3,18 @@
 //! by the foot (the paper reports 266 %).
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
 use super::force::{actuator_work, check_paper, PaperRow};
-use super::leg::{force_deflection, Dof, ForceDeflection, Leg, Sensor};
+use super::leg::{Dof, ForceDeflection, ForceTest, Leg, Sensor};
 use super::Error;
-use super::{csv, ModelSpec, Outcome, Table};
+use super::{csv, Outcome, Table};
 use crate::parallel::parallel;
 use crate::quantity::positive;
+use crate::session::ModelSpec;
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -33,11 +34,8 @@ pub struct Spec {
 #[serde(deny_unknown_fields)]
 pub struct Robot {
     pub name: String,
-    pub model: PathBuf,
-    #[serde(default)]
-    pub set: Vec<String>,
-    #[serde(default = "super::default_independent")]
-    pub independent: Vec<String>,
+    #[serde(flatten)]
+    pub model: ModelSpec,
     /// Seed Table IV values, per degree of freedom.
     #[serde(default)]
     pub paper: BTreeMap<String, PaperRow>,
@@ -73,14 +71,10 @@ pub fn compute(spec: &Spec, voltage: f64) -> Result<Vec<RobotTests>, Error> {
         spec.robot.iter().collect(),
         2,
         |robot| -> Result<_, Error> {
-            let leg = Leg::open(&ModelSpec {
-                model: robot.model.clone(),
-                set: robot.set.clone(),
-                independent: robot.independent.clone(),
-            })?;
+            let leg = Leg::open(&robot.model)?;
             let fbdf = actuator_work(&leg)?;
             let tests = [Dof::Lift, Dof::Swing]
-                .map(|dof| force_deflection(&leg, dof, dof.axis(), voltage, Sensor::Blocked, 0.0));
+                .map(|dof| ForceTest::new(dof, voltage, Sensor::Blocked).run(&leg));
             Ok((fbdf, tests))
         },
     );

@@ -114,7 +114,13 @@ impl fmt::Display for Error {
             Error::NoExperimentFiles { folder } => {
                 write!(f, "no `*.toml` experiment files in `{}`", folder.display())
             }
-            Error::Toml { message } => f.write_str(message),
+            Error::Toml { message } => {
+                f.write_str(message)?;
+                if message.starts_with("unknown field") && !message.contains("expected") {
+                    f.write_str("\n  hint: docs/experiments.md lists the keys of each kind")?;
+                }
+                Ok(())
+            }
             Error::MissingKind => f.write_str(
                 "missing key `kind`: expected one of \"trajectory\", \"force_deflection\", \
                  \"ratio_sweep\", \"compare\", \"bode\"",

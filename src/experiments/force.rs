@@ -4,27 +4,25 @@
 //! ~30 % off-axis load; blocked force and free deflection; `F·d` and `F·d/(F_b δ_f)`.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
-use super::leg::{force_deflection, Dof, ForceDeflection, Leg, Sensor};
+use super::leg::{Dof, ForceDeflection, ForceTest, Leg, Sensor};
 use super::Error;
-use super::{csv, percent_diff, ModelSpec, Outcome, Table};
+use super::{csv, percent_diff, Outcome, Table};
 use crate::quantity::{paper_value, positive};
 use crate::render::plot;
+use crate::session::ModelSpec;
 use mech_codegen::ir::transform::AXES;
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Spec {
     pub title: String,
-    pub model: PathBuf,
-    #[serde(default)]
-    pub set: Vec<String>,
-    #[serde(default = "super::default_independent")]
-    pub independent: Vec<String>,
+    #[serde(flatten)]
+    pub model: ModelSpec,
     /// Peak drive voltage of the model input (`225 V`).
     pub voltage: String,
     /// Step of the sensor position (`127 um`).
@@ -134,11 +132,8 @@ fn tests(
     voltage: f64,
     step: f64,
 ) -> Result<Vec<(&'static str, ForceDeflection)>, Error> {
-    let axis = dof.axis();
-    let mut cases = vec![(
-        "on-axis only",
-        force_deflection(leg, dof, axis, voltage, Sensor::Steps(step), 0.0)?,
-    )];
+    let test = ForceTest::new(dof, voltage, Sensor::Steps(step));
+    let mut cases = vec![("on-axis only", test.run(leg)?)];
     if let Some(c) = spec.off_axis_fraction {
         if c > 0.0 {
             let label = if (c - 0.3).abs() < 1e-12 {
@@ -146,10 +141,7 @@ fn tests(
             } else {
                 "off-axis"
             };
-            cases.push((
-                label,
-                force_deflection(leg, dof, axis, voltage, Sensor::Steps(step), c)?,
-            ));
+            cases.push((label, test.clone().off_axis(c).run(leg)?));
         }
     }
     Ok(cases)
@@ -158,11 +150,7 @@ fn tests(
 pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     let voltage = positive("voltage", &spec.voltage, Dimension::VOLTAGE)?;
     let step = positive("sensor_step", &spec.sensor_step, Dimension::LENGTH)?;
-    let leg = Leg::open(&ModelSpec {
-        model: spec.model.clone(),
-        set: spec.set.clone(),
-        independent: spec.independent.clone(),
-    })?;
+    let leg = Leg::open(&spec.model)?;
     let fbdf = actuator_work(&leg)?;
     let model_name = leg.model().name().to_string();
     let mut outcome = Outcome {
@@ -221,7 +209,7 @@ fn method_text(spec: &Spec, voltage: f64, step: f64) -> String {
          until the free foot no longer reaches it. Force = the fixture's reaction on the \
          sensor. Blocked force = force at distance 0; free deflection = the foot's one-way \
          displacement at {voltage} V; F·d as in Table IV. {}",
-        spec.model.display(),
+        spec.model.path.display(),
         step * 1e6,
         match spec.off_axis_fraction {
             Some(c) => format!(

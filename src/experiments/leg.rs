@@ -15,7 +15,7 @@ use mech_runtime::{
 use serde::Deserialize;
 
 use super::Error;
-use super::ModelSpec;
+use crate::session::ModelSpec;
 use crate::session::Session;
 
 /// A degree of freedom of the leg.
@@ -83,6 +83,10 @@ struct Ports {
     foot: [usize; 3],
 }
 
+/// The coordinates a HAMR leg holds independent when closing its loops, unless its
+/// experiment file names others: the swing and lift actuator tips.
+const ACTUATOR_COORDINATES: [&str; 2] = ["qsact", "qlact"];
+
 impl Leg {
     pub fn open(spec: &ModelSpec) -> Result<Leg, Error> {
         Leg::open_with(spec, &[])
@@ -93,7 +97,7 @@ impl Leg {
     pub fn open_with(spec: &ModelSpec, params: &[(&str, f64)]) -> Result<Leg, Error> {
         let session = open_session(spec)?;
         // Checked before the assembly, whose default independent coordinates are HAMR's.
-        hamr_ports(&session.model, &spec.model.display().to_string())?;
+        hamr_ports(&session.model, &spec.path.display().to_string())?;
         Leg::from_session(session, spec, params)
     }
 
@@ -116,14 +120,18 @@ impl Leg {
                 .model
                 .param_index(name)
                 .ok_or_else(|| Error::NoParameter {
-                    model: spec.model.display().to_string(),
+                    model: spec.path.display().to_string(),
                     name: name.to_string(),
                     purpose: None,
                 })?;
             session.model.set_param(index, value);
         }
         let ports = hamr_ports(&session.model, "").ok();
-        let state = session.assemble(&spec.independent)?;
+        let independent = match (&ports, spec.independent.is_empty()) {
+            (Some(_), true) => ACTUATOR_COORDINATES.map(String::from).to_vec(),
+            _ => spec.independent.clone(),
+        };
+        let state = session.assemble(&independent)?;
         Ok(Leg {
             independent: state.independent.clone(),
             q0: state.q,
@@ -288,8 +296,8 @@ impl Leg {
 }
 
 fn open_session(spec: &ModelSpec) -> Result<Session, Error> {
-    Session::open(&spec.model, &spec.set, &[]).map_err(|error| Error::Model {
-        model: spec.model.clone(),
+    Session::open(&spec.path, &spec.set, &[]).map_err(|error| Error::Model {
+        model: spec.path.clone(),
         error: Box::new(error),
     })
 }
@@ -402,123 +410,130 @@ impl Sensor {
 }
 
 /// The paper's force/deflection test (seed Sec. V.A, Fig. 7): the leg driven at `voltage`
-/// on `dof` pushes against a sensor (a frictionless plane normal to `axis`) placed as
-/// `sensor` says. With `off_axis_fraction = c > 0` the sensor also pushes on the foot along y with `c`
-/// times the on-axis force, opposing the free foot's y motion (the paper's ~30 % off-axis
-/// load): a side load of the sensor's fixture ([`SideLoad`]).
-pub fn force_deflection(
-    leg: &Leg,
-    dof: Dof,
-    axis: usize,
-    voltage: f64,
-    sensor: Sensor,
-    off_axis_fraction: f64,
-) -> Result<ForceDeflection, Error> {
-    let mut cold = WarmStarts::default();
-    force_deflection_warm(
-        leg,
-        dof,
-        axis,
-        voltage,
-        sensor,
-        off_axis_fraction,
-        &mut cold,
-    )
+/// on `dof` pushes against a sensor (a frictionless plane normal to the dof's axis) placed
+/// as `sensor` says. With `off_axis_fraction = c > 0` the sensor also pushes on the foot
+/// along y with `c` times the on-axis force, opposing the free foot's y motion (the paper's
+/// ~30 % off-axis load): a side load of the sensor's fixture ([`SideLoad`]).
+#[derive(Clone, Debug)]
+pub struct ForceTest {
+    pub dof: Dof,
+    /// Drive voltage of the dof's input (V).
+    pub voltage: f64,
+    pub sensor: Sensor,
+    pub off_axis_fraction: f64,
 }
 
-/// [`force_deflection`] with each equilibrium started from its counterpart in `warm` (and
-/// recorded there): slots 0 rest, 1 free, 2 + k the k-th sensor position.
-pub fn force_deflection_warm(
-    leg: &Leg,
-    dof: Dof,
-    axis: usize,
-    voltage: f64,
-    sensor: Sensor,
-    off_axis_fraction: f64,
-    warm: &mut WarmStarts,
-) -> Result<ForceDeflection, Error> {
-    if off_axis_fraction != 0.0 && axis == 1 {
-        return Err(Error::Test(
-            "an off-axis (y) load needs an on-axis direction x or z",
-        ));
+impl ForceTest {
+    /// The test without off-axis load.
+    pub fn new(dof: Dof, voltage: f64, sensor: Sensor) -> ForceTest {
+        ForceTest {
+            dof,
+            voltage,
+            sensor,
+            off_axis_fraction: 0.0,
+        }
     }
-    let rest_inputs = leg.inputs(0.0, 0.0);
-    let rest_q = leg
-        .warm_equilibrium(warm, 0, &leg.q0, &rest_inputs, &[], &[])?
-        .q;
-    let rest = leg.foot_at(&rest_q, &rest_inputs);
-    let inputs = leg.drive(dof, voltage);
-    let free_q = leg.warm_equilibrium(warm, 1, &rest_q, &inputs, &[], &[])?.q;
-    let free = leg.foot_at(&free_q, &inputs);
-    let signed = free[axis] - rest[axis];
-    let direction = if signed < 0.0 { -1.0 } else { 1.0 };
-    let free_deflection = signed.abs();
-    let y_direction = if free[1] < rest[1] { -1.0 } else { 1.0 };
 
-    let mut points = Vec::new();
-    let mut q = rest_q.clone();
-    let mut k = 0usize;
-    while let Some(distance) = sensor.position(k, free_deflection) {
-        if distance > free_deflection {
-            // Beyond the free foot's reach the sensor is not touched: no equilibrium to solve
-            // (holding the foot there would pull on it, and such a pulled leg far from its
-            // working range is where Newton struggles).
-            points.push(SensorPoint {
-                distance,
-                force: 0.0,
-                force_y: 0.0,
-                foot_y: free[1] - rest[1],
-            });
-            k += 1;
-            continue;
-        }
-        let mut target = rest;
-        target[axis] = rest[axis] + direction * distance;
-        // The sensor pushes the foot along y with c·F, opposing the free y motion: with the
-        // fixture's force on the foot μ along the axis, F = −μ·direction, so the applied y force
-        // is y_direction·c·direction·μ.
-        let load_y = y_direction * off_axis_fraction * direction;
-        let fixture = leg.fixture(target, vec![axis]);
-        let loads: Vec<SideLoad> = (load_y != 0.0)
-            .then_some(SideLoad {
-                fixture: 0,
-                held: axis,
-                along: 1,
-                ratio: load_y,
-            })
-            .into_iter()
-            .collect();
-        let equilibrium = leg.warm_equilibrium(warm, 2 + k, &q, &inputs, &[fixture], &loads)?;
-        let (solved, f) = (equilibrium.q, equilibrium.fixture_forces[0]);
-        let foot = leg.foot_at(&solved, &inputs);
-        let force = -f[axis] * direction;
-        // The sensor's y force on the foot is the side load, `load_y·f[axis]` (= f[1]); the
-        // foot's on the sensor, minus it.
-        let point = SensorPoint {
-            distance,
-            force,
-            force_y: -load_y * f[axis],
-            foot_y: foot[1] - rest[1],
-        };
-        q = solved;
-        points.push(point);
-        k += 1;
-        if matches!(sensor, Sensor::Steps(_)) && points.len() > 1000 {
-            return Err(Error::Test(
-                "more than 1000 sensor positions: is the step too small?",
-            ));
+    /// The same test with the sensor's y load `c` times the on-axis force.
+    pub fn off_axis(self, off_axis_fraction: f64) -> ForceTest {
+        ForceTest {
+            off_axis_fraction,
+            ..self
         }
     }
-    Ok(ForceDeflection {
-        dof,
-        axis,
-        voltage,
-        rest_q,
-        rest,
-        free,
-        free_deflection,
-        direction,
-        points,
-        off_axis_fraction,
-    })
+
+    pub fn run(&self, leg: &Leg) -> Result<ForceDeflection, Error> {
+        self.run_warm(leg, &mut WarmStarts::default())
+    }
+
+    /// [`ForceTest::run`] with each equilibrium started from its counterpart in `warm`
+    /// (and recorded there): slots 0 rest, 1 free, 2 + k the k-th sensor position.
+    pub fn run_warm(&self, leg: &Leg, warm: &mut WarmStarts) -> Result<ForceDeflection, Error> {
+        let ForceTest {
+            dof,
+            voltage,
+            ref sensor,
+            off_axis_fraction,
+        } = *self;
+        let axis = dof.axis();
+        let rest_inputs = leg.inputs(0.0, 0.0);
+        let rest_q = leg
+            .warm_equilibrium(warm, 0, &leg.q0, &rest_inputs, &[], &[])?
+            .q;
+        let rest = leg.foot_at(&rest_q, &rest_inputs);
+        let inputs = leg.drive(dof, voltage);
+        let free_q = leg.warm_equilibrium(warm, 1, &rest_q, &inputs, &[], &[])?.q;
+        let free = leg.foot_at(&free_q, &inputs);
+        let signed = free[axis] - rest[axis];
+        let direction = if signed < 0.0 { -1.0 } else { 1.0 };
+        let free_deflection = signed.abs();
+        let y_direction = if free[1] < rest[1] { -1.0 } else { 1.0 };
+
+        let mut points = Vec::new();
+        let mut q = rest_q.clone();
+        let mut k = 0usize;
+        while let Some(distance) = sensor.position(k, free_deflection) {
+            if distance > free_deflection {
+                // Beyond the free foot's reach the sensor is not touched: no equilibrium to solve
+                // (holding the foot there would pull on it, and such a pulled leg far from its
+                // working range is where Newton struggles).
+                points.push(SensorPoint {
+                    distance,
+                    force: 0.0,
+                    force_y: 0.0,
+                    foot_y: free[1] - rest[1],
+                });
+                k += 1;
+                continue;
+            }
+            let mut target = rest;
+            target[axis] = rest[axis] + direction * distance;
+            // The sensor pushes the foot along y with c·F, opposing the free y motion: with the
+            // fixture's force on the foot μ along the axis, F = −μ·direction, so the applied y force
+            // is y_direction·c·direction·μ.
+            let load_y = y_direction * off_axis_fraction * direction;
+            let fixture = leg.fixture(target, vec![axis]);
+            let loads: Vec<SideLoad> = (load_y != 0.0)
+                .then_some(SideLoad {
+                    fixture: 0,
+                    held: axis,
+                    along: 1,
+                    ratio: load_y,
+                })
+                .into_iter()
+                .collect();
+            let equilibrium = leg.warm_equilibrium(warm, 2 + k, &q, &inputs, &[fixture], &loads)?;
+            let (solved, f) = (equilibrium.q, equilibrium.fixture_forces[0]);
+            let foot = leg.foot_at(&solved, &inputs);
+            let force = -f[axis] * direction;
+            // The sensor's y force on the foot is the side load, `load_y·f[axis]` (= f[1]); the
+            // foot's on the sensor, minus it.
+            let point = SensorPoint {
+                distance,
+                force,
+                force_y: -load_y * f[axis],
+                foot_y: foot[1] - rest[1],
+            };
+            q = solved;
+            points.push(point);
+            k += 1;
+            if matches!(sensor, Sensor::Steps(_)) && points.len() > 1000 {
+                return Err(Error::Test(
+                    "more than 1000 sensor positions: is the step too small?",
+                ));
+            }
+        }
+        Ok(ForceDeflection {
+            dof,
+            axis,
+            voltage,
+            rest_q,
+            rest,
+            free,
+            free_deflection,
+            direction,
+            points,
+            off_axis_fraction,
+        })
+    }
 }

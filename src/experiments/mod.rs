@@ -39,24 +39,6 @@ pub enum Experiment {
     Bode(bode::Spec),
 }
 
-/// The model every experiment (or each of its series) runs on.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ModelSpec {
-    /// Path of the `.mech` file, relative to the current directory (or absolute).
-    pub model: PathBuf,
-    /// Parameter settings, `NAME=VALUE` as for `--set`.
-    #[serde(default)]
-    pub set: Vec<String>,
-    /// Coordinates held independent when closing the loops (the actuators).
-    #[serde(default = "default_independent")]
-    pub independent: Vec<String>,
-}
-
-pub(crate) fn default_independent() -> Vec<String> {
-    vec!["qsact".into(), "qlact".into()]
-}
-
 /// Reads and checks an experiment file. Errors name the file and the key.
 pub fn load(path: &Path) -> Result<Experiment, Error> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::Read {

@@ -5,18 +5,19 @@
 //! or `swing_arm`) and measured from the model's own kinematics at the zero configuration
 //! (foot displacement per actuator displacement along the test axis: lift z, swing x).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
 use super::force::actuator_work;
-use super::leg::{force_deflection, Dof, Leg, Sensor};
+use super::leg::{Dof, ForceTest, Leg, Sensor};
 use super::Error;
-use super::{csv, ModelSpec, Outcome, Table};
+use super::{csv, Outcome, Table};
 use crate::parallel::{parallel, threads};
 use crate::quantity::positive;
 use crate::render::plot::{self, CurveStyle, Star};
+use crate::session::ModelSpec;
 use mech_codegen::ir::transform::AXES;
 
 #[derive(Debug, Clone, Deserialize)]
@@ -43,11 +44,8 @@ pub struct Series {
     pub name: String,
     /// The actuator label, e.g. `PS 'a' (270 mN, 247 um)`; the values are the model's.
     pub actuator: String,
-    pub model: PathBuf,
-    #[serde(default)]
-    pub set: Vec<String>,
-    #[serde(default = "super::default_independent")]
-    pub independent: Vec<String>,
+    #[serde(flatten)]
+    pub model: ModelSpec,
     /// `lift` (arm `lift_arm`, foot z) or `swing` (arm `swing_arm`, foot x).
     pub dof: Dof,
     /// The swept crank arm, `["0.25 mm", "1.2 mm"]` (either order).
@@ -95,13 +93,6 @@ impl Series {
             .map(|l| positive(&format!("series[{k}].lever"), l, Dimension::LENGTH))
             .transpose()
             .map_err(Error::from)
-    }
-    fn leg(&self) -> ModelSpec {
-        ModelSpec {
-            model: self.model.clone(),
-            set: self.set.clone(),
-            independent: self.independent.clone(),
-        }
     }
 }
 
@@ -169,15 +160,15 @@ pub struct SweepPoint {
 pub fn sweep_point(series: &Series, voltage: f64, arm: Option<f64>) -> Result<SweepPoint, Error> {
     let dof = series.dof;
     let set: Vec<(&str, f64)> = arm.map(|a| (dof.arm(), a)).into_iter().collect();
-    let leg = Leg::open_with(&series.leg(), &set)?;
+    let leg = Leg::open_with(&series.model, &set)?;
     let arm = leg.param(dof.arm()).ok_or_else(|| Error::NoParameter {
-        model: series.model.display().to_string(),
+        model: series.model.path.display().to_string(),
         name: dof.arm().to_string(),
         purpose: Some(format!("the crank arm that sets the {} ratio", dof.name())),
     })?;
     let ratio = leg.kinematic_ratio(&leg.q0, dof, dof.axis())?.abs();
     let ratio_y = leg.kinematic_ratio(&leg.q0, dof, 1)?.abs();
-    let test = force_deflection(&leg, dof, dof.axis(), voltage, Sensor::Blocked, 0.0)?;
+    let test = ForceTest::new(dof, voltage, Sensor::Blocked).run(&leg)?;
     let ratio_rest = leg.kinematic_ratio(&test.rest_q, dof, dof.axis())?.abs();
     let actuator_force = match (leg.param("F_b"), leg.param("V_rated")) {
         (Some(f), Some(v)) => f * voltage / v,
@@ -211,7 +202,7 @@ fn arms(low: f64, high: f64, n: usize) -> Vec<f64> {
 fn keys(series: &[Series]) -> Vec<String> {
     let mut keys: Vec<String> = Vec::new();
     for (k, s) in series.iter().enumerate() {
-        let key = format!("{}_{}", super::stem(&s.model), s.dof.name());
+        let key = format!("{}_{}", super::stem(&s.model.path), s.dof.name());
         let key = if keys.contains(&key) {
             format!("{key}_{}", k + 1)
         } else {

@@ -3,27 +3,25 @@
 //! (x–z) and frontal (y–z) planes. Quasi-static: a static equilibrium at each drive phase
 //! (continuation from the previous one), valid far below the first resonance.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
 use super::leg::Leg;
 use super::Error;
-use super::{csv, ModelSpec, Outcome, Table};
+use super::{csv, Outcome, Table};
 use crate::quantity::positive;
 use crate::render::plot;
+use crate::session::ModelSpec;
 use mech_codegen::ir::transform::AXES;
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Spec {
     pub title: String,
-    pub model: PathBuf,
-    #[serde(default)]
-    pub set: Vec<String>,
-    #[serde(default = "super::default_independent")]
-    pub independent: Vec<String>,
+    #[serde(flatten)]
+    pub model: ModelSpec,
     /// Amplitude of the model's drive input (`225 V`: the paper's 225 V peak-to-peak drive
     /// moves a bimorph tip ± its peak one-way deflection, i.e. ±V_rated in the model).
     pub amplitude: String,
@@ -57,13 +55,6 @@ impl Spec {
             });
         }
         Ok(())
-    }
-    fn leg(&self) -> ModelSpec {
-        ModelSpec {
-            model: self.model.clone(),
-            set: self.set.clone(),
-            independent: self.independent.clone(),
-        }
     }
 }
 
@@ -145,7 +136,7 @@ fn peak_to_peak(values: &[f64]) -> f64 {
 pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     let amplitude = positive("amplitude", &spec.amplitude, Dimension::VOLTAGE)?;
     let frequency = positive("frequency", &spec.frequency, Dimension::FREQUENCY)?;
-    let leg = Leg::open(&spec.leg())?;
+    let leg = Leg::open(&spec.model)?;
     let rest_q = leg.equilibrium(&leg.q0, &leg.inputs(0.0, 0.0), &[])?.q;
     let mut outcome = Outcome {
         method: method_text(spec, amplitude, frequency),
@@ -266,11 +257,11 @@ fn method_text(spec: &Spec, amplitude: f64, frequency: f64) -> String {
          the drive is far below the first resonance. Model `{}`{}. Foot displacement \
          from its rest position under gravity, chassis frame (x forward, y lateral, z up).",
         spec.points,
-        spec.model.display(),
-        if spec.set.is_empty() {
+        spec.model.path.display(),
+        if spec.model.set.is_empty() {
             String::new()
         } else {
-            format!(" with {}", spec.set.join(", "))
+            format!(" with {}", spec.model.set.join(", "))
         }
     )
 }

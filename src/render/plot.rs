@@ -93,6 +93,15 @@ pub struct PlotError {
     pub kind: PlotErrorKind,
 }
 
+impl PlotError {
+    fn invalid(path: &Path, message: String) -> PlotError {
+        PlotError {
+            path: path.to_path_buf(),
+            kind: PlotErrorKind::InvalidData(message),
+        }
+    }
+}
+
 /// The kinds of [`PlotError`].
 #[derive(Debug)]
 pub enum PlotErrorKind {
@@ -141,10 +150,7 @@ pub fn plot_time_series(
     times: &[f64],
     panels: &[Panel],
 ) -> Result<(), PlotError> {
-    let fail = |msg: String| PlotError {
-        path: path.to_path_buf(),
-        kind: PlotErrorKind::InvalidData(msg),
-    };
+    let fail = |msg: String| PlotError::invalid(path, msg);
     let format = Format::of(path)?;
     if panels.is_empty() {
         return Err(fail("nothing to plot (no panels)".into()));
@@ -182,10 +188,7 @@ pub fn plot_xy(
     curves: &[(String, Vec<f64>, Vec<f64>)],
     log_x: bool,
 ) -> Result<(), PlotError> {
-    let fail = |msg: String| PlotError {
-        path: path.to_path_buf(),
-        kind: PlotErrorKind::InvalidData(msg),
-    };
+    let fail = |msg: String| PlotError::invalid(path, msg);
     let format = check_curves(path, curves)?;
     if log_x
         && !curves
@@ -210,10 +213,7 @@ pub fn plot_xy(
 
 /// The format of `path`, after checking there are curves and each has as many x as y values.
 fn check_curves(path: &Path, curves: &[(String, Vec<f64>, Vec<f64>)]) -> Result<Format, PlotError> {
-    let fail = |msg: String| PlotError {
-        path: path.to_path_buf(),
-        kind: PlotErrorKind::InvalidData(msg),
-    };
+    let fail = |msg: String| PlotError::invalid(path, msg);
     let format = Format::of(path)?;
     if curves.is_empty() {
         return Err(fail("nothing to plot (no curves)".into()));
@@ -241,10 +241,7 @@ pub fn plot_xy_styled(
     styles: &[CurveStyle],
     stars: &[Star],
 ) -> Result<(), PlotError> {
-    let fail = |msg: String| PlotError {
-        path: path.to_path_buf(),
-        kind: PlotErrorKind::InvalidData(msg),
-    };
+    let fail = |msg: String| PlotError::invalid(path, msg);
     if styles.len() != curves.len() {
         return Err(fail(format!(
             "{} curves but {} styles",

@@ -49,9 +49,17 @@ fn bad_experiment_files_give_clear_errors() {
     );
     let unknown = experiments::parse("kind = \"trajectory\"\ntitle = \"t\"\nmodel = \"m.mech\"\namplitude = \"225 V\"\nfrequency = \"1 Hz\"\nvolts = 3").unwrap_err();
     assert!(
-        matches!(unknown, experiments::Error::Toml { .. }) && unknown.to_string().contains("volts"),
+        matches!(unknown, experiments::Error::Toml { .. })
+            && unknown.to_string().contains("volts")
+            && unknown.to_string().contains("docs/experiments.md"),
         "{unknown}"
     );
+    // The model keys are shared by every kind; a missing one is still named.
+    let no_model = experiments::parse(
+        "kind = \"trajectory\"\ntitle = \"t\"\namplitude = \"225 V\"\nfrequency = \"1 Hz\"",
+    )
+    .unwrap_err();
+    assert!(no_model.to_string().contains("`model`"), "{no_model}");
     let unit = experiments::parse("kind = \"trajectory\"\ntitle = \"t\"\nmodel = \"m.mech\"\namplitude = \"225 mm\"\nfrequency = \"1 Hz\"").unwrap_err();
     let unit = unit.to_string();
     assert!(
@@ -69,14 +77,14 @@ fn trajectory_peak_equals_the_statics_deflection_at_the_peak_voltage() {
     let Experiment::Trajectory(t) = &spec else {
         panic!()
     };
-    let leg = leg::Leg::open(&experiments::ModelSpec {
-        model: t.model.clone(),
+    let leg = leg::Leg::open(&mech::session::ModelSpec {
         set: vec![],
-        independent: t.independent.clone(),
+        ..t.model.clone()
     })
     .unwrap();
-    let test =
-        leg::force_deflection(&leg, leg::Dof::Lift, 2, 225.0, leg::Sensor::Blocked, 0.0).unwrap();
+    let test = leg::ForceTest::new(leg::Dof::Lift, 225.0, leg::Sensor::Blocked)
+        .run(&leg)
+        .unwrap();
     let dz = test.free[2] - test.rest[2];
     assert!(
         close(outcome.values["lift_peak_dz"], dz, 1e-9),
@@ -135,14 +143,14 @@ fn force_deflection_blocked_force_and_work() {
     let Experiment::ForceDeflection(f) = &spec else {
         panic!()
     };
-    let leg = leg::Leg::open(&experiments::ModelSpec {
-        model: f.model.clone(),
+    let leg = leg::Leg::open(&mech::session::ModelSpec {
         set: vec![],
-        independent: f.independent.clone(),
+        ..f.model.clone()
     })
     .unwrap();
-    let test =
-        leg::force_deflection(&leg, leg::Dof::Lift, 2, 225.0, leg::Sensor::Blocked, 0.0).unwrap();
+    let test = leg::ForceTest::new(leg::Dof::Lift, 225.0, leg::Sensor::Blocked)
+        .run(&leg)
+        .unwrap();
     let inputs = leg.drive(leg::Dof::Lift, 225.0);
     let rest_q = leg
         .equilibrium(&leg.q0, &leg.inputs(0.0, 0.0), &[])

@@ -24,9 +24,9 @@ pub fn bundled_source(name: &str) -> String {
 
 /// HAMR-VI as a leg (`models/hamr_vi.mech`), the actuator coordinates (swing and lift)
 /// held independent.
-pub fn hamr_vi_spec() -> mech::experiments::ModelSpec {
-    mech::experiments::ModelSpec {
-        model: bundled_path("hamr_vi").into(),
+pub fn hamr_vi_spec() -> mech::session::ModelSpec {
+    mech::session::ModelSpec {
+        path: bundled_path("hamr_vi").into(),
         set: Vec::new(),
         independent: vec!["qsact".into(), "qlact".into()],
     }

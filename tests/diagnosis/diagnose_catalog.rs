@@ -16,7 +16,7 @@ use mech::diagnose::candidates::{diagnose, Diagnosis, Holdout, Trial, Verdict};
 use mech::diagnose::experiment::Experiment;
 use mech::diagnose::extend::{open_leg, Extension};
 use mech::diagnose::features::features;
-use mech::experiments::leg::{force_deflection, Dof, Leg, Sensor};
+use mech::experiments::leg::{Dof, ForceTest, Leg, Sensor};
 use mech_codegen::ir::transform::actuator::{BASE_COMPLIANCE, TIP_MASS, TIP_PRELOAD};
 use mech_codegen::ir::transform::hinge::{MISALIGNMENT, OFF_AXIS_COMPLIANCE, TWIST_FACTOR};
 
@@ -70,15 +70,10 @@ fn force_case(
     file_fraction: f64,
     rng: &mut Rng,
 ) -> (Experiment, String) {
-    let test = force_deflection(
-        truth,
-        dof,
-        dof.axis(),
-        225.0,
-        Sensor::Steps(SENSOR_STEP),
-        true_fraction,
-    )
-    .unwrap();
+    let test = ForceTest::new(dof, 225.0, Sensor::Steps(SENSOR_STEP))
+        .off_axis(true_fraction)
+        .run(truth)
+        .unwrap();
     let mut text = String::from("distance [um], force [mN]\n");
     for point in &test.points {
         let force = point.force + FORCE_NOISE * rng.normal();
@@ -96,7 +91,9 @@ fn force_case(
 }
 
 fn blocked_swing_force(leg: &Leg) -> f64 {
-    force_deflection(leg, Dof::Swing, 0, 225.0, Sensor::Blocked, 0.3)
+    ForceTest::new(Dof::Swing, 225.0, Sensor::Blocked)
+        .off_axis(0.3)
+        .run(leg)
         .unwrap()
         .blocked_force()
 }

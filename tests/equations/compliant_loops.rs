@@ -182,7 +182,7 @@ fn a_tilted_hinge_equals_one_written_tilted() {
             .flat_map(|(a, b)| (0..3).map(move |i| (a[i] - b[i]).abs()))
             .fold(0.0_f64, f64::max)
     };
-    let base = Compiled::from_path(&spec.model).unwrap().model;
+    let base = Compiled::from_path(&spec.path).unwrap().model;
     for (hinge, about) in [("l3", 1), ("l2", 1)] {
         let extension = Extension::Misalignment {
             flexure: hinge.into(),
