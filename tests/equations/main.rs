@@ -8,6 +8,7 @@ mod common;
 #[path = "../../codegen/tests/support/golden.rs"]
 mod support;
 
+mod actuator_extensions;
 mod backends;
 mod compliant_loops;
 mod golden_equations;
