@@ -169,6 +169,19 @@ fn twist_case(dir: &Path, rng: &mut Rng) {
     );
 }
 
+/// The held-out values, which no fit saw, are outside the noise band under the base model
+/// and inside it under `trial`.
+fn assert_holdout_gain(d: &Diagnosis, trial: &Trial) {
+    let band = d.noise_band * d.holdout_values as f64;
+    assert!(
+        d.base.holdout_chi2 > band && trial.holdout_chi2 <= band,
+        "held-out χ² {:.1} → {:.1}, noise band {band:.1}\n{}",
+        d.base.holdout_chi2,
+        trial.holdout_chi2,
+        summary(d)
+    );
+}
+
 /// Checks the top of `d`: the cause and where it acts, the verdict, the held-out gain, and
 /// returns the fitted value of `parameter`.
 fn top(d: &Diagnosis, cause: &str, location: &str, parameter: &str) -> f64 {
@@ -289,15 +302,15 @@ fn misalignment_case(dir: &Path, rng: &mut Rng) {
         "{}",
         summary(&d)
     );
-    let (_, _, fitted, se) = best
-        .parameters
-        .iter()
-        .find(|p| p.0 == MISALIGNMENT)
-        .cloned()
-        .unwrap();
+    // The combination the data determine: the tilted hinge's extra stiffness grows as
+    // α²·k/c (the bending forced about an axis α off, against the off-axis stiffness k/c).
+    let value = |name: &str| best.parameters.iter().find(|p| p.0 == name).unwrap().2;
+    let (alpha, compliance) = (value(MISALIGNMENT), value(OFF_AXIS_COMPLIANCE));
+    let (fitted, true_value) = (alpha.powi(2) / compliance, angle.powi(2) / 1e-4);
     assert!(
-        se > fitted.abs(),
-        "α = {fitted} ± {se} should not be identifiable alone (truth {angle})"
+        (fitted / true_value - 1.0).abs() < 0.2,
+        "α²/c = {fitted} (α {alpha}, c {compliance}) vs {true_value} (α {angle}, c 1e-4)\n{}",
+        summary(&d)
     );
 }
 
@@ -464,11 +477,13 @@ fn preload_case(dir: &Path, rng: &mut Rng) {
 }
 
 /// A flexure's stiffness 20 % off (the size): a flexure drawn by the generator made
-/// 20 % stiffer, in Bode data of both channels. The diagnosis must name a stiffness change,
-/// with the true flexure at the top or among the candidates the data support equally (then it
-/// says so), and recover the factor (within 5 % and 4σ) when the true flexure is on top. If
-/// it finds no significant discrepancy, the change must be below what these data resolve for
-/// that flexure (its candidate inert, or 1.2 × nominal within 3σ of its own fit).
+/// 20 % stiffer, in Bode data of both channels. How well such data see it is computed, not
+/// assumed: the separation χ² between the truth's and the base model's noise-free
+/// responses. The true flexure's own candidate must recover the factor within 4σ whatever
+/// the verdict (unless the change cannot act: separation below 1, candidate inert); a change
+/// the data clearly resolve (separation over 60, about what lifts the base model's χ² out
+/// of its noise band) must be found, with the true flexure at the top or among the causes the
+/// data support equally; on top, the factor within 5 %.
 fn stiffness_case(dir: &Path, rng: &mut Rng) {
     let flexures = ["s1", "s2", "s3", "l1", "l2", "l3", "fb1", "fb2", "fb3"];
     let pick = flexures[rng.index(flexures.len())];
@@ -477,37 +492,52 @@ fn stiffness_case(dir: &Path, rng: &mut Rng) {
     let nominal = truth.param(&name).unwrap();
     common::set_leg_param(&mut truth, &name, 1.2 * nominal);
     let damping = mech_runtime::FlexureDamping::Hysteretic;
+    let base = Leg::open(&common::hamr_vi_spec()).unwrap();
+    let separation = separation_chi2(
+        &bode_responses(&truth, damping),
+        &bode_responses(&base, damping),
+    );
     let (experiment, text) = bode_case(dir, &truth, damping, rng);
     let d = diagnose_data(dir, &experiment, &text);
     let location = format!("flexure {pick}");
-    if d.verdict == Verdict::NoSignificantDiscrepancy {
-        let unresolved = d.inert.iter().any(|t| t.location == location)
-            || d.ranked.iter().any(|t| {
-                t.location == location
-                    && t.parameters
-                        .first()
-                        .is_some_and(|&(_, nominal, _, se)| 0.2 * nominal < 3.0 * se)
-            });
+    let is_true =
+        |t: &&Trial| t.location == location && t.cause == "flexure stiffness off by a factor";
+    eprintln!(
+        "{name}: separation χ² {separation:.1}, verdict {:?}",
+        d.verdict
+    );
+    let Some(own) = d.ranked.iter().find(is_true) else {
         assert!(
-            unresolved,
-            "{name}: no discrepancy found, yet resolvable\n{}",
+            separation < 1.0 && d.inert.iter().any(|t| is_true(&t)),
+            "{name}: no fit of the true flexure (separation {separation})\n{}",
             summary(&d)
         );
         return;
-    }
-    let supported = &d.ranked[..d.tied.max(1)];
+    };
+    let (_, nominal, value, se) = own.parameters[0];
     assert!(
-        supported
-            .iter()
-            .any(|t| t.location == location && t.cause == "flexure stiffness off by a factor"),
-        "{name}\n{}",
+        (value - 1.2 * nominal).abs() < 4.0 * se,
+        "{name}: factor {} ± {} vs 1.2\n{}",
+        value / nominal,
+        se / nominal,
         summary(&d)
     );
-    let best = &d.ranked[0];
-    if best.location == location {
-        let (_, nominal, value, se) = best.parameters[0];
+    if separation > 60.0 {
+        assert_ne!(
+            d.verdict,
+            Verdict::NoSignificantDiscrepancy,
+            "{name}\n{}",
+            summary(&d)
+        );
         assert!(
-            (value / nominal - 1.2).abs() < 0.05 && (value - 1.2 * nominal).abs() < 4.0 * se,
+            d.ranked[..d.tied.max(1)].iter().any(|t| is_true(&t)),
+            "{name}\n{}",
+            summary(&d)
+        );
+    }
+    if d.ranked[0].location == location {
+        assert!(
+            (value / nominal - 1.2).abs() < 0.05,
             "{name}: factor {} ± {}",
             value / nominal,
             se / nominal
@@ -542,14 +572,10 @@ fn loss_factor_case(dir: &Path, rng: &mut Rng) {
         (value - eta).abs() < 3.0 * se && (value - eta).abs() < 0.01,
         "η = {value} ± {se} vs {eta}"
     );
-    // "Explained" already says the held-out residual is down to the noise; with every third
-    // frequency held out, the rows near the resonances (where the loss factor shows) fall
-    // mostly in the training set, so the held-out gain itself is modest (seen: 76 → 42).
-    assert!(
-        constant.holdout_chi2 < d.base.holdout_chi2,
-        "{}",
-        summary(&d)
-    );
+    // With every third frequency held out, the rows near the resonances (where the loss
+    // factor shows) fall mostly in the training set, so the held-out gain is modest (seen:
+    // 76 → 42); it must still carry the held-out data from outside the noise band to inside.
+    assert_holdout_gain(&d, constant);
 }
 
 /// The loss factor grows with frequency, η(f) = 0.08·(f/10 Hz)^α with α drawn from
@@ -575,7 +601,7 @@ fn frequency_dependent_loss_case(dir: &Path, rng: &mut Rng) {
         summary(&d)
     );
     // A held-out gain, modest for the reason the loss-factor case gives (seen: 72 → 51).
-    assert!(best.holdout_chi2 < d.base.holdout_chi2, "{}", summary(&d));
+    assert_holdout_gain(&d, best);
     let (_, _, fitted, se) = best
         .parameters
         .iter()
