@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use mech::diagnose::data::MeasuredData;
 use mech::diagnose::experiment::{self, Experiment};
-use mech::experiments::leg::Leg;
+use mech::experiments::leg::{Dof, Leg};
 use mech::tape_model::TapeModel;
 use mech_codegen::Compiled;
 use mech_runtime::{Method, Model, SimOptions, Trajectory};
@@ -263,6 +263,20 @@ pub fn measured_data(dir: &Path, text: &str) -> MeasuredData {
 pub fn set_leg_param(leg: &mut Leg, name: &str, value: f64) {
     let index = leg.model().param_index(name).unwrap();
     leg.session.model.set_param(index, value);
+}
+
+/// The foot at rest and under 225 V on each actuator, lift then swing (static equilibria
+/// from rest, m).
+pub fn feet_at_rest_and_225_volts(leg: &Leg) -> Vec<[f64; 3]> {
+    let rest_inputs = leg.inputs(0.0, 0.0);
+    let rest = leg.equilibrium(&leg.q0, &rest_inputs, &[]).unwrap().q;
+    let mut feet = vec![leg.foot_at(&rest, &rest_inputs)];
+    for dof in [Dof::Lift, Dof::Swing] {
+        let inputs = leg.drive(dof, 225.0);
+        let q = leg.equilibrium(&rest, &inputs, &[]).unwrap().q;
+        feet.push(leg.foot_at(&q, &inputs));
+    }
+    feet
 }
 
 /// `leg`'s quasi-static foot positions at 8 points of the paper's 225 V drive (lift

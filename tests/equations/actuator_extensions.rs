@@ -97,24 +97,12 @@ fn transformed(extension: Extension, parameter: &str, value: f64) -> Leg {
     leg
 }
 
-/// The foot at rest and under 225 V on each actuator (static equilibria, m).
-fn feet(leg: &Leg) -> Vec<[f64; 3]> {
-    let rest_inputs = leg.inputs(0.0, 0.0);
-    let rest = leg.equilibrium(&leg.q0, &rest_inputs, &[]).unwrap().q;
-    let mut feet = vec![leg.foot_at(&rest, &rest_inputs)];
-    for dof in [Dof::Lift, Dof::Swing] {
-        let inputs = leg.drive(dof, 225.0);
-        let q = leg.equilibrium(&rest, &inputs, &[]).unwrap().q;
-        feet.push(leg.foot_at(&q, &inputs));
-    }
-    feet
-}
-
 /// The seed's 50 µm preload in −y: the transform's spring rest against the actuators' joints
 /// moved in the text. The feet agree to 1 nm (Newton's tolerance; the preload moves them by
 /// micrometres).
 #[test]
 fn preload_equals_the_actuators_moved_in_the_text() {
+    let feet = common::feet_at_rest_and_225_volts;
     let dir = common::scratch_dir("written_preload");
     let offset = -50e-6;
     let written = feet(&common::hamr_vi_written(

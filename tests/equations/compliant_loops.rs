@@ -148,7 +148,7 @@ fn the_twist_extension_is_conservative_and_frees_the_loops() {
 #[test]
 fn a_tilted_hinge_equals_one_written_tilted() {
     use mech::diagnose::extend::apply;
-    use mech::experiments::leg::{Dof, Leg};
+    use mech::experiments::leg::Leg;
     use mech::session::Session;
     use mech_codegen::ir::transform::constant_direction;
     use mech_codegen::ir::transform::hinge::MISALIGNMENT;
@@ -165,17 +165,7 @@ fn a_tilted_hinge_equals_one_written_tilted() {
         leg.session.model.set_param(index, tilt);
         leg
     };
-    let feet = |leg: &Leg| -> Vec<[f64; 3]> {
-        let rest_inputs = leg.inputs(0.0, 0.0);
-        let rest = leg.equilibrium(&leg.q0, &rest_inputs, &[]).unwrap().q;
-        let mut feet = vec![leg.foot_at(&rest, &rest_inputs)];
-        for dof in [Dof::Lift, Dof::Swing] {
-            let inputs = leg.drive(dof, 225.0);
-            let q = leg.equilibrium(&rest, &inputs, &[]).unwrap().q;
-            feet.push(leg.foot_at(&q, &inputs));
-        }
-        feet
-    };
+    let feet = common::feet_at_rest_and_225_volts;
     let largest = |a: &[[f64; 3]], b: &[[f64; 3]]| {
         a.iter()
             .zip(b)
