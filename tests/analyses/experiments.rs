@@ -217,19 +217,23 @@ fn bode_resonances_match_the_linearized_modes() {
     let outcome = Experiment::Bode(b).run("bode", &out("bode")).unwrap();
     let v = &outcome.values;
     println!("{v:?}");
-    // Lift is the first mode, swing the second (tests/hamr.rs: 78.9 Hz, 106.3 Hz).
-    assert!(close(
-        v["lift_hysteretic_resonance_hz"],
-        v["mode1_hz"],
-        0.01
-    ));
-    assert!(close(
-        v["swing_hysteretic_resonance_hz"],
-        v["mode2_hz"],
-        0.01
-    ));
-    for key in ["lift_viscous_resonance_hz", "swing_viscous_resonance_hz"] {
-        assert!(v[key] > 40.0 && v[key] < 150.0, "{key} = {}", v[key]);
+    // Lift is the first mode, swing the second: the modes of tests/equations/hamr.rs
+    // (78.9053 Hz, 106.3285 Hz, within 1e-4 relative), and both the hysteretic and the
+    // viscous resonances within 1 % of them (measured: lift 78.78 / 78.70 Hz, swing 106.00 /
+    // 106.14 Hz; ζ ≈ 0.02–0.03 moves a peak by ~ζ², the 200-point grid is interpolated).
+    for (key, hz) in [("mode1_hz", 78.9053), ("mode2_hz", 106.3285)] {
+        assert!(close(v[key], hz, 1e-4), "{key} = {}, pinned {hz}", v[key]);
+    }
+    for (dof, mode) in [("lift", "mode1_hz"), ("swing", "mode2_hz")] {
+        for loss in ["hysteretic", "viscous"] {
+            let key = format!("{dof}_{loss}_resonance_hz");
+            assert!(
+                close(v[&key], v[mode], 0.01),
+                "{key} = {}, {mode} = {}",
+                v[&key],
+                v[mode]
+            );
+        }
     }
     assert!(v["lift_hysteretic_q"] > v["lift_viscous_q"]);
 }
