@@ -175,12 +175,36 @@ fn compare_work_ratio_is_consistent() {
     let spec = bundled("hamr_v2_vs_vi.toml", &[]);
     let outcome = spec.run("compare", &out("compare")).unwrap();
     let v = &outcome.values;
+    println!("{v:?}");
     let ratio =
         (v["new_lift_work"] + v["new_swing_work"]) / (v["old_lift_work"] + v["old_swing_work"]);
     assert!(close(v["work_ratio"], ratio, 1e-12));
     // The redesign increases the work of both DOFs in the model too.
     assert!(v["new_lift_work"] > v["old_lift_work"] && v["new_swing_work"] > v["old_swing_work"]);
-    assert!(v["work_ratio"] > 1.0);
+    // The model's own numbers, not the paper's 266 % (which the report prints from the
+    // experiment file): the F·d of docs/experiments.md's sample table (HAMR-V2.0 45.8 +
+    // 35.0 µJ, HAMR-VI 85.6 + 68.8 µJ) and their ratio 1.91 (a 91 % increase), pinned to the
+    // values measured on this model (`cargo test --test analyses
+    // compare_work_ratio_is_consistent -- --nocapture` prints them) within 1e-4 relative:
+    // the statics converge to ~1e-12, so only a change of the model or of the procedure
+    // moves them.
+    for (key, micro_joules) in [
+        ("old_lift_work", 45.8467),
+        ("old_swing_work", 34.9811),
+        ("new_lift_work", 85.5879),
+        ("new_swing_work", 68.8174),
+    ] {
+        assert!(
+            close(v[key] * 1e6, micro_joules, 1e-4),
+            "{key} = {} µJ, pinned {micro_joules} µJ",
+            v[key] * 1e6
+        );
+    }
+    assert!(
+        close(v["work_ratio"], 1.91030, 1e-4),
+        "work ratio {}, pinned 1.91030",
+        v["work_ratio"]
+    );
 }
 
 #[test]
@@ -193,19 +217,23 @@ fn bode_resonances_match_the_linearized_modes() {
     let outcome = Experiment::Bode(b).run("bode", &out("bode")).unwrap();
     let v = &outcome.values;
     println!("{v:?}");
-    // Lift is the first mode, swing the second (tests/hamr.rs: 78.9 Hz, 106.3 Hz).
-    assert!(close(
-        v["lift_hysteretic_resonance_hz"],
-        v["mode1_hz"],
-        0.01
-    ));
-    assert!(close(
-        v["swing_hysteretic_resonance_hz"],
-        v["mode2_hz"],
-        0.01
-    ));
-    for key in ["lift_viscous_resonance_hz", "swing_viscous_resonance_hz"] {
-        assert!(v[key] > 40.0 && v[key] < 150.0, "{key} = {}", v[key]);
+    // Lift is the first mode, swing the second: the modes of tests/equations/hamr.rs
+    // (78.9053 Hz, 106.3285 Hz, within 1e-4 relative), and both the hysteretic and the
+    // viscous resonances within 1 % of them (measured: lift 78.78 / 78.70 Hz, swing 106.00 /
+    // 106.14 Hz; ζ ≈ 0.02–0.03 moves a peak by ~ζ², the 200-point grid is interpolated).
+    for (key, hz) in [("mode1_hz", 78.9053), ("mode2_hz", 106.3285)] {
+        assert!(close(v[key], hz, 1e-4), "{key} = {}, pinned {hz}", v[key]);
+    }
+    for (dof, mode) in [("lift", "mode1_hz"), ("swing", "mode2_hz")] {
+        for loss in ["hysteretic", "viscous"] {
+            let key = format!("{dof}_{loss}_resonance_hz");
+            assert!(
+                close(v[&key], v[mode], 0.01),
+                "{key} = {}, {mode} = {}",
+                v[&key],
+                v[mode]
+            );
+        }
     }
     assert!(v["lift_hysteretic_q"] > v["lift_viscous_q"]);
 }
@@ -217,11 +245,34 @@ fn report_renders_tables_and_inline_plots() {
     let html =
         mech::render::report::render_html(std::slice::from_ref(&outcome), &out("report"), 0.1)
             .unwrap();
-    assert!(
-        html.starts_with("<!DOCTYPE html>") && html.contains("<table>") && html.contains("266")
+    assert!(html.starts_with("<!DOCTYPE html>") && html.contains("<table>"));
+    // The model's row of the work table, formatted as the report formats it from the model's
+    // own works and ratio (old µJ, new µJ, ratio new/old, increase; "80.8, 154.4, 1.91, 91 %"
+    // today), and the model's increase next to the paper's reported one: neither can come
+    // from the experiment file's 266 %.
+    let v = &outcome.values;
+    let (old, new) = (
+        v["old_lift_work"] + v["old_swing_work"],
+        v["new_lift_work"] + v["new_swing_work"],
     );
+    let ratio = v["work_ratio"];
+    let cells = [
+        "model".to_string(),
+        format!("{:.1}", old * 1e6),
+        format!("{:.1}", new * 1e6),
+        format!("{ratio:.2}"),
+        format!("{:.0} %", 100.0 * (ratio - 1.0)),
+    ];
+    assert_eq!(cells[1..], ["80.8", "154.4", "1.91", "91 %"]);
+    let html_row = format!("<tr><td>{}</td></tr>", cells.join("</td><td>"));
+    assert!(html.contains(&html_row), "no `{html_row}` in the HTML");
+    let reported = format!("266 % (model {:.0} %)", 100.0 * (ratio - 1.0));
+    assert!(html.contains(&reported), "no `{reported}` in the HTML");
+    let md_row = format!("| {} |", cells.join(" | "));
     let md = mech::render::report::render_markdown(&[outcome], &out("report"), 0.1);
     assert!(md.contains("| HAMR-VI | lift |"), "{md}");
+    assert!(md.contains(&md_row), "no `{md_row}` in {md}");
+    assert!(md.contains(&reported), "no `{reported}` in {md}");
 }
 
 /// The rows of a CSV written by an experiment, by column name.
