@@ -62,6 +62,7 @@ tests_per_file! {
     chain1,
     chain2,
     chain4,
+    compliant_four_bar,
     double_pendulum_3d,
     flexure_rig,
     four_bar,

@@ -1,5 +1,5 @@
 //! Closed kinematic loops against closed forms and SymPy: the four-bar of
-//! `../shared/peers/sympy_fourbar.py`, the slider-crank, an over-constrained (redundant)
+//! `tests/peers/sympy_fourbar.py`, the slider-crank, an over-constrained (redundant)
 //! closure, `J` and `J̇u` against finite differences, and drift control over long runs.
 
 use crate::common;
@@ -22,9 +22,10 @@ fn tight(t_end: f64, output_interval: f64) -> SimOptions {
     common::dopri5_options(t_end, output_interval, 1e-11, 1e-12)
 }
 
-/// Values printed by `sympy_fourbar.py` (SymPy KanesMethod with dependent coordinates,
-/// fsolve at xtol 1e-14), for q1 = 1 rad, u1 = 2 rad/s. Our coupler angle is relative to
-/// the crank, so its absolute angle is q1 + q2.
+/// Values printed by `tests/peers/sympy_fourbar.py` (its `x0`: SymPy KanesMethod with
+/// dependent coordinates, fsolve at xtol 1e-14; the command is in tests/peers/README.md), for
+/// q1 = 1 rad, u1 = 2 rad/s. Our coupler angle is relative to the crank, so its absolute angle
+/// is q1 + q2.
 #[test]
 fn four_bar_assembly_matches_sympy() {
     let model = common::tape("four_bar");
@@ -44,7 +45,8 @@ fn four_bar_assembly_matches_sympy() {
     );
 }
 
-/// After 1 s of free motion SymPy + SciPy DOP853 (rtol = atol = 1e-9) give q1 = 3.3500951900.
+/// After 1 s of free motion SymPy + SciPy DOP853 (rtol = atol = 1e-9) give q1 = 3.3500951900
+/// (`sim1s_DOP853.q1_final` of `tests/peers/sympy_fourbar.py`).
 #[test]
 fn four_bar_motion_matches_sympy_and_holds_the_loop() {
     for model in [
@@ -62,7 +64,7 @@ fn four_bar_motion_matches_sympy_and_holds_the_loop() {
 
 /// The same motion with DOP853 at the peer's own tolerance (rtol = atol = 1e-9, the
 /// projection after each step, 100 samples through the continuous extension): SciPy's DOP853
-/// on SymPy's equations gives q1(1 s) = 3.350095189957 (`sympy_fourbar.py`), and both
+/// on SymPy's equations gives q1(1 s) = 3.350095189957 (`tests/peers/sympy_fourbar.py`), and both
 /// integrate to 1e-9, so they agree to a few 1e-9; the loop holds at every sample.
 #[test]
 fn four_bar_dop853_at_the_peer_tolerance_matches_sympy() {

@@ -101,8 +101,9 @@ fn reduced_accelerations_match_the_multiplier_form() {
 }
 
 /// The four-bar's free motion (SymPy + SciPy DOP853 at 1e-9 give q1(1 s) = 3.3500951900,
-/// `sympy_fourbar.py`) with the exponential Rosenbrock method through `simulate`, which picks
-/// the crank as the independent coordinate: the same value, the loop closed at every sample.
+/// `sim1s_DOP853.q1_final` of `tests/peers/sympy_fourbar.py`) with the exponential Rosenbrock
+/// method through `simulate`, which picks the crank as the independent coordinate: the same
+/// value, the loop closed at every sample.
 #[test]
 fn four_bar_reduced_motion_matches_sympy() {
     let model = mech::models::compiled("four_bar").unwrap();

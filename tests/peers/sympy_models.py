@@ -3,7 +3,8 @@
 sympy.physics.mechanics.KanesMethod and writes M(q), forcing F(q, u) (with
 M u' = F, q' = u), kinetic and potential energy at fixed pseudo-random states
 to tests/peers/fixture.json.  For the loop models (four_bar, slider_crank: open tree plus
-coincident closures) also phi(q), J = dphi/dq and J'u.  Model definitions and conventions:
+coincident closures; compliant_four_bar: a flexure at every pin, one of them on a revolute
+closure) also phi(q), J = dphi/dq and J'u.  Model definitions and conventions:
 README.md.
 
 Regenerate (from the repository root):
@@ -120,6 +121,42 @@ class Model:
         for c in components:
             self.loops.append((r, getattr(self.N, c)))
             self.loop_names.append(f'{name}.{c}')
+
+    def revolute(self, name, parent_pt, child_pt, axis_parent, e1_child, e2_child):
+        """Revolute closure rows: r(child_pt) - r(parent_pt) in N (x, y, z), then the axis
+        (fixed in the parent) dotted with two directions perpendicular to it fixed in the child."""
+        self.coincident(name, parent_pt, child_pt, 'xyz')
+        for k, e in enumerate((e1_child, e2_child), start=1):
+            self.loops.append((axis_parent, e))
+            self.loop_names.append(f'{name}.align{k}')
+
+    def _flexure_params(self, name, k, eta, f_ref, rest_deg):
+        """Torsional spring k and viscous damper b = k eta / (2 pi f_ref) (Eq. 5), rest in rad."""
+        self.params.update({f'{name}.loss_factor': eta, f'{name}.reference_frequency_Hz': f_ref,
+                            f'{name}.rest_deg': rest_deg})
+        return R(eta) * k / (2 * sm.pi * R(f_ref)), R(rest_deg) * sm.pi / 180
+
+    def flexure(self, name, coord, k, eta, f_ref, rest_deg):
+        """A flexure on a pin joint: spring -k (q - rest) and damper -b u along the joint axis."""
+        b, rest = self._flexure_params(name, k, eta, f_ref, rest_deg)
+        q, u = (v[self.coords.index(coord)] for v in (self.q, self.u))
+        self.pe += k / 2 * (q - rest) ** 2
+        self._joint_load(coord, -k * (q - rest), True)
+        self._joint_load(coord, -b * u, False)
+
+    def loop_flexure(self, name, parent, child, axis, theta, k, eta, f_ref, rest_deg):
+        """A flexure on a revolute closure: the torque -k (theta - rest) - b theta' about `axis`
+        on the child frame and the opposite on the parent. theta is the child's rotation
+        relative to the parent about `axis`; theta' comes from the frames' angular velocities."""
+        b, rest = self._flexure_params(name, k, eta, f_ref, rest_deg)
+        qd = {qi.diff(t): ui for qi, ui in zip(self.q, self.u)}
+        rate = (child.ang_vel_in(self.N) - parent.ang_vel_in(self.N)).dot(axis).xreplace(qd)
+        self.pe += k / 2 * (theta - rest) ** 2
+        for mag, conservative in ((-k * (theta - rest), True), (-b * rate, False)):
+            pairs = [(child, mag * axis), (parent, -mag * axis)]
+            self.loads += pairs
+            if not conservative:
+                self.nc_loads += pairs
 
 
 # ---------------------------------------------------------------- models
@@ -245,9 +282,55 @@ def slider_crank():
     return M
 
 
+# A compliant four-bar at microrobot scale (models/compliant_four_bar.mech): a flexure at each of
+# its four pins, the fourth on the revolute closure coupler tip -> rocker tip.
+COMPLIANT = dict(ground=0.03, crank_length=0.01, coupler_length=0.025, rocker_length=0.02,
+                 m_crank=1e-6, m_coupler=2e-6, m_rocker=1.5e-6)
+KAPTON = dict(E=2.56e9, loss_factor=0.05)   # Doshi et al. Sec. IV.B (measured E; eta)
+
+
+def compliant_four_bar():
+    p = COMPLIANT
+    M = Model('compliant_four_bar')
+    M.up = M.N.y
+    A = M.pin('crank_angle', M.N, M.O, M.N.z, 'A')
+    M.body('crank', A, M.O, p['m_crank'], (p['crank_length'] / 2, 0, 0),
+           rod_inertia(p['m_crank'], p['crank_length'], 'z'))
+    Bo = M.point('Bo', M.O, R(p['crank_length']) * A.x)
+    B = M.pin('coupler_angle', A, Bo, A.z, 'B')
+    M.body('coupler', B, Bo, p['m_coupler'], (p['coupler_length'] / 2, 0, 0),
+           rod_inertia(p['m_coupler'], p['coupler_length'], 'z'))
+    Co = M.point('Co', M.O, R(p['ground']) * M.N.x)
+    C = M.pin('rocker_angle', M.N, Co, M.N.z, 'C')
+    M.body('rocker', C, Co, p['m_rocker'], (p['rocker_length'] / 2, 0, 0),
+           rod_inertia(p['m_rocker'], p['rocker_length'], 'z'))
+    # mech's perpendiculars for axis z are e1 = z x x = y and e2 = z x e1 = -x (child
+    # frame); in this planar model both rows are identically zero for any choice.
+    M.revolute('tip', M.point('Bt', Bo, R(p['coupler_length']) * B.x),
+               M.point('Ct', Co, R(p['rocker_length']) * C.x), B.z, C.y, -C.x)
+    M.params = {'g': float(G_ACC), 'gravity': [0, -float(G_ACC), 0], **p,
+                'inertia': 'slender rods: m l^2/12 about com z', 'loop tip': 'revolute about z',
+                'kapton': KAPTON}
+    M.flexure('crank_hinge', 'crank_angle', R(5e-8), 0.1, 0.1, 60)
+    # Kapton film: k = E w t^3 / (12 l) (Eq. 2), w = 0.5 mm, t = 12.5 um, l = 2 mm
+    w, h, l = R(0.5e-3), R(12.5e-6), R(2e-3)
+    M.flexure('coupler_hinge', 'coupler_angle', R(KAPTON['E']) * w * h ** 3 / (12 * l),
+              KAPTON['loss_factor'], 0.2, -35)
+    M.params['coupler_hinge.geometry'] = {'width': 0.5e-3, 'thickness': 12.5e-6, 'length': 2e-3}
+    M.flexure('rocker_hinge', 'rocker_angle', R(8e-8), 0.06, 0.05, 100)
+    # The rocker's rotation relative to the coupler (absolute angles: q3 and q1 + q2). mech
+    # measures it with atan2, in (-pi, pi]: the states keep |q3 - q1 - q2| <= 3 < pi.
+    q1, q2, q3 = M.q
+    assert all(abs(q[2] - q[0] - q[1]) < math.pi for q, _ in states(M.name, 3))
+    M.loop_flexure('tip_hinge', B, C, M.N.z, q3 - q1 - q2, R(3e-8), 0.12, 0.15, 20)
+    for name, k in (('crank_hinge', 5e-8), ('rocker_hinge', 8e-8), ('tip_hinge', 3e-8)):
+        M.params[f'{name}.stiffness'] = k
+    return M
+
+
 MODELS = [lambda: chain(1), lambda: chain(2), lambda: chain(4),
           lambda: pendulum_3d(2, 'double_pendulum_3d'), lambda: pendulum_3d(3, 'triple_pendulum_3d'),
-          cart_pendulum, mixed_chain, four_bar, slider_crank]
+          cart_pendulum, mixed_chain, four_bar, slider_crank, compliant_four_bar]
 
 
 # ---------------------------------------------------------------- evaluation
@@ -269,9 +352,12 @@ def derive(M):
         Jdu = (J * u).jacobian(q) * u                      # J'u = sum_i d(J u)/dq_i u_i
         # independent route for J'u: the second time derivative of the closure vector in N
         # (SymPy vector kinematics), with q'' = 0 and q' = u
+        # (product rule: the direction e moves for alignment rows, is fixed in N otherwise)
         qdd = {qi.diff(t, 2): 0 for qi in M.q}
-        acc = sm.Matrix([r.dt(M.N).dt(M.N).dot(e) for r, e in M.loops]).xreplace(qdd).xreplace(qd)
-        vel = sm.Matrix([r.dt(M.N).dot(e) for r, e in M.loops]).xreplace(qd)   # = J u
+        acc = sm.Matrix([r.dt(M.N).dt(M.N).dot(e) + 2 * r.dt(M.N).dot(e.dt(M.N))
+                         + r.dot(e.dt(M.N).dt(M.N)) for r, e in M.loops]).xreplace(qdd).xreplace(qd)
+        vel = sm.Matrix([r.dt(M.N).dot(e) + r.dot(e.dt(M.N))
+                         for r, e in M.loops]).xreplace(qd)   # = J u
         exprs += [phi, J, Jdu, acc - Jdu, vel - J * u]
     for e in exprs[:5] + exprs[6:9]:   # only q, u may remain (no q', no unsubstituted symbols)
         e = sm.sympify(e)
