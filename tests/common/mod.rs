@@ -307,7 +307,13 @@ pub enum WrittenEffect {
     /// Both actuators' slider joints moved this far (m) along their axes (+y): the springs
     /// rest there.
     Preload(f64),
+    /// A force along y at the foot, the parameter `side_force` (N, 0 as written), for a
+    /// sensor's side load computed outside the model ([`FOOT_SIDE_FORCE`]).
+    FootSideForce,
 }
+
+/// The parameter of [`WrittenEffect::FootSideForce`].
+pub const FOOT_SIDE_FORCE: &str = "side_force";
 
 /// `text` with the one occurrence of `from` replaced by `to` (panics unless exactly one).
 fn replace_once(text: &str, from: &str, to: &str) -> String {
@@ -349,6 +355,10 @@ pub fn hamr_vi_written(effect: WrittenEffect, dir: &Path) -> Leg {
                 &format!("1.456684126580 mm + {offset:e} m, -0.478250429210 mm]"),
             )
         }
+        WrittenEffect::FootSideForce => format!(
+            "{source}\nparam {FOOT_SIDE_FORCE} = 0 N;\n\
+             force sensor_side at leg.foot = [0, {FOOT_SIDE_FORCE}, 0] in newtonian;\n"
+        ),
     };
     let path = dir.join("hamr_vi_written.mech");
     std::fs::write(&path, text).unwrap();

@@ -11,7 +11,7 @@ use crate::common;
 
 use std::path::Path;
 
-use common::{Rng, WrittenEffect};
+use common::{Rng, WrittenEffect, FOOT_SIDE_FORCE};
 use mech::diagnose::candidates::{diagnose, Diagnosis, Holdout, Trial, Verdict};
 use mech::diagnose::experiment::Experiment;
 use mech::diagnose::extend::{open_leg, Extension};
@@ -209,13 +209,96 @@ fn top(d: &Diagnosis, cause: &str, location: &str, parameter: &str) -> f64 {
         .2
 }
 
+/// The on-axis sensor force at each 127 µm step of `dof`'s force test at 225 V, the sensor
+/// also pushing on the foot along y with `fraction` of that force, opposing the free foot's
+/// y motion — computed without the statics' side-load code ([`ForceTest::off_axis`]): the
+/// y force is a plain force at the foot written into the model (`side_force`), applied only
+/// while the sensor holds the foot (rest and free deflection are unloaded), and iterated to
+/// the fixed point `F_y = −sign(free y motion)·fraction·F` at each sensor position.
+fn side_loaded_forces(dir: &Path, dof: Dof, fraction: f64) -> Vec<(f64, f64)> {
+    let mut leg = common::hamr_vi_written(WrittenEffect::FootSideForce, dir);
+    let unloaded = ForceTest::new(dof, 225.0, Sensor::Steps(SENSOR_STEP))
+        .run(&leg)
+        .unwrap();
+    let y_direction = (unloaded.free[1] - unloaded.rest[1]).signum();
+    let (axis, inputs) = (dof.axis(), leg.drive(dof, 225.0));
+    let mut q = unloaded.rest_q.clone();
+    unloaded
+        .points
+        .iter()
+        .map(|point| {
+            if point.force == 0.0 {
+                return (point.distance, 0.0); // beyond the free foot's reach
+            }
+            let mut target = unloaded.rest;
+            target[axis] += unloaded.direction * point.distance;
+            let (mut side, mut force) = (0.0, 0.0);
+            for _ in 0..100 {
+                common::set_leg_param(&mut leg, FOOT_SIDE_FORCE, side);
+                let fixture = leg.fixture(target, vec![axis]);
+                let equilibrium = leg.equilibrium(&q, &inputs, &[fixture]).unwrap();
+                force = -equilibrium.fixture_forces[0][axis] * unloaded.direction;
+                q = equilibrium.q;
+                let next = -y_direction * fraction * force;
+                if (next - side).abs() < 1e-13 {
+                    break;
+                }
+                side = next;
+            }
+            common::set_leg_param(&mut leg, FOOT_SIDE_FORCE, 0.0);
+            (point.distance, force)
+        })
+        .collect()
+}
+
+/// The two formulations of the sensor's side load agree: the statics' side load of the
+/// fixture ([`ForceTest::off_axis`]) and a plain foot force iterated to its fixed point,
+/// to 1e-8 of the blocked force (each equilibrium converges to 1e-10 of the model's force
+/// scale; seen: 1.1e-9).
+#[test]
+fn the_side_load_equals_a_foot_force_at_its_fixed_point() {
+    let dir = common::scratch_dir("side_load_fixed_point");
+    let written = side_loaded_forces(&dir, Dof::Lift, 0.3);
+    let statics = ForceTest::new(Dof::Lift, 225.0, Sensor::Steps(SENSOR_STEP))
+        .off_axis(0.3)
+        .run(&Leg::open(&common::hamr_vi_spec()).unwrap())
+        .unwrap();
+    let unloaded = ForceTest::new(Dof::Lift, 225.0, Sensor::Blocked)
+        .run(&Leg::open(&common::hamr_vi_spec()).unwrap())
+        .unwrap();
+    assert_eq!(written.len(), statics.points.len());
+    for ((distance, force), point) in written.iter().zip(&statics.points) {
+        assert_eq!(*distance, point.distance);
+        assert!(
+            (force - point.force).abs() < 1e-8 * unloaded.blocked_force(),
+            "at {distance}: {force} vs {}",
+            point.force
+        );
+    }
+    let blocked = written[0].1;
+    assert!(
+        (blocked / unloaded.blocked_force() - 1.0).abs() > 1e-3,
+        "the side load changes the blocked force: {blocked} vs {}",
+        unloaded.blocked_force()
+    );
+}
+
 /// An unmodelled off-axis load: the sensor pushes on the foot along y with 20–40 % of the
-/// on-axis force (the seed's ~30 %), the experiment file says none. Lift force data; the
-/// fraction recovered within 0.05.
+/// on-axis force (the seed's ~30 %), the experiment file says none. Lift force data made by
+/// [`side_loaded_forces`], not by the side-load code the candidate fits with; the fraction
+/// recovered within 0.05.
 fn off_axis_load_case(dir: &Path, rng: &mut Rng) {
     let fraction = rng.uniform(0.2, 0.4);
-    let truth = Leg::open(&common::hamr_vi_spec()).unwrap();
-    let (experiment, text) = force_case(dir, &truth, Dof::Lift, fraction, 0.0, rng);
+    let mut text = String::from("distance [um], force [mN]\n");
+    for (distance, force) in side_loaded_forces(dir, Dof::Lift, fraction) {
+        let force = force + FORCE_NOISE * rng.normal();
+        text += &format!("{}, {}\n", distance * 1e6, force * 1e3);
+    }
+    let experiment = common::hamr_vi_experiment_in(
+        dir,
+        "kind = \"force_deflection\"\ntitle = \"lift force\"\ndof = \"lift\"\n\
+         voltage = \"225 V\"\noff_axis_fraction = 0\nnoise = \"0.3 mN\"\n",
+    );
     let d = diagnose_data(dir, &experiment, &text);
     let fitted = top(
         &d,
@@ -276,37 +359,34 @@ fn misalignment_case(dir: &Path, rng: &mut Rng) {
     }
     let d = diagnose_data(dir, &experiment, &text);
     // Measured: a tilt about y or about z of l2 fit these data equally (AICc within 2: the
-    // diagnosis reports them tied), and the tilt and the hinges' off-axis compliance act
-    // through one combination (a stiffening ~α²/c), so neither is recovered alone from a
-    // lift sweep — the standard error of α says so. Asserted: the cause and the hinge, the
-    // tie, the held-out gain.
+    // diagnosis reports them tied), and so, for some noise draws (seed 7), does l2 simply
+    // stiffer: a lift sweep sees the tilted hinge only through its extra stiffness, which
+    // grows as α²·k/c (the bending forced about an axis α off, against the off-axis
+    // stiffness k/c). So α and c are not recovered alone, but α²/c is. Asserted: every
+    // supported cause acts at l2, the true tilt among them, the held-out gain, and α²/c of
+    // the true tilt's fit within 20 %.
     assert_eq!(d.verdict, Verdict::Explained, "{}", summary(&d));
     let supported = &d.ranked[..d.tied.max(1)];
     assert!(
         supported
             .iter()
-            .all(|t| t.cause == "flexure axis misalignment" && t.location.starts_with("flexure l2")),
+            .all(|t| t.location.starts_with("flexure l2")),
         "{}",
         summary(&d)
     );
+    let tilt = supported
+        .iter()
+        .find(|t| t.location == "flexure l2 tilted about y")
+        .unwrap_or_else(|| panic!("the true tilt is not supported\n{}", summary(&d)));
     assert!(
-        supported
-            .iter()
-            .any(|t| t.location == "flexure l2 tilted about y"),
+        d.ranked[0].holdout_chi2 < 1e-3 * d.base.holdout_chi2,
         "{}",
         summary(&d)
     );
-    let best = &d.ranked[0];
-    assert!(
-        best.holdout_chi2 < 1e-3 * d.base.holdout_chi2,
-        "{}",
-        summary(&d)
-    );
-    // The combination the data determine: the tilted hinge's extra stiffness grows as
-    // α²·k/c (the bending forced about an axis α off, against the off-axis stiffness k/c).
-    let value = |name: &str| best.parameters.iter().find(|p| p.0 == name).unwrap().2;
+    let value = |name: &str| tilt.parameters.iter().find(|p| p.0 == name).unwrap().2;
     let (alpha, compliance) = (value(MISALIGNMENT), value(OFF_AXIS_COMPLIANCE));
     let (fitted, true_value) = (alpha.powi(2) / compliance, angle.powi(2) / 1e-4);
+    eprintln!("misalignment: α²/c = {fitted:.3} vs {true_value:.3}");
     assert!(
         (fitted / true_value - 1.0).abs() < 0.2,
         "α²/c = {fitted} (α {alpha}, c {compliance}) vs {true_value} (α {angle}, c 1e-4)\n{}",
