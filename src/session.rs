@@ -56,6 +56,17 @@ impl NameKind {
     }
 }
 
+/// Why the text of a setting cannot be read, from the parser that read it.
+#[derive(Debug, thiserror::Error)]
+pub enum SettingError {
+    #[error(transparent)]
+    Assignment(#[from] signal_spec::AssignmentError),
+    #[error(transparent)]
+    Quantity(#[from] mech_codegen::front::units::QuantityError),
+    #[error(transparent)]
+    Signal(#[from] signal_spec::Error),
+}
+
 /// Why a session cannot be opened, set up or analysed. Each message names the option (or
 /// the model) and says what was expected.
 #[derive(Debug)]
@@ -76,7 +87,8 @@ pub enum Error {
         option: &'static str,
         /// The name set, when the text got that far.
         name: Option<String>,
-        message: String,
+        /// Boxed: the parsers' errors are large, and sessions return errors often.
+        error: Box<SettingError>,
     },
     /// A quantity of the wrong dimension for what it sets.
     WrongUnit {
@@ -120,10 +132,10 @@ impl std::fmt::Display for Error {
             Error::Setting {
                 option,
                 name,
-                message,
+                error,
             } => match name {
-                Some(name) => write!(f, "{option} {name}: {message}"),
-                None => write!(f, "{option}: {message}"),
+                Some(name) => write!(f, "{option} {name}: {error}"),
+                None => write!(f, "{option}: {error}"),
             },
             Error::WrongUnit {
                 option,
@@ -200,12 +212,10 @@ impl Session {
         let option = "--set";
         let (name, value, index) = self.assignment(option, NameKind::Parameter, assignment)?;
         let (si, dimension) =
-            mech_codegen::front::units::parse_quantity(&value).map_err(|message| {
-                Error::Setting {
-                    option,
-                    name: Some(name.clone()),
-                    message: message.to_string(),
-                }
+            mech_codegen::front::units::parse_quantity(&value).map_err(|error| Error::Setting {
+                option,
+                name: Some(name.clone()),
+                error: Box::new(SettingError::Quantity(error)),
             })?;
         let expected = self
             .compiled
@@ -244,7 +254,7 @@ impl Session {
             signal_spec::parse_signal(&spec, expected).map_err(|error| Error::Setting {
                 option,
                 name: Some(name),
-                message: error.to_string(),
+                error: Box::new(SettingError::Signal(error)),
             })?;
         Ok(())
     }
@@ -261,7 +271,7 @@ impl Session {
             signal_spec::parse_assignment(text).map_err(|error| Error::Setting {
                 option,
                 name: None,
-                message: error.to_string(),
+                error: Box::new(SettingError::Assignment(error)),
             })?;
         let index = self.index_of(kind, &name, Some(option))?;
         Ok((name, value, index))
@@ -339,11 +349,11 @@ impl Session {
             let index = self.coordinate_index(name)?;
             if let Some(value) = value {
                 let (si, _) =
-                    mech_codegen::front::units::parse_quantity(value).map_err(|message| {
+                    mech_codegen::front::units::parse_quantity(value).map_err(|error| {
                         Error::Setting {
                             option: "--independent",
                             name: Some(name.to_string()),
-                            message: message.to_string(),
+                            error: Box::new(SettingError::Quantity(error)),
                         }
                     })?;
                 q[index] = si;

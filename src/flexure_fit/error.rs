@@ -12,8 +12,6 @@
 use std::fmt;
 use std::path::PathBuf;
 
-use mech_codegen::ir::Dimension;
-
 use super::trace::TraceError;
 
 /// Why the flexure characterization cannot go on.
@@ -109,15 +107,9 @@ pub enum SpecimenError {
         /// The TOML parser's message (with the line and a snippet).
         message: String,
     },
-    /// A quantity with a wrong unit or that cannot be parsed.
-    Quantity {
-        /// The key, e.g. `pendulum.mass`.
-        key: &'static str,
-        /// The dimension the key needs.
-        expected: Dimension,
-        /// The unit parser's message, which names the key.
-        message: String,
-    },
+    /// A quantity with a wrong unit or that cannot be parsed (the error names the key, e.g.
+    /// `pendulum.mass`).
+    Quantity(crate::quantity::Error),
     /// A quantity that is zero, negative or not finite.
     NotPositive {
         /// The key.
@@ -197,9 +189,8 @@ impl fmt::Display for Error {
 impl fmt::Display for SpecimenError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            SpecimenError::Toml { message } | SpecimenError::Quantity { message, .. } => {
-                f.write_str(message)
-            }
+            SpecimenError::Toml { message } => f.write_str(message),
+            SpecimenError::Quantity(error) => write!(f, "{error}"),
             SpecimenError::NotPositive { key, value } => {
                 write!(f, "{key} must be positive, got {value}")
             }

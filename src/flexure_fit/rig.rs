@@ -140,11 +140,7 @@ fn quantity(key: &'static str, q: &Quantity, expected: Dimension) -> Result<f64,
     let value = match q {
         Quantity::Number(v) => *v,
         Quantity::Text(text) => {
-            parse_si(key, text, expected, true).map_err(|error| SpecimenError::Quantity {
-                key,
-                expected,
-                message: error.to_string(),
-            })?
+            parse_si(key, text, expected, true).map_err(SpecimenError::Quantity)?
         }
     };
     if !(value.is_finite() && value > 0.0) {

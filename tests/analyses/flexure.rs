@@ -718,12 +718,12 @@ fn specimen_files_are_read_and_checked() {
         matches!(
             &e,
             Error::Specimen {
-                error: SpecimenError::Quantity {
-                    key: "pendulum.com_distance",
+                error: SpecimenError::Quantity(mech::quantity::Error {
+                    subject: mech::quantity::Subject::Plain(key),
                     ..
-                },
+                }),
                 ..
-            }
+            } if key == "pendulum.com_distance"
         ),
         "{e}"
     );
