@@ -147,14 +147,45 @@ fn tests(
     Ok(cases)
 }
 
-pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
+/// The force/deflection tests of the model at the drive voltage: per degree of freedom of
+/// the spec, its tests (on-axis only, then with the off-axis load if asked for).
+pub struct ForceDeflections {
+    pub model_name: String,
+    /// Drive voltage (V) and sensor step (m).
+    pub voltage: f64,
+    pub step: f64,
+    /// `F_b δ_f` of the model's actuator.
+    pub actuator_work: f64,
+    /// Per degree of freedom of the spec, its tests, each with its label (`on-axis only`,
+    /// then the off-axis load's).
+    pub dofs: Vec<(Dof, Vec<(&'static str, ForceDeflection)>)>,
+}
+
+/// Opens the leg and runs each degree of freedom's tests, in the spec's order.
+pub fn compute(spec: &Spec) -> Result<ForceDeflections, Error> {
     let voltage = positive("voltage", &spec.voltage, Dimension::VOLTAGE)?;
     let step = positive("sensor_step", &spec.sensor_step, Dimension::LENGTH)?;
     let leg = Leg::open(&spec.model)?;
-    let fbdf = actuator_work(&leg)?;
-    let model_name = leg.model().name().to_string();
+    let actuator_work = actuator_work(&leg)?;
+    let dofs = spec
+        .dofs
+        .iter()
+        .map(|&dof| Ok((dof, tests(spec, &leg, dof, voltage, step)?)))
+        .collect::<Result<_, Error>>()?;
+    Ok(ForceDeflections {
+        model_name: leg.model().name().to_string(),
+        voltage,
+        step,
+        actuator_work,
+        dofs,
+    })
+}
+
+pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
+    let results = compute(spec)?;
+    let (voltage, fbdf, model_name) = (results.voltage, results.actuator_work, &results.model_name);
     let mut outcome = Outcome {
-        method: method_text(spec, voltage, step),
+        method: method_text(spec, voltage, results.step),
         ..Outcome::default()
     };
     let mut summary = Table::new(
@@ -170,10 +201,10 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
         ],
     );
     let mut curves = Vec::new();
-    for &dof in &spec.dofs {
-        let cases = tests(spec, &leg, dof, voltage, step)?;
-        outcome.tables.push(points_table(&model_name, dof, &cases));
-        for (label, test) in &cases {
+    for (dof, cases) in &results.dofs {
+        let dof = *dof;
+        outcome.tables.push(points_table(model_name, dof, cases));
+        for (label, test) in cases {
             record(&mut outcome, &mut summary, dof, label, test, fbdf);
             let rows = write_test(&mut outcome, dir, dof, test)?;
             let (xs, ys): (Vec<f64>, Vec<f64>) =
@@ -185,7 +216,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     if !spec.paper.is_empty() {
         outcome
             .tables
-            .push(paper_table(&model_name, &spec.paper, &outcome)?);
+            .push(paper_table(model_name, &spec.paper, &outcome)?);
     }
     let path = dir.join("force_deflection.svg");
     plot::plot_xy(

@@ -133,11 +133,48 @@ fn peak_to_peak(values: &[f64]) -> f64 {
     hi - lo
 }
 
-pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
+/// The foot over one drive cycle of each case (lift alone, swing alone, both), from the
+/// rest equilibrium under gravity.
+pub struct Trajectories {
+    pub model_name: String,
+    /// Drive amplitude (V) and frequency (Hz).
+    pub amplitude: f64,
+    pub frequency: f64,
+    /// Per drive case (`lift`, `swing`, `both`): its name and cycle.
+    pub cycles: Vec<(&'static str, Cycle)>,
+}
+
+/// Finds the rest equilibrium, then each drive case's cycle by continuation from it.
+pub fn compute(spec: &Spec) -> Result<Trajectories, Error> {
     let amplitude = positive("amplitude", &spec.amplitude, Dimension::VOLTAGE)?;
     let frequency = positive("frequency", &spec.frequency, Dimension::FREQUENCY)?;
     let leg = Leg::open(&spec.model)?;
     let rest_q = leg.equilibrium(&leg.q0, &leg.inputs(0.0, 0.0), &[])?.q;
+    let cycles = CASES
+        .into_iter()
+        .map(|(name, lift_on, swing_on)| {
+            cycle(
+                spec,
+                &leg,
+                (lift_on, swing_on),
+                (amplitude, frequency),
+                &rest_q,
+            )
+            .map(|cycle| (name, cycle))
+            .map_err(|e| e.within(format!("{name} drive")))
+        })
+        .collect::<Result<_, Error>>()?;
+    Ok(Trajectories {
+        model_name: leg.model().name().to_string(),
+        amplitude,
+        frequency,
+        cycles,
+    })
+}
+
+pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
+    let trajectories = compute(spec)?;
+    let (amplitude, frequency) = (trajectories.amplitude, trajectories.frequency);
     let mut outcome = Outcome {
         method: method_text(spec, amplitude, frequency),
         ..Outcome::default()
@@ -154,15 +191,8 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     );
     let mut sagittal = Vec::new();
     let mut frontal = Vec::new();
-    for (name, lift_on, swing_on) in CASES {
-        let cycle = cycle(
-            spec,
-            &leg,
-            (lift_on, swing_on),
-            (amplitude, frequency),
-            &rest_q,
-        )
-        .map_err(|e| e.within(format!("{name} drive")))?;
+    for (name, cycle) in &trajectories.cycles {
+        let name = *name;
         csv(
             &mut outcome,
             dir,
@@ -204,7 +234,13 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
         frontal.push((label, ys, zs));
     }
     outcome.tables.push(table);
-    plot_planes(&mut outcome, dir, leg.model().name(), &sagittal, &frontal)?;
+    plot_planes(
+        &mut outcome,
+        dir,
+        &trajectories.model_name,
+        &sagittal,
+        &frontal,
+    )?;
     outcome.notes = spec.notes.clone();
     Ok(outcome)
 }

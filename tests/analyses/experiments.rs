@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use mech::experiments::{self, leg, Experiment};
+use mech::experiments::{self, force, leg, trajectory, Experiment};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -102,6 +102,82 @@ fn trajectory_peak_equals_the_statics_deflection_at_the_peak_voltage() {
     );
     assert_eq!(outcome.plots.len(), 2);
     assert!(outcome.plots.iter().all(|p| p.exists()));
+}
+
+/// `trajectory::compute` returns the cycles without writing anything: each drive case comes
+/// back to its start after one period (the lift and swing cases start at rest), and its peak
+/// is the quarter-period sample, where the lift (or the swing alone) is at +225 V.
+#[test]
+fn trajectory_compute_returns_closed_cycles_from_rest() {
+    let spec = bundled("hamr_vi_trajectory.toml", &[("points = 72", "points = 8")]);
+    let Experiment::Trajectory(t) = &spec else {
+        panic!()
+    };
+    let trajectories = trajectory::compute(t).unwrap();
+    assert_eq!(
+        (trajectories.amplitude, trajectories.frequency),
+        (225.0, 1.0)
+    );
+    let names: Vec<&str> = trajectories.cycles.iter().map(|(n, _)| *n).collect();
+    assert_eq!(names, ["lift", "swing", "both"]);
+    for (name, cycle) in &trajectories.cycles {
+        assert_eq!(cycle.rows.len(), 9, "{name}");
+        let (first, last) = (&cycle.rows[0], &cycle.rows[8]);
+        // Every drive starts at 0 V but the swing of `both`, 90° ahead of the lift.
+        let starts_at_rest = first[1] == 0.0 && first[2] == 0.0;
+        assert_eq!(starts_at_rest, *name != "both", "{name}: {first:?}");
+        for axis in 0..3 {
+            assert!(
+                !starts_at_rest || first[6 + axis].abs() < 1e-12,
+                "{name}: {first:?}"
+            );
+            assert!(
+                (last[6 + axis] - first[6 + axis]).abs() < 1e-9,
+                "{name}: {last:?}"
+            );
+        }
+        let quarter = &cycle.rows[2];
+        assert_eq!(
+            cycle.at_peak,
+            [quarter[6], quarter[7], quarter[8]],
+            "{name}"
+        );
+        let drive = if *name == "swing" {
+            quarter[2]
+        } else {
+            quarter[1]
+        };
+        assert!(close(drive, 225.0, 1e-12), "{name}: {quarter:?}");
+    }
+}
+
+/// `force::compute` returns the tests without writing anything: per DOF the on-axis test and
+/// the 30 % off-axis one; the sensor points (what `force_DOF.csv` lists) at 0, 1, 2, 3 mm
+/// with the force falling to the last one, all short of the free deflection.
+#[test]
+fn force_compute_returns_the_sensor_points() {
+    let spec = bundled("hamr_vi_force.toml", &[("\"127 um\"", "\"1000 um\"")]);
+    let Experiment::ForceDeflection(f) = &spec else {
+        panic!()
+    };
+    let results = force::compute(f).unwrap();
+    assert!(close(results.actuator_work, 0.320 * 300e-6, 1e-9));
+    let dofs: Vec<leg::Dof> = results.dofs.iter().map(|(d, _)| *d).collect();
+    assert_eq!(dofs, [leg::Dof::Lift, leg::Dof::Swing]);
+    for (dof, cases) in &results.dofs {
+        let labels: Vec<&str> = cases.iter().map(|(l, _)| *l).collect();
+        assert_eq!(labels, ["on-axis only", "30 % off-axis"], "{dof:?}");
+        assert_eq!(cases[1].1.off_axis_fraction, 0.3);
+    }
+    let lift = &results.dofs[0].1[0].1;
+    let distances: Vec<f64> = lift.points.iter().map(|p| p.distance).collect();
+    assert_eq!(distances.len(), 4);
+    for (k, d) in distances.iter().enumerate() {
+        assert!((d - k as f64 * 1e-3).abs() < 1e-12, "{distances:?}");
+    }
+    assert!(lift.free_deflection > distances[3]);
+    assert!(lift.points.windows(2).all(|w| w[1].force < w[0].force));
+    assert!(lift.points[3].force > 0.0);
 }
 
 #[test]
