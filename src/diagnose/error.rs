@@ -192,7 +192,7 @@ impl fmt::Display for Error {
             Error::ExperimentToml { path, error } => {
                 let message = error.to_string();
                 write!(f, "experiment `{}`: {}", path.display(), message.trim_end())?;
-                if message.starts_with("unknown field") && !message.contains("expected") {
+                if message.contains("unknown field") && !message.contains("expected one of") {
                     f.write_str("\n  hint: docs/diagnose.md lists the keys of each kind")?;
                 }
                 Ok(())

@@ -20,7 +20,6 @@ use mech_runtime::Mode;
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Spec {
-    pub title: String,
     #[serde(flatten)]
     pub model: ModelSpec,
     /// Lowest and highest frequency (`1 Hz`, `150 Hz`).
@@ -33,8 +32,6 @@ pub struct Spec {
     pub channel: Vec<Channel>,
     /// A simulated linear chirp (time domain, viscous flexure dampers), if given.
     pub chirp: Option<Chirp>,
-    #[serde(default)]
-    pub notes: Vec<String>,
 }
 
 fn default_points() -> usize {
@@ -277,7 +274,6 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     }
     outcome.tables.push(table);
     outcome.tables.push(modes_table(name, &responses.modes));
-    outcome.notes = spec.notes.clone();
     Ok(outcome)
 }
 

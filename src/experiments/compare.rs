@@ -19,15 +19,12 @@ use crate::session::ModelSpec;
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Spec {
-    pub title: String,
     /// Peak drive voltage of the model inputs (`225 V`).
     pub voltage: String,
     /// The paper's reported increase of the work done by the foot, percent (266).
     pub paper_work_increase_percent: Option<f64>,
     /// Exactly two robots: the old design first, the new one second.
     pub robot: Vec<Robot>,
-    #[serde(default)]
-    pub notes: Vec<String>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -181,7 +178,6 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     let (increase, model_ratio) = increase_table(spec, work, paper_work);
     outcome.values.insert("work_ratio".into(), model_ratio);
     outcome.tables.push(increase);
-    outcome.notes = spec.notes.clone();
     Ok(outcome)
 }
 

@@ -28,6 +28,11 @@ pub enum Error {
         message: String,
     },
     MissingKind,
+    /// A key no kind has (`line` of the file, 1-based, where it is set).
+    UnknownKey {
+        key: String,
+        line: usize,
+    },
     /// A key's value is unreadable or out of range (the message names the key).
     Key {
         message: String,
@@ -114,13 +119,12 @@ impl fmt::Display for Error {
             Error::NoExperimentFiles { folder } => {
                 write!(f, "no `*.toml` experiment files in `{}`", folder.display())
             }
-            Error::Toml { message } => {
-                f.write_str(message)?;
-                if message.starts_with("unknown field") && !message.contains("expected") {
-                    f.write_str("\n  hint: docs/experiments.md lists the keys of each kind")?;
-                }
-                Ok(())
-            }
+            Error::Toml { message } => f.write_str(message),
+            Error::UnknownKey { key, line } => write!(
+                f,
+                "line {line}: unknown key `{key}`\n  hint: docs/experiments.md lists the keys of \
+                 each kind"
+            ),
             Error::MissingKind => f.write_str(
                 "missing key `kind`: expected one of \"trajectory\", \"force_deflection\", \
                  \"ratio_sweep\", \"compare\", \"bode\"",
@@ -181,4 +185,17 @@ impl From<PlotError> for Error {
     fn from(error: PlotError) -> Error {
         Error::Plot(error)
     }
+}
+
+/// The key and line of the parser's "unknown field" `message` on `text`. The keys every kind
+/// shares are flattened into the kind's (serde's `flatten`), which loses the parser's span
+/// of the offending key, so its line is found by name: the first `key = …` line.
+pub(crate) fn unknown_key(text: &str, message: &str) -> Option<(String, usize)> {
+    let key = message.split("unknown field `").nth(1)?.split('`').next()?;
+    let line = text.lines().position(|line| {
+        line.trim_start()
+            .strip_prefix(key)
+            .is_some_and(|rest| rest.trim_start().starts_with('='))
+    })?;
+    Some((key.to_string(), line + 1))
 }

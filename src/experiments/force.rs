@@ -20,7 +20,6 @@ use mech_codegen::ir::transform::AXES;
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Spec {
-    pub title: String,
     #[serde(flatten)]
     pub model: ModelSpec,
     /// Peak drive voltage of the model input (`225 V`).
@@ -35,8 +34,6 @@ pub struct Spec {
     /// The paper's measured values for this robot (Table IV), per degree of freedom.
     #[serde(default)]
     pub paper: BTreeMap<String, PaperRow>,
-    #[serde(default)]
-    pub notes: Vec<String>,
 }
 
 /// One row of the paper's Table IV: `"2.2 +- 0.1 mm"` etc.
@@ -228,7 +225,6 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
         false,
     )?;
     outcome.plots.push(path);
-    outcome.notes = spec.notes.clone();
     Ok(outcome)
 }
 

@@ -28,10 +28,21 @@ pub use error::Error;
 pub use crate::render::report::Outcome;
 pub use crate::render::table::Table;
 
-/// One experiment file.
+/// One experiment file: what every kind has (a title, notes on the comparison with the
+/// paper, printed in the report), then the kind's own keys.
+#[derive(Debug, Clone, Deserialize)]
+pub struct Experiment {
+    pub title: String,
+    #[serde(default)]
+    pub notes: Vec<String>,
+    #[serde(flatten)]
+    pub kind: Kind,
+}
+
+/// The experiment kinds, by the file's `kind` key.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
-pub enum Experiment {
+pub enum Kind {
     Trajectory(trajectory::Spec),
     ForceDeflection(force::Spec),
     RatioSweep(sweep::Spec),
@@ -55,6 +66,8 @@ pub fn parse(text: &str) -> Result<Experiment, Error> {
         let message = e.to_string();
         if message.contains("missing field `kind`") {
             Error::MissingKind
+        } else if let Some((key, line)) = error::unknown_key(text, &message) {
+            Error::UnknownKey { key, line }
         } else {
             Error::Toml {
                 message: message.trim_end().to_string(),
@@ -67,46 +80,43 @@ pub fn parse(text: &str) -> Result<Experiment, Error> {
 
 impl Experiment {
     pub fn title(&self) -> &str {
-        match self {
-            Experiment::Trajectory(s) => &s.title,
-            Experiment::ForceDeflection(s) => &s.title,
-            Experiment::RatioSweep(s) => &s.title,
-            Experiment::Compare(s) => &s.title,
-            Experiment::Bode(s) => &s.title,
-        }
+        &self.title
     }
 
     /// Checks the quantities (units, signs) before anything runs.
     fn check(&self) -> Result<(), Error> {
-        match self {
-            Experiment::Trajectory(s) => s.check(),
-            Experiment::ForceDeflection(s) => s.check(),
-            Experiment::RatioSweep(s) => s.check(),
-            Experiment::Compare(s) => s.check(),
-            Experiment::Bode(s) => s.check(),
+        match &self.kind {
+            Kind::Trajectory(s) => s.check(),
+            Kind::ForceDeflection(s) => s.check(),
+            Kind::RatioSweep(s) => s.check(),
+            Kind::Compare(s) => s.check(),
+            Kind::Bode(s) => s.check(),
         }
     }
 
     /// A rough relative cost, to start the slow experiments first.
     pub fn cost(&self) -> f64 {
-        match self {
-            Experiment::Bode(s) => 1.0 + s.chirp.as_ref().map_or(0.0, |c| c.cost()),
-            Experiment::RatioSweep(_) => 4.0,
+        match &self.kind {
+            Kind::Bode(s) => 1.0 + s.chirp.as_ref().map_or(0.0, |c| c.cost()),
+            Kind::RatioSweep(_) => 4.0,
             _ => 1.0,
         }
     }
 
-    /// Runs the experiment, writing its files under `out_dir` (named by `name`).
+    /// Runs the experiment, writing its files under `out_dir` (named by `name`): the file's
+    /// notes first, then what the kind observes.
     pub fn run(&self, name: &str, out_dir: &Path) -> Result<Outcome, Error> {
-        let mut outcome = match self {
-            Experiment::Trajectory(s) => trajectory::run(s, out_dir)?,
-            Experiment::ForceDeflection(s) => force::run(s, out_dir)?,
-            Experiment::RatioSweep(s) => sweep::run(s, out_dir)?,
-            Experiment::Compare(s) => compare::run(s, out_dir)?,
-            Experiment::Bode(s) => bode::run(s, out_dir)?,
+        let mut outcome = match &self.kind {
+            Kind::Trajectory(s) => trajectory::run(s, out_dir)?,
+            Kind::ForceDeflection(s) => force::run(s, out_dir)?,
+            Kind::RatioSweep(s) => sweep::run(s, out_dir)?,
+            Kind::Compare(s) => compare::run(s, out_dir)?,
+            Kind::Bode(s) => bode::run(s, out_dir)?,
         };
+        let observed = std::mem::replace(&mut outcome.notes, self.notes.clone());
+        outcome.notes.extend(observed);
         outcome.name = name.to_string();
-        outcome.title = self.title().to_string();
+        outcome.title = self.title.clone();
         Ok(outcome)
     }
 }

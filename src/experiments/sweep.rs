@@ -23,7 +23,6 @@ use mech_codegen::ir::transform::AXES;
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Spec {
-    pub title: String,
     /// Peak drive voltage of the model input (`225 V`).
     pub voltage: String,
     /// Arm values per series, evenly spaced in 1/arm (so roughly evenly in ratio); the
@@ -32,8 +31,6 @@ pub struct Spec {
     pub points: usize,
     /// The curves: one robot, actuator and degree of freedom each.
     pub series: Vec<Series>,
-    #[serde(default)]
-    pub notes: Vec<String>,
 }
 
 /// One curve of the sweep.
@@ -349,9 +346,6 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
         &figure.stars,
     )?;
     outcome.plots.push(path);
-    // The file's notes first, then what each curve shows.
-    let observations = std::mem::replace(&mut outcome.notes, spec.notes.clone());
-    outcome.notes.extend(observations);
     if !sweep.failed.is_empty() {
         outcome.notes.push(format!(
             "Left out (no converged equilibrium): {}",

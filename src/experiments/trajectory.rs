@@ -19,7 +19,6 @@ use mech_codegen::ir::transform::AXES;
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Spec {
-    pub title: String,
     #[serde(flatten)]
     pub model: ModelSpec,
     /// Amplitude of the model's drive input (`225 V`: the paper's 225 V peak-to-peak drive
@@ -33,9 +32,6 @@ pub struct Spec {
     /// Equilibria per cycle (a multiple of 4 hits the peaks exactly).
     #[serde(default = "default_points")]
     pub points: usize,
-    /// Notes on the comparison with the paper, printed in the report.
-    #[serde(default)]
-    pub notes: Vec<String>,
 }
 
 fn default_phase() -> f64 {
@@ -241,7 +237,6 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
         &sagittal,
         &frontal,
     )?;
-    outcome.notes = spec.notes.clone();
     Ok(outcome)
 }
 

@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use mech::experiments::{self, force, leg, trajectory, Experiment};
+use mech::experiments::{self, force, leg, trajectory, Experiment, Kind};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -49,8 +49,7 @@ fn bad_experiment_files_give_clear_errors() {
     );
     let unknown = experiments::parse("kind = \"trajectory\"\ntitle = \"t\"\nmodel = \"m.mech\"\namplitude = \"225 V\"\nfrequency = \"1 Hz\"\nvolts = 3").unwrap_err();
     assert!(
-        matches!(unknown, experiments::Error::Toml { .. })
-            && unknown.to_string().contains("volts")
+        matches!(&unknown, experiments::Error::UnknownKey { key, line: 6 } if key == "volts")
             && unknown.to_string().contains("docs/experiments.md"),
         "{unknown}"
     );
@@ -74,7 +73,7 @@ fn trajectory_peak_equals_the_statics_deflection_at_the_peak_voltage() {
     let outcome = spec.run("trajectory", &out("trajectory")).unwrap();
     println!("{:?}", outcome.values);
     // The statics of the free leg at +225 V on the lift, independently.
-    let Experiment::Trajectory(t) = &spec else {
+    let Kind::Trajectory(t) = &spec.kind else {
         panic!()
     };
     let leg = leg::Leg::open(&mech::session::ModelSpec {
@@ -110,7 +109,7 @@ fn trajectory_peak_equals_the_statics_deflection_at_the_peak_voltage() {
 #[test]
 fn trajectory_compute_returns_closed_cycles_from_rest() {
     let spec = bundled("hamr_vi_trajectory.toml", &[("points = 72", "points = 8")]);
-    let Experiment::Trajectory(t) = &spec else {
+    let Kind::Trajectory(t) = &spec.kind else {
         panic!()
     };
     let trajectories = trajectory::compute(t).unwrap();
@@ -157,7 +156,7 @@ fn trajectory_compute_returns_closed_cycles_from_rest() {
 #[test]
 fn force_compute_returns_the_sensor_points() {
     let spec = bundled("hamr_vi_force.toml", &[("\"127 um\"", "\"1000 um\"")]);
-    let Experiment::ForceDeflection(f) = &spec else {
+    let Kind::ForceDeflection(f) = &spec.kind else {
         panic!()
     };
     let results = force::compute(f).unwrap();
@@ -216,7 +215,7 @@ fn force_deflection_blocked_force_and_work() {
         0.3 * v["lift_offaxis_blocked_force"],
         1e-9
     ));
-    let Experiment::ForceDeflection(f) = &spec else {
+    let Kind::ForceDeflection(f) = &spec.kind else {
         panic!()
     };
     let leg = leg::Leg::open(&mech::session::ModelSpec {
@@ -285,12 +284,12 @@ fn compare_work_ratio_is_consistent() {
 
 #[test]
 fn bode_resonances_match_the_linearized_modes() {
-    let spec = bundled("hamr_vi_bode.toml", &[("points = 300", "points = 200")]);
-    let Experiment::Bode(mut b) = spec else {
+    let mut spec = bundled("hamr_vi_bode.toml", &[("points = 300", "points = 200")]);
+    let Kind::Bode(b) = &mut spec.kind else {
         panic!()
     };
     b.chirp = None;
-    let outcome = Experiment::Bode(b).run("bode", &out("bode")).unwrap();
+    let outcome = spec.run("bode", &out("bode")).unwrap();
     let v = &outcome.values;
     println!("{v:?}");
     // Lift is the first mode, swing the second: the modes of tests/equations/hamr.rs
