@@ -39,6 +39,12 @@ pub enum Error {
         path: PathBuf,
         error: toml::de::Error,
     },
+    /// A key no kind has, at `line` (1-based) of the experiment file.
+    UnknownKey {
+        path: PathBuf,
+        key: String,
+        line: usize,
+    },
     /// A key of the experiment file has a value that cannot be used.
     Experiment { path: PathBuf, error: KeyError },
     /// A key of the experiment does not match the model it names (found once the model is
@@ -189,14 +195,18 @@ impl fmt::Display for Error {
             Error::ReadExperiment { path, error } => {
                 write!(f, "cannot read experiment `{}`: {error}", path.display())
             }
-            Error::ExperimentToml { path, error } => {
-                let message = error.to_string();
-                write!(f, "experiment `{}`: {}", path.display(), message.trim_end())?;
-                if message.contains("unknown field") && !message.contains("expected one of") {
-                    f.write_str("\n  hint: docs/diagnose.md lists the keys of each kind")?;
-                }
-                Ok(())
-            }
+            Error::ExperimentToml { path, error } => write!(
+                f,
+                "experiment `{}`: {}",
+                path.display(),
+                error.to_string().trim_end()
+            ),
+            Error::UnknownKey { path, key, line } => write!(
+                f,
+                "experiment `{}`, line {line}: unknown key `{key}`\n  hint: docs/diagnose.md \
+                 lists the keys of each kind",
+                path.display()
+            ),
             Error::Experiment { path, error } => {
                 write!(f, "experiment `{}`: {error}", path.display())
             }

@@ -157,9 +157,18 @@ pub fn load(path: &Path) -> Result<Experiment, Error> {
         path: path_buf(),
         error,
     })?;
-    let experiment: Experiment = toml::from_str(&text).map_err(|error| Error::ExperimentToml {
-        path: path_buf(),
-        error,
+    let experiment: Experiment = toml::from_str(&text).map_err(|error| {
+        match crate::experiments::error::unknown_key(&text, &error.to_string()) {
+            Some((key, line)) => Error::UnknownKey {
+                path: path_buf(),
+                key,
+                line,
+            },
+            None => Error::ExperimentToml {
+                path: path_buf(),
+                error,
+            },
+        }
     })?;
     experiment.check().map_err(|error| Error::Experiment {
         path: path_buf(),

@@ -416,6 +416,20 @@ fn bad_pendulum_data_are_clear_errors() {
     .unwrap();
     let e = experiment::load(&path).unwrap_err().to_string();
     assert!(e.contains("bad.toml") && e.contains("release"), "{e}");
+    // A misspelt key: named with its line.
+    std::fs::write(
+        &path,
+        format!(
+            "kind = \"pendulum\"\ntitle = \"t\"\nmodel = \"{}\"\nrelase = \"10 deg\"\n",
+            rig_path()
+        ),
+    )
+    .unwrap();
+    let e = experiment::load(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("bad.toml`, line 4: unknown key `relase`") && e.contains("docs/diagnose.md"),
+        "{e}"
+    );
     let other = experiment_in(&dir, "angle = \"foot.x\"\n");
     let e = other
         .observations(
