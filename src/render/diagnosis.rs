@@ -190,9 +190,17 @@ pub fn verdict_text(d: &Diagnosis) -> String {
     }
 }
 
-/// `NAME = value ± σ (nominal …)` for a fitted parameter of a trial.
+/// `NAME = value ± σ (nominal …)` for a fitted parameter of a trial; a fit that ran into a
+/// bound has no standard error (NaN), and says where it stopped instead.
 fn fitted_text((name, nominal, value, se): &(String, f64, f64, f64)) -> String {
-    format!("{name} = {value:.4e} ± {se:.1e} (nominal {nominal:.4e})")
+    if se.is_nan() {
+        format!(
+            "{name} = {value:.4e} at a bound of its plausible range, no standard error \
+             (nominal {nominal:.4e})"
+        )
+    } else {
+        format!("{name} = {value:.4e} ± {se:.1e} (nominal {nominal:.4e})")
+    }
 }
 
 /// `; the data support equally: …` when several candidates tie with the best.
@@ -516,5 +524,24 @@ impl Comparison {
             table.row(vec![r.series.clone(), before, after, change]);
         }
         table
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fitted_text;
+
+    #[test]
+    fn a_parameter_at_a_bound_has_no_standard_error_in_the_text() {
+        let fitted = ("k".to_string(), 1.0, 4.0, f64::NAN);
+        assert_eq!(
+            fitted_text(&fitted),
+            "k = 4.0000e0 at a bound of its plausible range, no standard error (nominal 1.0000e0)"
+        );
+        let fitted = ("k".to_string(), 1.0, 1.2, 0.05);
+        assert_eq!(
+            fitted_text(&fitted),
+            "k = 1.2000e0 ± 5.0e-2 (nominal 1.0000e0)"
+        );
     }
 }
