@@ -133,18 +133,26 @@ pub fn ranking_text(d: &Diagnosis) -> String {
             text += &line(t);
         }
     }
-    if !d.inert.is_empty() {
-        text += "\ninert (cannot change the response, or failed):\n";
-        for t in &d.inert {
-            text += &format!(
-                "  {} at {}{}\n",
-                t.cause,
-                t.location,
-                t.error.as_ref().map_or(String::new(), |e| format!(": {e}"))
-            );
+    let (failed, inert) = inert_and_failed(d);
+    if !inert.is_empty() {
+        text += "\ninert (cannot change the response beyond the noise):\n";
+        for t in inert {
+            text += &format!("  {} at {}\n", t.cause, t.location);
+        }
+    }
+    if !failed.is_empty() {
+        text += "\nfailed (the fit stopped with an error):\n";
+        for t in failed {
+            let error = t.error.as_deref().unwrap_or_default();
+            text += &format!("  {} at {}: {error}\n", t.cause, t.location);
         }
     }
     text
+}
+
+/// The trials set aside, split: those whose fit failed (with the error), and the inert.
+fn inert_and_failed(d: &Diagnosis) -> (Vec<&Trial>, Vec<&Trial>) {
+    d.inert.iter().partition(|t| t.error.is_some())
 }
 
 /// The verdict in one sentence: the cause with its held-out gain, a tie, a flag, or none.
@@ -291,7 +299,7 @@ pub fn diagnosis_page(
         outcome.notes.push(screening.summary());
     }
     if !d.inert.is_empty() {
-        outcome.tables.push(inert_table(d));
+        outcome.tables.extend(inert_tables(d));
     }
     let mut curves = vec![("base model".to_string(), d.base.predicted.as_slice())];
     if let Some(best) = d.ranked.first() {
@@ -336,20 +344,33 @@ fn flags_table(screening: &Screening) -> Table {
     flags
 }
 
-/// The candidates that could not change the response, or whose fit failed.
-fn inert_table(d: &Diagnosis) -> Table {
-    let mut inert = Table::new(
-        "Inert: cannot change the response beyond the noise, or the fit failed",
-        &["cause", "where", "note"],
-    );
-    for t in &d.inert {
-        inert.row(vec![
-            t.cause.clone(),
-            t.location.clone(),
-            t.error.clone().unwrap_or_default(),
-        ]);
+/// The candidates that could not change the response, and those whose fit failed (each
+/// table only if it has rows).
+fn inert_tables(d: &Diagnosis) -> Vec<Table> {
+    let (failed, inert) = inert_and_failed(d);
+    let mut tables = Vec::new();
+    if !inert.is_empty() {
+        let mut table = Table::new(
+            "Inert: cannot change the response beyond the noise",
+            &["cause", "where"],
+        );
+        for t in inert {
+            table.row(vec![t.cause.clone(), t.location.clone()]);
+        }
+        tables.push(table);
     }
-    inert
+    if !failed.is_empty() {
+        let mut table = Table::new(
+            "Failed: the fit stopped with an error",
+            &["cause", "where", "error"],
+        );
+        for t in failed {
+            let error = t.error.clone().unwrap_or_default();
+            table.row(vec![t.cause.clone(), t.location.clone(), error]);
+        }
+        tables.push(table);
+    }
+    tables
 }
 
 /// What the data show against what the base model and the best candidate predict: the
