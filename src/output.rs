@@ -482,26 +482,23 @@ mod tests {
             format!("`{name}`, line 3, column 2 (`v`): `abc` is not a number")
         );
 
+        // `NAME` stands for the file's path in the expected messages.
         for (contents, column, expected) in [
             (
                 "t,v\n0,1\n1,2,3\n",
                 "v",
-                "line 3: 3 fields, but the header has 2 columns",
+                "`NAME`, line 3: 3 fields, but the header has 2 columns",
             ),
             (
                 "t,v\n0,1\n",
                 "w",
-                " has no column `w`; its columns are `t`, `v`",
+                "`NAME` has no column `w`; its columns are `t`, `v`",
             ),
-            ("t,v\n", "v", " has a header but no data rows"),
+            ("t,v\n", "v", "`NAME` has a header but no data rows"),
         ] {
             fs::write(&path, contents).unwrap();
             let error = read_csv_column(&path, column).unwrap_err().to_string();
-            let expected = match expected.strip_prefix(' ') {
-                Some(rest) => format!("`{name}` {rest}"),
-                None => format!("`{name}`, {expected}"),
-            };
-            assert_eq!(error, expected);
+            assert_eq!(error, expected.replace("NAME", &name));
         }
 
         fs::write(&path, "").unwrap();

@@ -474,9 +474,9 @@ impl ForceTest {
         let mut k = 0usize;
         while let Some(distance) = sensor.position(k, free_deflection) {
             if distance > free_deflection {
-                // Beyond the free foot's reach the sensor is not touched: no equilibrium to solve
-                // (holding the foot there would pull on it, and such a pulled leg far from its
-                // working range is where Newton struggles).
+                // Beyond the free foot's reach the sensor is not touched: no equilibrium to
+                // solve (holding the foot there would pull on it, and such a pulled leg far
+                // from its working range is where Newton struggles).
                 points.push(SensorPoint {
                     distance,
                     force: 0.0,
@@ -488,9 +488,9 @@ impl ForceTest {
             }
             let mut target = rest;
             target[axis] = rest[axis] + direction * distance;
-            // The sensor pushes the foot along y with c·F, opposing the free y motion: with the
-            // fixture's force on the foot μ along the axis, F = −μ·direction, so the applied y force
-            // is y_direction·c·direction·μ.
+            // The sensor pushes the foot along y with c·F, opposing the free y motion: with
+            // the fixture's force on the foot μ along the axis, F = −μ·direction, so the
+            // applied y force is y_direction·c·direction·μ.
             let load_y = y_direction * off_axis_fraction * direction;
             let fixture = leg.fixture(target, vec![axis]);
             let loads: Vec<SideLoad> = (load_y != 0.0)
@@ -506,8 +506,8 @@ impl ForceTest {
             let (solved, f) = (equilibrium.q, equilibrium.fixture_forces[0]);
             let foot = leg.foot_at(&solved, &inputs);
             let force = -f[axis] * direction;
-            // The sensor's y force on the foot is the side load, `load_y·f[axis]` (= f[1]); the
-            // foot's on the sensor, minus it.
+            // The sensor's y force on the foot is the side load, `load_y·f[axis]` (= f[1]);
+            // the foot's on the sensor, minus it.
             let point = SensorPoint {
                 distance,
                 force,
