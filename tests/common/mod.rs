@@ -12,6 +12,10 @@ use mech_codegen::Compiled;
 use mech_runtime::{Method, Model, SimOptions, Trajectory};
 use serde_json::Value;
 
+mod written;
+#[allow(unused_imports)]
+pub use written::{hamr_vi_written, WrittenEffect, FOOT_SIDE_FORCE};
+
 /// The path of a bundled model, `models/NAME.mech`.
 pub fn bundled_path(name: &str) -> String {
     format!("{}/models/{name}.mech", env!("CARGO_MANIFEST_DIR"))
@@ -292,79 +296,4 @@ pub fn feet_along_the_drive(leg: &Leg) -> Vec<(f64, f64, [f64; 3])> {
             (lift, swing, leg.foot_at(&q, &inputs))
         })
         .collect()
-}
-
-/// An actuator effect written into HAMR-VI's `.mech` text by hand, independently of the
-/// model transformations `mech diagnose` fits (`ir::transform::actuator`): the truths of the
-/// diagnosis catalog's hidden-effect data.
-#[derive(Clone, Copy, Debug)]
-pub enum WrittenEffect {
-    /// The lift actuator on a base body that slides along y on its own spring
-    /// `k_b = k_a / c` (`k_a = F_b/δ_f`); the base weighs 1 mg (the force tests are static).
-    LiftBaseCompliance(f64),
-    /// This much mass (kg) added to the lift actuator's slider body.
-    LiftTipMass(f64),
-    /// Both actuators' slider joints moved this far (m) along their axes (+y): the springs
-    /// rest there.
-    Preload(f64),
-    /// A force along y at the foot, the parameter `side_force` (N, 0 as written), for a
-    /// sensor's side load computed outside the model ([`FOOT_SIDE_FORCE`]).
-    FootSideForce,
-}
-
-/// The parameter of [`WrittenEffect::FootSideForce`].
-pub const FOOT_SIDE_FORCE: &str = "side_force";
-
-/// `text` with the one occurrence of `from` replaced by `to` (panics unless exactly one).
-fn replace_once(text: &str, from: &str, to: &str) -> String {
-    assert_eq!(text.matches(from).count(), 1, "`{from}` must occur once");
-    text.replacen(from, to, 1)
-}
-
-/// HAMR-VI with `effect` written into its text, saved in `dir` and opened as a leg.
-pub fn hamr_vi_written(effect: WrittenEffect, dir: &Path) -> Leg {
-    let lift_joint = "joint qlact = slider(newtonian, lift_slider) {\n    axis = y;\n    \
-                      parent_point = [10.504659815390 mm, 3.151779821480 mm, \
-                      -0.501688531240 mm + lift_shift];\n}";
-    let source = bundled_source("hamr_vi");
-    let text = match effect {
-        WrittenEffect::LiftBaseCompliance(c) => {
-            let base = format!(
-                "body lift_base {{ mass = 1 mg; }}\n\
-                 joint qlbase = slider(newtonian, lift_base) {{\n    axis = y;\n    \
-                 parent_point = [10.504659815390 mm, 3.151779821480 mm, \
-                 -0.501688531240 mm + lift_shift];\n    stiffness = F_b / delta_f / {c:e};\n}}\n\
-                 joint qlact = slider(lift_base, lift_slider) {{ axis = y; }}"
-            );
-            replace_once(&source, lift_joint, &base)
-        }
-        WrittenEffect::LiftTipMass(mass) => replace_once(
-            &source,
-            "mass = 4.5174e-3 g;",
-            &format!("mass = 4.5174e-3 g + {mass:e} kg;"),
-        ),
-        WrittenEffect::Preload(offset) => {
-            let text = replace_once(
-                &source,
-                "3.151779821480 mm, -0.501688531240 mm + lift_shift]",
-                &format!("3.151779821480 mm + {offset:e} m, -0.501688531240 mm + lift_shift]"),
-            );
-            replace_once(
-                &text,
-                "1.456684126580 mm, -0.478250429210 mm]",
-                &format!("1.456684126580 mm + {offset:e} m, -0.478250429210 mm]"),
-            )
-        }
-        WrittenEffect::FootSideForce => format!(
-            "{source}\nparam {FOOT_SIDE_FORCE} = 0 N;\n\
-             force sensor_side at leg.foot = [0, {FOOT_SIDE_FORCE}, 0] in newtonian;\n"
-        ),
-    };
-    let path = dir.join("hamr_vi_written.mech");
-    std::fs::write(&path, text).unwrap();
-    Leg::open(&mech::session::ModelSpec {
-        path,
-        ..hamr_vi_spec()
-    })
-    .unwrap_or_else(|e| panic!("{effect:?}: {e}"))
 }

@@ -1,5 +1,7 @@
 //! An effect hidden in the data (issue 7's test): "measured" data made with mech's own
-//! simulator from the HAMR-VI model plus one hidden effect of the catalog — the entry drawn
+//! simulator from the HAMR-VI model plus one hidden effect of the catalog, written into the
+//! model's text by hand (`common::WrittenEffect`) or a runtime setting (the flexure
+//! parameters, damping laws), never by the candidates' own transformations — the entry drawn
 //! by a seeded random choice ([`draw`]), then its size, location and the noise from the same
 //! generator. Only the data and the base model go to `diagnose`; the top-ranked candidate
 //! must name the effect and where it acts, recover its parameter within a stated tolerance,
@@ -14,11 +16,10 @@ use std::path::Path;
 use common::{Rng, WrittenEffect, FOOT_SIDE_FORCE};
 use mech::diagnose::candidates::{diagnose, Diagnosis, Holdout, Trial, Verdict};
 use mech::diagnose::experiment::Experiment;
-use mech::diagnose::extend::{open_leg, Extension};
 use mech::diagnose::features::features;
 use mech::experiments::leg::{Dof, ForceTest, Leg, Sensor};
 use mech_codegen::ir::transform::actuator::{BASE_COMPLIANCE, TIP_MASS, TIP_PRELOAD};
-use mech_codegen::ir::transform::hinge::{MISALIGNMENT, OFF_AXIS_COMPLIANCE, TWIST_FACTOR};
+use mech_codegen::ir::transform::hinge::{MISALIGNMENT, OFF_AXIS_COMPLIANCE};
 
 /// Runs the diagnosis of `text` (CSV) under `experiment` with the default hold-out.
 fn diagnose_data(dir: &Path, experiment: &Experiment, text: &str) -> Diagnosis {
@@ -99,17 +100,16 @@ fn blocked_swing_force(leg: &Leg) -> f64 {
 }
 
 /// HAMR-VI with flexure fb3 twisting about y (Eq. 8's stiffness) and the other hinges
-/// compliant off their axes by `compliance`, and the fraction of the blocked swing force that
-/// this removes.
-fn fb3_twisting(compliance: f64) -> (Leg, f64) {
+/// compliant off their axes by `compliance`, written by hand in `dir`, and the fraction of the
+/// blocked swing force that this removes.
+fn fb3_twisting(dir: &Path, compliance: f64) -> (Leg, f64) {
     let base = blocked_swing_force(&Leg::open(&common::hamr_vi_spec()).unwrap());
-    let mut truth = open_leg(
-        &common::hamr_vi_spec(),
-        &Extension::Twist(vec![("fb3".into(), 1)]),
-    )
-    .unwrap();
-    common::set_leg_param(&mut truth, TWIST_FACTOR, 1.0);
-    common::set_leg_param(&mut truth, OFF_AXIS_COMPLIANCE, compliance);
+    let effect = WrittenEffect::Twist {
+        flexure: "fb3",
+        about: 1,
+        off_axis_compliance: compliance,
+    };
+    let truth = common::hamr_vi_written(effect, dir);
     let loss = 1.0 - blocked_swing_force(&truth) / base;
     (truth, loss)
 }
@@ -120,7 +120,7 @@ fn fb3_twisting(compliance: f64) -> (Leg, f64) {
 /// and recover the off-axis compliance within 30 %.
 fn twist_case(dir: &Path, rng: &mut Rng) {
     let compliance = 10f64.powf(rng.uniform(-3.6, -3.2));
-    let (truth, loss) = fb3_twisting(compliance);
+    let (truth, loss) = fb3_twisting(dir, compliance);
     assert!(
         (0.3..=0.5).contains(&loss),
         "the generator's twist removes {loss}"
@@ -335,13 +335,13 @@ fn base_compliance_case(dir: &Path, rng: &mut Rng) {
 /// data can and cannot tell.
 fn misalignment_case(dir: &Path, rng: &mut Rng) {
     let angle = rng.uniform(1.0, 2.0).to_radians();
-    let extension = Extension::Misalignment {
-        flexure: "l2".into(),
+    let effect = WrittenEffect::Tilt {
+        flexure: "l2",
         about: 1,
+        angle,
+        off_axis_compliance: 1e-4,
     };
-    let mut truth = open_leg(&common::hamr_vi_spec(), &extension).unwrap();
-    common::set_leg_param(&mut truth, MISALIGNMENT, angle);
-    common::set_leg_param(&mut truth, OFF_AXIS_COMPLIANCE, 1e-4);
+    let truth = common::hamr_vi_written(effect, dir);
     let experiment = common::hamr_vi_experiment_in(
         dir,
         "kind = \"quasi_static\"\ntitle = \"lift sweep\"\n\
@@ -841,7 +841,7 @@ fn the_seeds_draw_every_catalog_entry() {
 fn the_papers_story_twist_and_a_frequency_dependent_loss_factor() {
     let dir = common::scratch_dir("paper_story");
     let mut rng = Rng::new(2024);
-    let (truth, loss) = fb3_twisting(6.25e-4);
+    let (truth, loss) = fb3_twisting(&dir, 6.25e-4);
     assert!(
         (0.45..=0.6).contains(&loss),
         "Eq. 8 twist at fb3 removes {:.0} % of the swing force",
