@@ -160,10 +160,11 @@ fn fixture_reaction_carries_the_weight() {
 }
 
 /// A pendulum hanging from a flexure, driven by a torque: with the loss as complex stiffness
-/// the response is exactly `1 / (k(1 + iη) + m g L − I_p ω²)`; with the time-domain damper it
-/// is `1 / (k + m g L − I_p ω² + i ω k η/ω_ref)`.
+/// the response is exactly `1 / (k(1 + iη) + m g L − I_p ω²)`; with the loss factor a power
+/// law of frequency, `η (f/f_0)^α` in place of η; with the time-domain damper it is
+/// `1 / (k + m g L − I_p ω² + i ω k η/ω_ref)`.
 #[test]
-fn flexure_losses_as_complex_stiffness_or_viscous_damper() {
+fn flexure_losses_as_complex_stiffness_a_power_law_or_viscous_damper() {
     let source = "
         param m = 2 g;
         param arm = 20 mm;
@@ -208,6 +209,18 @@ fn flexure_losses_as_complex_stiffness_or_viscous_damper() {
         assert!(
             (ours - viscous).norm() < 1e-7 * viscous.norm(),
             "ω = {omega}: {ours} vs {viscous}"
+        );
+        let (exponent, reference_hz) = (0.3, 5.0);
+        let eta_at = eta * (omega / (std::f64::consts::TAU * reference_hz)).powf(exponent);
+        let power_law = Complex::new(1.0, 0.0) / Complex::new(static_stiffness, k * eta_at);
+        let law = FlexureDamping::HystereticPowerLaw {
+            exponent,
+            reference_hz,
+        };
+        let ours = linear.frequency_response(0, output, omega, law).unwrap();
+        assert!(
+            (ours - power_law).norm() < 1e-7 * power_law.norm(),
+            "ω = {omega}: {ours} vs {power_law}"
         );
     }
 }
