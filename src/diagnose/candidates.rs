@@ -25,7 +25,9 @@
 
 use mech_codegen::ir::Dimension;
 
-use mech_codegen::ir::transform::actuator::{BASE_COMPLIANCE, TIP_MASS, TIP_PRELOAD};
+use mech_codegen::ir::transform::actuator::{
+    BASE_COMPLIANCE, FORCE_FACTOR, STIFFNESS_FACTOR, TIP_MASS, TIP_PRELOAD,
+};
 use mech_codegen::ir::transform::hinge::{MISALIGNMENT, OFF_AXIS_COMPLIANCE, TWIST_FACTOR};
 use mech_codegen::ir::transform::{constant_direction, hinge_axis};
 use mech_codegen::Compiled;
@@ -318,7 +320,8 @@ fn hinge_candidates(leg: &Leg) -> Vec<Candidate> {
 }
 
 /// Per actuator (a slider coordinate with a force source): a compliant base in series (up to
-/// twice the actuator's own compliance) and a mass on its tip (up to 50 mg; a bimorph's
+/// twice the actuator's own compliance), its stiffness or its force off by a factor, and a
+/// mass on its tip (up to 50 mg; a bimorph's
 /// effective tip mass is about a quarter of its ~60 mg).
 fn actuator_candidates(leg: &Leg) -> Vec<Candidate> {
     let model = &leg.session.compiled.model;
@@ -355,6 +358,29 @@ fn actuator_candidates(leg: &Leg) -> Vec<Candidate> {
             ),
             Extension::BaseCompliance(slider.clone()),
         ));
+        // ÷2 to ×2: a bimorph further off than that is another actuator.
+        for (cause, name, extension) in [
+            (
+                "actuator stiffness off by a factor",
+                STIFFNESS_FACTOR,
+                Extension::ActuatorStiffness(slider.clone()),
+            ),
+            (
+                "actuator force off by a factor",
+                FORCE_FACTOR,
+                Extension::ActuatorForce(slider.clone()),
+            ),
+        ] {
+            out.push(Candidate::extended(
+                cause,
+                location.clone(),
+                (
+                    new_parameter,
+                    Parameter::new(name, 1.0).bounded(0.5, 2.0).with_scale(0.1),
+                ),
+                extension,
+            ));
+        }
         out.push(Candidate::extended(
             "actuator tip mass",
             location,
@@ -390,6 +416,22 @@ pub struct Trial {
     pub predicted: Vec<f64>,
 }
 
+impl Trial {
+    /// A fitted parameter ran into a bound of its plausible range (standard error NaN): the
+    /// change the data ask for is outside the catalog's range, so the trial names no cause.
+    pub fn at_bound(&self) -> bool {
+        self.parameters.iter().any(|p| p.3.is_nan())
+    }
+
+    /// Every fitted parameter is determined by the data: a finite standard error smaller
+    /// than its value (two hinges in series fitted together, each `k ± 10⁵ k`, are not).
+    fn determined(&self) -> bool {
+        self.parameters
+            .iter()
+            .all(|&(_, _, value, se)| se.is_finite() && se < value.abs())
+    }
+}
+
 /// What `mech diagnose` concludes; in `diagnosis.json` by its snake_case name
 /// (`no_significant_discrepancy`, `explained`, …).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -403,6 +445,10 @@ pub enum Verdict {
     PartlyExplained,
     /// No candidate helps significantly.
     Unexplained,
+    /// Only candidates whose fit ran into a bound of its plausible range help: the cause is
+    /// likely outside the catalog (or a nominal value is far off); the closest is reported,
+    /// not named.
+    OutsidePlausibleRange,
     /// The data show something no parameter of the model can produce (the screening's
     /// flags, e.g. a pendulum's amplitude-dependent damping): the candidates are fitted and
     /// reported, but no cause is named.
@@ -480,7 +526,10 @@ pub fn diagnose_causes(
     let (_, base) = results.next().expect("the base trial");
     let base = base.map_err(|e| Error::BaseModel(Box::new(e)))?;
     let band = NoiseBand::new(holdout_values);
-    let (ranked_pairs, inert) = sort_out(&base, results);
+    let (mut ranked_pairs, inert) = sort_out(&base, results);
+    // A fit at a bound names no cause: those go after every other (stable: each group keeps
+    // its held-out order), so the best named cause is the first.
+    ranked_pairs.sort_by_key(|(_, trial)| trial.at_bound());
     // Without user parameters the base model is not fitted, so every value tests it (a
     // held-out subset alone may miss a narrow resonance).
     let base_consistent = if user.is_empty() {
@@ -495,8 +544,11 @@ pub fn diagnose_causes(
     };
     let mut ranked: Vec<Trial> = ranked_pairs.into_iter().map(|(_, t)| t).collect();
     let flagged = screening.as_ref().is_some_and(|s| !s.flags.is_empty());
-    let best = combined.as_ref().or(ranked.first());
-    let verdict = verdict(flagged, base_consistent, &band, &base, best);
+    let best = combined
+        .as_ref()
+        .or(ranked.first().filter(|t| !t.at_bound()));
+    let beyond = ranked.iter().find(|t| t.at_bound());
+    let verdict = verdict(flagged, base_consistent, &band, &base, best, beyond);
     let tied = order_ties(&mut ranked);
     Ok(Diagnosis {
         base,
@@ -639,7 +691,7 @@ fn second_cause(
     base: &Trial,
     ranked: &[(Candidate, Trial)],
 ) -> (Vec<Trial>, Option<Trial>) {
-    let Some((best_candidate, best)) = ranked.first() else {
+    let Some((best_candidate, best)) = ranked.first().filter(|(_, t)| !t.at_bound()) else {
         return (Vec::new(), None);
     };
     if !improves(best, base) || band.holds(best) {
@@ -651,18 +703,26 @@ fn second_cause(
         .collect();
     let (pairs, _) = sort_out(best, trials.run(jobs).into_iter());
     let second_round: Vec<Trial> = pairs.into_iter().map(|(_, t)| t).collect();
-    let combined = second_round.first().filter(|t| improves(t, best)).cloned();
+    // A second cause is a stronger claim than one: every parameter of the pair must be
+    // determined by the data (two hinges in series fit any split of one stiffness change).
+    let combined = second_round
+        .iter()
+        .find(|t| t.determined())
+        .filter(|t| improves(t, best))
+        .cloned();
     (second_round, combined)
 }
 
-/// The verdict from the screening's flags, the base model and the best trial (a pair of
-/// causes when one was found, else the best alone).
+/// The verdict from the screening's flags, the base model, the best trial that can name a
+/// cause (a pair of causes when one was found, else the best alone) and the best whose fit
+/// ran into a bound.
 fn verdict(
     flagged: bool,
     base_consistent: bool,
     band: &NoiseBand,
     base: &Trial,
     best: Option<&Trial>,
+    beyond: Option<&Trial>,
 ) -> Verdict {
     if flagged {
         Verdict::Flagged
@@ -677,24 +737,26 @@ fn verdict(
                     Verdict::PartlyExplained
                 }
             }
+            _ if beyond.is_some_and(|t| improves(t, base)) => Verdict::OutsidePlausibleRange,
             _ => Verdict::Unexplained,
         }
     }
 }
 
 /// How many of `ranked`, from the top, the data support about equally (training AICc within
-/// 2 of the best's); among those, one whose fit ran into a bound (standard error NaN: the
-/// change it needs is outside the plausible range) goes after the others.
+/// 2 of the best's, none at a bound); among those, on equal evidence, the simpler
+/// explanation (fewer fitted parameters) first.
 fn order_ties(ranked: &mut [Trial]) -> usize {
     let tied = match ranked.first() {
         Some(best) => ranked
             .iter()
-            .take_while(|t| (t.aicc - best.aicc).abs() < 2.0 || t.aicc < best.aicc)
+            .take_while(|t| {
+                !t.at_bound() && ((t.aicc - best.aicc).abs() < 2.0 || t.aicc < best.aicc)
+            })
             .count(),
         None => 0,
     };
-    let at_bound = |t: &Trial| t.parameters.iter().any(|p| p.3.is_nan());
-    ranked[..tied].sort_by_key(at_bound);
+    ranked[..tied].sort_by_key(|t| t.parameters.len());
     tied
 }
 

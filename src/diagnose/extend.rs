@@ -30,6 +30,12 @@ pub enum Extension {
     /// The actuator along this slider coordinate sits on a compliant base (a spring in series
     /// with its own stiffness). New parameter: [`actuator::BASE_COMPLIANCE`].
     BaseCompliance(String),
+    /// The actuator along this slider coordinate is stiffer or softer than written, its
+    /// blocked force as written. New parameter: [`actuator::STIFFNESS_FACTOR`].
+    ActuatorStiffness(String),
+    /// The actuator along this slider coordinate pushes harder or weaker than written, its
+    /// stiffness as written. New parameter: [`actuator::FORCE_FACTOR`].
+    ActuatorForce(String),
     /// A mass rides on the tip of the actuator along this slider coordinate. New parameter:
     /// [`actuator::TIP_MASS`].
     TipMass(String),
@@ -50,7 +56,10 @@ impl Extension {
             Extension::Misalignment { flexure, about } => {
                 format!("{flexure} tilted about {}", AXES[*about])
             }
-            Extension::BaseCompliance(slider) | Extension::TipMass(slider) => {
+            Extension::BaseCompliance(slider)
+            | Extension::ActuatorStiffness(slider)
+            | Extension::ActuatorForce(slider)
+            | Extension::TipMass(slider) => {
                 format!("actuator along {slider}")
             }
             Extension::Preload => "every actuator".into(),
@@ -101,6 +110,8 @@ pub fn apply(model: &mut ir::Model, extension: &Extension) -> Result<(), Transfo
         Extension::Twist(hinges) => hinge::twist(model, hinges),
         Extension::Misalignment { flexure, about } => hinge::misalign(model, flexure, *about),
         Extension::BaseCompliance(slider) => actuator::base_compliance(model, slider),
+        Extension::ActuatorStiffness(slider) => actuator::stiffness_factor(model, slider),
+        Extension::ActuatorForce(slider) => actuator::force_factor(model, slider),
         Extension::TipMass(slider) => actuator::tip_mass(model, slider),
         Extension::Preload => actuator::preload(model),
     }

@@ -137,14 +137,14 @@ pub fn ranking_text(d: &Diagnosis) -> String {
     if !inert.is_empty() {
         text += "\ninert (cannot change the response beyond the noise):\n";
         for t in inert {
-            text += &format!("  {} at {}\n", t.cause, t.location);
+            text += &format!("  {}\n", cause_at(t));
         }
     }
     if !failed.is_empty() {
         text += "\nfailed (the fit stopped with an error):\n";
         for t in failed {
             let error = t.error.as_deref().unwrap_or_default();
-            text += &format!("  {} at {}: {error}\n", t.cause, t.location);
+            text += &format!("  {}: {error}\n", cause_at(t));
         }
     }
     text
@@ -158,44 +158,97 @@ fn inert_and_failed(d: &Diagnosis) -> (Vec<&Trial>, Vec<&Trial>) {
 /// The verdict in one sentence: the cause with its held-out gain, a tie, a flag, or none.
 pub fn verdict_text(d: &Diagnosis) -> String {
     let per = |chi2: f64| chi2 / d.holdout_values as f64;
-    match (&d.verdict, d.combined.as_ref().or(d.ranked.first())) {
+    let gain = |t: &Trial| {
+        format!(
+            "held-out χ²/value {:.2} → {:.2}",
+            per(d.base.holdout_chi2),
+            per(t.holdout_chi2)
+        )
+    };
+    let named = d.combined.as_ref().or(d.ranked.first());
+    match (&d.verdict, named) {
         (Verdict::NoSignificantDiscrepancy, _) => {
             "no significant discrepancy: the model as written explains the held-out data to the noise".to_string()
         }
         (Verdict::Explained, Some(best)) => format!(
-            "cause: {} at {} (held-out χ²/value {:.2} → {:.2}, {:+.0} %){}",
-            best.cause,
-            best.location,
-            per(d.base.holdout_chi2),
-            per(best.holdout_chi2),
+            "cause: {} ({}, {:+.0} %)",
+            named_cause(d, best),
+            gain(best),
             100.0 * (best.holdout_chi2 / d.base.holdout_chi2 - 1.0),
-            tied_text(d)
         ),
         (Verdict::PartlyExplained, Some(best)) => format!(
-            "partly explained by {} at {} (held-out χ²/value {:.2} → {:.2}); an unexplained \
-             residual above the noise remains",
-            best.cause,
-            best.location,
-            per(d.base.holdout_chi2),
-            per(best.holdout_chi2)
+            "partly explained by {} ({}); an unexplained residual above the noise remains",
+            named_cause(d, best),
+            gain(best)
         ),
+        (Verdict::OutsidePlausibleRange, _) => match d.ranked.iter().find(|t| t.at_bound()) {
+            Some(closest) => format!(
+                "no cause within the catalog's plausible ranges: the closest, {}, needs {} ({}); \
+                 the effect is likely outside the catalog, or a nominal value of the model is \
+                 far off",
+                cause_at(closest),
+                closest
+                    .parameters
+                    .iter()
+                    .filter(|p| p.3.is_nan())
+                    .map(fitted_text)
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                gain(closest)
+            ),
+            None => "no cause within the catalog's plausible ranges".to_string(),
+        },
         (Verdict::Flagged, _) => format!(
             "flagged ({}): the data show what no parameter of the model can produce, so no \
              cause is named; the fits are reported with the flag{}",
             d.screening.as_ref().map_or(String::new(), flag_kinds),
             match d.ranked.first() {
-                Some(best) => format!(
-                    " (best fit: {} at {}, held-out χ²/value {:.2} → {:.2})",
-                    best.cause,
-                    best.location,
-                    per(d.base.holdout_chi2),
-                    per(best.holdout_chi2)
-                ),
+                Some(best) => format!(" (best fit: {}, {})", cause_at(best), gain(best)),
                 None => String::new(),
             }
         ),
         _ => "unexplained: the residual is above the noise and no candidate explains it".to_string(),
     }
+}
+
+/// `CAUSE at LOCATION`; a pair of causes (`A + B` at `a; b`) as `A at a, and B at b`, or
+/// `A at a and at b` when both are the same cause.
+pub fn cause_at(t: &Trial) -> String {
+    let causes: Vec<&str> = t.cause.split(" + ").collect();
+    let locations: Vec<&str> = t.location.split("; ").collect();
+    if causes.len() != locations.len() || causes.len() == 1 {
+        return format!("{} at {}", t.cause, t.location);
+    }
+    if causes.iter().all(|c| *c == causes[0]) {
+        return format!("{} at {}", causes[0], locations.join(" and at "));
+    }
+    causes
+        .iter()
+        .zip(&locations)
+        .map(|(cause, location)| format!("{cause} at {location}"))
+        .collect::<Vec<_>>()
+        .join(", and ")
+}
+
+/// The named cause: `best` alone, or, when the data support several about equally, all of
+/// them as a tie (`X at one of a, b, c`), the simplest first.
+fn named_cause(d: &Diagnosis, best: &Trial) -> String {
+    let is_top = d.ranked.first().is_some_and(|top| std::ptr::eq(top, best));
+    if d.tied <= 1 || !is_top {
+        return cause_at(best);
+    }
+    let tied = &d.ranked[..d.tied];
+    let alternatives = if tied.iter().all(|t| t.cause == best.cause) {
+        let places: Vec<&str> = tied.iter().map(|t| t.location.as_str()).collect();
+        format!("{} at one of {}", best.cause, places.join(", "))
+    } else {
+        let each: Vec<String> = tied.iter().map(cause_at).collect();
+        format!("one of {}", each.join("; "))
+    };
+    format!(
+        "{alternatives} — not separable by these data (a measurement that tells them apart is \
+         needed: another output, drive or frequency band)"
+    )
 }
 
 /// `NAME = value ± σ (nominal …)` for a fitted parameter of a trial; a fit that ran into a
@@ -209,21 +262,6 @@ fn fitted_text((name, nominal, value, se): &(String, f64, f64, f64)) -> String {
     } else {
         format!("{name} = {value:.4e} ± {se:.1e} (nominal {nominal:.4e})")
     }
-}
-
-/// `; the data support equally: …` when several candidates tie with the best.
-fn tied_text(d: &Diagnosis) -> String {
-    if d.tied <= 1 {
-        return String::new();
-    }
-    let others: Vec<String> = d.ranked[1..d.tied]
-        .iter()
-        .map(|t| format!("{} at {}", t.cause, t.location))
-        .collect();
-    format!(
-        "; these data support equally well: {} (a measurement that separates them is needed)",
-        others.join(", ")
-    )
 }
 
 /// A JSON number, or `null` for NaN and infinities (which JSON cannot hold).
@@ -303,7 +341,7 @@ pub fn diagnosis_page(
     }
     let mut curves = vec![("base model".to_string(), d.base.predicted.as_slice())];
     if let Some(best) = d.ranked.first() {
-        let label = format!("{} at {}", best.cause, best.location);
+        let label = cause_at(best);
         curves.push((label, best.predicted.as_slice()));
     }
     outcome.plots = overlay_plots(
@@ -427,7 +465,7 @@ impl Comparison {
             .collect(),
         };
         Comparison {
-            best_label: best.map(|t| format!("{} at {}", t.cause, t.location)),
+            best_label: best.map(cause_at),
             features,
             rms,
         }

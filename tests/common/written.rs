@@ -24,6 +24,12 @@ pub enum WrittenEffect {
     /// Both actuators' slider joints moved this far (m) along their axes (+y): the springs
     /// rest there.
     Preload(f64),
+    /// The lift actuator's stiffness `k_a = F_b/δ_f` times this factor, its blocked force
+    /// as written (its free deflection divided by the factor).
+    LiftActuatorStiffness(f64),
+    /// The lift actuator's force source times this factor, its stiffness as written (blocked
+    /// force and free deflection both times the factor).
+    LiftActuatorForce(f64),
     /// A force along y at the foot, the parameter `side_force` (N, 0 as written), for a
     /// sensor's side load computed outside the model ([`FOOT_SIDE_FORCE`]).
     FootSideForce,
@@ -93,6 +99,14 @@ pub fn hamr_vi_written(effect: WrittenEffect, dir: &Path) -> Leg {
                 &format!("1.456684126580 mm + {offset:e} m, -0.478250429210 mm]"),
             )
         }
+        WrittenEffect::LiftActuatorStiffness(factor) => {
+            lift_actuator(&source, "F_b", &format!("delta_f / {factor:e}"))
+        }
+        WrittenEffect::LiftActuatorForce(factor) => lift_actuator(
+            &source,
+            &format!("F_b * {factor:e}"),
+            &format!("delta_f * {factor:e}"),
+        ),
         WrittenEffect::FootSideForce => format!(
             "{source}\nparam {FOOT_SIDE_FORCE} = 0 N;\n\
              force sensor_side at leg.foot = [0, {FOOT_SIDE_FORCE}, 0] in newtonian;\n"
@@ -140,6 +154,18 @@ pub fn hamr_vi_written(effect: WrittenEffect, dir: &Path) -> Leg {
         ..super::hamr_vi_spec()
     })
     .unwrap_or_else(|e| panic!("{effect:?}: {e}"))
+}
+
+/// `source` with the lift actuator's blocked force and free deflection written as given.
+fn lift_actuator(source: &str, blocked_force: &str, free_deflection: &str) -> String {
+    replace_once(
+        source,
+        "actuator lift on qlact {\n    blocked_force = F_b;\n    free_deflection = delta_f;",
+        &format!(
+            "actuator lift on qlact {{\n    blocked_force = {blocked_force};\n    \
+             free_deflection = {free_deflection};"
+        ),
+    )
 }
 
 /// A hinge as rewritten by [`compliant_hinges`]: its bending axis, and the directions of the

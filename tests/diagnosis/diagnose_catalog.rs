@@ -22,13 +22,13 @@ use mech_codegen::ir::transform::actuator::{BASE_COMPLIANCE, TIP_MASS, TIP_PRELO
 use mech_codegen::ir::transform::hinge::{MISALIGNMENT, OFF_AXIS_COMPLIANCE};
 
 /// Runs the diagnosis of `text` (CSV) under `experiment` with the default hold-out.
-fn diagnose_data(dir: &Path, experiment: &Experiment, text: &str) -> Diagnosis {
+pub(crate) fn diagnose_data(dir: &Path, experiment: &Experiment, text: &str) -> Diagnosis {
     let data = common::measured_data(dir, text);
     diagnose(experiment, &data, &[], Holdout::Every(3)).unwrap()
 }
 
 /// Everything a failed assertion needs to show.
-fn summary(d: &Diagnosis) -> String {
+pub(crate) fn summary(d: &Diagnosis) -> String {
     let mut text = format!(
         "verdict {:?}; base χ² {:.1}/{:.1}\n",
         d.verdict, d.base.train_chi2, d.base.holdout_chi2
@@ -63,7 +63,7 @@ const SENSOR_STEP: f64 = 127e-6;
 /// sensor's y load `true_fraction` of the on-axis force: the on-axis force at every 127 µm
 /// from the rest position until the free foot no longer reaches the sensor, from `truth`,
 /// with noise; and the experiment file that reads it (stating `file_fraction`).
-fn force_case(
+pub(crate) fn force_case(
     dir: &Path,
     truth: &Leg,
     dof: Dof,
@@ -184,7 +184,7 @@ fn assert_holdout_gain(d: &Diagnosis, trial: &Trial) {
 
 /// Checks the top of `d`: the cause and where it acts, the verdict, the held-out gain, and
 /// returns the fitted value of `parameter`.
-fn top(d: &Diagnosis, cause: &str, location: &str, parameter: &str) -> f64 {
+pub(crate) fn top(d: &Diagnosis, cause: &str, location: &str, parameter: &str) -> f64 {
     let best = d
         .combined
         .as_ref()

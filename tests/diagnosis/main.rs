@@ -5,6 +5,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod actuator_causes;
 mod diagnose;
 mod diagnose_catalog;
 mod pendulum_diagnose;

@@ -1,15 +1,21 @@
-//! An actuator beyond the model as written: a compliant base in series with it, a mass on
-//! its tip, a preload of every actuator's tip. An actuator is a force source and a series
-//! spring on a slider coordinate (`actuator` in the language).
+//! An actuator beyond the model as written: a compliant base in series with it, its own
+//! stiffness or force off by a factor, a mass on its tip, a preload of every actuator's tip.
+//! An actuator is a force source and a series spring on a slider coordinate (`actuator` in
+//! the language).
 //!
 //! Consumes: a checked model and the actuator's slider coordinate. Produces: the model
-//! changed in place, with [`BASE_COMPLIANCE`], [`TIP_MASS`] or [`TIP_PRELOAD`] appended.
+//! changed in place, with [`BASE_COMPLIANCE`], [`STIFFNESS_FACTOR`], [`FORCE_FACTOR`],
+//! [`TIP_MASS`] or [`TIP_PRELOAD`] appended.
 
 use super::{append_param, scaled, TransformError};
 use crate::ir::{Body, Dimension, Expr, Inertia, Load, Model, Motion};
 
 /// The base compliance of [`Extension::BaseCompliance`], per unit actuator compliance.
 pub const BASE_COMPLIANCE: &str = "base_compliance";
+/// The factor on one actuator's stiffness `k_a` of [`stiffness_factor`].
+pub const STIFFNESS_FACTOR: &str = "actuator_stiffness_factor";
+/// The factor on one actuator's force source `F_b V/V_rated` of [`force_factor`].
+pub const FORCE_FACTOR: &str = "actuator_force_factor";
 /// The mass (kg) of [`Extension::TipMass`].
 pub const TIP_MASS: &str = "tip_mass";
 /// The offset (m, positive along the slider axes) of [`Extension::Preload`].
@@ -54,18 +60,56 @@ pub fn base_compliance(model: &mut Model, slider: &str) -> Result<(), TransformE
         Box::new(Expr::one()),
         Box::new(Expr::Add(Box::new(Expr::one()), Box::new(compliance))),
     );
-    for index in [spring, force] {
+    scale_loads(model, &[spring, force], &factor);
+    Ok(())
+}
+
+/// The actuator's stiffness `k_a` times a fitted factor (1: the base model), its force
+/// source as written: a softer or stiffer bimorph with the same blocked force, so its free
+/// deflection `F_b/k_a` changes inversely.
+pub fn stiffness_factor(model: &mut Model, slider: &str) -> Result<(), TransformError> {
+    let (spring, _) = actuator_loads(model, slider)?;
+    let factor = append_param(
+        model,
+        STIFFNESS_FACTOR,
+        1.0,
+        Dimension::NONE,
+        "Factor on the actuator's stiffness k_a (mech diagnose).",
+    );
+    scale_loads(model, &[spring], &factor);
+    Ok(())
+}
+
+/// The actuator's force source times a fitted factor (1: the base model), its stiffness as
+/// written: a weaker or stronger drive (piezoelectric coefficient, the voltage reaching the
+/// bimorph), so blocked force and free deflection scale together.
+pub fn force_factor(model: &mut Model, slider: &str) -> Result<(), TransformError> {
+    let (_, force) = actuator_loads(model, slider)?;
+    let factor = append_param(
+        model,
+        FORCE_FACTOR,
+        1.0,
+        Dimension::NONE,
+        "Factor on the actuator's force source F_b V/V_rated (mech diagnose).",
+    );
+    scale_loads(model, &[force], &factor);
+    Ok(())
+}
+
+/// Multiplies the stiffness of the springs and the value of the generalized forces at
+/// `indices` of `model.loads` by `factor`.
+fn scale_loads(model: &mut Model, indices: &[usize], factor: &Expr) {
+    for &index in indices {
         match &mut model.loads[index] {
             Load::Spring {
                 stiffness: value, ..
             }
             | Load::GeneralizedForce { force: value, .. } => {
-                *value = scaled(&factor, value);
+                *value = scaled(factor, value);
             }
             _ => unreachable!("found as the actuator's loads"),
         }
     }
-    Ok(())
 }
 
 /// A point mass (fitted, starting at 0) on the frame of the actuator's slider.
