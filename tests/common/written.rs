@@ -212,7 +212,7 @@ fn rotated(v: [f64; 3], about: usize, angle: f64) -> [f64; 3] {
 /// between the hinge's parent and the hinge, each pin a flexure of stiffness `k/c` (or `k`
 /// times the given factor) with the hinge flexure's other fields.
 fn compliant_hinges(source: &str, c: f64, springs: impl Fn(&str, usize) -> HingeSprings) -> String {
-    let flexures: Vec<(String, String, Vec<(String, String)>)> = source
+    let flexures: Vec<(String, String, Fields)> = source
         .lines()
         .filter_map(|line| {
             let rest = line.strip_prefix("flexure ")?;
@@ -283,8 +283,11 @@ fn vector(v: &[f64; 3]) -> String {
     format!("[{}, {}, {}]", v[0], v[1], v[2])
 }
 
+/// A declaration's fields, `(key, value)`.
+type Fields = Vec<(String, String)>;
+
 /// `key = value; ...` as pairs.
-fn fields(text: &str) -> Vec<(String, String)> {
+fn fields(text: &str) -> Fields {
     text.split(';')
         .map(str::trim)
         .filter(|field| !field.is_empty())
@@ -302,7 +305,7 @@ struct Declaration {
     kind: String,
     parent: String,
     child: String,
-    fields: Vec<(String, String)>,
+    fields: Fields,
 }
 
 impl Declaration {
