@@ -423,11 +423,13 @@ impl Trial {
         self.parameters.iter().any(|p| p.3.is_nan())
     }
 
-    /// Every fitted parameter is determined by the data: a finite standard error smaller
-    /// than its value (two hinges in series fitted together, each `k ± 10⁵ k`, are not).
-    fn determined(&self) -> bool {
+    /// Every fitted parameter but those named in `except` is determined by the data: a
+    /// finite standard error smaller than its value (two hinges in series fitted together,
+    /// each `k ± 10⁵ k`, are not).
+    fn determined_except(&self, except: &[&str]) -> bool {
         self.parameters
             .iter()
+            .filter(|p| !except.contains(&p.0.as_str()))
             .all(|&(_, _, value, se)| se.is_finite() && se < value.abs())
     }
 }
@@ -526,7 +528,8 @@ pub fn diagnose_causes(
     let (_, base) = results.next().expect("the base trial");
     let base = base.map_err(|e| Error::BaseModel(Box::new(e)))?;
     let band = NoiseBand::new(holdout_values);
-    let (mut ranked_pairs, inert) = sort_out(&base, results);
+    let (ranked_pairs, inert) = sort_out(&base, results);
+    let mut ranked_pairs = hold_undetermined(&trials, ranked_pairs);
     // A fit at a bound names no cause: those go after every other (stable: each group keeps
     // its held-out order), so the best named cause is the first.
     ranked_pairs.sort_by_key(|(_, trial)| trial.at_bound());
@@ -703,11 +706,18 @@ fn second_cause(
         .collect();
     let (pairs, _) = sort_out(best, trials.run(jobs).into_iter());
     let second_round: Vec<Trial> = pairs.into_iter().map(|(_, t)| t).collect();
-    // A second cause is a stronger claim than one: every parameter of the pair must be
-    // determined by the data (two hinges in series fit any split of one stiffness change).
+    // A second cause is a stronger claim than one: the parameters it adds must be determined
+    // by the data (two hinges in series fit any split of one stiffness change). The first
+    // cause's own may stay as loosely determined as they were alone (a twist's stiffness
+    // factor trades off against the off-axis compliance).
+    let first: Vec<&str> = best_candidate
+        .parameters
+        .iter()
+        .map(|(_, p)| p.name.as_str())
+        .collect();
     let combined = second_round
         .iter()
-        .find(|t| t.determined())
+        .find(|t| t.determined_except(&first))
         .filter(|t| improves(t, best))
         .cloned();
     (second_round, combined)
@@ -758,6 +768,55 @@ fn order_ties(ranked: &mut [Trial]) -> usize {
     };
     ranked[..tied].sort_by_key(|t| t.parameters.len());
     tied
+}
+
+/// A fit can run into a bound along a direction the data do not determine — two parameters
+/// trading off, e.g. a twist's stiffness factor against the other hinges' off-axis
+/// compliance (measured: the fb3 twist factor wandering to 0.5 or 2 at the same χ²) — rather
+/// than because the data ask for a change beyond the range. Each trial at a bound that
+/// would otherwise come before every trial inside its bounds (a lower AICc) is refitted
+/// with its parameters at a bound held at their starting values; the refit replaces it
+/// when its training χ² is less than 4 higher (the bound not supported at 2σ), the held
+/// parameters then reported with standard error 0. Returned best first (held-out χ²).
+fn hold_undetermined(
+    trials: &Trials,
+    mut ranked: Vec<(Candidate, Trial)>,
+) -> Vec<(Candidate, Trial)> {
+    let best_inside = ranked
+        .iter()
+        .filter(|(_, t)| !t.at_bound())
+        .map(|(_, t)| t.aicc)
+        .fold(f64::INFINITY, f64::min);
+    let (indices, refits): (Vec<usize>, Vec<Candidate>) = ranked
+        .iter()
+        .enumerate()
+        .filter(|(_, (_, t))| t.at_bound() && t.aicc < best_inside)
+        .map(|(index, (candidate, trial))| (index, held_at_start(candidate, trial)))
+        .unzip();
+    for (index, (candidate, result)) in indices.into_iter().zip(trials.run(refits)) {
+        let Ok(refit) = result else { continue };
+        if !refit.inert && refit.train_chi2 - ranked[index].1.train_chi2 < 4.0 {
+            ranked[index] = (candidate, refit);
+        }
+    }
+    ranked.sort_by(|a, b| a.1.holdout_chi2.total_cmp(&b.1.holdout_chi2));
+    ranked
+}
+
+/// `candidate` with the parameters `trial` left at a bound fixed at their starting values.
+fn held_at_start(candidate: &Candidate, trial: &Trial) -> Candidate {
+    let mut held = candidate.clone();
+    for (_, parameter) in &mut held.parameters {
+        let at_bound = trial
+            .parameters
+            .iter()
+            .any(|(name, _, _, se)| *name == parameter.name && se.is_nan());
+        if at_bound {
+            parameter.lower = parameter.initial;
+            parameter.upper = parameter.initial;
+        }
+    }
+    held
 }
 
 /// A candidate and its trial, or why the trial failed.
@@ -877,15 +936,25 @@ impl Trials<'_> {
         }?;
         let mut parameters = self.user.to_vec();
         parameters.extend(candidate.parameters.iter().cloned());
-        if let Some(predicted) = cannot_move(
-            experiment,
-            data,
-            &mut leg,
-            candidate,
-            self.user,
-            observations,
-        ) {
-            let mut trial = self.judge(candidate, predicted, parameters.len());
+        let fixed = |p: &Parameter| p.lower == p.upper;
+        // A candidate holding parameters fixed is a refit of one that moved the residual
+        // ([`hold_undetermined`]): not screened again.
+        let refit = candidate.parameters.iter().any(|(_, p)| fixed(p));
+        let free = parameters.iter().filter(|(_, p)| !fixed(p)).count();
+        let unmoved = if refit {
+            None
+        } else {
+            cannot_move(
+                experiment,
+                data,
+                &mut leg,
+                candidate,
+                self.user,
+                observations,
+            )
+        };
+        if let Some(predicted) = unmoved {
+            let mut trial = self.judge(candidate, predicted, free);
             trial.inert = true;
             return Ok(trial);
         }
@@ -903,7 +972,7 @@ impl Trials<'_> {
             )?;
             (report.after, Some(report.result))
         };
-        let mut trial = self.judge(candidate, predicted, parameters.len());
+        let mut trial = self.judge(candidate, predicted, free);
         if let Some(result) = &fitted {
             trial.inert = all_unidentifiable(candidate, result);
             trial.parameters = parameters
