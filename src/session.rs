@@ -11,8 +11,8 @@ use mech_codegen::ir::Dimension;
 use mech_codegen::{Compiled, Errors};
 use mech_runtime::constraints::{choose_independent, complete_independent, jacobian};
 use mech_runtime::{
-    assemble, assemble_speeds, linearize, mobility, solve_statics, AssemblyOptions, Equilibrium,
-    Fixture, Linearization, Mobility, Model, RuntimeError, Signal, StaticsOptions,
+    assemble, assemble_along, assemble_speeds, linearize, mobility, solve_statics, AssemblyOptions,
+    Equilibrium, Fixture, Linearization, Mobility, Model, RuntimeError, Signal, StaticsOptions,
 };
 
 use crate::signal_spec;
@@ -331,6 +331,7 @@ impl Session {
         let mut q = vec![0.0; model.nq()];
         let mut u = vec![0.0; model.nu()];
         model.initial_state(&mut q, &mut u);
+        let q0 = q.clone();
         if model.nc() == 0 {
             return Ok(Assembled {
                 q,
@@ -363,16 +364,29 @@ impl Session {
         if fixed.is_empty() {
             // J has its generic rank only on the constraint manifold: close the loops first
             // (minimum-norm), choose there, then hold the chosen coordinates at their q0.
-            let written = q.clone();
             assemble(model, 0.0, &mut q, &[], &AssemblyOptions::default())
                 .map_err(Error::Assembly)?;
             fixed = choose_independent(&jacobian(model, 0.0, &q));
             for &i in &fixed {
-                q[i] = written[i];
+                q[i] = q0[i];
             }
         }
-        let iterations = assemble(model, 0.0, &mut q, &fixed, &AssemblyOptions::default())
-            .map_err(Error::Assembly)?;
+        let options = AssemblyOptions::default();
+        let iterations = match assemble(model, 0.0, &mut q, &fixed, &options) {
+            Ok(iterations) => iterations,
+            Err(direct) => {
+                // From held values far from the written ones Newton can stall: close at the
+                // written q0 and move the held coordinates there in steps.
+                let target: Vec<f64> = fixed.iter().map(|&c| q[c]).collect();
+                let mut path = q0.clone();
+                let closed = assemble(model, 0.0, &mut path, &fixed, &options)
+                    .map_err(|_| Error::Assembly(direct))?;
+                let moved = assemble_along(model, 0.0, &mut path, &fixed, &target, &options)
+                    .map_err(Error::Assembly)?;
+                q = path;
+                closed + moved
+            }
+        };
         let mobility = mobility(model, 0.0, &q);
         if fixed.len() < mobility.dof() {
             // More freedom than named (e.g. a twist added by `mech diagnose`): complete the

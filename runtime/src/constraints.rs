@@ -185,6 +185,43 @@ pub fn assemble<M: Model + ?Sized>(
     .map_err(|phi| assembly_error(model, phi.as_slice()))
 }
 
+/// Moves the `fixed` coordinates of a closed configuration `q` to `target` (their values,
+/// in `fixed`'s order) in steps, closing the loops at each from the last (natural-parameter
+/// continuation): from held values far from the closed ones a single Newton solve can stall
+/// (HAMR-VI at the ±0.3 mm corners of its actuator grid: the SFB's fb2 rows stayed 2e-4
+/// open). Each step is the rest of the way or what last worked, halved on failure down to
+/// 1/1024 of the way; doubled after a success. Returns the Newton iterations taken; on
+/// failure `q` is left at the last closed configuration.
+pub fn assemble_along<M: Model + ?Sized>(
+    model: &M,
+    t: f64,
+    q: &mut [f64],
+    fixed: &[usize],
+    target: &[f64],
+    options: &AssemblyOptions,
+) -> Result<usize, RuntimeError> {
+    let start: Vec<f64> = fixed.iter().map(|&c| q[c]).collect();
+    let (mut done, mut step, mut iterations) = (0.0_f64, 1.0_f64, 0);
+    while done < 1.0 {
+        let next = (done + step).min(1.0);
+        let mut trial = q.to_vec();
+        for (k, &c) in fixed.iter().enumerate() {
+            trial[c] = start[k] + next * (target[k] - start[k]);
+        }
+        match assemble(model, t, &mut trial, fixed, options) {
+            Ok(taken) => {
+                iterations += taken;
+                q.copy_from_slice(&trial);
+                done = next;
+                step = (2.0 * step).min(1.0);
+            }
+            Err(error) if step <= 1.0 / 1024.0 => return Err(error),
+            Err(_) => step *= 0.5,
+        }
+    }
+    Ok(iterations)
+}
+
 /// [`assemble`] for any residual `φ(q)` and its Jacobian (e.g. loops and fixtures together,
 /// in the statics): returns the iterations taken, or the `φ` it stopped at.
 pub fn close(

@@ -25,7 +25,8 @@ pub mod simulate;
 pub mod statics;
 
 pub use constraints::{
-    assemble, assemble_speeds, mobility, AssemblyOptions, ConstrainedSolver, Mobility,
+    assemble, assemble_along, assemble_speeds, mobility, AssemblyOptions, ConstrainedSolver,
+    Mobility,
 };
 pub use error::RuntimeError;
 pub use integrate::{

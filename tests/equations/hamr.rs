@@ -410,3 +410,46 @@ fn statics_at_full_voltage_converges_by_continuation() {
         );
     }
 }
+
+/// `mech assemble` over HAMR-VI's ±0.3 mm actuator grid (6 × 6 points, corners included):
+/// from the written q0 a single Newton solve stalled at 6 of the 36 with the fb2 rows 2e-4
+/// open; the session closes them by continuation. Independent check: the same
+/// configuration reached by the test's own walk from zero in 60 small steps of plain
+/// Newton (`assemble` from the previous point), to 1e-9 in every coordinate — the same
+/// branch, not just some closed configuration.
+#[test]
+fn the_actuator_grid_closes_everywhere_on_the_branch_of_the_rest_configuration() {
+    let session = mech::session::Session::open(
+        std::path::Path::new(&common::bundled_path("hamr_vi")),
+        &[],
+        &[],
+    )
+    .unwrap();
+    let model = &session.model;
+    let fixed = actuators(model);
+    let grid: Vec<f64> = (0..6).map(|k| (-0.3 + 0.12 * k as f64) * 1e-3).collect();
+    for &swing in &grid {
+        for &lift in &grid {
+            let state = session
+                .assemble(&[format!("qsact={} m", swing), format!("qlact={} m", lift)])
+                .unwrap_or_else(|e| panic!("swing {swing}, lift {lift}: {e}"));
+            let mut walked = assembled(model, 0.0, 0.0);
+            for step in 1..=60 {
+                let fraction = step as f64 / 60.0;
+                walked[fixed[0]] = fraction * swing;
+                walked[fixed[1]] = fraction * lift;
+                assemble(model, 0.0, &mut walked, &fixed, &AssemblyOptions::default())
+                    .unwrap_or_else(|e| panic!("walk at {fraction}: {e}"));
+            }
+            let apart = state
+                .q
+                .iter()
+                .zip(&walked)
+                .fold(0.0_f64, |m, (a, b)| m.max((a - b).abs()));
+            assert!(
+                apart < 1e-9,
+                "swing {swing}, lift {lift}: {apart:e} from the walk"
+            );
+        }
+    }
+}
