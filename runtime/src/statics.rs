@@ -93,8 +93,12 @@ pub struct StaticsOptions {
     /// Converged when the constraint residual is below this (SI lengths) ...
     pub constraint_tolerance: f64,
     /// ... and the generalized force residual is below this fraction of the largest
-    /// generalized force magnitude seen at the start.
+    /// generalized force magnitude seen at the start ...
     pub relative_force_tolerance: f64,
+    /// ... or below this (SI forces and torques): a model without loads starts at a zero
+    /// force scale, where only round-off (~1e-32) is left and the relative test can never
+    /// pass.
+    pub absolute_force_tolerance: f64,
 }
 
 impl Default for StaticsOptions {
@@ -103,6 +107,7 @@ impl Default for StaticsOptions {
             max_iterations: 60,
             constraint_tolerance: 1e-12,
             relative_force_tolerance: 1e-10,
+            absolute_force_tolerance: 1e-24,
         }
     }
 }
@@ -637,8 +642,9 @@ fn newton<M: Model + ?Sized>(
     let mut point = problem.point(q.to_vec());
     let mut iterations = 0;
     let converged = |point: &Point| {
-        point.residual.amax() <= options.relative_force_tolerance * force_scale
-            && point.phi.amax() <= tolerance
+        let force_tolerance =
+            (options.relative_force_tolerance * force_scale).max(options.absolute_force_tolerance);
+        point.residual.amax() <= force_tolerance && point.phi.amax() <= tolerance
     };
     // Once within tolerance, one more full Newton step: it costs little and, convergence
     // being quadratic, takes the residual to round-off, so that equilibria reached from
