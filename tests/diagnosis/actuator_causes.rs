@@ -12,26 +12,39 @@ use mech::diagnose::candidates::{diagnose_causes, Holdout, Verdict};
 use mech::experiments::leg::Dof;
 use mech_codegen::ir::transform::actuator::{FORCE_FACTOR, STIFFNESS_FACTOR};
 
-/// The lift actuator's stiffness ×U(0.7, 0.85), its blocked force as written: the top cause
-/// must be the lift actuator's stiffness, the factor within 3σ and 2 %.
+/// Lift force data from HAMR-VI with `effect` written in (drawing with `rng` after the
+/// effect's size), diagnosed with the whole catalog: the top cause must be `cause` at the lift
+/// actuator, its `parameter` within 3σ and 2 % of `truth`.
+fn actuator_case(
+    name: &str,
+    effect: WrittenEffect,
+    truth: f64,
+    (cause, parameter): (&str, &str),
+    rng: &mut Rng,
+) {
+    let dir = common::scratch_dir(name);
+    let leg = common::hamr_vi_written(effect, &dir);
+    let (experiment, text) = force_case(&dir, &leg, Dof::Lift, 0.0, 0.0, rng);
+    let d = diagnose_data(&dir, &experiment, &text);
+    let fitted = top(&d, cause, "actuator along qlact", parameter);
+    let se = d.ranked[0].parameters[0].3;
+    assert!(
+        (fitted - truth).abs() < 3.0 * se && (fitted / truth - 1.0).abs() < 0.02,
+        "{parameter} {fitted} ± {se} vs {truth}\n{}",
+        summary(&d)
+    );
+}
+
+/// The lift actuator's stiffness ×U(0.7, 0.85), its blocked force as written.
 fn softer_lift_actuator(seed: u64) {
     let mut rng = Rng::new(seed);
     let factor = rng.uniform(0.7, 0.85);
-    let dir = common::scratch_dir(&format!("softer_lift_actuator_{seed}"));
-    let truth = common::hamr_vi_written(WrittenEffect::LiftActuatorStiffness(factor), &dir);
-    let (experiment, text) = force_case(&dir, &truth, Dof::Lift, 0.0, 0.0, &mut rng);
-    let d = diagnose_data(&dir, &experiment, &text);
-    let fitted = top(
-        &d,
-        "actuator stiffness off by a factor",
-        "actuator along qlact",
-        STIFFNESS_FACTOR,
-    );
-    let se = d.ranked[0].parameters[0].3;
-    assert!(
-        (fitted - factor).abs() < 3.0 * se && (fitted / factor - 1.0).abs() < 0.02,
-        "stiffness factor {fitted} ± {se} vs {factor}\n{}",
-        summary(&d)
+    actuator_case(
+        &format!("softer_lift_actuator_{seed}"),
+        WrittenEffect::LiftActuatorStiffness(factor),
+        factor,
+        ("actuator stiffness off by a factor", STIFFNESS_FACTOR),
+        &mut rng,
     );
 }
 
@@ -53,26 +66,17 @@ fn hidden_effect_softer_lift_actuator_seed_3() {
 }
 
 /// The lift actuator's force ×U(0.8, 0.9), its stiffness as written (a weaker piezoelectric
-/// drive): the top cause must be the lift actuator's force, the factor within 3σ and 2 %.
+/// drive).
 #[test]
 fn hidden_effect_weaker_lift_actuator() {
     let mut rng = Rng::new(7);
     let factor = rng.uniform(0.8, 0.9);
-    let dir = common::scratch_dir("weaker_lift_actuator");
-    let truth = common::hamr_vi_written(WrittenEffect::LiftActuatorForce(factor), &dir);
-    let (experiment, text) = force_case(&dir, &truth, Dof::Lift, 0.0, 0.0, &mut rng);
-    let d = diagnose_data(&dir, &experiment, &text);
-    let fitted = top(
-        &d,
-        "actuator force off by a factor",
-        "actuator along qlact",
-        FORCE_FACTOR,
-    );
-    let se = d.ranked[0].parameters[0].3;
-    assert!(
-        (fitted - factor).abs() < 3.0 * se && (fitted / factor - 1.0).abs() < 0.02,
-        "force factor {fitted} ± {se} vs {factor}\n{}",
-        summary(&d)
+    actuator_case(
+        "weaker_lift_actuator",
+        WrittenEffect::LiftActuatorForce(factor),
+        factor,
+        ("actuator force off by a factor", FORCE_FACTOR),
+        &mut rng,
     );
 }
 

@@ -69,14 +69,7 @@ pub fn base_compliance(model: &mut Model, slider: &str) -> Result<(), TransformE
 /// deflection `F_b/k_a` changes inversely.
 pub fn stiffness_factor(model: &mut Model, slider: &str) -> Result<(), TransformError> {
     let (spring, _) = actuator_loads(model, slider)?;
-    let factor = append_param(
-        model,
-        STIFFNESS_FACTOR,
-        1.0,
-        Dimension::NONE,
-        "Factor on the actuator's stiffness k_a (mech diagnose).",
-    );
-    scale_loads(model, &[spring], &factor);
+    scale_by_new_factor(model, spring, STIFFNESS_FACTOR, "stiffness k_a");
     Ok(())
 }
 
@@ -85,15 +78,20 @@ pub fn stiffness_factor(model: &mut Model, slider: &str) -> Result<(), Transform
 /// bimorph), so blocked force and free deflection scale together.
 pub fn force_factor(model: &mut Model, slider: &str) -> Result<(), TransformError> {
     let (_, force) = actuator_loads(model, slider)?;
+    scale_by_new_factor(model, force, FORCE_FACTOR, "force source F_b V/V_rated");
+    Ok(())
+}
+
+/// Appends the factor `name` (1 as written) and multiplies load `index` by it.
+fn scale_by_new_factor(model: &mut Model, index: usize, name: &str, what: &str) {
     let factor = append_param(
         model,
-        FORCE_FACTOR,
+        name,
         1.0,
         Dimension::NONE,
-        "Factor on the actuator's force source F_b V/V_rated (mech diagnose).",
+        &format!("Factor on the actuator's {what} (mech diagnose)."),
     );
-    scale_loads(model, &[force], &factor);
-    Ok(())
+    scale_loads(model, &[index], &factor);
 }
 
 /// Multiplies the stiffness of the springs and the value of the generalized forces at
