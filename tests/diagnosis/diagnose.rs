@@ -255,3 +255,47 @@ fn diagnose_command_writes_the_page_and_the_summary() {
         }
     }
 }
+
+/// The drive example of docs/benchmarks.md (the diagnosis speed on a long quasi-static
+/// record): 73 equilibria along the paper's 225 V drive (lift 225 sin φ, swing 225 cos φ,
+/// φ in steps of 5° over one cycle, each from the last), foot x, y, z with 1 µm noise, from
+/// HAMR-VI with the lift actuator 20 % softer written into its text (seed 73). Run with
+/// `--ignored` to rewrite the files.
+#[test]
+#[ignore]
+fn write_the_drive_example() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = root.join("docs/examples/diagnose");
+    let scratch = common::scratch_dir("drive_example");
+    let truth =
+        common::hamr_vi_written(common::WrittenEffect::LiftActuatorStiffness(0.8), &scratch);
+    let mut rng = Rng::new(73);
+    let mut text = String::from(
+        "# Synthetic: HAMR-VI along the 225 V drive, lift actuator 20 % softer (k_a x 0.8), \
+         1 um noise (tests/diagnosis/diagnose.rs)\n\
+         v_lift [V], v_swing [V], foot.x [mm], foot.y [mm], foot.z [mm]\n",
+    );
+    let mut q = truth.q0.clone();
+    for k in 0..73 {
+        let phase = (5.0 * k as f64).to_radians();
+        let (lift, swing) = (225.0 * phase.sin(), 225.0 * phase.cos());
+        let inputs = truth.inputs(lift, swing);
+        q = truth.equilibrium(&q, &inputs, &[]).unwrap().q;
+        let foot = truth
+            .foot_at(&q, &inputs)
+            .map(|x| (x + 1e-6 * rng.normal()) * 1e3);
+        text += &format!("{lift}, {swing}, {}, {}, {}\n", foot[0], foot[1], foot[2]);
+    }
+    std::fs::write(dir.join("hamr_vi_drive.csv"), text).unwrap();
+    std::fs::write(
+        dir.join("hamr_vi_drive.toml"),
+        "# A diagnosis experiment: HAMR-VI's foot along the paper's 225 V drive, 73 \
+         quasi-static points.\n\
+         kind = \"quasi_static\"\n\
+         title = \"HAMR-VI foot along the 225 V drive (synthetic data)\"\n\
+         model = \"models/hamr_vi.mech\"\n\
+         outputs = [\"foot.x\", \"foot.y\", \"foot.z\"]\n\
+         noise = [\"1 um\", \"1 um\", \"1 um\"]\n",
+    )
+    .unwrap();
+}
