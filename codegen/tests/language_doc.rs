@@ -9,43 +9,10 @@ use std::sync::Arc;
 use mech_codegen::diag::SourceFile;
 use mech_codegen::front;
 
-/// A fenced example: its first line number, whether it must fail, and its text.
-struct Example {
-    line: usize,
-    must_fail: bool,
-    text: String,
-}
+#[path = "support/markdown.rs"]
+mod markdown;
 
-fn examples(markdown: &str) -> Vec<Example> {
-    let mut examples = Vec::new();
-    let mut current: Option<Example> = None;
-    for (index, line) in markdown.lines().enumerate() {
-        let trimmed = line.trim();
-        match current.take() {
-            Some(example) if trimmed == "```" => examples.push(example),
-            Some(mut example) => {
-                example.text.push_str(line);
-                example.text.push('\n');
-                current = Some(example);
-            }
-            None => {
-                let tag = trimmed.strip_prefix("```").map(str::trim);
-                if let Some(must_fail) = match tag {
-                    Some("mech") => Some(false),
-                    Some("mech,fail") => Some(true),
-                    _ => None,
-                } {
-                    current = Some(Example {
-                        line: index + 2,
-                        must_fail,
-                        text: String::new(),
-                    });
-                }
-            }
-        }
-    }
-    examples
-}
+use markdown::examples;
 
 #[test]
 fn language_reference_examples_load_as_tagged() {

@@ -110,6 +110,13 @@ impl fmt::Display for RuntimeError {
             ),
             RuntimeError::InvalidSignal(msg) => write!(f, "invalid input signal: {msg}"),
             RuntimeError::InvalidOptions(msg) => write!(f, "invalid options: {msg}"),
+            RuntimeError::AssemblyFailed { row, residual, .. } if residual.is_nan() => write!(
+                f,
+                "cannot close the loops: row `{row}` became not-a-number in the Newton steps (e.g. \
+                 a `distance` loop whose two points coincide, where its direction is undefined); \
+                 place such points apart in the written configuration (q0 of the joints, or the \
+                 points themselves)"
+            ),
             RuntimeError::AssemblyFailed {
                 row,
                 residual,

@@ -7,12 +7,15 @@ mod common;
 #[macro_use]
 #[path = "../../codegen/tests/support/golden.rs"]
 mod support;
+#[path = "../../codegen/tests/support/markdown.rs"]
+mod markdown;
 
 mod actuator_extensions;
 mod backends;
 mod compliant_loops;
 mod golden_equations;
 mod hamr;
+mod language_doc;
 mod linear;
 mod loops;
 mod pendulum;
