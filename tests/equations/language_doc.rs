@@ -45,7 +45,7 @@ fn a_distance_loop_starting_at_zero_length_is_a_clear_error() {
         loop link = distance(crank, slider) { parent_point = [0, 0.5 mm, 0]; length = 0.1 mm; }
     ";
     let compiled =
-        Compiled::from_source(SourceFile::new("coincident".into(), text.into())).unwrap();
+        Compiled::from_source(SourceFile::new("coincident".to_string(), text.to_string())).unwrap();
     let session = Session::from_compiled(compiled, &[], &[]).unwrap();
     let error = session.assemble(&[]).unwrap_err().to_string();
     assert!(
