@@ -1,8 +1,9 @@
 //! `mech bode MODEL --from-input IN --output OUT --from F1 --to F2`: the frequency response
 //! of the linear model (and optionally of a simulated chirp), its resonances and Q.
 //!
-//! Consumes: [`ModelArgs`] and the sweep settings. Produces: text on stdout, and with
-//! `--out`/`--plot` a CSV and a Bode plot.
+//! Consumes: [`ModelArgs`] and the sweep settings. Produces: text on stdout (resonances
+//! refined on the linear model's continuous response, so independent of `--points`), and
+//! with `--out`/`--plot` a CSV and a Bode plot.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -114,7 +115,11 @@ pub fn run(args: &BodeArgs) -> Result<(), Error> {
     } else {
         None
     };
-    print!("{}", resonances_text(args, model, (from, to), &response));
+    let found = frequency::refined_resonances(
+        &frequencies,
+        frequency::linear_magnitude(&linear, input, output, damping),
+    )?;
+    print!("{}", resonances_text(args, model, (from, to), &found));
 
     if let Some(out) = &args.out {
         let (header, rows) = response_table(&response, chirp.as_deref());
@@ -138,7 +143,7 @@ fn resonances_text(
     args: &BodeArgs,
     model: &dyn Model,
     (from, to): (f64, f64),
-    response: &[Point],
+    found: &[frequency::Resonance],
 ) -> String {
     let losses = if model.nflexures() == 0 {
         "no flexures"
@@ -153,11 +158,13 @@ fn resonances_text(
         args.drive,
         args.output
     );
-    let found = frequency::resonances(response);
     if found.is_empty() {
         text += "no resonance peak inside the sweep\n";
+    } else {
+        // Said because a grid-read Q (the `mech report` chirp rows, measured data) differs.
+        text += "peaks and −3 dB points solved on the continuous response, not read off the grid\n";
     }
-    for resonance in &found {
+    for resonance in found {
         let q = resonance
             .quality_factor
             .map_or("n/a (−3 dB points outside the sweep)".to_string(), |q| {

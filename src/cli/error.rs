@@ -62,6 +62,9 @@ pub enum Error {
     /// The linear model is singular at a frequency of the sweep.
     #[error("the linear model is singular at some frequency")]
     SingularResponse,
+    /// A resonance could not be refined on the linear model's response.
+    #[error("resonance refinement: {0}")]
+    Refine(#[from] crate::frequency::RefineError),
     /// A file written atomically could not be (the message names the file).
     #[error(transparent)]
     Io(#[from] std::io::Error),

@@ -1,6 +1,11 @@
 //! Experiment 5, dynamic regime (seed Sec. VI, Fig. 10): frequency responses from drive
 //! voltage to foot displacement, lift and swing, from the linearized model (hysteretic and
 //! viscous flexure losses) and from a simulated linear chirp; resonances and quality factors.
+//!
+//! Consumes: a [`Spec`] (model, sweep, channels, optional chirp). Produces: an [`Outcome`]
+//! with the resonance and mode tables, one CSV and Bode plot per channel, and key values.
+//! The linear model's resonances are refined on its continuous response (independent of
+//! `points`); the chirp's are read off the grid of its estimate, and say so.
 
 use std::path::Path;
 
@@ -10,7 +15,7 @@ use serde::Deserialize;
 use super::leg::Leg;
 use super::Error;
 use super::{csv, Outcome, Table};
-use crate::frequency::{self, ChirpSweep, Point};
+use crate::frequency::{self, ChirpSweep, Point, Resonance};
 use crate::parallel::{parallel, threads};
 use crate::quantity::{positive, quantity};
 use crate::render::plot;
@@ -111,8 +116,19 @@ pub struct Responses {
     pub to: f64,
     pub frequencies: Vec<f64>,
     pub modes: Vec<Mode>,
-    /// Per channel of the spec: (source, response) pairs.
-    pub channels: Vec<Vec<(&'static str, Vec<Point>)>>,
+    /// Per channel of the spec, one per source.
+    pub channels: Vec<Vec<Source>>,
+}
+
+/// One source's response on the sweep's grid and its resonances, strongest first.
+pub struct Source {
+    pub name: &'static str,
+    /// The key in [`Outcome::values`] (`hysteretic`, `viscous`, `chirp`).
+    pub key: &'static str,
+    pub response: Vec<Point>,
+    pub resonances: Vec<Resonance>,
+    /// Refined on the continuous response (the linear model), or read off the grid (chirp).
+    pub refined: bool,
 }
 
 /// Linearizes the leg at rest and computes every channel's responses (chirps in parallel,
@@ -182,22 +198,39 @@ pub fn compute(spec: &Spec) -> Result<Responses, Error> {
     };
     let mut channels = Vec::new();
     for (&(input, output), estimate) in indices.iter().zip(estimates) {
-        let linear_response = |damping| {
-            frequency::linear_response(&linear, input, output, &frequencies, damping)
-                .ok_or(Error::SingularResponse)
+        let linear_source = |name, key, damping| -> Result<Source, Error> {
+            Ok(Source {
+                name,
+                key,
+                response: frequency::linear_response(&linear, input, output, &frequencies, damping)
+                    .ok_or(Error::SingularResponse)?,
+                resonances: frequency::refined_resonances(
+                    &frequencies,
+                    frequency::linear_magnitude(&linear, input, output, damping),
+                )?,
+                refined: true,
+            })
         };
-        let mut sources: Vec<(&'static str, Vec<Point>)> = vec![
-            (
+        let mut sources = vec![
+            linear_source(
                 "linear, hysteretic",
-                linear_response(mech_runtime::FlexureDamping::Hysteretic)?,
-            ),
-            (
+                "hysteretic",
+                mech_runtime::FlexureDamping::Hysteretic,
+            )?,
+            linear_source(
                 "linear, viscous",
-                linear_response(mech_runtime::FlexureDamping::Viscous)?,
-            ),
+                "viscous",
+                mech_runtime::FlexureDamping::Viscous,
+            )?,
         ];
         if let Some(e) = estimate {
-            sources.push(("chirp simulation", e));
+            sources.push(Source {
+                name: "chirp simulation",
+                key: "chirp",
+                resonances: frequency::resonances(&e),
+                response: e,
+                refined: false,
+            });
         }
         channels.push(sources);
     }
@@ -235,15 +268,16 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
         ],
     );
     for (channel, sources) in spec.channel.iter().zip(&responses.channels) {
-        for (k, (source, response)) in sources.iter().enumerate() {
-            let peak = frequency::resonances(response).into_iter().next();
-            let low = response
+        for source in sources {
+            let peak = source.resonances.first();
+            let low = source
+                .response
                 .iter()
                 .map(|p| p.gain.norm())
                 .find(|g| g.is_finite())
                 .unwrap_or(f64::NAN);
+            let key = source.key;
             if let Some(r) = peak {
-                let key = ["hysteretic", "viscous", "chirp"][k];
                 outcome.values.insert(
                     format!("{}_{key}_resonance_hz", channel.name),
                     r.frequency_hz,
@@ -254,11 +288,17 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
                         .insert(format!("{}_{key}_q", channel.name), q);
                 }
             }
+            let q = q_text(peak.and_then(|r| r.quality_factor));
             table.row(vec![
                 channel.name.clone(),
-                source.to_string(),
+                source.name.to_string(),
                 peak.map_or("–".into(), |r| format!("{:.1}", r.frequency_hz)),
-                q_text(peak.and_then(|r| r.quality_factor)),
+                // A grid-read Q is low by an amount that depends on `points`: marked.
+                if source.refined || q == "n/a" {
+                    q
+                } else {
+                    format!("{q} (grid)")
+                },
                 peak.map_or("–".into(), |r| format!("{:.2}", r.peak_magnitude * 1e6)),
                 format!("{:.2}", low * 1e6),
             ]);
@@ -274,7 +314,26 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     }
     outcome.tables.push(table);
     outcome.tables.push(modes_table(name, &responses.modes));
+    outcome.notes.push(q_note(spec));
     Ok(outcome)
+}
+
+/// How the table's f_r and Q were obtained, and what limits the chirp's.
+fn q_note(spec: &Spec) -> String {
+    let linear = "Resonances of the linear model: the peak of |H| and both −3 dB points \
+                  solved on its continuous response (Brent's method), so f_r and Q do not \
+                  depend on the frequency grid.";
+    match spec.chirp {
+        Some(_) => format!(
+            "{linear} Chirp rows, marked (grid): read off the {}-point grid of the swept-sine \
+             estimate (parabola through the peak's samples, −3 dB points interpolated \
+             between samples), so their Q depends on that grid and on the estimate's \
+             ripple (sweep rate, record length) and can read low or high: compare it with \
+             the viscous linear row, the same losses.",
+            spec.points
+        ),
+        None => linear.to_string(),
+    }
 }
 
 fn method_text(spec: &Spec, from: f64, to: f64) -> String {
@@ -334,17 +393,17 @@ fn write_channel(
     name: &str,
     channel: &Channel,
     frequencies: &[f64],
-    sources: &[(&str, Vec<Point>)],
+    sources: &[Source],
 ) -> Result<(), Error> {
     let db = |p: &Point| 20.0 * (p.gain.norm() * 1e6).log10();
     let curves = |value: &dyn Fn(&Point) -> f64| -> Vec<(String, Vec<f64>, Vec<f64>)> {
         sources
             .iter()
-            .map(|(s, r)| {
+            .map(|s| {
                 (
-                    s.to_string(),
+                    s.name.to_string(),
                     frequencies.to_vec(),
-                    r.iter().map(value).collect(),
+                    s.response.iter().map(value).collect(),
                 )
             })
             .collect()
@@ -353,15 +412,15 @@ fn write_channel(
     let rows: Vec<Vec<f64>> = (0..frequencies.len())
         .map(|k| {
             let mut row = vec![frequencies[k]];
-            for (_, r) in sources {
-                row.extend([r[k].gain.norm(), r[k].phase_deg()]);
+            for s in sources {
+                row.extend([s.response[k].gain.norm(), s.response[k].phase_deg()]);
             }
             row
         })
         .collect();
     let mut header = vec!["frequency_hz".to_string()];
-    for (s, _) in sources {
-        let s = s.replace([',', ' '], "_").replace("__", "_");
+    for s in sources {
+        let s = s.name.replace([',', ' '], "_").replace("__", "_");
         header.extend([format!("{s}_magnitude_m_per_v"), format!("{s}_phase_deg")]);
     }
     let header: Vec<&str> = header.iter().map(String::as_str).collect();

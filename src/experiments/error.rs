@@ -2,13 +2,14 @@
 //! drive, each naming the file, key, model or part of the experiment it concerns.
 //!
 //! Consumes: the typed errors of the layers below ([`session::Error`], [`RuntimeError`],
-//! [`PlotError`]). Produces: [`Error`], whose `Display` is the message users read.
+//! [`PlotError`], [`RefineError`]). Produces: [`Error`], whose `Display` is the message users read.
 
 use std::fmt;
 use std::path::PathBuf;
 
 use mech_runtime::RuntimeError;
 
+use crate::frequency::RefineError;
 use crate::render::plot::PlotError;
 use crate::{quantity, session};
 
@@ -78,6 +79,8 @@ pub enum Error {
     NoModes,
     /// The linear model is singular at a frequency of the sweep.
     SingularResponse,
+    /// A resonance could not be refined on the linear model's response.
+    Refine(RefineError),
     Chirp(RuntimeError),
     /// A force/deflection test that cannot be set up or does not end.
     Test(&'static str),
@@ -156,6 +159,7 @@ impl fmt::Display for Error {
             Error::SingularResponse => {
                 f.write_str("the linear model is singular at some frequency")
             }
+            Error::Refine(error) => write!(f, "resonance refinement: {error}"),
             Error::Chirp(error) => write!(f, "chirp simulation failed: {error}"),
             Error::Test(message) => f.write_str(message),
             Error::ChosenDesignMissing => f.write_str("the chosen design is missing"),
@@ -178,6 +182,12 @@ impl From<session::Error> for Error {
 impl From<quantity::Error> for Error {
     fn from(error: quantity::Error) -> Error {
         Error::Quantity(error)
+    }
+}
+
+impl From<RefineError> for Error {
+    fn from(error: RefineError) -> Error {
+        Error::Refine(error)
     }
 }
 

@@ -314,7 +314,7 @@ fn hamr_vi_quasi_static_response_and_modes() {
         );
     }
     // The two modes of models/hamr_vi.mech's header (78.9 Hz and 106.3 Hz; the bode
-    // experiment's resonances in docs/experiments.md, 79.0/78.8 and 106.3 Hz), pinned within
+    // experiment's resonances in docs/experiments.md, 78.9/78.8 and 106.3 Hz), pinned within
     // 1e-4 relative (±0.008/±0.011 Hz) to the values measured here, with their damping
     // ratios within 1e-3 relative: lift first (its shape dominated by the lift actuator),
     // swing second.

@@ -20,6 +20,7 @@ mod linear;
 mod loops;
 mod pendulum;
 mod reduced;
+mod resonances;
 mod statics;
 mod sympy_cross_check;
 mod sympy_loops;
