@@ -66,8 +66,9 @@ fn hidden_effect_softer_lift_actuator_seed_3() {
 }
 
 /// The lift actuator's force ×U(0.8, 0.9), its stiffness as written (a weaker piezoelectric
-/// drive).
+/// drive). Slow (a whole-catalog diagnosis): run by .ci/run with the ignored seeds.
 #[test]
+#[ignore = "slow: a second whole-catalog diagnosis of this file, run by .ci/run"]
 fn hidden_effect_weaker_lift_actuator() {
     let mut rng = Rng::new(7);
     let factor = rng.uniform(0.8, 0.9);
