@@ -13,31 +13,17 @@ use nalgebra::{Complex, Matrix2, Vector2};
 #[test]
 fn two_mass_chain_frequency_response_matches_closed_form() {
     let model = common::tape("two_mass_chain");
-    let (m1, m2, k1, k2, c1, c2) = (2.0, 0.5, 300.0, 120.0, 1.5, 0.4);
+    let (m1, m2, k1, k2) = TWO_MASS_CHAIN_MASSES_AND_SPRINGS;
     let linear = linearize(&model, 0.0, &[0.0, 0.0], &[0.0], &[0, 1]).unwrap();
     let output = model.output_index("x2.x").unwrap();
     for omega in [0.5, 5.0, 11.0, 13.9, 20.0, 31.6, 100.0] {
-        // In absolute coordinates (x1, x2): (K − ω²M + iωC) X = [0, 1].
-        let dynamic = Matrix2::new(
-            Complex::new(k1 + k2 - omega * omega * m1, omega * (c1 + c2)),
-            Complex::new(-k2, -omega * c2),
-            Complex::new(-k2, -omega * c2),
-            Complex::new(k2 - omega * omega * m2, omega * c2),
-        );
-        let x = dynamic
-            .lu()
-            .solve(&Vector2::new(
-                Complex::new(0.0, 0.0),
-                Complex::new(1.0, 0.0),
-            ))
-            .unwrap();
+        let x2 = two_mass_chain_response(omega);
         let ours = linear
             .frequency_response(0, output, omega, FlexureDamping::Viscous)
             .unwrap();
         assert!(
-            (ours - x[1]).norm() < 1e-7 * x[1].norm(),
-            "ω = {omega}: {ours} vs {}",
-            x[1]
+            (ours - x2).norm() < 1e-7 * x2.norm(),
+            "ω = {omega}: {ours} vs {x2}"
         );
     }
     // Modes: the undamped natural frequencies of the same chain.
@@ -468,4 +454,28 @@ fn actuator_rest_offsets_the_free_deflection() {
         (free - expected).abs() < 1e-10 * expected.abs(),
         "{free} vs {expected}"
     );
+}
+
+/// `models/two_mass_chain.mech`'s m1, m2 (kg), k1, k2 (N/m).
+const TWO_MASS_CHAIN_MASSES_AND_SPRINGS: (f64, f64, f64, f64) = (2.0, 0.5, 300.0, 120.0);
+
+/// `models/two_mass_chain.mech`'s response `x2/push` at `omega` (rad/s) in closed form, in
+/// absolute coordinates (x1, x2): `(K − ω²M + iωC) X = [0, 1]`.
+pub(crate) fn two_mass_chain_response(omega: f64) -> Complex<f64> {
+    let (m1, m2, k1, k2) = TWO_MASS_CHAIN_MASSES_AND_SPRINGS;
+    let (c1, c2) = (1.5, 0.4);
+    let dynamic = Matrix2::new(
+        Complex::new(k1 + k2 - omega * omega * m1, omega * (c1 + c2)),
+        Complex::new(-k2, -omega * c2),
+        Complex::new(-k2, -omega * c2),
+        Complex::new(k2 - omega * omega * m2, omega * c2),
+    );
+    let x = dynamic
+        .lu()
+        .solve(&Vector2::new(
+            Complex::new(0.0, 0.0),
+            Complex::new(1.0, 0.0),
+        ))
+        .unwrap();
+    x[1]
 }
