@@ -1,4 +1,4 @@
-//! `mech bode MODEL --from-input IN --output OUT --from F1 --to F2`: the frequency response
+//! `mech bode MODEL --drive IN --output OUT --from F1 --to F2`: the frequency response
 //! of the linear model (and optionally of a simulated chirp), its resonances and Q.
 //!
 //! Consumes: [`ModelArgs`] and the sweep settings. Produces: text on stdout (resonances
@@ -20,8 +20,8 @@ use crate::render::plot;
 pub struct BodeArgs {
     #[command(flatten)]
     pub common: ModelArgs,
-    /// Input driving the response.
-    #[arg(long = "from-input", alias = "drive", value_name = "INPUT")]
+    /// Input driving the response (`--from-input` is an older spelling of the same option).
+    #[arg(long = "drive", alias = "from-input", value_name = "INPUT")]
     pub drive: String,
     /// Output observed.
     #[arg(long, value_name = "OUTPUT")]
