@@ -595,23 +595,39 @@ fn bad_traces_get_clear_errors() {
     assert!(matches!(e, TraceError::NoDecay { .. }), "{e}");
     assert!(e.to_string().contains("does not decay"));
 
-    // Growing oscillation.
+    // Growing oscillation, with the rate that decided it.
     let (t, a) = damped_sine(2000, -1.0);
-    assert!(matches!(
-        analyze_trace(&t, &a, &options),
-        Err(TraceError::NoDecay { .. })
-    ));
-
-    // Only one and a half cycles.
-    let (t, a) = damped_sine(150, 1.0);
     let e = analyze_trace(&t, &a, &options).unwrap_err();
-    assert!(matches!(e, TraceError::TooFewCrossings { .. }), "{e}");
+    assert!(
+        matches!(e, TraceError::Growing { sigma, .. } if (sigma + 1.0).abs() < 1e-3),
+        "{e}"
+    );
+    assert!(e.to_string().contains("grows"), "{e}");
+
+    // Only one and a half cycles, then two and a half (< 3 periods: 5 crossings).
+    for (n, crossings) in [(150, 3), (250, 5)] {
+        let (t, a) = damped_sine(n, 1.0);
+        let e = analyze_trace(&t, &a, &options).unwrap_err();
+        assert!(
+            matches!(e, TraceError::TooFewCrossings { found, period: Some(p), .. }
+                if found == crossings && (p - 0.1).abs() < 1e-3),
+            "{e}"
+        );
+        assert!(e.to_string().contains("record at least 3 periods"), "{e}");
+    }
+    let (t, a) = damped_sine(300, 1.0);
+    assert!(analyze_trace(&t, &a, &options).is_ok());
 
     // Noise only.
     let mut rng = Rng::new(3);
     let t: Vec<f64> = (0..2000).map(|i| i as f64 * 1e-3).collect();
     let a: Vec<f64> = t.iter().map(|_| 1e-3 * gaussian(&mut rng)).collect();
-    assert!(analyze_trace(&t, &a, &options).is_err());
+    let e = analyze_trace(&t, &a, &options).unwrap_err();
+    assert!(matches!(e, TraceError::NoOscillation { .. }), "{e}");
+    assert!(
+        e.to_string().contains("no oscillation above the noise"),
+        "{e}"
+    );
 
     let e = analyze_trace(&t, &a[..1999], &options).unwrap_err();
     assert!(matches!(e, TraceError::LengthMismatch { .. }));
