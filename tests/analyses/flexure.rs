@@ -326,6 +326,19 @@ fn pendulum_fit_recovers_modulus_loss_factor_and_stiffness() {
             }
         }
         let report = fit_results(results, &options);
+        // The trials of a flexure agree within their standard errors once the finite
+        // amplitude is corrected for (no false warning over 25 flexures). Eq. 4 literally is
+        // biased by the release amplitude, differently for the two trials (5°–15°): the
+        // check must see it on some flexures (4 here, 4.2–5.3 standard errors), and on k_m
+        // only, which is what the bias moves.
+        if small_angle {
+            assert!(!report.warnings.is_empty());
+            for warning in &report.warnings {
+                assert!(warning.contains("disagree on k_m"), "{warning}");
+            }
+        } else {
+            assert!(report.warnings.is_empty(), "{:#?}", report.warnings);
+        }
         let fit = report.uncastellated.expect("25 uncastellated specimens");
         let e_error = common::relative_error(fit.youngs_modulus, E_TRUE);
         let eta_error = common::relative_error(fit.loss_factor, ETA_TRUE);
@@ -776,7 +789,9 @@ fn example_data_fit_end_to_end() {
         .iter()
         .map(|f| mech::flexure_fit::rig::read_specimen(f).unwrap())
         .collect();
-    let report = mech::flexure_fit::fit_specimens(specimens, &FitOptions::default()).unwrap();
+    let report = mech::flexure_fit::fit_specimens(specimens, &FitOptions::default());
+    assert!(report.rejected.is_empty(), "{:#?}", report.rejected);
+    assert!(report.warnings.is_empty(), "{:#?}", report.warnings);
     let fit = report.uncastellated.as_ref().unwrap();
     assert!(
         common::relative_error(fit.youngs_modulus, E_TRUE).abs() < 0.01,
