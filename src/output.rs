@@ -120,6 +120,9 @@ pub struct CsvTable {
     pub header: Vec<String>,
     /// `columns[j][i]` is the value in data row `i`, column `j`.
     pub columns: Vec<Vec<f64>>,
+    /// `lines[i]` is the file line (1-based) of data row `i`: comment lines are skipped, so
+    /// messages about a value need this rather than the row index.
+    pub lines: Vec<u64>,
 }
 
 impl CsvTable {
@@ -271,9 +274,11 @@ pub fn read_csv_table(path: &Path) -> Result<CsvTable, CsvError> {
         return Err(CsvError::new(path, CsvErrorKind::NoHeader));
     }
     let mut columns = vec![Vec::new(); header.len()];
+    let mut lines = Vec::new();
     let mut record = csv::StringRecord::new();
     while reader.read_record(&mut record).map_err(reading)? {
         let line = record.position().map_or(0, |p| p.line());
+        lines.push(line);
         if record.len() != header.len() {
             let kind = CsvErrorKind::RaggedRow {
                 line,
@@ -298,7 +303,11 @@ pub fn read_csv_table(path: &Path) -> Result<CsvTable, CsvError> {
     if columns[0].is_empty() {
         return Err(CsvError::new(path, CsvErrorKind::NoDataRows));
     }
-    Ok(CsvTable { header, columns })
+    Ok(CsvTable {
+        header,
+        columns,
+        lines,
+    })
 }
 
 /// Reads one column of a CSV file (see [`read_csv_table`]) together with the first column,

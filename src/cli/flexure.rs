@@ -12,9 +12,9 @@ use clap::{Args, Subcommand};
 use mech_codegen::ir::Dimension;
 
 use super::{angular_frequency, length, positive, Error};
-use crate::flexure_fit::fit::{fit_specimens, FitOptions};
+use crate::flexure_fit::fit::{fit_files, FitOptions, PLAUSIBLE_MODULUS};
 use crate::flexure_fit::report;
-use crate::flexure_fit::rig::{read_specimen, specimen_files};
+use crate::flexure_fit::rig::specimen_files;
 use crate::physics::flexure::{
     twist_ratio, HAMR_HINGE_EFFECTIVE_LENGTH, HAMR_HINGE_LOSS_FACTOR, HAMR_HINGE_THICKNESS,
     SEED_TABLE_III,
@@ -83,6 +83,10 @@ pub struct FitArgs {
     /// Use Eq. 4 literally, without the finite-amplitude correction of the gravity stiffness.
     #[arg(long)]
     pub small_angle: bool,
+    /// Plausible Young's modulus, MIN and MAX: an uncastellated fit outside is rejected
+    /// (default 0.256 GPa and 25.6 GPa, a factor 10 either side of Kapton's).
+    #[arg(long, num_args = 2, value_names = ["MIN", "MAX"])]
+    pub modulus_range: Option<Vec<String>>,
     /// Plot format: `svg` or `png`; `none` for no plots.
     #[arg(long, default_value = "svg")]
     pub plots: String,
@@ -260,12 +264,28 @@ pub fn seed_table_iii() -> String {
     s
 }
 
+/// Fits every specimen it can; prints the report and writes its files even when some traces
+/// were rejected, then fails (exit code 1) listing every rejected trace.
 fn fit(args: &FitArgs) -> Result<(), Error> {
     let files = specimen_files(&args.data)?;
-    let specimens = files
-        .iter()
-        .map(|f| read_specimen(f))
-        .collect::<Result<Vec<_>, _>>()?;
+    let modulus_range = match args.modulus_range.as_deref() {
+        Some([min, max]) => {
+            let value = |text: &str| {
+                positive(
+                    "--modulus-range",
+                    parse_si("--modulus-range", text, Dimension::PRESSURE, false)?,
+                )
+            };
+            let range = (value(min)?, value(max)?);
+            if range.0 >= range.1 {
+                return Err(Error::Usage(format!(
+                    "--modulus-range: MIN `{min}` must be below MAX `{max}`"
+                )));
+            }
+            range
+        }
+        _ => PLAUSIBLE_MODULUS,
+    };
     let modulus = match &args.modulus {
         Some(text) => Some(positive(
             "--modulus",
@@ -276,6 +296,7 @@ fn fit(args: &FitArgs) -> Result<(), Error> {
     let options = FitOptions {
         small_angle: args.small_angle,
         modulus,
+        modulus_range,
         ..FitOptions::default()
     };
     let plots = args.plots.to_ascii_lowercase();
@@ -285,7 +306,7 @@ fn fit(args: &FitArgs) -> Result<(), Error> {
             args.plots
         )));
     }
-    let fit_report = fit_specimens(specimens, &options)?;
+    let fit_report = fit_files(&files, &options);
     print!("{}", report::text_report(&fit_report));
     let mut written = report::write_csvs(&fit_report, &args.out_dir)?;
     if plots != "none" {
@@ -299,5 +320,5 @@ fn fit(args: &FitArgs) -> Result<(), Error> {
             .collect::<Vec<_>>()
             .join(", ")
     );
-    Ok(())
+    Ok(fit_report.problems()?)
 }

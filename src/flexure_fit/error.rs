@@ -69,6 +69,76 @@ pub enum Error {
         /// The trace file.
         path: PathBuf,
     },
+    /// A time or angle that is NaN or infinite (the CSV reader accepts `nan` and `inf` as
+    /// numbers; a trace cannot use them).
+    NotFinite {
+        /// The trace file.
+        path: PathBuf,
+        /// File line of the first such value (1-based, comments counted).
+        line: u64,
+        /// Column (1-based) and its name.
+        column: usize,
+        name: String,
+        /// The value read.
+        value: f64,
+        /// How many values of that column are not finite.
+        count: usize,
+    },
+    /// The time does not increase strictly from one data row to the next.
+    TimeNotIncreasing {
+        /// The trace file.
+        path: PathBuf,
+        /// File line of the offending row.
+        line: u64,
+        /// Column (1-based) and name of the time.
+        column: usize,
+        name: String,
+        /// The time on the row before and on this row (s).
+        previous: f64,
+        time: f64,
+    },
+    /// The trace's amplitude is implausible for the rig in the declared angle unit; most
+    /// often angles in degrees read as radians.
+    AngleAmplitude {
+        /// The trace file.
+        path: PathBuf,
+        /// Column (1-based) and name of the angle.
+        column: usize,
+        name: String,
+        /// The amplitude as written in the file ([`super::trace::robust_amplitude`]).
+        amplitude: f64,
+        /// The declared `angle_unit`, `rad` or `deg`.
+        unit: &'static str,
+        /// The specimen file that declares it.
+        specimen: PathBuf,
+    },
+    /// The measured stiffness k_m (Eq. 4) is zero or negative: the pendulum swings slower than
+    /// its gravity stiffness alone would make it.
+    NonPositiveStiffness {
+        /// The trace file.
+        path: PathBuf,
+        /// `I_p ω_n²` (N·m/rad).
+        total: f64,
+        /// The gravity term subtracted, `m g L_cm ⟨2J₁(A)/A⟩` (N·m/rad).
+        gravity: f64,
+    },
+    /// The uncastellated fit's Young's modulus is not positive, or wildly outside the range of
+    /// the film (by default a factor 10 either side of Kapton's 2.56 GPa).
+    ImplausibleModulus {
+        /// The fitted modulus (Pa).
+        modulus: f64,
+        /// The plausible range (Pa).
+        range: (f64, f64),
+        /// The specimens of the fit.
+        specimens: Vec<String>,
+    },
+    /// Some traces or specimen files of a data set were rejected; the fits use the others.
+    Rejected {
+        /// Every problem found, each naming its file.
+        problems: Vec<Error>,
+        /// Traces analysed (accepted and rejected).
+        traces: usize,
+    },
     /// The trace is read but cannot be analysed.
     Trace {
         /// The trace file.
@@ -174,6 +244,116 @@ impl fmt::Display for Error {
                 "`{}` needs two columns, time [s] and angle",
                 path.display()
             ),
+            Error::NotFinite {
+                path,
+                line,
+                column,
+                name,
+                value,
+                count,
+            } => {
+                write!(
+                    f,
+                    "`{}`, line {line}, column {column} (`{name}`): `{value}` is not a finite \
+                     number",
+                    path.display()
+                )?;
+                if *count > 1 {
+                    write!(f, " ({count} such values in the column, the first shown)")?;
+                }
+                f.write_str("; remove or fill the row (a dropped camera frame?)")
+            }
+            Error::TimeNotIncreasing {
+                path,
+                line,
+                column,
+                name,
+                previous,
+                time,
+            } => write!(
+                f,
+                "`{}`, line {line}, column {column} (`{name}`): time {time} s does not increase \
+                 (previous row {previous} s): times must be strictly increasing",
+                path.display()
+            ),
+            Error::AngleAmplitude {
+                path,
+                column,
+                name,
+                amplitude,
+                unit,
+                specimen,
+            } => {
+                let head = format!("`{}`, column {column} (`{name}`)", path.display());
+                let limit = super::rig::MAX_AMPLITUDE.to_degrees();
+                if *unit == "rad" && amplitude.to_radians() <= super::rig::MAX_AMPLITUDE {
+                    write!(
+                        f,
+                        "{head}: the angles look like degrees: amplitude {amplitude:.4} read as \
+                         rad is {:.0}°, beyond the {limit:.0}° the analysis accepts (the rig \
+                         swings 5–15°), but {amplitude:.4}° is plausible; set \
+                         `angle_unit = \"deg\"` in `{}`",
+                        amplitude.to_degrees(),
+                        specimen.display()
+                    )
+                } else {
+                    let degrees = if *unit == "deg" {
+                        *amplitude
+                    } else {
+                        amplitude.to_degrees()
+                    };
+                    write!(
+                        f,
+                        "{head}: amplitude {amplitude:.4} {unit} ({degrees:.0}°) is beyond the \
+                         {limit:.0}° the analysis accepts (the rig swings 5–15°): is the angle \
+                         measured from the vertical (the rest position), and is `angle_unit` \
+                         in `{}` right?",
+                        specimen.display()
+                    )
+                }
+            }
+            Error::NonPositiveStiffness {
+                path,
+                total,
+                gravity,
+            } => write!(
+                f,
+                "`{}`: measured stiffness k_m = I_p ω_n² − m g L_cm = {total:.4e} − {gravity:.4e} \
+                 = {:.4e} N·m/rad is not positive (Eq. 4): the pendulum swings slower than \
+                 gravity alone would make it; check pendulum.inertia (about the pivot), \
+                 pendulum.mass and pendulum.com_distance, and the angle unit",
+                path.display(),
+                total - gravity
+            ),
+            Error::ImplausibleModulus {
+                modulus,
+                range,
+                specimens,
+            } => write!(
+                f,
+                "the uncastellated fit gives Young's modulus E = {:.4} GPa, outside the \
+                 plausible {:.3}–{:.3} GPa (Kapton: 2.56 GPa), so it is not reported; specimens \
+                 {}: check flexure.thickness (it enters cubed), flexure.length and \
+                 flexure.width, and the pendulum; for another film set --modulus-range",
+                modulus * 1e-9,
+                range.0 * 1e-9,
+                range.1 * 1e-9,
+                specimens.join(", ")
+            ),
+            Error::Rejected { problems, traces } => {
+                let rejected_traces = problems.iter().filter(|p| p.is_trace_problem()).count();
+                write!(
+                    f,
+                    "{} problem{} in the data set ({rejected_traces} of {traces} traces \
+                     rejected; the fits above use the others):",
+                    problems.len(),
+                    if problems.len() == 1 { "" } else { "s" }
+                )?;
+                for problem in problems {
+                    write!(f, "\n  - {problem}")?;
+                }
+                Ok(())
+            }
             Error::Trace { path, error } => write!(f, "`{}`: {error}", path.display()),
             Error::EncodeCsv { path, message } => {
                 write!(f, "cannot write `{}`: {message}", path.display())
@@ -183,6 +363,24 @@ impl fmt::Display for Error {
             | Error::Write { message, .. }
             | Error::Plot { message, .. } => f.write_str(message),
         }
+    }
+}
+
+impl Error {
+    /// Whether this problem rejects one trace (rather than a specimen file, or a fit across
+    /// specimens).
+    pub fn is_trace_problem(&self) -> bool {
+        matches!(
+            self,
+            Error::ReadTrace { .. }
+                | Error::MissingAngleColumn { .. }
+                | Error::NoAngleColumn { .. }
+                | Error::NotFinite { .. }
+                | Error::TimeNotIncreasing { .. }
+                | Error::AngleAmplitude { .. }
+                | Error::NonPositiveStiffness { .. }
+                | Error::Trace { .. }
+        )
     }
 }
 

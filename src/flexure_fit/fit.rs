@@ -4,18 +4,20 @@
 //! factor (Eq. 7); for castellated hinges of one thickness and length, the effective length
 //! and their own loss factor.
 //!
-//! Consumes: [`Specimen`]s (and reads their traces) or analysed traces. Produces: a
-//! [`FitReport`], or an [`Error`] naming the trace file that could not be used.
+//! Consumes: specimen files, [`Specimen`]s (and reads their traces) or analysed traces.
+//! Produces: a [`FitReport`] of the good traces and specimens, with every rejected trace or
+//! file (an [`Error`] naming it) and warnings (a poor decay fit, trials that disagree beyond
+//! their uncertainties, a poor line across flexures). One bad trace does not stop the others.
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use super::error::Error;
 use super::rig::{Kind, Pendulum, Specimen};
 use super::trace::{analyze_trace, TraceAnalysis, TraceOptions};
 
 /// Options of the fits.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FitOptions {
     /// Trace analysis options.
     pub trace: TraceOptions,
@@ -25,8 +27,37 @@ pub struct FitOptions {
     /// Young's modulus for the castellated fits (Pa); default: the uncastellated fit's, or
     /// Kapton's 2.56 GPa if there are no uncastellated specimens.
     pub modulus: Option<f64>,
+    /// Plausible Young's modulus (Pa): an uncastellated fit outside it is rejected. Default
+    /// [`PLAUSIBLE_MODULUS`].
+    pub modulus_range: (f64, f64),
 }
 
+impl Default for FitOptions {
+    fn default() -> Self {
+        FitOptions {
+            trace: TraceOptions::default(),
+            small_angle: false,
+            modulus: None,
+            modulus_range: PLAUSIBLE_MODULUS,
+        }
+    }
+}
+
+/// A factor 10 either side of Kapton's 2.56 GPa: polymer films (2–10 GPa) pass; a
+/// thickness in the wrong unit (it enters cubed) or degrees read as radians do not.
+pub const PLAUSIBLE_MODULUS: (f64, f64) = (0.256e9, 25.6e9);
+
+/// Below this weighted R² of its `ln A` fit a trace's decay is not exponential (the R² of
+/// the test's synthetic traces with 0.05° noise is above 0.9999).
+pub const POOR_DECAY_R2: f64 = 0.99;
+
+/// Two trials of a flexure disagree when their k_m or b_m differ by more than this many
+/// combined standard errors.
+pub const AGREEMENT_SIGMA: f64 = 4.0;
+
+/// Below this R² a line across flexures is reported as poor (the seed's real data gave
+/// 0.83–0.97).
+pub const POOR_LINE_R2: f64 = 0.8;
 /// Eq. 3: `b_m = 2 ζ ω_n I_p` (= 2 σ I_p), N·m·s/rad.
 pub fn measured_damping(analysis: &TraceAnalysis, pendulum: &Pendulum) -> f64 {
     2.0 * analysis.zeta * analysis.omega_n * pendulum.inertia
@@ -59,6 +90,9 @@ pub struct TraceResult {
     pub stiffness: f64,
     /// Measured damping b_m (N·m·s/rad), Eq. 3.
     pub damping: f64,
+    /// Standard errors of k_m and b_m from those of ω_d and σ (N·m/rad, N·m·s/rad).
+    pub stiffness_se: f64,
+    pub damping_se: f64,
 }
 
 /// One specimen: its traces and their means (the seed averages the trials of a flexure).
@@ -176,6 +210,26 @@ pub struct FitReport {
     pub uncastellated: Option<ModulusFit>,
     /// One fit per (thickness, length) group of castellated specimens with ≥ 2 members.
     pub castellated: Vec<CastellatedFit>,
+    /// Every trace, specimen file or fit rejected, each naming its file.
+    pub rejected: Vec<Error>,
+    /// What was fitted but deserves a look, each naming its files.
+    pub warnings: Vec<String>,
+    /// Traces read (accepted and rejected).
+    pub traces: usize,
+}
+
+impl FitReport {
+    /// `Err` listing every problem if anything was rejected (the fits of the rest stand).
+    pub fn problems(&self) -> Result<(), Error> {
+        if self.rejected.is_empty() {
+            Ok(())
+        } else {
+            Err(Error::Rejected {
+                problems: self.rejected.clone(),
+                traces: self.traces,
+            })
+        }
+    }
 }
 
 /// Analyses one trace of `specimen`.
@@ -190,9 +244,26 @@ pub fn analyze_specimen_trace(
         Ok(analysis) => analysis,
         Err(error) => return Err(Error::Trace { path: file, error }),
     };
+    let stiffness = measured_stiffness(&analysis, pendulum, options.small_angle);
+    if stiffness.is_nan() || stiffness <= 0.0 {
+        let total = pendulum.inertia * analysis.omega_n.powi(2);
+        return Err(Error::NonPositiveStiffness {
+            path: file,
+            total,
+            gravity: total - stiffness,
+        });
+    }
+    // k_m = I_p (σ² + ω_d²) − …, b_m = 2 I_p σ; ω_d and σ come from separate fits.
+    let i2 = 2.0 * pendulum.inertia;
+    let stiffness_se = i2
+        * ((analysis.sigma * analysis.sigma_se).powi(2)
+            + (analysis.omega_d * analysis.omega_d_se).powi(2))
+        .sqrt();
     Ok(TraceResult {
-        stiffness: measured_stiffness(&analysis, pendulum, options.small_angle),
+        stiffness,
         damping: measured_damping(&analysis, pendulum),
+        stiffness_se,
+        damping_se: i2 * analysis.sigma_se,
         file,
         analysis,
     })
@@ -212,24 +283,126 @@ pub fn specimen_result(specimen: Specimen, traces: Vec<TraceResult>) -> Specimen
     }
 }
 
-/// Reads and analyses every trace of `specimens` and fits across them.
-pub fn fit_specimens(specimens: Vec<Specimen>, options: &FitOptions) -> Result<FitReport, Error> {
+/// Reads every specimen file and fits its traces ([`fit_specimens`]); a file that cannot be
+/// read is listed among the rejected, before the traces' problems.
+pub fn fit_files(files: &[PathBuf], options: &FitOptions) -> FitReport {
+    let mut rejected = Vec::new();
+    let mut specimens = Vec::new();
+    for file in files {
+        match super::rig::read_specimen(file) {
+            Ok(specimen) => specimens.push(specimen),
+            Err(error) => rejected.push(error),
+        }
+    }
+    let mut report = fit_specimens(specimens, options);
+    rejected.append(&mut report.rejected);
+    report.rejected = rejected;
+    report
+}
+
+/// Reads and analyses every trace of `specimens` and fits across them. A trace that cannot
+/// be used is listed in [`FitReport::rejected`]; a specimen is fitted from its good traces,
+/// and left out if it has none.
+pub fn fit_specimens(specimens: Vec<Specimen>, options: &FitOptions) -> FitReport {
+    let mut rejected = Vec::new();
     let mut results = Vec::new();
+    let mut count = 0;
     for specimen in specimens {
         let mut traces = Vec::new();
         for file in &specimen.traces {
-            let (times, angles) = super::rig::read_trace(&specimen, file)?;
-            traces.push(analyze_specimen_trace(
-                &times,
-                &angles,
-                &specimen.pendulum,
-                file.clone(),
-                options,
-            )?);
+            count += 1;
+            match analyze_file(&specimen, file, options) {
+                Ok(trace) => traces.push(trace),
+                Err(error) => rejected.push(error),
+            }
         }
-        results.push(specimen_result(specimen, traces));
+        if !traces.is_empty() {
+            results.push(specimen_result(specimen, traces));
+        }
     }
-    Ok(fit_results(results, options))
+    let mut report = fit_results(results, options);
+    rejected.append(&mut report.rejected);
+    report.rejected = rejected;
+    report.traces = count;
+    report
+}
+
+fn analyze_file(
+    specimen: &Specimen,
+    file: &Path,
+    options: &FitOptions,
+) -> Result<TraceResult, Error> {
+    let trace = super::rig::read_trace(specimen, file)?;
+    analyze_specimen_trace(
+        &trace.times,
+        &trace.angles,
+        &specimen.pendulum,
+        file.to_path_buf(),
+        options,
+    )
+}
+
+/// Warnings on the analysed traces: a poor decay fit, and trials of one specimen that
+/// disagree beyond their standard errors.
+fn trace_warnings(specimens: &[SpecimenResult]) -> Vec<String> {
+    let mut warnings = Vec::new();
+    for sr in specimens {
+        for t in &sr.traces {
+            if t.analysis.log_fit_r2 < POOR_DECAY_R2 {
+                warnings.push(format!(
+                    "`{}`: the decay is not exponential (R² of ln A against time {:.4} < \
+                     {POOR_DECAY_R2}, {} peaks): damping that depends on the amplitude, a \
+                     drifting baseline or a disturbance; `mech diagnose` with `kind = \
+                     \"pendulum\"` screens for these",
+                    t.file.display(),
+                    t.analysis.log_fit_r2,
+                    t.analysis.peaks.len()
+                ));
+            }
+        }
+        for (i, a) in sr.traces.iter().enumerate() {
+            for b in &sr.traces[i + 1..] {
+                let quantities = [
+                    (
+                        "k_m",
+                        a.stiffness,
+                        a.stiffness_se,
+                        b.stiffness,
+                        b.stiffness_se,
+                        1e6,
+                        "µN·m/rad",
+                    ),
+                    (
+                        "b_m",
+                        a.damping,
+                        a.damping_se,
+                        b.damping,
+                        b.damping_se,
+                        1e9,
+                        "nN·m·s/rad",
+                    ),
+                ];
+                for (name, va, sa, vb, sb, scale, unit) in quantities {
+                    let z = (va - vb).abs() / (sa * sa + sb * sb).sqrt();
+                    if z > AGREEMENT_SIGMA {
+                        warnings.push(format!(
+                            "{}: trials `{}` and `{}` disagree on {name}: {:.4} ± {:.4} and \
+                             {:.4} ± {:.4} {unit}, {z:.1} standard errors apart (more than \
+                             {AGREEMENT_SIGMA}); the mean hides it",
+                            sr.specimen.name,
+                            a.file.display(),
+                            b.file.display(),
+                            va * scale,
+                            sa * scale,
+                            vb * scale,
+                            sb * scale
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    warnings
 }
 
 /// The fits across already analysed specimens.
@@ -237,6 +410,8 @@ pub fn fit_results(specimens: Vec<SpecimenResult>, options: &FitOptions) -> FitR
     let unc: Vec<usize> = (0..specimens.len())
         .filter(|&i| specimens[i].specimen.flexure.kind == Kind::Uncastellated)
         .collect();
+    let mut rejected = Vec::new();
+    let mut warnings = trace_warnings(&specimens);
     let uncastellated = (unc.len() >= 2).then(|| {
         let widths: Vec<f64> = unc
             .iter()
@@ -260,6 +435,31 @@ pub fn fit_results(specimens: Vec<SpecimenResult>, options: &FitOptions) -> FitR
             specimens: unc,
         }
     });
+    // A modulus outside the plausible range is not a result: it is reported as a problem and
+    // the castellated fits fall back to the default modulus.
+    let uncastellated = uncastellated.and_then(|fit| {
+        let (lo, hi) = options.modulus_range;
+        if fit.youngs_modulus >= lo && fit.youngs_modulus <= hi {
+            return Some(fit);
+        }
+        rejected.push(Error::ImplausibleModulus {
+            modulus: fit.youngs_modulus,
+            range: options.modulus_range,
+            specimens: fit
+                .specimens
+                .iter()
+                .map(|&i| specimens[i].specimen.name.clone())
+                .collect(),
+        });
+        None
+    });
+    if let Some(fit) = &uncastellated {
+        for (what, line) in [("Eq. 6", &fit.stiffness_line), ("Eq. 7", &fit.damping_line)] {
+            if line.r_squared < POOR_LINE_R2 {
+                warnings.push(line_warning(&format!("uncastellated {what}"), line));
+            }
+        }
+    }
     let modulus = options
         .modulus
         .or(uncastellated.as_ref().map(|f| f.youngs_modulus))
@@ -277,7 +477,7 @@ pub fn fit_results(specimens: Vec<SpecimenResult>, options: &FitOptions) -> FitR
             groups.entry(key).or_default().push(i);
         }
     }
-    let castellated = groups
+    let castellated: Vec<CastellatedFit> = groups
         .into_values()
         .filter(|members| members.len() >= 2)
         .map(|members| {
@@ -305,9 +505,33 @@ pub fn fit_results(specimens: Vec<SpecimenResult>, options: &FitOptions) -> FitR
             }
         })
         .collect();
+    for fit in &castellated {
+        for (what, line) in [("k_m", &fit.stiffness_line), ("b_m·ω_d", &fit.damping_line)] {
+            if line.r_squared < POOR_LINE_R2 {
+                let group = format!(
+                    "castellated (t = {:.1} µm, l = {:.0} µm) {what}",
+                    fit.thickness * 1e6,
+                    fit.length * 1e6
+                );
+                warnings.push(line_warning(&group, line));
+            }
+        }
+    }
+    let traces = specimens.iter().map(|s| s.traces.len()).sum();
     FitReport {
         specimens,
         uncastellated,
         castellated,
+        rejected,
+        warnings,
+        traces,
     }
+}
+
+fn line_warning(what: &str, line: &LineFit) -> String {
+    format!(
+        "{what} against width: R² = {:.3} < {POOR_LINE_R2} over {} flexures; the flexures \
+         scatter about the line (the seed's real data gave 0.83–0.97): check their geometry",
+        line.r_squared, line.points
+    )
 }

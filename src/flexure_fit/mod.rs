@@ -5,8 +5,10 @@
 //! (castellated hinges).
 //!
 //! - [`trace`]: one trace → ω_d (zero crossings), σ (log of the peaks), ω_n, ζ;
-//! - [`rig`]: the specimen description (flexure geometry, pendulum, trace files) in TOML;
+//! - [`rig`]: the specimen description (flexure geometry, pendulum, trace files) in TOML, and
+//!   the trace files, checked (finite, increasing times, an amplitude plausible in radians);
 //! - [`fit`]: Eqs. 3–4 per trace, means per specimen, Eqs. 6–7 and the castellated fits;
+//!   every rejected trace listed, the good ones fitted, warnings on what looks wrong;
 //! - [`report`]: tables, CSV and plots;
 //! - [`error`]: what can go wrong, as [`Error`], with messages for the user.
 
@@ -17,6 +19,6 @@ pub mod rig;
 pub mod trace;
 
 pub use error::{Error, SpecimenError};
-pub use fit::{fit_specimens, FitOptions, FitReport};
+pub use fit::{fit_files, fit_specimens, FitOptions, FitReport};
 pub use rig::{Pendulum, Specimen};
 pub use trace::{analyze_trace, TraceAnalysis, TraceError, TraceOptions};

@@ -28,14 +28,34 @@ fn kind_name(kind: Kind) -> &'static str {
     }
 }
 
-/// The report as text: per-trace table, per-specimen table, and the fits.
+/// The report as text: per-trace table, per-specimen table, the fits, and the warnings.
+/// The rejected traces are not in it: they are the command's error ([`FitReport::problems`]).
 pub fn text_report(report: &FitReport) -> String {
     let mut s = String::new();
     write_trace_table(&mut s, report);
     write_flexure_table(&mut s, report);
-    write_uncastellated_fit(&mut s, report.uncastellated.as_ref());
+    write_uncastellated_fit(&mut s, report);
     for fit in &report.castellated {
         write_castellated_fit(&mut s, fit);
+    }
+    if !report.rejected.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n{} of {} traces rejected, {} problem(s) in all: listed at the end (on stderr)",
+            report
+                .rejected
+                .iter()
+                .filter(|e| e.is_trace_problem())
+                .count(),
+            report.traces,
+            report.rejected.len()
+        );
+    }
+    if !report.warnings.is_empty() {
+        let _ = writeln!(s, "\nwarnings:");
+        for warning in &report.warnings {
+            let _ = writeln!(s, "  - {warning}");
+        }
     }
     s
 }
@@ -115,8 +135,20 @@ fn write_flexure_table(s: &mut String, report: &FitReport) {
     }
 }
 
-fn write_uncastellated_fit(s: &mut String, fit: Option<&ModulusFit>) {
-    match fit {
+fn write_uncastellated_fit(s: &mut String, report: &FitReport) {
+    let rejected = report
+        .rejected
+        .iter()
+        .any(|e| matches!(e, Error::ImplausibleModulus { .. }));
+    if rejected {
+        let _ = writeln!(
+            s,
+            "\nuncastellated flexures: no modulus fit (the fitted E is implausible, listed at \
+             the end)"
+        );
+        return;
+    }
+    match report.uncastellated.as_ref() {
         Some(fit) => {
             let _ = writeln!(
                 s,
@@ -200,6 +232,8 @@ pub fn write_csvs(report: &FitReport, dir: &Path) -> Result<Vec<PathBuf>, Error>
                 num(a.noise),
                 num(a.log_fit_r2),
                 num(a.gravity_softening),
+                num(t.stiffness_se),
+                num(t.damping_se),
             ]);
         }
     }
@@ -220,6 +254,8 @@ pub fn write_csvs(report: &FitReport, dir: &Path) -> Result<Vec<PathBuf>, Error>
             "noise",
             "log_fit_r2",
             "gravity_softening",
+            "k_m_se",
+            "b_m_se",
         ],
         &trace_rows,
     )?;

@@ -282,8 +282,23 @@ pub fn specimen_files(arguments: &[PathBuf]) -> Result<Vec<PathBuf>, Error> {
     Ok(files)
 }
 
-/// Reads the angle trace `path` of `specimen`: `(times s, angles rad)`.
-pub fn read_trace(specimen: &Specimen, path: &Path) -> Result<(Vec<f64>, Vec<f64>), Error> {
+/// The largest amplitude (rad) a trace may have: the rig is released from 5–15°, and a
+/// release of 1° written in degrees but read as radians already exceeds it. Beyond it the
+/// hanging pendulum is far from the small angles Eq. 4 linearizes about.
+pub const MAX_AMPLITUDE: f64 = 1.0;
+
+/// A trace as read from its CSV file, checked: times finite and strictly increasing, angles
+/// finite and of a plausible amplitude.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Trace {
+    /// Sample times (s).
+    pub times: Vec<f64>,
+    /// Angles (rad).
+    pub angles: Vec<f64>,
+}
+
+/// Reads the angle trace `path` of `specimen`; errors name the file, the line and the column.
+pub fn read_trace(specimen: &Specimen, path: &Path) -> Result<Trace, Error> {
     let table = crate::output::read_csv_table(path).map_err(|error| Error::ReadTrace {
         path: path.to_path_buf(),
         message: error.to_string(),
@@ -305,10 +320,51 @@ pub fn read_trace(specimen: &Specimen, path: &Path) -> Result<(Vec<f64>, Vec<f64
             1
         }
     };
-    let times = table.columns[0].clone();
-    let angles = table.columns[index]
+    for j in [0, index] {
+        let column = &table.columns[j];
+        if let Some(row) = column.iter().position(|v| !v.is_finite()) {
+            return Err(Error::NotFinite {
+                path: path.to_path_buf(),
+                line: table.lines[row],
+                column: j + 1,
+                name: table.header[j].clone(),
+                value: column[row],
+                count: column.iter().filter(|v| !v.is_finite()).count(),
+            });
+        }
+    }
+    let times = &table.columns[0];
+    if let Some(row) = (1..times.len()).find(|&i| times[i] <= times[i - 1]) {
+        return Err(Error::TimeNotIncreasing {
+            path: path.to_path_buf(),
+            line: table.lines[row],
+            column: 1,
+            name: table.header[0].clone(),
+            previous: times[row - 1],
+            time: times[row],
+        });
+    }
+    let angles: Vec<f64> = table.columns[index]
         .iter()
         .map(|a| a * specimen.angle_scale)
         .collect();
-    Ok((times, angles))
+    let amplitude = super::trace::robust_amplitude(&angles);
+    if amplitude > MAX_AMPLITUDE {
+        return Err(Error::AngleAmplitude {
+            path: path.to_path_buf(),
+            column: index + 1,
+            name: table.header[index].clone(),
+            amplitude: amplitude / specimen.angle_scale,
+            unit: if specimen.angle_scale == 1.0 {
+                "rad"
+            } else {
+                "deg"
+            },
+            specimen: specimen.source.clone(),
+        });
+    }
+    Ok(Trace {
+        times: times.clone(),
+        angles,
+    })
 }

@@ -5,7 +5,11 @@
 //!
 //! Consumes: sample times (s, strictly increasing) and angles (rad, measured from the rest
 //! position, i.e. the vertical).
-//! Produces: a [`TraceAnalysis`] or a [`TraceError`] saying what is wrong with the trace.
+//! Produces: a [`TraceAnalysis`] (with standard errors of ω_d and σ from the scatter about
+//! their fits) or a [`TraceError`] saying what is wrong with the trace, with the numbers that
+//! decided it: no oscillation above the noise, fewer than about 3 periods of it, an amplitude
+//! that grows or does not change. `mech diagnose` screens pendulum traces with this analysis
+//! too, so these checks are made in one place.
 //!
 //! Robustness to measurement noise, which matters most at the end of a trace, where the
 //! oscillation has decayed into the noise:
@@ -81,17 +85,44 @@ pub enum TraceError {
         /// Sample index.
         index: usize,
     },
-    /// Too few usable zero crossings to measure a frequency.
+    /// No oscillation stands out of the noise: the trace's amplitude is below the amplitude
+    /// threshold (pure noise, or a pendulum that was not released).
+    NoOscillation {
+        /// The trace's amplitude, [`robust_amplitude`] (rad).
+        amplitude: f64,
+        /// Estimated noise level (rad).
+        noise: f64,
+        /// The smallest amplitude used, in noise levels.
+        needed_over_noise: f64,
+    },
+    /// Too few usable zero crossings to measure a frequency and a decay: the recording is
+    /// shorter than about 3 periods, or the oscillation sinks into the noise before that.
     TooFewCrossings {
         /// Usable crossings found.
         found: usize,
         /// Minimum needed.
         needed: usize,
+        /// Period estimated from the crossings (s), if at least two were found.
+        period: Option<f64>,
+        /// Time span of the recording (s).
+        duration: f64,
     },
-    /// The amplitude does not decay measurably (σ ≤ 0 or less than 1 % decay over the fit).
+    /// The amplitude grows (negative damping: a driven rig, or not a free decay).
+    Growing {
+        /// Fitted decay rate σ (1/s), negative.
+        sigma: f64,
+        /// First and last peak amplitude used (rad).
+        first: f64,
+        last: f64,
+        /// Time span of those peaks (s).
+        span: f64,
+    },
+    /// The amplitude does not change measurably (less than 1 % over the peaks used).
     NoDecay {
         /// Fitted decay rate σ (1/s).
         sigma: f64,
+        /// Time span of the peaks used (s).
+        span: f64,
     },
 }
 
@@ -117,15 +148,76 @@ impl fmt::Display for TraceError {
                 "time does not increase at data row {}: times must be strictly increasing",
                 index + 1
             ),
-            TraceError::TooFewCrossings { found, needed } => write!(
+            TraceError::NoOscillation {
+                amplitude,
+                noise,
+                needed_over_noise,
+            } => write!(
                 f,
-                "only {found} usable zero crossings (need {needed}): the trace must show several \
-                 oscillation cycles above the noise, about the angle 0 (the vertical)"
+                "no oscillation above the noise: amplitude {:.4}° is {:.1} noise levels \
+                 (noise {:.4}°), need {needed_over_noise} for a decay; is this a ring-down \
+                 trace, and the right column?",
+                amplitude.to_degrees(),
+                amplitude / noise,
+                noise.to_degrees()
             ),
-            TraceError::NoDecay { sigma } => write!(
+            TraceError::TooFewCrossings {
+                found,
+                needed,
+                period: Some(period),
+                duration,
+            } => {
+                let recorded = duration / period;
+                write!(
+                    f,
+                    "too short: only {found} usable zero crossings (need {needed}, about 3 \
+                     periods); period {period:.4} s, "
+                )?;
+                if recorded < 3.0 {
+                    write!(
+                        f,
+                        "the trace lasts {duration:.4} s = {recorded:.1} periods: record at least \
+                         3 periods"
+                    )
+                } else {
+                    write!(
+                        f,
+                        "the trace lasts {recorded:.1} periods but the oscillation sinks into \
+                         the noise after {:.1}: heavily damped, or too noisy",
+                        0.5 * found.saturating_sub(1) as f64
+                    )
+                }
+            }
+            TraceError::TooFewCrossings {
+                found,
+                needed,
+                period: None,
+                duration,
+            } => write!(
                 f,
-                "the oscillation does not decay (fitted decay rate σ = {sigma:.3e} 1/s): cannot \
-                 measure damping; is the trace long enough, and is the angle from the vertical?"
+                "too short: only {found} usable zero crossings in {duration:.4} s (need {needed}, \
+                 about 3 periods): the trace must show several oscillation cycles above the \
+                 noise, about the angle 0 (the vertical)"
+            ),
+            TraceError::Growing {
+                sigma,
+                first,
+                last,
+                span,
+            } => write!(
+                f,
+                "the oscillation grows (σ = {sigma:.4} 1/s: amplitude {:.3}° → {:.3}° over \
+                 {span:.3} s): negative damping; is this a free decay, with the pendulum \
+                 released and not driven?",
+                first.to_degrees(),
+                last.to_degrees()
+            ),
+            TraceError::NoDecay { sigma, span } => write!(
+                f,
+                "the oscillation does not decay (fitted decay rate σ = {sigma:.3e} 1/s, \
+                 {:.2} % over {span:.3} s; need 1 %): cannot measure damping; is the trace long \
+                 enough, and is the angle from the vertical?",
+                100.0 * (sigma * span).abs()
             ),
         }
     }
@@ -149,8 +241,13 @@ pub struct TraceAnalysis {
     pub peaks: Vec<(f64, f64)>,
     /// Damped angular frequency ω_d (rad/s).
     pub omega_d: f64,
+    /// Standard error of ω_d from the scatter of the crossing times about their line
+    /// (rad/s).
+    pub omega_d_se: f64,
     /// Decay rate σ (1/s).
     pub sigma: f64,
+    /// Standard error of σ from the scatter of `ln A` about its line (1/s).
+    pub sigma_se: f64,
     /// Natural angular frequency `√(σ² + ω_d²)` (rad/s).
     pub omega_n: f64,
     /// Damping ratio `σ / ω_n`.
@@ -165,8 +262,9 @@ pub struct TraceAnalysis {
 
 /// Minimum number of samples of a trace.
 pub const MIN_SAMPLES: usize = 32;
-/// Minimum number of usable zero crossings (two full cycles).
-pub const MIN_CROSSINGS: usize = 5;
+/// Minimum number of usable zero crossings: 6, the five half-cycles that a recording of
+/// 3 periods released from rest shows (a decay measured over fewer cycles is mostly noise).
+pub const MIN_CROSSINGS: usize = 6;
 
 /// Analyses one decay trace. See the module documentation for the method.
 pub fn analyze_trace(
@@ -176,7 +274,26 @@ pub fn analyze_trace(
 ) -> Result<TraceAnalysis, TraceError> {
     validate(times, angles)?;
     let noise = noise_level(angles);
-    let rough = rough_crossings(times, angles, 3.0 * noise)?;
+    let amplitude = robust_amplitude(angles);
+    if amplitude < options.min_amplitude_over_noise * noise {
+        return Err(TraceError::NoOscillation {
+            amplitude,
+            noise,
+            needed_over_noise: options.min_amplitude_over_noise,
+        });
+    }
+    let duration = times[times.len() - 1] - times[0];
+    let rough = rough_crossings(times, angles, 3.0 * noise);
+    if rough.len() < MIN_CROSSINGS {
+        let period = (rough.len() >= 2)
+            .then(|| 2.0 * (rough[rough.len() - 1] - rough[0]) / (rough.len() - 1) as f64);
+        return Err(TraceError::TooFewCrossings {
+            found: rough.len(),
+            needed: MIN_CROSSINGS,
+            period,
+            duration,
+        });
+    }
     let mut gaps: Vec<f64> = rough.windows(2).map(|w| w[1] - w[0]).collect();
     let half_period = median(&mut gaps);
 
@@ -197,11 +314,13 @@ pub fn analyze_trace(
         return Err(TraceError::TooFewCrossings {
             found: crossings.len(),
             needed: MIN_CROSSINGS,
+            period: Some(2.0 * half_period),
+            duration,
         });
     }
 
-    let omega_d = damped_frequency(&crossings);
-    let (sigma, log_fit_r2) = decay_rate(&peaks)?;
+    let (omega_d, omega_d_se) = damped_frequency(&crossings);
+    let (sigma, sigma_se, log_fit_r2) = decay_rate(&peaks)?;
     let omega_n = (sigma * sigma + omega_d * omega_d).sqrt();
     Ok(TraceAnalysis {
         samples: times.len(),
@@ -211,7 +330,9 @@ pub fn analyze_trace(
         crossings,
         peaks,
         omega_d,
+        omega_d_se,
         sigma,
+        sigma_se,
         omega_n,
         zeta: sigma / omega_n,
         log_fit_r2,
@@ -219,18 +340,12 @@ pub fn analyze_trace(
 }
 
 /// Rough crossing times: crossings with hysteresis (a `band` either side of zero), each at
-/// the last sign change inside its bracket, interpolated. At least [`MIN_CROSSINGS`].
-fn rough_crossings(times: &[f64], angles: &[f64], band: f64) -> Result<Vec<f64>, TraceError> {
+/// the last sign change inside its bracket, interpolated.
+fn rough_crossings(times: &[f64], angles: &[f64], band: f64) -> Vec<f64> {
     // (index of the last sample beyond the band on the old side, index of the first sample
     // beyond the band on the new side).
     let brackets = hysteresis_crossings(angles, band);
-    if brackets.len() < MIN_CROSSINGS {
-        return Err(TraceError::TooFewCrossings {
-            found: brackets.len(),
-            needed: MIN_CROSSINGS,
-        });
-    }
-    Ok(brackets
+    brackets
         .iter()
         .map(|&(a, b)| {
             let mut k = b;
@@ -239,7 +354,7 @@ fn rough_crossings(times: &[f64], angles: &[f64], band: f64) -> Result<Vec<f64>,
             }
             interpolate_zero(times[k - 1], angles[k - 1], times[k], angles[k])
         })
-        .collect())
+        .collect()
 }
 
 /// The leading half-cycles to use: from the start, while the peak is above `threshold` and
@@ -267,27 +382,68 @@ fn clean_half_cycles(
     }
 }
 
-/// ω_d = π / T½, with T½ the least squares slope of crossing time against its index.
-fn damped_frequency(crossings: &[f64]) -> f64 {
+/// ω_d = π / T½, with T½ the least squares slope of crossing time against its index, and
+/// its standard error.
+fn damped_frequency(crossings: &[f64]) -> (f64, f64) {
     let index: Vec<f64> = (0..crossings.len()).map(|i| i as f64).collect();
     let ones = vec![1.0; crossings.len()];
-    let (slope, _, _) = weighted_line(&index, crossings, &ones);
-    PI / slope
+    let (slope, intercept, _) = weighted_line(&index, crossings, &ones);
+    let slope_se = slope_standard_error(&index, crossings, &ones, slope, intercept);
+    (PI / slope, PI / (slope * slope) * slope_se)
 }
 
-/// σ and the fit's R² from weighted least squares on ln A (weights A²); an error if the
-/// amplitude does not fall by at least 1 % over the peaks.
-fn decay_rate(peaks: &[(f64, f64)]) -> Result<(f64, f64), TraceError> {
+/// σ, its standard error and the fit's R² from weighted least squares on ln A (weights
+/// A²); an error if the amplitude grows, or changes by less than 1 % over the peaks.
+fn decay_rate(peaks: &[(f64, f64)]) -> Result<(f64, f64, f64), TraceError> {
     let peak_times: Vec<f64> = peaks.iter().map(|p| p.0).collect();
     let logs: Vec<f64> = peaks.iter().map(|p| p.1.ln()).collect();
     let weights: Vec<f64> = peaks.iter().map(|p| p.1 * p.1).collect();
-    let (log_slope, _, log_fit_r2) = weighted_line(&peak_times, &logs, &weights);
+    let (log_slope, intercept, log_fit_r2) = weighted_line(&peak_times, &logs, &weights);
     let sigma = -log_slope;
     let span = peak_times.last().unwrap_or(&0.0) - peak_times.first().unwrap_or(&0.0);
-    if sigma.is_nan() || sigma <= 0.0 || sigma * span < 0.01 {
-        return Err(TraceError::NoDecay { sigma });
+    // 1 % of change over the fit is the least the log fit can tell from a constant.
+    if sigma * span <= -0.01 {
+        return Err(TraceError::Growing {
+            sigma,
+            first: peaks.first().map_or(f64::NAN, |p| p.1),
+            last: peaks.last().map_or(f64::NAN, |p| p.1),
+            span,
+        });
     }
-    Ok((sigma, log_fit_r2))
+    if sigma.is_nan() || sigma * span < 0.01 {
+        return Err(TraceError::NoDecay { sigma, span });
+    }
+    let sigma_se = slope_standard_error(&peak_times, &logs, &weights, log_slope, intercept);
+    Ok((sigma, sigma_se, log_fit_r2))
+}
+
+/// The standard error of a weighted least squares slope with the weights known only up to a
+/// factor: the residual scatter sets the scale, `se² = Σw r² / ((n − 2) Σw (x − x̄)²)`.
+/// Zero for two points or fewer (no scatter to measure).
+fn slope_standard_error(xs: &[f64], ys: &[f64], ws: &[f64], slope: f64, intercept: f64) -> f64 {
+    let n = xs.len();
+    if n <= 2 {
+        return 0.0;
+    }
+    let sw: f64 = ws.iter().sum();
+    let mx = xs.iter().zip(ws).map(|(x, w)| x * w).sum::<f64>() / sw;
+    let (mut residual, mut sxx) = (0.0, 0.0);
+    for ((&x, &y), &w) in xs.iter().zip(ys).zip(ws) {
+        residual += w * (y - slope * x - intercept).powi(2);
+        sxx += w * (x - mx) * (x - mx);
+    }
+    (residual / ((n - 2) as f64 * sxx)).sqrt()
+}
+
+/// The amplitude of a trace robust to a few spikes: the 5th largest `|θ|` (the largest for
+/// shorter traces). A ring-down's first peak spans many samples; a glitch spans one or two.
+pub fn robust_amplitude(values: &[f64]) -> f64 {
+    let mut magnitudes: Vec<f64> = values.iter().map(|v| v.abs()).collect();
+    magnitudes.sort_by(|a, b| b.total_cmp(a));
+    match magnitudes.len() {
+        0 => 0.0,
+        n => magnitudes[4.min(n - 1)],
+    }
 }
 
 /// [`bessel_softening`] of the peaks averaged with the weights the ω_d fit gives the

@@ -326,6 +326,19 @@ fn pendulum_fit_recovers_modulus_loss_factor_and_stiffness() {
             }
         }
         let report = fit_results(results, &options);
+        // The trials of a flexure agree within their standard errors once the finite
+        // amplitude is corrected for (no false warning over 25 flexures). Eq. 4 literally is
+        // biased by the release amplitude, differently for the two trials (5°–15°): the
+        // check must see it on some flexures (4 here, 4.2–5.3 standard errors), and on k_m
+        // only, which is what the bias moves.
+        if small_angle {
+            assert!(!report.warnings.is_empty());
+            for warning in &report.warnings {
+                assert!(warning.contains("disagree on k_m"), "{warning}");
+            }
+        } else {
+            assert!(report.warnings.is_empty(), "{:#?}", report.warnings);
+        }
         let fit = report.uncastellated.expect("25 uncastellated specimens");
         let e_error = common::relative_error(fit.youngs_modulus, E_TRUE);
         let eta_error = common::relative_error(fit.loss_factor, ETA_TRUE);
@@ -595,23 +608,39 @@ fn bad_traces_get_clear_errors() {
     assert!(matches!(e, TraceError::NoDecay { .. }), "{e}");
     assert!(e.to_string().contains("does not decay"));
 
-    // Growing oscillation.
+    // Growing oscillation, with the rate that decided it.
     let (t, a) = damped_sine(2000, -1.0);
-    assert!(matches!(
-        analyze_trace(&t, &a, &options),
-        Err(TraceError::NoDecay { .. })
-    ));
-
-    // Only one and a half cycles.
-    let (t, a) = damped_sine(150, 1.0);
     let e = analyze_trace(&t, &a, &options).unwrap_err();
-    assert!(matches!(e, TraceError::TooFewCrossings { .. }), "{e}");
+    assert!(
+        matches!(e, TraceError::Growing { sigma, .. } if (sigma + 1.0).abs() < 1e-3),
+        "{e}"
+    );
+    assert!(e.to_string().contains("grows"), "{e}");
+
+    // Only one and a half cycles, then two and a half (< 3 periods: 5 crossings).
+    for (n, crossings) in [(150, 3), (250, 5)] {
+        let (t, a) = damped_sine(n, 1.0);
+        let e = analyze_trace(&t, &a, &options).unwrap_err();
+        assert!(
+            matches!(e, TraceError::TooFewCrossings { found, period: Some(p), .. }
+                if found == crossings && (p - 0.1).abs() < 1e-3),
+            "{e}"
+        );
+        assert!(e.to_string().contains("record at least 3 periods"), "{e}");
+    }
+    let (t, a) = damped_sine(300, 1.0);
+    assert!(analyze_trace(&t, &a, &options).is_ok());
 
     // Noise only.
     let mut rng = Rng::new(3);
     let t: Vec<f64> = (0..2000).map(|i| i as f64 * 1e-3).collect();
     let a: Vec<f64> = t.iter().map(|_| 1e-3 * gaussian(&mut rng)).collect();
-    assert!(analyze_trace(&t, &a, &options).is_err());
+    let e = analyze_trace(&t, &a, &options).unwrap_err();
+    assert!(matches!(e, TraceError::NoOscillation { .. }), "{e}");
+    assert!(
+        e.to_string().contains("no oscillation above the noise"),
+        "{e}"
+    );
 
     let e = analyze_trace(&t, &a[..1999], &options).unwrap_err();
     assert!(matches!(e, TraceError::LengthMismatch { .. }));
@@ -760,7 +789,9 @@ fn example_data_fit_end_to_end() {
         .iter()
         .map(|f| mech::flexure_fit::rig::read_specimen(f).unwrap())
         .collect();
-    let report = mech::flexure_fit::fit_specimens(specimens, &FitOptions::default()).unwrap();
+    let report = mech::flexure_fit::fit_specimens(specimens, &FitOptions::default());
+    assert!(report.rejected.is_empty(), "{:#?}", report.rejected);
+    assert!(report.warnings.is_empty(), "{:#?}", report.warnings);
     let fit = report.uncastellated.as_ref().unwrap();
     assert!(
         common::relative_error(fit.youngs_modulus, E_TRUE).abs() < 0.01,

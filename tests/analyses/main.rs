@@ -8,4 +8,5 @@ mod common;
 mod actuator;
 mod experiments;
 mod flexure;
+mod flexure_screening;
 mod readme;
