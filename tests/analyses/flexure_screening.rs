@@ -355,16 +355,8 @@ fn bad_traces_are_rejected_together_and_good_hinges_still_fitted() {
         100.0 * common::relative_error(fit.youngs_modulus, E),
         100.0 * common::relative_error(fit.loss_factor, ETA)
     );
-    assert!(
-        common::relative_error(fit.youngs_modulus, E).abs() < 1e-3,
-        "E {}",
-        fit.youngs_modulus
-    );
-    assert!(
-        common::relative_error(fit.loss_factor, ETA).abs() < 0.01,
-        "η {}",
-        fit.loss_factor
-    );
+    common::assert_close("E", fit.youngs_modulus, E, 1e-3, 0.0);
+    common::assert_close("η", fit.loss_factor, ETA, 0.01, 0.0);
     // Clean trials agree within their uncertainties: no false warning.
     assert!(report.warnings.is_empty(), "{:#?}", report.warnings);
 
