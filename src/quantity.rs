@@ -204,30 +204,10 @@ pub(crate) fn example_quantity(number: &str, dimension: Dimension) -> String {
     }
 }
 
-/// A familiar unit for `dimension` (`N` rather than `kg*m/s^2`), or its SI form; `None` if
-/// dimensionless.
+/// A familiar unit for `dimension` (`N` rather than `kg*m/s^2`: its `Display`), or its SI
+/// form; `None` if dimensionless.
 pub(crate) fn unit_hint(dimension: Dimension) -> Option<String> {
-    let named = [
-        (Dimension::FORCE, "N"),
-        (Dimension::TORQUE, "N*m"),
-        (Dimension::LENGTH, "m"),
-        (Dimension::MASS, "kg"),
-        (Dimension::TIME, "s"),
-        (Dimension::CURRENT, "A"),
-        (Dimension::FREQUENCY, "Hz"),
-        (Dimension::ACCELERATION, "m/s^2"),
-        (Dimension::VOLTAGE, "V"),
-        (Dimension::PRESSURE, "Pa"),
-    ];
-    if dimension == Dimension::NONE {
-        return None;
-    }
-    Some(
-        named
-            .iter()
-            .find(|(d, _)| *d == dimension)
-            .map_or_else(|| dimension.to_string(), |(_, unit)| unit.to_string()),
-    )
+    (dimension != Dimension::NONE).then(|| dimension.to_string())
 }
 
 #[cfg(test)]

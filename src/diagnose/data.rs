@@ -1025,7 +1025,7 @@ mod tests {
                 "column 3",
                 "`force.x`",
                 "expected m",
-                "found kg*m/s^2",
+                "found N",
                 "`[mN]`",
                 "`force.x [mm]`",
             ],

@@ -23,7 +23,7 @@ pub struct PendulumParams {
     /// Default 9.81 (SI units: m/s^2).
     pub g: f64,
     /// Viscous damping at the pivot.
-    /// Default 0 (SI units: kg*m^2/s).
+    /// Default 0 (SI units: N*m*s).
     pub c: f64,
 }
 #[allow(clippy::derivable_impls)]

@@ -130,9 +130,47 @@ impl Dimension {
     }
 }
 
+impl Dimension {
+    /// The conventional derived unit of this dimension where it has one (`N` rather than
+    /// `kg*m/s^2`, `V` rather than `kg*m^2/s^3/A`), as the language writes it.
+    pub fn conventional_unit(self) -> Option<&'static str> {
+        let per = |a: Dimension, b: Dimension| a.div(b);
+        let named = [
+            (Dimension::FORCE, "N"),
+            (Dimension::TORQUE, "N*m"),
+            (Dimension::LENGTH, "m"),
+            (Dimension::MASS, "kg"),
+            (Dimension::TIME, "s"),
+            (Dimension::CURRENT, "A"),
+            (Dimension::FREQUENCY, "Hz"),
+            (Dimension::ACCELERATION, "m/s^2"),
+            (Dimension::VOLTAGE, "V"),
+            (Dimension::PRESSURE, "Pa"),
+            (Dimension::INERTIA, "kg*m^2"),
+            (per(Dimension::FORCE, Dimension::LENGTH), "N/m"),
+            (
+                per(Dimension::FORCE.mul(Dimension::TIME), Dimension::LENGTH),
+                "N*s/m",
+            ),
+            (Dimension::TORQUE.mul(Dimension::TIME), "N*m*s"),
+            (per(Dimension::TORQUE, Dimension::TIME), "W"),
+            (per(Dimension::FORCE, Dimension::VOLTAGE), "N/V"),
+            (per(Dimension::LENGTH, Dimension::VOLTAGE), "m/V"),
+        ];
+        named
+            .iter()
+            .find(|(dimension, _)| *dimension == self)
+            .map(|(_, unit)| *unit)
+    }
+}
+
 impl std::fmt::Display for Dimension {
-    /// `kg*m/s^2`-style SI form; `1` for dimensionless.
+    /// The conventional unit where there is one (`N`, `V`, `N*m`, …), else the `kg*m/s^2`-style
+    /// SI form; `1` for dimensionless.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if let Some(unit) = self.conventional_unit() {
+            return write!(f, "{unit}");
+        }
         let parts = [
             ("kg", self.mass),
             ("m", self.length),
