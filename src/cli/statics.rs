@@ -2,7 +2,8 @@
 //! inputs and loads, the loop reactions and the forces of fixtures.
 //!
 //! Consumes: [`ModelArgs`] and fixture strings. Produces: a table on stdout and, with
-//! `--out`, the equilibrium as CSV.
+//! `--out`, the equilibrium as CSV: the coordinates `q_NAME`, the loop reactions
+//! `lambda_ROW` and the fixture forces `FIXTURE.force_x` ….
 
 use super::Error;
 use std::fmt::Write as _;
@@ -23,7 +24,7 @@ pub struct StaticsArgs {
     /// `:xz` to hold only some components.
     #[arg(long = "fixture", value_name = "OUTPUT=[x, y, z][:COMPONENTS]")]
     pub fixtures: Vec<String>,
-    /// CSV file for the equilibrium.
+    /// CSV file for the equilibrium: coordinates, loop reactions and fixture forces.
     #[arg(long)]
     pub out: Option<PathBuf>,
 }
@@ -136,6 +137,10 @@ pub fn run(args: &StaticsArgs) -> Result<(), Error> {
             .map(|i| format!("q_{}", model.coordinate_name(i)))
             .collect();
         let mut row = equilibrium.q.clone();
+        for (i, lambda) in equilibrium.loop_multipliers.iter().enumerate() {
+            header.push(format!("lambda_{}", model.constraint_name(i)));
+            row.push(*lambda);
+        }
         for (fixture, force) in fixtures.iter().zip(&equilibrium.fixture_forces) {
             for (axis, value) in ["x", "y", "z"].iter().zip(force) {
                 header.push(format!("{}.force_{axis}", fixture.name));

@@ -567,3 +567,64 @@ fn static_forcing_is_the_forcing_at_zero_speed() {
         assert!(differs, "{}: the speeds do not enter F", model.name());
     }
 }
+
+/// `mech statics --out` writes what it prints: the coordinates, the loop reactions λ (one
+/// column per loop row) and the fixture forces, the same numbers as the session's
+/// equilibrium (four-bar under gravity, crank held at −1.5 rad).
+#[test]
+fn statics_out_writes_coordinates_reactions_and_fixture_forces() {
+    let dir = common::scratch_dir("statics_out");
+    let out = dir.join("equilibrium.csv");
+    let common_args = mech::cli::ModelArgs {
+        model: common::bundled_path("four_bar").into(),
+        sets: Vec::new(),
+        inputs: Vec::new(),
+        independent: vec!["crank_angle=-1.5rad".into()],
+    };
+    let args = mech::cli::statics::StaticsArgs {
+        common: common_args.clone(),
+        fixtures: Vec::new(),
+        out: Some(out.clone()),
+    };
+    mech::cli::statics::run(&args).unwrap();
+    let text = std::fs::read_to_string(&out).unwrap();
+    let (header, row) = text.trim_end().split_once('\n').unwrap();
+    let names: Vec<&str> = header.split(',').map(str::trim).collect();
+    let values: Vec<f64> = row.split(',').map(|v| v.trim().parse().unwrap()).collect();
+    let session = mech::session::Session::open(&common_args.model, &[], &[]).unwrap();
+    let (equilibrium, _) = session
+        .equilibrium(&common_args.independent, &[], &[])
+        .unwrap();
+    let mut expected: Vec<(String, f64)> = (0..session.model.nq())
+        .map(|i| {
+            (
+                format!("q_{}", session.model.coordinate_name(i)),
+                equilibrium.q[i],
+            )
+        })
+        .collect();
+    expected.extend(
+        equilibrium
+            .loop_multipliers
+            .iter()
+            .enumerate()
+            .map(|(i, lambda)| {
+                (
+                    format!("lambda_{}", session.model.constraint_name(i)),
+                    *lambda,
+                )
+            }),
+    );
+    assert_eq!(names.len(), expected.len(), "{header}");
+    assert!(
+        names.contains(&"lambda_tip.x") && names.contains(&"lambda_tip.y"),
+        "{header}"
+    );
+    for ((name, value), (want_name, want)) in names.iter().zip(&values).zip(&expected) {
+        assert_eq!(name, want_name);
+        assert!(
+            (value - want).abs() <= 1e-9 * want.abs().max(1.0),
+            "{name}: {value} vs {want}"
+        );
+    }
+}
