@@ -766,7 +766,8 @@ fn order_ties(ranked: &mut [Trial]) -> usize {
             .count(),
         None => 0,
     };
-    ranked[..tied].sort_by_key(|t| t.parameters.len());
+    // Held parameters (standard error 0) are not fitted: they do not count.
+    ranked[..tied].sort_by_key(|t| t.parameters.iter().filter(|p| p.3 != 0.0).count());
     tied
 }
 
@@ -936,11 +937,10 @@ impl Trials<'_> {
         }?;
         let mut parameters = self.user.to_vec();
         parameters.extend(candidate.parameters.iter().cloned());
-        let fixed = |p: &Parameter| p.lower == p.upper;
         // A candidate holding parameters fixed is a refit of one that moved the residual
         // ([`hold_undetermined`]): not screened again.
-        let refit = candidate.parameters.iter().any(|(_, p)| fixed(p));
-        let free = parameters.iter().filter(|(_, p)| !fixed(p)).count();
+        let refit = candidate.parameters.iter().any(|(_, p)| p.is_fixed());
+        let free = parameters.iter().filter(|(_, p)| !p.is_fixed()).count();
         let unmoved = if refit {
             None
         } else {

@@ -318,7 +318,7 @@ fn force_ends(distance: &[f64], force: &[f64]) -> (Option<f64>, Option<f64>) {
     }
     let blocked = Polynomial::fit(&pushing[..pushing.len().min(5)], 2).map(|p| p.value(0.0));
     let tail = &pressing[pressing.len().saturating_sub(4)..];
-    let free = Polynomial::fit(tail, 1).and_then(|p| p.root_after(tail[0].0));
+    let free = Polynomial::fit(tail, 1).and_then(|p| p.line_root_after(tail[0].0));
     (blocked, free)
 }
 
@@ -362,28 +362,14 @@ impl Polynomial {
             .fold(0.0, |acc, c| acc * t + c)
     }
 
-    /// The smallest root at or beyond `x`; `None` if there is none (or the polynomial does
-    /// not fall through zero there).
-    fn root_after(&self, x: f64) -> Option<f64> {
-        let from = (x - self.center) / self.scale;
-        let (c0, c1) = (self.coefficients[0], self.coefficients[1]);
-        let c2 = self.coefficients.get(2).copied().unwrap_or(0.0);
-        let roots: Vec<f64> = if c2.abs() <= 1e-9 * c1.abs() {
-            vec![-c0 / c1]
-        } else {
-            let discriminant = c1 * c1 - 4.0 * c2 * c0;
-            if discriminant < 0.0 {
-                return None;
-            }
-            // The stable form of the two roots (no cancellation between −c1 and √Δ).
-            let q = -0.5 * (c1 + c1.signum() * discriminant.sqrt());
-            vec![q / c2, c0 / q]
+    /// The root of a line at or beyond `x`; `None` for a flat line or a root before `x`.
+    fn line_root_after(&self, x: f64) -> Option<f64> {
+        let [c0, c1] = self.coefficients[..] else {
+            return None;
         };
-        roots
-            .into_iter()
-            .filter(|t| t.is_finite() && *t >= from)
-            .min_by(f64::total_cmp)
-            .map(|t| self.center + t * self.scale)
+        let t = -c0 / c1;
+        (t.is_finite() && t >= (x - self.center) / self.scale)
+            .then_some(self.center + t * self.scale)
     }
 }
 

@@ -114,6 +114,11 @@ impl Parameter {
         self.scale = Some(scale);
         self
     }
+
+    /// Held at one value (`lower == upper`), not fitted.
+    pub fn is_fixed(&self) -> bool {
+        self.lower == self.upper
+    }
 }
 
 /// How the Jacobian is approximated.

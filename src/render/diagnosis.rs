@@ -233,8 +233,8 @@ pub fn cause_at(t: &Trial) -> String {
 /// The named cause: `best` alone, or, when the data support several about equally, all of
 /// them as a tie (`X at one of a, b, c`), the simplest first.
 fn named_cause(d: &Diagnosis, best: &Trial) -> String {
-    let is_top = d.ranked.first().is_some_and(|top| std::ptr::eq(top, best));
-    if d.tied <= 1 || !is_top {
+    // A pair of causes is named as it is; the tie is among single causes.
+    if d.tied <= 1 || d.combined.is_some() {
         return cause_at(best);
     }
     let tied = &d.ranked[..d.tied];
