@@ -22,6 +22,16 @@ use mech_runtime::{
     FlexureDamping, Linearization, Method, Model, RuntimeError, Signal, SimOptions,
 };
 
+/// One transfer function an experiment file names: a model input driven, a model output
+/// read, and the channel's name (its data columns and output files are suffixed with it).
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Channel {
+    pub name: String,
+    pub input: String,
+    pub output: String,
+}
+
 /// One point of a frequency response.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Point {

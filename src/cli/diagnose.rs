@@ -56,11 +56,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), Error> {
     let d = diagnose_causes(&experiment, &data, &args.fit, holdout, &args.causes)?;
     println!(
         "{}: {} values fitted, {} held out ({}); noise band: held-out χ²/value ≤ {:.2}",
-        experiment.title(),
-        d.train_values,
-        d.holdout_values,
-        args.holdout,
-        d.noise_band
+        experiment.title, d.train_values, d.holdout_values, args.holdout, d.noise_band
     );
     print!("{}", screening_text(d.screening.as_ref()));
     print!("{}", ranking_text(&d));
@@ -106,7 +102,7 @@ fn summary_json(
     };
     let (flags, screened) = screening_json(d.screening.as_ref());
     json!({
-        "experiment": experiment.title(),
+        "experiment": experiment.title,
         "data": args.data.display().to_string(),
         "flags": flags,
         "screening": screened,

@@ -41,7 +41,7 @@ pub struct FitArgs {
 pub fn run(args: &FitArgs) -> Result<(), Error> {
     let experiment = experiment::load(&args.experiment)?;
     let data = MeasuredData::load(&args.data)?;
-    let mut leg = Leg::open_any(experiment.model_spec(), &[])?;
+    let mut leg = Leg::open_any(&experiment.model, &[])?;
     let requests = args
         .fit
         .iter()
@@ -53,7 +53,7 @@ pub fn run(args: &FitArgs) -> Result<(), Error> {
     let screening = experiment.screen(&data)?;
     println!(
         "{}: {} rows of `{}`, fitting {}",
-        experiment.title(),
+        experiment.title,
         data.rows,
         args.data.display(),
         requests
@@ -99,7 +99,7 @@ fn write_outputs(
     let r = &report.result;
     let (flags, screened) = screening_json(screening);
     let summary = json!({
-        "experiment": experiment.title(),
+        "experiment": experiment.title,
         "data": args.data.display().to_string(),
         "flags": flags,
         "screening": screened,

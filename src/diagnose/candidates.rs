@@ -35,8 +35,8 @@ use serde::Serialize;
 
 use super::data::MeasuredData;
 use super::error::Error;
-use super::experiment::Experiment;
 use super::experiment::Extensions;
+use super::experiment::{Experiment, Kind};
 use super::extend::Extension;
 use super::fit::{fit_values, residual, Target};
 use super::lm::{information_criteria, FitResult, NoiseModel, Parameter};
@@ -139,9 +139,9 @@ impl Candidate {
 /// the experiment can show (a frequency-dependent loss factor needs a frequency response, an
 /// off-axis load at the foot a force/deflection test).
 pub fn catalog(leg: &Leg, experiment: &Experiment) -> Vec<Candidate> {
-    let frequency_response = matches!(experiment, Experiment::FrequencyResponse(_));
+    let frequency_response = matches!(experiment.kind, Kind::FrequencyResponse(_));
     let mut out = parameter_candidates(leg, frequency_response);
-    if let Experiment::ForceDeflection(test) = experiment {
+    if let Kind::ForceDeflection(test) = &experiment.kind {
         out.push(Candidate::parameter_change(
             "unmodelled off-axis load at the foot",
             "foot (the sensor's y force)".into(),
@@ -155,7 +155,7 @@ pub fn catalog(leg: &Leg, experiment: &Experiment) -> Vec<Candidate> {
     }
     out.extend(modulus_candidates(leg));
     // A ring-down swings in the hinge's plane: no twist to excite.
-    if !matches!(experiment, Experiment::Pendulum(_)) {
+    if !matches!(experiment.kind, Kind::Pendulum(_)) {
         out.extend(hinge_candidates(leg));
         out.extend(actuator_candidates(leg));
     }
@@ -507,7 +507,7 @@ pub fn diagnose_causes(
     holdout: Holdout,
     causes: &[String],
 ) -> Result<Diagnosis, Error> {
-    let spec = experiment.model_spec();
+    let spec = &experiment.model;
     let leg = Leg::open_any(spec, &[]).map_err(Error::leg)?;
     let observations = experiment.observations(&leg, data)?;
     let screening = experiment.screen(data)?;

@@ -36,12 +36,24 @@ use super::observations::noise_value;
 pub use super::observations::Observations;
 use super::pendulum::{self, Pendulum, Screening};
 use crate::experiments::leg::{Dof, ForceTest, Leg, Sensor, WarmStarts};
+use crate::frequency::Channel;
 use crate::session::ModelSpec;
 
-/// One diagnosis experiment file.
+/// One diagnosis experiment file: the keys every kind has (a title, the model), then the
+/// kind's own keys.
 #[derive(Debug, Clone, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
-pub enum Experiment {
+pub struct Experiment {
+    pub title: String,
+    #[serde(flatten)]
+    pub model: ModelSpec,
+    #[serde(flatten)]
+    pub kind: Kind,
+}
+
+/// The diagnosis experiment kinds, by the file's `kind` key.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Kind {
     QuasiStatic(QuasiStatic),
     FrequencyResponse(FrequencyResponse),
     ForceDeflection(ForceDeflectionTest),
@@ -51,9 +63,6 @@ pub enum Experiment {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ForceDeflectionTest {
-    pub title: String,
-    #[serde(flatten)]
-    pub model: ModelSpec,
     /// The driven degree of freedom: `lift` (force along z) or `swing` (along x).
     pub dof: Dof,
     /// Drive voltage of the model input, e.g. `"225 V"`.
@@ -70,9 +79,6 @@ pub struct ForceDeflectionTest {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct QuasiStatic {
-    pub title: String,
-    #[serde(flatten)]
-    pub model: ModelSpec,
     /// The measured outputs (model output names = data column names).
     pub outputs: Vec<String>,
     /// Measurement noise (one standard deviation) of each output, e.g. `"5 um"`; omitted: the
@@ -84,9 +90,6 @@ pub struct QuasiStatic {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FrequencyResponse {
-    pub title: String,
-    #[serde(flatten)]
-    pub model: ModelSpec,
     /// One transfer function: model input and output, e.g. `v_lift` → `foot.z` (data
     /// columns `gain`, `phase`). Or several as `[[channel]]` tables below.
     #[serde(default)]
@@ -105,15 +108,6 @@ pub struct FrequencyResponse {
     pub gain_noise: Option<String>,
     #[serde(default)]
     pub phase_noise: Option<String>,
-}
-
-/// One measured transfer function of a `frequency_response` experiment.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Channel {
-    pub name: String,
-    pub input: String,
-    pub output: String,
 }
 
 impl FrequencyResponse {
@@ -182,8 +176,8 @@ impl Experiment {
     /// [`pendulum`]. Errors only for unreadable data (missing column, bad unit, time not
     /// increasing), which the observations report too.
     pub fn screen(&self, data: &MeasuredData) -> Result<Option<Screening>, Error> {
-        match self {
-            Experiment::Pendulum(e) => {
+        match &self.kind {
+            Kind::Pendulum(e) => {
                 let (times, angles) = e.trace(data)?;
                 Ok(Some(pendulum::screen(times, angles)))
             }
@@ -191,40 +185,15 @@ impl Experiment {
         }
     }
 
-    pub fn title(&self) -> &str {
-        self.header().0
-    }
-
-    /// The model and its settings.
-    pub fn model_spec(&self) -> &ModelSpec {
-        self.header().1
-    }
-
     /// The same experiment on another model file (`mech diagnose MODEL …`).
     pub fn set_model(&mut self, path: PathBuf) {
-        let model = match self {
-            Experiment::QuasiStatic(e) => &mut e.model,
-            Experiment::FrequencyResponse(e) => &mut e.model,
-            Experiment::ForceDeflection(e) => &mut e.model,
-            Experiment::Pendulum(e) => &mut e.model,
-        };
-        model.path = path;
-    }
-
-    /// The keys every kind has: title and model.
-    fn header(&self) -> (&str, &ModelSpec) {
-        match self {
-            Experiment::QuasiStatic(e) => (&e.title, &e.model),
-            Experiment::FrequencyResponse(e) => (&e.title, &e.model),
-            Experiment::ForceDeflection(e) => (&e.title, &e.model),
-            Experiment::Pendulum(e) => (&e.title, &e.model),
-        }
+        self.model.path = path;
     }
 
     /// The keys that do not need the model or the data.
     fn check(&self) -> Result<(), KeyError> {
-        match self {
-            Experiment::QuasiStatic(e) => {
+        match &self.kind {
+            Kind::QuasiStatic(e) => {
                 if e.outputs.is_empty() {
                     return Err(KeyError::NoOutputs);
                 }
@@ -238,7 +207,7 @@ impl Experiment {
                     noise_value("noise", text)?;
                 }
             }
-            Experiment::FrequencyResponse(e) => {
+            Kind::FrequencyResponse(e) => {
                 let single = e.input.is_some() || e.output.is_some();
                 if single && (e.input.is_none() || e.output.is_none() || !e.channel.is_empty()) {
                     return Err(KeyError::ChannelForms);
@@ -253,7 +222,7 @@ impl Experiment {
                     noise_value("phase_noise", text)?;
                 }
             }
-            Experiment::ForceDeflection(e) => {
+            Kind::ForceDeflection(e) => {
                 e.volts()?;
                 if let Some(text) = &e.noise {
                     noise_value("noise", text)?;
@@ -264,7 +233,7 @@ impl Experiment {
                     });
                 }
             }
-            Experiment::Pendulum(e) => e.check()?,
+            Kind::Pendulum(e) => e.check()?,
         }
         Ok(())
     }
@@ -272,11 +241,11 @@ impl Experiment {
     /// The measured values this experiment compares, in the order of [`Experiment::predict`].
     /// Errors name the data file and the column.
     pub fn observations(&self, leg: &Leg, data: &MeasuredData) -> Result<Observations, Error> {
-        match self {
-            Experiment::QuasiStatic(e) => e.observations(leg, data),
-            Experiment::FrequencyResponse(e) => e.observations(leg, data),
-            Experiment::ForceDeflection(e) => e.observations(leg, data),
-            Experiment::Pendulum(e) => e.observations(leg, data),
+        match &self.kind {
+            Kind::QuasiStatic(e) => e.observations(leg, data),
+            Kind::FrequencyResponse(e) => e.observations(leg, data),
+            Kind::ForceDeflection(e) => e.observations(leg, data),
+            Kind::Pendulum(e) => e.observations(leg, data),
         }
     }
 
@@ -302,15 +271,13 @@ impl Experiment {
         extensions: &Extensions,
         warm: &mut WarmStarts,
     ) -> Result<Vec<f64>, Error> {
-        match self {
-            Experiment::QuasiStatic(e) => e.predict_warm(leg, data, warm),
-            Experiment::FrequencyResponse(e) => {
-                e.predict_warm(leg, data, measured, extensions, warm)
-            }
-            Experiment::ForceDeflection(e) => e.predict_warm(leg, measured, extensions, warm),
+        match &self.kind {
+            Kind::QuasiStatic(e) => e.predict_warm(leg, data, warm),
+            Kind::FrequencyResponse(e) => e.predict_warm(leg, data, measured, extensions, warm),
+            Kind::ForceDeflection(e) => e.predict_warm(leg, measured, extensions, warm),
             // A frequency-dependent loss factor has no meaning at the one frequency of a
             // ring-down (the catalog leaves it out for every kind but frequency responses).
-            Experiment::Pendulum(e) => e.predict(leg, data),
+            Kind::Pendulum(e) => e.predict(leg, data),
         }
     }
 }

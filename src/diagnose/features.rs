@@ -14,7 +14,7 @@
 //! feature compares like with like: a model's peak between two measured frequencies is seen
 //! as the measurement would see it.
 
-use super::experiment::{Experiment, Observations};
+use super::experiment::{Experiment, Kind, Observations};
 
 /// One feature of a response: `value` in SI units (`None` where the curve does not show it,
 /// e.g. a peak at the edge of the band); `unit` and `scale` for display (`value·scale unit`).
@@ -65,20 +65,20 @@ pub fn features(
         observations,
         values,
     };
-    match experiment {
-        Experiment::FrequencyResponse(_) => observations
+    match experiment.kind {
+        Kind::FrequencyResponse(_) => observations
             .series_names()
             .into_iter()
             .filter_map(|name| name.strip_prefix("ln|H|"))
             .flat_map(|suffix| channel_features(&curves, suffix))
             .collect(),
-        Experiment::ForceDeflection(_) => force_deflection_features(&curves),
-        Experiment::QuasiStatic(_) => observations
+        Kind::ForceDeflection(_) => force_deflection_features(&curves),
+        Kind::QuasiStatic(_) => observations
             .series_names()
             .into_iter()
             .map(|name| peak_to_peak(&curves, name))
             .collect(),
-        Experiment::Pendulum(_) => ring_down_features(&curves),
+        Kind::Pendulum(_) => ring_down_features(&curves),
     }
 }
 

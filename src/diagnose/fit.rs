@@ -223,7 +223,7 @@ pub fn fit_values(
     let after = experiment.predict_warm(leg, data, &observations, &extensions, &mut warm)?;
     let residuals = series_rms(&observations, &before, &after, &|_| true);
     Ok(FitReport {
-        title: experiment.title().to_string(),
+        title: experiment.title.to_string(),
         observations,
         before,
         after,

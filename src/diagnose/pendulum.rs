@@ -49,7 +49,6 @@ use super::lm::{levenberg_marquardt, LmOptions, Parameter};
 use super::observations::{noise_value, Observations};
 use crate::experiments::leg::Leg;
 use crate::flexure_fit::trace::{analyze_trace, TraceAnalysis, TraceOptions};
-use crate::session::ModelSpec;
 
 /// An effect is flagged when its estimate exceeds this many standard errors. Three effects
 /// are tested per trace; with Gaussian noise 3.5σ gives a false flag on about 0.14 % of
@@ -72,9 +71,6 @@ const ATOL: f64 = 1e-12;
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Pendulum {
-    pub title: String,
-    #[serde(flatten)]
-    pub model: ModelSpec,
     /// The measured angle: a model output or coordinate, and the data column of that name
     /// (default `angle`, the rig's output).
     #[serde(default = "default_angle")]

@@ -15,7 +15,7 @@ use serde::Deserialize;
 use super::leg::Leg;
 use super::Error;
 use super::{csv, Outcome, Table};
-use crate::frequency::{self, ChirpSweep, Point, Resonance};
+use crate::frequency::{self, Channel, ChirpSweep, Point, Resonance};
 use crate::parallel::{parallel, threads};
 use crate::quantity::{positive, quantity};
 use crate::render::plot;
@@ -41,14 +41,6 @@ pub struct Spec {
 
 fn default_points() -> usize {
     300
-}
-
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Channel {
-    pub name: String,
-    pub input: String,
-    pub output: String,
 }
 
 #[derive(Debug, Clone, Deserialize)]

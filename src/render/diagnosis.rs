@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use serde_json::json;
 
 use crate::diagnose::candidates::{Diagnosis, Trial, Verdict};
-use crate::diagnose::experiment::{Experiment, Observations};
+use crate::diagnose::experiment::{Experiment, Kind, Observations};
 use crate::diagnose::features::{features, series_rms, Feature, SeriesResidual};
 use crate::diagnose::pendulum::Screening;
 use crate::output;
@@ -65,13 +65,13 @@ pub fn overlay_plots(
     obs: &Observations,
     curves: &[(String, &[f64])],
 ) -> Result<Vec<PathBuf>, Error> {
-    let log_x = matches!(experiment, Experiment::FrequencyResponse(_));
+    let log_x = matches!(experiment.kind, Kind::FrequencyResponse(_));
     // Axis labels and the SI → plotted unit factors.
-    let (x_label, x_scale, y_unit, y_scale) = match experiment {
-        Experiment::FrequencyResponse(_) => ("frequency [Hz]", 1.0, "", 1.0),
-        Experiment::QuasiStatic(_) => ("data row", 1.0, " [m]", 1.0),
-        Experiment::ForceDeflection(_) => ("sensor distance [µm]", 1e6, " [mN]", 1e3),
-        Experiment::Pendulum(_) => ("time [s]", 1.0, " [rad]", 1.0),
+    let (x_label, x_scale, y_unit, y_scale) = match experiment.kind {
+        Kind::FrequencyResponse(_) => ("frequency [Hz]", 1.0, "", 1.0),
+        Kind::QuasiStatic(_) => ("data row", 1.0, " [m]", 1.0),
+        Kind::ForceDeflection(_) => ("sensor distance [µm]", 1e6, " [mN]", 1e3),
+        Kind::Pendulum(_) => ("time [s]", 1.0, " [rad]", 1.0),
     };
     let mut paths = Vec::new();
     for name in obs.series_names() {
@@ -94,7 +94,7 @@ pub fn overlay_plots(
                 })
                 .collect();
         let path = dir.join(format!("{prefix}_{}.svg", name.replace(['|', '.'], "_")));
-        let title = format!("{}: {name}", experiment.title());
+        let title = format!("{}: {name}", experiment.title);
         let y_label = format!("{name}{y_unit}");
         plot::plot_xy(&path, &title, x_label, &y_label, &lines, log_x)?;
         paths.push(path);
@@ -324,7 +324,7 @@ pub fn diagnosis_page(
     let mut outcome = Outcome {
         name: "diagnosis".into(),
         source: Some(sources.experiment.display().to_string()),
-        title: experiment.title().to_string(),
+        title: experiment.title.to_string(),
         method: format!(
             "{} values fitted, {} held out ({}); a model explains the data to the noise when \
              its χ² per held-out value is at most {:.2}. Verdict: {verdict}.",

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use common::Rng;
 use mech::diagnose::candidates::{diagnose, Diagnosis, Holdout, Verdict};
-use mech::diagnose::experiment::Experiment;
+use mech::diagnose::experiment::{Experiment, Kind};
 use mech::diagnose::fit::{fit, parameters, FitRequest};
 use mech::experiments::leg::Leg;
 
@@ -27,7 +27,7 @@ fn quasi_static_fit_recovers_a_hidden_stiffness() {
         "kind = \"quasi_static\"\ntitle = \"hidden k_s3\"\n\
              outputs = [\"foot.x\", \"foot.z\"]\nnoise = [\"1 um\", \"1 um\"]\n",
     );
-    let mut truth = Leg::open(experiment.model_spec()).unwrap();
+    let mut truth = Leg::open(&experiment.model).unwrap();
     let nominal = param(&truth, "k_s3");
     common::set_leg_param(&mut truth, "k_s3", 1.3 * nominal);
 
@@ -42,7 +42,7 @@ fn quasi_static_fit_recovers_a_hidden_stiffness() {
     }
     let data = common::measured_data(&dir, &text);
 
-    let mut leg = Leg::open(experiment.model_spec()).unwrap();
+    let mut leg = Leg::open(&experiment.model).unwrap();
     let requests = [FitRequest::parse("k_s3").unwrap()];
     let fitted = parameters(&leg, &requests).unwrap();
     let report = fit(&experiment, &data, &mut leg, &fitted).unwrap();
@@ -73,13 +73,13 @@ fn quasi_static_fit_recovers_a_hidden_stiffness() {
 fn frequency_response_fit_recovers_the_loss_factor() {
     let dir = common::scratch_dir("diagnose_frequency_response");
     let experiment = bode_experiment(&dir);
-    let Experiment::FrequencyResponse(_) = &experiment else {
+    let Kind::FrequencyResponse(_) = &experiment.kind else {
         panic!("a frequency-response experiment");
     };
     let text = bode_data(&experiment, 0.12, 0.0, 3);
     let data = common::measured_data(&dir, &text);
 
-    let mut leg = Leg::open(experiment.model_spec()).unwrap();
+    let mut leg = Leg::open(&experiment.model).unwrap();
     let requests = [FitRequest::parse("eta=0.01..0.5").unwrap()];
     let fitted = parameters(&leg, &requests).unwrap();
     let report = fit(&experiment, &data, &mut leg, &fitted).unwrap();
@@ -95,7 +95,7 @@ fn frequency_response_fit_recovers_the_loss_factor() {
 /// noise, as CSV text.
 fn bode_data(experiment: &Experiment, eta: f64, delay: f64, seed: u64) -> String {
     let (damping, from_hz) = (mech_runtime::FlexureDamping::Hysteretic, 20.0_f64);
-    let mut truth = Leg::open(experiment.model_spec()).unwrap();
+    let mut truth = Leg::open(&experiment.model).unwrap();
     common::set_leg_param(&mut truth, "eta", eta);
     let rest_inputs = truth.inputs(0.0, 0.0);
     let rest = truth.equilibrium(&truth.q0, &rest_inputs, &[]).unwrap().q;

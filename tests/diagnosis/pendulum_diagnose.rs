@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use common::Rng;
 use mech::diagnose::candidates::{diagnose, Holdout, Verdict};
 use mech::diagnose::data::MeasuredData;
-use mech::diagnose::experiment::{self, Experiment};
+use mech::diagnose::experiment::{self, Experiment, Kind};
 use mech::diagnose::fit::{fit, parameters, FitRequest};
 use mech::diagnose::pendulum::{screen, Screening};
 use mech::experiments::leg::Leg;
@@ -281,7 +281,7 @@ fn fit_recovers_the_loss_factor_and_modulus() {
         ),
     ] {
         let data = common::measured_data(&dir, &trace_csv(extra, 21, NOISE_DEG));
-        let mut leg = Leg::open_any(experiment.model_spec(), &[]).unwrap();
+        let mut leg = Leg::open_any(&experiment.model, &[]).unwrap();
         let expected: Vec<f64> = fits
             .iter()
             .map(|&name| match name {
@@ -362,7 +362,7 @@ fn diagnose_ring_downs() {
 fn bad_pendulum_data_are_clear_errors() {
     let dir = common::scratch_dir("pendulum_bad_data");
     let experiment = experiment_in(&dir, "");
-    let leg = Leg::open_any(experiment.model_spec(), &[]).unwrap();
+    let leg = Leg::open_any(&experiment.model, &[]).unwrap();
     let check = |name: &str, text: &str| -> String {
         let path = dir.join(name);
         std::fs::write(&path, text).unwrap();
@@ -555,13 +555,13 @@ fn release_angle_from_the_file_or_the_data() {
     let dir = common::scratch_dir("pendulum_release");
     let data = common::measured_data(&dir, &trace_csv(Extra::default(), 51, NOISE_DEG));
     let given = experiment_in(&dir, "release = \"10 deg\"\n");
-    let leg = Leg::open_any(given.model_spec(), &[]).unwrap();
+    let leg = Leg::open_any(&given.model, &[]).unwrap();
     let observations = given.observations(&leg, &data).unwrap();
     let predicted = given
         .predict(&leg, &data, &observations, &Default::default())
         .unwrap();
     assert_eq!(predicted[0], 10f64.to_radians());
-    let Experiment::Pendulum(pendulum) = experiment_in(&dir, "") else {
+    let Kind::Pendulum(pendulum) = experiment_in(&dir, "").kind else {
         panic!("a pendulum experiment");
     };
     for seed in 52..56 {
