@@ -6,7 +6,7 @@
 
 use std::cell::RefCell;
 
-use mech_codegen::back::tape::{Env, Tape};
+use mech_codegen::back::tape::{Env, Program, Tape};
 use mech_codegen::Compiled;
 
 /// The tape of a model with its names, defaults and current parameter values.
@@ -71,8 +71,21 @@ impl TapeModel {
         &self.tape
     }
 
-    fn run(&self, program: &mech_codegen::back::tape::Program, env: &Env, out: &mut [f64]) {
+    fn run(&self, program: &Program, env: &Env, out: &mut [f64]) {
         program.eval(env, &mut self.registers.borrow_mut(), out);
+    }
+
+    /// Runs `program` at `(t, q, u, inputs)` into `out`.
+    fn eval(
+        &self,
+        program: &Program,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        inputs: &[f64],
+        out: &mut [f64],
+    ) {
+        self.run(program, &self.env(t, q, u, inputs), out);
     }
 }
 
@@ -131,23 +144,19 @@ impl mech_runtime::Model for TapeModel {
         }
     }
     fn mass_matrix(&self, t: f64, q: &[f64], inputs: &[f64], out: &mut [f64]) {
-        let env = self.env(t, q, &[], inputs);
-        self.run(&self.tape.mass_matrix, &env, out);
+        self.eval(&self.tape.mass_matrix, t, q, &[], inputs, out);
     }
     fn forcing(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]) {
-        let env = self.env(t, q, u, inputs);
-        self.run(&self.tape.forcing, &env, out);
+        self.eval(&self.tape.forcing, t, q, u, inputs, out);
     }
     fn static_forcing(&self, t: f64, q: &[f64], inputs: &[f64], out: &mut [f64]) {
         let Some(program) = &self.tape.static_forcing else {
             return self.forcing(t, q, &vec![0.0; self.tape.nu], inputs, out);
         };
-        let env = self.env(t, q, &[], inputs);
-        self.run(program, &env, out);
+        self.eval(program, t, q, &[], inputs, out);
     }
     fn outputs(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]) {
-        let env = self.env(t, q, u, inputs);
-        self.run(&self.tape.outputs, &env, out);
+        self.eval(&self.tape.outputs, t, q, u, inputs, out);
     }
     fn selected_outputs(
         &self,
@@ -175,16 +184,13 @@ impl mech_runtime::Model for TapeModel {
         name_at(&self.constraint_names, i)
     }
     fn constraints(&self, t: f64, q: &[f64], out: &mut [f64]) {
-        let env = self.env(t, q, &[], &[]);
-        self.run(&self.tape.constraints, &env, out);
+        self.eval(&self.tape.constraints, t, q, &[], &[], out);
     }
     fn constraint_jacobian(&self, t: f64, q: &[f64], out: &mut [f64]) {
-        let env = self.env(t, q, &[], &[]);
-        self.run(&self.tape.constraint_jacobian, &env, out);
+        self.eval(&self.tape.constraint_jacobian, t, q, &[], &[], out);
     }
     fn constraint_bias(&self, t: f64, q: &[f64], u: &[f64], out: &mut [f64]) {
-        let env = self.env(t, q, u, &[]);
-        self.run(&self.tape.constraint_bias, &env, out);
+        self.eval(&self.tape.constraint_bias, t, q, u, &[], out);
     }
     fn nflexures(&self) -> usize {
         self.tape.nflexures
@@ -193,7 +199,6 @@ impl mech_runtime::Model for TapeModel {
         name_at(&self.flexure_names, i)
     }
     fn flexures(&self, t: f64, q: &[f64], out: &mut [f64]) {
-        let env = self.env(t, q, &[], &[]);
-        self.run(&self.tape.flexures, &env, out);
+        self.eval(&self.tape.flexures, t, q, &[], &[], out);
     }
 }

@@ -317,30 +317,25 @@ fn render(
     let bytes = match format {
         Format::Svg => {
             let mut svg = String::new();
-            {
-                let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
-                figure
-                    .draw(&root)
-                    .map_err(|m| error(PlotErrorKind::Render(m)))?;
-                root.present()
-                    .map_err(|e| error(PlotErrorKind::Render(e.to_string())))?;
-            }
+            draw_and_present(figure, SVGBackend::with_string(&mut svg, size))
+                .map_err(|m| error(PlotErrorKind::Render(m)))?;
             svg.into_bytes()
         }
         Format::Png => {
             let mut pixels = vec![0u8; size.0 as usize * size.1 as usize * 3];
-            {
-                let root = BitMapBackend::with_buffer(&mut pixels, size).into_drawing_area();
-                figure
-                    .draw(&root)
-                    .map_err(|m| error(PlotErrorKind::Render(m)))?;
-                root.present()
-                    .map_err(|e| error(PlotErrorKind::Render(e.to_string())))?;
-            }
+            draw_and_present(figure, BitMapBackend::with_buffer(&mut pixels, size))
+                .map_err(|m| error(PlotErrorKind::Render(m)))?;
             encode_png(&pixels, size).map_err(|m| error(PlotErrorKind::Render(m)))?
         }
     };
     crate::output::write_atomic(path, &bytes).map_err(|e| error(PlotErrorKind::Io(e)))
+}
+
+/// Draws `figure` on `backend` and flushes it into the backend's buffer.
+fn draw_and_present<DB: DrawingBackend>(figure: &impl Figure, backend: DB) -> Result<(), String> {
+    let root = backend.into_drawing_area();
+    figure.draw(&root)?;
+    root.present().map_err(|e| e.to_string())
 }
 
 /// Encodes 8-bit RGB pixels as a PNG file in memory.
