@@ -4,8 +4,11 @@
 
 #[path = "../common/mod.rs"]
 mod common;
+#[path = "../../codegen/tests/support/markdown.rs"]
+mod markdown;
 
 mod actuator;
+mod docs_commands;
 mod experiments;
 mod flexure;
 mod flexure_screening;

@@ -1,12 +1,54 @@
-//! The fenced examples of a Markdown page (```` ```mech ```` and ```` ```mech,fail ````), for
-//! the tests that keep `docs/mech-language.md` true (codegen's loading test, the root crate's
-//! assembly test).
+//! The fenced blocks of a Markdown page, for the tests that keep the docs true: the
+//! ```` ```mech ```` and ```` ```mech,fail ```` examples of `docs/mech-language.md` (codegen's
+//! loading test, the root crate's assembly test) and the documented commands with their
+//! printed output (the root crate's docs test).
 //!
-//! Consumes: Markdown text. Produces: [`Example`]s with their line numbers.
+//! Consumes: Markdown text. Produces: [`Block`]s (and the [`Example`]s among them) with their
+//! line numbers.
 
 #![allow(dead_code)]
 
-/// A fenced example: its first line number, whether it must fail, and its text.
+/// A fenced block: the line of its first content line, the fence's tag (` ```text ` → `text`),
+/// the last non-blank line before the fence, and the content.
+pub struct Block {
+    pub line: usize,
+    pub tag: String,
+    pub preceding: String,
+    pub text: String,
+}
+
+/// Every fenced block of `markdown`, in order.
+pub fn blocks(markdown: &str) -> Vec<Block> {
+    let mut blocks = Vec::new();
+    let mut current: Option<Block> = None;
+    let mut preceding = "";
+    for (index, line) in markdown.lines().enumerate() {
+        let trimmed = line.trim();
+        match current.take() {
+            Some(block) if trimmed == "```" => blocks.push(block),
+            Some(mut block) => {
+                block.text.push_str(line);
+                block.text.push('\n');
+                current = Some(block);
+            }
+            None => match trimmed.strip_prefix("```") {
+                Some(tag) => {
+                    current = Some(Block {
+                        line: index + 2,
+                        tag: tag.trim().to_string(),
+                        preceding: preceding.to_string(),
+                        text: String::new(),
+                    })
+                }
+                None if !trimmed.is_empty() => preceding = trimmed,
+                None => {}
+            },
+        }
+    }
+    blocks
+}
+
+/// A `.mech` example: its first line number, whether it must fail, and its text.
 pub struct Example {
     pub line: usize,
     pub must_fail: bool,
@@ -14,32 +56,19 @@ pub struct Example {
 }
 
 pub fn examples(markdown: &str) -> Vec<Example> {
-    let mut examples = Vec::new();
-    let mut current: Option<Example> = None;
-    for (index, line) in markdown.lines().enumerate() {
-        let trimmed = line.trim();
-        match current.take() {
-            Some(example) if trimmed == "```" => examples.push(example),
-            Some(mut example) => {
-                example.text.push_str(line);
-                example.text.push('\n');
-                current = Some(example);
-            }
-            None => {
-                let tag = trimmed.strip_prefix("```").map(str::trim);
-                if let Some(must_fail) = match tag {
-                    Some("mech") => Some(false),
-                    Some("mech,fail") => Some(true),
-                    _ => None,
-                } {
-                    current = Some(Example {
-                        line: index + 2,
-                        must_fail,
-                        text: String::new(),
-                    });
-                }
-            }
-        }
-    }
-    examples
+    blocks(markdown)
+        .into_iter()
+        .filter_map(|block| {
+            let must_fail = match block.tag.as_str() {
+                "mech" => false,
+                "mech,fail" => true,
+                _ => return None,
+            };
+            Some(Example {
+                line: block.line,
+                must_fail,
+                text: block.text,
+            })
+        })
+        .collect()
 }
