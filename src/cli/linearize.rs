@@ -1,15 +1,17 @@
 //! `mech linearize MODEL`: `M δz̈ + C δż + K δz = B δin` about the static equilibrium, in
 //! minimal coordinates, and the normal modes.
 //!
-//! Consumes: [`ModelArgs`]. Produces: the matrices and modes on stdout and, with `--out`,
-//! the modes as CSV.
+//! Consumes: [`ModelArgs`]. Produces: the matrices and modes on stdout; with `--out` the
+//! modes as CSV, with `--matrices` the matrices and the first-order (state-space) form as
+//! JSON, each row and column named.
 
 use super::Error;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use clap::Args;
-use mech_runtime::Model;
+use mech_runtime::nalgebra::DMatrix;
+use mech_runtime::{Linearization, Model};
 
 use super::ModelArgs;
 use crate::output;
@@ -21,9 +23,56 @@ pub struct LinearizeArgs {
     /// CSV file for the modes (frequency, damping ratio, shape).
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// JSON file for the matrices M, C, K, B and the state-space form ẋ = A x + B_s in,
+    /// y = C_s x + D_s in with x = [δz; δż] (rows as arrays, with the names of the
+    /// coordinates, inputs, states and outputs).
+    #[arg(long)]
+    pub matrices: Option<PathBuf>,
 }
 
-fn matrix_text(name: &str, matrix: &mech_runtime::nalgebra::DMatrix<f64>) -> String {
+/// A matrix as JSON: an array of rows.
+fn matrix_json(matrix: &DMatrix<f64>) -> serde_json::Value {
+    (0..matrix.nrows())
+        .map(|r| (0..matrix.ncols()).map(|c| matrix[(r, c)]).collect())
+        .collect::<Vec<Vec<f64>>>()
+        .into()
+}
+
+/// The `--matrices` document: the second-order matrices in the minimal coordinates and the
+/// first-order form, with the names that label their rows and columns.
+fn matrices_json(
+    model: &dyn Model,
+    linear: &Linearization,
+    coordinates: &[&str],
+) -> Result<serde_json::Value, Error> {
+    let state_space = linear.state_space().ok_or(Error::NoModes)?;
+    let inputs: Vec<&str> = (0..model.ninputs()).map(|i| model.input_name(i)).collect();
+    let outputs: Vec<&str> = (0..model.noutputs())
+        .map(|i| model.output_name(i))
+        .collect();
+    let states: Vec<String> = ["q", "u"]
+        .iter()
+        .flat_map(|kind| coordinates.iter().map(move |name| format!("{kind}_{name}")))
+        .collect();
+    Ok(serde_json::json!({
+        "model": model.name(),
+        "form": "M δz̈ + C δż + K δz = B δin; ẋ = A x + B_s δin, y = C_s x + D_s δin, x = [δz; δż] (SI units)",
+        "coordinates": coordinates,
+        "inputs": inputs,
+        "outputs": outputs,
+        "states": states,
+        "M": matrix_json(&linear.mass),
+        "C": matrix_json(&linear.damping),
+        "K": matrix_json(&linear.stiffness),
+        "B": matrix_json(&linear.input),
+        "A": matrix_json(&state_space.a),
+        "B_s": matrix_json(&state_space.b),
+        "C_s": matrix_json(&state_space.c),
+        "D_s": matrix_json(&state_space.d),
+    }))
+}
+
+fn matrix_text(name: &str, matrix: &DMatrix<f64>) -> String {
     let mut text = format!("{name} =\n");
     for r in 0..matrix.nrows() {
         let row: Vec<String> = (0..matrix.ncols())
@@ -97,6 +146,12 @@ pub fn run(args: &LinearizeArgs) -> Result<(), Error> {
         header.extend(names.iter().map(|n| format!("shape_{n}")));
         output::write_csv(out, &header, &rows).map_err(|e| Error::write(out, e))?;
         println!("written to {}", out.display());
+    }
+    if let Some(path) = &args.matrices {
+        let json = matrices_json(model, &linear, &names)?;
+        let text = serde_json::to_string_pretty(&json).map_err(|e| Error::write(path, e))?;
+        output::write_atomic(path, text.as_bytes()).map_err(|e| Error::write(path, e))?;
+        println!("written to {}", path.display());
     }
     Ok(())
 }

@@ -479,3 +479,89 @@ pub(crate) fn two_mass_chain_response(omega: f64) -> Complex<f64> {
         .unwrap();
     x[1]
 }
+
+/// `mech linearize --matrices` writes the two-mass chain's matrices as written by hand from
+/// its Lagrangian (m2 at x1 + x21: M = [[m1 + m2, m2], [m2, m2]], K = diag(k1, k2),
+/// C = diag(c1, c2), the push on m2 does work through both coordinates: B = [1, 1]ᵀ), and
+/// the first-order form A = [[0, I], [−M⁻¹K, −M⁻¹C]], B_s = [0; M⁻¹B], with the output x2.x
+/// reading x1 + x21.
+#[test]
+fn linearize_matrices_are_the_chains_written_by_hand() {
+    let dir = common::scratch_dir("linearize_matrices");
+    let path = dir.join("chain.json");
+    let args = mech::cli::linearize::LinearizeArgs {
+        common: mech::cli::ModelArgs {
+            model: common::bundled_path("two_mass_chain").into(),
+            sets: Vec::new(),
+            inputs: Vec::new(),
+            independent: Vec::new(),
+        },
+        out: None,
+        matrices: Some(path.clone()),
+    };
+    mech::cli::linearize::run(&args).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let matrix =
+        |key: &str| -> Vec<Vec<f64>> { serde_json::from_value(json[key].clone()).unwrap() };
+    let (m1, m2, k1, k2) = TWO_MASS_CHAIN_MASSES_AND_SPRINGS;
+    let (c1, c2) = (1.5, 0.4);
+    let mass = Matrix2::new(m1 + m2, m2, m2, m2);
+    let close = |got: &[Vec<f64>], want: &[&[f64]], what: &str| {
+        assert_eq!(got.len(), want.len(), "{what} rows");
+        for (row, want_row) in got.iter().zip(want) {
+            assert_eq!(row.len(), want_row.len(), "{what} columns");
+            for (g, w) in row.iter().zip(*want_row) {
+                assert!(
+                    (g - w).abs() <= 1e-9 * w.abs().max(1.0),
+                    "{what}: {got:?} vs {want:?}"
+                );
+            }
+        }
+    };
+    close(&matrix("M"), &[&[m1 + m2, m2], &[m2, m2]], "M");
+    close(&matrix("K"), &[&[k1, 0.0], &[0.0, k2]], "K");
+    close(&matrix("C"), &[&[c1, 0.0], &[0.0, c2]], "C");
+    close(&matrix("B"), &[&[1.0], &[1.0]], "B");
+    let inverse = mass.try_inverse().unwrap();
+    let minv_k = -inverse * Matrix2::new(k1, 0.0, 0.0, k2);
+    let minv_c = -inverse * Matrix2::new(c1, 0.0, 0.0, c2);
+    let minv_b = inverse * Vector2::new(1.0, 1.0);
+    close(
+        &matrix("A"),
+        &[
+            &[0.0, 0.0, 1.0, 0.0],
+            &[0.0, 0.0, 0.0, 1.0],
+            &[
+                minv_k[(0, 0)],
+                minv_k[(0, 1)],
+                minv_c[(0, 0)],
+                minv_c[(0, 1)],
+            ],
+            &[
+                minv_k[(1, 0)],
+                minv_k[(1, 1)],
+                minv_c[(1, 0)],
+                minv_c[(1, 1)],
+            ],
+        ],
+        "A",
+    );
+    close(
+        &matrix("B_s"),
+        &[&[0.0], &[0.0], &[minv_b[0]], &[minv_b[1]]],
+        "B_s",
+    );
+    let outputs: Vec<String> = serde_json::from_value(json["outputs"].clone()).unwrap();
+    let x2 = outputs.iter().position(|name| name == "x2.x").unwrap();
+    close(
+        &matrix("C_s")[x2..=x2],
+        &[&[1.0, 1.0, 0.0, 0.0]],
+        "C_s (x2.x)",
+    );
+    assert_eq!(
+        json["states"],
+        serde_json::json!(["q_x1", "q_x21", "u_x1", "u_x21"])
+    );
+    assert_eq!(json["inputs"], serde_json::json!(["push"]));
+}
