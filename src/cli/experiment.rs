@@ -8,7 +8,6 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use crate::experiments;
 use crate::render::report::outcome_text;
 
 #[derive(Args, Clone, Debug)]
@@ -21,7 +20,7 @@ pub struct ExperimentArgs {
 }
 
 pub fn run(args: &ExperimentArgs) -> Result<(), Error> {
-    let outcome = experiments::run_file(&args.file, &args.out_dir)?;
+    let outcome = crate::render::experiments::run_file(&args.file, &args.out_dir)?;
     print!("{}", outcome_text(&outcome));
     Ok(())
 }

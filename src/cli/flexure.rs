@@ -2,7 +2,7 @@
 //! the pendulum characterization fit (Sec. IV.A).
 //!
 //! Consumes: quantities with units from the command line, specimen files. Produces: text on
-//! stdout; `fit` also writes CSV files and plots through [`crate::flexure_fit::report`].
+//! stdout; `fit` also writes CSV files and plots through [`crate::render::flexure_fit`].
 
 use std::f64::consts::TAU;
 use std::fmt::Write as _;
@@ -13,7 +13,6 @@ use mech_codegen::ir::Dimension;
 
 use super::{angular_frequency, length, positive, Error};
 use crate::flexure_fit::fit::{fit_files, FitOptions, PLAUSIBLE_MODULUS};
-use crate::flexure_fit::report;
 use crate::flexure_fit::rig::specimen_files;
 use crate::physics::flexure::{
     twist_ratio, HAMR_HINGE_EFFECTIVE_LENGTH, HAMR_HINGE_LOSS_FACTOR, HAMR_HINGE_THICKNESS,
@@ -21,6 +20,7 @@ use crate::physics::flexure::{
 };
 use crate::physics::{Flexure, HingeKind, Material};
 use crate::quantity::parse_si;
+use crate::render::flexure_fit as report;
 
 /// `mech flexure ...`
 #[derive(Subcommand)]

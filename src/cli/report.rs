@@ -10,8 +10,9 @@ use std::time::Instant;
 
 use clap::Args;
 
-use crate::experiments::{experiment_files, run_all};
+use crate::experiments::experiment_files;
 use crate::output;
+use crate::render::experiments::run_all;
 use crate::render::report::{outcome_text, render_html, render_markdown};
 
 #[derive(Args, Clone, Debug)]

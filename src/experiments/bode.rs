@@ -2,23 +2,19 @@
 //! voltage to foot displacement, lift and swing, from the linearized model (hysteretic and
 //! viscous flexure losses) and from a simulated linear chirp; resonances and quality factors.
 //!
-//! Consumes: a [`Spec`] (model, sweep, channels, optional chirp). Produces: an [`Outcome`]
-//! with the resonance and mode tables, one CSV and Bode plot per channel, and key values.
+//! Consumes: a [`Spec`] (model, sweep, channels, optional chirp). Produces:
+//! [`Responses`]: every channel's response from each source, the modes and resonances.
 //! The linear model's resonances are refined on its continuous response (independent of
 //! `points`); the chirp's are read off the grid of its estimate, and say so.
-
-use std::path::Path;
 
 use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
 use super::leg::Leg;
 use super::Error;
-use super::{csv, Outcome, Table};
 use crate::frequency::{self, Channel, ChirpSweep, Point, Resonance};
 use crate::parallel::{parallel, threads};
 use crate::quantity::{positive, quantity};
-use crate::render::plot;
 use crate::session::ModelSpec;
 use mech_runtime::Mode;
 
@@ -96,10 +92,6 @@ impl Spec {
     }
 }
 
-fn q_text(q: Option<f64>) -> String {
-    q.map_or("n/a".into(), |q| format!("{q:.1}"))
-}
-
 /// The responses of the model: its modes at rest and, per channel, `H(f)` from the linear
 /// model (hysteretic and viscous losses) and from the chirp simulation if asked for.
 pub struct Responses {
@@ -115,7 +107,7 @@ pub struct Responses {
 /// One source's response on the sweep's grid and its resonances, strongest first.
 pub struct Source {
     pub name: &'static str,
-    /// The key in [`Outcome::values`] (`hysteretic`, `viscous`, `chirp`).
+    /// The key in [`crate::render::report::Outcome::values`] (`hysteretic`, `viscous`, `chirp`).
     pub key: &'static str,
     pub response: Vec<Point>,
     pub resonances: Vec<Resonance>,
@@ -234,205 +226,4 @@ pub fn compute(spec: &Spec) -> Result<Responses, Error> {
         modes,
         channels,
     })
-}
-
-pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
-    let responses = compute(spec)?;
-    let (from, to, name) = (responses.from, responses.to, &responses.model_name);
-    let mut outcome = Outcome {
-        method: method_text(spec, from, to),
-        ..Outcome::default()
-    };
-    for (k, mode) in responses.modes.iter().enumerate() {
-        outcome
-            .values
-            .insert(format!("mode{}_hz", k + 1), mode.frequency_hz());
-    }
-    let mut table = Table::new(
-        &format!("{name}: resonances and quality factors, {from}–{to} Hz"),
-        &[
-            "channel",
-            "source",
-            "f_r [Hz]",
-            "Q (−3 dB)",
-            "gain at f_r [µm/V]",
-            "lowest-f gain [µm/V]",
-        ],
-    );
-    for (channel, sources) in spec.channel.iter().zip(&responses.channels) {
-        for source in sources {
-            let peak = source.resonances.first();
-            let low = source
-                .response
-                .iter()
-                .map(|p| p.gain.norm())
-                .find(|g| g.is_finite())
-                .unwrap_or(f64::NAN);
-            let key = source.key;
-            if let Some(r) = peak {
-                outcome.values.insert(
-                    format!("{}_{key}_resonance_hz", channel.name),
-                    r.frequency_hz,
-                );
-                if let Some(q) = r.quality_factor {
-                    outcome
-                        .values
-                        .insert(format!("{}_{key}_q", channel.name), q);
-                }
-            }
-            let q = q_text(peak.and_then(|r| r.quality_factor));
-            table.row(vec![
-                channel.name.clone(),
-                source.name.to_string(),
-                peak.map_or("–".into(), |r| format!("{:.1}", r.frequency_hz)),
-                // A grid-read Q is low by an amount that depends on `points`: marked.
-                if source.refined || q == "n/a" {
-                    q
-                } else {
-                    format!("{q} (grid)")
-                },
-                peak.map_or("–".into(), |r| format!("{:.2}", r.peak_magnitude * 1e6)),
-                format!("{:.2}", low * 1e6),
-            ]);
-        }
-        write_channel(
-            &mut outcome,
-            dir,
-            name,
-            channel,
-            &responses.frequencies,
-            sources,
-        )?;
-    }
-    outcome.tables.push(table);
-    outcome.tables.push(modes_table(name, &responses.modes));
-    outcome.notes.push(q_note(spec));
-    Ok(outcome)
-}
-
-/// How the table's f_r and Q were obtained, and what limits the chirp's.
-fn q_note(spec: &Spec) -> String {
-    let linear = "Resonances of the linear model: the peak of |H| and both −3 dB points \
-                  solved on its continuous response (Brent's method), so f_r and Q do not \
-                  depend on the frequency grid.";
-    match spec.chirp {
-        Some(_) => format!(
-            "{linear} Chirp rows, marked (grid): read off the {}-point grid of the swept-sine \
-             estimate (parabola through the peak's samples, −3 dB points interpolated \
-             between samples), so their Q depends on that grid and on the estimate's \
-             ripple (sweep rate, record length) and can read low or high: compare it with \
-             the viscous linear row, the same losses.",
-            spec.points
-        ),
-        None => linear.to_string(),
-    }
-}
-
-fn method_text(spec: &Spec, from: f64, to: f64) -> String {
-    format!(
-        "Linearized about the rest equilibrium under gravity (minimal coordinates: the \
-         actuators), H = foot displacement / drive voltage, {from}–{to} Hz: with the \
-         flexure losses as complex stiffness k(1 + iη) (exact at every frequency) and as \
-         the time-domain viscous dampers b = kη/ω_ref (ω_ref = 2π·40 Hz). {}",
-        match &spec.chirp {
-            Some(c) => format!(
-                "Chirp: the nonlinear model simulated (DOPRI5) from rest under a linear chirp \
-                 of {} from {from} to {to} Hz over {}, one input at a time; H estimated by \
-                 single-bin Fourier transforms of the whole record (rectangular window; viscous \
-                 losses, as in the time domain). Magnitudes in dB re 1 µm/V.",
-                c.amplitude, c.duration
-            ),
-            None => "Magnitudes in dB re 1 µm/V.".into(),
-        }
-    )
-}
-
-fn modes_table(name: &str, modes: &[Mode]) -> Table {
-    let mut table = Table::new(
-        &format!("{name}: normal modes of the linearized model"),
-        &[
-            "mode",
-            "f [Hz]",
-            "ζ (viscous)",
-            "Q ≈ 1/(2ζ)",
-            "shape (qsact, qlact)",
-        ],
-    );
-    for (k, mode) in modes.iter().enumerate() {
-        table.row(vec![
-            format!("{}", k + 1),
-            format!("{:.1}", mode.frequency_hz()),
-            format!("{:.4}", mode.damping_ratio),
-            format!("{:.1}", 1.0 / (2.0 * mode.damping_ratio)),
-            format!(
-                "[{}]",
-                mode.shape
-                    .iter()
-                    .map(|x| format!("{x:+.3}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        ]);
-    }
-    table
-}
-
-/// `bode_NAME.csv` (magnitude in m/V, phase) and `bode_NAME.svg` (dB re 1 µm/V) of one
-/// channel, every source side by side.
-fn write_channel(
-    outcome: &mut Outcome,
-    dir: &Path,
-    name: &str,
-    channel: &Channel,
-    frequencies: &[f64],
-    sources: &[Source],
-) -> Result<(), Error> {
-    let db = |p: &Point| 20.0 * (p.gain.norm() * 1e6).log10();
-    let curves = |value: &dyn Fn(&Point) -> f64| -> Vec<(String, Vec<f64>, Vec<f64>)> {
-        sources
-            .iter()
-            .map(|s| {
-                (
-                    s.name.to_string(),
-                    frequencies.to_vec(),
-                    s.response.iter().map(value).collect(),
-                )
-            })
-            .collect()
-    };
-    let (magnitude, phase) = (curves(&db), curves(&Point::phase_deg));
-    let rows: Vec<Vec<f64>> = (0..frequencies.len())
-        .map(|k| {
-            let mut row = vec![frequencies[k]];
-            for s in sources {
-                row.extend([s.response[k].gain.norm(), s.response[k].phase_deg()]);
-            }
-            row
-        })
-        .collect();
-    let mut header = vec!["frequency_hz".to_string()];
-    for s in sources {
-        let s = s.name.replace([',', ' '], "_").replace("__", "_");
-        header.extend([format!("{s}_magnitude_m_per_v"), format!("{s}_phase_deg")]);
-    }
-    let header: Vec<&str> = header.iter().map(String::as_str).collect();
-    csv(
-        outcome,
-        dir,
-        &format!("bode_{}.csv", channel.name),
-        &header,
-        &rows,
-    )?;
-    let path = dir.join(format!("bode_{}.svg", channel.name));
-    plot::plot_bode(
-        &path,
-        &format!(
-            "{name}: {} → {} (dB re 1 µm/V)",
-            channel.input, channel.output
-        ),
-        &magnitude,
-        &phase,
-    )?;
-    outcome.plots.push(path);
-    Ok(())
 }

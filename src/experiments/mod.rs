@@ -4,8 +4,10 @@
 //!
 //! Consumes: an experiment file (`kind = "trajectory" | "force_deflection" | "ratio_sweep" |
 //! "compare" | "bode"`, see `docs/experiments.md`) naming a `.mech` model and its settings.
-//! Produces: an [`Outcome`]: CSV files and plots in an output folder, tables (model beside
-//! the paper's measured values) and notes, and named key values for tests.
+//! Produces: each kind's `compute` returns its results as plain data (equilibria, forces,
+//! sweeps, responses); [`crate::render::experiments`] turns them into an `Outcome` (tables
+//! of the model beside the paper's measured values, notes, CSV files and plots, named key
+//! values for tests).
 //!
 //! Every quasi-static experiment uses static equilibria (`solve_statics`), not time
 //! simulation: the paper's 0.5–1 Hz drives are far below the legs' ~65–110 Hz resonances.
@@ -20,13 +22,9 @@ pub mod trajectory;
 
 use std::path::{Path, PathBuf};
 
-use crate::parallel::{parallel, threads};
 use serde::Deserialize;
 
 pub use error::Error;
-
-pub use crate::render::report::Outcome;
-pub use crate::render::table::Table;
 
 /// One experiment file: what every kind has (a title, notes on the comparison with the
 /// paper, printed in the report), then the kind's own keys.
@@ -102,23 +100,6 @@ impl Experiment {
             _ => 1.0,
         }
     }
-
-    /// Runs the experiment, writing its files under `out_dir` (named by `name`): the file's
-    /// notes first, then what the kind observes.
-    pub fn run(&self, name: &str, out_dir: &Path) -> Result<Outcome, Error> {
-        let mut outcome = match &self.kind {
-            Kind::Trajectory(s) => trajectory::run(s, out_dir)?,
-            Kind::ForceDeflection(s) => force::run(s, out_dir)?,
-            Kind::RatioSweep(s) => sweep::run(s, out_dir)?,
-            Kind::Compare(s) => compare::run(s, out_dir)?,
-            Kind::Bode(s) => bode::run(s, out_dir)?,
-        };
-        let observed = std::mem::replace(&mut outcome.notes, self.notes.clone());
-        outcome.notes.extend(observed);
-        outcome.name = name.to_string();
-        outcome.title = self.title.clone();
-        Ok(outcome)
-    }
 }
 
 /// The experiment files of a folder, sorted by name.
@@ -141,71 +122,9 @@ pub fn experiment_files(folder: &Path) -> Result<Vec<PathBuf>, Error> {
     Ok(files)
 }
 
-/// Runs every file (parsed first, so a bad file fails before anything runs), the costly
-/// ones first, on all cores; `progress` is called after each one finishes.
-pub fn run_all(
-    files: &[PathBuf],
-    out_dir: &Path,
-    progress: &(dyn Fn(&str) + Sync),
-) -> Result<Vec<Outcome>, Error> {
-    let experiments: Vec<(usize, String, Experiment)> = files
-        .iter()
-        .enumerate()
-        .map(|(k, f)| Ok((k, stem(f), load(f)?)))
-        .collect::<Result<_, Error>>()?;
-    let mut jobs = experiments;
-    jobs.sort_by(|a, b| b.2.cost().total_cmp(&a.2.cost()));
-    let results = parallel(jobs, threads(), |(k, name, experiment)| {
-        let result = experiment
-            .run(&name, &out_dir.join(&name))
-            .map_err(|e| e.in_file(&files[k]));
-        progress(&name);
-        (k, result)
-    });
-    let mut results: Vec<(usize, Result<Outcome, Error>)> = results;
-    results.sort_by_key(|(k, _)| *k);
-    results.into_iter().map(|(_, r)| r).collect()
-}
-
-/// Runs one experiment file, its outputs in `out_dir/<stem>/`.
-pub fn run_file(path: &Path, out_dir: &Path) -> Result<Outcome, Error> {
-    let experiment = load(path)?;
-    let name = stem(path);
-    experiment
-        .run(&name, &out_dir.join(&name))
-        .map_err(|e| e.in_file(path))
-}
-
-pub(crate) fn stem(path: &Path) -> String {
+/// The experiment's name: its file's stem.
+pub fn stem(path: &Path) -> String {
     path.file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "experiment".into())
-}
-
-// ------------------------------------------------------------------ plumbing
-
-/// Writes a CSV under `dir` and records it.
-pub(crate) fn csv(
-    outcome: &mut Outcome,
-    dir: &Path,
-    file: &str,
-    header: &[&str],
-    rows: &[Vec<f64>],
-) -> Result<(), Error> {
-    let path = dir.join(file);
-    let header: Vec<String> = header.iter().map(|s| s.to_string()).collect();
-    crate::output::write_csv(&path, &header, rows).map_err(|e| Error::Write {
-        path: path.clone(),
-        message: e.to_string(),
-    })?;
-    outcome.files.push(path);
-    Ok(())
-}
-
-/// `a` relative to `b` in percent, `+12 %`.
-pub(crate) fn percent_diff(model: f64, paper: f64) -> String {
-    if paper == 0.0 {
-        return "–".into();
-    }
-    format!("{:+.0} %", 100.0 * (model / paper - 1.0))
 }

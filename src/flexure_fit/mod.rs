@@ -9,12 +9,11 @@
 //!   the trace files, checked (finite, increasing times, an amplitude plausible in radians);
 //! - [`fit`]: Eqs. 3–4 per trace, means per specimen, Eqs. 6–7 and the castellated fits;
 //!   every rejected trace listed, the good ones fitted, warnings on what looks wrong;
-//! - [`report`]: tables, CSV and plots;
+//! - tables, CSV and plots: [`crate::render::flexure_fit`];
 //! - [`error`]: what can go wrong, as [`Error`], with messages for the user.
 
 pub mod error;
 pub mod fit;
-pub mod report;
 pub mod rig;
 pub mod trace;
 

@@ -6,6 +6,8 @@ use std::fmt;
 use std::path::PathBuf;
 
 pub mod diagnosis;
+pub mod experiments;
+pub mod flexure_fit;
 pub mod plot;
 pub mod report;
 pub mod table;

@@ -5,6 +5,7 @@
 use std::path::PathBuf;
 
 use mech::experiments::{self, force, leg, trajectory, Experiment, Kind};
+use mech::render;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -70,7 +71,7 @@ fn bad_experiment_files_give_clear_errors() {
 #[test]
 fn trajectory_peak_equals_the_statics_deflection_at_the_peak_voltage() {
     let spec = bundled("hamr_vi_trajectory.toml", &[("points = 72", "points = 8")]);
-    let outcome = spec.run("trajectory", &out("trajectory")).unwrap();
+    let outcome = render::experiments::run(&spec, "trajectory", &out("trajectory")).unwrap();
     println!("{:?}", outcome.values);
     // The statics of the free leg at +225 V on the lift, independently.
     let Kind::Trajectory(t) = &spec.kind else {
@@ -182,7 +183,7 @@ fn force_compute_returns_the_sensor_points() {
 #[test]
 fn force_deflection_blocked_force_and_work() {
     let spec = bundled("hamr_vi_force.toml", &[("\"127 um\"", "\"1000 um\"")]);
-    let outcome = spec.run("force", &out("force")).unwrap();
+    let outcome = render::experiments::run(&spec, "force", &out("force")).unwrap();
     let v = &outcome.values;
     println!("{v:?}");
     // Blocked force ≈ F_b / T at small motion (T = 13.1 lift → z, 14.3 swing → x), and
@@ -248,7 +249,7 @@ fn force_deflection_blocked_force_and_work() {
 #[test]
 fn compare_work_ratio_is_consistent() {
     let spec = bundled("hamr_v2_vs_vi.toml", &[]);
-    let outcome = spec.run("compare", &out("compare")).unwrap();
+    let outcome = render::experiments::run(&spec, "compare", &out("compare")).unwrap();
     let v = &outcome.values;
     println!("{v:?}");
     let ratio =
@@ -289,7 +290,7 @@ fn bode_resonances_match_the_linearized_modes() {
         panic!()
     };
     b.chirp = None;
-    let outcome = spec.run("bode", &out("bode")).unwrap();
+    let outcome = render::experiments::run(&spec, "bode", &out("bode")).unwrap();
     let v = &outcome.values;
     println!("{v:?}");
     // Lift is the first mode, swing the second: the modes of tests/equations/hamr.rs
@@ -361,7 +362,8 @@ fn bode_resonances_do_not_depend_on_the_grid() {
 #[test]
 fn report_renders_tables_and_inline_plots() {
     let spec = bundled("hamr_v2_vs_vi.toml", &[]);
-    let outcome = spec.run("compare", &out("report").join("compare")).unwrap();
+    let outcome =
+        render::experiments::run(&spec, "compare", &out("report").join("compare")).unwrap();
     let html =
         mech::render::report::render_html(std::slice::from_ref(&outcome), &out("report"), 0.1)
             .unwrap();
@@ -421,19 +423,18 @@ fn csv_columns(path: &std::path::Path) -> std::collections::BTreeMap<String, Vec
 #[test]
 fn ratio_sweep_matches_the_force_experiments_and_the_papers_trend() {
     let spec = bundled("hamr_ratio_sweep.toml", &[("points = 16", "points = 5")]);
-    let outcome = spec.run("sweep", &out("sweep")).unwrap();
+    let outcome = render::experiments::run(&spec, "sweep", &out("sweep")).unwrap();
     let v = &outcome.values;
     println!("{v:?}");
 
     // At the model's own arm the sweep runs the procedure of experiments 2 and 4: the same
     // blocked force, free deflection and work as the force/deflection experiment (HAMR-VI)
     // and the comparison (HAMR-V2.0).
-    let force = bundled("hamr_vi_force.toml", &[("\"127 um\"", "\"1000 um\"")])
-        .run("force", &out("sweep_force"))
-        .unwrap();
-    let compare = bundled("hamr_v2_vs_vi.toml", &[])
-        .run("compare", &out("sweep_compare"))
-        .unwrap();
+    let force_spec = bundled("hamr_vi_force.toml", &[("\"127 um\"", "\"1000 um\"")]);
+    let force = render::experiments::run(&force_spec, "force", &out("sweep_force")).unwrap();
+    let compare_spec = bundled("hamr_v2_vs_vi.toml", &[]);
+    let compare =
+        render::experiments::run(&compare_spec, "compare", &out("sweep_compare")).unwrap();
     for dof in ["lift", "swing"] {
         for quantity in ["blocked_force", "free_deflection", "work", "normalized"] {
             let sweep = v[&format!("hamr_vi_{dof}_chosen_{quantity}")];

@@ -804,12 +804,12 @@ fn example_data_fit_end_to_end() {
         fit.loss_factor
     );
     let out = std::env::temp_dir().join(format!("mech_flexure_fit_{}", std::process::id()));
-    let written = mech::flexure_fit::report::write_csvs(&report, &out).unwrap();
-    let plots = mech::flexure_fit::report::write_plots(&report, &out, "svg").unwrap();
+    let written = mech::render::flexure_fit::write_csvs(&report, &out).unwrap();
+    let plots = mech::render::flexure_fit::write_plots(&report, &out, "svg").unwrap();
     for f in written.iter().chain(&plots) {
         assert!(std::fs::metadata(f).unwrap().len() > 100, "{}", f.display());
     }
-    let text = mech::flexure_fit::report::text_report(&report);
+    let text = mech::render::flexure_fit::text_report(&report);
     assert!(text.contains("Eq. 6") && text.contains("R²"), "{text}");
     let _ = std::fs::remove_dir_all(&out);
 }

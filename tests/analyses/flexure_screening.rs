@@ -408,7 +408,7 @@ fn an_implausible_modulus_is_rejected_not_reported() {
         common::relative_error(modulus, 1000.0 * E).abs() < 0.01,
         "{modulus}"
     );
-    let text = mech::flexure_fit::report::text_report(&report);
+    let text = mech::render::flexure_fit::text_report(&report);
     assert!(
         text.contains("no modulus fit") && !text.contains("E = "),
         "{text}"

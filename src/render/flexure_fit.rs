@@ -8,9 +8,9 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use super::error::Error;
-use super::fit::{CastellatedFit, FitReport, LineFit, ModulusFit, SpecimenResult};
-use super::rig::Kind;
+use crate::flexure_fit::error::Error;
+use crate::flexure_fit::fit::{CastellatedFit, FitReport, LineFit, ModulusFit, SpecimenResult};
+use crate::flexure_fit::rig::Kind;
 use crate::output;
 use crate::render::plot;
 
