@@ -11,8 +11,9 @@ use mech_codegen::ir::Dimension;
 use mech_codegen::{Compiled, Errors};
 use mech_runtime::constraints::{choose_independent, complete_independent, jacobian};
 use mech_runtime::{
-    assemble, assemble_along, assemble_speeds, linearize, mobility, solve_statics, AssemblyOptions,
-    Equilibrium, Fixture, Linearization, Mobility, Model, RuntimeError, Signal, StaticsOptions,
+    assemble, assemble_along, assemble_speeds, linearize, mobility, simulate, simulate_reduced,
+    solve_statics, AssemblyOptions, Equilibrium, Fixture, Linearization, Mobility, Model,
+    RuntimeError, Signal, SimOptions, StaticsOptions, Trajectory,
 };
 
 use crate::signal_spec;
@@ -104,6 +105,8 @@ pub enum Error {
     Statics { model: String, error: RuntimeError },
     /// The linearization about the equilibrium failed.
     Linearization(RuntimeError),
+    /// The simulation stopped.
+    Simulation { model: String, error: RuntimeError },
 }
 
 impl std::fmt::Display for Error {
@@ -150,6 +153,9 @@ impl std::fmt::Display for Error {
             Error::Assembly(error) => write!(f, "{error}"),
             Error::Statics { model, error } => write!(f, "statics of `{model}`: {error}"),
             Error::Linearization(error) => write!(f, "linearization failed: {error}"),
+            Error::Simulation { model, error } => {
+                write!(f, "simulation of `{model}` failed: {error}")
+            }
         }
     }
 }
@@ -428,6 +434,29 @@ impl Session {
             error,
         })?;
         Ok((equilibrium, state.independent))
+    }
+
+    /// The motion from an assembled `state` under the session's input signals: the reduced
+    /// methods (`options.method.is_reduced()`) in the state's independent coordinates, the
+    /// others in all coordinates with the loops projected. `progress` gets the time reached.
+    pub fn simulate(
+        &self,
+        state: &Assembled,
+        options: &SimOptions,
+        progress: &mut dyn FnMut(f64),
+    ) -> Result<Trajectory, Error> {
+        let (model, signals) = (&self.model, &self.signals);
+        let (q0, u0) = (&state.q, &state.u);
+        if options.method.is_reduced() {
+            let independent = &state.independent;
+            simulate_reduced(model, q0, u0, independent, signals, options, progress)
+        } else {
+            simulate(model, q0, u0, signals, options, progress)
+        }
+        .map_err(|error| Error::Simulation {
+            model: model.name().to_string(),
+            error,
+        })
     }
 
     /// The linear model about the static equilibrium under constant `inputs`, in the

@@ -52,8 +52,6 @@ pub enum Error {
     Render(#[from] render::Error),
     #[error("cannot plot: {0}")]
     Plot(#[from] PlotError),
-    #[error("simulation of `{model}` failed: {error}")]
-    Simulation { model: String, error: RuntimeError },
     #[error("chirp simulation failed: {0}")]
     Chirp(RuntimeError),
     /// The reduced mass matrix is not positive definite: no modes.

@@ -65,7 +65,7 @@ pub fn run(request: &SimulateArgs) -> Result<(), Error> {
     if let Some(mobility) = &state.mobility {
         println!("assembled `{}`: {mobility}", session.model.name());
     }
-    let (model, signals) = (&session.model, &session.signals);
+    let model = &session.model;
     let t_end = parse_time("--t-end", &request.t_end)?;
     let options = SimOptions {
         t_end,
@@ -77,7 +77,6 @@ pub fn run(request: &SimulateArgs) -> Result<(), Error> {
         ..SimOptions::default()
     };
 
-    let (q0, u0) = (&state.q, &state.u);
     let bar = super::progress_bar(
         1000,
         "simulating {bar:40} {percent:>3}% t = {msg} [{elapsed} / ~{eta}]",
@@ -86,17 +85,9 @@ pub fn run(request: &SimulateArgs) -> Result<(), Error> {
         bar.set_position((1000.0 * t / t_end) as u64);
         bar.set_message(format!("{t:.4} s"));
     };
-    let trajectory = if options.method.is_reduced() {
-        let independent = &state.independent;
-        mech_runtime::simulate_reduced(model, q0, u0, independent, signals, &options, &mut progress)
-    } else {
-        mech_runtime::simulate(model, q0, u0, signals, &options, &mut progress)
-    };
+    let trajectory = session.simulate(&state, &options, &mut progress);
     bar.finish_and_clear();
-    let trajectory = trajectory.map_err(|error| Error::Simulation {
-        model: model.name().to_string(),
-        error,
-    })?;
+    let trajectory = trajectory?;
 
     let (header, rows) = trajectory_table(model, &trajectory);
     output::write_csv(&request.out, &header, &rows).map_err(|e| Error::write(&request.out, e))?;
