@@ -191,8 +191,8 @@ impl<'a> Lowerer<'a> {
             None => zeros(),
         };
         let inertia = match fields.iter().find(|f| f.name.name == "inertia") {
-            Some(field) => self.inertia(&field.value).unwrap_or_else(zero_inertia),
-            None => zero_inertia(),
+            Some(field) => self.inertia(&field.value).unwrap_or_else(ir::Inertia::zero),
+            None => ir::Inertia::zero(),
         };
         self.owners[owner].body = Some(BodyProps {
             mass,
@@ -642,17 +642,6 @@ impl<'a> Lowerer<'a> {
         match point {
             PointRef::Origin(owner) | PointRef::Com(owner) | PointRef::Named(owner, _) => owner,
         }
-    }
-}
-
-fn zero_inertia() -> ir::Inertia {
-    ir::Inertia {
-        xx: Expr::zero(),
-        yy: Expr::zero(),
-        zz: Expr::zero(),
-        xy: Expr::zero(),
-        yz: Expr::zero(),
-        zx: Expr::zero(),
     }
 }
 
