@@ -272,26 +272,46 @@ impl<'a> Lowerer<'a> {
             );
             return false;
         }
-        if !BODY_FIELDS.contains(&field.name.name.as_str()) {
-            self.error(names::unknown_labelled(
-                "E0209",
-                "field",
-                "fields of a body",
-                &field.name.name,
-                field.name.span,
-                &BODY_FIELDS,
-                "not a body field",
-            ));
-            return false;
-        }
-        self.check_duplicate_field(field, seen)
+        let (list, label) = ("fields of a body", "not a body field");
+        self.check_field(field, seen, &BODY_FIELDS, list, label)
     }
 
-    pub(super) fn check_duplicate_field(
+    /// The fields of a declaration that are known and not repeated, in order (see
+    /// [`check_field`](Self::check_field)).
+    pub(super) fn known_fields<'f>(
+        &mut self,
+        fields: &'f [ast::Field],
+        allowed: &[&str],
+        list: &str,
+        label: &str,
+    ) -> Vec<&'f ast::Field> {
+        let mut known: Vec<&ast::Field> = Vec::new();
+        for field in fields {
+            if self.check_field(field, &known, allowed, list, label) {
+                known.push(field);
+            }
+        }
+        known
+    }
+
+    /// Whether `field` is one of `allowed` (E0209 otherwise: the field `label`led, the allowed
+    /// ones listed as `list`) and not among the fields `seen` before it (E0211).
+    pub(super) fn check_field(
         &mut self,
         field: &ast::Field,
         seen: &[&ast::Field],
+        allowed: &[&str],
+        list: &str,
+        label: &str,
     ) -> bool {
+        let name = &field.name;
+        if !allowed.contains(&name.name.as_str()) {
+            let unknown = names::unknown(
+                "E0209", "field", list, &name.name, name.span, allowed, label,
+            );
+            self.error(unknown);
+            return false;
+        }
         let Some(previous) = seen.iter().find(|f| f.name.name == field.name.name) else {
             return true;
         };
@@ -526,6 +546,7 @@ impl<'a> Lowerer<'a> {
                     &name.name,
                     name.span,
                     &candidates,
+                    names::NOT_DECLARED,
                 ));
                 None
             }
@@ -584,7 +605,15 @@ impl<'a> Lowerer<'a> {
             )
         };
         let plural = format!("{kind}s of `{owner_name}`");
-        let mut diagnostic = names::unknown(code, kind, &plural, &full, name.span, &candidates);
+        let mut diagnostic = names::unknown(
+            code,
+            kind,
+            &plural,
+            &full,
+            name.span,
+            &candidates,
+            names::NOT_DECLARED,
+        );
         if let Some(best) = crate::diag::closest(&name.name, &candidates) {
             diagnostic = diagnostic.with_help(format!("did you mean `{owner_name}.{best}`?"));
         }
@@ -617,6 +646,7 @@ impl<'a> Lowerer<'a> {
             &name.name,
             name.span,
             &candidates,
+            names::NOT_DECLARED,
         );
         if self.joint_index.contains_key(&name.name) {
             diagnostic =

@@ -406,6 +406,7 @@ impl Lowerer<'_> {
             &name.name,
             name.span,
             &candidates,
+            names::NOT_DECLARED,
         );
         if units::lookup(&name.name).is_some() && diagnostic.help.is_none() {
             diagnostic = diagnostic.with_help(format!(
@@ -518,7 +519,7 @@ impl Lowerer<'_> {
 
     fn unknown_function(&mut self, function: &ast::Ident) {
         let candidates = ["sin", "cos", "tan", "sqrt", "exp", "ln", "abs", "atan2"];
-        let mut diagnostic = names::unknown_labelled(
+        let mut diagnostic = names::unknown(
             "E0207",
             "function",
             "functions",

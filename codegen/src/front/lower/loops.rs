@@ -131,7 +131,7 @@ impl<'a> Lowerer<'a> {
         if let Some(&known) = LOOP_KINDS.iter().find(|&&k| k == kind.name) {
             return Some(known);
         }
-        let mut diagnostic = names::unknown_labelled(
+        let mut diagnostic = names::unknown(
             "E0208",
             "loop kind",
             "loop kinds",
@@ -169,27 +169,8 @@ impl<'a> Lowerer<'a> {
                 .flat_map(|k| loop_fields(k).iter().copied())
                 .collect(),
         };
-        let mut fields: Vec<&ast::Field> = Vec::new();
-        for field in &decl.fields {
-            let name = field.name.name.as_str();
-            if !allowed.contains(&name) {
-                let what = format!("fields of a {} loop", kind.unwrap_or("loop"));
-                self.error(names::unknown_labelled(
-                    "E0209",
-                    "field",
-                    &what,
-                    name,
-                    field.name.span,
-                    &allowed,
-                    "not a field of this loop",
-                ));
-                continue;
-            }
-            if self.check_duplicate_field(field, &fields) {
-                fields.push(field);
-            }
-        }
-        fields
+        let list = format!("fields of a {} loop", kind.unwrap_or("loop"));
+        self.known_fields(&decl.fields, &allowed, &list, "not a field of this loop")
     }
 
     /// `components = [x, y];` (default all three) in `frame = F;` (default newtonian).

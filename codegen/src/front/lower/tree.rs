@@ -219,7 +219,7 @@ impl<'a> Lowerer<'a> {
             "weld" => return Some(JointKind::Weld),
             _ => {}
         }
-        let mut diagnostic = names::unknown_labelled(
+        let mut diagnostic = names::unknown(
             "E0208",
             "joint kind",
             "joint kinds",
@@ -268,22 +268,11 @@ impl<'a> Lowerer<'a> {
     ) -> Vec<&'f ast::Field> {
         let mut fields: Vec<&ast::Field> = Vec::new();
         for field in &decl.fields {
+            let (list, label) = ("fields of a joint", "not a joint field");
+            if !self.check_field(field, &fields, &JOINT_FIELDS, list, label) {
+                continue;
+            }
             let name = field.name.name.as_str();
-            if !JOINT_FIELDS.contains(&name) {
-                self.error(names::unknown_labelled(
-                    "E0209",
-                    "field",
-                    "fields of a joint",
-                    name,
-                    field.name.span,
-                    &JOINT_FIELDS,
-                    "not a joint field",
-                ));
-                continue;
-            }
-            if !self.check_duplicate_field(field, &fields) {
-                continue;
-            }
             if kind == Some(JointKind::Weld) && DOF_FIELDS.contains(&name) {
                 self.error(
                     Diagnostic::error("E0403", format!("`{name}` is not allowed on a weld joint"))
