@@ -170,11 +170,8 @@ impl<'a> Lowerer<'a> {
                     .unwrap_or_else(Expr::zero)
             }
             None => {
-                self.error(
-                    Diagnostic::error("E0402", format!("body `{}` has no `mass`", body.name.name))
-                        .with_label(body.name.span, "missing `mass = ...;`")
-                        .with_help("every body needs a mass, e.g. `mass = 10 g;`"),
-                );
+                let help = "every body needs a mass, e.g. `mass = 10 g;`";
+                self.error(missing_field("body", &body.name, "mass", help));
                 Expr::zero()
             }
         };
@@ -673,6 +670,13 @@ impl<'a> Lowerer<'a> {
             PointRef::Origin(owner) | PointRef::Com(owner) | PointRef::Named(owner, _) => owner,
         }
     }
+}
+
+/// E0402: `<what> `name`` lacks its required `field`.
+pub(super) fn missing_field(what: &str, name: &Ident, field: &str, help: &str) -> Diagnostic {
+    Diagnostic::error("E0402", format!("{what} `{}` has no `{field}`", name.name))
+        .with_label(name.span, format!("missing `{field} = ...;`"))
+        .with_help(help)
 }
 
 /// Flattens `a * b * c` (through parentheses) into its factors, left to right.

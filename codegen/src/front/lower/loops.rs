@@ -12,7 +12,7 @@ use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, ExprKind};
 use crate::ir::{self, AxisAngle, ClosureKind, Dimension, Expr, Vec3};
 
-use super::body::zeros;
+use super::body::{missing_field, zeros};
 use super::expr::{unparen, Ctx, Expect};
 use super::{names, Lowerer};
 
@@ -260,16 +260,9 @@ impl<'a> Lowerer<'a> {
         let axis: Option<Vec3> = match field("axis") {
             Some(f) => self.axis(&f.value, "a loop axis"),
             None => {
-                self.error(
-                    Diagnostic::error(
-                        "E0402",
-                        format!("revolute loop `{}` has no `axis`", decl.name.name),
-                    )
-                    .with_label(decl.name.span, "missing `axis = ...;`")
-                    .with_help(
-                        "add `axis = z;` (or `x`, `y`, `[ax, ay, az]`), in the parent interframe",
-                    ),
-                );
+                let help =
+                    "add `axis = z;` (or `x`, `y`, `[ax, ay, az]`), in the parent interframe";
+                self.error(missing_field("revolute loop", &decl.name, "axis", help));
                 None
             }
         };
@@ -302,14 +295,8 @@ impl<'a> Lowerer<'a> {
         length: Option<&ast::Field>,
     ) -> Option<ClosureKind> {
         let Some(length) = length else {
-            self.error(
-                Diagnostic::error(
-                    "E0402",
-                    format!("distance loop `{}` has no `length`", decl.name.name),
-                )
-                .with_label(decl.name.span, "missing `length = ...;`")
-                .with_help("add the distance between the two points, e.g. `length = 5 mm;`"),
-            );
+            let help = "add the distance between the two points, e.g. `length = 5 mm;`";
+            self.error(missing_field("distance loop", &decl.name, "length", help));
             return None;
         };
         let length = self.lower_scalar_as(

@@ -10,7 +10,7 @@ use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, ExprKind};
 use crate::ir::{self, AxisAngle, Dimension, Expr, Handle, JointKind, Motion, Vec3};
 
-use super::body::{zeros, FrameRef};
+use super::body::{missing_field, zeros, FrameRef};
 use super::expr::{is_vector, neg, unparen, Ctx, Expect};
 use super::{names, Lowerer};
 
@@ -295,19 +295,10 @@ impl<'a> Lowerer<'a> {
         match (kind, field) {
             (_, Some(field)) => self.axis(&field.value, "a joint axis"),
             (Some(JointKind::Pin | JointKind::Slider), None) => {
-                self.error(
-                    Diagnostic::error(
-                        "E0402",
-                        format!(
-                            "{} joint `{}` has no `axis`",
-                            decl.kind.name, decl.name.name
-                        ),
-                    )
-                    .with_label(decl.name.span, "missing `axis = ...;`")
-                    .with_help(
-                        "add `axis = z;` (or `x`, `y`, `-z`, `[ax, ay, az]`), in the joint frame",
-                    ),
-                );
+                let what = format!("{} joint", decl.kind.name);
+                let help =
+                    "add `axis = z;` (or `x`, `y`, `-z`, `[ax, ay, az]`), in the joint frame";
+                self.error(missing_field(&what, &decl.name, "axis", help));
                 None
             }
             _ => None,
