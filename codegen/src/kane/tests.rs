@@ -83,24 +83,17 @@ fn pendulum() -> Model {
     model
 }
 
+/// `id` is the expression `expected` (hash-consing makes structural equality an id comparison).
+fn assert_is(pool: &mut ExprPool, id: ExprId, expected: &str) {
+    let expected_id = pool.parse_sexpr(expected).unwrap();
+    assert_eq!(id, expected_id, "{} is not {expected}", pool.sexpr(id));
+}
+
 #[test]
 fn simple_pendulum_is_exact() {
     let mut eqs = derive(&pendulum());
-    // Hash-consing makes structural equality an id comparison.
-    let expected_m = eqs.pool.parse_sexpr("(* m (^ l 2))").unwrap();
-    let expected_f = eqs.pool.parse_sexpr("(* -1 m g l (sin q_hinge))").unwrap();
-    assert_eq!(
-        eqs.mass_matrix[0],
-        expected_m,
-        "M = {}",
-        eqs.pool.sexpr(eqs.mass_matrix[0])
-    );
-    assert_eq!(
-        eqs.forcing[0],
-        expected_f,
-        "F = {}",
-        eqs.pool.sexpr(eqs.forcing[0])
-    );
+    assert_is(&mut eqs.pool, eqs.mass_matrix[0], "(* m (^ l 2))");
+    assert_is(&mut eqs.pool, eqs.forcing[0], "(* -1 m g l (sin q_hinge))");
 }
 
 /// A cart (mass M) on a slider along x carrying a pendulum bob (mass m, length l):
