@@ -155,7 +155,8 @@ struct Emitter<'a> {
     params_name: Ident,
 }
 
-/// Which arguments a generated function receives.
+/// A generated function computing rows of the equations: its name and the state it receives
+/// are the same inherent and in the trait.
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Function {
     MassMatrix,
@@ -183,6 +184,45 @@ impl Function {
             Function::DynamicsTerms => "dynamics_terms",
         }
     }
+
+    fn ident(self) -> Ident {
+        format_ident!("{}", self.name())
+    }
+
+    /// The state it receives after `t`, in order; its body sees the rest as zeros.
+    fn arguments(self) -> &'static [State] {
+        match self {
+            Function::MassMatrix => &[State::Q, State::Inputs],
+            Function::Constraints | Function::ConstraintJacobian | Function::Flexures => {
+                &[State::Q]
+            }
+            Function::ConstraintBias => &[State::Q, State::U],
+            Function::Forcing
+            | Function::Outputs
+            | Function::ConstrainedTerms
+            | Function::DynamicsTerms => &State::ALL,
+        }
+    }
+}
+
+/// A state vector of generated code: coordinates `q`, speeds `u` or `inputs`.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum State {
+    Q,
+    U,
+    Inputs,
+}
+
+impl State {
+    const ALL: [State; 3] = [State::Q, State::U, State::Inputs];
+
+    fn ident(self) -> Ident {
+        match self {
+            State::Q => format_ident!("q"),
+            State::U => format_ident!("u"),
+            State::Inputs => format_ident!("inputs"),
+        }
+    }
 }
 
 impl<'a> Emitter<'a> {
@@ -198,99 +238,61 @@ impl<'a> Emitter<'a> {
         }
     }
 
-    fn sizes(&self) -> (Literal, Literal, Literal, Literal, Literal) {
-        (
-            usize_literal(self.equations.nq),
-            usize_literal(self.equations.nu),
-            usize_literal(self.model.inputs.len()),
-            usize_literal(self.equations.outputs.len()),
-            usize_literal(self.model.params.len()),
-        )
+    fn len(&self, state: State) -> Literal {
+        usize_literal(match state {
+            State::Q => self.equations.nq,
+            State::U => self.equations.nu,
+            State::Inputs => self.model.inputs.len(),
+        })
     }
 
     fn file(&self) -> TokenStream {
         let rt = &self.runtime;
         let (name, params) = (&self.struct_name, &self.params_name);
-        let (nq, nu, ni, no, np) = self.sizes();
+        let [nq, nu, ni] = State::ALL.map(|state| self.len(state));
+        let no = usize_literal(self.equations.outputs.len());
+        let np = usize_literal(self.model.params.len());
         let model_docs = doc_attributes(&self.model.docs);
         let model_name = &self.model.name;
         let params_doc =
             format!(" Parameters of [`{name}`], in SI units; defaults from the model.");
 
-        let field_docs: Vec<TokenStream> = self
-            .model
-            .params
+        let parameters: Vec<_> = self.model.params.iter().map(|(_, p)| p).collect();
+        let coordinates: Vec<_> = self.model.coordinates.iter().map(|(_, c)| c).collect();
+        let inputs: Vec<_> = self.model.inputs.iter().map(|(_, i)| i).collect();
+
+        let field_docs = parameters.iter().map(|p| {
+            let mut docs = p.docs.clone();
+            docs.push(format!("Default {} (SI units: {}).", p.value, p.dimension));
+            doc_attributes(&docs)
+        });
+        let fields: Vec<Ident> = parameters
             .iter()
-            .map(|(_, p)| {
-                let mut docs = p.docs.clone();
-                docs.push(format!("Default {} (SI units: {}).", p.value, p.dimension));
-                doc_attributes(&docs)
-            })
+            .map(|p| sanitize_identifier(&p.name))
             .collect();
-        let fields: Vec<Ident> = self
-            .model
-            .params
-            .iter()
-            .map(|(_, p)| sanitize_identifier(&p.name))
-            .collect();
-        let defaults: Vec<TokenStream> = self
-            .model
-            .params
-            .iter()
-            .map(|(_, p)| f64_tokens(p.value))
-            .collect();
+        let defaults = parameters.iter().map(|p| f64_tokens(p.value));
         let param_indices: Vec<Literal> = (0..fields.len()).map(usize_literal).collect();
 
-        let names = |items: Vec<String>| quote!([#(#items),*]);
-        let coordinate_names = names(
-            self.model
-                .coordinates
-                .iter()
-                .map(|(_, c)| c.name.clone())
-                .collect(),
-        );
-        let input_names = names(
-            self.model
-                .inputs
-                .iter()
-                .map(|(_, i)| i.name.clone())
-                .collect(),
-        );
-        let output_names = names(self.equations.output_names.clone());
-        let param_names = names(
-            self.model
-                .params
-                .iter()
-                .map(|(_, p)| p.name.clone())
-                .collect(),
-        );
-        let input_defaults: Vec<TokenStream> = self
-            .model
-            .inputs
-            .iter()
-            .map(|(_, i)| f64_tokens(i.default))
-            .collect();
-        let q0: Vec<TokenStream> = self
-            .model
-            .coordinates
-            .iter()
-            .map(|(_, c)| f64_tokens(c.initial))
-            .collect();
-        let u0: Vec<TokenStream> = self
-            .model
-            .coordinates
-            .iter()
-            .map(|(_, c)| f64_tokens(c.initial_speed))
-            .collect();
+        let names = |items: Vec<&String>| quote!([#(#items),*]);
+        let coordinate_names = names(coordinates.iter().map(|c| &c.name).collect());
+        let input_names = names(inputs.iter().map(|i| &i.name).collect());
+        let output_names = names(self.equations.output_names.iter().collect());
+        let param_names = names(parameters.iter().map(|p| &p.name).collect());
+        let input_defaults = inputs.iter().map(|i| f64_tokens(i.default));
+        let q0 = coordinates.iter().map(|c| f64_tokens(c.initial));
+        let u0 = coordinates.iter().map(|c| f64_tokens(c.initial_speed));
 
-        let (mass_parts, mass_body) =
-            self.function_body(Function::MassMatrix, &self.equations.mass_matrix);
-        let (forcing_parts, forcing_body) =
-            self.function_body(Function::Forcing, &self.equations.forcing);
+        let (mass_parts, mass_matrix) =
+            self.inherent_function(Function::MassMatrix, &self.equations.mass_matrix);
+        let (forcing_parts, forcing) =
+            self.inherent_function(Function::Forcing, &self.equations.forcing);
         let (constraint_inherent, constraint_trait) = self.constraint_functions();
         let (flexure_inherent, flexure_trait) = self.flexure_functions();
-        let (output_parts, output_body) =
-            self.function_body(Function::Outputs, &self.equations.outputs);
+        let (output_parts, outputs) =
+            self.inherent_function(Function::Outputs, &self.equations.outputs);
+        let mass_matrix_in_trait = self.trait_method(Function::MassMatrix, "m");
+        let forcing_in_trait = self.trait_method(Function::Forcing, "f");
+        let outputs_in_trait = self.trait_method(Function::Outputs, "y");
 
         quote! {
             #model_docs
@@ -350,38 +352,14 @@ impl<'a> Emitter<'a> {
                 }
 
                 /// Mass matrix `M(q)` of `M u̇ = F` (symmetric positive definite).
-                pub fn mass_matrix(
-                    &self,
-                    t: f64,
-                    q: &#rt::__codegen::SVector<f64, #nq>,
-                    inputs: &#rt::__codegen::SVector<f64, #ni>,
-                ) -> #rt::__codegen::SMatrix<f64, #nu, #nu> {
-                    let u = &#rt::__codegen::SVector::<f64, #nu>::zeros();
-                    #mass_body
-                }
+                #mass_matrix
 
                 /// Forcing `F(t, q, u, inputs)` of `M u̇ = F`: generalized active forces plus the
                 /// velocity-dependent generalized inertia forces.
-                pub fn forcing(
-                    &self,
-                    t: f64,
-                    q: &#rt::__codegen::SVector<f64, #nq>,
-                    u: &#rt::__codegen::SVector<f64, #nu>,
-                    inputs: &#rt::__codegen::SVector<f64, #ni>,
-                ) -> #rt::__codegen::SVector<f64, #nu> {
-                    #forcing_body
-                }
+                #forcing
 
                 /// Outputs, in the order of `OUTPUT_NAMES`.
-                pub fn outputs(
-                    &self,
-                    t: f64,
-                    q: &#rt::__codegen::SVector<f64, #nq>,
-                    u: &#rt::__codegen::SVector<f64, #nu>,
-                    inputs: &#rt::__codegen::SVector<f64, #ni>,
-                ) -> #rt::__codegen::SVector<f64, #no> {
-                    #output_body
-                }
+                #outputs
 
                 #(#mass_parts)*
                 #(#forcing_parts)*
@@ -421,26 +399,9 @@ impl<'a> Emitter<'a> {
                     for (slot, value) in q.iter_mut().zip(Self::initial_q().iter()) { *slot = *value; }
                     for (slot, value) in u.iter_mut().zip(Self::initial_u().iter()) { *slot = *value; }
                 }
-                fn mass_matrix(&self, t: f64, q: &[f64], inputs: &[f64], out: &mut [f64]) {
-                    let q = #rt::__codegen::vector_from_slice::<#nq>(q);
-                    let inputs = #rt::__codegen::vector_from_slice::<#ni>(inputs);
-                    let m = #name::mass_matrix(self, t, &q, &inputs);
-                    for (slot, value) in out.iter_mut().zip(m.iter()) { *slot = *value; }
-                }
-                fn forcing(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]) {
-                    let q = #rt::__codegen::vector_from_slice::<#nq>(q);
-                    let u = #rt::__codegen::vector_from_slice::<#nu>(u);
-                    let inputs = #rt::__codegen::vector_from_slice::<#ni>(inputs);
-                    let f = #name::forcing(self, t, &q, &u, &inputs);
-                    for (slot, value) in out.iter_mut().zip(f.iter()) { *slot = *value; }
-                }
-                fn outputs(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]) {
-                    let q = #rt::__codegen::vector_from_slice::<#nq>(q);
-                    let u = #rt::__codegen::vector_from_slice::<#nu>(u);
-                    let inputs = #rt::__codegen::vector_from_slice::<#ni>(inputs);
-                    let y = #name::outputs(self, t, &q, &u, &inputs);
-                    for (slot, value) in out.iter_mut().zip(y.iter()) { *slot = *value; }
-                }
+                #mass_matrix_in_trait
+                #forcing_in_trait
+                #outputs_in_trait
                 #constraint_trait
                 #flexure_trait
             }
@@ -454,13 +415,10 @@ impl<'a> Emitter<'a> {
         if rows.names.is_empty() {
             return (TokenStream::new(), TokenStream::new());
         }
-        let rt = &self.runtime;
-        let name = &self.struct_name;
-        let (nq, nu, ni, _, _) = self.sizes();
         let count = usize_literal(rows.names.len());
-        let total = usize_literal(4 * rows.names.len());
         let names = rows.names.clone();
-        let (parts, body) = self.function_body(Function::Flexures, &rows.all());
+        let (parts, flexures) = self.inherent_function(Function::Flexures, &rows.all());
+        let flexures_in_trait = self.trait_method(Function::Flexures, "values");
         let inherent = quote! {
             /// Number of flexures.
             pub const NFLEXURES: usize = #count;
@@ -468,22 +426,14 @@ impl<'a> Emitter<'a> {
 
             /// `[θ…, k…, b…, η…]`: each flexure's angle, stiffness, time-domain damping and
             /// loss factor.
-            pub fn flexures(&self, t: f64, q: &#rt::__codegen::SVector<f64, #nq>) -> #rt::__codegen::SVector<f64, #total> {
-                let u = &#rt::__codegen::SVector::<f64, #nu>::zeros();
-                let inputs = &#rt::__codegen::SVector::<f64, #ni>::zeros();
-                #body
-            }
+            #flexures
 
             #(#parts)*
         };
         let in_trait = quote! {
             fn nflexures(&self) -> usize { #count }
             fn flexure_name(&self, i: usize) -> &str { Self::FLEXURE_NAMES.get(i).copied().unwrap_or("") }
-            fn flexures(&self, t: f64, q: &[f64], out: &mut [f64]) {
-                let q = #rt::__codegen::vector_from_slice::<#nq>(q);
-                let values = #name::flexures(self, t, &q);
-                for (slot, value) in out.iter_mut().zip(values.iter()) { *slot = *value; }
-            }
+            #flexures_in_trait
         };
         (inherent, in_trait)
     }
@@ -495,75 +445,43 @@ impl<'a> Emitter<'a> {
         if rows.residual.is_empty() {
             return (TokenStream::new(), TokenStream::new());
         }
-        let rt = &self.runtime;
         let name = &self.struct_name;
-        let (nq, nu, ni, _, _) = self.sizes();
         let nc = usize_literal(rows.residual.len());
         let names = rows.names.clone();
-        let (phi_parts, phi_body) = self.function_body(Function::Constraints, &rows.residual);
-        let (jacobian_parts, jacobian_body) =
-            self.function_body(Function::ConstraintJacobian, &rows.jacobian);
-        let (bias_parts, bias_body) = self.function_body(Function::ConstraintBias, &rows.bias);
-        let fused: Vec<ExprId> = [
-            &self.equations.mass_matrix,
-            &self.equations.forcing,
-            &rows.jacobian,
-            &rows.bias,
-        ]
-        .into_iter()
-        .flatten()
-        .copied()
-        .collect();
-        let fused_count = usize_literal(fused.len());
-        let (fused_parts, fused_body) = self.function_body(Function::ConstrainedTerms, &fused);
-        let dynamics: Vec<ExprId> = [
-            &self.equations.mass_matrix,
-            &self.equations.forcing,
-            &rows.bias,
-        ]
-        .into_iter()
-        .flatten()
-        .copied()
-        .collect();
-        let dynamics_count = usize_literal(dynamics.len());
-        let (dynamics_parts, dynamics_body) =
-            self.function_body(Function::DynamicsTerms, &dynamics);
+        let (phi_parts, phi) = self.inherent_function(Function::Constraints, &rows.residual);
+        let (jacobian_parts, jacobian) =
+            self.inherent_function(Function::ConstraintJacobian, &rows.jacobian);
+        let (bias_parts, bias) = self.inherent_function(Function::ConstraintBias, &rows.bias);
+        let concatenated = |rows: &[&Vec<ExprId>]| -> Vec<ExprId> {
+            rows.iter().flat_map(|row| row.iter().copied()).collect()
+        };
+        let (mass_matrix, forcing) = (&self.equations.mass_matrix, &self.equations.forcing);
+        let (fused_parts, fused) = self.inherent_function(
+            Function::ConstrainedTerms,
+            &concatenated(&[mass_matrix, forcing, &rows.jacobian, &rows.bias]),
+        );
+        let (dynamics_parts, dynamics) = self.inherent_function(
+            Function::DynamicsTerms,
+            &concatenated(&[mass_matrix, forcing, &rows.bias]),
+        );
         let (mass_len, forcing_len, jacobian_len) = (
-            usize_literal(self.equations.mass_matrix.len()),
-            usize_literal(self.equations.forcing.len()),
+            usize_literal(mass_matrix.len()),
+            usize_literal(forcing.len()),
             usize_literal(rows.jacobian.len()),
         );
-        let zero_u = quote!(let u = &#rt::__codegen::SVector::<f64, #nu>::zeros(););
-        let zero_inputs = quote!(let inputs = &#rt::__codegen::SVector::<f64, #ni>::zeros(););
         let inherent = quote! {
             /// Number of loop-closure constraint rows (redundant rows included).
             pub const NC: usize = #nc;
             pub const CONSTRAINT_NAMES: [&'static str; #nc] = [#(#names),*];
 
             /// Loop-closure residual `φ(q)`.
-            pub fn constraints(&self, t: f64, q: &#rt::__codegen::SVector<f64, #nq>) -> #rt::__codegen::SVector<f64, #nc> {
-                #zero_u
-                #zero_inputs
-                #phi_body
-            }
+            #phi
 
             /// Constraint Jacobian `J(q) = ∂φ/∂q`.
-            pub fn constraint_jacobian(&self, t: f64, q: &#rt::__codegen::SVector<f64, #nq>) -> #rt::__codegen::SMatrix<f64, #nc, #nq> {
-                #zero_u
-                #zero_inputs
-                #jacobian_body
-            }
+            #jacobian
 
             /// Acceleration bias `J̇(q, u) u`: `J u̇ + J̇u = 0` along constrained motion.
-            pub fn constraint_bias(
-                &self,
-                t: f64,
-                q: &#rt::__codegen::SVector<f64, #nq>,
-                u: &#rt::__codegen::SVector<f64, #nu>,
-            ) -> #rt::__codegen::SVector<f64, #nc> {
-                #zero_inputs
-                #bias_body
-            }
+            #bias
 
             #(#phi_parts)*
             #(#jacobian_parts)*
@@ -571,65 +489,28 @@ impl<'a> Emitter<'a> {
 
             /// `[M (column-major), F, J (column-major), J̇u]` in one pass, sharing
             /// subexpressions between them.
-            pub fn constrained_terms(
-                &self,
-                t: f64,
-                q: &#rt::__codegen::SVector<f64, #nq>,
-                u: &#rt::__codegen::SVector<f64, #nu>,
-                inputs: &#rt::__codegen::SVector<f64, #ni>,
-            ) -> #rt::__codegen::SVector<f64, #fused_count> {
-                #fused_body
-            }
+            #fused
 
             #(#fused_parts)*
 
             /// `[M (column-major), F, J̇u]` in one pass: `constrained_terms` without `J`.
-            pub fn dynamics_terms(
-                &self,
-                t: f64,
-                q: &#rt::__codegen::SVector<f64, #nq>,
-                u: &#rt::__codegen::SVector<f64, #nu>,
-                inputs: &#rt::__codegen::SVector<f64, #ni>,
-            ) -> #rt::__codegen::SVector<f64, #dynamics_count> {
-                #dynamics_body
-            }
+            #dynamics
 
             #(#dynamics_parts)*
         };
+        let phi_in_trait = self.trait_method(Function::Constraints, "phi");
+        let jacobian_in_trait = self.trait_method(Function::ConstraintJacobian, "jacobian");
+        let bias_in_trait = self.trait_method(Function::ConstraintBias, "bias");
+        let (arguments, vectors, call) = self.slice_call(Function::ConstrainedTerms);
         let in_trait = quote! {
             fn nc(&self) -> usize { #nc }
             fn constraint_name(&self, i: usize) -> &str { Self::CONSTRAINT_NAMES.get(i).copied().unwrap_or("") }
-            fn constraints(&self, t: f64, q: &[f64], out: &mut [f64]) {
-                let q = #rt::__codegen::vector_from_slice::<#nq>(q);
-                let phi = #name::constraints(self, t, &q);
-                for (slot, value) in out.iter_mut().zip(phi.iter()) { *slot = *value; }
-            }
-            fn constraint_jacobian(&self, t: f64, q: &[f64], out: &mut [f64]) {
-                let q = #rt::__codegen::vector_from_slice::<#nq>(q);
-                let jacobian = #name::constraint_jacobian(self, t, &q);
-                for (slot, value) in out.iter_mut().zip(jacobian.iter()) { *slot = *value; }
-            }
-            fn constraint_bias(&self, t: f64, q: &[f64], u: &[f64], out: &mut [f64]) {
-                let q = #rt::__codegen::vector_from_slice::<#nq>(q);
-                let u = #rt::__codegen::vector_from_slice::<#nu>(u);
-                let bias = #name::constraint_bias(self, t, &q, &u);
-                for (slot, value) in out.iter_mut().zip(bias.iter()) { *slot = *value; }
-            }
-            fn constrained_terms(
-                &self,
-                t: f64,
-                q: &[f64],
-                u: &[f64],
-                inputs: &[f64],
-                mass: &mut [f64],
-                forcing: &mut [f64],
-                jacobian: &mut [f64],
-                bias: &mut [f64],
-            ) {
-                let q = #rt::__codegen::vector_from_slice::<#nq>(q);
-                let u = #rt::__codegen::vector_from_slice::<#nu>(u);
-                let inputs = #rt::__codegen::vector_from_slice::<#ni>(inputs);
-                let all = #name::constrained_terms(self, t, &q, &u, &inputs);
+            #phi_in_trait
+            #jacobian_in_trait
+            #bias_in_trait
+            fn constrained_terms(&self, #arguments, mass: &mut [f64], forcing: &mut [f64], jacobian: &mut [f64], bias: &mut [f64]) {
+                #vectors
+                let all = #name::constrained_terms(self, #call);
                 let values = all.as_slice();
                 let (m, rest) = values.split_at(#mass_len);
                 let (f, rest) = rest.split_at(#forcing_len);
@@ -639,20 +520,9 @@ impl<'a> Emitter<'a> {
                 for (slot, value) in jacobian.iter_mut().zip(j) { *slot = *value; }
                 for (slot, value) in bias.iter_mut().zip(b) { *slot = *value; }
             }
-            fn dynamics_terms(
-                &self,
-                t: f64,
-                q: &[f64],
-                u: &[f64],
-                inputs: &[f64],
-                mass: &mut [f64],
-                forcing: &mut [f64],
-                bias: &mut [f64],
-            ) {
-                let q = #rt::__codegen::vector_from_slice::<#nq>(q);
-                let u = #rt::__codegen::vector_from_slice::<#nu>(u);
-                let inputs = #rt::__codegen::vector_from_slice::<#ni>(inputs);
-                let all = #name::dynamics_terms(self, t, &q, &u, &inputs);
+            fn dynamics_terms(&self, #arguments, mass: &mut [f64], forcing: &mut [f64], bias: &mut [f64]) {
+                #vectors
+                let all = #name::dynamics_terms(self, #call);
                 let values = all.as_slice();
                 let (m, rest) = values.split_at(#mass_len);
                 let (f, b) = rest.split_at(#forcing_len);
@@ -664,9 +534,69 @@ impl<'a> Emitter<'a> {
         (inherent, in_trait)
     }
 
-    /// The statements computing `roots`, and the result construction. Returns extra part
-    /// functions when the body is longer than `max_statements`.
-    fn function_body(
+    /// `t: f64, q: &SVector<f64, NQ>, …` for `states`.
+    fn vector_parameters(&self, states: &[State]) -> TokenStream {
+        let rt = &self.runtime;
+        let parameters = states.iter().map(|&state| {
+            let (ident, n) = (state.ident(), self.len(state));
+            quote!(#ident: &#rt::__codegen::SVector<f64, #n>)
+        });
+        quote!(t: f64, #(#parameters),*)
+    }
+
+    /// What `function` returns for `count` roots: `SMatrix<f64, rows, columns>` (column-major)
+    /// or `SVector<f64, count>`, as the type's name and its dimensions.
+    fn result_shape(&self, function: Function, count: usize) -> (Ident, TokenStream) {
+        let (nq, nu) = (self.len(State::Q), self.len(State::U));
+        match function {
+            Function::MassMatrix => (format_ident!("SMatrix"), quote!(#nu, #nu)),
+            Function::ConstraintJacobian => {
+                let nc = usize_literal(self.equations.nc());
+                (format_ident!("SMatrix"), quote!(#nc, #nq))
+            }
+            _ => {
+                let count = usize_literal(count);
+                (format_ident!("SVector"), quote!(#count))
+            }
+        }
+    }
+
+    /// The trait's `<function>(&self, t, q: &[f64], …, out: &mut [f64])`: the inherent function
+    /// on the slices, its result (bound to `result`) copied into `out`.
+    fn trait_method(&self, function: Function, result: &str) -> TokenStream {
+        let (arguments, vectors, call) = self.slice_call(function);
+        let (name, model, result) = (
+            function.ident(),
+            &self.struct_name,
+            format_ident!("{result}"),
+        );
+        quote! {
+            fn #name(&self, #arguments, out: &mut [f64]) {
+                #vectors
+                let #result = #model::#name(self, #call);
+                for (slot, value) in out.iter_mut().zip(#result.iter()) { *slot = *value; }
+            }
+        }
+    }
+
+    /// For a trait method wrapping `function`: its slice parameters `t: f64, q: &[f64], …`, the
+    /// `let`s turning them into vectors, and the arguments of the inherent call.
+    fn slice_call(&self, function: Function) -> (TokenStream, TokenStream, TokenStream) {
+        let rt = &self.runtime;
+        let states = function.arguments();
+        let idents: Vec<Ident> = states.iter().map(|state| state.ident()).collect();
+        let lens = states.iter().map(|&state| self.len(state));
+        (
+            quote!(t: f64, #(#idents: &[f64]),*),
+            quote!(#(let #idents = #rt::__codegen::vector_from_slice::<#lens>(#idents);)*),
+            quote!(t, #(&#idents),*),
+        )
+    }
+
+    /// `pub fn <function>(&self, t: f64, q: &SVector<f64, NQ>, …) -> <result>` over the state
+    /// the function receives (the rest zero): the statements computing `roots`, and the result
+    /// construction. Returns extra part functions when the body is longer than `max_statements`.
+    fn inherent_function(
         &self,
         function: Function,
         roots: &[ExprId],
@@ -674,7 +604,6 @@ impl<'a> Emitter<'a> {
         let rt = &self.runtime;
         let pool = &self.equations.pool;
         let statements = schedule(pool, roots);
-        let (nq, nu, ni, _, _) = self.sizes();
         let names: BTreeMap<ExprId, usize> = statements
             .iter()
             .enumerate()
@@ -741,16 +670,10 @@ impl<'a> Emitter<'a> {
             } else {
                 let name = format_ident!("{}_part{}", function.name(), part);
                 let slots = usize_literal(spill_slots.len());
+                let parameters = self.vector_parameters(&State::ALL);
                 part_functions.push(quote! {
                     #[inline(never)]
-                    fn #name(
-                        &self,
-                        t: f64,
-                        q: &#rt::__codegen::SVector<f64, #nq>,
-                        u: &#rt::__codegen::SVector<f64, #nu>,
-                        inputs: &#rt::__codegen::SVector<f64, #ni>,
-                        spill: &mut [f64; #slots],
-                    ) {
+                    fn #name(&self, #parameters, spill: &mut [f64; #slots]) {
                         let p = &self.params;
                         #(#body)*
                     }
@@ -765,19 +688,9 @@ impl<'a> Emitter<'a> {
                 other => self.operand_tokens(other, &|id| reference(id, parts)),
             })
             .collect();
-        let count = usize_literal(roots.len());
-        let nc = usize_literal(self.equations.nc());
-        let construct = match function {
-            Function::MassMatrix => {
-                quote!(#rt::__codegen::SMatrix::<f64, #nu, #nu>::from_column_slice(&[#(#results),*]))
-            }
-            Function::ConstraintJacobian => {
-                quote!(#rt::__codegen::SMatrix::<f64, #nc, #nq>::from_column_slice(&[#(#results),*]))
-            }
-            _ => {
-                quote!(#rt::__codegen::SVector::<f64, #count>::from_column_slice(&[#(#results),*]))
-            }
-        };
+        let (kind, dimensions) = self.result_shape(function, roots.len());
+        let construct =
+            quote!(#rt::__codegen::#kind::<f64, #dimensions>::from_column_slice(&[#(#results),*]));
         let body = if parts > 1 {
             let slots = usize_literal(spill_slots.len());
             let calls = (0..parts).map(|part| {
@@ -796,7 +709,22 @@ impl<'a> Emitter<'a> {
                 #construct
             }
         };
-        (part_functions, body)
+        let name = function.ident();
+        let parameters = self.vector_parameters(function.arguments());
+        let zeros = [State::U, State::Inputs]
+            .into_iter()
+            .filter(|state| !function.arguments().contains(state))
+            .map(|state| {
+                let (ident, n) = (state.ident(), self.len(state));
+                quote!(let #ident = &#rt::__codegen::SVector::<f64, #n>::zeros();)
+            });
+        let function = quote! {
+            pub fn #name(&self, #parameters) -> #rt::__codegen::#kind<f64, #dimensions> {
+                #(#zeros)*
+                #body
+            }
+        };
+        (part_functions, function)
     }
 
     fn operand_tokens(

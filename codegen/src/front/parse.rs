@@ -148,6 +148,27 @@ impl<'i> Parts<'i> {
     fn expr(&mut self) -> Result<Expr> {
         expr(self.next()?)
     }
+    fn path(&mut self) -> Result<ast::Path> {
+        Ok(path(self.next()?))
+    }
+    /// The fields of an optional `{ field; ... }` block (of a joint, loop or element).
+    fn block_fields(&mut self) -> Result<Vec<ast::Field>> {
+        let Some(block) = self.take(Rule::joint_block) else {
+            return Ok(Vec::new());
+        };
+        block
+            .into_inner()
+            .filter(|inner| inner.as_rule() == Rule::field)
+            .map(field)
+            .collect()
+    }
+    /// The frame of an optional `in FRAME` clause.
+    fn frame_clause(&mut self) -> Result<Option<ast::Path>> {
+        match self.take(Rule::frame_clause) {
+            Some(clause) => Ok(Some(Parts::of(clause).path()?)),
+            None => Ok(None),
+        }
+    }
     /// The next pair if it has the given rule.
     fn take(&mut self, rule: Rule) -> Option<Pair<'i, Rule>> {
         if self
@@ -302,55 +323,33 @@ fn field(pair: Pair<Rule>) -> Result<ast::Field> {
     })
 }
 
-/// The fields of an optional `{ field; ... }` block (of a joint, loop or element).
-fn block_fields(parts: &mut Parts) -> Result<Vec<ast::Field>> {
-    let Some(block) = parts.take(Rule::joint_block) else {
-        return Ok(Vec::new());
-    };
-    block
-        .into_inner()
-        .filter(|inner| inner.as_rule() == Rule::field)
-        .map(field)
-        .collect()
-}
-
 /// `material NAME { .. }` or `flexure|actuator NAME on TARGET { .. }`.
 fn element_decl(pair: Pair<Rule>, docs: Vec<String>, has_target: bool) -> Result<ast::ElementDecl> {
     let mut parts = Parts::of(pair);
-    let name = parts.ident()?;
-    let target = if has_target {
-        Some(parts.ident()?)
-    } else {
-        None
-    };
-    let span = parts.span;
-    let fields = block_fields(&mut parts)?;
     Ok(ast::ElementDecl {
         docs,
-        name,
-        target,
-        fields,
-        span,
+        name: parts.ident()?,
+        target: if has_target {
+            Some(parts.ident()?)
+        } else {
+            None
+        },
+        fields: parts.block_fields()?,
+        span: parts.span,
     })
 }
 
 /// A `joint` or `loop` declaration (they have the same shape).
 fn joint_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::JointDecl> {
     let mut parts = Parts::of(pair);
-    let name = parts.ident()?;
-    let kind = parts.ident()?;
-    let parent = parts.ident()?;
-    let child = parts.ident()?;
-    let span = parts.span;
-    let fields = block_fields(&mut parts)?;
     Ok(ast::JointDecl {
         docs,
-        name,
-        kind,
-        parent,
-        child,
-        fields,
-        span,
+        name: parts.ident()?,
+        kind: parts.ident()?,
+        parent: parts.ident()?,
+        child: parts.ident()?,
+        fields: parts.block_fields()?,
+        span: parts.span,
     })
 }
 
@@ -358,61 +357,37 @@ fn force_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
     let mut parts = Parts::of(pair);
     let name = parts.ident()?;
     parts.take(Rule::kw_at);
-    let point = path(parts.next()?);
-    let value = parts.expr()?;
-    let frame = parts
-        .take(Rule::frame_clause)
-        .map(frame_clause)
-        .transpose()?;
     Ok(ast::Item::Force(ast::ForceDecl {
         docs,
         name,
-        point,
-        value,
-        frame,
+        point: parts.path()?,
+        value: parts.expr()?,
+        frame: parts.frame_clause()?,
         span: parts.span,
     }))
 }
 
 fn torque_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
     let mut parts = Parts::of(pair);
-    let name = parts.ident()?;
-    let body = path(parts.next()?);
-    let value = parts.expr()?;
-    let frame = parts
-        .take(Rule::frame_clause)
-        .map(frame_clause)
-        .transpose()?;
     Ok(ast::Item::Torque(ast::TorqueDecl {
         docs,
-        name,
-        body,
-        value,
-        frame,
+        name: parts.ident()?,
+        body: parts.path()?,
+        value: parts.expr()?,
+        frame: parts.frame_clause()?,
         span: parts.span,
     }))
 }
 
 fn output_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
     let mut parts = Parts::of(pair);
-    let name = parts.ident()?;
-    let value = parts.expr()?;
-    let frame = parts
-        .take(Rule::frame_clause)
-        .map(frame_clause)
-        .transpose()?;
     Ok(ast::Item::Output(ast::OutputDecl {
         docs,
-        name,
-        value,
-        frame,
+        name: parts.ident()?,
+        value: parts.expr()?,
+        frame: parts.frame_clause()?,
         span: parts.span,
     }))
-}
-
-fn frame_clause(pair: Pair<Rule>) -> Result<ast::Path> {
-    let mut parts = Parts::of(pair);
-    Ok(path(parts.next()?))
 }
 
 fn ident(pair: Pair<Rule>) -> Ident {

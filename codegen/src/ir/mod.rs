@@ -398,6 +398,19 @@ pub struct Inertia {
     pub zx: Expr,
 }
 
+impl Inertia {
+    pub fn zero() -> Inertia {
+        Inertia {
+            xx: Expr::zero(),
+            yy: Expr::zero(),
+            zz: Expr::zero(),
+            xy: Expr::zero(),
+            yz: Expr::zero(),
+            zx: Expr::zero(),
+        }
+    }
+}
+
 /// A rigid body attached to one frame of the tree.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Body {
@@ -409,6 +422,21 @@ pub struct Body {
     pub inertia: Inertia,
     pub docs: Vec<String>,
     pub span: Span,
+}
+
+impl Body {
+    /// A point mass at the origin of `frame`, without docs or span.
+    pub fn point_mass(name: String, frame: Handle<Frame>, mass: Expr) -> Body {
+        Body {
+            name,
+            frame,
+            mass,
+            center_of_mass: [Expr::zero(), Expr::zero(), Expr::zero()],
+            inertia: Inertia::zero(),
+            docs: Vec::new(),
+            span: Span::default(),
+        }
+    }
 }
 
 /// A named point fixed in a frame.

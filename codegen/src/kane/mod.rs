@@ -304,6 +304,35 @@ fn mat_vec3(pool: &mut ExprPool, m: &[[ExprId; 3]; 3], v: Vec3) -> Vec3 {
     vector::mat_vec(pool, m, v)
 }
 
+/// `k (x − rest)`, a spring's restoring force or moment at `x`; `x` is built after `k` and
+/// `rest`, the order the pool (and so the golden equations) numbers them in.
+fn spring_moment(
+    pool: &mut ExprPool,
+    stiffness: &ir::Expr,
+    rest: &ir::Expr,
+    x: impl FnOnce(&mut ExprPool) -> ExprId,
+) -> ExprId {
+    let k = lower_expr(pool, stiffness);
+    let rest = lower_expr(pool, rest);
+    let x = x(pool);
+    let stretch = pool.sub(x, rest);
+    pool.mul(k, stretch)
+}
+
+/// `Q_r −= moment ∂θ/∂q_r`: the generalized forces of a moment resisting the angle `theta`.
+fn push_angle_forces(
+    pool: &mut ExprPool,
+    forcing: &mut [Vec<ExprId>],
+    theta: ExprId,
+    moment: ExprId,
+) {
+    let gradient = angle_gradient(pool, theta, forcing.len());
+    for (r, slope) in gradient.into_iter().enumerate() {
+        let force = pool.mul(moment, slope);
+        forcing[r].push(pool.neg(force));
+    }
+}
+
 /// Contribution of one applied load to the generalized active forces `F_r`.
 fn add_load(
     pool: &mut ExprPool,
@@ -335,11 +364,9 @@ fn add_load(
             rest,
             ..
         } => {
-            let k = lower_expr(pool, stiffness);
-            let rest = lower_expr(pool, rest);
-            let q = pool.symbol(Symbol::Coordinate(coordinate.index() as u32));
-            let stretch = pool.sub(q, rest);
-            let force = pool.mul(k, stretch);
+            let force = spring_moment(pool, stiffness, rest, |pool| {
+                pool.symbol(Symbol::Coordinate(coordinate.index() as u32))
+            });
             forcing[coordinate.index()].push(pool.neg(force));
         }
         Load::Damper {
@@ -366,11 +393,9 @@ fn add_load(
             let torque = |pool: &mut ExprPool,
                           _: &mut Kinematics,
                           geometry: &constraints::RevoluteGeometry| {
-                let k = lower_expr(pool, stiffness);
-                let rest = lower_expr(pool, rest);
-                let angle = constraints::relative_angle(pool, geometry);
-                let stretch = pool.sub(angle, rest);
-                let moment = pool.mul(k, stretch);
+                let moment = spring_moment(pool, stiffness, rest, |pool| {
+                    constraints::relative_angle(pool, geometry)
+                });
                 pool.neg(moment)
             };
             constraints::closure_torque_forces(pool, kinematics, model, *closure, torque, forcing);
@@ -387,13 +412,7 @@ fn add_load(
             let theta = flexure_angle(pool, kinematics, model, *angle);
             let stretch = pool.sub(theta, rest);
             let moment = pool.mul(k, stretch);
-            for (r, slope) in angle_gradient(pool, theta, forcing.len())
-                .into_iter()
-                .enumerate()
-            {
-                let force = pool.mul(moment, slope);
-                forcing[r].push(pool.neg(force));
-            }
+            push_angle_forces(pool, forcing, theta, moment);
         }
         Load::AngleDamper { angle, damping, .. } => {
             // Q_r = −c θ̇ ∂θ/∂q_r with θ̇ = Σ ∂θ/∂q_i u_i (q̇ = u).
@@ -401,13 +420,7 @@ fn add_load(
             let theta = flexure_angle(pool, kinematics, model, *angle);
             let rate = pool.time_derivative(theta);
             let moment = pool.mul(c, rate);
-            for (r, slope) in angle_gradient(pool, theta, forcing.len())
-                .into_iter()
-                .enumerate()
-            {
-                let force = pool.mul(moment, slope);
-                forcing[r].push(pool.neg(force));
-            }
+            push_angle_forces(pool, forcing, theta, moment);
         }
         Load::LoopDamper {
             closure, damping, ..

@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::diag::Span;
-use crate::ir::{Body, Coordinate, Dimension, Expr, Frame, Handle, Inertia, Motion, Param};
+use crate::ir::{Body, Coordinate, Dimension, Expr, Frame, Handle, Motion, Param};
 
 fn param(model: &mut Model, name: &str, value: f64) -> Expr {
     let handle = model.params.append(Param {
@@ -53,23 +53,24 @@ fn frame(
 }
 
 fn point_mass(model: &mut Model, name: &str, frame: Handle<Frame>, mass: Expr) {
-    let zero = Expr::zero;
-    model.bodies.append(Body {
-        name: name.to_string(),
-        frame,
-        mass,
-        center_of_mass: zero3(),
-        inertia: Inertia {
-            xx: zero(),
-            yy: zero(),
-            zz: zero(),
-            xy: zero(),
-            yz: zero(),
-            zx: zero(),
-        },
-        docs: Vec::new(),
-        span: Span::default(),
-    });
+    model
+        .bodies
+        .append(Body::point_mass(name.to_string(), frame, mass));
+}
+
+/// Hangs a bob of mass `m` on a massless rod of length `l` from a pin about z in `parent` (its
+/// coordinate and frame both named `pin`), under gravity −g y.
+fn hang_bob(model: &mut Model, parent: Handle<Frame>, pin: &str, m: Expr, l: Expr, g: Expr) {
+    let q = coordinate(model, pin);
+    let revolute = Motion::Revolute {
+        axis: axis(2),
+        coordinate: q,
+    };
+    let pin = frame(model, pin, parent, zero3(), revolute);
+    let rod = [Expr::zero(), Expr::Neg(Box::new(l)), Expr::zero()];
+    let bob = frame(model, "bob", pin, rod, Motion::Fixed);
+    point_mass(model, "bob", bob, m);
+    model.gravity = Some([Expr::zero(), Expr::Neg(Box::new(g)), Expr::zero()]);
 }
 
 /// A bob of mass m on a massless rod of length l, pinned about z, gravity −g y.
@@ -78,47 +79,21 @@ fn pendulum() -> Model {
     let m = param(&mut model, "m", 1.0);
     let l = param(&mut model, "l", 1.0);
     let g = param(&mut model, "g", 9.81);
-    let q = coordinate(&mut model, "hinge");
-    let hinge = frame(
-        &mut model,
-        "hinge",
-        Model::NEWTONIAN,
-        zero3(),
-        Motion::Revolute {
-            axis: axis(2),
-            coordinate: q,
-        },
-    );
-    let bob = frame(
-        &mut model,
-        "bob",
-        hinge,
-        [Expr::zero(), Expr::Neg(Box::new(l)), Expr::zero()],
-        Motion::Fixed,
-    );
-    point_mass(&mut model, "bob", bob, m);
-    model.gravity = Some([Expr::zero(), Expr::Neg(Box::new(g)), Expr::zero()]);
+    hang_bob(&mut model, Model::NEWTONIAN, "hinge", m, l, g);
     model
+}
+
+/// `id` is the expression `expected` (hash-consing makes structural equality an id comparison).
+fn assert_is(pool: &mut ExprPool, id: ExprId, expected: &str) {
+    let expected_id = pool.parse_sexpr(expected).unwrap();
+    assert_eq!(id, expected_id, "{} is not {expected}", pool.sexpr(id));
 }
 
 #[test]
 fn simple_pendulum_is_exact() {
     let mut eqs = derive(&pendulum());
-    // Hash-consing makes structural equality an id comparison.
-    let expected_m = eqs.pool.parse_sexpr("(* m (^ l 2))").unwrap();
-    let expected_f = eqs.pool.parse_sexpr("(* -1 m g l (sin q_hinge))").unwrap();
-    assert_eq!(
-        eqs.mass_matrix[0],
-        expected_m,
-        "M = {}",
-        eqs.pool.sexpr(eqs.mass_matrix[0])
-    );
-    assert_eq!(
-        eqs.forcing[0],
-        expected_f,
-        "F = {}",
-        eqs.pool.sexpr(eqs.forcing[0])
-    );
+    assert_is(&mut eqs.pool, eqs.mass_matrix[0], "(* m (^ l 2))");
+    assert_is(&mut eqs.pool, eqs.forcing[0], "(* -1 m g l (sin q_hinge))");
 }
 
 /// A cart (mass M) on a slider along x carrying a pendulum bob (mass m, length l):
@@ -131,7 +106,6 @@ fn cart_pendulum_matches_closed_form() {
     let l = param(&mut model, "l", 0.8);
     let g = param(&mut model, "g", 9.81);
     let x = coordinate(&mut model, "x");
-    let theta = coordinate(&mut model, "theta");
     let cart = frame(
         &mut model,
         "cart",
@@ -143,25 +117,7 @@ fn cart_pendulum_matches_closed_form() {
         },
     );
     point_mass(&mut model, "cart", cart, cart_mass);
-    let pin = frame(
-        &mut model,
-        "pin",
-        cart,
-        zero3(),
-        Motion::Revolute {
-            axis: axis(2),
-            coordinate: theta,
-        },
-    );
-    let bob = frame(
-        &mut model,
-        "bob",
-        pin,
-        [Expr::zero(), Expr::Neg(Box::new(l)), Expr::zero()],
-        Motion::Fixed,
-    );
-    point_mass(&mut model, "bob", bob, m);
-    model.gravity = Some([Expr::zero(), Expr::Neg(Box::new(g)), Expr::zero()]);
+    hang_bob(&mut model, cart, "theta", m, l, g);
     let eqs = derive(&model);
 
     let (q, u) = ([0.3, -0.7], [0.4, 1.3]);

@@ -184,30 +184,19 @@ impl Number {
     }
 }
 
-impl std::ops::Add for Number {
-    type Output = Number;
-    fn add(self, other: Number) -> Number {
-        Number::add(self, other)
-    }
+// The operators are the exact arithmetic of the methods of the same name.
+macro_rules! number_operator {
+    ($($trait:ident $method:ident),*) => {$(
+        impl std::ops::$trait for Number {
+            type Output = Number;
+            fn $method(self, other: Number) -> Number {
+                Number::$method(self, other)
+            }
+        }
+    )*};
 }
-impl std::ops::Sub for Number {
-    type Output = Number;
-    fn sub(self, other: Number) -> Number {
-        Number::sub(self, other)
-    }
-}
-impl std::ops::Mul for Number {
-    type Output = Number;
-    fn mul(self, other: Number) -> Number {
-        Number::mul(self, other)
-    }
-}
-impl std::ops::Div for Number {
-    type Output = Number;
-    fn div(self, other: Number) -> Number {
-        Number::div(self, other)
-    }
-}
+number_operator!(Add add, Sub sub, Mul mul, Div div);
+
 impl std::ops::Neg for Number {
     type Output = Number;
     fn neg(self) -> Number {

@@ -185,61 +185,26 @@ impl ExprPool {
     }
 
     fn apply_operator(&mut self, head: &str, args: &[ExprId]) -> Result<ExprId, SexprError> {
-        let unary = |args: &[ExprId]| match args {
-            [x] => Ok(*x),
-            _ => Err(SexprError::Arity {
-                operator: head.to_string(),
-                expected: "one argument",
-            }),
+        let arity = |expected| SexprError::Arity {
+            operator: head.to_string(),
+            expected,
         };
-        Ok(match head {
-            "+" => self.add_all(args),
-            "*" => self.mul_all(args),
-            "-" => match args {
-                [x] => self.neg(*x),
-                [a, b] => self.sub(*a, *b),
-                _ => {
-                    return Err(SexprError::Arity {
-                        operator: "-".into(),
-                        expected: "one or two arguments",
-                    })
-                }
-            },
-            "/" => match args {
-                [a, b] => self.div(*a, *b),
-                _ => {
-                    return Err(SexprError::Arity {
-                        operator: "/".into(),
-                        expected: "two arguments",
-                    })
-                }
-            },
-            "^" => match args {
-                [a, n] => {
-                    let e = self.as_number(*n).ok_or(SexprError::ExponentNotANumber)?;
-                    self.pow(*a, e)
-                }
-                _ => {
-                    return Err(SexprError::Arity {
-                        operator: "^".into(),
-                        expected: "two arguments",
-                    })
-                }
-            },
-            "sqrt" => {
-                let x = unary(args)?;
-                self.sqrt(x)
+        Ok(match (head, args) {
+            ("+", _) => self.add_all(args),
+            ("*", _) => self.mul_all(args),
+            ("-", [x]) => self.neg(*x),
+            ("-", [a, b]) => self.sub(*a, *b),
+            ("-", _) => return Err(arity("one or two arguments")),
+            ("/", [a, b]) => self.div(*a, *b),
+            ("^", [a, n]) => {
+                let e = self.as_number(*n).ok_or(SexprError::ExponentNotANumber)?;
+                self.pow(*a, e)
             }
-            "atan2" => match args {
-                [y, x] => self.atan2(*y, *x),
-                _ => {
-                    return Err(SexprError::Arity {
-                        operator: "atan2".into(),
-                        expected: "two arguments",
-                    })
-                }
-            },
-            name => {
+            ("atan2", [y, x]) => self.atan2(*y, *x),
+            ("/" | "^" | "atan2", _) => return Err(arity("two arguments")),
+            ("sqrt", [x]) => self.sqrt(*x),
+            ("sqrt", _) => return Err(arity("one argument")),
+            (name, _) => {
                 let func = [
                     Func::Sin,
                     Func::Cos,
@@ -251,8 +216,10 @@ impl ExprPool {
                 .into_iter()
                 .find(|f| f.name() == name)
                 .ok_or_else(|| SexprError::UnknownOperator(name.to_string()))?;
-                let x = unary(args)?;
-                self.call(func, x)
+                let [x] = args else {
+                    return Err(arity("one argument"));
+                };
+                self.call(func, *x)
             }
         })
     }

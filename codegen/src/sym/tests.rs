@@ -115,12 +115,23 @@ fn derivative_agrees_with_finite_difference() {
     assert!((fd - exact).abs() < 1e-8, "{fd} vs {exact}");
 }
 
+/// Reading `input` fails, saying `expected`.
+fn check_error(input: &str, expected: &str) {
+    let error = ExprPool::new().parse_sexpr(input).unwrap_err();
+    assert_eq!(error.to_string(), expected, "reading {input}");
+}
+
 #[test]
 fn parse_errors_are_reported() {
-    let mut pool = ExprPool::new();
-    assert!(pool.parse_sexpr("(+ 1").is_err());
-    assert!(pool.parse_sexpr("(frob 1)").is_err());
-    assert!(pool.parse_sexpr(")").is_err());
+    check_error("(+ 1", "missing `)`");
+    check_error("(frob 1)", "unknown operator `frob`");
+    check_error(")", "unexpected `)`");
+    check_error("(- a b c)", "`-` takes one or two arguments");
+    check_error("(/ a)", "`/` takes two arguments");
+    check_error("(^ a b)", "the exponent of `^` must be a number");
+    check_error("(atan2 y)", "`atan2` takes two arguments");
+    check_error("(sqrt a b)", "`sqrt` takes one argument");
+    check_error("(sin a b)", "`sin` takes one argument");
 }
 
 #[test]

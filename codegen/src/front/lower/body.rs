@@ -170,11 +170,8 @@ impl<'a> Lowerer<'a> {
                     .unwrap_or_else(Expr::zero)
             }
             None => {
-                self.error(
-                    Diagnostic::error("E0402", format!("body `{}` has no `mass`", body.name.name))
-                        .with_label(body.name.span, "missing `mass = ...;`")
-                        .with_help("every body needs a mass, e.g. `mass = 10 g;`"),
-                );
+                let help = "every body needs a mass, e.g. `mass = 10 g;`";
+                self.error(missing_field("body", &body.name, "mass", help));
                 Expr::zero()
             }
         };
@@ -191,8 +188,8 @@ impl<'a> Lowerer<'a> {
             None => zeros(),
         };
         let inertia = match fields.iter().find(|f| f.name.name == "inertia") {
-            Some(field) => self.inertia(&field.value).unwrap_or_else(zero_inertia),
-            None => zero_inertia(),
+            Some(field) => self.inertia(&field.value).unwrap_or_else(ir::Inertia::zero),
+            None => ir::Inertia::zero(),
         };
         self.owners[owner].body = Some(BodyProps {
             mass,
@@ -272,26 +269,46 @@ impl<'a> Lowerer<'a> {
             );
             return false;
         }
-        if !BODY_FIELDS.contains(&field.name.name.as_str()) {
-            self.error(names::unknown_labelled(
-                "E0209",
-                "field",
-                "fields of a body",
-                &field.name.name,
-                field.name.span,
-                &BODY_FIELDS,
-                "not a body field",
-            ));
-            return false;
-        }
-        self.check_duplicate_field(field, seen)
+        let (list, label) = ("fields of a body", "not a body field");
+        self.check_field(field, seen, &BODY_FIELDS, list, label)
     }
 
-    pub(super) fn check_duplicate_field(
+    /// The fields of a declaration that are known and not repeated, in order (see
+    /// [`check_field`](Self::check_field)).
+    pub(super) fn known_fields<'f>(
+        &mut self,
+        fields: &'f [ast::Field],
+        allowed: &[&str],
+        list: &str,
+        label: &str,
+    ) -> Vec<&'f ast::Field> {
+        let mut known: Vec<&ast::Field> = Vec::new();
+        for field in fields {
+            if self.check_field(field, &known, allowed, list, label) {
+                known.push(field);
+            }
+        }
+        known
+    }
+
+    /// Whether `field` is one of `allowed` (E0209 otherwise: the field `label`led, the allowed
+    /// ones listed as `list`) and not among the fields `seen` before it (E0211).
+    pub(super) fn check_field(
         &mut self,
         field: &ast::Field,
         seen: &[&ast::Field],
+        allowed: &[&str],
+        list: &str,
+        label: &str,
     ) -> bool {
+        let name = &field.name;
+        if !allowed.contains(&name.name.as_str()) {
+            let unknown = names::unknown(
+                "E0209", "field", list, &name.name, name.span, allowed, label,
+            );
+            self.error(unknown);
+            return false;
+        }
         let Some(previous) = seen.iter().find(|f| f.name.name == field.name.name) else {
             return true;
         };
@@ -526,6 +543,7 @@ impl<'a> Lowerer<'a> {
                     &name.name,
                     name.span,
                     &candidates,
+                    names::NOT_DECLARED,
                 ));
                 None
             }
@@ -584,7 +602,15 @@ impl<'a> Lowerer<'a> {
             )
         };
         let plural = format!("{kind}s of `{owner_name}`");
-        let mut diagnostic = names::unknown(code, kind, &plural, &full, name.span, &candidates);
+        let mut diagnostic = names::unknown(
+            code,
+            kind,
+            &plural,
+            &full,
+            name.span,
+            &candidates,
+            names::NOT_DECLARED,
+        );
         if let Some(best) = crate::diag::closest(&name.name, &candidates) {
             diagnostic = diagnostic.with_help(format!("did you mean `{owner_name}.{best}`?"));
         }
@@ -617,6 +643,7 @@ impl<'a> Lowerer<'a> {
             &name.name,
             name.span,
             &candidates,
+            names::NOT_DECLARED,
         );
         if self.joint_index.contains_key(&name.name) {
             diagnostic =
@@ -645,15 +672,11 @@ impl<'a> Lowerer<'a> {
     }
 }
 
-fn zero_inertia() -> ir::Inertia {
-    ir::Inertia {
-        xx: Expr::zero(),
-        yy: Expr::zero(),
-        zz: Expr::zero(),
-        xy: Expr::zero(),
-        yz: Expr::zero(),
-        zx: Expr::zero(),
-    }
+/// E0402: `<what> `name`` lacks its required `field`.
+pub(super) fn missing_field(what: &str, name: &Ident, field: &str, help: &str) -> Diagnostic {
+    Diagnostic::error("E0402", format!("{what} `{}` has no `{field}`", name.name))
+        .with_label(name.span, format!("missing `{field} = ...;`"))
+        .with_help(help)
 }
 
 /// Flattens `a * b * c` (through parentheses) into its factors, left to right.

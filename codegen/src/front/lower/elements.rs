@@ -185,27 +185,8 @@ impl<'a> Lowerer<'a> {
         allowed: &[&str],
         what: &str,
     ) -> Vec<&'f ast::Field> {
-        let mut fields: Vec<&ast::Field> = Vec::new();
-        for field in &decl.fields {
-            let name = field.name.name.as_str();
-            if !allowed.contains(&name) {
-                let list = format!("fields of a {what}");
-                self.error(names::unknown_labelled(
-                    "E0209",
-                    "field",
-                    &list,
-                    name,
-                    field.name.span,
-                    allowed,
-                    &format!("not a {what} field"),
-                ));
-                continue;
-            }
-            if self.check_duplicate_field(field, &fields) {
-                fields.push(field);
-            }
-        }
-        fields
+        let (list, label) = (format!("fields of a {what}"), format!("not a {what} field"));
+        self.known_fields(&decl.fields, allowed, &list, &label)
     }
 
     /// A scalar field checked against its dimension (params allowed, or inputs with `dynamic`).
@@ -299,7 +280,7 @@ impl<'a> Lowerer<'a> {
         candidates.extend(self.model.loops.iter().map(|l| l.name.as_str()));
         let candidates: Vec<String> = candidates.iter().map(|s| s.to_string()).collect();
         let candidates: Vec<&str> = candidates.iter().map(String::as_str).collect();
-        self.error(names::unknown_labelled(
+        self.error(names::unknown(
             "E0201",
             "joint or loop",
             "joints and loops",
@@ -326,7 +307,7 @@ impl<'a> Lowerer<'a> {
                     let found = materials.get(&name.name).cloned();
                     if found.is_none() {
                         let known: Vec<&str> = materials.keys().map(String::as_str).collect();
-                        self.error(names::unknown_labelled(
+                        self.error(names::unknown(
                             "E0204",
                             "material",
                             "materials",

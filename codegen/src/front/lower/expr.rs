@@ -406,6 +406,7 @@ impl Lowerer<'_> {
             &name.name,
             name.span,
             &candidates,
+            names::NOT_DECLARED,
         );
         if units::lookup(&name.name).is_some() && diagnostic.help.is_none() {
             diagnostic = diagnostic.with_help(format!(
@@ -518,7 +519,7 @@ impl Lowerer<'_> {
 
     fn unknown_function(&mut self, function: &ast::Ident) {
         let candidates = ["sin", "cos", "tan", "sqrt", "exp", "ln", "abs", "atan2"];
-        let mut diagnostic = names::unknown_labelled(
+        let mut diagnostic = names::unknown(
             "E0207",
             "function",
             "functions",
@@ -842,10 +843,16 @@ fn exponent_ratio(exponent: Number) -> Option<(i64, i64)> {
 // Folding constructors: numeric operands are combined exactly (Number arithmetic).
 // ---------------------------------------------------------------------------------------------
 
-fn numbers(a: &Expr, b: &Expr) -> Option<(Number, Number)> {
-    match (a, b) {
-        (Expr::Number(x), Expr::Number(y)) => Some((*x, *y)),
-        _ => None,
+/// `a op b`, folded to a number where both are numbers.
+fn binary(
+    a: Expr,
+    b: Expr,
+    number: fn(Number, Number) -> Number,
+    node: fn(Box<Expr>, Box<Expr>) -> Expr,
+) -> Expr {
+    match (&a, &b) {
+        (Expr::Number(x), Expr::Number(y)) => Expr::Number(number(*x, *y)),
+        _ => node(Box::new(a), Box::new(b)),
     }
 }
 
@@ -858,31 +865,19 @@ pub fn neg(a: Expr) -> Expr {
 }
 
 pub fn add(a: Expr, b: Expr) -> Expr {
-    match numbers(&a, &b) {
-        Some((x, y)) => Expr::Number(x.add(y)),
-        None => Expr::Add(Box::new(a), Box::new(b)),
-    }
+    binary(a, b, Number::add, Expr::Add)
 }
 
 pub fn sub(a: Expr, b: Expr) -> Expr {
-    match numbers(&a, &b) {
-        Some((x, y)) => Expr::Number(x.sub(y)),
-        None => Expr::Sub(Box::new(a), Box::new(b)),
-    }
+    binary(a, b, Number::sub, Expr::Sub)
 }
 
 pub fn mul(a: Expr, b: Expr) -> Expr {
-    match numbers(&a, &b) {
-        Some((x, y)) => Expr::Number(x.mul(y)),
-        None => Expr::Mul(Box::new(a), Box::new(b)),
-    }
+    binary(a, b, Number::mul, Expr::Mul)
 }
 
 pub fn div(a: Expr, b: Expr) -> Expr {
-    match numbers(&a, &b) {
-        Some((x, y)) => Expr::Number(x.div(y)),
-        None => Expr::Div(Box::new(a), Box::new(b)),
-    }
+    binary(a, b, Number::div, Expr::Div)
 }
 
 pub fn pow(base: Expr, exponent: Number) -> Expr {

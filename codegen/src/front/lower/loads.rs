@@ -112,9 +112,8 @@ impl Lowerer<'_> {
             what: "a force",
             example: "[0, 1 mN, 0]",
         };
-        let components = self.lower_vector_as(&decl.value, Ctx::Dynamic, &expect);
-        let frame = self.frame_clause(decl.frame.as_ref());
-        if let (Some(point), Some(frame), Some(components)) = (point, frame, components) {
+        let vector = self.load_vector(&decl.value, decl.frame.as_ref(), &expect);
+        if let (Some(point), Some((components, frame))) = (point, vector) {
             self.loads.push(PendingLoad::Force {
                 point,
                 frame,
@@ -141,9 +140,8 @@ impl Lowerer<'_> {
             what: "a torque",
             example: "[0, 0, 1 uN*m]",
         };
-        let components = self.lower_vector_as(&decl.value, Ctx::Dynamic, &expect);
-        let frame = self.frame_clause(decl.frame.as_ref());
-        if let (Some(body), Some(frame), Some(components)) = (body, frame, components) {
+        let vector = self.load_vector(&decl.value, decl.frame.as_ref(), &expect);
+        if let (Some(body), Some((components, frame))) = (body, vector) {
             self.loads.push(PendingLoad::Torque {
                 body,
                 frame,
@@ -151,6 +149,18 @@ impl Lowerer<'_> {
                 span: decl.span,
             });
         }
+    }
+
+    /// The components of a force or torque and the frame they are given in.
+    fn load_vector(
+        &mut self,
+        value: &ast::Expr,
+        frame: Option<&ast::Path>,
+        expect: &Expect,
+    ) -> Option<(Vec3, FrameRef)> {
+        let components = self.lower_vector_as(value, Ctx::Dynamic, expect);
+        let frame = self.frame_clause(frame);
+        Some((components?, frame?))
     }
 
     /// `in FRAME`, defaulting to the Newtonian frame.

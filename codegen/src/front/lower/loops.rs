@@ -12,7 +12,7 @@ use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, ExprKind};
 use crate::ir::{self, AxisAngle, ClosureKind, Dimension, Expr, Vec3};
 
-use super::body::zeros;
+use super::body::{missing_field, zeros};
 use super::expr::{unparen, Ctx, Expect};
 use super::{names, Lowerer};
 
@@ -131,7 +131,7 @@ impl<'a> Lowerer<'a> {
         if let Some(&known) = LOOP_KINDS.iter().find(|&&k| k == kind.name) {
             return Some(known);
         }
-        let mut diagnostic = names::unknown_labelled(
+        let mut diagnostic = names::unknown(
             "E0208",
             "loop kind",
             "loop kinds",
@@ -169,27 +169,8 @@ impl<'a> Lowerer<'a> {
                 .flat_map(|k| loop_fields(k).iter().copied())
                 .collect(),
         };
-        let mut fields: Vec<&ast::Field> = Vec::new();
-        for field in &decl.fields {
-            let name = field.name.name.as_str();
-            if !allowed.contains(&name) {
-                let what = format!("fields of a {} loop", kind.unwrap_or("loop"));
-                self.error(names::unknown_labelled(
-                    "E0209",
-                    "field",
-                    &what,
-                    name,
-                    field.name.span,
-                    &allowed,
-                    "not a field of this loop",
-                ));
-                continue;
-            }
-            if self.check_duplicate_field(field, &fields) {
-                fields.push(field);
-            }
-        }
-        fields
+        let list = format!("fields of a {} loop", kind.unwrap_or("loop"));
+        self.known_fields(&decl.fields, &allowed, &list, "not a field of this loop")
     }
 
     /// `components = [x, y];` (default all three) in `frame = F;` (default newtonian).
@@ -279,16 +260,9 @@ impl<'a> Lowerer<'a> {
         let axis: Option<Vec3> = match field("axis") {
             Some(f) => self.axis(&f.value, "a loop axis"),
             None => {
-                self.error(
-                    Diagnostic::error(
-                        "E0402",
-                        format!("revolute loop `{}` has no `axis`", decl.name.name),
-                    )
-                    .with_label(decl.name.span, "missing `axis = ...;`")
-                    .with_help(
-                        "add `axis = z;` (or `x`, `y`, `[ax, ay, az]`), in the parent interframe",
-                    ),
-                );
+                let help =
+                    "add `axis = z;` (or `x`, `y`, `[ax, ay, az]`), in the parent interframe";
+                self.error(missing_field("revolute loop", &decl.name, "axis", help));
                 None
             }
         };
@@ -321,14 +295,8 @@ impl<'a> Lowerer<'a> {
         length: Option<&ast::Field>,
     ) -> Option<ClosureKind> {
         let Some(length) = length else {
-            self.error(
-                Diagnostic::error(
-                    "E0402",
-                    format!("distance loop `{}` has no `length`", decl.name.name),
-                )
-                .with_label(decl.name.span, "missing `length = ...;`")
-                .with_help("add the distance between the two points, e.g. `length = 5 mm;`"),
-            );
+            let help = "add the distance between the two points, e.g. `length = 5 mm;`";
+            self.error(missing_field("distance loop", &decl.name, "length", help));
             return None;
         };
         let length = self.lower_scalar_as(

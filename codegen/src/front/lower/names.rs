@@ -51,28 +51,13 @@ pub fn reserved(name: &Ident, meaning: &str) -> Diagnostic {
         .with_help("choose another name")
 }
 
-/// An "unknown X" error with the candidates as a note and the closest one as help;
-/// `plural` introduces the list ("bodies in scope", "joint kinds").
-pub fn unknown(
-    code: &'static str,
-    what: &str,
-    plural: &str,
-    name: &str,
-    span: Span,
-    candidates: &[&str],
-) -> Diagnostic {
-    unknown_labelled(
-        code,
-        what,
-        plural,
-        name,
-        span,
-        candidates,
-        "not declared in this model",
-    )
-}
+/// The label of an unknown name where the declarations are the model's own.
+pub const NOT_DECLARED: &str = "not declared in this model";
 
-pub fn unknown_labelled(
+/// An "unknown X" error, the name `label`led (e.g. [`NOT_DECLARED`]), with the candidates
+/// as a note and the closest one as help; `plural` introduces the list ("bodies in scope",
+/// "joint kinds").
+pub fn unknown(
     code: &'static str,
     what: &str,
     plural: &str,

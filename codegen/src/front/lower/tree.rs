@@ -10,7 +10,7 @@ use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, ExprKind};
 use crate::ir::{self, AxisAngle, Dimension, Expr, Handle, JointKind, Motion, Vec3};
 
-use super::body::{zeros, FrameRef};
+use super::body::{missing_field, zeros, FrameRef};
 use super::expr::{is_vector, neg, unparen, Ctx, Expect};
 use super::{names, Lowerer};
 
@@ -219,7 +219,7 @@ impl<'a> Lowerer<'a> {
             "weld" => return Some(JointKind::Weld),
             _ => {}
         }
-        let mut diagnostic = names::unknown_labelled(
+        let mut diagnostic = names::unknown(
             "E0208",
             "joint kind",
             "joint kinds",
@@ -268,22 +268,11 @@ impl<'a> Lowerer<'a> {
     ) -> Vec<&'f ast::Field> {
         let mut fields: Vec<&ast::Field> = Vec::new();
         for field in &decl.fields {
+            let (list, label) = ("fields of a joint", "not a joint field");
+            if !self.check_field(field, &fields, &JOINT_FIELDS, list, label) {
+                continue;
+            }
             let name = field.name.name.as_str();
-            if !JOINT_FIELDS.contains(&name) {
-                self.error(names::unknown_labelled(
-                    "E0209",
-                    "field",
-                    "fields of a joint",
-                    name,
-                    field.name.span,
-                    &JOINT_FIELDS,
-                    "not a joint field",
-                ));
-                continue;
-            }
-            if !self.check_duplicate_field(field, &fields) {
-                continue;
-            }
             if kind == Some(JointKind::Weld) && DOF_FIELDS.contains(&name) {
                 self.error(
                     Diagnostic::error("E0403", format!("`{name}` is not allowed on a weld joint"))
@@ -306,19 +295,10 @@ impl<'a> Lowerer<'a> {
         match (kind, field) {
             (_, Some(field)) => self.axis(&field.value, "a joint axis"),
             (Some(JointKind::Pin | JointKind::Slider), None) => {
-                self.error(
-                    Diagnostic::error(
-                        "E0402",
-                        format!(
-                            "{} joint `{}` has no `axis`",
-                            decl.kind.name, decl.name.name
-                        ),
-                    )
-                    .with_label(decl.name.span, "missing `axis = ...;`")
-                    .with_help(
-                        "add `axis = z;` (or `x`, `y`, `-z`, `[ax, ay, az]`), in the joint frame",
-                    ),
-                );
+                let what = format!("{} joint", decl.kind.name);
+                let help =
+                    "add `axis = z;` (or `x`, `y`, `-z`, `[ax, ay, az]`), in the joint frame";
+                self.error(missing_field(&what, &decl.name, "axis", help));
                 None
             }
             _ => None,

@@ -8,7 +8,7 @@
 //! [`TIP_MASS`] or [`TIP_PRELOAD`] appended.
 
 use super::{append_param, scaled, TransformError};
-use crate::ir::{Body, Dimension, Expr, Inertia, Load, Model, Motion};
+use crate::ir::{Body, Dimension, Expr, Load, Model, Motion};
 
 /// The base compliance of [`Extension::BaseCompliance`], per unit actuator compliance.
 pub const BASE_COMPLIANCE: &str = "base_compliance";
@@ -132,23 +132,9 @@ pub fn tip_mass(model: &mut Model, slider: &str) -> Result<(), TransformError> {
         Dimension::MASS,
         "Mass on the actuator tip (kg, mech diagnose).",
     );
-    let zero = Expr::zero;
-    model.bodies.append(Body {
-        name: format!("{slider}_tip_mass"),
-        frame,
-        mass,
-        center_of_mass: [zero(), zero(), zero()],
-        inertia: Inertia {
-            xx: zero(),
-            yy: zero(),
-            zz: zero(),
-            xy: zero(),
-            yz: zero(),
-            zx: zero(),
-        },
-        docs: Vec::new(),
-        span: Default::default(),
-    });
+    model
+        .bodies
+        .append(Body::point_mass(format!("{slider}_tip_mass"), frame, mass));
     Ok(())
 }
 
