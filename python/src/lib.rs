@@ -1,0 +1,494 @@
+//! `mech._mech`: the native module of the Python package `mech` (`python/mech/`, which
+//! wraps it with keyword conveniences and docstrings).
+//!
+//! Consumes: Python calls with a `.mech` path, `NAME=VALUE` settings (units checked, as on
+//! the command line) or SI numbers, and NumPy arrays of states. Produces: NumPy arrays and
+//! dicts of them from the library's analyses ([`mech::session::Session`]: assembly,
+//! simulation, statics, linearization) and the model's own functions (`M(q)`, `F(q, u)`,
+//! outputs). Errors are raised as `mech.MechError` carrying the library's message (a model
+//! text error shows its file, line, column and hint, as `mech check` prints it).
+//!
+//! Long computations (simulate, statics, linearize) run with the Python thread detached, on a
+//! copy of the session, so other Python threads go on meanwhile.
+
+use std::path::PathBuf;
+use std::sync::{Mutex, MutexGuard};
+
+use mech::session::{Assembled, Session};
+use mech_runtime::nalgebra::DMatrix;
+use mech_runtime::{Method, Model as _, SimOptions};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1};
+use pyo3::create_exception;
+use pyo3::exceptions::PyException;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+create_exception!(
+    _mech,
+    MechError,
+    PyException,
+    "A model that cannot be read or an analysis that cannot be done; the message says where and why."
+);
+
+fn error(message: impl std::fmt::Display) -> PyErr {
+    MechError::new_err(message.to_string())
+}
+
+/// A compiled `.mech` model with its parameter values and input signals. Behind a mutex: a
+/// Python object may be used from several threads, and the tape's register file is not
+/// shared-safe.
+#[pyclass(module = "mech._mech")]
+struct Model {
+    session: Mutex<Session>,
+}
+
+/// A matrix as a 2-D array.
+fn matrix<'py>(py: Python<'py>, m: &DMatrix<f64>) -> Bound<'py, PyArray2<f64>> {
+    let rows: Vec<Vec<f64>> = m.row_iter().map(|r| r.iter().copied().collect()).collect();
+    rows_array(py, &rows, m.ncols())
+}
+
+/// Rows of equal length as a 2-D array (`columns` wide when there are no rows).
+fn rows_array<'py>(
+    py: Python<'py>,
+    rows: &[Vec<f64>],
+    columns: usize,
+) -> Bound<'py, PyArray2<f64>> {
+    let flat: Vec<f64> = rows.iter().flatten().copied().collect();
+    PyArray1::from_vec(py, flat)
+        .reshape([rows.len(), columns])
+        .expect("rows of equal length")
+}
+
+/// `independent=` as Python gives it: `None`, a list of names (held at their `q0`), or a
+/// dict of names to values (a string with a unit, or a number in SI units).
+fn independent_list(given: Option<Bound<'_, PyAny>>) -> PyResult<Vec<String>> {
+    let Some(given) = given else {
+        return Ok(Vec::new());
+    };
+    if let Ok(dict) = given.cast::<PyDict>() {
+        return dict
+            .iter()
+            .map(|(name, value)| {
+                let name: String = name.extract()?;
+                Ok(if value.is_none() {
+                    name
+                } else if let Ok(text) = value.extract::<String>() {
+                    format!("{name}={text}")
+                } else {
+                    format!("{name}={}", value.extract::<f64>()?)
+                })
+            })
+            .collect();
+    }
+    given.extract::<Vec<String>>().map_err(|_| {
+        error("`independent` is a list of coordinate names or a dict of names to values")
+    })
+}
+
+fn method(name: &str, rtol: f64, atol: f64, step: Option<f64>) -> PyResult<Method> {
+    let h_max = f64::INFINITY;
+    Ok(match name {
+        "dopri5" => Method::Dopri5 { rtol, atol, h_max },
+        "dop853" => Method::Dop853 { rtol, atol, h_max },
+        "rosenbrock" => Method::Rosenbrock { rtol, atol, h_max },
+        "exp-rosenbrock" | "exp_rosenbrock" => Method::ExpRosenbrock { rtol, atol, h_max },
+        "rk4" => Method::Rk4 {
+            step: step.ok_or_else(|| error("method `rk4` needs `step` (seconds)"))?,
+        },
+        other => {
+            return Err(error(format!(
+                "unknown method `{other}`; the methods are dopri5, dop853, rk4, rosenbrock, \
+                 exp-rosenbrock"
+            )))
+        }
+    })
+}
+
+impl Model {
+    /// The session, locked (a panic elsewhere leaves it usable: it holds no invariant a panic
+    /// could break).
+    fn session(&self) -> MutexGuard<'_, Session> {
+        self.session
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    /// The model's inputs as given (`None`: their current signals at t = 0), checked.
+    fn input_values(&self, inputs: Option<PyReadonlyArray1<f64>>) -> PyResult<Vec<f64>> {
+        let session = self.session();
+        let model = &session.model;
+        match inputs {
+            Some(values) => {
+                let values = values.as_slice()?.to_vec();
+                if values.len() != model.ninputs() {
+                    return Err(error(format!(
+                        "`{}` has {} inputs, got {} values",
+                        model.name(),
+                        model.ninputs(),
+                        values.len()
+                    )));
+                }
+                Ok(values)
+            }
+            None => Ok(session.signals.iter().map(|s| s.value(0.0)).collect()),
+        }
+    }
+
+    /// A state vector of the model's length, or an error naming it.
+    fn state(&self, what: &str, values: PyReadonlyArray1<f64>) -> PyResult<Vec<f64>> {
+        let values = values.as_slice()?.to_vec();
+        let n = self.session().model.nq();
+        if values.len() != n {
+            return Err(error(format!(
+                "`{what}` has {} values; `{}` has {n} coordinates",
+                values.len(),
+                self.session().model.name()
+            )));
+        }
+        Ok(values)
+    }
+
+    fn names(count: usize, name: impl Fn(usize) -> String) -> Vec<String> {
+        (0..count).map(name).collect()
+    }
+}
+
+#[pymethods]
+impl Model {
+    /// Compiles the `.mech` file at `path` and applies `NAME=VALUE` settings (`set`, units
+    /// checked against each parameter) and input signals (`inputs`, e.g.
+    /// `drive=sine(amplitude=1 mN, frequency=10 Hz)`).
+    #[new]
+    #[pyo3(signature = (path, set=Vec::new(), inputs=Vec::new()))]
+    fn new(path: PathBuf, set: Vec<String>, inputs: Vec<String>) -> PyResult<Self> {
+        let session = Session::open(&path, &set, &inputs).map_err(error)?;
+        Ok(Model {
+            session: Mutex::new(session),
+        })
+    }
+
+    #[getter]
+    fn name(&self) -> String {
+        self.session().model.name().to_string()
+    }
+
+    #[getter]
+    fn coordinates(&self) -> Vec<String> {
+        let session = self.session();
+        let model = &session.model;
+        Self::names(model.nq(), |i| model.coordinate_name(i).to_string())
+    }
+
+    #[getter]
+    fn inputs(&self) -> Vec<String> {
+        let session = self.session();
+        let model = &session.model;
+        Self::names(model.ninputs(), |i| model.input_name(i).to_string())
+    }
+
+    #[getter]
+    fn outputs(&self) -> Vec<String> {
+        let session = self.session();
+        let model = &session.model;
+        Self::names(model.noutputs(), |i| model.output_name(i).to_string())
+    }
+
+    #[getter]
+    fn constraints(&self) -> Vec<String> {
+        let session = self.session();
+        let model = &session.model;
+        Self::names(model.nc(), |i| model.constraint_name(i).to_string())
+    }
+
+    /// Parameter values by name, SI units.
+    #[getter]
+    fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let session = self.session();
+        let model = &session.model;
+        let dict = PyDict::new(py);
+        for i in 0..model.nparams() {
+            dict.set_item(model.param_name(i), model.param(i))?;
+        }
+        Ok(dict)
+    }
+
+    /// `NAME=VALUE` with a unit (`k=3 N/m`), checked as `--set` is.
+    fn set(&mut self, assignment: &str) -> PyResult<()> {
+        self.session().set(assignment).map_err(error)
+    }
+
+    /// Sets parameter `name` to `value` in SI units (no unit check).
+    fn set_si(&mut self, name: &str, value: f64) -> PyResult<()> {
+        let mut session = self.session();
+        let model = &mut session.model;
+        let index = model.param_index(name).ok_or_else(|| {
+            let known = Self::names(model.nparams(), |i| model.param_name(i).to_string());
+            error(format!(
+                "`{}` has no parameter `{name}`; its parameters: {}",
+                model.name(),
+                known.join(", ")
+            ))
+        })?;
+        model.set_param(index, value);
+        Ok(())
+    }
+
+    /// `NAME=SIGNAL` (`drive=sine(amplitude=1 mN, frequency=10 Hz)`), checked as `--input` is.
+    fn input(&mut self, assignment: &str) -> PyResult<()> {
+        self.session().input(assignment).map_err(error)
+    }
+
+    /// The equations `M(q) u̇ = F` and the outputs as s-expressions (`mech derive`).
+    fn equations(&self) -> String {
+        mech::describe::equations_text(&self.session().compiled)
+    }
+
+    /// The initial state with the loops closed: `independent` coordinates held
+    /// (`NAME` or `NAME=VALUE`). A dict of `q`, `u`, the names held independent, and for a
+    /// model with loops its mobility (`rank`, `dof`, `singular_values`).
+    #[pyo3(signature = (independent=None))]
+    fn assemble<'py>(
+        &self,
+        py: Python<'py>,
+        independent: Option<Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let independent = independent_list(independent)?;
+        let state = self.session().assemble(&independent).map_err(error)?;
+        self.state_dict(py, &state)
+    }
+
+    /// Integrates from the assembled initial state to `t_end` (seconds), sampled every
+    /// `dt_out` (default `t_end / 1000`). A dict of arrays: `t` (n), `q` and `u` (n × nq),
+    /// `outputs` (n × outputs), `inputs` (n × inputs), and the integrator's `steps`.
+    #[pyo3(signature = (t_end, dt_out=None, method="dopri5", rtol=1e-9, atol=1e-12, step=None, independent=None, max_steps=1_000_000))]
+    #[allow(clippy::too_many_arguments)]
+    fn simulate<'py>(
+        &self,
+        py: Python<'py>,
+        t_end: f64,
+        dt_out: Option<f64>,
+        method: &str,
+        rtol: f64,
+        atol: f64,
+        step: Option<f64>,
+        independent: Option<Bound<'py, PyAny>>,
+        max_steps: usize,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        if !(t_end.is_finite() && t_end > 0.0) {
+            return Err(error(format!(
+                "`t_end` must be a positive number of seconds, got {t_end}"
+            )));
+        }
+        let options = SimOptions {
+            t_end,
+            output_interval: dt_out.unwrap_or(t_end / 1000.0),
+            method: self::method(method, rtol, atol, step)?,
+            max_steps,
+            ..SimOptions::default()
+        };
+        let independent = independent_list(independent)?;
+        let session = self.session().clone();
+        let trajectory = py
+            .detach(move || {
+                let state = session.assemble(&independent)?;
+                session.simulate(&state, &options, &mut |_| {})
+            })
+            .map_err(error)?;
+        let (nq, no, ni) = {
+            let model = &self.session().model;
+            (model.nq(), model.noutputs(), model.ninputs())
+        };
+        let dict = PyDict::new(py);
+        dict.set_item("t", PyArray1::from_vec(py, trajectory.times.clone()))?;
+        dict.set_item("q", rows_array(py, &trajectory.q, nq))?;
+        dict.set_item("u", rows_array(py, &trajectory.u, nq))?;
+        dict.set_item("outputs", rows_array(py, &trajectory.outputs, no))?;
+        dict.set_item("inputs", rows_array(py, &trajectory.inputs, ni))?;
+        dict.set_item("steps", trajectory.stats.accepted_steps)?;
+        Ok(dict)
+    }
+
+    /// A static equilibrium near the assembled initial state under constant `inputs` (default:
+    /// the signals at t = 0). A dict of `q` and the loop multipliers `lambda`, with the
+    /// residuals `force_residual` (max |F + Jᵀλ|) and `constraint_residual` (max |φ|).
+    #[pyo3(signature = (independent=None, inputs=None))]
+    fn statics<'py>(
+        &self,
+        py: Python<'py>,
+        independent: Option<Bound<'py, PyAny>>,
+        inputs: Option<PyReadonlyArray1<f64>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let inputs = self.input_values(inputs)?;
+        let independent = independent_list(independent)?;
+        let session = self.session().clone();
+        let (equilibrium, _) = py
+            .detach(move || session.equilibrium(&independent, &inputs, &[]))
+            .map_err(error)?;
+        let dict = PyDict::new(py);
+        dict.set_item("q", PyArray1::from_vec(py, equilibrium.q))?;
+        dict.set_item(
+            "lambda",
+            PyArray1::from_vec(py, equilibrium.loop_multipliers),
+        )?;
+        dict.set_item("force_residual", equilibrium.force_residual)?;
+        dict.set_item("constraint_residual", equilibrium.constraint_residual)?;
+        Ok(dict)
+    }
+
+    /// The linear model about the static equilibrium, `M δz̈ + C δż + K δz = B δin` in the
+    /// minimal coordinates `z` (names in `coordinates`), its first-order form
+    /// `ẋ = A x + B_s δin`, `y = C_s x + D_s δin` with `x = [δz; δż]`, and the undamped
+    /// modes (`frequency_hz`, `damping_ratio`, `shapes` one column per mode).
+    #[pyo3(signature = (independent=None, inputs=None))]
+    fn linearize<'py>(
+        &self,
+        py: Python<'py>,
+        independent: Option<Bound<'py, PyAny>>,
+        inputs: Option<PyReadonlyArray1<f64>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let inputs = self.input_values(inputs)?;
+        let independent = independent_list(independent)?;
+        let session = self.session().clone();
+        let linear = py
+            .detach(move || session.linearization(&independent, &inputs))
+            .map_err(error)?;
+        let state_space = linear
+            .state_space()
+            .ok_or_else(|| error("the reduced mass matrix is singular"))?;
+        let modes = linear
+            .modes()
+            .ok_or_else(|| error("the reduced mass matrix is not positive definite"))?;
+        let session = self.session();
+        let model = &session.model;
+        let dict = PyDict::new(py);
+        let names: Vec<&str> = linear
+            .independent
+            .iter()
+            .map(|&i| model.coordinate_name(i))
+            .collect();
+        dict.set_item("coordinates", names.clone())?;
+        for (key, value) in [
+            ("M", &linear.mass),
+            ("C", &linear.damping),
+            ("K", &linear.stiffness),
+            ("B", &linear.input),
+            ("A", &state_space.a),
+            ("B_s", &state_space.b),
+            ("C_s", &state_space.c),
+            ("D_s", &state_space.d),
+        ] {
+            dict.set_item(key, matrix(py, value))?;
+        }
+        let frequencies: Vec<f64> = modes.iter().map(|m| m.frequency_hz()).collect();
+        let ratios: Vec<f64> = modes.iter().map(|m| m.damping_ratio).collect();
+        let shapes: Vec<Vec<f64>> = (0..names.len())
+            .map(|r| modes.iter().map(|m| m.shape[r]).collect())
+            .collect();
+        dict.set_item("frequency_hz", PyArray1::from_vec(py, frequencies))?;
+        dict.set_item("damping_ratio", PyArray1::from_vec(py, ratios))?;
+        dict.set_item("shapes", rows_array(py, &shapes, modes.len()))?;
+        Ok(dict)
+    }
+
+    /// The mass matrix `M(q)` (nq × nq) at time `t`.
+    #[pyo3(signature = (q, inputs=None, t=0.0))]
+    fn mass_matrix<'py>(
+        &self,
+        py: Python<'py>,
+        q: PyReadonlyArray1<f64>,
+        inputs: Option<PyReadonlyArray1<f64>>,
+        t: f64,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let (q, inputs) = (self.state("q", q)?, self.input_values(inputs)?);
+        let n = q.len();
+        let mut out = vec![0.0; n * n];
+        self.session().model.mass_matrix(t, &q, &inputs, &mut out);
+        PyArray1::from_vec(py, out).reshape([n, n])
+    }
+
+    /// The forcing vector `F(q, u)` of `M(q) u̇ = F` at time `t` (loop reactions excluded).
+    #[pyo3(signature = (q, u, inputs=None, t=0.0))]
+    fn forcing<'py>(
+        &self,
+        py: Python<'py>,
+        q: PyReadonlyArray1<f64>,
+        u: PyReadonlyArray1<f64>,
+        inputs: Option<PyReadonlyArray1<f64>>,
+        t: f64,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let (q, u, inputs) = (
+            self.state("q", q)?,
+            self.state("u", u)?,
+            self.input_values(inputs)?,
+        );
+        let mut out = vec![0.0; q.len()];
+        self.session().model.forcing(t, &q, &u, &inputs, &mut out);
+        Ok(PyArray1::from_vec(py, out))
+    }
+
+    /// The model's outputs (names in `outputs`) at `(t, q, u)`.
+    #[pyo3(signature = (q, u, inputs=None, t=0.0))]
+    fn evaluate_outputs<'py>(
+        &self,
+        py: Python<'py>,
+        q: PyReadonlyArray1<f64>,
+        u: PyReadonlyArray1<f64>,
+        inputs: Option<PyReadonlyArray1<f64>>,
+        t: f64,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let (q, u, inputs) = (
+            self.state("q", q)?,
+            self.state("u", u)?,
+            self.input_values(inputs)?,
+        );
+        let mut out = vec![0.0; self.session().model.noutputs()];
+        self.session().model.outputs(t, &q, &u, &inputs, &mut out);
+        Ok(PyArray1::from_vec(py, out))
+    }
+
+    fn __repr__(&self) -> String {
+        let session = self.session();
+        let model = &session.model;
+        format!(
+            "<mech.Model `{}`: {} coordinates, {} inputs, {} outputs, {} loop rows>",
+            model.name(),
+            model.nq(),
+            model.ninputs(),
+            model.noutputs(),
+            model.nc()
+        )
+    }
+}
+
+impl Model {
+    fn state_dict<'py>(&self, py: Python<'py>, state: &Assembled) -> PyResult<Bound<'py, PyDict>> {
+        let session = self.session();
+        let model = &session.model;
+        let dict = PyDict::new(py);
+        dict.set_item("q", PyArray1::from_vec(py, state.q.clone()))?;
+        dict.set_item("u", PyArray1::from_vec(py, state.u.clone()))?;
+        let independent: Vec<&str> = state
+            .independent
+            .iter()
+            .map(|&i| model.coordinate_name(i))
+            .collect();
+        dict.set_item("independent", independent)?;
+        if let Some(mobility) = &state.mobility {
+            dict.set_item("rank", mobility.rank)?;
+            dict.set_item("dof", mobility.dof())?;
+            dict.set_item(
+                "singular_values",
+                PyArray1::from_vec(py, mobility.singular_values.clone()),
+            )?;
+        }
+        Ok(dict)
+    }
+}
+
+#[pymodule]
+fn _mech(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Model>()?;
+    m.add("MechError", m.py().get_type::<MechError>())?;
+    Ok(())
+}
