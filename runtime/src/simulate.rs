@@ -517,31 +517,36 @@ fn integrate<O: Ode, M: Model + ?Sized>(
     map: &mut dyn StateMap,
 ) -> Result<Trajectory, RuntimeError> {
     let (t0, t1) = (options.t_start, options.t_end);
-    let adaptive = |defaults: AdaptiveOptions, rtol, atol, h_max| AdaptiveOptions {
+    let opts = adaptive_options(options);
+    match options.method {
+        Method::Dopri5 { .. } => run(Dopri5::new(ode, t0, x0, t1, opts)?, sampling, map),
+        Method::Dop853 { .. } => run(Dop853::new(ode, t0, x0, t1, opts)?, sampling, map),
+        Method::Rk4 { step } => run(Rk4::new(ode, t0, x0, t1, step)?, sampling, map),
+        Method::Rosenbrock { .. } => run(Rosenbrock::new(ode, t0, x0, t1, opts)?, sampling, map),
+        Method::ExpRosenbrock { .. } => {
+            run(ExpRosenbrock::new(ode, t0, x0, t1, opts)?, sampling, map)
+        }
+    }
+}
+
+/// The options of an adaptive `options.method`: Hairer's defaults for the method (`RODAS`'s
+/// for both Rosenbrock methods) with its tolerances, step limit and `options.max_steps`. RK4
+/// has none: the defaults, unused.
+fn adaptive_options(options: &SimOptions) -> AdaptiveOptions {
+    let (defaults, rtol, atol, h_max) = match options.method {
+        Method::Dopri5 { rtol, atol, h_max } => (AdaptiveOptions::default(), rtol, atol, h_max),
+        Method::Dop853 { rtol, atol, h_max } => (AdaptiveOptions::dop853(), rtol, atol, h_max),
+        Method::Rosenbrock { rtol, atol, h_max } | Method::ExpRosenbrock { rtol, atol, h_max } => {
+            (AdaptiveOptions::rosenbrock(), rtol, atol, h_max)
+        }
+        Method::Rk4 { .. } => return AdaptiveOptions::default(),
+    };
+    AdaptiveOptions {
         rtol,
         atol,
         h_max,
         max_steps: options.max_steps,
         ..defaults
-    };
-    match options.method {
-        Method::Dopri5 { rtol, atol, h_max } => {
-            let opts = adaptive(AdaptiveOptions::default(), rtol, atol, h_max);
-            run(Dopri5::new(ode, t0, x0, t1, opts)?, sampling, map)
-        }
-        Method::Dop853 { rtol, atol, h_max } => {
-            let opts = adaptive(AdaptiveOptions::dop853(), rtol, atol, h_max);
-            run(Dop853::new(ode, t0, x0, t1, opts)?, sampling, map)
-        }
-        Method::Rk4 { step } => run(Rk4::new(ode, t0, x0, t1, step)?, sampling, map),
-        Method::Rosenbrock { rtol, atol, h_max } => {
-            let opts = adaptive(AdaptiveOptions::rosenbrock(), rtol, atol, h_max);
-            run(Rosenbrock::new(ode, t0, x0, t1, opts)?, sampling, map)
-        }
-        Method::ExpRosenbrock { rtol, atol, h_max } => {
-            let opts = adaptive(AdaptiveOptions::rosenbrock(), rtol, atol, h_max);
-            run(ExpRosenbrock::new(ode, t0, x0, t1, opts)?, sampling, map)
-        }
     }
 }
 
@@ -550,13 +555,7 @@ trait StateMap {
     /// Corrects the state after an accepted step in place; returns whether it changed.
     fn after_step(&mut self, t: f64, x: &mut [f64]) -> Result<bool, RuntimeError>;
     /// The model's `q` and `u` at a sample `(t, x)`.
-    fn full_state(
-        &mut self,
-        t: f64,
-        x: &[f64],
-        q: &mut [f64],
-        u: &mut [f64],
-    ) -> Result<(), RuntimeError>;
+    fn full_state(&mut self, t: f64, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>), RuntimeError>;
 }
 
 /// `x = [q; u]`, projected onto the loops after every step and at every sample.
@@ -581,20 +580,13 @@ impl<M: Model + ?Sized> StateMap for FullCoordinates<'_, M> {
         projector.project_state(self.model, t, q, u, &self.inputs, self.tolerance)
     }
 
-    fn full_state(
-        &mut self,
-        t: f64,
-        x: &[f64],
-        q: &mut [f64],
-        u: &mut [f64],
-    ) -> Result<(), RuntimeError> {
-        q.copy_from_slice(&x[..self.nq]);
-        u.copy_from_slice(&x[self.nq..]);
+    fn full_state(&mut self, t: f64, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>), RuntimeError> {
+        let (mut q, mut u) = (x[..self.nq].to_vec(), x[self.nq..].to_vec());
         if let Some(projector) = self.projector.as_mut() {
             values_at(self.signals, t, &mut self.inputs);
-            projector.project_state(self.model, t, q, u, &self.inputs, self.tolerance)?;
+            projector.project_state(self.model, t, &mut q, &mut u, &self.inputs, self.tolerance)?;
         }
-        Ok(())
+        Ok((q, u))
     }
 }
 
@@ -609,18 +601,10 @@ impl<M: Model + ?Sized> StateMap for ReducedCoordinates<'_, M> {
         Ok(false)
     }
 
-    fn full_state(
-        &mut self,
-        t: f64,
-        x: &[f64],
-        q: &mut [f64],
-        u: &mut [f64],
-    ) -> Result<(), RuntimeError> {
+    fn full_state(&mut self, t: f64, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>), RuntimeError> {
         let (z, zdot) = x.split_at(self.nz);
         self.sampler.state(t, z, zdot)?;
-        q.copy_from_slice(self.sampler.q());
-        u.copy_from_slice(self.sampler.u());
-        Ok(())
+        Ok((self.sampler.q().to_vec(), self.sampler.u().to_vec()))
     }
 }
 
@@ -664,7 +648,6 @@ fn run<M: Model + ?Sized, S: Stepper>(
         max_steps,
         progress,
     } = sampling;
-    let nq = model.nq();
     let mut traj = Trajectory {
         q: Vec::with_capacity(grid.len()),
         u: Vec::with_capacity(grid.len()),
@@ -681,8 +664,7 @@ fn run<M: Model + ?Sized, S: Stepper>(
                   x: &[f64],
                   traj: &mut Trajectory|
      -> Result<(), RuntimeError> {
-        let (mut q, mut u) = (vec![0.0; nq], vec![0.0; nq]);
-        map.full_state(t, x, &mut q, &mut u)?;
+        let (q, u) = map.full_state(t, x)?;
         let mut inputs = vec![0.0; signals.len()];
         values_at(signals, t, &mut inputs);
         let mut outputs = vec![0.0; model.noutputs()];
