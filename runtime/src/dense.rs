@@ -44,34 +44,18 @@ impl Dim for Dynamic {
     }
 }
 
-/// Runs `$body` with `$d` bound to a [`Dim`] of value `$n`: `Fixed` up to [`UNROLLED`].
+/// Runs `$body` with `$d` bound to a [`Dim`] of value `$n`: `Fixed` for the sizes 1 to
+/// [`UNROLLED`] (listed in the first rule), `Dynamic` above.
 macro_rules! by_size {
     ($n:expr, |$d:ident| $body:expr) => {
+        by_size!($n, |$d| $body, fixed: 1 2 3 4 5 6)
+    };
+    ($n:expr, |$d:ident| $body:expr, fixed: $($size:literal)+) => {
         match $n {
-            1 => {
-                let $d = Fixed::<1>;
+            $($size => {
+                let $d = Fixed::<$size>;
                 $body
-            }
-            2 => {
-                let $d = Fixed::<2>;
-                $body
-            }
-            3 => {
-                let $d = Fixed::<3>;
-                $body
-            }
-            4 => {
-                let $d = Fixed::<4>;
-                $body
-            }
-            5 => {
-                let $d = Fixed::<5>;
-                $body
-            }
-            6 => {
-                let $d = Fixed::<6>;
-                $body
-            }
+            })+
             n => {
                 let $d = Dynamic(n);
                 $body
