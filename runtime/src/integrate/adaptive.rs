@@ -491,8 +491,7 @@ impl StepControl {
             Some(h) => h.min(opts.h_max),
             None if self.t_end > self.t => {
                 self.stats.rhs_evaluations += 1;
-                let (mut x1, mut f1) = (vec![0.0; n], vec![0.0; n]);
-                initial_step(ode, &opts, order, self.t, x0, &f0, &mut x1, &mut f1)?
+                initial_step(ode, &opts, order, self.t, x0, &f0)?
             }
             None => 0.0,
         };
@@ -575,8 +574,7 @@ impl StepControl {
 /// Hairer's starting step-size heuristic (`HINIT`; Hairer, Nørsett & Wanner, *Solving
 /// Ordinary Differential Equations I*, §II.4) for a method of order `order`, with
 /// root-mean-square norms: `h` such that `h^order · max(‖f0‖, ‖f'‖) = 0.01`, from one explicit
-/// Euler step (one evaluation of `ode`, written into `f1`; `x1` is scratch).
-#[allow(clippy::too_many_arguments)]
+/// Euler step (one evaluation of `ode`).
 fn initial_step<O: Ode>(
     ode: &mut O,
     opts: &AdaptiveOptions,
@@ -584,9 +582,8 @@ fn initial_step<O: Ode>(
     t: f64,
     x: &[f64],
     f0: &[f64],
-    x1: &mut [f64],
-    f1: &mut [f64],
 ) -> Result<f64, RuntimeError> {
+    let (mut x1, mut f1) = (vec![0.0; x.len()], vec![0.0; x.len()]);
     let n = x.len().max(1) as f64;
     let (rtol, atol, h_max) = (opts.rtol, opts.atol, opts.h_max);
     let (mut dnf, mut dny) = (0.0, 0.0);
@@ -606,7 +603,7 @@ fn initial_step<O: Ode>(
     for ((xs, x), f) in x1.iter_mut().zip(x).zip(f0) {
         *xs = x + h * f;
     }
-    ode.rhs(t + h, x1, f1)?;
+    ode.rhs(t + h, &x1, &mut f1)?;
     let mut der2 = 0.0;
     for ((x, f0), f1) in x.iter().zip(f0).zip(f1.iter()) {
         let sk = atol + rtol * x.abs();
