@@ -169,14 +169,6 @@ struct AccelSolver {
     pivots: Vec<usize>,
 }
 
-/// What the solve produced.
-enum Solve {
-    Ok,
-    /// `M` or `F` was not finite; `udot` is NaN.
-    NonFinite,
-    Singular,
-}
-
 impl AccelSolver {
     fn new(nu: usize) -> Self {
         AccelSolver {
@@ -187,6 +179,8 @@ impl AccelSolver {
         }
     }
 
+    /// Solves `M u̇ = F` into `udot`. Errors: [`RuntimeError::SingularMassMatrix`], or
+    /// [`RuntimeError::NonFiniteState`] with `udot` NaN if `M`, `F` or `u̇` is not finite.
     fn solve<M: Model + ?Sized>(
         &mut self,
         model: &M,
@@ -195,24 +189,24 @@ impl AccelSolver {
         u: &[f64],
         inputs: &[f64],
         udot: &mut [f64],
-    ) -> Solve {
+    ) -> Result<(), RuntimeError> {
         model.mass_matrix(t, q, inputs, self.mass.as_mut_slice());
         model.forcing(t, q, u, inputs, self.force.as_mut_slice());
         let finite = |s: &[f64]| s.iter().all(|v| v.is_finite());
         if !finite(self.mass.as_slice()) || !finite(self.force.as_slice()) {
             udot.fill(f64::NAN);
-            return Solve::NonFinite;
+            return Err(RuntimeError::NonFiniteState { t });
         }
         // A factorisation with acceptable pivots and a non-finite result means F overflowed
         // through M⁻¹ (not a singular M): report it as non-finite.
         let factored = (self.is_symmetric() && self.cholesky(udot)) || self.lu(udot);
         if !factored {
-            Solve::Singular
+            Err(RuntimeError::SingularMassMatrix { t })
         } else if finite(udot) {
-            Solve::Ok
+            Ok(())
         } else {
             udot.fill(f64::NAN);
-            Solve::NonFinite
+            Err(RuntimeError::NonFiniteState { t })
         }
     }
 
@@ -332,13 +326,22 @@ impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
         check_len("u", self.nq, u.len())?;
         check_len("inputs", self.inputs.len(), inputs.len())?;
         check_len("udot", self.nq, udot.len())?;
-        if let Some(constrained) = &mut self.constrained {
-            return constrained.accelerations(self.model, t, q, u, inputs, udot);
-        }
-        match self.solver.solve(self.model, t, q, u, inputs, udot) {
-            Solve::Ok => Ok(()),
-            Solve::NonFinite => Err(RuntimeError::NonFiniteState { t }),
-            Solve::Singular => Err(RuntimeError::SingularMassMatrix { t }),
+        self.inputs.copy_from_slice(inputs);
+        self.solve(t, q, u, udot)
+    }
+
+    /// `u̇` at `(t, q, u)` under the input values in `self.inputs`, with the loops closed where
+    /// the model has them. A non-finite `u̇` is [`RuntimeError::NonFiniteState`], `udot` NaN.
+    fn solve(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        udot: &mut [f64],
+    ) -> Result<(), RuntimeError> {
+        match &mut self.constrained {
+            Some(constrained) => constrained.accelerations(self.model, t, q, u, &self.inputs, udot),
+            None => self.solver.solve(self.model, t, q, u, &self.inputs, udot),
         }
     }
 }
@@ -353,16 +356,10 @@ impl<M: Model + ?Sized> Ode for ModelOde<'_, M> {
         values_at(self.signals, t, &mut self.inputs);
         let (qdot, udot) = dxdt.split_at_mut(self.nq);
         qdot.copy_from_slice(u);
-        if let Some(constrained) = &mut self.constrained {
-            // A non-finite derivative makes the adaptive integrator retry a smaller step.
-            return match constrained.accelerations(self.model, t, q, u, &self.inputs, udot) {
-                Ok(_) | Err(RuntimeError::NonFiniteState { .. }) => Ok(()),
-                Err(error) => Err(error),
-            };
-        }
-        match self.solver.solve(self.model, t, q, u, &self.inputs, udot) {
-            Solve::Ok | Solve::NonFinite => Ok(()),
-            Solve::Singular => Err(RuntimeError::SingularMassMatrix { t }),
+        // A non-finite derivative (NaN) makes the adaptive integrator retry a smaller step.
+        match self.solve(t, q, u, udot) {
+            Ok(()) | Err(RuntimeError::NonFiniteState { .. }) => Ok(()),
+            Err(error) => Err(error),
         }
     }
 }
