@@ -80,26 +80,33 @@ fn cholesky_in<D: Dim>(a: &mut [f64], d: D) -> bool {
         scale = f64::max(scale, a[i + n * i].abs());
     }
     let floor = scale * 1e-14;
-    // Right-looking: column j of L, then the trailing lower triangle.
     for j in 0..n {
         // The Schur-complement diagonal; NaN counts as not positive.
         let diagonal = a[j + n * j];
         if diagonal.is_nan() || diagonal <= floor {
             return false;
         }
-        let pivot = diagonal.sqrt();
-        a[j + n * j] = pivot;
-        for i in j + 1..n {
-            a[i + n * j] /= pivot;
-        }
-        for c in j + 1..n {
-            let l_cj = a[c + n * j];
-            for i in c..n {
-                a[i + n * c] -= a[i + n * j] * l_cj;
-            }
-        }
+        cholesky_column(a, n, j);
     }
     true
+}
+
+/// One right-looking step of the Cholesky factorizations, at a positive diagonal `A_jj`:
+/// column `j` of `L` (`L_jj = √A_jj`, `L_ij = A_ij / L_jj`), then the update of the trailing
+/// lower triangle, `A_ik −= L_ij L_kj` for `j < k ≤ i`.
+#[inline(always)]
+fn cholesky_column(a: &mut [f64], n: usize, j: usize) {
+    let pivot = a[j + n * j].sqrt();
+    a[j + n * j] = pivot;
+    for i in j + 1..n {
+        a[i + n * j] /= pivot;
+    }
+    for k in j + 1..n {
+        let l_kj = a[k + n * j];
+        for i in k..n {
+            a[i + n * k] -= a[i + n * j] * l_kj;
+        }
+    }
 }
 
 /// Solves `L y = b` in place (forward substitution), with `L` from [`cholesky`].
@@ -351,18 +358,7 @@ fn pivoted_cholesky_in<D: Dim>(
             swap_symmetric(a, n, j, best);
             order.swap(j, best);
         }
-        let pivot = a[j + n * j].sqrt();
-        a[j + n * j] = pivot;
-        for i in j + 1..n {
-            a[i + n * j] /= pivot;
-        }
-        // Update the trailing block's lower triangle: A_ik −= L_ij L_kj.
-        for k in j + 1..n {
-            let l_kj = a[k + n * j];
-            for i in k..n {
-                a[i + n * k] -= a[i + n * j] * l_kj;
-            }
-        }
+        cholesky_column(a, n, j);
     }
     n
 }
