@@ -574,14 +574,14 @@ impl<M: Model + ?Sized> StateMap for FullCoordinates<'_, M> {
         };
         values_at(self.signals, t, &mut self.inputs);
         let (q, u) = x.split_at_mut(self.nq);
-        projector.project_state(self.model, t, q, u, &self.inputs, self.tolerance)
+        projector.project(self.model, t, q, u, &self.inputs, self.tolerance)
     }
 
     fn full_state(&mut self, t: f64, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>), RuntimeError> {
         let (mut q, mut u) = (x[..self.nq].to_vec(), x[self.nq..].to_vec());
         if let Some(projector) = self.projector.as_mut() {
             values_at(self.signals, t, &mut self.inputs);
-            projector.project_state(self.model, t, &mut q, &mut u, &self.inputs, self.tolerance)?;
+            projector.project(self.model, t, &mut q, &mut u, &self.inputs, self.tolerance)?;
         }
         Ok((q, u))
     }
