@@ -126,15 +126,7 @@ impl AdaptiveMethod for ExpRosenbrockMethod {
             return Ok(f64::NAN);
         }
         // U2 = x + h/2·φ1(hJ/2)·F.
-        Self::linear_flow(
-            &mut self.phi,
-            true,
-            0.5 * h,
-            &now.f,
-            &self.jacobian.dfdt,
-            &mut self.flow,
-            &mut self.work,
-        );
+        self.linear_flow(true, 0.5 * h, &now.f);
         for i in 0..n {
             self.x_stage[i] = now.x[i] + self.flow[i];
         }
@@ -144,15 +136,7 @@ impl AdaptiveMethod for ExpRosenbrockMethod {
         self.d2 = d2;
 
         // The flow h·φ1·F, and U3 = x + h·φ1·F + h·φ1·D2.
-        Self::linear_flow(
-            &mut self.phi,
-            false,
-            h,
-            &now.f,
-            &self.jacobian.dfdt,
-            &mut self.flow,
-            &mut self.work,
-        );
+        self.linear_flow(false, h, &now.f);
         self.work.fill(0.0);
         self.phi.add_apply(1, &self.d2, &mut self.work);
         for i in 0..n {
@@ -203,19 +187,14 @@ impl AdaptiveMethod for ExpRosenbrockMethod {
         if !self.phi_at(tau) {
             return Err(RuntimeError::NonFiniteState { t });
         }
-        let [_, f, d2, d3] = &self.cont;
-        Self::linear_flow(
-            &mut self.phi,
-            false,
-            tau,
-            f,
-            &self.jacobian.dfdt,
-            &mut self.flow,
-            &mut self.work,
-        );
+        // The derivative at the step's start, taken out of `cont` for the call.
+        let f = std::mem::take(&mut self.cont[1]);
+        self.linear_flow(false, tau, &f);
+        self.cont[1] = f;
         for (o, w) in out.iter_mut().zip(&self.flow) {
             *o += w;
         }
+        let [_, _, d2, d3] = &self.cont;
         let (a, b) = (2.0 * theta * theta * tau, 6.0 * theta.powi(3) * tau);
         for (order, coefficients) in [(3, (8.0 * a, -a)), (4, (-8.0 * b, 2.0 * b))] {
             for i in 0..n {
@@ -246,19 +225,12 @@ impl ExpRosenbrockMethod {
         ok
     }
 
-    /// `out = τ·φ1(τJ)·[f; 1] = τ·(φ1(τ∂f/∂x)·f + τ·φ2(τ∂f/∂x)·∂f/∂t)` for the φ-functions at
-    /// `τ` (`half`: at `τ` for the functions of half the argument).
-    fn linear_flow(
-        phi: &mut PhiFunctions,
-        half: bool,
-        tau: f64,
-        f: &[f64],
-        dfdt: &[f64],
-        out: &mut [f64],
-        work: &mut [f64],
-    ) {
+    /// `flow = τ·φ1(τJ)·[f; 1] = τ·(φ1(τ∂f/∂x)·f + τ·φ2(τ∂f/∂x)·∂f/∂t)` for the φ-functions
+    /// at `τ` (`half`: at `τ` for the functions of half the argument).
+    fn linear_flow(&mut self, half: bool, tau: f64, f: &[f64]) {
+        let (phi, out, work) = (&mut self.phi, &mut self.flow, &mut self.work);
         out.fill(0.0);
-        for (w, d) in work.iter_mut().zip(dfdt) {
+        for (w, d) in work.iter_mut().zip(&self.jacobian.dfdt) {
             *w = tau * d;
         }
         if half {
