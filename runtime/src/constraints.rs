@@ -451,23 +451,9 @@ impl ConstrainedSolver {
     /// Moves `q` back onto `φ(q) = 0` (minimum-norm Gauss–Newton, `Δq = −Jᵀ(J Jᵀ)⁺φ`, until
     /// `max |φ| ≤ tolerance`, at most 10 steps) and then, unless `max |J u|` is already within
     /// `tolerance`, `u` onto `J u = 0` (the kinetic-energy-closest correction
-    /// `Δu = −M⁻¹Jᵀ(J M⁻¹ Jᵀ)⁺ J u`). Allocates nothing.
+    /// `Δu = −M⁻¹Jᵀ(J M⁻¹ Jᵀ)⁺ J u`). Returns whether `q` or `u` was changed (a state already
+    /// within tolerance is left bit for bit as it was). Allocates nothing.
     pub fn project<M: Model + ?Sized>(
-        &mut self,
-        model: &M,
-        t: f64,
-        q: &mut [f64],
-        u: &mut [f64],
-        inputs: &[f64],
-        tolerance: f64,
-    ) -> Result<(), RuntimeError> {
-        self.project_state(model, t, q, u, inputs, tolerance)
-            .map(|_| ())
-    }
-
-    /// [`project`](Self::project), returning whether `q` or `u` was changed (a state already
-    /// within tolerance is left bit for bit as it was).
-    pub fn project_state<M: Model + ?Sized>(
         &mut self,
         model: &M,
         t: f64,

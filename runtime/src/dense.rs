@@ -44,34 +44,18 @@ impl Dim for Dynamic {
     }
 }
 
-/// Runs `$body` with `$d` bound to a [`Dim`] of value `$n`: `Fixed` up to [`UNROLLED`].
+/// Runs `$body` with `$d` bound to a [`Dim`] of value `$n`: `Fixed` for the sizes 1 to
+/// [`UNROLLED`] (listed in the first rule), `Dynamic` above.
 macro_rules! by_size {
     ($n:expr, |$d:ident| $body:expr) => {
+        by_size!($n, |$d| $body, fixed: 1 2 3 4 5 6)
+    };
+    ($n:expr, |$d:ident| $body:expr, fixed: $($size:literal)+) => {
         match $n {
-            1 => {
-                let $d = Fixed::<1>;
+            $($size => {
+                let $d = Fixed::<$size>;
                 $body
-            }
-            2 => {
-                let $d = Fixed::<2>;
-                $body
-            }
-            3 => {
-                let $d = Fixed::<3>;
-                $body
-            }
-            4 => {
-                let $d = Fixed::<4>;
-                $body
-            }
-            5 => {
-                let $d = Fixed::<5>;
-                $body
-            }
-            6 => {
-                let $d = Fixed::<6>;
-                $body
-            }
+            })+
             n => {
                 let $d = Dynamic(n);
                 $body
@@ -96,26 +80,33 @@ fn cholesky_in<D: Dim>(a: &mut [f64], d: D) -> bool {
         scale = f64::max(scale, a[i + n * i].abs());
     }
     let floor = scale * 1e-14;
-    // Right-looking: column j of L, then the trailing lower triangle.
     for j in 0..n {
         // The Schur-complement diagonal; NaN counts as not positive.
         let diagonal = a[j + n * j];
         if diagonal.is_nan() || diagonal <= floor {
             return false;
         }
-        let pivot = diagonal.sqrt();
-        a[j + n * j] = pivot;
-        for i in j + 1..n {
-            a[i + n * j] /= pivot;
-        }
-        for c in j + 1..n {
-            let l_cj = a[c + n * j];
-            for i in c..n {
-                a[i + n * c] -= a[i + n * j] * l_cj;
-            }
-        }
+        cholesky_column(a, n, j);
     }
     true
+}
+
+/// One right-looking step of the Cholesky factorizations, at a positive diagonal `A_jj`:
+/// column `j` of `L` (`L_jj = √A_jj`, `L_ij = A_ij / L_jj`), then the update of the trailing
+/// lower triangle, `A_ik −= L_ij L_kj` for `j < k ≤ i`.
+#[inline(always)]
+fn cholesky_column(a: &mut [f64], n: usize, j: usize) {
+    let pivot = a[j + n * j].sqrt();
+    a[j + n * j] = pivot;
+    for i in j + 1..n {
+        a[i + n * j] /= pivot;
+    }
+    for k in j + 1..n {
+        let l_kj = a[k + n * j];
+        for i in k..n {
+            a[i + n * k] -= a[i + n * j] * l_kj;
+        }
+    }
 }
 
 /// Solves `L y = b` in place (forward substitution), with `L` from [`cholesky`].
@@ -367,18 +358,7 @@ fn pivoted_cholesky_in<D: Dim>(
             swap_symmetric(a, n, j, best);
             order.swap(j, best);
         }
-        let pivot = a[j + n * j].sqrt();
-        a[j + n * j] = pivot;
-        for i in j + 1..n {
-            a[i + n * j] /= pivot;
-        }
-        // Update the trailing block's lower triangle: A_ik −= L_ij L_kj.
-        for k in j + 1..n {
-            let l_kj = a[k + n * j];
-            for i in k..n {
-                a[i + n * k] -= a[i + n * j] * l_kj;
-            }
-        }
+        cholesky_column(a, n, j);
     }
     n
 }

@@ -169,14 +169,6 @@ struct AccelSolver {
     pivots: Vec<usize>,
 }
 
-/// What the solve produced.
-enum Solve {
-    Ok,
-    /// `M` or `F` was not finite; `udot` is NaN.
-    NonFinite,
-    Singular,
-}
-
 impl AccelSolver {
     fn new(nu: usize) -> Self {
         AccelSolver {
@@ -187,6 +179,8 @@ impl AccelSolver {
         }
     }
 
+    /// Solves `M u̇ = F` into `udot`. Errors: [`RuntimeError::SingularMassMatrix`], or
+    /// [`RuntimeError::NonFiniteState`] with `udot` NaN if `M`, `F` or `u̇` is not finite.
     fn solve<M: Model + ?Sized>(
         &mut self,
         model: &M,
@@ -195,24 +189,24 @@ impl AccelSolver {
         u: &[f64],
         inputs: &[f64],
         udot: &mut [f64],
-    ) -> Solve {
+    ) -> Result<(), RuntimeError> {
         model.mass_matrix(t, q, inputs, self.mass.as_mut_slice());
         model.forcing(t, q, u, inputs, self.force.as_mut_slice());
         let finite = |s: &[f64]| s.iter().all(|v| v.is_finite());
         if !finite(self.mass.as_slice()) || !finite(self.force.as_slice()) {
             udot.fill(f64::NAN);
-            return Solve::NonFinite;
+            return Err(RuntimeError::NonFiniteState { t });
         }
         // A factorisation with acceptable pivots and a non-finite result means F overflowed
         // through M⁻¹ (not a singular M): report it as non-finite.
         let factored = (self.is_symmetric() && self.cholesky(udot)) || self.lu(udot);
         if !factored {
-            Solve::Singular
+            Err(RuntimeError::SingularMassMatrix { t })
         } else if finite(udot) {
-            Solve::Ok
+            Ok(())
         } else {
             udot.fill(f64::NAN);
-            Solve::NonFinite
+            Err(RuntimeError::NonFiniteState { t })
         }
     }
 
@@ -332,13 +326,22 @@ impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
         check_len("u", self.nq, u.len())?;
         check_len("inputs", self.inputs.len(), inputs.len())?;
         check_len("udot", self.nq, udot.len())?;
-        if let Some(constrained) = &mut self.constrained {
-            return constrained.accelerations(self.model, t, q, u, inputs, udot);
-        }
-        match self.solver.solve(self.model, t, q, u, inputs, udot) {
-            Solve::Ok => Ok(()),
-            Solve::NonFinite => Err(RuntimeError::NonFiniteState { t }),
-            Solve::Singular => Err(RuntimeError::SingularMassMatrix { t }),
+        self.inputs.copy_from_slice(inputs);
+        self.solve(t, q, u, udot)
+    }
+
+    /// `u̇` at `(t, q, u)` under the input values in `self.inputs`, with the loops closed where
+    /// the model has them. A non-finite `u̇` is [`RuntimeError::NonFiniteState`], `udot` NaN.
+    fn solve(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        udot: &mut [f64],
+    ) -> Result<(), RuntimeError> {
+        match &mut self.constrained {
+            Some(constrained) => constrained.accelerations(self.model, t, q, u, &self.inputs, udot),
+            None => self.solver.solve(self.model, t, q, u, &self.inputs, udot),
         }
     }
 }
@@ -353,16 +356,10 @@ impl<M: Model + ?Sized> Ode for ModelOde<'_, M> {
         values_at(self.signals, t, &mut self.inputs);
         let (qdot, udot) = dxdt.split_at_mut(self.nq);
         qdot.copy_from_slice(u);
-        if let Some(constrained) = &mut self.constrained {
-            // A non-finite derivative makes the adaptive integrator retry a smaller step.
-            return match constrained.accelerations(self.model, t, q, u, &self.inputs, udot) {
-                Ok(_) | Err(RuntimeError::NonFiniteState { .. }) => Ok(()),
-                Err(error) => Err(error),
-            };
-        }
-        match self.solver.solve(self.model, t, q, u, &self.inputs, udot) {
-            Solve::Ok | Solve::NonFinite => Ok(()),
-            Solve::Singular => Err(RuntimeError::SingularMassMatrix { t }),
+        // A non-finite derivative (NaN) makes the adaptive integrator retry a smaller step.
+        match self.solve(t, q, u, udot) {
+            Ok(()) | Err(RuntimeError::NonFiniteState { .. }) => Ok(()),
+            Err(error) => Err(error),
         }
     }
 }
@@ -517,31 +514,36 @@ fn integrate<O: Ode, M: Model + ?Sized>(
     map: &mut dyn StateMap,
 ) -> Result<Trajectory, RuntimeError> {
     let (t0, t1) = (options.t_start, options.t_end);
-    let adaptive = |defaults: AdaptiveOptions, rtol, atol, h_max| AdaptiveOptions {
+    let opts = adaptive_options(options);
+    match options.method {
+        Method::Dopri5 { .. } => run(Dopri5::new(ode, t0, x0, t1, opts)?, sampling, map),
+        Method::Dop853 { .. } => run(Dop853::new(ode, t0, x0, t1, opts)?, sampling, map),
+        Method::Rk4 { step } => run(Rk4::new(ode, t0, x0, t1, step)?, sampling, map),
+        Method::Rosenbrock { .. } => run(Rosenbrock::new(ode, t0, x0, t1, opts)?, sampling, map),
+        Method::ExpRosenbrock { .. } => {
+            run(ExpRosenbrock::new(ode, t0, x0, t1, opts)?, sampling, map)
+        }
+    }
+}
+
+/// The options of an adaptive `options.method`: Hairer's defaults for the method (`RODAS`'s
+/// for both Rosenbrock methods) with its tolerances, step limit and `options.max_steps`. RK4
+/// has none: the defaults, unused.
+fn adaptive_options(options: &SimOptions) -> AdaptiveOptions {
+    let (defaults, rtol, atol, h_max) = match options.method {
+        Method::Dopri5 { rtol, atol, h_max } => (AdaptiveOptions::default(), rtol, atol, h_max),
+        Method::Dop853 { rtol, atol, h_max } => (AdaptiveOptions::dop853(), rtol, atol, h_max),
+        Method::Rosenbrock { rtol, atol, h_max } | Method::ExpRosenbrock { rtol, atol, h_max } => {
+            (AdaptiveOptions::rosenbrock(), rtol, atol, h_max)
+        }
+        Method::Rk4 { .. } => return AdaptiveOptions::default(),
+    };
+    AdaptiveOptions {
         rtol,
         atol,
         h_max,
         max_steps: options.max_steps,
         ..defaults
-    };
-    match options.method {
-        Method::Dopri5 { rtol, atol, h_max } => {
-            let opts = adaptive(AdaptiveOptions::default(), rtol, atol, h_max);
-            run(Dopri5::new(ode, t0, x0, t1, opts)?, sampling, map)
-        }
-        Method::Dop853 { rtol, atol, h_max } => {
-            let opts = adaptive(AdaptiveOptions::dop853(), rtol, atol, h_max);
-            run(Dop853::new(ode, t0, x0, t1, opts)?, sampling, map)
-        }
-        Method::Rk4 { step } => run(Rk4::new(ode, t0, x0, t1, step)?, sampling, map),
-        Method::Rosenbrock { rtol, atol, h_max } => {
-            let opts = adaptive(AdaptiveOptions::rosenbrock(), rtol, atol, h_max);
-            run(Rosenbrock::new(ode, t0, x0, t1, opts)?, sampling, map)
-        }
-        Method::ExpRosenbrock { rtol, atol, h_max } => {
-            let opts = adaptive(AdaptiveOptions::rosenbrock(), rtol, atol, h_max);
-            run(ExpRosenbrock::new(ode, t0, x0, t1, opts)?, sampling, map)
-        }
     }
 }
 
@@ -550,13 +552,7 @@ trait StateMap {
     /// Corrects the state after an accepted step in place; returns whether it changed.
     fn after_step(&mut self, t: f64, x: &mut [f64]) -> Result<bool, RuntimeError>;
     /// The model's `q` and `u` at a sample `(t, x)`.
-    fn full_state(
-        &mut self,
-        t: f64,
-        x: &[f64],
-        q: &mut [f64],
-        u: &mut [f64],
-    ) -> Result<(), RuntimeError>;
+    fn full_state(&mut self, t: f64, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>), RuntimeError>;
 }
 
 /// `x = [q; u]`, projected onto the loops after every step and at every sample.
@@ -578,23 +574,16 @@ impl<M: Model + ?Sized> StateMap for FullCoordinates<'_, M> {
         };
         values_at(self.signals, t, &mut self.inputs);
         let (q, u) = x.split_at_mut(self.nq);
-        projector.project_state(self.model, t, q, u, &self.inputs, self.tolerance)
+        projector.project(self.model, t, q, u, &self.inputs, self.tolerance)
     }
 
-    fn full_state(
-        &mut self,
-        t: f64,
-        x: &[f64],
-        q: &mut [f64],
-        u: &mut [f64],
-    ) -> Result<(), RuntimeError> {
-        q.copy_from_slice(&x[..self.nq]);
-        u.copy_from_slice(&x[self.nq..]);
+    fn full_state(&mut self, t: f64, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>), RuntimeError> {
+        let (mut q, mut u) = (x[..self.nq].to_vec(), x[self.nq..].to_vec());
         if let Some(projector) = self.projector.as_mut() {
             values_at(self.signals, t, &mut self.inputs);
-            projector.project_state(self.model, t, q, u, &self.inputs, self.tolerance)?;
+            projector.project(self.model, t, &mut q, &mut u, &self.inputs, self.tolerance)?;
         }
-        Ok(())
+        Ok((q, u))
     }
 }
 
@@ -609,18 +598,10 @@ impl<M: Model + ?Sized> StateMap for ReducedCoordinates<'_, M> {
         Ok(false)
     }
 
-    fn full_state(
-        &mut self,
-        t: f64,
-        x: &[f64],
-        q: &mut [f64],
-        u: &mut [f64],
-    ) -> Result<(), RuntimeError> {
+    fn full_state(&mut self, t: f64, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>), RuntimeError> {
         let (z, zdot) = x.split_at(self.nz);
         self.sampler.state(t, z, zdot)?;
-        q.copy_from_slice(self.sampler.q());
-        u.copy_from_slice(self.sampler.u());
-        Ok(())
+        Ok((self.sampler.q().to_vec(), self.sampler.u().to_vec()))
     }
 }
 
@@ -664,7 +645,6 @@ fn run<M: Model + ?Sized, S: Stepper>(
         max_steps,
         progress,
     } = sampling;
-    let nq = model.nq();
     let mut traj = Trajectory {
         q: Vec::with_capacity(grid.len()),
         u: Vec::with_capacity(grid.len()),
@@ -681,8 +661,7 @@ fn run<M: Model + ?Sized, S: Stepper>(
                   x: &[f64],
                   traj: &mut Trajectory|
      -> Result<(), RuntimeError> {
-        let (mut q, mut u) = (vec![0.0; nq], vec![0.0; nq]);
-        map.full_state(t, x, &mut q, &mut u)?;
+        let (q, u) = map.full_state(t, x)?;
         let mut inputs = vec![0.0; signals.len()];
         values_at(signals, t, &mut inputs);
         let mut outputs = vec![0.0; model.noutputs()];

@@ -4,30 +4,76 @@
 //! Consumes an [`Ode`], a start `(t0, x0)`, an end time and [`AdaptiveOptions`]; produces an
 //! [`AdaptiveStepper`], which implements [`Stepper`] once for all of them. The shell owns
 //! what every adaptive method has: the system, the step-size controller ([`StepControl`]:
-//! times, step size, Hairer's accept/reject logic, counters), the derivative refresh after
-//! [`Stepper::state_mut`], and the checks of interpolation. A method ([`AdaptiveMethod`])
-//! supplies only its stages: a trial step with its error norm, what it keeps of an accepted
-//! step, and its continuous extension.
+//! times, step size, Hairer's accept/reject logic, counters), the current point and the end
+//! of the trial step, the derivative refresh after [`Stepper::state_mut`], and the checks of
+//! interpolation. A method ([`AdaptiveMethod`]) supplies only its stages: a trial step with
+//! its error norm, what it keeps of an accepted step, and its continuous extension.
 
 use super::{
-    begin_interpolation, check_len, check_times, derivative_at, Ode, Stats, Stepper, UROUND,
+    all_finite, begin_interpolation, check_len, check_times, derivative_at, Ode, Stats, Stepper,
+    UROUND,
 };
 use crate::RuntimeError;
 // For the documentation's links only.
 #[cfg(doc)]
 use super::{Dop853, Dopri5, ExpRosenbrock, Rosenbrock};
 
-/// The current point of an integration: the state `x(t)` and the derivative `f(t, x)`, which
-/// is the first stage of the next step for every adaptive method.
-pub struct Current {
+/// A point of an integration: the state `x(t)` and the derivative `f(t, x)`. At the current
+/// point the derivative is the first stage of the next step for every adaptive method.
+pub struct Point {
     pub(super) x: Vec<f64>,
     pub(super) f: Vec<f64>,
+}
+
+impl Point {
+    fn zeros(n: usize) -> Self {
+        Point {
+            x: vec![0.0; n],
+            f: vec![0.0; n],
+        }
+    }
+}
+
+/// A step of size `h` from the current point `(t, now)` to `next`, as the shell hands it to a
+/// method: to try ([`AdaptiveMethod::trial`]), then, once accepted, to keep
+/// ([`AdaptiveMethod::accept`]).
+pub struct Step<'a> {
+    /// The options of the error test.
+    pub(super) opts: &'a AdaptiveOptions,
+    /// The counters, for work beyond the shell's count of evaluations.
+    pub(super) stats: &'a mut Stats,
+    pub(super) now: &'a Point,
+    /// The end of the step: the trial writes its state (and its derivative, where the error
+    /// test needs it; otherwise the acceptance does).
+    pub(super) next: &'a mut Point,
+    pub(super) t: f64,
+    pub(super) h: f64,
+}
+
+impl<'a> Step<'a> {
+    fn new(
+        opts: &'a AdaptiveOptions,
+        stats: &'a mut Stats,
+        now: &'a Point,
+        next: &'a mut Point,
+        t: f64,
+        h: f64,
+    ) -> Self {
+        Step {
+            opts,
+            stats,
+            now,
+            next,
+            t,
+            h,
+        }
+    }
 }
 
 /// The method-specific part of an adaptive integrator: its working storage and stages.
 ///
 /// The shell calls [`AdaptiveMethod::trial`] until the controller accepts a step, then
-/// [`AdaptiveMethod::accept`], which moves the [`Current`] point to the step's end.
+/// [`AdaptiveMethod::accept`], and then makes the step's end the current [`Point`].
 pub trait AdaptiveMethod {
     /// Order of the propagated solution, for the initial step-size heuristic.
     const ORDER: i32;
@@ -45,40 +91,30 @@ pub trait AdaptiveMethod {
     /// The derivative was refreshed at a modified state: drop what depended on the old one.
     fn derivative_refreshed(&mut self) {}
 
-    /// A trial step of size `h` from `(t, now.x)`: computes the new state (kept until
+    /// A trial step: computes the new state into `step.next` (kept until
     /// [`AdaptiveMethod::accept`] or the next trial) and returns the scaled error norm, NaN
     /// if anything is non-finite. The shell has counted
-    /// [`AdaptiveMethod::EVALUATIONS_PER_TRIAL`]; any other work goes into `stats`.
-    fn trial<O: Ode>(
-        &mut self,
-        ode: &mut O,
-        opts: &AdaptiveOptions,
-        stats: &mut Stats,
-        now: &Current,
-        t: f64,
-        h: f64,
-    ) -> Result<f64, RuntimeError>;
+    /// [`AdaptiveMethod::EVALUATIONS_PER_TRIAL`]; any other work goes into `step.stats`.
+    fn trial<O: Ode>(&mut self, ode: &mut O, step: Step<'_>) -> Result<f64, RuntimeError>;
 
-    /// The last trial step, of size `h` from `control.t_prev`, was accepted (`control` is
-    /// already past it): move `now` to its end and keep what its dense output needs.
-    fn accept<O: Ode>(
-        &mut self,
-        ode: &mut O,
-        control: &mut StepControl,
-        now: &mut Current,
-        h: f64,
-    ) -> Result<(), RuntimeError>;
+    /// The last trial step was accepted: completes `step.next` (its derivative, if the trial
+    /// did not evaluate it) and keeps what the step's dense output needs. The shell then
+    /// makes `step.next` the current point.
+    fn accept<O: Ode>(&mut self, ode: &mut O, step: Step<'_>) -> Result<(), RuntimeError>;
 
-    /// Writes the solution at `t`, the fraction `theta` in `[0, 1)` of the last step
-    /// `[control.t_prev, control.t]`, into `out` (its length checked).
-    fn interpolate<O: Ode>(
+    /// Makes the dense output of the last step `[control.t_prev, control.t]` ready, for a
+    /// method that computes it on first use.
+    fn prepare_dense<O: Ode>(
         &mut self,
-        ode: &mut O,
-        control: &mut StepControl,
-        t: f64,
-        theta: f64,
-        out: &mut [f64],
-    ) -> Result<(), RuntimeError>;
+        _ode: &mut O,
+        _control: &mut StepControl,
+    ) -> Result<(), RuntimeError> {
+        Ok(())
+    }
+
+    /// Writes the solution at `t`, the fraction `theta` in `[0, 1)` of the last step, into
+    /// `out` (its length checked), once [`AdaptiveMethod::prepare_dense`] has run.
+    fn interpolate(&mut self, t: f64, theta: f64, out: &mut [f64]) -> Result<(), RuntimeError>;
 }
 
 /// An adaptive integrator: the shell shared by [`Dopri5`], [`Dop853`], [`Rosenbrock`] and
@@ -86,7 +122,9 @@ pub trait AdaptiveMethod {
 pub struct AdaptiveStepper<O: Ode, M> {
     pub(super) ode: O,
     pub(super) control: StepControl,
-    pub(super) now: Current,
+    pub(super) now: Point,
+    /// The end of the trial step.
+    next: Point,
     /// The state (or the system) was modified; `now.f` is stale.
     pub(super) dirty: bool,
     pub(super) method: M,
@@ -109,10 +147,11 @@ impl<O: Ode, M: AdaptiveMethod> AdaptiveStepper<O, M> {
         Ok(AdaptiveStepper {
             ode,
             control,
-            now: Current {
+            now: Point {
                 x: x0.to_vec(),
                 f: f0,
             },
+            next: Point::zeros(x0.len()),
             dirty: false,
             method: M::new(x0),
         })
@@ -159,13 +198,23 @@ impl<O: Ode, M: AdaptiveMethod> Stepper for AdaptiveStepper<O, M> {
             ode,
             control,
             now,
+            next,
             method,
             ..
         } = self;
         let opts = control.opts;
-        let accepted = control.advance(|stats, t, h| method.trial(ode, &opts, stats, now, t, h));
-        if let Some(h) = accepted? {
-            method.accept(ode, control, now, h)?;
+        let accepted = control
+            .advance(|stats, t, h| method.trial(ode, Step::new(&opts, stats, now, next, t, h)))?;
+        let Some(h) = accepted else {
+            return Ok(());
+        };
+        let t = control.t_prev;
+        method.accept(ode, Step::new(&opts, &mut control.stats, now, next, t, h))?;
+        std::mem::swap(now, next);
+        // Only a method that evaluates the derivative on acceptance (DOP853) can get here
+        // with a non-finite one: the others' error test rejects it.
+        if !all_finite(&now.f) {
+            return Err(RuntimeError::NonFiniteState { t: control.t });
         }
         Ok(())
     }
@@ -209,7 +258,8 @@ impl<O: Ode, M: AdaptiveMethod> Stepper for AdaptiveStepper<O, M> {
             return Ok(());
         };
         self.method
-            .interpolate(&mut self.ode, &mut self.control, t, theta, out)
+            .prepare_dense(&mut self.ode, &mut self.control)?;
+        self.method.interpolate(t, theta, out)
     }
 
     fn set_t_end(&mut self, t_end: f64) -> Result<(), RuntimeError> {
@@ -441,8 +491,7 @@ impl StepControl {
             Some(h) => h.min(opts.h_max),
             None if self.t_end > self.t => {
                 self.stats.rhs_evaluations += 1;
-                let (mut x1, mut f1) = (vec![0.0; n], vec![0.0; n]);
-                initial_step(ode, &opts, order, self.t, x0, &f0, &mut x1, &mut f1)?
+                initial_step(ode, &opts, order, self.t, x0, &f0)?
             }
             None => 0.0,
         };
@@ -525,8 +574,7 @@ impl StepControl {
 /// Hairer's starting step-size heuristic (`HINIT`; Hairer, Nørsett & Wanner, *Solving
 /// Ordinary Differential Equations I*, §II.4) for a method of order `order`, with
 /// root-mean-square norms: `h` such that `h^order · max(‖f0‖, ‖f'‖) = 0.01`, from one explicit
-/// Euler step (one evaluation of `ode`, written into `f1`; `x1` is scratch).
-#[allow(clippy::too_many_arguments)]
+/// Euler step (one evaluation of `ode`).
 fn initial_step<O: Ode>(
     ode: &mut O,
     opts: &AdaptiveOptions,
@@ -534,9 +582,8 @@ fn initial_step<O: Ode>(
     t: f64,
     x: &[f64],
     f0: &[f64],
-    x1: &mut [f64],
-    f1: &mut [f64],
 ) -> Result<f64, RuntimeError> {
+    let (mut x1, mut f1) = (vec![0.0; x.len()], vec![0.0; x.len()]);
     let n = x.len().max(1) as f64;
     let (rtol, atol, h_max) = (opts.rtol, opts.atol, opts.h_max);
     let (mut dnf, mut dny) = (0.0, 0.0);
@@ -556,7 +603,7 @@ fn initial_step<O: Ode>(
     for ((xs, x), f) in x1.iter_mut().zip(x).zip(f0) {
         *xs = x + h * f;
     }
-    ode.rhs(t + h, x1, f1)?;
+    ode.rhs(t + h, &x1, &mut f1)?;
     let mut der2 = 0.0;
     for ((x, f0), f1) in x.iter().zip(f0).zip(f1.iter()) {
         let sk = atol + rtol * x.abs();

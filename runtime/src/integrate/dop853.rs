@@ -13,9 +13,12 @@
 // The coefficients are kept digit for digit as published (the compiler rounds them to f64).
 #![allow(clippy::excessive_precision)]
 
-use super::adaptive::{AdaptiveMethod, Current, StepControl};
-use super::{all_finite, AdaptiveOptions, AdaptiveStepper, Ode, Stats};
+use super::adaptive::{AdaptiveMethod, Step, StepControl};
+use super::{AdaptiveStepper, Ode};
 use crate::RuntimeError;
+// For the documentation's links only.
+#[cfg(doc)]
+use super::AdaptiveOptions;
 
 const C2: f64 = 0.526001519587677318785587544488e-01;
 const C3: f64 = 0.789002279381515978178381316732e-01;
@@ -258,19 +261,12 @@ impl AdaptiveMethod for Dop853Method {
     }
 
     /// Computes stages 2–12 of a trial step of size `h` from `(t, x)` with `k[0] = f(t, x)`:
-    /// `x_end` holds the 8th-order solution; returns the scaled error norm (NaN if anything
-    /// is non-finite).
-    fn trial<O: Ode>(
-        &mut self,
-        ode: &mut O,
-        opts: &AdaptiveOptions,
-        _stats: &mut Stats,
-        now: &Current,
-        t: f64,
-        h: f64,
-    ) -> Result<f64, RuntimeError> {
+    /// the step's end holds the 8th-order solution; returns the scaled error norm (NaN if
+    /// anything is non-finite).
+    fn trial<O: Ode>(&mut self, ode: &mut O, step: Step<'_>) -> Result<f64, RuntimeError> {
+        let (opts, now, t, h) = (step.opts, step.now, step.t, step.h);
         let n = now.x.len();
-        let (x, xs, k) = (&now.x, &mut self.x_stage, &mut self.k);
+        let (x, x_end, xs, k) = (&now.x, &mut step.next.x, &mut self.x_stage, &mut self.k);
         // Stage i: x + h·Σ_j a_ij k_j, evaluated into k[i − 1].
         macro_rules! stage {
             ($dst:expr, $c:expr, $($a:expr => $j:expr),+) => {{
@@ -312,8 +308,8 @@ impl AdaptiveMethod for Dop853Method {
                 + B10 * k[9][i]
                 + B11 * k[10][i]
                 + B12 * k[11][i];
-            self.x_end[i] = x[i] + h * slope;
-            let sk = atol + rtol * x[i].abs().max(self.x_end[i].abs());
+            x_end[i] = x[i] + h * slope;
+            let sk = atol + rtol * x[i].abs().max(x_end[i].abs());
             let e3 = slope - BHH1 * k[0][i] - BHH2 * k[8][i] - BHH3 * k[11][i];
             let e5 = ER1 * k[0][i]
                 + ER6 * k[5][i]
@@ -325,7 +321,7 @@ impl AdaptiveMethod for Dop853Method {
                 + ER12 * k[11][i];
             err3 += (e3 / sk).powi(2);
             err5 += (e5 / sk).powi(2);
-            finite &= self.x_end[i].is_finite();
+            finite &= x_end[i].is_finite();
         }
         let deno = match err5 + 0.01 * err3 {
             d if d > 0.0 => d,
@@ -335,47 +331,20 @@ impl AdaptiveMethod for Dop853Method {
         Ok(if finite { err } else { f64::NAN })
     }
 
-    fn accept<O: Ode>(
-        &mut self,
-        ode: &mut O,
-        control: &mut StepControl,
-        now: &mut Current,
-        h: f64,
-    ) -> Result<(), RuntimeError> {
-        // At `t_prev + h`, where the stages put the step's end (the controller sets the
-        // last step's `t` to `t_end` exactly).
-        ode.rhs(control.t_prev + h, &self.x_end, &mut self.f_end)?;
-        control.stats.rhs_evaluations += 1;
-        self.x_start.copy_from_slice(&now.x);
-        now.x.copy_from_slice(&self.x_end);
-        now.f.copy_from_slice(&self.f_end);
+    /// Evaluates the derivative at the step's end, and keeps the step as computed.
+    fn accept<O: Ode>(&mut self, ode: &mut O, step: Step<'_>) -> Result<(), RuntimeError> {
+        let next = step.next;
+        // At `t + h`, where the stages put the step's end (the controller sets the last
+        // step's end to `t_end` exactly).
+        ode.rhs(step.t + step.h, &next.x, &mut next.f)?;
+        step.stats.rhs_evaluations += 1;
+        self.x_start.copy_from_slice(&step.now.x);
+        self.x_end.copy_from_slice(&next.x);
+        self.f_end.copy_from_slice(&next.f);
         self.dense_ready = false;
-        if !all_finite(&now.f) {
-            return Err(RuntimeError::NonFiniteState { t: control.t });
-        }
         Ok(())
     }
 
-    fn interpolate<O: Ode>(
-        &mut self,
-        ode: &mut O,
-        control: &mut StepControl,
-        _t: f64,
-        s: f64,
-        out: &mut [f64],
-    ) -> Result<(), RuntimeError> {
-        self.prepare_dense(ode, control)?;
-        let s1 = 1.0 - s;
-        let [c0, c1, c2, c3, c4, c5, c6, c7] = &self.cont;
-        for (i, o) in out.iter_mut().enumerate() {
-            let conpar = c4[i] + s * (c5[i] + s1 * (c6[i] + s * c7[i]));
-            *o = c0[i] + s * (c1[i] + s1 * (c2[i] + s * (c3[i] + s1 * conpar)));
-        }
-        Ok(())
-    }
-}
-
-impl Dop853Method {
     /// Computes the continuous extension of the last step (3 evaluations), once.
     fn prepare_dense<O: Ode>(
         &mut self,
@@ -455,6 +424,16 @@ impl Dop853Method {
             c7[i] = h * add(c7[i], &D7);
         }
         self.dense_ready = true;
+        Ok(())
+    }
+
+    fn interpolate(&mut self, _t: f64, s: f64, out: &mut [f64]) -> Result<(), RuntimeError> {
+        let s1 = 1.0 - s;
+        let [c0, c1, c2, c3, c4, c5, c6, c7] = &self.cont;
+        for (i, o) in out.iter_mut().enumerate() {
+            let conpar = c4[i] + s * (c5[i] + s1 * (c6[i] + s * c7[i]));
+            *o = c0[i] + s * (c1[i] + s1 * (c2[i] + s * (c3[i] + s1 * conpar)));
+        }
         Ok(())
     }
 }

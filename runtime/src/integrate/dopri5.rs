@@ -4,8 +4,8 @@
 //! Consumes the right-hand side through the shell; produces the 5th-order solution of each
 //! step, its scaled error norm and the coefficients of Shampine's 4th-order dense output.
 
-use super::adaptive::{error_norm, AdaptiveMethod, Current, DenseWithStep, StepControl};
-use super::{AdaptiveOptions, AdaptiveStepper, Ode, Stats};
+use super::adaptive::{error_norm, AdaptiveMethod, DenseWithStep, Point, Step};
+use super::{AdaptiveStepper, Ode};
 use crate::RuntimeError;
 
 // Dormand & Prince (1980) coefficients, as in Hairer's CDOPRI.
@@ -59,17 +59,15 @@ const D7: f64 = 69997945.0 / 29380423.0;
 pub type Dopri5<O> = AdaptiveStepper<O, Dopri5Method>;
 
 /// The stages of [`Dopri5`]: the working vectors of one step and the dense output of the last.
-/// `k1 = f(t, x)` is the shell's current derivative.
+/// `k1 = f(t, x)` is the shell's current derivative, `k7 = f(t + h, x_new)` the derivative at
+/// the step's end.
 pub struct Dopri5Method {
-    x_new: Vec<f64>,
     x_stage: Vec<f64>,
     k2: Vec<f64>,
     k3: Vec<f64>,
     k4: Vec<f64>,
     k5: Vec<f64>,
     k6: Vec<f64>,
-    /// `f(t + h, x_new)`.
-    k7: Vec<f64>,
     /// Dense output coefficients of the last step.
     cont: [Vec<f64>; 5],
 }
@@ -99,14 +97,12 @@ impl AdaptiveMethod for Dopri5Method {
     fn new(x0: &[f64]) -> Self {
         let zeros = vec![0.0; x0.len()];
         Dopri5Method {
-            x_new: zeros.clone(),
             x_stage: zeros.clone(),
             k2: zeros.clone(),
             k3: zeros.clone(),
             k4: zeros.clone(),
             k5: zeros.clone(),
             k6: zeros.clone(),
-            k7: zeros.clone(),
             cont: [
                 x0.to_vec(),
                 zeros.clone(),
@@ -117,18 +113,12 @@ impl AdaptiveMethod for Dopri5Method {
         }
     }
 
-    /// Computes the six stages of a trial step of size `h` from `(t, x)`: `x_new` holds the
-    /// 5th-order solution and `k7` its derivative.
-    fn trial<O: Ode>(
-        &mut self,
-        ode: &mut O,
-        opts: &AdaptiveOptions,
-        _stats: &mut Stats,
-        now: &Current,
-        t: f64,
-        h: f64,
-    ) -> Result<f64, RuntimeError> {
+    /// Computes the six stages of a trial step of size `h` from `(t, x)`: `x_new` (the step's
+    /// end) holds the 5th-order solution and `k7` its derivative.
+    fn trial<O: Ode>(&mut self, ode: &mut O, step: Step<'_>) -> Result<f64, RuntimeError> {
+        let (opts, now, next, t, h) = (step.opts, step.now, step.next, step.t, step.h);
         let (x, k1) = (&now.x, &now.f);
+        let (x_new, k7) = (&mut next.x, &mut next.f);
         let n = x.len();
         for i in 0..n {
             self.x_stage[i] = x[i] + h * A21 * k1[i];
@@ -158,14 +148,14 @@ impl AdaptiveMethod for Dopri5Method {
         let t_new = t + h;
         ode.rhs(t_new, &self.x_stage, &mut self.k6)?;
         for i in 0..n {
-            self.x_new[i] = x[i]
+            x_new[i] = x[i]
                 + h * (A71 * k1[i]
                     + A73 * self.k3[i]
                     + A74 * self.k4[i]
                     + A75 * self.k5[i]
                     + A76 * self.k6[i]);
         }
-        ode.rhs(t_new, &self.x_new, &mut self.k7)?;
+        ode.rhs(t_new, x_new, k7)?;
 
         let error = |i: usize| {
             (E1 * k1[i]
@@ -173,33 +163,18 @@ impl AdaptiveMethod for Dopri5Method {
                 + E4 * self.k4[i]
                 + E5 * self.k5[i]
                 + E6 * self.k6[i]
-                + E7 * self.k7[i])
+                + E7 * k7[i])
                 * h
         };
-        Ok(error_norm(opts, x, &self.x_new, &self.k7, error))
+        Ok(error_norm(opts, x, x_new, k7, error))
     }
 
-    fn accept<O: Ode>(
-        &mut self,
-        _ode: &mut O,
-        _control: &mut StepControl,
-        now: &mut Current,
-        h: f64,
-    ) -> Result<(), RuntimeError> {
-        self.store_dense(now, h);
-        std::mem::swap(&mut now.x, &mut self.x_new);
-        std::mem::swap(&mut now.f, &mut self.k7);
+    fn accept<O: Ode>(&mut self, _ode: &mut O, step: Step<'_>) -> Result<(), RuntimeError> {
+        self.store_dense(step.now, step.next, step.h);
         Ok(())
     }
 
-    fn interpolate<O: Ode>(
-        &mut self,
-        _ode: &mut O,
-        _control: &mut StepControl,
-        _t: f64,
-        theta: f64,
-        out: &mut [f64],
-    ) -> Result<(), RuntimeError> {
+    fn interpolate(&mut self, _t: f64, theta: f64, out: &mut [f64]) -> Result<(), RuntimeError> {
         let theta1 = 1.0 - theta;
         let [c0, c1, c2, c3, c4] = &self.cont;
         for (i, o) in out.iter_mut().enumerate() {
@@ -210,24 +185,25 @@ impl AdaptiveMethod for Dopri5Method {
 }
 
 impl Dopri5Method {
-    /// Stores the dense output coefficients of the step of size `h` from `now.x` to `x_new`.
-    fn store_dense(&mut self, now: &Current, h: f64) {
+    /// Stores the dense output coefficients of the step of size `h` from `now` to `next`.
+    fn store_dense(&mut self, now: &Point, next: &Point, h: f64) {
         let (x, k1) = (&now.x, &now.f);
+        let (x_new, k7) = (&next.x, &next.f);
         let [c0, c1, c2, c3, c4] = &mut self.cont;
         for i in 0..x.len() {
-            let ydiff = self.x_new[i] - x[i];
+            let ydiff = x_new[i] - x[i];
             let bspl = h * k1[i] - ydiff;
             c0[i] = x[i];
             c1[i] = ydiff;
             c2[i] = bspl;
-            c3[i] = -h * self.k7[i] + ydiff - bspl;
+            c3[i] = -h * k7[i] + ydiff - bspl;
             c4[i] = h
                 * (D1 * k1[i]
                     + D3 * self.k3[i]
                     + D4 * self.k4[i]
                     + D5 * self.k5[i]
                     + D6 * self.k6[i]
-                    + D7 * self.k7[i]);
+                    + D7 * k7[i]);
         }
     }
 }

@@ -6,10 +6,13 @@
 //! matrix φ-functions of [`PhiFunctions`]); produces the order-4 solution of each step, its
 //! scaled error norm and the dense output of the same variation-of-constants formula.
 
-use super::adaptive::{error_norm, AdaptiveMethod, Current, DenseWithStep, StepControl};
+use super::adaptive::{error_norm, AdaptiveMethod, DenseWithStep, Point, Step};
 use super::phi::PhiFunctions;
-use super::{finite_difference_jacobian, AdaptiveOptions, AdaptiveStepper, Ode, Stats};
+use super::{AdaptiveStepper, Jacobian, Ode};
 use crate::RuntimeError;
+// For the documentation's links only.
+#[cfg(doc)]
+use super::{AdaptiveOptions, Stats};
 
 // M. Hochbruck, A. Ostermann and J. Schweitzer, "Exponential Rosenbrock-type methods",
 // SIAM J. Numer. Anal. 47(1), 2009, pp. 786–803, scheme exprb43 (order 4, embedded order 3);
@@ -49,14 +52,10 @@ pub type ExpRosenbrock<O> = AdaptiveStepper<O, ExpRosenbrockMethod>;
 /// The working vectors of one step (length `n`); `F(y_n) = f(t, x)` is the shell's current
 /// derivative.
 pub struct ExpRosenbrockMethod {
-    x_new: Vec<f64>,
-    f_new: Vec<f64>,
     x_stage: Vec<f64>,
     f_stage: Vec<f64>,
-    /// `∂f/∂x` (`n × n`, column-major) and `∂f/∂t` at the start of the step.
-    jacobian: Vec<f64>,
-    dfdt: Vec<f64>,
-    jacobian_current: bool,
+    /// `∂f/∂x` and `∂f/∂t` at the start of the step.
+    jacobian: Jacobian,
     /// φ-functions of `h·∂f/∂x` for `phi_h` (NaN: none, or of another argument).
     phi: PhiFunctions,
     phi_h: f64,
@@ -89,13 +88,9 @@ impl AdaptiveMethod for ExpRosenbrockMethod {
         let n = x0.len();
         let zeros = vec![0.0; n];
         ExpRosenbrockMethod {
-            x_new: zeros.clone(),
-            f_new: zeros.clone(),
             x_stage: zeros.clone(),
             f_stage: zeros.clone(),
-            jacobian: vec![0.0; n * n],
-            dfdt: zeros.clone(),
-            jacobian_current: false,
+            jacobian: Jacobian::new(n),
             phi: PhiFunctions::new(n),
             phi_h: f64::NAN,
             phi_balanced: false,
@@ -110,35 +105,20 @@ impl AdaptiveMethod for ExpRosenbrockMethod {
     }
 
     fn derivative_refreshed(&mut self) {
-        self.jacobian_current = false;
+        self.jacobian.current = false;
     }
 
-    /// A trial step of size `h` from `(t, x)`: `x_new`, `f_new = f(t + h, x_new)` and the
-    /// scaled error norm. The Jacobian of the step, evaluated first, is counted in `stats`.
-    fn trial<O: Ode>(
-        &mut self,
-        ode: &mut O,
-        opts: &AdaptiveOptions,
-        stats: &mut Stats,
-        now: &Current,
-        t: f64,
-        h: f64,
-    ) -> Result<f64, RuntimeError> {
+    /// A trial step of size `h` from `(t, x)`: `x_new`, `f_new = f(t + h, x_new)` (the step's
+    /// end) and the scaled error norm. The Jacobian of the step, evaluated first, is counted
+    /// in `stats`.
+    // Indexed loops, so that each line reads as the formula at the top of the file.
+    #[allow(clippy::needless_range_loop)]
+    fn trial<O: Ode>(&mut self, ode: &mut O, step: Step<'_>) -> Result<f64, RuntimeError> {
+        let (opts, now, next, t, h) = (step.opts, step.now, step.next, step.t, step.h);
+        let (x_new, f_new) = (&mut next.x, &mut next.f);
         let n = now.x.len();
-        if !self.jacobian_current {
-            finite_difference_jacobian(
-                ode,
-                t,
-                &now.x,
-                &now.f,
-                &mut self.jacobian,
-                &mut self.dfdt,
-                &mut self.x_stage,
-                &mut self.f_stage,
-            )?;
-            stats.rhs_evaluations += n + 1;
-            stats.jacobian_evaluations += 1;
-            self.jacobian_current = true;
+        if !self.jacobian.current {
+            self.jacobian.evaluate(ode, t, &now.x, &now.f, step.stats)?;
             self.phi_h = f64::NAN;
             self.phi_balanced = false;
         }
@@ -146,15 +126,7 @@ impl AdaptiveMethod for ExpRosenbrockMethod {
             return Ok(f64::NAN);
         }
         // U2 = x + h/2·φ1(hJ/2)·F.
-        Self::linear_flow(
-            &mut self.phi,
-            true,
-            0.5 * h,
-            &now.f,
-            &self.dfdt,
-            &mut self.flow,
-            &mut self.work,
-        );
+        self.linear_flow(true, 0.5 * h, &now.f);
         for i in 0..n {
             self.x_stage[i] = now.x[i] + self.flow[i];
         }
@@ -164,15 +136,7 @@ impl AdaptiveMethod for ExpRosenbrockMethod {
         self.d2 = d2;
 
         // The flow h·φ1·F, and U3 = x + h·φ1·F + h·φ1·D2.
-        Self::linear_flow(
-            &mut self.phi,
-            false,
-            h,
-            &now.f,
-            &self.dfdt,
-            &mut self.flow,
-            &mut self.work,
-        );
+        self.linear_flow(false, h, &now.f);
         self.work.fill(0.0);
         self.phi.add_apply(1, &self.d2, &mut self.work);
         for i in 0..n {
@@ -186,49 +150,34 @@ impl AdaptiveMethod for ExpRosenbrockMethod {
         // x_new = x + h·φ1·F + φ3·w3 + φ4·w4, error φ4·w4.
         for i in 0..n {
             self.work[i] = h * (16.0 * self.d2[i] - 2.0 * self.d3[i]);
-            self.x_new[i] = now.x[i] + self.flow[i];
+            x_new[i] = now.x[i] + self.flow[i];
         }
         self.error.fill(0.0);
         self.phi.add_apply(3, &self.work, &mut self.error);
         for i in 0..n {
-            self.x_new[i] += self.error[i];
+            x_new[i] += self.error[i];
             self.work[i] = h * (-48.0 * self.d2[i] + 12.0 * self.d3[i]);
         }
         self.error.fill(0.0);
         self.phi.add_apply(4, &self.work, &mut self.error);
         for i in 0..n {
-            self.x_new[i] += self.error[i];
+            x_new[i] += self.error[i];
         }
-        ode.rhs(t + h, &self.x_new, &mut self.f_new)?;
+        ode.rhs(t + h, x_new, f_new)?;
 
         let error = |i: usize| self.error[i];
-        Ok(error_norm(opts, &now.x, &self.x_new, &self.f_new, error))
+        Ok(error_norm(opts, &now.x, x_new, f_new, error))
     }
 
-    fn accept<O: Ode>(
-        &mut self,
-        _ode: &mut O,
-        _control: &mut StepControl,
-        now: &mut Current,
-        h: f64,
-    ) -> Result<(), RuntimeError> {
-        self.store_dense(now, h);
-        std::mem::swap(&mut now.x, &mut self.x_new);
-        std::mem::swap(&mut now.f, &mut self.f_new);
+    fn accept<O: Ode>(&mut self, _ode: &mut O, step: Step<'_>) -> Result<(), RuntimeError> {
+        self.store_dense(step.now, step.h);
         // The Jacobian of the last step stays for its dense output; the next step starts
         // with a new one.
-        self.jacobian_current = false;
+        self.jacobian.current = false;
         Ok(())
     }
 
-    fn interpolate<O: Ode>(
-        &mut self,
-        _ode: &mut O,
-        _control: &mut StepControl,
-        t: f64,
-        theta: f64,
-        out: &mut [f64],
-    ) -> Result<(), RuntimeError> {
+    fn interpolate(&mut self, t: f64, theta: f64, out: &mut [f64]) -> Result<(), RuntimeError> {
         let n = out.len();
         out.copy_from_slice(&self.cont[0]);
         if theta == 0.0 {
@@ -238,19 +187,14 @@ impl AdaptiveMethod for ExpRosenbrockMethod {
         if !self.phi_at(tau) {
             return Err(RuntimeError::NonFiniteState { t });
         }
-        let [_, f, d2, d3] = &self.cont;
-        Self::linear_flow(
-            &mut self.phi,
-            false,
-            tau,
-            f,
-            &self.dfdt,
-            &mut self.flow,
-            &mut self.work,
-        );
+        // The derivative at the step's start, taken out of `cont` for the call.
+        let f = std::mem::take(&mut self.cont[1]);
+        self.linear_flow(false, tau, &f);
+        self.cont[1] = f;
         for (o, w) in out.iter_mut().zip(&self.flow) {
             *o += w;
         }
+        let [_, _, d2, d3] = &self.cont;
         let (a, b) = (2.0 * theta * theta * tau, 6.0 * theta.powi(3) * tau);
         for (order, coefficients) in [(3, (8.0 * a, -a)), (4, (-8.0 * b, 2.0 * b))] {
             for i in 0..n {
@@ -274,26 +218,19 @@ impl ExpRosenbrockMethod {
         }
         let ok = self
             .phi
-            .compute_multiple(&self.jacobian, tau, !self.phi_balanced);
+            .compute_multiple(&self.jacobian.dfdx, tau, !self.phi_balanced);
         // A non-finite Jacobian leaves the balancing's norm NaN: every τ fails.
         self.phi_balanced = true;
         self.phi_h = if ok { tau } else { f64::NAN };
         ok
     }
 
-    /// `out = τ·φ1(τJ)·[f; 1] = τ·(φ1(τ∂f/∂x)·f + τ·φ2(τ∂f/∂x)·∂f/∂t)` for the φ-functions at
-    /// `τ` (`half`: at `τ` for the functions of half the argument).
-    fn linear_flow(
-        phi: &mut PhiFunctions,
-        half: bool,
-        tau: f64,
-        f: &[f64],
-        dfdt: &[f64],
-        out: &mut [f64],
-        work: &mut [f64],
-    ) {
+    /// `flow = τ·φ1(τJ)·[f; 1] = τ·(φ1(τ∂f/∂x)·f + τ·φ2(τ∂f/∂x)·∂f/∂t)` for the φ-functions
+    /// at `τ` (`half`: at `τ` for the functions of half the argument).
+    fn linear_flow(&mut self, half: bool, tau: f64, f: &[f64]) {
+        let (phi, out, work) = (&mut self.phi, &mut self.flow, &mut self.work);
         out.fill(0.0);
-        for (w, d) in work.iter_mut().zip(dfdt) {
+        for (w, d) in work.iter_mut().zip(&self.jacobian.dfdt) {
             *w = tau * d;
         }
         if half {
@@ -309,21 +246,22 @@ impl ExpRosenbrockMethod {
     }
 
     /// `D = f(t + c·h, x_stage) − f0 − J (x_stage − x) − ∂f/∂t·c·h` into `d`, from `f_stage`.
-    fn remainder(&self, now: &Current, ch: f64, d: &mut [f64]) {
+    fn remainder(&self, now: &Point, ch: f64, d: &mut [f64]) {
         let n = now.x.len();
-        for (((d, f), f0), dfdt) in d.iter_mut().zip(&self.f_stage).zip(&now.f).zip(&self.dfdt) {
+        let (dfdx, dfdt) = (&self.jacobian.dfdx, &self.jacobian.dfdt);
+        for (((d, f), f0), dfdt) in d.iter_mut().zip(&self.f_stage).zip(&now.f).zip(dfdt) {
             *d = f - f0 - dfdt * ch;
         }
         for j in 0..n {
             let dx = self.x_stage[j] - now.x[j];
             for (i, di) in d.iter_mut().enumerate() {
-                *di -= self.jacobian[i + n * j] * dx;
+                *di -= dfdx[i + n * j] * dx;
             }
         }
     }
 
     /// Keeps what the dense output of the accepted step of size `h` needs.
-    fn store_dense(&mut self, now: &Current, h: f64) {
+    fn store_dense(&mut self, now: &Point, h: f64) {
         let [x0, f, d2, d3] = &mut self.cont;
         x0.copy_from_slice(&now.x);
         f.copy_from_slice(&now.f);

@@ -166,48 +166,74 @@ fn derivative_at<O: Ode + ?Sized>(
     }
 }
 
-/// `J = ∂f/∂x` (`n × n`, column-major) and `∂f/∂t` at `(t, x)` by forward differences from
-/// `f0 = f(t, x)`, with Hairer's increments `√(UROUND·max(1e-5, |x_j|))` (as in `RODAS`);
-/// `n + 1` evaluations. `x_scratch` and `f_scratch` are working vectors of length `n`.
-///
-/// The time column comes first, then the state columns from the last to the first: a system
-/// whose state is `[positions; rates]` and which keeps work that depends on the positions
-/// only (the loops closed by [`Reduced`](crate::Reduced)) evaluates every column that leaves
-/// the positions at `x` before it moves them, instead of moving away and back.
-#[allow(clippy::too_many_arguments)]
-fn finite_difference_jacobian<O: Ode + ?Sized>(
-    ode: &mut O,
-    t: f64,
-    x: &[f64],
-    f0: &[f64],
-    jacobian: &mut [f64],
-    dfdt: &mut [f64],
-    x_scratch: &mut [f64],
-    f_scratch: &mut [f64],
-) -> Result<(), RuntimeError> {
-    let n = x.len();
-    let t_plus = t + (UROUND * t.abs().max(1e-5)).sqrt();
-    ode.rhs(t_plus, x, f_scratch)?;
-    let delta = t_plus - t;
-    for ((out, f), f0) in dfdt.iter_mut().zip(&*f_scratch).zip(f0) {
-        *out = (f - f0) / delta;
+/// `J = ∂f/∂x` (`n × n`, column-major) and `∂f/∂t` at a point, by forward differences: the
+/// linearization that the implicit methods ([`Rosenbrock`], [`ExpRosenbrock`]) step with.
+struct Jacobian {
+    dfdx: Vec<f64>,
+    dfdt: Vec<f64>,
+    /// Evaluated at the current point (the method clears it when the point moves).
+    current: bool,
+    /// Working vectors of the differences.
+    x_scratch: Vec<f64>,
+    f_scratch: Vec<f64>,
+}
+
+impl Jacobian {
+    fn new(n: usize) -> Self {
+        Jacobian {
+            dfdx: vec![0.0; n * n],
+            dfdt: vec![0.0; n],
+            current: false,
+            x_scratch: vec![0.0; n],
+            f_scratch: vec![0.0; n],
+        }
     }
-    x_scratch.copy_from_slice(x);
-    for j in (0..n).rev() {
-        x_scratch[j] = x[j] + (UROUND * x[j].abs().max(1e-5)).sqrt();
-        // The increment as represented, so that the quotient has no rounding bias.
-        let delta = x_scratch[j] - x[j];
-        ode.rhs(t, x_scratch, f_scratch)?;
-        for ((out, f), f0) in jacobian[n * j..n * (j + 1)]
-            .iter_mut()
-            .zip(&*f_scratch)
-            .zip(f0)
-        {
+
+    /// Evaluates `J` and `∂f/∂t` at `(t, x)` from `f0 = f(t, x)`, with Hairer's increments
+    /// `√(UROUND·max(1e-5, |x_j|))` (as in `RODAS`): `n + 1` evaluations, counted in `stats`
+    /// with the Jacobian.
+    ///
+    /// The time column comes first, then the state columns from the last to the first: a
+    /// system whose state is `[positions; rates]` and which keeps work that depends on the
+    /// positions only (the loops closed by [`Reduced`](crate::Reduced)) evaluates every
+    /// column that leaves the positions at `x` before it moves them, instead of moving away
+    /// and back.
+    fn evaluate<O: Ode + ?Sized>(
+        &mut self,
+        ode: &mut O,
+        t: f64,
+        x: &[f64],
+        f0: &[f64],
+        stats: &mut Stats,
+    ) -> Result<(), RuntimeError> {
+        let n = x.len();
+        let (x_scratch, f_scratch) = (&mut self.x_scratch, &mut self.f_scratch);
+        let t_plus = t + (UROUND * t.abs().max(1e-5)).sqrt();
+        ode.rhs(t_plus, x, f_scratch)?;
+        let delta = t_plus - t;
+        for ((out, f), f0) in self.dfdt.iter_mut().zip(&*f_scratch).zip(f0) {
             *out = (f - f0) / delta;
         }
-        x_scratch[j] = x[j];
+        x_scratch.copy_from_slice(x);
+        for j in (0..n).rev() {
+            x_scratch[j] = x[j] + (UROUND * x[j].abs().max(1e-5)).sqrt();
+            // The increment as represented, so that the quotient has no rounding bias.
+            let delta = x_scratch[j] - x[j];
+            ode.rhs(t, x_scratch, f_scratch)?;
+            for ((out, f), f0) in self.dfdx[n * j..n * (j + 1)]
+                .iter_mut()
+                .zip(&*f_scratch)
+                .zip(f0)
+            {
+                *out = (f - f0) / delta;
+            }
+            x_scratch[j] = x[j];
+        }
+        stats.rhs_evaluations += n + 1;
+        stats.jacobian_evaluations += 1;
+        self.current = true;
+        Ok(())
     }
-    Ok(())
 }
 
 fn all_finite(x: &[f64]) -> bool {

@@ -6,9 +6,12 @@
 //! produces the order-2 solution of each step, its scaled error norm and the quadratic dense
 //! output.
 
-use super::adaptive::{error_norm, AdaptiveMethod, Current, DenseWithStep, StepControl};
-use super::{finite_difference_jacobian, AdaptiveOptions, AdaptiveStepper, Ode, Stats};
+use super::adaptive::{error_norm, AdaptiveMethod, DenseWithStep, Point, Step};
+use super::{AdaptiveStepper, Jacobian, Ode};
 use crate::{dense, RuntimeError};
+// For the documentation's links only.
+#[cfg(doc)]
+use super::{AdaptiveOptions, Stats};
 
 // L. F. Shampine and M. W. Reichelt, "The MATLAB ODE Suite", SIAM J. Sci. Comput. 18(1),
 // 1997, §3: with W = I − h·d·J and T = ∂f/∂t,
@@ -46,21 +49,15 @@ const E32: f64 = 7.414_213_562_373_095;
 pub type Rosenbrock<O> = AdaptiveStepper<O, RosenbrockMethod>;
 
 /// The working vectors of one step, the Jacobian and the factor of `W`; `F0 = f(t, x)` is
-/// the shell's current derivative.
+/// the shell's current derivative, `F2 = f(t + h, y_new)` the derivative at the step's end.
 pub struct RosenbrockMethod {
-    x_new: Vec<f64>,
-    /// `f(t + h, x_new)`.
-    f2: Vec<f64>,
     x_stage: Vec<f64>,
     f1: Vec<f64>,
     k1: Vec<f64>,
     k2: Vec<f64>,
     k3: Vec<f64>,
-    /// `∂f/∂x` (`n × n`, column-major) and `∂f/∂t`.
-    jacobian: Vec<f64>,
-    dfdt: Vec<f64>,
-    /// `J` was evaluated at the current `(t, x)`.
-    jacobian_current: bool,
+    /// `J` and `∂f/∂t`.
+    jacobian: Jacobian,
     /// Accepted steps since `J` was evaluated.
     jacobian_age: usize,
     /// Steps a Jacobian may serve after the one it was evaluated for.
@@ -100,16 +97,12 @@ impl AdaptiveMethod for RosenbrockMethod {
         let n = x0.len();
         let zeros = vec![0.0; n];
         RosenbrockMethod {
-            x_new: zeros.clone(),
-            f2: zeros.clone(),
             x_stage: zeros.clone(),
             f1: zeros.clone(),
             k1: zeros.clone(),
             k2: zeros.clone(),
             k3: zeros.clone(),
-            jacobian: vec![0.0; n * n],
-            dfdt: zeros.clone(),
-            jacobian_current: false,
+            jacobian: Jacobian::new(n),
             jacobian_age: usize::MAX,
             jacobian_reuse: 0,
             attempts: 0,
@@ -121,35 +114,29 @@ impl AdaptiveMethod for RosenbrockMethod {
     }
 
     fn derivative_refreshed(&mut self) {
-        self.jacobian_current = false;
+        self.jacobian.current = false;
     }
 
-    /// A trial step of size `h` from `(t, x)`: `x_new`, `f2 = f(t + h, x_new)`, and the scaled
-    /// error norm (NaN also if `W` is singular). A Jacobian evaluated first is counted in
-    /// `stats`.
+    /// A trial step of size `h` from `(t, x)`: `x_new`, `f2 = f(t + h, x_new)` (the step's
+    /// end), and the scaled error norm (NaN also if `W` is singular). A Jacobian evaluated
+    /// first is counted in `stats`.
     // Indexed loops, so that each line reads as the formula at the top of the file.
     #[allow(clippy::needless_range_loop)]
-    fn trial<O: Ode>(
-        &mut self,
-        ode: &mut O,
-        opts: &AdaptiveOptions,
-        stats: &mut Stats,
-        now: &Current,
-        t: f64,
-        h: f64,
-    ) -> Result<f64, RuntimeError> {
+    fn trial<O: Ode>(&mut self, ode: &mut O, step: Step<'_>) -> Result<f64, RuntimeError> {
+        let (opts, now, next, t, h) = (step.opts, step.now, step.next, step.t, step.h);
         let (x, f0) = (&now.x, &now.f);
+        let (x_new, f2) = (&mut next.x, &mut next.f);
         let n = x.len();
         let stale = self.attempts > 0 || self.jacobian_age > self.jacobian_reuse;
-        if !self.jacobian_current && stale {
-            self.evaluate_jacobian(ode, now, t)?;
-            stats.rhs_evaluations += n + 1;
-            stats.jacobian_evaluations += 1;
+        if !self.jacobian.current && stale {
+            self.jacobian.evaluate(ode, t, x, f0, step.stats)?;
+            self.jacobian_age = 0;
+            self.factor_h = f64::NAN;
         }
         self.attempts += 1;
         if self.factor_h != h {
             let hd = h * D;
-            for (w, j) in self.factor.iter_mut().zip(&self.jacobian) {
+            for (w, j) in self.factor.iter_mut().zip(&self.jacobian.dfdx) {
                 *w = -hd * j;
             }
             for i in 0..n {
@@ -162,9 +149,9 @@ impl AdaptiveMethod for RosenbrockMethod {
             self.factor_h = h;
         }
         let hd = h * D;
-        let (factor, pivots) = (&self.factor, &self.pivots);
+        let (factor, pivots, dfdt) = (&self.factor, &self.pivots, &self.jacobian.dfdt);
         for i in 0..n {
-            self.k1[i] = f0[i] + hd * self.dfdt[i];
+            self.k1[i] = f0[i] + hd * dfdt[i];
         }
         dense::lu_solve(factor, n, pivots, &mut self.k1);
         for i in 0..n {
@@ -177,43 +164,28 @@ impl AdaptiveMethod for RosenbrockMethod {
         dense::lu_solve(factor, n, pivots, &mut self.k2);
         for i in 0..n {
             self.k2[i] += self.k1[i];
-            self.x_new[i] = x[i] + h * self.k2[i];
+            x_new[i] = x[i] + h * self.k2[i];
         }
-        ode.rhs(t + h, &self.x_new, &mut self.f2)?;
+        ode.rhs(t + h, x_new, f2)?;
         for i in 0..n {
-            self.k3[i] = self.f2[i] - E32 * (self.k2[i] - self.f1[i]) - 2.0 * (self.k1[i] - f0[i])
-                + hd * self.dfdt[i];
+            self.k3[i] =
+                f2[i] - E32 * (self.k2[i] - self.f1[i]) - 2.0 * (self.k1[i] - f0[i]) + hd * dfdt[i];
         }
         dense::lu_solve(factor, n, pivots, &mut self.k3);
 
         let error = |i: usize| h / 6.0 * (self.k1[i] - 2.0 * self.k2[i] + self.k3[i]);
-        Ok(error_norm(opts, x, &self.x_new, &self.f2, error))
+        Ok(error_norm(opts, x, x_new, f2, error))
     }
 
-    fn accept<O: Ode>(
-        &mut self,
-        _ode: &mut O,
-        _control: &mut StepControl,
-        now: &mut Current,
-        h: f64,
-    ) -> Result<(), RuntimeError> {
-        self.store_dense(now, h);
-        std::mem::swap(&mut now.x, &mut self.x_new);
-        std::mem::swap(&mut now.f, &mut self.f2);
-        self.jacobian_current = false;
+    fn accept<O: Ode>(&mut self, _ode: &mut O, step: Step<'_>) -> Result<(), RuntimeError> {
+        self.store_dense(step.now, step.h);
+        self.jacobian.current = false;
         self.jacobian_age = self.jacobian_age.saturating_add(1);
         self.attempts = 0;
         Ok(())
     }
 
-    fn interpolate<O: Ode>(
-        &mut self,
-        _ode: &mut O,
-        _control: &mut StepControl,
-        _t: f64,
-        theta: f64,
-        out: &mut [f64],
-    ) -> Result<(), RuntimeError> {
+    fn interpolate(&mut self, _t: f64, theta: f64, out: &mut [f64]) -> Result<(), RuntimeError> {
         let [c0, c1, c2] = &self.cont;
         let (a, b) = (theta * (1.0 - theta), theta * (theta - 2.0 * D));
         for (i, o) in out.iter_mut().enumerate() {
@@ -225,7 +197,7 @@ impl AdaptiveMethod for RosenbrockMethod {
 
 impl RosenbrockMethod {
     /// Stores the dense output of the accepted step of size `h` from `now.x`.
-    fn store_dense(&mut self, now: &Current, h: f64) {
+    fn store_dense(&mut self, now: &Point, h: f64) {
         let [c0, c1, c2] = &mut self.cont;
         let scale = h / (1.0 - 2.0 * D);
         for i in 0..now.x.len() {
@@ -233,28 +205,5 @@ impl RosenbrockMethod {
             c1[i] = scale * self.k1[i];
             c2[i] = scale * self.k2[i];
         }
-    }
-
-    /// `J` and `∂f/∂t` at the current `(t, x)`.
-    fn evaluate_jacobian<O: Ode>(
-        &mut self,
-        ode: &mut O,
-        now: &Current,
-        t: f64,
-    ) -> Result<(), RuntimeError> {
-        finite_difference_jacobian(
-            ode,
-            t,
-            &now.x,
-            &now.f,
-            &mut self.jacobian,
-            &mut self.dfdt,
-            &mut self.x_stage,
-            &mut self.f1,
-        )?;
-        self.jacobian_current = true;
-        self.jacobian_age = 0;
-        self.factor_h = f64::NAN;
-        Ok(())
     }
 }
