@@ -35,6 +35,9 @@ pub use integrate::{
 pub use linearize::{linearize, FlexureDamping, Linearization, Mode, StateSpace};
 pub use model::Model;
 pub use nalgebra;
+/// The fixed-size vector and matrix types of the generated models' inherent `*_fixed`
+/// methods (also reachable as `nalgebra::SVector`, `nalgebra::SMatrix`).
+pub use nalgebra::{SMatrix, SVector};
 pub use reduced::Reduced;
 pub use signal::{default_signals, Signal, Table};
 pub use simulate::{
