@@ -20,8 +20,8 @@ fn main() -> Result<(), mech_runtime::RuntimeError> {
     let q = DoublePendulum::initial_q();
     let u = DoublePendulum::initial_u();
     let inputs = mech_runtime::nalgebra::SVector::<f64, 0>::zeros();
-    let mass = model.mass_matrix(0.0, &q, &inputs);
-    let forcing = model.forcing(0.0, &q, &u, &inputs);
+    let mass = model.mass_matrix_fixed(0.0, &q, &inputs);
+    let forcing = model.forcing_fixed(0.0, &q, &u, &inputs);
     println!("M(q0) = {mass}F(q0, u0) = {forcing}");
 
     // The runtime's integrator through the Model trait.
