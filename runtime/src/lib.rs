@@ -58,6 +58,9 @@ pub use statics::{
 ///     mech_runtime::include_model!("pendulum");
 /// }
 /// ```
+///
+/// A name that `build.rs` did not compile is one error, `couldn't read
+/// \`$OUT_DIR/<name>.rs\``: the name is the `model NAME;` of the file (else its stem).
 #[macro_export]
 macro_rules! include_model {
     ($name:literal) => {
