@@ -1,11 +1,11 @@
 //! The generated double pendulum (default and split into 8-statement parts, both written
 //! by build.rs) against direct evaluation of its symbolic equations, at random states.
 
-mod whole {
+pub mod whole {
     mech_runtime::include_model!("double_pendulum");
 }
 
-mod split {
+pub mod split {
     include!(concat!(env!("OUT_DIR"), "/split/double_pendulum.rs"));
 }
 
