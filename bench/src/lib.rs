@@ -201,12 +201,12 @@ mod tests {
         let inputs = nalgebra::SVector::<f64, 0>::zeros();
         let (m, f) = eval_equations(&compiled, &q, &u);
         assert_close(
-            model.mass_matrix(0.0, &qv, &inputs).as_slice(),
+            model.mass_matrix_fixed(0.0, &qv, &inputs).as_slice(),
             &m,
             "generated M",
         );
         assert_close(
-            model.forcing(0.0, &qv, &uv, &inputs).as_slice(),
+            model.forcing_fixed(0.0, &qv, &uv, &inputs).as_slice(),
             &f,
             "generated F",
         );

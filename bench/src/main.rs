@@ -128,8 +128,8 @@ macro_rules! measure_generated {
         let u = SVector::<f64, $n>::from_column_slice(&bench_speeds($n));
         let inputs = SVector::<f64, 0>::zeros();
         let solve = |q: &SVector<f64, $n>, u: &SVector<f64, $n>| -> SVector<f64, $n> {
-            let mut m: SMatrix<f64, $n, $n> = model.mass_matrix(0.0, q, &inputs);
-            let mut f = model.forcing(0.0, q, u, &inputs);
+            let mut m: SMatrix<f64, $n, $n> = model.mass_matrix_fixed(0.0, q, &inputs);
+            let mut f = model.forcing_fixed(0.0, q, u, &inputs);
             if !mech_bench::cholesky_solve_fixed(&mut m, &mut f) {
                 f.fill(f64::NAN);
             }
@@ -138,14 +138,14 @@ macro_rules! measure_generated {
         let (batches, batch) = (config.batches, config.batch_time);
         let mass_matrix = per_call_ns(
             || {
-                black_box(model.mass_matrix(0.0, &black_box(q), &inputs));
+                black_box(model.mass_matrix_fixed(0.0, &black_box(q), &inputs));
             },
             batches,
             batch,
         );
         let forcing = per_call_ns(
             || {
-                black_box(model.forcing(0.0, &black_box(q), &black_box(u), &inputs));
+                black_box(model.forcing_fixed(0.0, &black_box(q), &black_box(u), &inputs));
             },
             batches,
             batch,
@@ -160,15 +160,15 @@ macro_rules! measure_generated {
         let mass_forcing = per_call_ns(
             || {
                 let (q, u) = (black_box(q), black_box(u));
-                black_box(model.mass_matrix(0.0, &q, &inputs));
-                black_box(model.forcing(0.0, &q, &u, &inputs));
+                black_box(model.mass_matrix_fixed(0.0, &q, &inputs));
+                black_box(model.forcing_fixed(0.0, &q, &u, &inputs));
             },
             batches,
             batch,
         );
         let (m0, f0) = (
-            model.mass_matrix(0.0, &q, &inputs),
-            model.forcing(0.0, &q, &u, &inputs),
+            model.mass_matrix_fixed(0.0, &q, &inputs),
+            model.forcing_fixed(0.0, &q, &u, &inputs),
         );
         let solve_only = per_call_ns(
             || {
@@ -182,8 +182,8 @@ macro_rules! measure_generated {
         let udot_nalgebra = per_call_ns(
             || {
                 let (q, u) = (black_box(q), black_box(u));
-                let m = model.mass_matrix(0.0, &q, &inputs);
-                let f = model.forcing(0.0, &q, &u, &inputs);
+                let m = model.mass_matrix_fixed(0.0, &q, &inputs);
+                let f = model.forcing_fixed(0.0, &q, &u, &inputs);
                 black_box(m.cholesky().map(|c| c.solve(&f)));
             },
             batches,

@@ -27,7 +27,9 @@
 //! pub mod pendulum { mech_runtime::include_model!("pendulum"); }
 //! ```
 //! [`compile_models`] writes `$OUT_DIR/<model>.rs` (only when its bytes change) and prints
-//! `cargo:rerun-if-changed` for every `.mech` file it reads. Note that any
+//! `cargo:rerun-if-changed` for every `.mech` file it reads. A model with errors writes
+//! nothing and returns the diagnostics, which `main` returning `Err` prints as they are:
+//! the build fails on them alone. Note that any
 //! `rerun-if-changed` line replaces cargo's default of re-running when any package file
 //! changes; a build script that also depends on other files must list them too.
 //!
@@ -167,9 +169,12 @@ impl Builder {
         self
     }
 
-    /// Compiles every file; stops at the first file with errors and returns all of its
-    /// diagnostics. Two files declaring the same model name are an error (`E0002`): the
-    /// second would overwrite the first's `<model>.rs`.
+    /// Compiles every file, then writes `<model>.rs` for each (and the include file) into
+    /// the output directory, creating it if needed. Stops at the first file with errors and
+    /// returns all of its diagnostics, having written nothing: the build script fails on the
+    /// `.mech` error alone, not on Rust errors in a half-written set of modules. Two files
+    /// declaring the same model name are an error (`E0002`): the second would overwrite the
+    /// first's `<model>.rs`.
     pub fn compile(&self, paths: &[impl AsRef<Path>]) -> Result<(), Errors> {
         let out_dir = match &self.out_dir {
             Some(dir) => dir.clone(),
@@ -182,7 +187,8 @@ impl Builder {
                     Errors::io("OUT_DIR", &error)
                 })?,
         };
-        let mut written: BTreeMap<String, String> = BTreeMap::new();
+        // Model name → (the file declaring it, the generated source).
+        let mut sources: BTreeMap<String, (String, String)> = BTreeMap::new();
         for path in paths {
             let path = path.as_ref();
             if self.emit_rerun_if_changed {
@@ -190,7 +196,7 @@ impl Builder {
             }
             let compiled = Compiled::from_path(path)?;
             let shown = path.display().to_string();
-            if let Some(first) = written.insert(compiled.model.name.clone(), shown.clone()) {
+            if let Some((first, _)) = sources.get(&compiled.model.name) {
                 let diagnostic = Diagnostic::error(
                     "E0002",
                     format!(
@@ -205,20 +211,25 @@ impl Builder {
                 ));
             }
             let options = RustOptions {
-                source_name: path.display().to_string(),
+                source_name: shown.clone(),
                 ..self.rust.clone()
             };
             let source = compiled.rust(&options);
-            let target = out_dir.join(format!("{}.rs", compiled.model.name));
-            write_if_changed(&target, source.as_bytes())
-                .map_err(|error| Errors::io(&target.display().to_string(), &error))?;
+            sources.insert(compiled.model.name.clone(), (shown, source));
+        }
+        let write = |name: &Path, bytes: &[u8]| {
+            let target = out_dir.join(name);
+            std::fs::create_dir_all(&out_dir)
+                .and_then(|()| write_if_changed(&target, bytes))
+                .map_err(|error| Errors::io(&target.display().to_string(), &error))
+        };
+        for (name, (_, source)) in &sources {
+            write(Path::new(&format!("{name}.rs")), source.as_bytes())?;
         }
         if let Some(name) = &self.include_file {
-            let names: Vec<String> = written.into_keys().collect();
+            let names: Vec<String> = sources.into_keys().collect();
             let source = back::include::emit(&names, &self.rust.runtime_path);
-            let target = out_dir.join(name);
-            write_if_changed(&target, source.as_bytes())
-                .map_err(|error| Errors::io(&target.display().to_string(), &error))?;
+            write(name, source.as_bytes())?;
         }
         Ok(())
     }

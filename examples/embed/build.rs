@@ -1,17 +1,15 @@
-//! What an embedding crate writes: compile the models at build time with mech-codegen.
+//! Compiles the `.mech` models into `$OUT_DIR/<model>.rs` at build time, for
+//! `mech_runtime::include_model!`. A model with errors fails the build with its diagnostics.
 
 fn main() -> Result<(), mech_codegen::Errors> {
-    // The one-call form, with default options.
-    mech_codegen::compile_models(&["models/double_pendulum.mech"])?;
+    mech_codegen::compile_models(&["models/double_pendulum.mech", "models/four_bar.mech"])?;
 
-    // The builder form: the same model, split into functions of at most 8 statements (the
-    // default is 1000), written under another name so both can be compared in the tests.
-    let out_dir =
-        std::path::PathBuf::from(std::env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
-    let split_dir = out_dir.join("split");
-    std::fs::create_dir_all(&split_dir).map_err(|e| mech_codegen::Errors::io("split", &e))?;
+    // The builder form, for other settings: the double pendulum again, into another
+    // directory, split into functions of at most 8 statements (default 1000). Only the
+    // tests use it (tests/generated_code.rs).
+    let out_dir = std::path::PathBuf::from(std::env::var_os("OUT_DIR").expect("set by cargo"));
     mech_codegen::Builder::new()
-        .out_dir(&split_dir)
+        .out_dir(out_dir.join("split"))
         .max_statements_per_function(8)
         .compile(&["models/double_pendulum.mech"])
 }

@@ -35,6 +35,9 @@ pub use integrate::{
 pub use linearize::{linearize, FlexureDamping, Linearization, Mode, StateSpace};
 pub use model::Model;
 pub use nalgebra;
+/// The fixed-size vector and matrix types of the generated models' inherent `*_fixed`
+/// methods (also reachable as `nalgebra::SVector`, `nalgebra::SMatrix`).
+pub use nalgebra::{SMatrix, SVector};
 pub use reduced::Reduced;
 pub use signal::{default_signals, Signal, Table};
 pub use simulate::{
@@ -55,6 +58,9 @@ pub use statics::{
 ///     mech_runtime::include_model!("pendulum");
 /// }
 /// ```
+///
+/// A name that `build.rs` did not compile is one error, `couldn't read
+/// \`$OUT_DIR/<name>.rs\``: the name is the `model NAME;` of the file (else its stem).
 #[macro_export]
 macro_rules! include_model {
     ($name:literal) => {

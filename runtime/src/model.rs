@@ -3,7 +3,8 @@
 //!
 //! A model is `M(q) u̇ = F(t, q, u, inputs)` with `q̇ = u`, plus outputs `y(t, q, u, inputs)`.
 //! Slices keep the trait object-safe and size-agnostic; generated models also offer
-//! fixed-size inherent methods (`SMatrix<f64, NU, NU>`) for embedding.
+//! fixed-size inherent methods (`mass_matrix_fixed` → `SMatrix<f64, NU, NU>`, …) for
+//! embedding, named apart from the trait's so that neither shadows the other.
 
 /// A multibody model in Kane's form `M(q) u̇ = F(t, q, u, inputs)`, `q̇ = u`.
 ///
@@ -134,6 +135,11 @@ pub trait Model {
     /// the damping `b` by the complex stiffness `k(1 + iη)`.
     fn flexures(&self, _t: f64, _q: &[f64], _out: &mut [f64]) {}
 
+    /// Index of the generalized coordinate called `name`, as [`Model::coordinate_name`]
+    /// spells it (e.g. `crank_angle`); the same index addresses `q` and `u`.
+    fn coordinate_index(&self, name: &str) -> Option<usize> {
+        (0..self.nq()).find(|&i| self.coordinate_name(i) == name)
+    }
     /// Index of the parameter called `name`.
     fn param_index(&self, name: &str) -> Option<usize> {
         (0..self.nparams()).find(|&i| self.param_name(i) == name)
@@ -145,5 +151,69 @@ pub trait Model {
     /// Index of the output called `name`.
     fn output_index(&self, name: &str) -> Option<usize> {
         (0..self.noutputs()).find(|&i| self.output_name(i) == name)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Model;
+
+    /// Two coordinates, a parameter, an input and an output, all named; no dynamics.
+    struct Named;
+
+    impl Model for Named {
+        fn name(&self) -> &str {
+            "named"
+        }
+        fn nq(&self) -> usize {
+            2
+        }
+        fn nu(&self) -> usize {
+            2
+        }
+        fn ninputs(&self) -> usize {
+            1
+        }
+        fn noutputs(&self) -> usize {
+            1
+        }
+        fn nparams(&self) -> usize {
+            1
+        }
+        fn coordinate_name(&self, i: usize) -> &str {
+            ["crank_angle", "rocker_angle"][i]
+        }
+        fn input_name(&self, _i: usize) -> &str {
+            "torque"
+        }
+        fn output_name(&self, _i: usize) -> &str {
+            "ke"
+        }
+        fn param_name(&self, _i: usize) -> &str {
+            "m"
+        }
+        fn param(&self, _i: usize) -> f64 {
+            1.0
+        }
+        fn set_param(&mut self, _i: usize, _value: f64) {}
+        fn input_default(&self, _i: usize) -> f64 {
+            0.0
+        }
+        fn initial_state(&self, _q: &mut [f64], _u: &mut [f64]) {}
+        fn mass_matrix(&self, _t: f64, _q: &[f64], _inputs: &[f64], _out: &mut [f64]) {}
+        fn forcing(&self, _t: f64, _q: &[f64], _u: &[f64], _inputs: &[f64], _out: &mut [f64]) {}
+        fn outputs(&self, _t: f64, _q: &[f64], _u: &[f64], _inputs: &[f64], _out: &mut [f64]) {}
+    }
+
+    #[test]
+    fn every_kind_of_name_is_looked_up() {
+        let model = Named;
+        assert_eq!(model.coordinate_index("crank_angle"), Some(0));
+        assert_eq!(model.coordinate_index("rocker_angle"), Some(1));
+        assert_eq!(model.coordinate_index("coupler_angle"), None);
+        assert_eq!(model.param_index("m"), Some(0));
+        assert_eq!(model.input_index("torque"), Some(0));
+        assert_eq!(model.output_index("ke"), Some(0));
+        assert_eq!(model.output_index("m"), None);
     }
 }

@@ -78,7 +78,7 @@ impl Pendulum {
         ::mech_runtime::__codegen::SVector::<f64, 1>::from_column_slice(&[0.0])
     }
     /// Mass matrix `M(q)` of `M u̇ = F` (symmetric positive definite).
-    pub fn mass_matrix(
+    pub fn mass_matrix_fixed(
         &self,
         t: f64,
         q: &::mech_runtime::__codegen::SVector<f64, 1>,
@@ -91,7 +91,7 @@ impl Pendulum {
     }
     /// Forcing `F(t, q, u, inputs)` of `M u̇ = F`: generalized active forces plus the
     /// velocity-dependent generalized inertia forces.
-    pub fn forcing(
+    pub fn forcing_fixed(
         &self,
         t: f64,
         q: &::mech_runtime::__codegen::SVector<f64, 1>,
@@ -106,7 +106,7 @@ impl Pendulum {
         ::mech_runtime::__codegen::SVector::<f64, 1>::from_column_slice(&[x3])
     }
     /// Outputs, in the order of `OUTPUT_NAMES`.
-    pub fn outputs(
+    pub fn outputs_fixed(
         &self,
         t: f64,
         q: &::mech_runtime::__codegen::SVector<f64, 1>,
@@ -192,7 +192,7 @@ impl ::mech_runtime::__codegen::Model for Pendulum {
     fn mass_matrix(&self, t: f64, q: &[f64], inputs: &[f64], out: &mut [f64]) {
         let q = ::mech_runtime::__codegen::vector_from_slice::<1>(q);
         let inputs = ::mech_runtime::__codegen::vector_from_slice::<0>(inputs);
-        let m = Pendulum::mass_matrix(self, t, &q, &inputs);
+        let m = Pendulum::mass_matrix_fixed(self, t, &q, &inputs);
         for (slot, value) in out.iter_mut().zip(m.iter()) {
             *slot = *value;
         }
@@ -201,7 +201,7 @@ impl ::mech_runtime::__codegen::Model for Pendulum {
         let q = ::mech_runtime::__codegen::vector_from_slice::<1>(q);
         let u = ::mech_runtime::__codegen::vector_from_slice::<1>(u);
         let inputs = ::mech_runtime::__codegen::vector_from_slice::<0>(inputs);
-        let f = Pendulum::forcing(self, t, &q, &u, &inputs);
+        let f = Pendulum::forcing_fixed(self, t, &q, &u, &inputs);
         for (slot, value) in out.iter_mut().zip(f.iter()) {
             *slot = *value;
         }
@@ -210,7 +210,7 @@ impl ::mech_runtime::__codegen::Model for Pendulum {
         let q = ::mech_runtime::__codegen::vector_from_slice::<1>(q);
         let u = ::mech_runtime::__codegen::vector_from_slice::<1>(u);
         let inputs = ::mech_runtime::__codegen::vector_from_slice::<0>(inputs);
-        let y = Pendulum::outputs(self, t, &q, &u, &inputs);
+        let y = Pendulum::outputs_fixed(self, t, &q, &u, &inputs);
         for (slot, value) in out.iter_mut().zip(y.iter()) {
             *slot = *value;
         }

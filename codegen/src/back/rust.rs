@@ -3,9 +3,14 @@
 //! Consumes: the [`Model`] (names, defaults, docs) and its [`Equations`]. Produces: formatted
 //! Rust source (quote → syn → prettyplease) with
 //! - `struct <Model> { pub params: <Model>Params }` and the params struct (SI defaults);
-//! - inherent `mass_matrix`, `forcing`, `outputs` on fixed-size nalgebra types: straight-line
-//!   code, one `let` per shared subexpression, no allocation, no panics;
-//! - `impl Model` (the runtime trait) over slices.
+//! - inherent `mass_matrix_fixed`, `forcing_fixed`, `outputs_fixed` (and `constraints_fixed`,
+//!   … for loops, `flexures_fixed`) on fixed-size nalgebra types: straight-line code, one
+//!   `let` per shared subexpression, no allocation, no panics; named apart from the trait's
+//!   methods so that calling either on a value of the generated type does what it says;
+//! - `initial_q()`, `initial_u()`: associated functions (no `self`), like `NQ` and the name
+//!   arrays: the `q0`, `u0` written in the model do not depend on `params`;
+//! - `impl Model` (the runtime trait) over slices, each method copying the result of its
+//!   `*_fixed` twin.
 //!
 //! Every runtime item is named by its full path (`::mech_runtime::__codegen::…`, or the
 //! configured runtime path), so the file does not depend on the includer's imports. Long
@@ -155,8 +160,8 @@ struct Emitter<'a> {
     params_name: Ident,
 }
 
-/// A generated function computing rows of the equations: its name and the state it receives
-/// are the same inherent and in the trait.
+/// A generated function computing rows of the equations: the trait method and its inherent
+/// fixed-size twin (`<name>_fixed`) receive the same state.
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Function {
     MassMatrix,
@@ -185,8 +190,16 @@ impl Function {
         }
     }
 
+    /// The trait method's name (and the prefix of the parts of a split inherent function).
     fn ident(self) -> Ident {
         format_ident!("{}", self.name())
+    }
+
+    /// The inherent fixed-size function's name, `<trait method>_fixed`: a different name,
+    /// so that neither shadows the other on a value of the generated type (their signatures
+    /// differ: nalgebra vectors in and out against slices and an `out` argument).
+    fn fixed_ident(self) -> Ident {
+        format_ident!("{}_fixed", self.name())
     }
 
     /// The state it receives after `t`, in order; its body sees the rest as zeros.
@@ -510,7 +523,7 @@ impl<'a> Emitter<'a> {
             #bias_in_trait
             fn constrained_terms(&self, #arguments, mass: &mut [f64], forcing: &mut [f64], jacobian: &mut [f64], bias: &mut [f64]) {
                 #vectors
-                let all = #name::constrained_terms(self, #call);
+                let all = #name::constrained_terms_fixed(self, #call);
                 let values = all.as_slice();
                 let (m, rest) = values.split_at(#mass_len);
                 let (f, rest) = rest.split_at(#forcing_len);
@@ -522,7 +535,7 @@ impl<'a> Emitter<'a> {
             }
             fn dynamics_terms(&self, #arguments, mass: &mut [f64], forcing: &mut [f64], bias: &mut [f64]) {
                 #vectors
-                let all = #name::dynamics_terms(self, #call);
+                let all = #name::dynamics_terms_fixed(self, #call);
                 let values = all.as_slice();
                 let (m, rest) = values.split_at(#mass_len);
                 let (f, b) = rest.split_at(#forcing_len);
@@ -565,15 +578,16 @@ impl<'a> Emitter<'a> {
     /// on the slices, its result (bound to `result`) copied into `out`.
     fn trait_method(&self, function: Function, result: &str) -> TokenStream {
         let (arguments, vectors, call) = self.slice_call(function);
-        let (name, model, result) = (
+        let (name, fixed, model, result) = (
             function.ident(),
+            function.fixed_ident(),
             &self.struct_name,
             format_ident!("{result}"),
         );
         quote! {
             fn #name(&self, #arguments, out: &mut [f64]) {
                 #vectors
-                let #result = #model::#name(self, #call);
+                let #result = #model::#fixed(self, #call);
                 for (slot, value) in out.iter_mut().zip(#result.iter()) { *slot = *value; }
             }
         }
@@ -709,7 +723,7 @@ impl<'a> Emitter<'a> {
                 #construct
             }
         };
-        let name = function.ident();
+        let name = function.fixed_ident();
         let parameters = self.vector_parameters(function.arguments());
         let zeros = [State::U, State::Inputs]
             .into_iter()

@@ -351,6 +351,25 @@ fn every_error_of_the_phase_is_reported() {
     assert_eq!(codes, ["E0206", "E0301", "E0204", "E0407"]);
 }
 
+/// A param or input whose value has an error is reported there alone, not again as a
+/// dimension error wherever it is used (a unit typo once gave a dozen errors).
+#[test]
+fn a_value_with_an_error_is_reported_once() {
+    let text = "
+        param l = 40 mn;
+        input push = 1 mNN;
+        body b { mass = 1 g; com = [0, -l/2, 0]; inertia = [l^2 * 1 g, l^2 * 1 g, l^2 * 1 g]; }
+        joint j = pin(newtonian, b) { axis = z; parent_point = [0, -l, 0]; }
+        force f at b = [push, 0, 0] in newtonian;
+        output half = l / 2;
+    ";
+    assert_eq!(codes(text), ["E0206", "E0206"], "{}", errors(text));
+    check_code(
+        "param l = 40 mn; let twice = 2 * l; output o = twice + 1 m;",
+        "E0206",
+    );
+}
+
 #[test]
 fn structure_errors() {
     check_code(

@@ -322,6 +322,7 @@ impl Lowerer<'_> {
                 ))
             }
             Value::Let(index) => self.let_value(index, name, ctx),
+            Value::Failed => None,
         }
     }
 

@@ -68,6 +68,10 @@ enum Value {
     Param(Handle<ir::Param>),
     Input(Handle<ir::Input>),
     Let(usize),
+    /// A param or input whose value has errors (already reported): its uses lower to
+    /// nothing, without errors of their own, so that one typo is reported once and not
+    /// again as a dimension error at every use (as a `let` with errors is).
+    Failed,
 }
 
 /// Names that may not be declared as params, lets or inputs.
@@ -252,7 +256,8 @@ impl<'a> Lowerer<'a> {
     fn lower_param(&mut self, decl: &ast::ValueDecl) {
         let declared = self.declare_value(&decl.name);
         let ctx = expr::Ctx::Constant("a param value");
-        let (value, dimension) = match self.lower_constant(&decl.value, ctx) {
+        let lowered = self.lower_constant(&decl.value, ctx);
+        let (value, dimension) = match lowered {
             Some((number, dimension)) => (number.to_f64(), dimension),
             None => (0.0, ir::Dimension::NONE),
         };
@@ -265,15 +270,19 @@ impl<'a> Lowerer<'a> {
         });
         self.param_values.push(value);
         if declared {
-            self.values
-                .insert(decl.name.name.clone(), Value::Param(handle));
+            let value = match lowered {
+                Some(_) => Value::Param(handle),
+                None => Value::Failed,
+            };
+            self.values.insert(decl.name.name.clone(), value);
         }
     }
 
     fn lower_input(&mut self, decl: &ast::ValueDecl) {
         let declared = self.declare_value(&decl.name);
         let ctx = expr::Ctx::Constant("an input's default value");
-        let (default, dimension) = match self.lower_constant(&decl.value, ctx) {
+        let lowered = self.lower_constant(&decl.value, ctx);
+        let (default, dimension) = match lowered {
             Some((number, dimension)) => (number.to_f64(), dimension),
             None => (0.0, ir::Dimension::NONE),
         };
@@ -285,8 +294,11 @@ impl<'a> Lowerer<'a> {
             span: decl.name.span,
         });
         if declared {
-            self.values
-                .insert(decl.name.name.clone(), Value::Input(handle));
+            let value = match lowered {
+                Some(_) => Value::Input(handle),
+                None => Value::Failed,
+            };
+            self.values.insert(decl.name.name.clone(), value);
         }
     }
 
