@@ -50,3 +50,15 @@ fn readme_shows_this_crate_as_it_is() {
         );
     }
 }
+
+/// The example's four-bar is the bundled one (a copy, so the crate builds on its own).
+#[test]
+fn the_four_bar_is_the_bundled_one() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let copy = std::fs::read_to_string(root.join("models/four_bar.mech")).unwrap();
+    let bundled = std::fs::read_to_string(root.join("../../models/four_bar.mech")).unwrap();
+    assert_eq!(
+        copy, bundled,
+        "examples/embed/models/four_bar.mech drifted from models/"
+    );
+}
