@@ -135,6 +135,20 @@ impl Model {
         }
     }
 
+    /// `analysis` of a copy of the session with the `independent=` argument, run with the
+    /// Python thread detached (other Python threads go on meanwhile).
+    fn detached<T: Send>(
+        &self,
+        py: Python<'_>,
+        independent: Option<Bound<'_, PyAny>>,
+        analysis: impl FnOnce(&Session, &[String]) -> Result<T, mech::session::Error> + Send,
+    ) -> PyResult<T> {
+        let independent = independent_list(independent)?;
+        let session = self.session().clone();
+        py.detach(move || analysis(&session, &independent))
+            .map_err(error)
+    }
+
     /// A state vector of the model's length, or an error naming it.
     fn state(&self, what: &str, values: PyReadonlyArray1<f64>) -> PyResult<Vec<f64>> {
         let values = values.as_slice()?.to_vec();
@@ -287,14 +301,10 @@ impl Model {
             max_steps,
             ..SimOptions::default()
         };
-        let independent = independent_list(independent)?;
-        let session = self.session().clone();
-        let trajectory = py
-            .detach(move || {
-                let state = session.assemble(&independent)?;
-                session.simulate(&state, &options, &mut |_| {})
-            })
-            .map_err(error)?;
+        let trajectory = self.detached(py, independent, move |session, independent| {
+            let state = session.assemble(independent)?;
+            session.simulate(&state, &options, &mut |_| {})
+        })?;
         let (nq, no, ni) = {
             let model = &self.session().model;
             (model.nq(), model.noutputs(), model.ninputs())
@@ -320,11 +330,9 @@ impl Model {
         inputs: Option<PyReadonlyArray1<f64>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let inputs = self.input_values(inputs)?;
-        let independent = independent_list(independent)?;
-        let session = self.session().clone();
-        let (equilibrium, _) = py
-            .detach(move || session.equilibrium(&independent, &inputs, &[]))
-            .map_err(error)?;
+        let (equilibrium, _) = self.detached(py, independent, move |session, independent| {
+            session.equilibrium(independent, &inputs, &[])
+        })?;
         let dict = PyDict::new(py);
         dict.set_item("q", PyArray1::from_vec(py, equilibrium.q))?;
         dict.set_item(
@@ -348,11 +356,9 @@ impl Model {
         inputs: Option<PyReadonlyArray1<f64>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let inputs = self.input_values(inputs)?;
-        let independent = independent_list(independent)?;
-        let session = self.session().clone();
-        let linear = py
-            .detach(move || session.linearization(&independent, &inputs))
-            .map_err(error)?;
+        let linear = self.detached(py, independent, move |session, independent| {
+            session.linearization(independent, &inputs)
+        })?;
         let state_space = linear
             .state_space()
             .ok_or_else(|| error("the reduced mass matrix is singular"))?;
