@@ -39,7 +39,7 @@ use super::experiment::Extensions;
 use super::experiment::{Experiment, Kind};
 use super::extend::Extension;
 use super::fit::{fit_values, residual, Target};
-use super::lm::{information_criteria, FitResult, NoiseModel, Parameter};
+use super::lm::{information_criteria, FitResult, NoiseModel, Parameter, Stall};
 use crate::experiments::leg::{Leg, WarmStarts};
 use mech_codegen::ir::transform::AXES;
 
@@ -515,7 +515,7 @@ pub fn diagnose_causes(
     let (train, train_values, holdout_values) = split_values(&observations, data.rows, holdout)?;
     let user = user_fit_parameters(&leg, user_parameters)?;
     let jobs = jobs(&leg, experiment, &user, causes)?;
-    let trials = Trials {
+    let mut trials = Trials {
         experiment,
         base: &leg.session.compiled,
         data,
@@ -523,10 +523,20 @@ pub fn diagnose_causes(
         user: &user,
         observations: &observations,
         train: &train,
+        stall: None,
     };
-    let mut results = trials.run(jobs).into_iter();
-    let (_, base) = results.next().expect("the base trial");
-    let base = base.map_err(|e| Error::BaseModel(Box::new(e)))?;
+    let mut jobs = jobs.into_iter();
+    let base_job = jobs.next().expect("the base trial");
+    let base = trials
+        .trial(&base_job)
+        .map_err(|e| Error::BaseModel(Box::new(e)))?;
+    // A candidate still short of one χ² unit below the base model after 10 iterations
+    // stops there (it would be ranked inert: `sort_out`); the others fit to convergence.
+    trials.stall = Some(Stall {
+        iterations: 10,
+        cost_above: 0.5 * (base.train_chi2 - 1.0),
+    });
+    let results = trials.run(jobs.collect()).into_iter();
     let band = NoiseBand::new(holdout_values);
     let (ranked_pairs, inert) = sort_out(&base, results);
     let mut ranked_pairs = hold_undetermined(&trials, ranked_pairs);
@@ -902,6 +912,8 @@ struct Trials<'a> {
     user: &'a [(Target, Parameter)],
     observations: &'a super::experiment::Observations,
     train: &'a [bool],
+    /// When a candidate's fit gives up ([`Stall`]); `None` for the base model's own fit.
+    stall: Option<Stall>,
 }
 
 impl Trials<'_> {
@@ -969,10 +981,21 @@ impl Trials<'_> {
                 &parameters,
                 observations.clone(),
                 self.train,
+                self.stall,
             )?;
             (report.after, Some(report.result))
         };
         let mut trial = self.judge(candidate, predicted, free);
+        if let (Some(result), Some(_)) = (&fitted, std::env::var_os("MECH_DIAGNOSE_TIMING")) {
+            eprintln!(
+                "          fit of {} at {}: {} iterations, {} evaluations, {:?}",
+                candidate.cause,
+                candidate.location,
+                result.iterations,
+                result.evaluations,
+                result.reason
+            );
+        }
         if let Some(result) = &fitted {
             trial.inert = all_unidentifiable(candidate, result);
             trial.parameters = parameters

@@ -18,7 +18,7 @@ use super::error::Error;
 use super::experiment::{Experiment, Extensions, Observations};
 use super::features::series_rms;
 pub use super::features::SeriesResidual;
-use super::lm::{levenberg_marquardt, Difference, FitResult, LmOptions, Parameter};
+use super::lm::{levenberg_marquardt, Difference, FitResult, LmOptions, Parameter, Stall};
 use crate::experiments::leg::{Leg, WarmStarts};
 
 /// What a fitted value sets: a model parameter (by index) or an extension's setting.
@@ -161,11 +161,11 @@ pub fn fit(
 ) -> Result<FitReport, Error> {
     let observations = experiment.observations(leg, data)?;
     let train = vec![true; observations.values.len()];
-    fit_values(experiment, data, leg, fitted, observations, &train)
+    fit_values(experiment, data, leg, fitted, observations, &train, None)
 }
 
 /// As [`fit`] with the observations already built, fitting only the values marked in
-/// `train` (the rest are held out: predicted, not fitted).
+/// `train` (the rest are held out: predicted, not fitted), giving up as `stall` says.
 pub fn fit_values(
     experiment: &Experiment,
     data: &MeasuredData,
@@ -173,6 +173,7 @@ pub fn fit_values(
     fitted: &[(Target, Parameter)],
     observations: Observations,
     train: &[bool],
+    stall: Option<Stall>,
 ) -> Result<FitReport, Error> {
     let mut extensions = Extensions::default();
     for (target, parameter) in fitted {
@@ -198,6 +199,7 @@ pub fn fit_values(
         // bounds the cost of a candidate whose predictions are slow (IR extensions).
         max_iterations: 50,
         residuals_normalized: sigma.is_some(),
+        stall,
         ..LmOptions::default()
     };
     let result = {

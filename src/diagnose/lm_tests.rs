@@ -191,6 +191,42 @@ fn rosenbrock_converges_from_the_classic_start() {
     assert!(result.noise_variance.is_nan());
 }
 
+/// A stall line the fit cannot reach stops it after the stated iterations (Rosenbrock's valley
+/// takes longer than 3 to fall below cost 0.5); one it reaches changes nothing.
+#[test]
+fn a_stalled_fit_stops_and_a_reachable_line_changes_nothing() {
+    let rosenbrock = |p: &[f64]| Ok(vec![10.0 * (p[1] - p[0] * p[0]), 1.0 - p[0]]);
+    let start = [Parameter::new("x", -1.2), Parameter::new("y", 1.0)];
+    let plain = fit(rosenbrock, &start, &LmOptions::default());
+    let stalled = fit(
+        rosenbrock,
+        &start,
+        &LmOptions {
+            stall: Some(Stall {
+                iterations: 3,
+                cost_above: 1e-6,
+            }),
+            ..LmOptions::default()
+        },
+    );
+    assert_eq!(stalled.reason, StopReason::Stalled, "{stalled}");
+    assert_eq!(stalled.iterations, 3);
+    assert!(!stalled.converged && stalled.cost > 1e-6);
+    let reachable = fit(
+        rosenbrock,
+        &start,
+        &LmOptions {
+            stall: Some(Stall {
+                iterations: 3,
+                cost_above: 1e3,
+            }),
+            ..LmOptions::default()
+        },
+    );
+    assert_eq!(reachable.params, plain.params);
+    assert_eq!(reachable.reason, plain.reason);
+}
+
 #[test]
 fn active_bound_is_respected_and_reported() {
     let (x, y) = line_data(3);
