@@ -11,13 +11,14 @@
 //! Long computations (simulate, statics, linearize) run with the Python thread detached, on a
 //! copy of the session, so other Python threads go on meanwhile.
 
+use std::f64::consts::TAU;
 use std::path::PathBuf;
 use std::sync::{Mutex, MutexGuard};
 
 use mech::session::{Assembled, Session};
 use mech_runtime::nalgebra::DMatrix;
-use mech_runtime::{Method, Model as _, SimOptions};
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1};
+use mech_runtime::{FlexureDamping, Method, Model as _, SimOptions};
+use numpy::{Complex64, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1};
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
@@ -395,6 +396,56 @@ impl Model {
         dict.set_item("damping_ratio", PyArray1::from_vec(py, ratios))?;
         dict.set_item("shapes", rows_array(py, &shapes, modes.len()))?;
         Ok(dict)
+    }
+
+    /// The frequency response from input `input` to output `output` of the linear model about
+    /// the static equilibrium, at `frequencies_hz`: complex gains (SI units). `damping` is
+    /// `hysteretic` (flexures as complex stiffness k(1 + iη), exact at every frequency;
+    /// default) or `viscous` (their time-domain dampers b = kη/ω_ref, as a simulation sees
+    /// them).
+    #[pyo3(signature = (input, output, frequencies_hz, damping="hysteretic", independent=None))]
+    fn bode<'py>(
+        &self,
+        py: Python<'py>,
+        input: &str,
+        output: &str,
+        frequencies_hz: PyReadonlyArray1<f64>,
+        damping: &str,
+        independent: Option<Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray1<Complex64>>> {
+        let damping = match damping {
+            "hysteretic" => FlexureDamping::Hysteretic,
+            "viscous" => FlexureDamping::Viscous,
+            other => {
+                return Err(error(format!(
+                    "unknown damping `{other}`; write `hysteretic` or `viscous`"
+                )))
+            }
+        };
+        let (input, output) = {
+            let session = self.session();
+            let input = session.input_index(input).map_err(error)?;
+            (input, session.output_index(output).map_err(error)?)
+        };
+        let frequencies = frequencies_hz.as_slice()?.to_vec();
+        let inputs = self.input_values(None)?;
+        let gains = self.detached(py, independent, move |session, independent| {
+            let linear = session.linearization(independent, &inputs)?;
+            Ok(frequencies
+                .iter()
+                .map(|&f| {
+                    let gain = linear.frequency_response(input, output, TAU * f, damping);
+                    (f, gain.map(|g| Complex64::new(g.re, g.im)))
+                })
+                .collect::<Vec<_>>())
+        })?;
+        let gains = gains
+            .into_iter()
+            .map(|(f, gain)| {
+                gain.ok_or_else(|| error(format!("the linear model is singular at {f} Hz")))
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        Ok(PyArray1::from_vec(py, gains))
     }
 
     /// The mass matrix `M(q)` (nq × nq) at time `t`.

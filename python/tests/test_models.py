@@ -93,6 +93,27 @@ def test_two_mass_chain_linear_model_is_written_by_hand():
     np.testing.assert_allclose(linear["frequency_hz"], np.sqrt(omega2) / (2 * math.pi), rtol=1e-6)
 
 
+def test_bode_is_the_chains_response_written_by_hand():
+    """x2/push at 0.1–30 Hz against (−ω² M + iω C + K)⁻¹ B summed over x1 + x21; no flexures,
+    so hysteretic and viscous agree."""
+    chain = model("two_mass_chain")
+    p = chain.parameters
+    frequencies = np.geomspace(0.1, 30.0, 25)
+    gains = chain.bode("push", "x2.x", frequencies)
+    viscous = chain.bode("push", "x2.x", frequencies, damping="viscous")
+    M = np.array([[p["m1"] + p["m2"], p["m2"]], [p["m2"], p["m2"]]])
+    C, K = np.diag([p["c1"], p["c2"]]), np.diag([p["k1"], p["k2"]])
+    for f, gain, gain_viscous in zip(frequencies, gains, viscous):
+        omega = 2 * math.pi * f
+        expected = np.linalg.solve(-(omega**2) * M + 1j * omega * C + K, np.ones(2)).sum()
+        assert abs(gain - expected) <= 1e-6 * abs(expected)
+        assert gain_viscous == gain
+    with pytest.raises(mech.MechError, match="push"):
+        chain.bode("pull", "x2.x", frequencies)
+    with pytest.raises(mech.MechError, match="hysteretic"):
+        chain.bode("push", "x2.x", frequencies, damping="coulomb")
+
+
 def test_a_driven_chain_settles_on_its_linear_response():
     """A sinusoidal push: after the transient (damping time 2m/c ≈ 3 s) the simulated x2 has
     the amplitude |H(ω)| of the chain's frequency response."""
