@@ -47,6 +47,7 @@ material kapton { loss_factor = 0.08; }
 flexure fl on elbow { width = 1 mm; thickness = 25 um; length = 100 um; reference_frequency = 40 Hz; twist_axis = y; }
 flexure fc on close { stiffness = 1 uN*m/rad; reference_frequency = 40 Hz; }
 actuator act on rail { blocked_force = 320 mN; free_deflection = 300 um; rated_voltage = 225 V; voltage = drive_v; }
+spring tie between arm.tip and cart { stiffness = 10 N/m; rest_length = l; damping = 0.01 N*s/m; }
 output tip = position(arm.tip) in newtonian;
 output angle = hinge.q;
 output ke = kinetic_energy;
@@ -77,6 +78,10 @@ const TOKENS: &[&str] = &[
     "flexure",
     "actuator",
     "on",
+    "spring",
+    "between",
+    "and",
+    "rest_length",
     "twist_axis",
     "(",
     ")",

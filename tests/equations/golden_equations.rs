@@ -72,6 +72,7 @@ tests_per_file! {
     pendulum,
     slider_crank,
     spherical_five_bar,
+    spring_pendulum,
     triple_pendulum_3d,
     two_mass_chain,
 }

@@ -21,6 +21,7 @@ mod loops;
 mod pendulum;
 mod reduced;
 mod resonances;
+mod springs;
 mod statics;
 mod sympy_cross_check;
 mod sympy_loops;

@@ -47,6 +47,7 @@ pub enum Item {
     Flexure(ElementDecl),
     /// `actuator NAME on TARGET { fields }`.
     Actuator(ElementDecl),
+    Spring(SpringDecl),
     Force(ForceDecl),
     Torque(TorqueDecl),
     Output(OutputDecl),
@@ -140,6 +141,17 @@ pub struct ElementDecl {
     pub docs: Vec<String>,
     pub name: Ident,
     pub target: Option<Ident>,
+    pub fields: Vec<Field>,
+    pub span: Span,
+}
+
+/// `spring NAME between POINT and POINT { fields }`
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpringDecl {
+    pub docs: Vec<String>,
+    pub name: Ident,
+    /// The two points the spring connects, as written (`A` and `B` of the docs).
+    pub ends: [Path; 2],
     pub fields: Vec<Field>,
     pub span: Span,
 }

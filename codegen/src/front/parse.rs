@@ -112,6 +112,7 @@ fn build_item(pair: Pair<Rule>) -> Result<ast::Item> {
             Rule::material_decl => Ok(ast::Item::Material(element_decl(inner, docs, false)?)),
             Rule::flexure_decl => Ok(ast::Item::Flexure(element_decl(inner, docs, true)?)),
             Rule::actuator_decl => Ok(ast::Item::Actuator(element_decl(inner, docs, true)?)),
+            Rule::spring_decl => spring_decl(inner, docs),
             Rule::force_decl => force_decl(inner, docs),
             Rule::torque_decl => torque_decl(inner, docs),
             Rule::output_decl => output_decl(inner, docs),
@@ -212,6 +213,9 @@ fn is_punctuation(rule: Rule) -> bool {
             | kw_material
             | kw_flexure
             | kw_actuator
+            | kw_spring
+            | kw_between
+            | kw_and
             | kw_force
             | kw_torque
             | kw_output
@@ -351,6 +355,17 @@ fn joint_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::JointDecl> {
         fields: parts.block_fields()?,
         span: parts.span,
     })
+}
+
+fn spring_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
+    let mut parts = Parts::of(pair);
+    Ok(ast::Item::Spring(ast::SpringDecl {
+        docs,
+        name: parts.ident()?,
+        ends: [parts.path()?, parts.path()?],
+        fields: parts.block_fields()?,
+        span: parts.span,
+    }))
 }
 
 fn force_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
@@ -792,6 +807,8 @@ fn describe(rule: Rule) -> &'static str {
         frame_clause | kw_in => "`in`",
         kw_at => "`at`",
         kw_on => "`on`",
+        kw_between => "`between`",
+        kw_and => "`and`",
         EOI => "end of file",
         _ => DECLARATION,
     }
@@ -837,7 +854,7 @@ fn found_token(text: &str, position: usize) -> String {
 /// The top-level keyword right before `position`, if any (a field named `joint` means a `}`
 /// is missing).
 fn keyword_before(text: &str, position: usize) -> Option<&'static str> {
-    const KEYWORDS: [&str; 14] = [
+    const KEYWORDS: [&str; 15] = [
         "param",
         "let",
         "input",
@@ -849,6 +866,7 @@ fn keyword_before(text: &str, position: usize) -> Option<&'static str> {
         "material",
         "flexure",
         "actuator",
+        "spring",
         "force",
         "torque",
         "output",

@@ -568,6 +568,19 @@ pub enum Load {
         damping: Expr,
         span: Span,
     },
+    /// A spring–damper along the line between two points `ends = [A, B]` (`spring NAME
+    /// between A and B`): with `d = r_B − r_A`, `L = |d|`, `ê = d/L`, the tension
+    /// `T = stiffness·(L − rest_length) + damping·L̇` pulls B towards A (`−T ê` on B, `+T ê`
+    /// on A). Stores `½k(L − rest_length)²` of potential energy. The points are on
+    /// different bodies (the front end checks it) and must not meet: `ê` is undefined at
+    /// `L = 0`.
+    PointSpring {
+        ends: [Handle<Point>; 2],
+        stiffness: Expr,
+        rest_length: Expr,
+        damping: Option<Expr>,
+        span: Span,
+    },
     /// A generalized force acting directly on one coordinate (an actuator's force source).
     GeneralizedForce {
         coordinate: Handle<Coordinate>,
@@ -620,7 +633,8 @@ pub enum OutputKind {
     Coordinate(Handle<Coordinate>),
     Speed(Handle<Coordinate>),
     KineticEnergy,
-    /// Gravity plus joint springs; zero at the Newtonian origin and at springs' rest values.
+    /// Gravity plus joint, closure, flexure and point-to-point springs; zero at the Newtonian
+    /// origin and at springs' rest values.
     PotentialEnergy,
     /// Any scalar expression of parameters, inputs and time.
     Expr(Expr),

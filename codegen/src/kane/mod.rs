@@ -5,7 +5,7 @@
 //! For each generalized speed r (Kane & Levinson, *Dynamics: Theory and Applications*, ch. 6),
 //! `F_r + F_r* = 0` with
 //! - `F_r  = Σ_points f·∂v_P/∂u_r + Σ_bodies T·∂ω/∂u_r` (applied forces, gravity, joint
-//!   springs and dampers), the generalized active forces;
+//!   springs and dampers, point-to-point springs), the generalized active forces;
 //! - `F_r* = −Σ_bodies [m a_G·∂v_G/∂u_r + (I α + ω × I ω)·∂ω/∂u_r]`, the generalized inertia
 //!   forces.
 //!
@@ -333,6 +333,77 @@ fn push_angle_forces(
     }
 }
 
+/// The line of a point-to-point spring between `ends = [A, B]`, in N's basis.
+struct SpringLine {
+    /// `L = |r_B − r_A|`.
+    length: ExprId,
+    /// `ê·∂(v_B − v_A)/∂u_r = ∂L/∂q_r` for every speed r that moves an end (`ê = d/L`).
+    stretch_rates: Vec<(usize, ExprId)>,
+}
+
+/// `d = r_B − r_A` and `L = |d|` of a spring's ends, in N (positions from [`point_position`]).
+fn spring_length(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    model: &Model,
+    ends: [ir::Handle<ir::Point>; 2],
+) -> (Vec3, ExprId) {
+    let [a, b] = ends.map(|end| point_position(pool, kinematics, &model.points[end]));
+    let d = vector::sub(pool, b, a);
+    let square = vector::dot(pool, d, d);
+    (d, pool.sqrt(square))
+}
+
+impl SpringLine {
+    /// `ê` from the ends' positions, and the partial velocities of each end (B with `+`, A
+    /// with `−`, each from [`Kinematics::point_partials`] re-expressed in N) projected on it.
+    fn new(
+        pool: &mut ExprPool,
+        kinematics: &mut Kinematics,
+        model: &Model,
+        ends: [ir::Handle<ir::Point>; 2],
+    ) -> SpringLine {
+        let (d, length) = spring_length(pool, kinematics, model, ends);
+        let inverse = pool.pow(length, Number::MINUS_ONE);
+        let direction = vector::scale(pool, d, inverse);
+        let mut relative: kinematics::Partials = Vec::new();
+        for (end, sign) in [(ends[1], Number::ONE), (ends[0], Number::MINUS_ONE)] {
+            let point = &model.points[end];
+            let offset = kinematics::lower_vec(pool, &point.position);
+            let partials: kinematics::Partials = kinematics
+                .point_partials(pool, point.frame, offset)
+                .into_iter()
+                .map(|(r, v)| {
+                    let v = kinematics.express(pool, v, point.frame, Model::NEWTONIAN);
+                    (r, vector::scale_number(pool, v, sign))
+                })
+                .collect();
+            relative = kinematics::merge(pool, &relative, &partials);
+        }
+        let stretch_rates = relative
+            .into_iter()
+            .map(|(r, v)| (r, vector::dot(pool, direction, v)))
+            .collect();
+        SpringLine {
+            length,
+            stretch_rates,
+        }
+    }
+
+    /// `L̇ = ê·(v_B − v_A) = Σ_r (ê·∂(v_B − v_A)/∂u_r) u_r`.
+    fn stretch_speed(&self, pool: &mut ExprPool) -> ExprId {
+        let terms: Vec<ExprId> = self
+            .stretch_rates
+            .iter()
+            .map(|&(r, rate)| {
+                let u = pool.symbol(Symbol::Speed(r as u32));
+                pool.mul(rate, u)
+            })
+            .collect();
+        pool.add_all(&terms)
+    }
+}
+
 /// Contribution of one applied load to the generalized active forces `F_r`.
 fn add_load(
     pool: &mut ExprPool,
@@ -383,6 +454,28 @@ fn add_load(
             coordinate, force, ..
         } => {
             forcing[coordinate.index()].push(lower_expr(pool, force));
+        }
+        Load::PointSpring {
+            ends,
+            stiffness,
+            rest_length,
+            damping,
+            ..
+        } => {
+            // T = k (L − L0) + c L̇; −T ê on B and +T ê on A give
+            // F_r = −T ê·(∂v_B/∂u_r − ∂v_A/∂u_r).
+            let line = SpringLine::new(pool, kinematics, model, *ends);
+            let mut tension = spring_moment(pool, stiffness, rest_length, |_| line.length);
+            if let Some(damping) = damping {
+                let c = lower_expr(pool, damping);
+                let speed = line.stretch_speed(pool);
+                let viscous = pool.mul(c, speed);
+                tension = pool.add(tension, viscous);
+            }
+            for &(r, rate) in &line.stretch_rates {
+                let force = pool.mul(tension, rate);
+                forcing[r].push(pool.neg(force));
+            }
         }
         Load::LoopSpring {
             closure,
@@ -507,7 +600,8 @@ fn kinetic_energy(pool: &mut ExprPool, kinematics: &Kinematics, model: &Model) -
     pool.scale(twice, Number::rational(1, 2))
 }
 
-/// `−Σ_bodies m g·r_G + Σ_springs ½ k (q − rest)²`.
+/// `−Σ_bodies m g·r_G + Σ_springs ½ k (x − rest)²`, x a joint coordinate, a closure or
+/// flexure angle, or a point-to-point spring's length.
 fn potential_energy(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Model) -> ExprId {
     let mut terms = Vec::new();
     let gravity = kinematics.frames[ir::Model::NEWTONIAN.index()].gravity;
@@ -522,7 +616,8 @@ fn potential_energy(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Mo
         terms.push(pool.neg(work));
     }
     for load in &model.loads {
-        // ½ k (x − rest)² for joint springs (x = q), closure and angle springs (x = θ).
+        // ½ k (x − rest)² for joint springs (x = q), closure and angle springs (x = θ),
+        // point-to-point springs (x = L).
         let (stiffness, rest, stretched) = match load {
             Load::Spring {
                 coordinate,
@@ -560,6 +655,16 @@ fn potential_energy(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Mo
                 stiffness,
                 rest,
                 flexure_angle(pool, kinematics, model, *angle),
+            ),
+            Load::PointSpring {
+                ends,
+                stiffness,
+                rest_length,
+                ..
+            } => (
+                stiffness,
+                rest_length,
+                spring_length(pool, kinematics, model, *ends).1,
             ),
             _ => continue,
         };

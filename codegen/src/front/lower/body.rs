@@ -59,6 +59,15 @@ pub enum PointRef {
     Named(usize, usize),
 }
 
+impl PointRef {
+    /// The index in `owners` of the body (or `newtonian`, 0) the point is fixed in.
+    pub fn owner(self) -> usize {
+        match self {
+            PointRef::Origin(owner) | PointRef::Com(owner) | PointRef::Named(owner, _) => owner,
+        }
+    }
+}
+
 /// A reference to a frame: a body's (or the Newtonian) frame, a named frame, or a joint's frame.
 #[derive(Clone, Copy, Debug)]
 pub enum FrameRef {

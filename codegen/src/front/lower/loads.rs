@@ -1,14 +1,15 @@
-//! Gravity, forces, torques and outputs.
+//! Gravity, forces, torques, point-to-point springs and outputs.
 //!
-//! Consumes: `gravity`, `force`, `torque` and `output` declarations.
-//! Produces: `model.gravity`, force/torque [`ir::Load`]s and [`ir::Output`]s. References are
-//! resolved first (collecting every error) and turned into handles once the tree is built.
+//! Consumes: `gravity`, `force`, `torque`, `spring` and `output` declarations.
+//! Produces: `model.gravity`, force, torque and point-spring [`ir::Load`]s and
+//! [`ir::Output`]s. References are resolved first (collecting every error) and turned into
+//! handles once the tree is built.
 
 use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, ExprKind, Ident};
 use crate::ir::{self, Dimension, Expr, Handle, JointKind, Vec3};
 
-use super::body::{FrameRef, PointRef};
+use super::body::{missing_field, FrameRef, PointRef};
 use super::expr::{unparen, Ctx, Expect};
 use super::names::Namespace;
 use super::Lowerer;
@@ -26,6 +27,36 @@ pub enum PendingLoad {
         components: Vec3,
         span: Span,
     },
+    Spring {
+        ends: [PointRef; 2],
+        stiffness: Expr,
+        rest_length: Expr,
+        damping: Option<Expr>,
+        span: Span,
+    },
+}
+
+/// The fields of a `spring` block.
+const SPRING_FIELDS: [&str; 3] = ["stiffness", "rest_length", "damping"];
+
+/// The dimension of a spring field: N/m, m, N·s/m.
+fn spring_expect(field: &str) -> Expect<'static> {
+    let (time, length, what, example) = match field {
+        "stiffness" => (-2, 0, "`stiffness`", "10 N/m"),
+        "damping" => (-1, 0, "`damping`", "0.01 N*s/m"),
+        _ => (0, 1, "`rest_length`", "5 mm"),
+    };
+    let mass = if field == "rest_length" { 0 } else { 1 };
+    Expect {
+        dim: Dimension {
+            mass,
+            length,
+            time,
+            current: 0,
+        },
+        what,
+        example,
+    }
 }
 
 pub struct PendingOutput {
@@ -75,6 +106,10 @@ impl Lowerer<'_> {
                 ast::Item::Torque(decl) => {
                     self.declare_in(&mut load_names, &decl.name, "the load");
                     self.lower_torque(decl);
+                }
+                ast::Item::Spring(decl) => {
+                    self.declare_in(&mut load_names, &decl.name, "the load");
+                    self.lower_spring(decl);
                 }
                 ast::Item::Output(decl)
                     if self.declare_in(&mut output_names, &decl.name, "the output") =>
@@ -149,6 +184,76 @@ impl Lowerer<'_> {
                 span: decl.span,
             });
         }
+    }
+
+    /// `spring NAME between A and B { stiffness; rest_length; damping; }`: `stiffness` is
+    /// required (a pure damper writes `stiffness = 0 N/m;` on purpose), `rest_length` defaults
+    /// to 0 and `damping` to none; the ends are on two different bodies.
+    fn lower_spring(&mut self, decl: &ast::SpringDecl) {
+        let ends = decl.ends.each_ref().map(|path| self.resolve_point(path));
+        let fields = self.known_fields(
+            &decl.fields,
+            &SPRING_FIELDS,
+            "fields of a spring",
+            "not a field of a spring",
+        );
+        let ctx = Ctx::Static("a spring property");
+        let scalar = |this: &mut Self, name: &str| {
+            let field = fields.iter().find(|f| f.name.name == name)?;
+            Some(this.lower_scalar_as(&field.value, ctx, &spring_expect(name)))
+        };
+        let stiffness = scalar(self, "stiffness");
+        let rest_length = scalar(self, "rest_length");
+        let damping = scalar(self, "damping");
+        if stiffness.is_none() {
+            let help = "add the spring's stiffness along its line, e.g. `stiffness = 10 N/m;`";
+            self.error(missing_field("spring", &decl.name, "stiffness", help));
+        }
+        if let [Some(a), Some(b)] = ends {
+            self.check_spring_ends(decl, a, b);
+        }
+        // Each `Some(None)` is a field whose error is already reported.
+        let (Some(Some(stiffness)), [Some(a), Some(b)]) = (stiffness, ends) else {
+            return;
+        };
+        let rest_length = match rest_length {
+            None => Expr::zero(),
+            Some(Some(rest_length)) => rest_length,
+            Some(None) => return,
+        };
+        let damping = match damping {
+            None => None,
+            Some(Some(damping)) => Some(damping),
+            Some(None) => return,
+        };
+        self.loads.push(PendingLoad::Spring {
+            ends: [a, b],
+            stiffness,
+            rest_length,
+            damping,
+            span: decl.span,
+        });
+    }
+
+    /// E0408 if both ends of a spring are on one body (or both fixed in `newtonian`): its
+    /// length could not change, so it would do nothing (its forces on the body cancel).
+    fn check_spring_ends(&mut self, decl: &ast::SpringDecl, a: PointRef, b: PointRef) {
+        if a.owner() != b.owner() {
+            return;
+        }
+        let owner = self.owners[a.owner()].name.clone();
+        self.error(
+            Diagnostic::error(
+                "E0408",
+                format!("spring `{}` connects `{owner}` to itself", decl.name.name),
+            )
+            .with_label(decl.ends[1].span, "this point")
+            .with_label(decl.ends[0].span, format!("is on `{owner}` too"))
+            .with_help(
+                "a spring acts between points of two different bodies (or a body and `newtonian`); \
+                 between two points of one rigid body its length never changes",
+            ),
+        );
     }
 
     /// The components of a force or torque and the frame they are given in.
@@ -352,6 +457,22 @@ impl Lowerer<'_> {
                         span: *span,
                     })
                 }
+                PendingLoad::Spring {
+                    ends,
+                    stiffness,
+                    rest_length,
+                    damping,
+                    span,
+                } => {
+                    let handles = self.point_handle(ends[0]).zip(self.point_handle(ends[1]));
+                    handles.map(|(a, b)| ir::Load::PointSpring {
+                        ends: [a, b],
+                        stiffness: stiffness.clone(),
+                        rest_length: rest_length.clone(),
+                        damping: damping.clone(),
+                        span: *span,
+                    })
+                }
             };
             match built {
                 Some(load) => self.model.loads.push(load),
@@ -400,6 +521,8 @@ impl Lowerer<'_> {
 
 fn load_span(load: &PendingLoad) -> Span {
     match load {
-        PendingLoad::Force { span, .. } | PendingLoad::Torque { span, .. } => *span,
+        PendingLoad::Force { span, .. }
+        | PendingLoad::Torque { span, .. }
+        | PendingLoad::Spring { span, .. } => *span,
     }
 }

@@ -7,7 +7,7 @@
 //!
 //! The work is split by topic: `expr` (scalar expressions, units, dimensions), `body` (bodies,
 //! points, frames, axes, rotations), `tree` (joints, tree order, frame building), `loads`
-//! (gravity, forces, torques, outputs), `loops` (loop closures) and `names` (namespaces and
+//! (gravity, forces, torques, point-to-point springs, outputs), `loops` (loop closures) and `names` (namespaces and
 //! suggestions).
 
 mod body;

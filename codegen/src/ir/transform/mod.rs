@@ -443,6 +443,7 @@ fn remap_handles(model: &mut Model, remap: &dyn Fn(Handle<Frame>) -> Handle<Fram
             | Load::LoopDamper { .. }
             | Load::AngleSpring { .. }
             | Load::AngleDamper { .. }
+            | Load::PointSpring { .. }
             | Load::GeneralizedForce { .. } => {}
         }
     }
