@@ -16,6 +16,7 @@ use std::path::PathBuf;
 use std::sync::{Mutex, MutexGuard};
 
 use mech::session::{Assembled, Session};
+use mech::tape_model::TapeModel;
 use mech_runtime::nalgebra::DMatrix;
 use mech_runtime::{FlexureDamping, Method, Model as _, SimOptions};
 use numpy::{Complex64, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1};
@@ -164,8 +165,17 @@ impl Model {
         Ok(values)
     }
 
-    fn names(count: usize, name: impl Fn(usize) -> String) -> Vec<String> {
-        (0..count).map(name).collect()
+    /// The names the model lists: `count` of them, the i-th by `name`.
+    fn names(
+        &self,
+        count: fn(&TapeModel) -> usize,
+        name: for<'a> fn(&'a TapeModel, usize) -> &'a str,
+    ) -> Vec<String> {
+        let session = self.session();
+        let model = &session.model;
+        (0..count(model))
+            .map(|i| name(model, i).to_string())
+            .collect()
     }
 }
 
@@ -190,30 +200,22 @@ impl Model {
 
     #[getter]
     fn coordinates(&self) -> Vec<String> {
-        let session = self.session();
-        let model = &session.model;
-        Self::names(model.nq(), |i| model.coordinate_name(i).to_string())
+        self.names(|m| m.nq(), |m, i| m.coordinate_name(i))
     }
 
     #[getter]
     fn inputs(&self) -> Vec<String> {
-        let session = self.session();
-        let model = &session.model;
-        Self::names(model.ninputs(), |i| model.input_name(i).to_string())
+        self.names(|m| m.ninputs(), |m, i| m.input_name(i))
     }
 
     #[getter]
     fn outputs(&self) -> Vec<String> {
-        let session = self.session();
-        let model = &session.model;
-        Self::names(model.noutputs(), |i| model.output_name(i).to_string())
+        self.names(|m| m.noutputs(), |m, i| m.output_name(i))
     }
 
     #[getter]
     fn constraints(&self) -> Vec<String> {
-        let session = self.session();
-        let model = &session.model;
-        Self::names(model.nc(), |i| model.constraint_name(i).to_string())
+        self.names(|m| m.nc(), |m, i| m.constraint_name(i))
     }
 
     /// Parameter values by name, SI units.
@@ -238,7 +240,7 @@ impl Model {
         let mut session = self.session();
         let model = &mut session.model;
         let index = model.param_index(name).ok_or_else(|| {
-            let known = Self::names(model.nparams(), |i| model.param_name(i).to_string());
+            let known: Vec<&str> = (0..model.nparams()).map(|i| model.param_name(i)).collect();
             error(format!(
                 "`{}` has no parameter `{name}`; its parameters: {}",
                 model.name(),

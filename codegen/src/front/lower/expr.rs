@@ -75,6 +75,22 @@ pub struct Expect<'w> {
     pub example: &'static str,
 }
 
+impl<'w> Expect<'w> {
+    /// A mechanical quantity (no current) of dimension mass^m · length^l · time^t.
+    pub fn mechanical(what: &'w str, example: &'static str, [mass, length, time]: [i8; 3]) -> Self {
+        Expect {
+            dim: Dimension {
+                mass,
+                length,
+                time,
+                current: 0,
+            },
+            what,
+            example,
+        }
+    }
+}
+
 impl Lowerer<'_> {
     /// Lowers a scalar expression.
     pub(super) fn lower_scalar(&mut self, e: &ast::Expr, ctx: Ctx) -> Option<Typed> {

@@ -41,21 +41,10 @@ const SPRING_FIELDS: [&str; 3] = ["stiffness", "rest_length", "damping"];
 
 /// The dimension of a spring field: N/m, m, N·s/m.
 fn spring_expect(field: &str) -> Expect<'static> {
-    let (time, length, what, example) = match field {
-        "stiffness" => (-2, 0, "`stiffness`", "10 N/m"),
-        "damping" => (-1, 0, "`damping`", "0.01 N*s/m"),
-        _ => (0, 1, "`rest_length`", "5 mm"),
-    };
-    let mass = if field == "rest_length" { 0 } else { 1 };
-    Expect {
-        dim: Dimension {
-            mass,
-            length,
-            time,
-            current: 0,
-        },
-        what,
-        example,
+    match field {
+        "stiffness" => Expect::mechanical("`stiffness`", "10 N/m", [1, 0, -2]),
+        "damping" => Expect::mechanical("`damping`", "0.01 N*s/m", [1, 0, -1]),
+        _ => Expect::mechanical("`rest_length`", "5 mm", [0, 1, 0]),
     }
 }
 

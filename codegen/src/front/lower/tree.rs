@@ -71,16 +71,7 @@ fn joint_expect(field: &'static str, kind: JointKind) -> Expect<'static> {
         "stiffness" => "`stiffness`",
         _ => "`damping`",
     };
-    Expect {
-        dim: Dimension {
-            mass,
-            length,
-            time,
-            current: 0,
-        },
-        what,
-        example,
-    }
+    Expect::mechanical(what, example, [mass, length, time])
 }
 
 impl<'a> Lowerer<'a> {
