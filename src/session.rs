@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use mech_codegen::ir::Dimension;
 use mech_codegen::{Compiled, Errors};
 use mech_runtime::constraints::{choose_independent, complete_independent, jacobian};
+use mech_runtime::nalgebra::DMatrix;
 use mech_runtime::{
     assemble, assemble_along, assemble_speeds, linearize, mobility, simulate, simulate_reduced,
     solve_statics, AssemblyOptions, Equilibrium, Fixture, Linearization, Mobility, Model,
@@ -470,6 +471,24 @@ impl Session {
         linearize(&self.model, 0.0, &equilibrium.q, inputs, &independent)
             .map_err(Error::Linearization)
     }
+}
+
+/// The matrices of a linearization under the names `mech linearize --matrices` and Python's
+/// `linearize()` give them: `M`, `C`, `K`, `B` of `M δz̈ + C δż + K δz = B δin`, then the
+/// first-order `A`, `B_s`, `C_s`, `D_s` (`ẋ = A x + B_s δin`, `y = C_s x + D_s δin`,
+/// `x = [δz; δż]`). `None` when `M` is singular.
+pub fn named_matrices(linear: &Linearization) -> Option<[(&'static str, DMatrix<f64>); 8]> {
+    let state_space = linear.state_space()?;
+    Some([
+        ("M", linear.mass.clone()),
+        ("C", linear.damping.clone()),
+        ("K", linear.stiffness.clone()),
+        ("B", linear.input.clone()),
+        ("A", state_space.a),
+        ("B_s", state_space.b),
+        ("C_s", state_space.c),
+        ("D_s", state_space.d),
+    ])
 }
 
 fn list(names: &[&str]) -> String {

@@ -313,7 +313,7 @@ impl Model {
             (model.nq(), model.noutputs(), model.ninputs())
         };
         let dict = PyDict::new(py);
-        dict.set_item("t", PyArray1::from_vec(py, trajectory.times.clone()))?;
+        dict.set_item("t", PyArray1::from_vec(py, trajectory.times))?;
         dict.set_item("q", rows_array(py, &trajectory.q, nq))?;
         dict.set_item("u", rows_array(py, &trajectory.u, nq))?;
         dict.set_item("outputs", rows_array(py, &trajectory.outputs, no))?;
@@ -362,8 +362,7 @@ impl Model {
         let linear = self.detached(py, independent, move |session, independent| {
             session.linearization(independent, &inputs)
         })?;
-        let state_space = linear
-            .state_space()
+        let matrices = mech::session::named_matrices(&linear)
             .ok_or_else(|| error("the reduced mass matrix is singular"))?;
         let modes = linear
             .modes()
@@ -377,17 +376,8 @@ impl Model {
             .map(|&i| model.coordinate_name(i))
             .collect();
         dict.set_item("coordinates", names.clone())?;
-        for (key, value) in [
-            ("M", &linear.mass),
-            ("C", &linear.damping),
-            ("K", &linear.stiffness),
-            ("B", &linear.input),
-            ("A", &state_space.a),
-            ("B_s", &state_space.b),
-            ("C_s", &state_space.c),
-            ("D_s", &state_space.d),
-        ] {
-            dict.set_item(key, matrix(py, value))?;
+        for (key, value) in &matrices {
+            dict.set_item(*key, matrix(py, value))?;
         }
         let frequencies: Vec<f64> = modes.iter().map(|m| m.frequency_hz()).collect();
         let ratios: Vec<f64> = modes.iter().map(|m| m.damping_ratio).collect();

@@ -203,8 +203,9 @@ def test_four_bar_equilibrium_is_stationary_on_the_loop():
 
 
 def test_simulations_run_in_parallel_threads():
-    """The thread is detached during a simulation: two threads simulate at once and each gets
-    the same result as alone."""
+    """Two Python threads may call one model at once (each analysis runs on its own copy of
+    the session): each gets the same result as a call alone. (It checks thread safety, not
+    that the calls overlap in time.)"""
     four_bar = model("four_bar")
     alone = four_bar.simulate(t_end=0.5)
     results = [None, None]

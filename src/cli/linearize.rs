@@ -45,7 +45,7 @@ fn matrices_json(
     linear: &Linearization,
     coordinates: &[&str],
 ) -> Result<serde_json::Value, Error> {
-    let state_space = linear.state_space().ok_or(Error::NoModes)?;
+    let matrices = crate::session::named_matrices(linear).ok_or(Error::NoModes)?;
     let inputs: Vec<&str> = (0..model.ninputs()).map(|i| model.input_name(i)).collect();
     let outputs: Vec<&str> = (0..model.noutputs())
         .map(|i| model.output_name(i))
@@ -54,22 +54,18 @@ fn matrices_json(
         .iter()
         .flat_map(|kind| coordinates.iter().map(move |name| format!("{kind}_{name}")))
         .collect();
-    Ok(serde_json::json!({
+    let mut json = serde_json::json!({
         "model": model.name(),
         "form": "M δz̈ + C δż + K δz = B δin; ẋ = A x + B_s δin, y = C_s x + D_s δin, x = [δz; δż] (SI units)",
         "coordinates": coordinates,
         "inputs": inputs,
         "outputs": outputs,
         "states": states,
-        "M": matrix_json(&linear.mass),
-        "C": matrix_json(&linear.damping),
-        "K": matrix_json(&linear.stiffness),
-        "B": matrix_json(&linear.input),
-        "A": matrix_json(&state_space.a),
-        "B_s": matrix_json(&state_space.b),
-        "C_s": matrix_json(&state_space.c),
-        "D_s": matrix_json(&state_space.d),
-    }))
+    });
+    for (name, matrix) in &matrices {
+        json[*name] = matrix_json(matrix);
+    }
+    Ok(json)
 }
 
 fn matrix_text(name: &str, matrix: &DMatrix<f64>) -> String {
