@@ -100,6 +100,13 @@ pub enum Error {
         found: Dimension,
         expected: Dimension,
     },
+    /// The same name set twice by one option.
+    Repeated {
+        option: &'static str,
+        name: String,
+        first: String,
+        second: String,
+    },
     /// The loops could not be closed.
     Assembly(RuntimeError),
     /// No static equilibrium was found.
@@ -147,9 +154,27 @@ impl std::fmt::Display for Error {
                 value,
                 found,
                 expected,
+            } => {
+                write!(f, "{option} {name}: `{value}` ")?;
+                if *found == Dimension::NONE {
+                    write!(f, "has no unit, but `{name}` needs ")?;
+                } else {
+                    write!(f, "has unit {found}, but `{name}` needs ")?;
+                }
+                if *expected == Dimension::NONE {
+                    write!(f, "no unit (a plain number, or an angle such as `30 deg`)")
+                } else {
+                    write!(f, "{expected} (e.g. `{name}=2 {expected}`)")
+                }
+            }
+            Error::Repeated {
+                option,
+                name,
+                first,
+                second,
             } => write!(
                 f,
-                "{option} {name}: `{value}` has unit {found}, but `{name}` needs {expected}"
+                "{option} {name}: given twice (`{first}` and `{second}`); give it once"
             ),
             Error::Assembly(error) => write!(f, "{error}"),
             Error::Statics { model, error } => write!(f, "statics of `{model}`: {error}"),
@@ -162,6 +187,52 @@ impl std::fmt::Display for Error {
 }
 
 impl std::error::Error for Error {}
+
+/// An error if two of the `NAME=VALUE` `assignments` given by `option` set the same name:
+/// which one was meant cannot be known.
+fn refuse_repeated(option: &'static str, assignments: &[String]) -> Result<(), Error> {
+    let mut seen = std::collections::BTreeMap::new();
+    for text in assignments {
+        let Ok((name, _)) = signal_spec::parse_assignment(text) else {
+            continue; // reported with its position when it is applied
+        };
+        if let Some(first) = seen.insert(name.clone(), text.clone()) {
+            return Err(Error::Repeated {
+                option,
+                name,
+                first,
+                second: text.clone(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// `text` (the value given to `name` by `option`) in SI, if its unit has the `expected`
+/// dimension. A bare number is SI only where the dimension is none (an angle in rad).
+pub fn quantity(
+    option: &'static str,
+    name: &str,
+    text: &str,
+    expected: Dimension,
+) -> Result<f64, Error> {
+    let (si, found) =
+        mech_codegen::front::units::parse_quantity(text).map_err(|error| Error::Setting {
+            option,
+            name: Some(name.to_string()),
+            error: Box::new(SettingError::Quantity(error)),
+        })?;
+    if found != expected {
+        return Err(Error::WrongUnit {
+            option,
+            name: name.to_string(),
+            value: text.to_string(),
+            found,
+            expected,
+        });
+    }
+    Ok(si)
+}
 
 /// A compiled model with its run-time settings. Cloning one is cheaper than compiling the
 /// text again (a diagnosis opens the same model once per candidate).
@@ -205,6 +276,8 @@ impl Session {
             model,
             signals,
         };
+        refuse_repeated("--set", sets)?;
+        refuse_repeated("--input", inputs)?;
         for assignment in sets {
             session.set(assignment)?;
         }
@@ -218,12 +291,6 @@ impl Session {
     pub fn set(&mut self, assignment: &str) -> Result<(), Error> {
         let option = "--set";
         let (name, value, index) = self.assignment(option, NameKind::Parameter, assignment)?;
-        let (si, dimension) =
-            mech_codegen::front::units::parse_quantity(&value).map_err(|error| Error::Setting {
-                option,
-                name: Some(name.clone()),
-                error: Box::new(SettingError::Quantity(error)),
-            })?;
         let expected = self
             .compiled
             .model
@@ -232,31 +299,26 @@ impl Session {
             .nth(index)
             .map(|(_, p)| p.dimension)
             .unwrap_or_default();
-        if dimension != expected {
-            return Err(Error::WrongUnit {
-                option,
-                name,
-                value,
-                found: dimension,
-                expected,
-            });
-        }
+        let si = quantity(option, &name, &value, expected)?;
         self.model.set_param(index, si);
         Ok(())
+    }
+
+    /// The dimension of input `index`'s values (a force, a voltage, …).
+    pub fn input_dimension(&self, index: usize) -> Dimension {
+        let inputs = &self.compiled.model.inputs;
+        inputs
+            .iter()
+            .nth(index)
+            .map(|(_, i)| i.dimension)
+            .unwrap_or_default()
     }
 
     /// `--input drive=sine(...)`: checks the name and the signal's units.
     pub fn input(&mut self, assignment: &str) -> Result<(), Error> {
         let option = "--input";
         let (name, spec, index) = self.assignment(option, NameKind::Input, assignment)?;
-        let expected = self
-            .compiled
-            .model
-            .inputs
-            .iter()
-            .nth(index)
-            .map(|(_, i)| i.dimension)
-            .unwrap_or_default();
+        let expected = self.input_dimension(index);
         self.signals[index] =
             signal_spec::parse_signal(&spec, expected).map_err(|error| Error::Setting {
                 option,
@@ -356,15 +418,10 @@ impl Session {
             };
             let index = self.coordinate_index(name)?;
             if let Some(value) = value {
-                let (si, _) =
-                    mech_codegen::front::units::parse_quantity(value).map_err(|error| {
-                        Error::Setting {
-                            option: "--independent",
-                            name: Some(name.to_string()),
-                            error: Box::new(SettingError::Quantity(error)),
-                        }
-                    })?;
-                q[index] = si;
+                let coordinates = &self.compiled.model.coordinates;
+                let expected = coordinates.iter().nth(index).map(|(_, c)| c.dimension);
+                let expected = expected.unwrap_or_default();
+                q[index] = quantity("--independent", name, value, expected)?;
             }
             fixed.push(index);
         }

@@ -484,6 +484,10 @@ fn check_initial_state<M: Model + ?Sized>(
     Ok(nq)
 }
 
+/// Most samples a trajectory stores: a typo in the output interval (`1e-12 s`) must not
+/// allocate without bound (each sample holds q, u and the outputs).
+pub const MAX_SAMPLES: usize = 1_000_000;
+
 /// The output grid of `options`, after checking the times.
 fn checked_grid(options: &SimOptions) -> Result<Vec<f64>, RuntimeError> {
     let SimOptions {
@@ -500,6 +504,15 @@ fn checked_grid(options: &SimOptions) -> Result<Vec<f64>, RuntimeError> {
     if !(output_interval > 0.0 && output_interval.is_finite()) {
         return Err(RuntimeError::InvalidOptions(format!(
             "output_interval must be finite and > 0 (got {output_interval})"
+        )));
+    }
+    let samples = (t_end - t_start) / output_interval;
+    if samples > MAX_SAMPLES as f64 {
+        return Err(RuntimeError::InvalidOptions(format!(
+            "an output interval of {output_interval:e} s over {:e} s gives {samples:.3e} samples, \
+             more than the {MAX_SAMPLES} a run stores; choose an interval of at least {:.3e} s",
+            t_end - t_start,
+            (t_end - t_start) / MAX_SAMPLES as f64
         )));
     }
     Ok(output_grid(t_start, t_end, output_interval))

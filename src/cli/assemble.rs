@@ -24,7 +24,7 @@ pub struct AssembleArgs {
 }
 
 pub fn run(args: &AssembleArgs) -> Result<(), Error> {
-    let (session, _) = args.common.open()?;
+    let (session, _) = args.common.open("assemble")?;
     let state = session.assemble(&args.common.independent)?;
     print!("{}", session::assembly_report(&session.model, &state));
     if let Some(out) = &args.out {

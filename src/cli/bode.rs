@@ -33,7 +33,7 @@ pub struct BodeArgs {
     #[arg(long)]
     pub to: String,
     /// Number of log-spaced frequencies.
-    #[arg(long, default_value_t = 400)]
+    #[arg(long, default_value_t = 400, value_parser = super::point_count)]
     pub points: usize,
     /// How flexure losses enter: `hysteretic` (complex stiffness k(1 + iη), exact at every
     /// frequency) or `viscous` (the time-domain dampers b = kη/ω_ref, as a simulation sees them).
@@ -61,7 +61,7 @@ pub enum Damping {
 }
 
 pub fn run(args: &BodeArgs) -> Result<(), Error> {
-    let (session, inputs) = args.common.open()?;
+    let (session, inputs) = args.common.open("bode")?;
     let model = &session.model;
     let input = session.input_index(&args.drive)?;
     let output = session.output_index(&args.output)?;
@@ -88,9 +88,8 @@ pub fn run(args: &BodeArgs) -> Result<(), Error> {
             output,
             amplitude: match &args.chirp_amplitude {
                 Some(text) => {
-                    mech_codegen::front::units::parse_quantity(text)
-                        .map_err(|e| Error::Usage(format!("--chirp-amplitude: {e}")))?
-                        .0
+                    let expected = session.input_dimension(input);
+                    crate::session::quantity("--chirp-amplitude", &args.drive, text, expected)?
                 }
                 None => 1.0,
             },

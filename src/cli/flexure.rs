@@ -58,10 +58,10 @@ pub struct StiffnessArgs {
     #[arg(long)]
     pub modulus: Option<String>,
     /// Override Poisson's ratio.
-    #[arg(long)]
+    #[arg(long, value_parser = super::poisson_ratio)]
     pub poisson: Option<f64>,
     /// Override the loss factor η.
-    #[arg(long)]
+    #[arg(long, value_parser = super::non_negative_number)]
     pub loss_factor: Option<f64>,
     /// Reference frequency of the time-domain damping b = kη/ω: `40 Hz`, or `250 rad/s`.
     #[arg(long, default_value = "40 Hz")]

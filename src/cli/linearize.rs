@@ -80,7 +80,7 @@ fn matrix_text(name: &str, matrix: &DMatrix<f64>) -> String {
 }
 
 pub fn run(args: &LinearizeArgs) -> Result<(), Error> {
-    let (session, inputs) = args.common.open()?;
+    let (session, inputs) = args.common.open("linearize")?;
     let model = &session.model;
     let linear = session.linearization(&args.common.independent, &inputs)?;
     let names: Vec<&str> = linear

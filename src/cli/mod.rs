@@ -24,7 +24,7 @@ use std::f64::consts::TAU;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Args, Parser, Subcommand};
+use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand};
 use mech_codegen::ir::Dimension;
 
 use crate::quantity::parse_si;
@@ -103,7 +103,11 @@ fn restore_default_sigpipe() {}
 /// Parses the process arguments, runs the command, prints its error (if any) on stderr.
 pub fn main() -> ExitCode {
     restore_default_sigpipe();
-    let cli = Cli::parse();
+    let command = accept_leading_hyphens(Cli::command());
+    let matches = command.clone().get_matches();
+    let cli = refuse_options_as_values(&command, &matches)
+        .and_then(|()| Cli::from_arg_matches(&matches))
+        .unwrap_or_else(|error| error.exit());
     let result = match cli.command {
         Command::Check(args) => check::run(&args),
         Command::Derive(args) => derive::run(&args),
@@ -128,6 +132,55 @@ pub fn main() -> ExitCode {
     }
 }
 
+/// Lets every option take a value that starts with `-` (`--t-end -1`, `--rtol -1e-6`), so
+/// the option's own check says what is wrong with it instead of clap's tip to write `-- -1`
+/// (clap's `allow_negative_numbers` misses `-1e-6` and `-1 ms`).
+fn accept_leading_hyphens(command: clap::Command) -> clap::Command {
+    command
+        .mut_args(|arg| {
+            if arg.get_action().takes_values() {
+                arg.allow_hyphen_values(true)
+            } else {
+                arg
+            }
+        })
+        .mut_subcommands(accept_leading_hyphens)
+}
+
+/// With [`accept_leading_hyphens`], `--out --plot run.svg` would read `--plot` as the file
+/// name: a value that looks like one of the command's options is refused instead.
+fn refuse_options_as_values(
+    command: &clap::Command,
+    matches: &clap::ArgMatches,
+) -> Result<(), clap::Error> {
+    if let Some((name, sub_matches)) = matches.subcommand() {
+        if let Some(sub_command) = command.find_subcommand(name) {
+            return refuse_options_as_values(sub_command, sub_matches);
+        }
+    }
+    for arg in command.get_arguments() {
+        let Some(long) = arg.get_long() else { continue };
+        let Ok(Some(values)) = matches.try_get_raw(arg.get_id().as_str()) else {
+            continue;
+        };
+        for value in values {
+            let value = value.to_string_lossy();
+            let named = value.strip_prefix("--").unwrap_or_default();
+            let name = named.split('=').next().unwrap_or_default();
+            if command.get_arguments().any(|a| a.get_long() == Some(name)) {
+                let mut command = command.clone();
+                return Err(command.error(
+                    clap::error::ErrorKind::InvalidValue,
+                    format!(
+                        "--{long} needs a value, but the next argument is the option `--{name}`"
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// What every linear-analysis command takes.
 #[derive(Args, Clone, Debug)]
 pub struct ModelArgs {
@@ -148,9 +201,25 @@ pub struct ModelArgs {
 }
 
 impl ModelArgs {
-    /// Opens the model with constant inputs, and returns it with the input values.
-    fn open(&self) -> Result<(Session, Vec<f64>), Error> {
-        let session = Session::open(&self.model, &self.sets, &self.inputs)?;
+    /// Opens the model for `simulate`, which takes signals (`sine(...)`) as inputs.
+    fn open_with_signals(&self) -> Result<Session, Error> {
+        Ok(Session::open(&self.model, &self.sets, &self.inputs)?)
+    }
+
+    /// Opens the model for `command`, which holds the inputs constant, and returns it with
+    /// the input values. A signal that varies in time is refused, not read at t = 0.
+    fn open(&self, command: &str) -> Result<(Session, Vec<f64>), Error> {
+        let session = self.open_with_signals()?;
+        for (index, signal) in session.signals.iter().enumerate() {
+            if !matches!(signal, mech_runtime::Signal::Constant(_)) {
+                let name = mech_runtime::Model::input_name(&session.model, index);
+                return Err(Error::Usage(format!(
+                    "--input {name}: `mech {command}` holds inputs constant; give a value such \
+                     as `{name}=2 {}` (signals that vary in time are for `mech simulate`)",
+                    session.input_dimension(index)
+                )));
+            }
+        }
         let inputs: Vec<f64> = session.signals.iter().map(|s| s.value(0.0)).collect();
         Ok((session, inputs))
     }
@@ -167,6 +236,49 @@ fn progress_bar(length: u64, template: &str) -> indicatif::ProgressBar {
 }
 
 // ------------------------------------------------------------------ quantities
+
+/// A plain number from the command line, with the range it must lie in. clap's parser for
+/// `f64` takes `NaN` and `inf`; this one says which numbers the option takes.
+fn number_in(text: &str, accept: impl Fn(f64) -> bool, expected: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(value) if value.is_finite() && accept(value) => Ok(value),
+        Ok(_) => Err(format!("expected {expected}")),
+        Err(_) => Err(format!(
+            "expected {expected}, as a plain number such as `0.5`"
+        )),
+    }
+}
+
+/// clap value parser: a finite number above zero (`--rtol 1e-9`).
+pub(crate) fn positive_number(text: &str) -> Result<f64, String> {
+    number_in(text, |v| v > 0.0, "a number above zero")
+}
+
+/// clap value parser: a finite number at or above zero (`--loss-factor 0.02`).
+pub(crate) fn non_negative_number(text: &str) -> Result<f64, String> {
+    number_in(text, |v| v >= 0.0, "a number at or above zero")
+}
+
+/// clap value parser: Poisson's ratio of an isotropic solid, −1 < ν < ½.
+pub(crate) fn poisson_ratio(text: &str) -> Result<f64, String> {
+    number_in(
+        text,
+        |v| v > -1.0 && v < 0.5,
+        "Poisson's ratio between -1 and 0.5 (exclusive)",
+    )
+}
+
+/// Most frequencies or samples a command computes and stores: enough for any plot, small
+/// enough that a typo (`--points 1e8`) cannot take the machine's memory.
+pub(crate) const MAX_POINTS: usize = 1_000_000;
+
+/// clap value parser: a number of frequencies, at least 2 (a sweep needs two ends).
+pub(crate) fn point_count(text: &str) -> Result<usize, String> {
+    match text.trim().parse::<usize>() {
+        Ok(n) if (2..=MAX_POINTS).contains(&n) => Ok(n),
+        _ => Err(format!("expected a whole number from 2 to {MAX_POINTS}")),
+    }
+}
 
 /// A time given with a unit (`2 s`, `500 ms`) or as plain seconds.
 pub(crate) fn parse_time(what: &str, text: &str) -> Result<f64, Error> {

@@ -30,10 +30,10 @@ pub struct SimulateArgs {
     #[arg(long, value_enum, default_value_t = Integrator::Dopri5)]
     pub method: Integrator,
     /// Relative tolerance (adaptive methods).
-    #[arg(long, default_value_t = 1e-9)]
+    #[arg(long, default_value_t = 1e-9, value_parser = super::positive_number)]
     pub rtol: f64,
     /// Absolute tolerance (adaptive methods).
-    #[arg(long, default_value_t = 1e-12)]
+    #[arg(long, default_value_t = 1e-12, value_parser = super::positive_number)]
     pub atol: f64,
     /// Step size for rk4, with a unit or in seconds.
     #[arg(long, default_value = "0.1 ms")]
@@ -60,7 +60,7 @@ pub enum Integrator {
 
 pub fn run(request: &SimulateArgs) -> Result<(), Error> {
     let path = request.common.model.as_path();
-    let (session, _) = request.common.open()?;
+    let session = request.common.open_with_signals()?;
     let state = session.assemble(&request.common.independent)?;
     if let Some(mobility) = &state.mobility {
         println!("assembled `{}`: {mobility}", session.model.name());

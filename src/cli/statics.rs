@@ -90,7 +90,7 @@ fn parse_fixture(model: &dyn Model, text: &str) -> Result<Fixture, String> {
 }
 
 pub fn run(args: &StaticsArgs) -> Result<(), Error> {
-    let (session, inputs) = args.common.open()?;
+    let (session, inputs) = args.common.open("statics")?;
     let model = &session.model;
     let fixtures: Vec<Fixture> = args
         .fixtures

@@ -36,8 +36,22 @@ pub fn parse_quantity_text(
     text: &str,
 ) -> std::result::Result<(bool, String, Option<ast::Unit>), String> {
     check_bracket_depth(text).map_err(|d| d.message)?;
-    let pairs =
-        MechParser::parse(Rule::quantity_text, text).map_err(|e| syntax_error(text, e).message)?;
+    // The grammar's own message ("expected a declaration") speaks of a model file; a value
+    // on the command line or in a data file gets the form it should have.
+    let pairs = MechParser::parse(Rule::quantity_text, text).map_err(|_| {
+        let finite = match text
+            .trim_start_matches(['-', '+'])
+            .to_ascii_lowercase()
+            .as_str()
+        {
+            "nan" | "inf" | "infinity" => " (only finite numbers)",
+            _ => "",
+        };
+        format!(
+            "expected a number with an optional unit, such as `10 mN` or `-2.5e-3`{finite}; \
+             got `{text}`"
+        )
+    })?;
     let mut negative = false;
     for pair in pairs.flatten() {
         match pair.as_rule() {

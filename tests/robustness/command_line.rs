@@ -1,0 +1,174 @@
+//! Bad command-line values: each gets an error that names the option and the expected form.
+
+use crate::support::{expect_errors, scratch};
+
+#[test]
+fn a_value_that_is_not_a_quantity_names_the_option_and_the_form() {
+    let dir = scratch("not_a_quantity");
+    let form = "expected a number with an optional unit, such as `10 mN`";
+    expect_errors(
+        &dir,
+        &[
+            (&["statics", "{model:pendulum}", "--set", "m=NaN"], "--set m: expected a number with an optional unit, such as `10 mN` or `-2.5e-3` (only finite numbers); got `NaN`"),
+            (&["statics", "{model:pendulum}", "--set", "m=inf"], "(only finite numbers); got `inf`"),
+            (&["statics", "{model:pendulum}", "--set", "m=abc"], form),
+            (&["statics", "{model:pendulum}", "--set", "m="], "--set: `m=` has no value after `=`"),
+            (&["assemble", "{model:four_bar}", "--independent", "crank_angle=fast"], form),
+        ],
+    );
+}
+
+#[test]
+fn a_unit_of_the_wrong_dimension_is_refused() {
+    let dir = scratch("wrong_dimension");
+    expect_errors(
+        &dir,
+        &[
+            (
+                &["statics", "{model:pendulum}", "--set", "m=1 m"],
+                "--set m: `1 m` has unit m, but `m` needs kg (e.g. `m=2 kg`)",
+            ),
+            (
+                &["statics", "{model:pendulum}", "--set", "l=0.1"],
+                "--set l: `0.1` has no unit, but `l` needs m",
+            ),
+            // Units were ignored here: 1 m was read as 1 rad.
+            (
+                &[
+                    "assemble",
+                    "{model:four_bar}",
+                    "--independent",
+                    "crank_angle=1 m",
+                ],
+                "--independent crank_angle: `1 m` has unit m, but `crank_angle` needs no unit",
+            ),
+            (
+                &[
+                    "bode",
+                    "{model:hamr_vi}",
+                    "--drive",
+                    "v_lift",
+                    "--output",
+                    "foot.z",
+                    "--from",
+                    "1 Hz",
+                    "--to",
+                    "1 kHz",
+                    "--chirp",
+                    "--chirp-amplitude",
+                    "1 mm",
+                ],
+                "--chirp-amplitude v_lift: `1 mm` has unit m, but `v_lift` needs V",
+            ),
+        ],
+    );
+}
+
+#[test]
+fn negative_and_non_finite_numbers_get_the_options_own_check() {
+    let dir = scratch("negative_numbers");
+    // clap's tip ("to pass '-1' as a value, use '-- -1'") was printed for these.
+    expect_errors(
+        &dir,
+        &[
+            (
+                &[
+                    "simulate",
+                    "{model:pendulum}",
+                    "--t-end",
+                    "-1",
+                    "--out",
+                    "run.csv",
+                ],
+                "--t-end: expected a positive time such as `2 s` or `500 ms`, got `-1`",
+            ),
+            (
+                &[
+                    "simulate",
+                    "{model:pendulum}",
+                    "--t-end",
+                    "1",
+                    "--rtol",
+                    "-1e-6",
+                    "--out",
+                    "run.csv",
+                ],
+                "--rtol",
+            ),
+            (
+                &[
+                    "simulate",
+                    "{model:pendulum}",
+                    "--t-end",
+                    "1",
+                    "--atol",
+                    "NaN",
+                    "--out",
+                    "run.csv",
+                ],
+                "expected a number above zero",
+            ),
+            (
+                &[
+                    "flexure",
+                    "stiffness",
+                    "--width",
+                    "1 mm",
+                    "--thickness",
+                    "25 um",
+                    "--length",
+                    "100 um",
+                    "--poisson",
+                    "0.7",
+                ],
+                "Poisson's ratio between -1 and 0.5",
+            ),
+            (
+                &[
+                    "flexure",
+                    "stiffness",
+                    "--width",
+                    "1 mm",
+                    "--thickness",
+                    "25 um",
+                    "--length",
+                    "100 um",
+                    "--loss-factor",
+                    "inf",
+                ],
+                "expected a number at or above zero",
+            ),
+        ],
+    );
+}
+
+#[test]
+fn counts_are_bounded_before_anything_is_allocated() {
+    let dir = scratch("counts");
+    expect_errors(
+        &dir,
+        &[
+            // Aborted allocating 800 GB.
+            (&["simulate", "{model:pendulum}", "--t-end", "1 s", "--dt-out", "1e-12 s", "--out", "run.csv"], "gives 1.000e12 samples, more than the 1000000 a run stores; choose an interval of at least 1.000e-6 s"),
+            // Ran without bound.
+            (&["bode", "{model:hamr_vi}", "--drive", "v_lift", "--output", "foot.z", "--from", "1 Hz", "--to", "1 kHz", "--points", "100000000"], "'--points <POINTS>': expected a whole number from 2 to 1000000"),
+            (&["bode", "{model:hamr_vi}", "--drive", "v_lift", "--output", "foot.z", "--from", "1 Hz", "--to", "1 kHz", "--points", "1"], "expected a whole number from 2"),
+            (&["bode", "{model:hamr_vi}", "--drive", "v_lift", "--output", "foot.z", "--from", "1 Hz", "--to", "1 kHz", "--points", "0"], "expected a whole number from 2"),
+        ],
+    );
+}
+
+#[test]
+fn settings_given_twice_or_signals_where_a_constant_is_held_are_refused() {
+    let dir = scratch("repeated");
+    expect_errors(
+        &dir,
+        &[
+            (&["statics", "{model:pendulum}", "--set", "m=1 g", "--set", "m=2 g"], "--set m: given twice (`m=1 g` and `m=2 g`); give it once"),
+            (&["statics", "{model:hamr_vi}", "--input", "v_lift=10 V", "--input", "v_lift=20 V"], "--input v_lift: given twice"),
+            // Read at t = 0 without a word before.
+            (&["statics", "{model:hamr_vi}", "--input", "v_lift=sine(amplitude=100 V, frequency=1 Hz)"], "--input v_lift: `mech statics` holds inputs constant; give a value such as `v_lift=2 V`"),
+            (&["linearize", "{model:hamr_vi}", "--input", "v_lift=sine(amplitude=100 V, frequency=1 Hz)"], "`mech linearize` holds inputs constant"),
+        ],
+    );
+}

@@ -1,0 +1,8 @@
+//! Hostile input to the `mech` binary (issue #18): bad command-line values, bad data and
+//! experiment files, outputs that would overwrite inputs. Each case found by the black-box
+//! run of the issue is kept here, with the message it must get.
+//!
+//! One test binary per group, so the suite links a few binaries instead of one per file.
+
+mod command_line;
+mod support;
