@@ -134,11 +134,12 @@ pub fn main() -> ExitCode {
 
 /// Lets every option take a value that starts with `-` (`--t-end -1`, `--rtol -1e-6`), so
 /// the option's own check says what is wrong with it instead of clap's tip to write `-- -1`
-/// (clap's `allow_negative_numbers` misses `-1e-6` and `-1 ms`).
+/// (clap's `allow_negative_numbers` misses `-1e-6` and `-1 ms`). Not for positionals: a list
+/// of files would swallow the options after it.
 fn accept_leading_hyphens(command: clap::Command) -> clap::Command {
     command
         .mut_args(|arg| {
-            if arg.get_action().takes_values() {
+            if arg.get_action().takes_values() && !arg.is_positional() {
                 arg.allow_hyphen_values(true)
             } else {
                 arg
