@@ -1,64 +1,275 @@
-//! Files written and read by the command line: atomic writes and simple numeric CSV tables.
+//! Files written and read by the command line: a run's outputs written all or none, and
+//! simple numeric CSV tables.
 //!
-//! Consumes: bytes to store (plots, reports), a header and rows of numbers to store as CSV
-//! (simulation results), and CSV files named on the command line (`--input x=csv(...)`).
-//! Produces: files that are either completely written or untouched (never half-written), and
-//! `(times, values)` columns read back from CSV, or a [`CsvError`] that names file, line and
-//! column. Writing fails with an [`io::Error`] that names the file.
+//! Consumes: the [`File`]s a run rendered in memory (plots, reports, CSV of numbers) with the
+//! files it read, and CSV files named on the command line (`--input x=csv(...)`). Produces:
+//! the run's files, either all written or none changed (never half-written, never over one of
+//! the run's inputs), and `(times, values)` columns read back from CSV, or a [`CsvError`]
+//! that names file, line and column. Writing fails with a [`WriteError`] that names the file.
 
 use std::fs;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-/// Writes `bytes` to `path` atomically: to a new temporary file in the same directory, flushed
-/// to disk, then renamed over `path`. If anything fails, `path` keeps its old contents (or stays
-/// absent) and the temporary file is removed. Missing parent directories are created. An
-/// existing target's permissions are kept.
-///
-/// Errors keep their [`io::ErrorKind`] and name the file.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
-    let context = |error: io::Error, what: &str, file: &Path| {
+/// A file rendered in memory. A run renders all its files first and writes them together
+/// with [`write_all`], so a failure half-way (a bad plot path, a fit that does not converge)
+/// leaves every earlier output as it was.
+#[derive(Debug, Clone, PartialEq)]
+pub struct File {
+    pub path: PathBuf,
+    pub bytes: Vec<u8>,
+}
+
+impl File {
+    pub fn new(path: impl Into<PathBuf>, bytes: impl Into<Vec<u8>>) -> File {
+        File {
+            path: path.into(),
+            bytes: bytes.into(),
+        }
+    }
+
+    /// A numeric table as CSV: one header row, then one row per entry of `rows`. Numbers are
+    /// printed in the shortest form that reads back to the same `f64` (`1e-7`, `0.1`, `NaN`,
+    /// `inf`). Every row must have one value per header field.
+    pub fn csv(path: impl Into<PathBuf>, header: &[String], rows: &[Vec<f64>]) -> io::Result<File> {
+        let path = path.into();
+        if let Some((i, row)) = rows
+            .iter()
+            .enumerate()
+            .find(|(_, row)| row.len() != header.len())
+        {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!(
+                    "cannot write `{}`: row {} has {} values but the header has {} columns",
+                    path.display(),
+                    i + 1,
+                    row.len(),
+                    header.len()
+                ),
+            ));
+        }
+        let mut writer = csv::Writer::from_writer(Vec::new());
+        let to_io = |e: csv::Error| io::Error::other(e.to_string());
+        writer.write_record(header).map_err(to_io)?;
+        for row in rows {
+            writer
+                .write_record(row.iter().map(|v| format!("{v:?}")))
+                .map_err(to_io)?;
+        }
+        let bytes = writer
+            .into_inner()
+            .map_err(|e| io::Error::other(e.to_string()))?;
+        Ok(File { path, bytes })
+    }
+}
+
+/// Why the files of a run were not written; no file was changed unless the message says so.
+#[derive(Debug, thiserror::Error)]
+pub enum WriteError {
+    /// An output would replace a file the same run reads.
+    #[error(
+        "refusing to write `{}`: it is {what} `{}` of this run; choose another output name",
+        .output.display(),
+        .input.display()
+    )]
+    OverwritesInput {
+        output: PathBuf,
+        input: PathBuf,
+        /// "the input", "the model", …
+        what: &'static str,
+    },
+    /// Two outputs of the run name the same file (`--plot` equal to `--out`).
+    #[error(
+        "refusing to write `{}` twice in one run (as `{}` and as `{}`); give the outputs different names",
+        .path.display(),
+        .first.display(),
+        .second.display()
+    )]
+    Twice {
+        path: PathBuf,
+        first: PathBuf,
+        second: PathBuf,
+    },
+    #[error("{0}")]
+    Io(#[from] io::Error),
+}
+
+/// A file a run reads, which none of its outputs may replace.
+#[derive(Clone, Debug)]
+pub struct Read {
+    pub path: PathBuf,
+    /// What the file is to the run, for the message: "the model", "the data file", ….
+    pub what: &'static str,
+}
+
+/// Refuses outputs that would replace one of `reads` or that name one file twice, before a
+/// run starts its work (so a long run does not fail at its end). [`write_all`] checks again.
+pub fn check_outputs<'a>(
+    outputs: impl IntoIterator<Item = &'a Path>,
+    reads: &[Read],
+) -> Result<(), WriteError> {
+    let reads: Vec<(PathBuf, &Read)> = reads.iter().map(|r| (identity(&r.path), r)).collect();
+    let mut seen: Vec<(PathBuf, &Path)> = Vec::new();
+    for output in outputs {
+        let id = identity(output);
+        if let Some((_, read)) = reads.iter().find(|(r, _)| *r == id) {
+            return Err(WriteError::OverwritesInput {
+                output: output.to_path_buf(),
+                input: read.path.clone(),
+                what: read.what,
+            });
+        }
+        if let Some((_, first)) = seen.iter().find(|(s, _)| *s == id) {
+            return Err(WriteError::Twice {
+                path: id,
+                first: first.to_path_buf(),
+                second: output.to_path_buf(),
+            });
+        }
+        seen.push((id, output));
+    }
+    Ok(())
+}
+
+/// Writes `files` all or none. Each goes to a new temporary file beside its target (missing
+/// folders are created), flushed to disk; only when every one is complete are they renamed
+/// into place, one after another (a rename is atomic; the window between renames is that of
+/// a few system calls). On an error, or SIGINT/SIGTERM/SIGHUP, the temporary files are
+/// removed and the targets keep their old contents. An existing target's permissions are
+/// kept. Refuses, before writing anything, an output that is one of `reads` or a file named
+/// twice.
+pub fn write_all(files: &[File], reads: &[Read]) -> Result<(), WriteError> {
+    check_outputs(files.iter().map(|f| f.path.as_path()), reads)?;
+    install_cleanup();
+    let mut staged: Vec<(PathBuf, &Path)> = Vec::new();
+    let result = files.iter().try_for_each(|file| {
+        staged.push((stage(file)?, &file.path));
+        Ok::<(), io::Error>(())
+    });
+    if let Err(error) = result {
+        remove_staged(staged.iter().map(|(temp, _)| temp));
+        return Err(error.into());
+    }
+    for (k, (temp, target)) in staged.iter().enumerate() {
+        if let Err(error) = fs::rename(temp, target) {
+            remove_staged(staged[k..].iter().map(|(temp, _)| temp));
+            let replaced: Vec<String> = staged[..k]
+                .iter()
+                .map(|(_, t)| format!("`{}`", t.display()))
+                .collect();
+            let note = if replaced.is_empty() {
+                String::new()
+            } else {
+                format!(" (already replaced: {})", replaced.join(", "))
+            };
+            return Err(WriteError::Io(io::Error::new(
+                error.kind(),
+                format!("cannot write `{}`: {error}{note}", target.display()),
+            )));
+        }
+        forget_staged(temp);
+    }
+    // Make the renames durable (best effort: not every platform can sync a directory).
+    for (_, target) in &staged {
+        if let Ok(dir_handle) = fs::File::open(folder_of(target)) {
+            let _ = dir_handle.sync_all();
+        }
+    }
+    Ok(())
+}
+
+/// The folder a file goes into (`.` for a bare file name).
+fn folder_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent,
+        _ => Path::new("."),
+    }
+}
+
+/// Where `path` really is, for comparing paths: the canonical path of the file, or of its
+/// folder joined with its name when the file does not exist yet.
+fn identity(path: &Path) -> PathBuf {
+    if let Ok(canonical) = fs::canonicalize(path) {
+        return canonical;
+    }
+    match (fs::canonicalize(folder_of(path)), path.file_name()) {
+        (Ok(folder), Some(name)) => folder.join(name),
+        _ => std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf()),
+    }
+}
+
+/// Writes `file` to a new temporary file beside its target and returns that file's path
+/// (registered for removal on a signal).
+fn stage(file: &File) -> io::Result<PathBuf> {
+    let context = |error: io::Error, what: &str, path: &Path| {
         io::Error::new(
             error.kind(),
-            format!("cannot {what} `{}`: {error}", file.display()),
+            format!("cannot {what} `{}`: {error}", path.display()),
         )
     };
+    let path = &file.path;
     let file_name = path.file_name().ok_or_else(|| {
         io::Error::new(
             io::ErrorKind::InvalidInput,
             format!("cannot write `{}`: it does not name a file", path.display()),
         )
     })?;
-    let dir = match path.parent() {
-        Some(parent) if !parent.as_os_str().is_empty() => parent,
-        _ => Path::new("."),
-    };
+    let dir = folder_of(path);
     fs::create_dir_all(dir).map_err(|e| context(e, "create directory", dir))?;
-
-    let (temp_path, mut file) = create_temp_file(dir, file_name)
+    let (temp_path, mut handle) = create_temp_file(dir, file_name)
         .map_err(|e| context(e, "create a temporary file in", dir))?;
     let result = (|| {
-        file.write_all(bytes)?;
+        handle.write_all(&file.bytes)?;
         if let Ok(metadata) = fs::metadata(path) {
-            file.set_permissions(metadata.permissions())?;
+            handle.set_permissions(metadata.permissions())?;
         }
-        file.sync_all()?;
-        drop(file);
-        fs::rename(&temp_path, path)
+        handle.sync_all()
     })();
-    if let Err(error) = result {
-        let _ = fs::remove_file(&temp_path);
-        return Err(context(error, "write", path));
+    match result {
+        Ok(()) => Ok(temp_path),
+        Err(error) => {
+            remove_staged([&temp_path]);
+            Err(context(error, "write", path))
+        }
     }
-    // Make the rename itself durable (best effort: not every platform can sync a directory).
-    if let Ok(dir_handle) = fs::File::open(dir) {
-        let _ = dir_handle.sync_all();
-    }
-    Ok(())
 }
 
-/// Creates `dir/.NAME.tmp-PID-N` with a fresh `N`, never reusing an existing file.
+/// Temporary files not yet renamed into place: what a signal handler removes.
+static STAGED: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+fn remove_staged<'a>(temps: impl IntoIterator<Item = &'a PathBuf>) {
+    for temp in temps {
+        let _ = fs::remove_file(temp);
+        forget_staged(temp);
+    }
+}
+
+fn forget_staged(temp: &Path) {
+    if let Ok(mut staged) = STAGED.lock() {
+        staged.retain(|t| t != temp);
+    }
+}
+
+/// On SIGINT, SIGTERM or SIGHUP: remove the temporary files of a write in progress and exit
+/// with 130 (the shell's code for an interrupt). Installed once, on the first write.
+fn install_cleanup() {
+    static INSTALLED: std::sync::Once = std::sync::Once::new();
+    INSTALLED.call_once(|| {
+        let _ = ctrlc::set_handler(|| {
+            if let Ok(staged) = STAGED.lock() {
+                for temp in staged.iter() {
+                    let _ = fs::remove_file(temp);
+                }
+            }
+            std::process::exit(130);
+        });
+    });
+}
+
+/// Creates `dir/.NAME.tmp-PID-N` with a fresh `N`, never reusing an existing file, and
+/// registers it for removal on a signal.
 fn create_temp_file(dir: &Path, file_name: &std::ffi::OsStr) -> io::Result<(PathBuf, fs::File)> {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
     loop {
@@ -67,50 +278,25 @@ fn create_temp_file(dir: &Path, file_name: &std::ffi::OsStr) -> io::Result<(Path
         name.push(file_name);
         name.push(format!(".tmp-{}-{n}", std::process::id()));
         let temp_path = dir.join(name);
+        // Registered before it exists: a signal between creation and registration would
+        // otherwise leave it behind.
+        if let Ok(mut staged) = STAGED.lock() {
+            staged.push(temp_path.clone());
+        }
         match fs::OpenOptions::new()
             .write(true)
             .create_new(true)
             .open(&temp_path)
         {
             Ok(file) => return Ok((temp_path, file)),
-            Err(e) if e.kind() == io::ErrorKind::AlreadyExists => continue,
-            Err(e) => return Err(e),
+            Err(e) => {
+                forget_staged(&temp_path);
+                if e.kind() != io::ErrorKind::AlreadyExists {
+                    return Err(e);
+                }
+            }
         }
     }
-}
-
-/// Writes a numeric table as CSV (atomically, see [`write_atomic`]): one header row, then one
-/// row per entry of `rows`. Numbers are printed in the shortest form that reads back to the
-/// same `f64` (`1e-7`, `0.1`, `NaN`, `inf`). Every row must have one value per header field.
-pub fn write_csv(path: &Path, header: &[String], rows: &[Vec<f64>]) -> io::Result<()> {
-    if let Some((i, row)) = rows
-        .iter()
-        .enumerate()
-        .find(|(_, row)| row.len() != header.len())
-    {
-        return Err(io::Error::new(
-            io::ErrorKind::InvalidInput,
-            format!(
-                "cannot write `{}`: row {} has {} values but the header has {} columns",
-                path.display(),
-                i + 1,
-                row.len(),
-                header.len()
-            ),
-        ));
-    }
-    let mut writer = csv::Writer::from_writer(Vec::new());
-    let to_io = |e: csv::Error| io::Error::other(e.to_string());
-    writer.write_record(header).map_err(to_io)?;
-    for row in rows {
-        writer
-            .write_record(row.iter().map(|v| format!("{v:?}")))
-            .map_err(to_io)?;
-    }
-    let bytes = writer
-        .into_inner()
-        .map_err(|e| io::Error::other(e.to_string()))?;
-    write_atomic(path, &bytes)
 }
 
 /// A numeric CSV table: the header and the values column by column.
@@ -358,6 +544,16 @@ mod tests {
         }
     }
 
+    /// One file written alone.
+    fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
+        write_all(&[File::new(path, bytes)], &[])
+    }
+
+    fn write_csv(path: &Path, header: &[String], rows: &[Vec<f64>]) -> io::Result<()> {
+        let file = File::csv(path, header, rows)?;
+        write_all(&[file], &[]).map_err(|e| io::Error::other(e.to_string()))
+    }
+
     fn entries(dir: &Path) -> Vec<String> {
         let mut names: Vec<String> = fs::read_dir(dir)
             .unwrap()
@@ -420,6 +616,56 @@ mod tests {
             Ok(()) => assert_eq!(fs::read(&path).unwrap(), b"new"),
         }
         assert_eq!(entries(&dir.0), vec!["out.txt"]);
+    }
+
+    #[test]
+    fn a_failure_in_any_file_of_a_run_changes_none() {
+        let dir = TempDir::new("all-or-none");
+        let (csv, plot) = (dir.0.join("run.csv"), dir.0.join("blocker/run.svg"));
+        fs::write(&csv, b"old run").unwrap();
+        // `blocker` is a file, so no folder of that name can be made for the plot.
+        fs::write(dir.0.join("blocker"), b"keep").unwrap();
+        let files = [File::new(&csv, "new run"), File::new(&plot, "<svg/>")];
+        let error = write_all(&files, &[]).unwrap_err();
+        assert!(error.to_string().contains("blocker"), "{error}");
+        assert_eq!(fs::read(&csv).unwrap(), b"old run");
+        assert_eq!(entries(&dir.0), vec!["blocker", "run.csv"]);
+    }
+
+    #[test]
+    fn outputs_over_an_input_or_named_twice_are_refused_before_writing() {
+        let dir = TempDir::new("guard");
+        let model = dir.0.join("model.mech");
+        fs::write(&model, b"model m;").unwrap();
+        let reads = [Read {
+            path: model.clone(),
+            what: "the model",
+        }];
+        // The same file by another spelling.
+        let same = dir.0.join(".").join("model.mech");
+        let error = write_all(&[File::new(&same, "x")], &reads).unwrap_err();
+        assert!(
+            matches!(
+                error,
+                WriteError::OverwritesInput {
+                    what: "the model",
+                    ..
+                }
+            ),
+            "{error}"
+        );
+        assert!(error.to_string().contains("it is the model"), "{error}");
+        assert_eq!(fs::read(&model).unwrap(), b"model m;");
+
+        let out = dir.0.join("out.csv");
+        let twice = [
+            File::new(&out, "a"),
+            File::new(dir.0.join("sub/../out.csv"), "b"),
+        ];
+        fs::create_dir(dir.0.join("sub")).unwrap();
+        let error = write_all(&twice, &reads).unwrap_err();
+        assert!(matches!(error, WriteError::Twice { .. }), "{error}");
+        assert_eq!(entries(&dir.0), vec!["model.mech", "sub"]);
     }
 
     #[test]

@@ -714,13 +714,27 @@ fn chirp(args: &[Argument], expected: Dimension) -> Result<Signal, Error> {
     })
 }
 
+/// The parameters of `csv(...)`.
+const CSV_PARAMS: &[Param] = &[
+    param("path", &["file"], true),
+    param("column", &["col"], false),
+    param("unit", &[], false),
+];
+
+/// The file a signal specification reads (`csv(path, ...)`), if any: an output of the same
+/// run must not replace it.
+pub fn file_read(spec: &str) -> Option<std::path::PathBuf> {
+    let (function, args) = split_call(spec.trim()).ok()??;
+    if function != "csv" {
+        return None;
+    }
+    let args = split_arguments(function, args).ok()?;
+    let v = bind("csv", CSV_PARAMS, &args).ok()?;
+    Some(Path::new(unquote(v[0]?)).to_path_buf())
+}
+
 fn csv(args: &[Argument], expected: Dimension) -> Result<Signal, Error> {
-    const PARAMS: &[Param] = &[
-        param("path", &["file"], true),
-        param("column", &["col"], false),
-        param("unit", &[], false),
-    ];
-    let v = bind("csv", PARAMS, args)?;
+    let v = bind("csv", CSV_PARAMS, args)?;
     let path_text = unquote(v[0].unwrap_or_default());
     let path = Path::new(path_text);
     let (times, mut values) = match v[1].map(unquote) {

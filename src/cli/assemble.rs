@@ -24,6 +24,7 @@ pub struct AssembleArgs {
 }
 
 pub fn run(args: &AssembleArgs) -> Result<(), Error> {
+    let reads = args.common.check_outputs(&[args.out.as_deref()], None)?;
     let (session, _) = args.common.open("assemble")?;
     let state = session.assemble(&args.common.independent)?;
     print!("{}", session::assembly_report(&session.model, &state));
@@ -33,7 +34,7 @@ pub fn run(args: &AssembleArgs) -> Result<(), Error> {
         let mut header: Vec<String> = names.iter().map(|n| format!("q_{n}")).collect();
         header.extend(names.iter().map(|n| format!("u_{n}")));
         let row: Vec<f64> = state.q.iter().chain(&state.u).copied().collect();
-        output::write_csv(out, &header, &[row]).map_err(|e| Error::write(out, e))?;
+        output::write_all(&[output::File::csv(out, &header, &[row])?], &reads)?;
         println!("\nwritten to {}", out.display());
     }
     Ok(())

@@ -61,6 +61,7 @@ pub enum Damping {
 }
 
 pub fn run(args: &BodeArgs) -> Result<(), Error> {
+    let reads = (args.common).check_outputs(&[args.out.as_deref()], args.plot.as_deref())?;
     let (session, inputs) = args.common.open("bode")?;
     let model = &session.model;
     let input = session.input_index(&args.drive)?;
@@ -120,18 +121,20 @@ pub fn run(args: &BodeArgs) -> Result<(), Error> {
     )?;
     print!("{}", resonances_text(args, model, (from, to), &found));
 
+    let mut files = Vec::new();
     if let Some(out) = &args.out {
         let (header, rows) = response_table(&response, chirp.as_deref());
-        output::write_csv(out, &header, &rows).map_err(|e| Error::write(out, e))?;
+        files.push(output::File::csv(out, &header, &rows)?);
+    }
+    if let Some(path) = &args.plot {
+        let title = format!("{}: {} → {}", model.name(), args.drive, args.output);
+        files.push(bode_plot(path, &title, &response, chirp.as_deref())?);
+    }
+    output::write_all(&files, &reads)?;
+    if let Some(out) = &args.out {
         println!("written to {}", out.display());
     }
     if let Some(path) = &args.plot {
-        bode_plot(
-            path,
-            &format!("{}: {} → {}", model.name(), args.drive, args.output),
-            &response,
-            chirp.as_deref(),
-        )?;
         println!("plot written to {}", path.display());
     }
     Ok(())
@@ -205,7 +208,7 @@ fn bode_plot(
     title: &str,
     response: &[Point],
     chirp: Option<&[Point]>,
-) -> Result<(), Error> {
+) -> Result<output::File, Error> {
     let frequencies: Vec<f64> = response.iter().map(|p| p.frequency_hz).collect();
     let mut magnitude = vec![(
         "linear model".to_string(),
@@ -229,5 +232,5 @@ fn bode_plot(
             chirp.iter().map(Point::phase_deg).collect(),
         ));
     }
-    plot::plot_bode(path, title, &magnitude, &phase).map_err(Error::Plot)
+    Ok(plot::plot_bode(path, title, &magnitude, &phase)?)
 }

@@ -49,7 +49,14 @@ pub fn run(args: &DeriveArgs) -> Result<(), Error> {
     };
     match out {
         Some(file) => {
-            output::write_atomic(file, text.as_bytes()).map_err(|e| Error::write(file, e))
+            let model = output::Read {
+                path: path.to_path_buf(),
+                what: "the model",
+            };
+            Ok(output::write_all(
+                &[output::File::new(file, text)],
+                &[model],
+            )?)
         }
         None => {
             print!("{text}");

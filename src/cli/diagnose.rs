@@ -51,6 +51,9 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), Error> {
     if let Some(model) = &args.model {
         experiment.set_model(model.clone());
     }
+    let reads = super::data_run_reads(&args.experiment, &experiment, &args.data);
+    let known = ["diagnosis.json", "diagnosis.html"].map(|name| args.out_dir.join(name));
+    output::check_outputs(known.iter().map(PathBuf::as_path), &reads)?;
     let data = MeasuredData::load(&args.data)?;
     let holdout = Holdout::parse(&args.holdout)?;
     let d = diagnose_causes(&experiment, &data, &args.fit, holdout, &args.causes)?;
@@ -64,18 +67,23 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), Error> {
     let comparison = Comparison::new(&experiment, &d);
     print!("{}", comparison.text());
     println!("\nverdict: {verdict}");
-    std::fs::create_dir_all(&args.out_dir).map_err(|e| Error::write(&args.out_dir, e))?;
     let summary = summary_json(args, &experiment, &d, &verdict, &comparison);
     let path = args.out_dir.join("diagnosis.json");
     let text = serde_json::to_string_pretty(&summary)?;
-    output::write_atomic(&path, text.as_bytes()).map_err(|e| Error::write(&path, e))?;
+    let json = output::File::new(&path, text);
     let sources = PageSources {
         experiment: &args.experiment,
         data: &args.data,
         holdout: &args.holdout,
         out_dir: &args.out_dir,
     };
-    let html = diagnosis_page(&sources, &experiment, &d, &verdict, &comparison, path)?;
+    let mut files = diagnosis_page(&sources, &experiment, &d, &verdict, &comparison, path)?;
+    let html = files
+        .last()
+        .map(|page| page.path.clone())
+        .unwrap_or_default();
+    files.push(json);
+    output::write_all(&files, &reads)?;
     println!("wrote {} and its data", html.display());
     Ok(())
 }

@@ -63,9 +63,12 @@ pub enum Error {
     /// A resonance could not be refined on the linear model's response.
     #[error("resonance refinement: {0}")]
     Refine(#[from] crate::frequency::RefineError),
-    /// A file written atomically could not be (the message names the file).
+    /// A file could not be rendered (the message names the file).
     #[error(transparent)]
     Io(#[from] std::io::Error),
+    /// The run's files were not written (the message names the file).
+    #[error(transparent)]
+    Output(#[from] crate::output::WriteError),
     /// An output file or folder could not be written.
     #[error("cannot write {}: {message}", path.display())]
     Write { path: PathBuf, message: String },

@@ -1,13 +1,15 @@
 //! `mech experiment FILE`: run one experiment file (`experiments/*.toml`) and print its
 //! tables; its CSV files and plots go to a subfolder of the output folder.
 //!
-//! Consumes: the experiment file. Produces: text on stdout, files from the experiment.
+//! Consumes: the experiment file. Produces: text on stdout, files from the experiment
+//! (written all or none).
 
 use super::Error;
 use std::path::PathBuf;
 
 use clap::Args;
 
+use crate::output;
 use crate::render::report::outcome_text;
 
 #[derive(Args, Clone, Debug)]
@@ -21,6 +23,11 @@ pub struct ExperimentArgs {
 
 pub fn run(args: &ExperimentArgs) -> Result<(), Error> {
     let outcome = crate::render::experiments::run_file(&args.file, &args.out_dir)?;
+    let experiment = output::Read {
+        path: args.file.clone(),
+        what: "the experiment file",
+    };
+    output::write_all(&outcome.rendered, &[experiment])?;
     print!("{}", outcome_text(&outcome));
     Ok(())
 }

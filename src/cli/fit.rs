@@ -40,6 +40,9 @@ pub struct FitArgs {
 
 pub fn run(args: &FitArgs) -> Result<(), Error> {
     let experiment = experiment::load(&args.experiment)?;
+    let reads = super::data_run_reads(&args.experiment, &experiment, &args.data);
+    let known = ["fit.json", "fit.csv"].map(|name| args.out_dir.join(name));
+    output::check_outputs(known.iter().map(PathBuf::as_path), &reads)?;
     let data = MeasuredData::load(&args.data)?;
     let mut leg = Leg::open_any(&experiment.model, &[])?;
     let requests = args
@@ -85,7 +88,7 @@ pub fn run(args: &FitArgs) -> Result<(), Error> {
             flag_kinds(s)
         );
     }
-    write_outputs(args, &experiment, &report, screening.as_ref())
+    write_outputs(args, &experiment, &report, screening.as_ref(), &reads)
 }
 
 fn write_outputs(
@@ -93,9 +96,9 @@ fn write_outputs(
     experiment: &Experiment,
     report: &FitReport,
     screening: Option<&Screening>,
+    reads: &[output::Read],
 ) -> Result<(), Error> {
     let dir = &args.out_dir;
-    std::fs::create_dir_all(dir).map_err(|e| Error::write(dir, e))?;
     let r = &report.result;
     let (flags, screened) = screening_json(screening);
     let summary = json!({
@@ -119,7 +122,7 @@ fn write_outputs(
     });
     let text = serde_json::to_string_pretty(&summary)?;
     let json_path = dir.join("fit.json");
-    output::write_atomic(&json_path, text.as_bytes()).map_err(|e| Error::write(&json_path, e))?;
+    let mut files = vec![output::File::new(&json_path, text)];
 
     let obs = &report.observations;
     let names = obs.series_names();
@@ -140,13 +143,16 @@ fn write_outputs(
         .map(|s| s.to_string())
         .collect();
     let csv_path = dir.join("fit.csv");
-    output::write_csv(&csv_path, &header, &rows).map_err(|e| Error::write(&csv_path, e))?;
+    files.push(output::File::csv(&csv_path, &header, &rows)?);
     let curves = [
         ("model before".to_string(), report.before.as_slice()),
         ("model after fit".to_string(), report.after.as_slice()),
     ];
-    for path in overlay_plots(dir, "fit", experiment, obs, &curves)? {
-        println!("wrote {}", path.display());
+    let plots = overlay_plots(dir, "fit", experiment, obs, &curves)?;
+    files.extend(plots.iter().cloned());
+    output::write_all(&files, reads)?;
+    for plot in &plots {
+        println!("wrote {}", plot.path.display());
     }
     println!("wrote {} and {}", json_path.display(), csv_path.display());
     Ok(())

@@ -14,6 +14,7 @@ use mech_codegen::ir::Dimension;
 use super::{angular_frequency, length, positive, Error};
 use crate::flexure_fit::fit::{fit_files, FitOptions, PLAUSIBLE_MODULUS};
 use crate::flexure_fit::rig::specimen_files;
+use crate::output;
 use crate::physics::flexure::{
     twist_ratio, HAMR_HINGE_EFFECTIVE_LENGTH, HAMR_HINGE_LOSS_FACTOR, HAMR_HINGE_THICKNESS,
     SEED_TABLE_III,
@@ -308,15 +309,24 @@ fn fit(args: &FitArgs) -> Result<(), Error> {
     }
     let fit_report = fit_files(&files, &options);
     print!("{}", report::text_report(&fit_report));
-    let mut written = report::write_csvs(&fit_report, &args.out_dir)?;
+    let mut written = report::csv_files(&fit_report, &args.out_dir)?;
     if plots != "none" {
-        written.extend(report::write_plots(&fit_report, &args.out_dir, &plots)?);
+        written.extend(report::plot_files(&fit_report, &args.out_dir, &plots)?);
     }
+    let traces = fit_report.specimens.iter().flat_map(|s| &s.traces);
+    let reads: Vec<output::Read> = (files.iter().map(|path| (path, "a specimen file")))
+        .chain(traces.map(|trace| (&trace.file, "a trace")))
+        .map(|(path, what)| output::Read {
+            path: path.clone(),
+            what,
+        })
+        .collect();
+    output::write_all(&written, &reads)?;
     println!(
         "\nwritten: {}",
         written
             .iter()
-            .map(|p| p.display().to_string())
+            .map(|file| file.path.display().to_string())
             .collect::<Vec<_>>()
             .join(", ")
     );

@@ -80,6 +80,8 @@ fn matrix_text(name: &str, matrix: &DMatrix<f64>) -> String {
 }
 
 pub fn run(args: &LinearizeArgs) -> Result<(), Error> {
+    let outputs = [args.out.as_deref(), args.matrices.as_deref()];
+    let reads = args.common.check_outputs(&outputs, None)?;
     let (session, inputs) = args.common.open("linearize")?;
     let model = &session.model;
     let linear = session.linearization(&args.common.independent, &inputs)?;
@@ -133,6 +135,7 @@ pub fn run(args: &LinearizeArgs) -> Result<(), Error> {
         rows.push(row);
     }
     print!("{text}");
+    let mut files = Vec::new();
     if let Some(out) = &args.out {
         let mut header = vec![
             "frequency_hz".to_string(),
@@ -140,14 +143,16 @@ pub fn run(args: &LinearizeArgs) -> Result<(), Error> {
             "damping_ratio".to_string(),
         ];
         header.extend(names.iter().map(|n| format!("shape_{n}")));
-        output::write_csv(out, &header, &rows).map_err(|e| Error::write(out, e))?;
-        println!("written to {}", out.display());
+        files.push(output::File::csv(out, &header, &rows)?);
     }
     if let Some(path) = &args.matrices {
         let json = matrices_json(model, &linear, &names)?;
         let text = serde_json::to_string_pretty(&json).map_err(|e| Error::write(path, e))?;
-        output::write_atomic(path, text.as_bytes()).map_err(|e| Error::write(path, e))?;
-        println!("written to {}", path.display());
+        files.push(output::File::new(path, text));
+    }
+    output::write_all(&files, &reads)?;
+    for file in &files {
+        println!("written to {}", file.path.display());
     }
     Ok(())
 }

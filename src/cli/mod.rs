@@ -21,7 +21,7 @@ pub mod simulate;
 pub mod statics;
 
 use std::f64::consts::TAU;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand};
@@ -202,6 +202,39 @@ pub struct ModelArgs {
 }
 
 impl ModelArgs {
+    /// The files the run reads: the model and the tables of `--input x=csv(...)`.
+    fn reads(&self) -> Vec<crate::output::Read> {
+        let model = crate::output::Read {
+            path: self.model.clone(),
+            what: "the model",
+        };
+        let tables = self.inputs.iter().filter_map(|assignment| {
+            let (_, spec) = crate::signal_spec::parse_assignment(assignment).ok()?;
+            Some(crate::output::Read {
+                path: crate::signal_spec::file_read(&spec)?,
+                what: "the input table",
+            })
+        });
+        std::iter::once(model).chain(tables).collect()
+    }
+
+    /// Refuses, before the command's work, outputs that would replace one of its inputs or
+    /// that name one file twice, and a plot path of no known format; returns the inputs for
+    /// [`crate::output::write_all`].
+    fn check_outputs(
+        &self,
+        outputs: &[Option<&Path>],
+        plot: Option<&Path>,
+    ) -> Result<Vec<crate::output::Read>, Error> {
+        let reads = self.reads();
+        let paths = outputs.iter().copied().chain([plot]).flatten();
+        crate::output::check_outputs(paths, &reads)?;
+        if let Some(plot) = plot {
+            crate::render::plot::check_path(plot)?;
+        }
+        Ok(reads)
+    }
+
     /// Opens the model for `simulate`, which takes signals (`sine(...)`) as inputs.
     fn open_with_signals(&self) -> Result<Session, Error> {
         Ok(Session::open(&self.model, &self.sets, &self.inputs)?)
@@ -224,6 +257,24 @@ impl ModelArgs {
         let inputs: Vec<f64> = session.signals.iter().map(|s| s.value(0.0)).collect();
         Ok((session, inputs))
     }
+}
+
+/// The files a fit or a diagnosis reads, which its outputs must not replace: the experiment
+/// file, its model and the measured data.
+fn data_run_reads(
+    experiment_file: &Path,
+    experiment: &crate::diagnose::experiment::Experiment,
+    data: &Path,
+) -> Vec<crate::output::Read> {
+    let read = |path: &Path, what| crate::output::Read {
+        path: path.to_path_buf(),
+        what,
+    };
+    vec![
+        read(experiment_file, "the experiment file"),
+        read(&experiment.model.path, "the model"),
+        read(data, "the data file"),
+    ]
 }
 
 /// A progress bar drawn with `template` (indicatif's syntax) on stderr.

@@ -1,8 +1,8 @@
 //! `mech report`: run every experiment in a folder in parallel (progress bar) and write
 //! `report.html` (self-contained) and `report.md`.
 //!
-//! Consumes: the experiments folder. Produces: text on stdout, the two report files written
-//! atomically, and each experiment's files.
+//! Consumes: the experiments folder. Produces: text on stdout, the two report files and each
+//! experiment's files, written all or none.
 
 use super::Error;
 use std::path::PathBuf;
@@ -27,13 +27,13 @@ pub struct ReportArgs {
 
 pub fn run(args: &ReportArgs) -> Result<(), Error> {
     let start = Instant::now();
-    let files = experiment_files(&args.experiments)?;
+    let experiment_files = experiment_files(&args.experiments)?;
     let bar = super::progress_bar(
-        files.len() as u64,
+        experiment_files.len() as u64,
         "experiments {bar:40} {pos}/{len} {msg} [{elapsed}]",
     );
     bar.tick();
-    let outcomes = run_all(&files, &args.out_dir, &|name| {
+    let outcomes = run_all(&experiment_files, &args.out_dir, &|name| {
         bar.inc(1);
         bar.set_message(format!("done: {name}"));
     });
@@ -49,14 +49,23 @@ pub fn run(args: &ReportArgs) -> Result<(), Error> {
         args.out_dir.join("report.html"),
         args.out_dir.join("report.md"),
     );
-    output::write_atomic(
+    let mut files: Vec<output::File> = outcomes.iter().flat_map(|o| o.rendered.clone()).collect();
+    files.push(output::File::new(
         &html,
-        render_html(&outcomes, &args.out_dir, elapsed)?.as_bytes(),
-    )?;
-    output::write_atomic(
+        render_html(&outcomes, &args.out_dir, elapsed)?,
+    ));
+    files.push(output::File::new(
         &markdown,
-        render_markdown(&outcomes, &args.out_dir, elapsed).as_bytes(),
-    )?;
+        render_markdown(&outcomes, &args.out_dir, elapsed),
+    ));
+    let reads: Vec<output::Read> = experiment_files
+        .iter()
+        .map(|path| output::Read {
+            path: path.clone(),
+            what: "an experiment file",
+        })
+        .collect();
+    output::write_all(&files, &reads)?;
     println!(
         "{} experiments in {elapsed:.1} s; report written to {} and {}",
         outcomes.len(),

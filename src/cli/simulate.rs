@@ -60,6 +60,8 @@ pub enum Integrator {
 
 pub fn run(request: &SimulateArgs) -> Result<(), Error> {
     let path = request.common.model.as_path();
+    let plot_path = request.plot.as_deref();
+    let reads = (request.common).check_outputs(&[Some(&request.out)], plot_path)?;
     let session = request.common.open_with_signals()?;
     let state = session.assemble(&request.common.independent)?;
     if let Some(mobility) = &state.mobility {
@@ -90,7 +92,18 @@ pub fn run(request: &SimulateArgs) -> Result<(), Error> {
     let trajectory = trajectory?;
 
     let (header, rows) = trajectory_table(model, &trajectory);
-    output::write_csv(&request.out, &header, &rows).map_err(|e| Error::write(&request.out, e))?;
+    let mut files = vec![output::File::csv(&request.out, &header, &rows)?];
+    if let Some(plot_path) = &request.plot {
+        let title = format!("{} — {}", model.name(), path.display());
+        let panels = trajectory_panels(model, &trajectory);
+        files.push(plot::plot_time_series(
+            plot_path,
+            &title,
+            &trajectory.times,
+            &panels,
+        )?);
+    }
+    output::write_all(&files, &reads)?;
     println!(
         "simulated `{}` to t = {t_end} s: {} samples written to {}",
         model.name(),
@@ -98,14 +111,6 @@ pub fn run(request: &SimulateArgs) -> Result<(), Error> {
         request.out.display()
     );
     if let Some(plot_path) = &request.plot {
-        let title = format!("{} — {}", model.name(), path.display());
-        plot::plot_time_series(
-            plot_path,
-            &title,
-            &trajectory.times,
-            &trajectory_panels(model, &trajectory),
-        )
-        .map_err(Error::Plot)?;
         println!("plot written to {}", plot_path.display());
     }
     Ok(())

@@ -90,6 +90,7 @@ fn parse_fixture(model: &dyn Model, text: &str) -> Result<Fixture, String> {
 }
 
 pub fn run(args: &StaticsArgs) -> Result<(), Error> {
+    let reads = args.common.check_outputs(&[args.out.as_deref()], None)?;
     let (session, inputs) = args.common.open("statics")?;
     let model = &session.model;
     let fixtures: Vec<Fixture> = args
@@ -147,7 +148,7 @@ pub fn run(args: &StaticsArgs) -> Result<(), Error> {
                 row.push(*value);
             }
         }
-        output::write_csv(out, &header, &[row]).map_err(|e| Error::write(out, e))?;
+        output::write_all(&[output::File::csv(out, &header, &[row])?], &reads)?;
         println!("written to {}", out.display());
     }
     Ok(())

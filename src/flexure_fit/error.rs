@@ -153,13 +153,6 @@ pub enum Error {
         /// The CSV writer's reason.
         message: String,
     },
-    /// An output file cannot be written.
-    Write {
-        /// The output file.
-        path: PathBuf,
-        /// The reason, which names the file.
-        message: String,
-    },
     /// A plot cannot be made.
     Plot {
         /// The plot file.
@@ -359,9 +352,7 @@ impl fmt::Display for Error {
                 write!(f, "cannot write `{}`: {message}", path.display())
             }
             // These messages come from layers that already name the file.
-            Error::ReadTrace { message, .. }
-            | Error::Write { message, .. }
-            | Error::Plot { message, .. } => f.write_str(message),
+            Error::ReadTrace { message, .. } | Error::Plot { message, .. } => f.write_str(message),
         }
     }
 }

@@ -14,7 +14,7 @@ use crate::diagnose::candidates::{Diagnosis, Trial, Verdict};
 use crate::diagnose::experiment::{Experiment, Kind, Observations};
 use crate::diagnose::features::{features, series_rms, Feature, SeriesResidual};
 use crate::diagnose::pendulum::Screening;
-use crate::output;
+use crate::output::File;
 use crate::render::plot;
 use crate::render::report::{render_page, Outcome};
 use crate::render::table::Table;
@@ -64,7 +64,7 @@ pub fn overlay_plots(
     experiment: &Experiment,
     obs: &Observations,
     curves: &[(String, &[f64])],
-) -> Result<Vec<PathBuf>, Error> {
+) -> Result<Vec<File>, Error> {
     let log_x = matches!(experiment.kind, Kind::FrequencyResponse(_));
     // Axis labels and the SI → plotted unit factors.
     let (x_label, x_scale, y_unit, y_scale) = match experiment.kind {
@@ -73,7 +73,7 @@ pub fn overlay_plots(
         Kind::ForceDeflection(_) => ("sensor distance [µm]", 1e6, " [mN]", 1e3),
         Kind::Pendulum(_) => ("time [s]", 1.0, " [rad]", 1.0),
     };
-    let mut paths = Vec::new();
+    let mut plots = Vec::new();
     for name in obs.series_names() {
         let pick = |values: &[f64]| -> (Vec<f64>, Vec<f64>) {
             (0..values.len().min(obs.series.len()))
@@ -96,10 +96,11 @@ pub fn overlay_plots(
         let path = dir.join(format!("{prefix}_{}.svg", name.replace(['|', '.'], "_")));
         let title = format!("{}: {name}", experiment.title);
         let y_label = format!("{name}{y_unit}");
-        plot::plot_xy(&path, &title, x_label, &y_label, &lines, log_x)?;
-        paths.push(path);
+        plots.push(plot::plot_xy(
+            &path, &title, x_label, &y_label, &lines, log_x,
+        )?);
     }
-    Ok(paths)
+    Ok(plots)
 }
 
 /// The ranking as terminal text: the base model, the candidates best first, the second
@@ -287,6 +288,7 @@ pub struct PageSources<'a> {
 
 /// `diagnosis.html`, in the style of `mech report`: the verdict, the ranking, the inert
 /// candidates, and per measured series the data with the base model and the best candidate.
+/// Returns the page's files, the page last (the plots first).
 pub fn diagnosis_page(
     sources: &PageSources,
     experiment: &Experiment,
@@ -294,7 +296,7 @@ pub fn diagnosis_page(
     verdict: &str,
     comparison: &Comparison,
     json_path: PathBuf,
-) -> Result<PathBuf, Error> {
+) -> Result<Vec<File>, Error> {
     let per = |chi2: f64| chi2 / d.holdout_values as f64;
     let mut ranking = Table::new(
         "Candidates, best first (χ² on the fitted values; χ² per value on the held-out ones)",
@@ -347,27 +349,27 @@ pub fn diagnosis_page(
         let label = cause_at(best);
         curves.push((label, best.predicted.as_slice()));
     }
-    outcome.plots = overlay_plots(
+    let plots = overlay_plots(
         sources.out_dir,
         "diagnosis",
         experiment,
         &d.observations,
         &curves,
     )?;
+    for plot in plots {
+        outcome.add_plot(plot);
+    }
     let page = render_page(
         "mech diagnose: what the model gets wrong",
         "Every candidate cause of the catalog is fitted to the rows not held out and ranked by \
          its χ² on the held-out rows (docs/diagnose.md).",
         &format!("Data: <code>{}</code>", sources.data.display()),
-        &[outcome],
+        std::slice::from_ref(&outcome),
         sources.out_dir,
     )?;
     let path = sources.out_dir.join("diagnosis.html");
-    output::write_atomic(&path, page.as_bytes()).map_err(|e| Error::Write {
-        path: path.clone(),
-        message: e.to_string(),
-    })?;
-    Ok(path)
+    outcome.rendered.push(File::new(path, page));
+    Ok(outcome.rendered)
 }
 
 /// The screening's flags, or its summary when nothing was flagged.

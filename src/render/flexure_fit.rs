@@ -6,12 +6,12 @@
 //! written (or an [`Error`] naming the file that could not be).
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use crate::flexure_fit::error::Error;
 use crate::flexure_fit::fit::{CastellatedFit, FitReport, LineFit, ModulusFit, SpecimenResult};
 use crate::flexure_fit::rig::Kind;
-use crate::output;
+use crate::output::File;
 use crate::render::plot;
 
 fn file_name(path: &Path) -> String {
@@ -186,7 +186,7 @@ fn write_castellated_fit(s: &mut String, fit: &CastellatedFit) {
     );
 }
 
-fn write_text_csv(path: &Path, header: &[&str], rows: &[Vec<String>]) -> Result<(), Error> {
+fn text_csv(path: &Path, header: &[&str], rows: &[Vec<String>]) -> Result<File, Error> {
     let encode_failed = |message: String| Error::EncodeCsv {
         path: path.to_path_buf(),
         message,
@@ -203,15 +203,12 @@ fn write_text_csv(path: &Path, header: &[&str], rows: &[Vec<String>]) -> Result<
     let bytes = writer
         .into_inner()
         .map_err(|e| encode_failed(e.to_string()))?;
-    output::write_atomic(path, &bytes).map_err(|e| Error::Write {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    })
+    Ok(File::new(path, bytes))
 }
 
-/// Writes `traces.csv` (one row per trace) and `flexures.csv` (one row per specimen, with the
-/// normalized values) into `dir`, in SI units. Returns the files written.
-pub fn write_csvs(report: &FitReport, dir: &Path) -> Result<Vec<PathBuf>, Error> {
+/// `traces.csv` (one row per trace) and `flexures.csv` (one row per specimen, with the
+/// normalized values) in `dir`, in SI units.
+pub fn csv_files(report: &FitReport, dir: &Path) -> Result<Vec<File>, Error> {
     // `{:?}` of an f64 is the shortest text that reads back to the same number.
     let num = |v: f64| format!("{v:?}");
     let mut trace_rows = Vec::new();
@@ -237,9 +234,8 @@ pub fn write_csvs(report: &FitReport, dir: &Path) -> Result<Vec<PathBuf>, Error>
             ]);
         }
     }
-    let traces = dir.join("traces.csv");
-    write_text_csv(
-        &traces,
+    let traces = text_csv(
+        &dir.join("traces.csv"),
         &[
             "specimen",
             "trace",
@@ -280,9 +276,8 @@ pub fn write_csvs(report: &FitReport, dir: &Path) -> Result<Vec<PathBuf>, Error>
             ]
         })
         .collect();
-    let flexures = dir.join("flexures.csv");
-    write_text_csv(
-        &flexures,
+    let flexures = text_csv(
+        &dir.join("flexures.csv"),
         &[
             "specimen",
             "kind",
@@ -370,13 +365,8 @@ fn specimen_values(
         .collect()
 }
 
-/// Draws `panel` against `widths_mm` into `dir` as `<stem>.<extension>`; returns the file.
-fn draw_panel(
-    dir: &Path,
-    extension: &str,
-    widths_mm: &[f64],
-    panel: Panel,
-) -> Result<PathBuf, Error> {
+/// Draws `panel` against `widths_mm` as `dir/<stem>.<extension>`.
+fn draw_panel(dir: &Path, extension: &str, widths_mm: &[f64], panel: Panel) -> Result<File, Error> {
     let path = dir.join(format!("{}.{extension}", panel.stem));
     let w_max = widths_mm.iter().fold(0.0_f64, |m, &w| m.max(w)) * 1.05;
     let line_x = vec![0.0, w_max];
@@ -402,12 +392,11 @@ fn draw_panel(
     .map_err(|e| Error::Plot {
         path: path.clone(),
         message: e.to_string(),
-    })?;
-    Ok(path)
+    })
 }
 
-/// Writes the plots of every fit into `dir` with extension `extension` (`svg` or `png`).
-pub fn write_plots(report: &FitReport, dir: &Path, extension: &str) -> Result<Vec<PathBuf>, Error> {
+/// The plots of every fit in `dir`, with extension `extension` (`svg` or `png`).
+pub fn plot_files(report: &FitReport, dir: &Path, extension: &str) -> Result<Vec<File>, Error> {
     let mut panels = Vec::new();
     if let Some(fit) = &report.uncastellated {
         panels.push(uncastellated_panels(report, fit));

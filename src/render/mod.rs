@@ -24,10 +24,6 @@ pub enum Error {
         path: PathBuf,
         message: String,
     },
-    Write {
-        path: PathBuf,
-        message: String,
-    },
 }
 
 impl fmt::Display for Error {
@@ -36,9 +32,6 @@ impl fmt::Display for Error {
             Error::Plot(error) => write!(f, "{error}"),
             Error::ReadPlot { path, message } => {
                 write!(f, "cannot read plot {}: {message}", path.display())
-            }
-            Error::Write { path, message } => {
-                write!(f, "cannot write {}: {message}", path.display())
             }
         }
     }

@@ -3,7 +3,8 @@
 //! Consumes: sampled time series grouped into panels ([`plot_time_series`]) or `(x, y)` curves
 //! ([`plot_xy`], e.g. frequency responses and fits), and an output path whose extension picks
 //! the format (`.svg` or `.png`).
-//! Produces: the image file, written atomically through [`crate::output::write_atomic`].
+//! Produces: the image as a [`File`] in memory, for the run to write with its other files
+//! ([`crate::output::write_all`]).
 //!
 //! Text is drawn with DejaVu Sans, bundled from `assets/` and registered with plotters as
 //! `sans-serif` on first use. Non-finite samples (NaN, ±inf) are skipped: the line is broken
@@ -13,6 +14,8 @@ use std::fmt;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
+
+use crate::output::File;
 
 use plotters::coord::ranged1d::{Ranged, ValueFormatter};
 use plotters::coord::types::RangedCoordf64;
@@ -111,8 +114,6 @@ pub enum PlotErrorKind {
     InvalidData(String),
     /// Plotters or the PNG encoder failed.
     Render(String),
-    /// Writing the file failed (the message names the file).
-    Io(std::io::Error),
 }
 
 impl fmt::Display for PlotError {
@@ -127,19 +128,11 @@ impl fmt::Display for PlotError {
             PlotErrorKind::Render(msg) => {
                 write!(f, "cannot plot to `{path}`: rendering failed: {msg}")
             }
-            PlotErrorKind::Io(error) => write!(f, "{error}"),
         }
     }
 }
 
-impl std::error::Error for PlotError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match &self.kind {
-            PlotErrorKind::Io(error) => Some(error),
-            _ => None,
-        }
-    }
-}
+impl std::error::Error for PlotError {}
 
 /// Plots `panels` stacked vertically over a shared time axis `times` (seconds), each with its
 /// own y axis and legend, under the figure `title`. Every series must have one value per time.
@@ -149,7 +142,7 @@ pub fn plot_time_series(
     title: &str,
     times: &[f64],
     panels: &[Panel],
-) -> Result<(), PlotError> {
+) -> Result<File, PlotError> {
     let fail = |msg: String| PlotError::invalid(path, msg);
     let format = Format::of(path)?;
     if panels.is_empty() {
@@ -187,7 +180,7 @@ pub fn plot_xy(
     y_label: &str,
     curves: &[(String, Vec<f64>, Vec<f64>)],
     log_x: bool,
-) -> Result<(), PlotError> {
+) -> Result<File, PlotError> {
     let fail = |msg: String| PlotError::invalid(path, msg);
     let format = check_curves(path, curves)?;
     if log_x
@@ -240,7 +233,7 @@ pub fn plot_xy_styled(
     curves: &[(String, Vec<f64>, Vec<f64>)],
     styles: &[CurveStyle],
     stars: &[Star],
-) -> Result<(), PlotError> {
+) -> Result<File, PlotError> {
     let fail = |msg: String| PlotError::invalid(path, msg);
     if styles.len() != curves.len() {
         return Err(fail(format!(
@@ -280,6 +273,12 @@ enum Format {
     Png,
 }
 
+/// An error now if `path` names no format a plot can have (`.svg` or `.png`): a command
+/// checks its plot path before its work, not after.
+pub fn check_path(path: &Path) -> Result<(), PlotError> {
+    Format::of(path).map(|_| ())
+}
+
 impl Format {
     fn of(path: &Path) -> Result<Format, PlotError> {
         let extension = path
@@ -308,7 +307,7 @@ fn render(
     format: Format,
     size: (u32, u32),
     figure: &impl Figure,
-) -> Result<(), PlotError> {
+) -> Result<File, PlotError> {
     let error = |kind| PlotError {
         path: path.to_path_buf(),
         kind,
@@ -328,7 +327,7 @@ fn render(
             encode_png(&pixels, size).map_err(|m| error(PlotErrorKind::Render(m)))?
         }
     };
-    crate::output::write_atomic(path, &bytes).map_err(|e| error(PlotErrorKind::Io(e)))
+    Ok(File::new(path, bytes))
 }
 
 /// Draws `figure` on `backend` and flushes it into the backend's buffer.
@@ -482,7 +481,7 @@ pub fn plot_bode(
     title: &str,
     magnitude: &[(String, Vec<f64>, Vec<f64>)],
     phase: &[(String, Vec<f64>, Vec<f64>)],
-) -> Result<(), PlotError> {
+) -> Result<File, PlotError> {
     let format = Format::of(path)?;
     let positive = |curves: &[(String, Vec<f64>, Vec<f64>)]| {
         curves
@@ -872,8 +871,9 @@ mod tests {
         let panels = demo_panels(&times);
 
         let svg = dir.join("out.svg");
-        plot_time_series(&svg, "Pendulum response", &times, &panels).unwrap();
-        let text = fs::read_to_string(&svg).unwrap();
+        let file = plot_time_series(&svg, "Pendulum response", &times, &panels).unwrap();
+        assert_eq!(file.path, svg);
+        let text = String::from_utf8(file.bytes).unwrap();
         assert!(text.starts_with("<svg"), "{}", &text[..40]);
         for needle in [
             "Pendulum response",
@@ -886,8 +886,9 @@ mod tests {
         }
 
         let png_path = dir.join("out.PNG");
-        plot_time_series(&png_path, "Pendulum response", &times, &panels).unwrap();
-        let bytes = fs::read(&png_path).unwrap();
+        let bytes = plot_time_series(&png_path, "Pendulum response", &times, &panels)
+            .unwrap()
+            .bytes;
         assert!(bytes.starts_with(b"\x89PNG\r\n\x1a\n"));
         let _ = fs::remove_dir_all(&dir);
     }
@@ -912,9 +913,10 @@ mod tests {
                 gain.iter().map(|g| g - 3.0).collect(),
             ),
         ];
+        let mut bode_svg = String::new();
         for name in ["bode.svg", "bode.png"] {
             let path = dir.join(name);
-            plot_xy(
+            let file = plot_xy(
                 &path,
                 "Frequency response",
                 "f [Hz]",
@@ -923,10 +925,13 @@ mod tests {
                 true,
             )
             .unwrap();
-            assert!(fs::metadata(&path).unwrap().len() > 1000);
+            assert!(file.bytes.len() > 1000);
+            if name.ends_with("svg") {
+                bode_svg = String::from_utf8(file.bytes).unwrap();
+            }
         }
         plot_xy(&dir.join("lin.svg"), "Linear", "x", "y", &curves, false).unwrap();
-        let text = fs::read_to_string(dir.join("bode.svg")).unwrap();
+        let text = bode_svg;
         assert!(text.contains("Frequency response") && text.contains("f [Hz]"));
         let _ = fs::remove_dir_all(&dir);
     }

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 
 use super::table::{escape_html, Table};
 use super::Error;
+use crate::output::File;
 
 /// What an experiment produced.
 #[derive(Debug, Clone, Default)]
@@ -23,14 +24,31 @@ pub struct Outcome {
     /// How the experiment was run (method, assumptions), one paragraph.
     pub method: String,
     pub tables: Vec<Table>,
-    /// Plots (SVG) written.
+    /// Plots (SVG), by path.
     pub plots: Vec<PathBuf>,
-    /// CSV files written.
+    /// Data files, by path: the CSV files rendered, or files the run read or wrote.
     pub files: Vec<PathBuf>,
+    /// The plots and files this outcome rendered and its command writes (all together,
+    /// [`crate::output::write_all`]).
+    pub rendered: Vec<File>,
     /// Comparison with the paper: agreements, differences and the paper's explanations.
     pub notes: Vec<String>,
     /// Key results by name, SI units (for tests and scripts).
     pub values: BTreeMap<String, f64>,
+}
+
+impl Outcome {
+    /// Adds a rendered plot.
+    pub fn add_plot(&mut self, plot: File) {
+        self.plots.push(plot.path.clone());
+        self.rendered.push(plot);
+    }
+
+    /// Adds a rendered data file.
+    pub fn add_file(&mut self, file: File) {
+        self.files.push(file.path.clone());
+        self.rendered.push(file);
+    }
 }
 
 /// The terminal text of an outcome: method, tables, notes, files.
@@ -149,10 +167,14 @@ pub fn render_page(
             body += &table.html();
         }
         for plot in &outcome.plots {
-            let svg = std::fs::read_to_string(plot).map_err(|e| Error::ReadPlot {
-                path: plot.clone(),
-                message: e.to_string(),
-            })?;
+            // Rendered by this run, or else written before it.
+            let svg = match outcome.rendered.iter().find(|file| file.path == *plot) {
+                Some(file) => String::from_utf8_lossy(&file.bytes).into_owned(),
+                None => std::fs::read_to_string(plot).map_err(|e| Error::ReadPlot {
+                    path: plot.clone(),
+                    message: e.to_string(),
+                })?,
+            };
             let svg = match svg.find("<svg") {
                 Some(start) => &svg[start..],
                 None => svg.as_str(),

@@ -71,7 +71,7 @@ fn bad_experiment_files_give_clear_errors() {
 #[test]
 fn trajectory_peak_equals_the_statics_deflection_at_the_peak_voltage() {
     let spec = bundled("hamr_vi_trajectory.toml", &[("points = 72", "points = 8")]);
-    let outcome = render::experiments::run(&spec, "trajectory", &out("trajectory")).unwrap();
+    let outcome = run_and_write(&spec, "trajectory", &out("trajectory")).unwrap();
     println!("{:?}", outcome.values);
     // The statics of the free leg at +225 V on the lift, independently.
     let Kind::Trajectory(t) = &spec.kind else {
@@ -183,7 +183,7 @@ fn force_compute_returns_the_sensor_points() {
 #[test]
 fn force_deflection_blocked_force_and_work() {
     let spec = bundled("hamr_vi_force.toml", &[("\"127 um\"", "\"1000 um\"")]);
-    let outcome = render::experiments::run(&spec, "force", &out("force")).unwrap();
+    let outcome = run_and_write(&spec, "force", &out("force")).unwrap();
     let v = &outcome.values;
     println!("{v:?}");
     // Blocked force ≈ F_b / T at small motion (T = 13.1 lift → z, 14.3 swing → x), and
@@ -249,7 +249,7 @@ fn force_deflection_blocked_force_and_work() {
 #[test]
 fn compare_work_ratio_is_consistent() {
     let spec = bundled("hamr_v2_vs_vi.toml", &[]);
-    let outcome = render::experiments::run(&spec, "compare", &out("compare")).unwrap();
+    let outcome = run_and_write(&spec, "compare", &out("compare")).unwrap();
     let v = &outcome.values;
     println!("{v:?}");
     let ratio =
@@ -290,7 +290,7 @@ fn bode_resonances_match_the_linearized_modes() {
         panic!()
     };
     b.chirp = None;
-    let outcome = render::experiments::run(&spec, "bode", &out("bode")).unwrap();
+    let outcome = run_and_write(&spec, "bode", &out("bode")).unwrap();
     let v = &outcome.values;
     println!("{v:?}");
     // Lift is the first mode, swing the second: the modes of tests/equations/hamr.rs
@@ -362,8 +362,7 @@ fn bode_resonances_do_not_depend_on_the_grid() {
 #[test]
 fn report_renders_tables_and_inline_plots() {
     let spec = bundled("hamr_v2_vs_vi.toml", &[]);
-    let outcome =
-        render::experiments::run(&spec, "compare", &out("report").join("compare")).unwrap();
+    let outcome = run_and_write(&spec, "compare", &out("report").join("compare")).unwrap();
     let html =
         mech::render::report::render_html(std::slice::from_ref(&outcome), &out("report"), 0.1)
             .unwrap();
@@ -397,6 +396,17 @@ fn report_renders_tables_and_inline_plots() {
     assert!(md.contains(&reported), "no `{reported}` in {md}");
 }
 
+/// Runs an experiment and writes its files, as `mech experiment` does.
+fn run_and_write(
+    spec: &mech::experiments::Experiment,
+    name: &str,
+    dir: &std::path::Path,
+) -> Result<mech::render::report::Outcome, mech::experiments::Error> {
+    let outcome = render::experiments::run(spec, name, dir)?;
+    mech::output::write_all(&outcome.rendered, &[]).unwrap();
+    Ok(outcome)
+}
+
 /// The rows of a CSV written by an experiment, by column name.
 fn csv_columns(path: &std::path::Path) -> std::collections::BTreeMap<String, Vec<f64>> {
     let text = std::fs::read_to_string(path).unwrap();
@@ -423,7 +433,7 @@ fn csv_columns(path: &std::path::Path) -> std::collections::BTreeMap<String, Vec
 #[test]
 fn ratio_sweep_matches_the_force_experiments_and_the_papers_trend() {
     let spec = bundled("hamr_ratio_sweep.toml", &[("points = 16", "points = 5")]);
-    let outcome = render::experiments::run(&spec, "sweep", &out("sweep")).unwrap();
+    let outcome = run_and_write(&spec, "sweep", &out("sweep")).unwrap();
     let v = &outcome.values;
     println!("{v:?}");
 
@@ -431,10 +441,9 @@ fn ratio_sweep_matches_the_force_experiments_and_the_papers_trend() {
     // blocked force, free deflection and work as the force/deflection experiment (HAMR-VI)
     // and the comparison (HAMR-V2.0).
     let force_spec = bundled("hamr_vi_force.toml", &[("\"127 um\"", "\"1000 um\"")]);
-    let force = render::experiments::run(&force_spec, "force", &out("sweep_force")).unwrap();
+    let force = run_and_write(&force_spec, "force", &out("sweep_force")).unwrap();
     let compare_spec = bundled("hamr_v2_vs_vi.toml", &[]);
-    let compare =
-        render::experiments::run(&compare_spec, "compare", &out("sweep_compare")).unwrap();
+    let compare = run_and_write(&compare_spec, "compare", &out("sweep_compare")).unwrap();
     for dof in ["lift", "swing"] {
         for quantity in ["blocked_force", "free_deflection", "work", "normalized"] {
             let sweep = v[&format!("hamr_vi_{dof}_chosen_{quantity}")];

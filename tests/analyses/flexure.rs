@@ -804,10 +804,16 @@ fn example_data_fit_end_to_end() {
         fit.loss_factor
     );
     let out = std::env::temp_dir().join(format!("mech_flexure_fit_{}", std::process::id()));
-    let written = mech::render::flexure_fit::write_csvs(&report, &out).unwrap();
-    let plots = mech::render::flexure_fit::write_plots(&report, &out, "svg").unwrap();
-    for f in written.iter().chain(&plots) {
-        assert!(std::fs::metadata(f).unwrap().len() > 100, "{}", f.display());
+    let mut written = mech::render::flexure_fit::csv_files(&report, &out).unwrap();
+    written.extend(mech::render::flexure_fit::plot_files(&report, &out, "svg").unwrap());
+    mech::output::write_all(&written, &[]).unwrap();
+    for f in &written {
+        let size = std::fs::metadata(&f.path).unwrap().len();
+        assert!(
+            size > 100 && size == f.bytes.len() as u64,
+            "{}",
+            f.path.display()
+        );
     }
     let text = mech::render::flexure_fit::text_report(&report);
     assert!(text.contains("Eq. 6") && text.contains("R²"), "{text}");

@@ -5,4 +5,5 @@
 //! One test binary per group, so the suite links a few binaries instead of one per file.
 
 mod command_line;
+mod outputs;
 mod support;

@@ -202,7 +202,7 @@ fn write_channel(
         &rows,
     )?;
     let path = dir.join(format!("bode_{}.svg", channel.name));
-    plot::plot_bode(
+    let plot = plot::plot_bode(
         &path,
         &format!(
             "{name}: {} → {} (dB re 1 µm/V)",
@@ -211,7 +211,7 @@ fn write_channel(
         &magnitude,
         &phase,
     )?;
-    outcome.plots.push(path);
+    outcome.add_plot(plot);
     Ok(())
 }
 

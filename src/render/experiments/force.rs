@@ -53,7 +53,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
             .push(paper_table(model_name, &spec.paper, &outcome)?);
     }
     let path = dir.join("force_deflection.svg");
-    plot::plot_xy(
+    let plot = plot::plot_xy(
         &path,
         &format!("{model_name}: force on the sensor against its distance at {voltage} V"),
         "sensor distance from the foot's rest position [mm]",
@@ -61,7 +61,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
         &curves,
         false,
     )?;
-    outcome.plots.push(path);
+    outcome.add_plot(plot);
     Ok(outcome)
 }
 

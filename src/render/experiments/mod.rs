@@ -65,7 +65,7 @@ pub fn run_file(path: &Path, out_dir: &Path) -> Result<Outcome, Error> {
     run(&experiment, &name, &out_dir.join(&name)).map_err(|e| e.in_file(path))
 }
 
-/// Writes a CSV under `dir` and records it.
+/// Renders a CSV under `dir` into the outcome.
 pub(crate) fn csv(
     outcome: &mut Outcome,
     dir: &Path,
@@ -75,11 +75,11 @@ pub(crate) fn csv(
 ) -> Result<(), Error> {
     let path = dir.join(file);
     let header: Vec<String> = header.iter().map(|s| s.to_string()).collect();
-    crate::output::write_csv(&path, &header, rows).map_err(|e| Error::Write {
+    let file = crate::output::File::csv(&path, &header, rows).map_err(|e| Error::Write {
         path: path.clone(),
         message: e.to_string(),
     })?;
-    outcome.files.push(path);
+    outcome.add_file(file);
     Ok(())
 }
 

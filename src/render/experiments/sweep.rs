@@ -84,7 +84,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     }
     outcome.tables.insert(0, chosen_table);
     let path = dir.join("ratio_sweep.svg");
-    plot::plot_xy_styled(
+    let plot = plot::plot_xy_styled(
         &path,
         &format!("Work done by the foot (F·d) against the transmission ratio at {voltage} V"),
         "transmission ratio T (foot per actuator displacement; lift: z, swing: x)",
@@ -93,7 +93,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
         &figure.styles,
         &figure.stars,
     )?;
-    outcome.plots.push(path);
+    outcome.add_plot(plot);
     if !sweep.failed.is_empty() {
         outcome.notes.push(format!(
             "Left out (no converged equilibrium): {}",

@@ -111,7 +111,7 @@ fn plot_planes(
         ),
     ] {
         let path = dir.join(file);
-        plot::plot_xy(
+        let plot = plot::plot_xy(
             &path,
             &format!("{model_name}: quasi-static foot trajectory, {title}"),
             x_label,
@@ -119,7 +119,7 @@ fn plot_planes(
             curves,
             false,
         )?;
-        outcome.plots.push(path);
+        outcome.add_plot(plot);
     }
     Ok(())
 }
