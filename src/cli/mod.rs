@@ -4,6 +4,25 @@
 //! and the renderers of [`crate::render`].
 //!
 //! Consumes: the process arguments. Produces: text on stdout/stderr, files, the exit code.
+//!
+//! `print!` and `println!` in this module and its command files are the two macros below,
+//! not std's: everything printed passes through [`terminal_safe`], because messages quote
+//! file contents, file names and titles that may hold escape sequences.
+
+/// std's `print!`, with control characters made visible ([`terminal_safe`]).
+macro_rules! print {
+    ($($arg:tt)*) => {
+        ::std::print!("{}", $crate::render::terminal::terminal_safe(&format!($($arg)*)))
+    };
+}
+
+/// std's `println!`, with control characters made visible ([`terminal_safe`]).
+macro_rules! println {
+    () => { ::std::println!() };
+    ($($arg:tt)*) => {
+        ::std::println!("{}", $crate::render::terminal::terminal_safe(&format!($($arg)*)))
+    };
+}
 
 pub mod actuator;
 pub mod assemble;
@@ -28,6 +47,7 @@ use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand};
 use mech_codegen::ir::Dimension;
 
 use crate::quantity::parse_si;
+use crate::render::terminal::terminal_safe;
 use crate::session::Session;
 
 pub use error::Error;
@@ -126,7 +146,7 @@ pub fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(message) => {
-            eprintln!("{}", message.to_string().trim_end());
+            eprintln!("{}", terminal_safe(message.to_string().trim_end()));
             ExitCode::FAILURE
         }
     }

@@ -11,6 +11,7 @@ pub mod flexure_fit;
 pub mod plot;
 pub mod report;
 pub mod table;
+pub mod terminal;
 
 pub use plot::PlotError;
 

@@ -172,3 +172,15 @@ fn settings_given_twice_or_signals_where_a_constant_is_held_are_refused() {
         ],
     );
 }
+
+#[test]
+fn escape_sequences_in_an_input_file_are_shown_not_sent_to_the_terminal() {
+    let dir = scratch("escapes");
+    let model = "model x;\nbody b { mass = 1 g; }\nparam \u{1b}[2Jq = 3;\n";
+    std::fs::write(dir.join("escape.mech"), model).unwrap();
+    let run = crate::support::mech(&dir, &["check", "escape.mech"]);
+    assert_eq!(run.code, Some(1), "{}", run.stderr);
+    assert!(!run.stderr.contains('\u{1b}'), "{:?}", run.stderr);
+    assert!(run.stderr.contains("param ␛[2Jq = 3;"), "{}", run.stderr);
+    assert!(run.stderr.contains("escape.mech:3:7"), "{}", run.stderr);
+}
