@@ -8,7 +8,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use mech_codegen::ir::Dimension;
-use mech_codegen::{Compiled, Errors};
+use mech_codegen::{Compiled, Diagnostic, Errors};
 use mech_runtime::constraints::{choose_independent, complete_independent, jacobian};
 use mech_runtime::nalgebra::DMatrix;
 use mech_runtime::{
@@ -107,8 +107,12 @@ pub enum Error {
         first: String,
         second: String,
     },
-    /// The loops could not be closed.
-    Assembly(RuntimeError),
+    /// The loops could not be closed. `site`: the error again, pointing at the declaration
+    /// of the loop it names, when the model's text is at hand.
+    Assembly {
+        error: RuntimeError,
+        site: Option<Box<Errors>>,
+    },
     /// No static equilibrium was found.
     Statics { model: String, error: RuntimeError },
     /// The linearization about the equilibrium failed.
@@ -176,7 +180,10 @@ impl std::fmt::Display for Error {
                 f,
                 "{option} {name}: given twice (`{first}` and `{second}`); give it once"
             ),
-            Error::Assembly(error) => write!(f, "{error}"),
+            Error::Assembly {
+                site: Some(site), ..
+            } => write!(f, "{site}"),
+            Error::Assembly { error, site: None } => write!(f, "{error}"),
             Error::Statics { model, error } => write!(f, "statics of `{model}`: {error}"),
             Error::Linearization(error) => write!(f, "linearization failed: {error}"),
             Error::Simulation { model, error } => {
@@ -429,7 +436,7 @@ impl Session {
             // J has its generic rank only on the constraint manifold: close the loops first
             // (minimum-norm), choose there, then hold the chosen coordinates at their q0.
             assemble(model, 0.0, &mut q, &[], &AssemblyOptions::default())
-                .map_err(Error::Assembly)?;
+                .map_err(|error| self.assembly_error(error))?;
             fixed = choose_independent(&jacobian(model, 0.0, &q));
             for &i in &fixed {
                 q[i] = q0[i];
@@ -444,20 +451,21 @@ impl Session {
                 let target: Vec<f64> = fixed.iter().map(|&c| q[c]).collect();
                 let mut path = q0.clone();
                 let closed = assemble(model, 0.0, &mut path, &fixed, &options)
-                    .map_err(|_| Error::Assembly(direct))?;
+                    .map_err(|_| self.assembly_error(direct))?;
                 let moved = assemble_along(model, 0.0, &mut path, &fixed, &target, &options)
-                    .map_err(Error::Assembly)?;
+                    .map_err(|error| self.assembly_error(error))?;
                 q = path;
                 closed + moved
             }
         };
-        let mobility = mobility(model, 0.0, &q);
+        let mobility = mobility(model, 0.0, &q).map_err(|error| self.assembly_error(error))?;
         if fixed.len() < mobility.dof() {
             // More freedom than named (e.g. a twist added by `mech diagnose`): complete the
             // list, keeping the named coordinates.
             fixed = complete_independent(&jacobian(model, 0.0, &q), &fixed);
         }
-        assemble_speeds(model, 0.0, &q, &mut u, &fixed);
+        assemble_speeds(model, 0.0, &q, &mut u, &fixed)
+            .map_err(|error| self.assembly_error(error))?;
         let mobility = Some(mobility);
         Ok(Assembled {
             q,
@@ -466,6 +474,31 @@ impl Session {
             mobility,
             iterations,
         })
+    }
+
+    /// `error` of closing the loops, pointing at the declaration of the loop whose row it
+    /// names (rows are named `<loop>.<row>`), if the model's text is at hand.
+    fn assembly_error(&self, error: RuntimeError) -> Error {
+        let row = match &error {
+            RuntimeError::AssemblyFailed { row, .. }
+            | RuntimeError::StationaryConstraint { row, .. } => Some(row),
+            RuntimeError::NonFiniteConstraints { rows, .. } => rows.first(),
+            _ => None,
+        };
+        let closure = row
+            .and_then(|row| row.rsplit_once('.'))
+            .and_then(|(name, _)| self.compiled.model.loops.iter().find(|l| l.name == name));
+        let site = match (closure, &self.compiled.source) {
+            (Some(closure), Some(file)) => {
+                let diagnostic = Diagnostic::error("E0501", error.to_string()).with_label(
+                    closure.span,
+                    format!("loop `{}` cannot be closed here", closure.name),
+                );
+                Some(Box::new(Errors::new(file.clone(), vec![diagnostic])))
+            }
+            _ => None,
+        };
+        Error::Assembly { error, site }
     }
 
     /// A static equilibrium near the assembled initial state (`independent` as for

@@ -108,7 +108,7 @@ pub fn assembled<M: Model>(model: &M, fixed: &[usize]) -> (Vec<f64>, Vec<f64>, u
     model.initial_state(&mut q, &mut u);
     let iterations = assemble(model, 0.0, &mut q, fixed, &AssemblyOptions::default())
         .unwrap_or_else(|e| panic!("{} does not assemble: {e}", model.name()));
-    assemble_speeds(model, 0.0, &q, &mut u, fixed);
+    assemble_speeds(model, 0.0, &q, &mut u, fixed).unwrap();
     (q, u, iterations)
 }
 
@@ -236,7 +236,7 @@ pub fn measure_loop<M: Model>(
     let assemble_speeds_time = per_call_ns(
         || {
             speeds.copy_from_slice(&u0);
-            assemble_speeds(model, 0.0, black_box(&q), black_box(&mut speeds), fixed);
+            assemble_speeds(model, 0.0, black_box(&q), black_box(&mut speeds), fixed).unwrap();
         },
         batches,
         batch,

@@ -71,20 +71,32 @@ pub use kane::Equations;
 pub struct Compiled {
     pub model: ir::Model,
     pub equations: Equations,
+    /// The text the model was compiled from (`None` for a model built in memory): for
+    /// run-time errors that point at a declaration, such as a loop that does not close.
+    pub source: Option<Arc<SourceFile>>,
 }
 
 impl Compiled {
     /// Parses, lowers and derives a model from source text.
     pub fn from_source(file: SourceFile) -> Result<Compiled, Errors> {
-        let model = front::load(Arc::new(file))?;
+        let file = Arc::new(file);
+        let model = front::load(file.clone())?;
         let equations = kane::derive(&model);
-        Ok(Compiled { model, equations })
+        Ok(Compiled {
+            model,
+            equations,
+            source: Some(file),
+        })
     }
 
     /// Derives a model built or transformed in memory (e.g. by `ir::transform`).
     pub fn from_model(model: ir::Model) -> Compiled {
         let equations = kane::derive(&model);
-        Compiled { model, equations }
+        Compiled {
+            model,
+            equations,
+            source: None,
+        }
     }
 
     /// Reads and compiles a `.mech` file; diagnostics show `path` as given.

@@ -75,6 +75,7 @@ tests_per_file! {
     loop_bad_component,
     loop_field_of_other_kind,
     loop_missing_axis,
+    loop_zero_length,
     many_errors,
     missing_axis,
     missing_mass,

@@ -10,7 +10,7 @@
 
 use std::fmt;
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Dyn, SVD};
 
 use crate::{dense, Model, RuntimeError};
 
@@ -74,24 +74,59 @@ pub fn residual<M: Model + ?Sized>(model: &M, t: f64, q: &[f64]) -> DVector<f64>
     phi
 }
 
-/// Rank of `J` at `q` from its singular values.
-pub fn mobility<M: Model + ?Sized>(model: &M, t: f64, q: &[f64]) -> Mobility {
+/// Iteration cap of every SVD here. nalgebra's default iterates until convergence, which a
+/// matrix of the sizes met here reaches in tens of sweeps; 10,000 only bounds the loop.
+const MAX_SVD_ITERATIONS: usize = 10_000;
+
+/// The SVD of `a`, or `None` if `a` has a NaN or an infinity (nalgebra's SVD of one panics
+/// with "Singular value was NaN" or never returns) or the iteration does not converge.
+pub fn svd(a: DMatrix<f64>, u: bool, v: bool) -> Option<SVD<f64, Dyn, Dyn>> {
+    if !a.iter().all(|x| x.is_finite()) {
+        return None;
+    }
+    // nalgebra's `svd()` convergence threshold, so that results match it bit for bit.
+    SVD::try_new(a, u, v, 5.0 * f64::EPSILON, MAX_SVD_ITERATIONS)
+}
+
+/// Indices of the rows of `a` with an entry that is NaN or infinite.
+pub fn non_finite_rows(a: &DMatrix<f64>) -> Vec<usize> {
+    (0..a.nrows())
+        .filter(|&r| a.row(r).iter().any(|x| !x.is_finite()))
+        .collect()
+}
+
+/// The names of constraint `rows` of `model`.
+fn row_names<M: Model + ?Sized>(model: &M, rows: &[usize]) -> Vec<String> {
+    rows.iter()
+        .map(|&r| model.constraint_name(r).to_string())
+        .collect()
+}
+
+/// Rank of `J` at `q` from its singular values; an error naming the rows if `J` is not
+/// finite there.
+pub fn mobility<M: Model + ?Sized>(model: &M, t: f64, q: &[f64]) -> Result<Mobility, RuntimeError> {
     let j = jacobian(model, t, q);
     let mut singular_values: Vec<f64> = if j.is_empty() {
         Vec::new()
     } else {
-        j.singular_values().iter().copied().collect()
+        let rows = non_finite_rows(&j);
+        let decomposition =
+            svd(j, false, false).ok_or_else(|| RuntimeError::NonFiniteConstraints {
+                rows: row_names(model, &rows),
+                jacobian: true,
+            })?;
+        decomposition.singular_values.iter().copied().collect()
     };
     singular_values.sort_by(|a, b| b.total_cmp(a));
     let threshold = singular_values.first().copied().unwrap_or(0.0) * RANK_TOLERANCE;
     let rank = singular_values.iter().filter(|&&s| s > threshold).count();
-    Mobility {
+    Ok(Mobility {
         coordinates: model.nq(),
         rows: model.nc(),
         rank,
         singular_values,
         threshold,
-    }
+    })
 }
 
 /// Least-squares minimum-norm solution of `A x = b`, treating singular values below
@@ -99,12 +134,15 @@ pub fn mobility<M: Model + ?Sized>(model: &M, t: f64, q: &[f64]) -> Mobility {
 /// factorization: nalgebra's SVD reproduces some rank-deficient matrices only to ~1e-8 of
 /// their entries (dimforge/nalgebra#1172; seen on the HAMR-VI loop Jacobian with a fixture
 /// row, where the plain solve left `|A x − b|` at 2e-9 of `|b|` for a consistent system),
-/// and the correction solve takes that to round-off.
-pub fn solve_least_squares(a: &DMatrix<f64>, b: &DVector<f64>) -> DVector<f64> {
+/// and the correction solve takes that to round-off. `None` if `a` or `b` is not finite.
+pub fn solve_least_squares(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<DVector<f64>> {
     if a.is_empty() {
-        return DVector::zeros(a.ncols());
+        return Some(DVector::zeros(a.ncols()));
     }
-    let svd = a.clone().svd(true, true);
+    if !b.iter().all(|x| x.is_finite()) {
+        return None;
+    }
+    let svd = svd(a.clone(), true, true)?;
     let largest = svd.singular_values.max();
     let threshold = (largest * RANK_TOLERANCE).max(f64::MIN_POSITIVE);
     let solve = |rhs: &DVector<f64>| {
@@ -113,7 +151,7 @@ pub fn solve_least_squares(a: &DMatrix<f64>, b: &DVector<f64>) -> DVector<f64> {
     };
     let x = solve(b);
     let correction = solve(&(b - a * &x));
-    x + correction
+    Some(x + correction)
 }
 
 /// Independent coordinates for a model that names none: the coordinates declared first
@@ -167,7 +205,8 @@ impl Default for AssemblyOptions {
 
 /// Solves `φ(q) = 0` for the coordinates not listed in `fixed`, starting from `q` (updated
 /// in place): damped Newton steps `Δq_free = −J_free⁺ φ` (rank-revealing least squares),
-/// halved until `|φ|` decreases. Fails with the loop rows that remain open.
+/// halved until `|φ|` decreases. Fails with the loop rows that remain open, that are not
+/// finite, or that no step can move (see [`Unclosed`]).
 pub fn assemble<M: Model + ?Sized>(
     model: &M,
     t: f64,
@@ -182,7 +221,17 @@ pub fn assemble<M: Model + ?Sized>(
         fixed,
         options,
     )
-    .map_err(|phi| assembly_error(model, phi.as_slice()))
+    .map_err(|unclosed| match unclosed {
+        Unclosed::Open(phi) => assembly_error(model, phi.as_slice()),
+        Unclosed::NonFinite { rows, jacobian } => RuntimeError::NonFiniteConstraints {
+            rows: row_names(model, &rows),
+            jacobian,
+        },
+        Unclosed::Stationary { row, residual } => RuntimeError::StationaryConstraint {
+            row: model.constraint_name(row).to_string(),
+            residual,
+        },
+    })
 }
 
 /// Moves the `fixed` coordinates of a closed configuration `q` to `target` (their values,
@@ -222,24 +271,55 @@ pub fn assemble_along<M: Model + ?Sized>(
     Ok(iterations)
 }
 
+/// Why [`close`] stopped short of `φ = 0` (rows are indices into `φ`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Unclosed {
+    /// The steps stalled or the iterations ran out with this `φ`.
+    Open(DVector<f64>),
+    /// `φ` at the current `q` (or, with `jacobian`, `J` of the free coordinates) has a NaN or
+    /// an infinity in these rows.
+    NonFinite { rows: Vec<usize>, jacobian: bool },
+    /// The steps stalled, and row `row`, open by `residual`, has a zero gradient in the free
+    /// coordinates (below `RANK_TOLERANCE` of the largest row's): no step can close it.
+    Stationary { row: usize, residual: f64 },
+}
+
 /// [`assemble`] for any residual `φ(q)` and its Jacobian (e.g. loops and fixtures together,
-/// in the statics): returns the iterations taken, or the `φ` it stopped at.
+/// in the statics): returns the iterations taken, or why it stopped. No step is taken to a
+/// `q` where `φ` is not finite, so `q` stays where `φ` was last finite.
 pub fn close(
     residual: impl Fn(&[f64]) -> DVector<f64>,
     jacobian: impl Fn(&[f64]) -> DMatrix<f64>,
     q: &mut [f64],
     fixed: &[usize],
     options: &AssemblyOptions,
-) -> Result<usize, DVector<f64>> {
+) -> Result<usize, Unclosed> {
     let free: Vec<usize> = (0..q.len()).filter(|c| !fixed.contains(c)).collect();
     let mut phi = residual(q);
+    let non_finite = |phi: &DVector<f64>| phi.iter().any(|x| !x.is_finite());
+    if non_finite(&phi) {
+        let rows = (0..phi.len()).filter(|&r| !phi[r].is_finite()).collect();
+        return Err(Unclosed::NonFinite {
+            rows,
+            jacobian: false,
+        });
+    }
+    let mut j_free = DMatrix::zeros(0, 0);
     for iteration in 0..options.max_iterations {
         if phi.amax() <= options.tolerance {
             return Ok(iteration);
         }
-        let j = jacobian(q);
-        let j_free = j.select_columns(&free);
-        let step = solve_least_squares(&j_free, &(-&phi));
+        j_free = jacobian(q).select_columns(&free);
+        let rows = non_finite_rows(&j_free);
+        if !rows.is_empty() {
+            return Err(Unclosed::NonFinite {
+                rows,
+                jacobian: true,
+            });
+        }
+        let Some(step) = solve_least_squares(&j_free, &(-&phi)) else {
+            break;
+        };
         let mut scale = 1.0;
         let before = phi.norm();
         let mut trial = q.to_vec();
@@ -248,9 +328,12 @@ pub fn close(
                 trial[c] = q[c] + scale * step[k];
             }
             let trial_phi = residual(&trial);
-            if trial_phi.norm() < before || scale < 1e-6 {
+            if trial_phi.norm() < before || (scale < 1e-6 && !non_finite(&trial_phi)) {
                 q.copy_from_slice(&trial);
                 phi = trial_phi;
+                break;
+            }
+            if scale < 1e-6 {
                 break;
             }
             scale *= 0.5;
@@ -262,11 +345,36 @@ pub fn close(
     if phi.amax() <= options.tolerance {
         return Ok(options.max_iterations);
     }
-    Err(phi)
+    Err(stationary_row(&phi, &j_free, options.tolerance).unwrap_or(Unclosed::Open(phi)))
 }
 
-/// The open loop row with the largest residual in `phi`, as an error.
+/// The open row (`|φ| > tolerance`) with the largest residual among those whose gradient
+/// `j` (the free columns, at the last Newton step) is zero relative to the largest row's.
+fn stationary_row(phi: &DVector<f64>, j: &DMatrix<f64>, tolerance: f64) -> Option<Unclosed> {
+    // With nothing free, every row is open rather than stationary.
+    if j.nrows() != phi.len() || j.ncols() == 0 {
+        return None;
+    }
+    let largest = j.row_iter().map(|row| row.norm()).fold(0.0, f64::max);
+    (0..phi.len())
+        .filter(|&r| phi[r].abs() > tolerance && j.row(r).norm() <= largest * RANK_TOLERANCE)
+        .max_by(|&a, &b| phi[a].abs().total_cmp(&phi[b].abs()))
+        .map(|row| Unclosed::Stationary {
+            row,
+            residual: phi[row],
+        })
+}
+
+/// The open loop row with the largest residual in `phi`, as an error (the rows that are
+/// not finite, if any are).
 pub(crate) fn assembly_error<M: Model + ?Sized>(model: &M, phi: &[f64]) -> RuntimeError {
+    let rows: Vec<usize> = (0..phi.len()).filter(|&r| !phi[r].is_finite()).collect();
+    if !rows.is_empty() {
+        return RuntimeError::NonFiniteConstraints {
+            rows: row_names(model, &rows),
+            jacobian: false,
+        };
+    }
     let worst = (0..phi.len())
         .max_by(|&a, &b| phi[a].abs().total_cmp(&phi[b].abs()))
         .unwrap_or(0);
@@ -278,24 +386,38 @@ pub(crate) fn assembly_error<M: Model + ?Sized>(model: &M, phi: &[f64]) -> Runti
 }
 
 /// Speeds consistent with `J u = 0`: keeps `u` of the `fixed` coordinates and solves the
-/// others by least squares (`J_free u_free = −J_fixed u_fixed`).
+/// others by least squares (`J_free u_free = −J_fixed u_fixed`). An error naming the rows if
+/// `J` is not finite at `q`.
 pub fn assemble_speeds<M: Model + ?Sized>(
     model: &M,
     t: f64,
     q: &[f64],
     u: &mut [f64],
     fixed: &[usize],
-) {
+) -> Result<(), RuntimeError> {
     let j = jacobian(model, t, q);
     let free: Vec<usize> = (0..model.nq()).filter(|c| !fixed.contains(c)).collect();
     let mut rhs = DVector::zeros(model.nc());
     for &c in fixed {
         rhs -= j.column(c) * u[c];
     }
-    let solution = solve_least_squares(&j.select_columns(&free), &rhs);
+    let solution = solve_least_squares(&j.select_columns(&free), &rhs).ok_or_else(|| {
+        let rows = non_finite_rows(&j);
+        // Finite J with a non-finite right-hand side: the given speeds are not finite.
+        if rows.is_empty() {
+            return RuntimeError::NonFinite {
+                what: "the speeds u0 of the independent coordinates",
+            };
+        }
+        RuntimeError::NonFiniteConstraints {
+            rows: row_names(model, &rows),
+            jacobian: true,
+        }
+    })?;
     for (k, &c) in free.iter().enumerate() {
         u[c] = solution[k];
     }
+    Ok(())
 }
 
 /// Workspace for constrained dynamics and projection. [`accelerations`](Self::accelerations)

@@ -56,6 +56,16 @@ pub enum RuntimeError {
         residual: f64,
         norm: f64,
     },
+    /// The loop rows `rows` (names such as `link.distance`) are NaN or infinite at the
+    /// coordinates the solver reached, in `φ` itself or (with `jacobian`) in `J = ∂φ/∂q`.
+    NonFiniteConstraints { rows: Vec<String>, jacobian: bool },
+    /// Loop row `row` is open by `residual` (model units), but no change of the free
+    /// coordinates moves it: its gradient is zero there (a `distance` loop whose points
+    /// coincide), so Newton steps cannot close it.
+    StationaryConstraint { row: String, residual: f64 },
+    /// A quantity a solver needs (`what`: "the static forces F", "the linear model", ...) is
+    /// NaN or infinite.
+    NonFinite { what: &'static str },
     /// The independent coordinates do not determine the others at this configuration: the
     /// loop Jacobian of the dependent coordinates is rank-deficient (reduced dynamics).
     SingularDependentJacobian {
@@ -110,12 +120,35 @@ impl fmt::Display for RuntimeError {
             ),
             RuntimeError::InvalidSignal(msg) => write!(f, "invalid input signal: {msg}"),
             RuntimeError::InvalidOptions(msg) => write!(f, "invalid options: {msg}"),
-            RuntimeError::AssemblyFailed { row, residual, .. } if residual.is_nan() => write!(
+            RuntimeError::NonFiniteConstraints { rows, jacobian } => {
+                let rows: Vec<String> = rows.iter().map(|row| format!("`{row}`")).collect();
+                let (plural, what) = match (rows.len() > 1, jacobian) {
+                    (false, false) => ("", "is"),
+                    (true, false) => ("s", "are"),
+                    (false, true) => ("", "has a Jacobian that is"),
+                    (true, true) => ("s", "have Jacobians that are"),
+                };
+                write!(
+                    f,
+                    "cannot close the loops: row{plural} {} {what} not a number (NaN or \
+                     infinite) at the coordinates reached; check the loops' expressions for a \
+                     division by zero or a square root of a negative number at the parameters \
+                     set, and start from another configuration (q0 of the joints)",
+                    rows.join(", ")
+                )
+            }
+            RuntimeError::StationaryConstraint { row, residual } => write!(
                 f,
-                "cannot close the loops: row `{row}` became not-a-number in the Newton steps (e.g. \
-                 a `distance` loop whose two points coincide, where its direction is undefined); \
-                 place such points apart in the written configuration (q0 of the joints, or the \
-                 points themselves)"
+                "cannot close the loops: row `{row}` is {residual:e} away and no move of the \
+                 free coordinates changes it here (its gradient is zero, as where the points \
+                 of a `distance` loop coincide); start the mechanism from another \
+                 configuration (q0 of the joints), where the loop's points are apart"
+            ),
+            RuntimeError::NonFinite { what } => write!(
+                f,
+                "{what} became not a number (NaN or infinite): check the parameters and \
+                 inputs for values that make the model's expressions blow up (divisions by \
+                 zero, square roots of negative numbers), and start from another configuration"
             ),
             RuntimeError::AssemblyFailed {
                 row,

@@ -209,6 +209,15 @@ pub fn linearize<M: Model + ?Sized>(
         )?;
         gradient.column_mut(k).copy_from_slice(&column);
     }
+    let finite = |m: &DMatrix<f64>| m.iter().all(|x| x.is_finite());
+    if ![&mass, &a_z, &a_zdot, &a_in, &c_q, &c_u, &d, &gradient]
+        .into_iter()
+        .all(finite)
+    {
+        return Err(RuntimeError::NonFinite {
+            what: "the linear model (M, C, K, B or the output matrices)",
+        });
+    }
     Ok(Linearization {
         flexure_gradient: gradient,
         flexure_stiffness: values[nf..2 * nf].to_vec(),
@@ -231,6 +240,9 @@ impl Linearization {
     /// First-order form `ẋ = A x + B in`, `y = C x + D in` with `x = [δz; δż]`.
     pub fn state_space(&self) -> Option<StateSpace> {
         let n = self.mass.nrows();
+        if !self.is_finite() {
+            return None;
+        }
         let lu = self.mass.clone().lu();
         let minv_k = lu.solve(&self.stiffness)?;
         let minv_c = lu.solve(&self.damping)?;
@@ -255,11 +267,27 @@ impl Linearization {
         })
     }
 
+    /// Whether the matrices and flexure records are finite (a [`linearize`] result is; the
+    /// fields are public), so that they may be decomposed.
+    fn is_finite(&self) -> bool {
+        let finite = |values: &[f64]| values.iter().all(|x| x.is_finite());
+        [&self.mass, &self.damping, &self.stiffness, &self.input]
+            .into_iter()
+            .all(|m| finite(m.as_slice()))
+            && finite(self.flexure_gradient.as_slice())
+            && finite(&self.flexure_stiffness)
+            && finite(&self.flexure_damping)
+            && finite(&self.flexure_loss)
+    }
+
     /// Undamped normal modes `K v = ω² M v` (K symmetrized), lowest first, with modal
-    /// damping ratios. `None` if `M` is not positive definite.
+    /// damping ratios. `None` if `M` is not positive definite or a matrix is not finite.
     pub fn modes(&self) -> Option<Vec<Mode>> {
         if self.mass.is_empty() {
             return Some(Vec::new());
+        }
+        if !self.is_finite() {
+            return None;
         }
         let cholesky = self.mass.clone().cholesky()?;
         let l = cholesky.l();
@@ -267,7 +295,9 @@ impl Linearization {
         let k_sym = (&self.stiffness + self.stiffness.transpose()) * 0.5;
         let s = &l_inv * k_sym * l_inv.transpose();
         let s = (&s + s.transpose()) * 0.5;
-        let eigen = s.symmetric_eigen();
+        // Capped: nalgebra's default iterates until convergence (symmetric matrices of
+        // these sizes converge in tens of sweeps).
+        let eigen = s.try_symmetric_eigen(f64::EPSILON, 10_000)?;
         let mut modes: Vec<Mode> = (0..eigen.eigenvalues.len())
             .map(|k| {
                 let omega_squared = eigen.eigenvalues[k];
@@ -348,6 +378,9 @@ impl Linearization {
             }
         };
         let n = self.mass.nrows();
+        if !(omega.is_finite() && self.is_finite()) {
+            return None;
+        }
         let i = Complex::new(0.0, 1.0);
         let dynamic = DMatrix::from_fn(n, n, |r, c| {
             Complex::new(

@@ -115,7 +115,7 @@ impl<'a, M: Model + ?Sized> Reduced<'a, M> {
         let dof = if nc == 0 {
             nq
         } else {
-            mobility(model, t, q).dof()
+            mobility(model, t, q)?.dof()
         };
         if independent.len() != dof {
             return Err(RuntimeError::InvalidOptions(format!(
@@ -429,6 +429,7 @@ impl<M: Model + ?Sized> Ode for Reduced<'_, M> {
             Ok(()) => Ok(()),
             Err(
                 RuntimeError::AssemblyFailed { .. }
+                | RuntimeError::NonFiniteConstraints { .. }
                 | RuntimeError::SingularDependentJacobian { .. }
                 | RuntimeError::NonFiniteState { .. },
             ) => {

@@ -38,7 +38,9 @@
 
 use nalgebra::{DMatrix, DVector, DVectorView};
 
-use crate::constraints::{self, solve_least_squares, AssemblyOptions, RANK_TOLERANCE};
+use crate::constraints::{
+    self, non_finite_rows, solve_least_squares, svd, AssemblyOptions, Unclosed, RANK_TOLERANCE,
+};
 use crate::{Model, RuntimeError};
 
 /// A point of the model (given by three position outputs, components in the Newtonian frame)
@@ -312,11 +314,13 @@ impl<M: Model + ?Sized> Problem<'_, M> {
             &options,
         ) {
             Ok(_) => true,
-            Err(phi) => phi.amax() <= tolerance,
+            Err(Unclosed::Open(phi)) => phi.amax() <= tolerance,
+            Err(_) => false,
         }
     }
 
-    /// The closed configuration after `step` from `point`, if the loops and fixtures close.
+    /// The closed configuration after `step` from `point`, if the loops and fixtures close
+    /// (and its equations are finite: a step into a NaN is a step rejected).
     fn step(&self, point: &Point, step: &DVector<f64>, tolerance: f64) -> Option<Point> {
         let mut q: Vec<f64> = point
             .q
@@ -327,27 +331,56 @@ impl<M: Model + ?Sized> Problem<'_, M> {
         // Held only with fixtures: without them `J` is the analytic loop Jacobian, no dearer
         // than the extra steps (each with its SVD) the chord takes.
         let chord = (self.nf > 0).then_some(&point.jacobian);
-        self.close(&mut q, tolerance, chord).then(|| self.point(q))
+        self.close(&mut q, tolerance, chord)
+            .then(|| self.point(q).ok())
+            .flatten()
     }
 
-    /// The equilibrium equations at `q`.
-    fn point(&self, q: Vec<f64>) -> Point {
+    /// The equilibrium equations at `q`; an error if `F` or `J` is not finite there (no
+    /// decomposition is fed a NaN).
+    fn point(&self, q: Vec<f64>) -> Result<Point, RuntimeError> {
         let phi = self.residual(&q);
         let (j, g) = self.jacobians(&q, true);
         let force = self.force(&q);
-        let tangent = null_space(&j);
+        if force.iter().any(|x| !x.is_finite()) {
+            return Err(RuntimeError::NonFinite {
+                what: "the generalized forces at rest, F(q, 0, inputs),",
+            });
+        }
+        let rows = non_finite_rows(g.as_ref().unwrap_or(&j));
+        if let Some(&first) = rows.first() {
+            return Err(if first < self.nc {
+                let loop_rows = rows.iter().take_while(|&&r| r < self.nc);
+                RuntimeError::NonFiniteConstraints {
+                    rows: loop_rows
+                        .map(|&r| self.model.constraint_name(r).to_string())
+                        .collect(),
+                    jacobian: true,
+                }
+            } else {
+                RuntimeError::NonFinite {
+                    what: "the fixtures' rows of the constraint Jacobian",
+                }
+            });
+        }
+        // Both are finite here, so the decompositions below only fail if an SVD does not
+        // converge (never seen for finite matrices), reported as the same error.
+        let not_finite = || RuntimeError::NonFinite {
+            what: "the static equilibrium's constraint Jacobian",
+        };
+        let tangent = null_space(&j).ok_or_else(not_finite)?;
         let (lambda, balance) = match &g {
             None => (
-                solve_least_squares(&j.transpose(), &(-&force)),
+                solve_least_squares(&j.transpose(), &(-&force)).ok_or_else(not_finite)?,
                 tangent.clone(),
             ),
             Some(g) => (
-                solve_least_squares(&g.transpose(), &(-&force)),
-                null_space(g),
+                solve_least_squares(&g.transpose(), &(-&force)).ok_or_else(not_finite)?,
+                null_space(g).ok_or_else(not_finite)?,
             ),
         };
         let residual = &balance * (balance.transpose() * &force);
-        Point {
+        Ok(Point {
             jacobian: j,
             tangent,
             balance,
@@ -356,7 +389,7 @@ impl<M: Model + ?Sized> Problem<'_, M> {
             force,
             lambda,
             residual,
-        }
+        })
     }
 
     /// `Wᵀ ∂(F + Gᵀλ)/∂q Z` at `point` with `λ` held (`Z` its tangent basis, `W` the
@@ -513,19 +546,19 @@ fn span(z: &DMatrix<f64>, w: &DMatrix<f64>) -> DMatrix<f64> {
 }
 
 /// Orthonormal basis of the null space of `j` (singular values at most `RANK_TOLERANCE·σ₁`
-/// count as zero, as in [`solve_least_squares`]).
-fn null_space(j: &DMatrix<f64>) -> DMatrix<f64> {
+/// count as zero, as in [`solve_least_squares`]); `None` if `j` is not finite.
+fn null_space(j: &DMatrix<f64>) -> Option<DMatrix<f64>> {
     let nq = j.ncols();
     // Zero rows up to a square matrix, so that the SVD's Vᵀ spans all of q.
     let mut padded = DMatrix::zeros(j.nrows().max(nq), nq);
     padded.rows_mut(0, j.nrows()).copy_from(j);
-    let svd = padded.svd(false, true);
-    let v_t = svd.v_t.expect("requested");
+    let svd = svd(padded, false, true)?;
+    let v_t = svd.v_t?;
     let threshold = svd.singular_values.max() * RANK_TOLERANCE;
     let null: Vec<usize> = (0..nq)
         .filter(|&i| svd.singular_values[i] <= threshold)
         .collect();
-    DMatrix::from_fn(nq, null.len(), |r, c| v_t[(null[c], r)])
+    Some(DMatrix::from_fn(nq, null.len(), |r, c| v_t[(null[c], r)]))
 }
 
 /// Solves for a static equilibrium near `q` (updated in place).
@@ -615,7 +648,7 @@ pub fn reduced_equilibrium<M: Model + ?Sized>(
     loads: &[SideLoad],
 ) -> Result<ReducedEquilibrium, RuntimeError> {
     let problem = Problem::new(model, t, inputs, fixtures, loads)?;
-    let point = problem.point(q.to_vec());
+    let point = problem.point(q.to_vec())?;
     Ok(ReducedEquilibrium {
         stiffness: problem.reduced_stiffness(&point, true),
         tangent: point.tangent,
@@ -639,7 +672,7 @@ fn newton<M: Model + ?Sized>(
             problem.residual(q).amax()
         )));
     }
-    let mut point = problem.point(q.to_vec());
+    let mut point = problem.point(q.to_vec())?;
     let mut iterations = 0;
     let converged = |point: &Point| {
         let force_tolerance =
@@ -685,7 +718,10 @@ fn newton<M: Model + ?Sized>(
             point.balance.clone(),
         ));
         let unbalanced = point.balance.transpose() * &point.force;
-        let along = solve_least_squares(&stiffness, &(-unbalanced));
+        let along =
+            solve_least_squares(&stiffness, &(-unbalanced)).ok_or(RuntimeError::NonFinite {
+                what: "the static stiffness (forces differenced along the free directions)",
+            })?;
         let step = &point.tangent * along;
         let before = point.residual.norm();
         if within {

@@ -346,7 +346,9 @@ impl Polynomial {
             ((points[row].0 - center) / scale).powi(power as i32)
         });
         let values = nalgebra::DVector::from_iterator(n, points.iter().map(|p| p.1));
-        let solution = design.svd(true, true).solve(&values, 1e-12).ok()?;
+        let solution = mech_runtime::constraints::svd(design, true, true)?
+            .solve(&values, 1e-12)
+            .ok()?;
         Some(Polynomial {
             center,
             scale,

@@ -32,9 +32,9 @@ fn language_reference_examples_with_loops_assemble() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
-/// The example as it was: a `distance` loop whose points coincide at `q0` has no direction
-/// there, and the Newton steps turn it into NaN; the error says so instead of "still NaN
-/// away".
+/// The example as it was: a `distance` loop whose points coincide at `q0` has no gradient
+/// there (its row is finite since the residual is `(|d|² − L²)/2L`, but no Newton step moves
+/// it); the error says so and points at the loop.
 #[test]
 fn a_distance_loop_starting_at_zero_length_is_a_clear_error() {
     let text = "
@@ -49,7 +49,9 @@ fn a_distance_loop_starting_at_zero_length_is_a_clear_error() {
     let session = Session::from_compiled(compiled, &[], &[]).unwrap();
     let error = session.assemble(&[]).unwrap_err().to_string();
     assert!(
-        error.contains("`link.distance` became not-a-number") && error.contains("coincide"),
+        error.contains("row `link.distance` is -5e-5 away")
+            && error.contains("coincide")
+            && error.contains("coincident:6:9"),
         "{error}"
     );
 }

@@ -14,7 +14,7 @@ fn assembled(model: &dyn Model, fixed: &[usize]) -> (Vec<f64>, Vec<f64>) {
     let mut u = vec![0.0; model.nu()];
     model.initial_state(&mut q, &mut u);
     assemble(model, 0.0, &mut q, fixed, &AssemblyOptions::default()).unwrap();
-    assemble_speeds(model, 0.0, &q, &mut u, fixed);
+    assemble_speeds(model, 0.0, &q, &mut u, fixed).unwrap();
     (q, u)
 }
 
@@ -40,7 +40,7 @@ fn four_bar_assembly_matches_sympy() {
         assert!((value - reference).abs() < 2e-12, "{value} vs {reference}");
     }
     assert_eq!(
-        mobility(&model, 0.0, &q).to_string(),
+        mobility(&model, 0.0, &q).unwrap().to_string(),
         "3 coordinates, 2 constraint rows, rank 2: 1 degree of freedom"
     );
 }
@@ -177,7 +177,7 @@ fn slider_crank_position_and_velocity_match_the_analytic_expressions() {
         q[0] = theta;
         u[0] = omega;
         assemble(&model, 0.0, &mut q, &[0], &AssemblyOptions::default()).unwrap();
-        assemble_speeds(&model, 0.0, &q, &mut u, &[0]);
+        assemble_speeds(&model, 0.0, &q, &mut u, &[0]).unwrap();
         let root = (rod * rod - r * r * theta.sin().powi(2)).sqrt();
         let x = r * theta.cos() + root;
         let v = -r * omega * theta.sin() - r * r * omega * theta.sin() * theta.cos() / root;
@@ -210,7 +210,7 @@ fn redundant_closure_reports_mobility_and_simulates() {
     assert!(redundant.contains("revolute(coupler, rocker)"));
     let model = common::tape_from_text("four_bar_redundant", &redundant);
     let (q, u) = assembled(&model, &[0]);
-    let report = mobility(&model, 0.0, &q);
+    let report = mobility(&model, 0.0, &q).unwrap();
     assert_eq!(
         report.to_string(),
         "3 coordinates, 5 constraint rows, rank 2: 1 degree of freedom"
@@ -310,7 +310,7 @@ fn spherical_five_bar_mobility_and_motion() {
     model.set_param(damping, 0.0);
     let (q, u) = assembled(&model, &[0, 1]);
     assert_eq!(
-        mobility(&model, 0.0, &q).to_string(),
+        mobility(&model, 0.0, &q).unwrap().to_string(),
         "4 coordinates, 5 constraint rows, rank 2: 2 degrees of freedom"
     );
     let run = mech_runtime::simulate(&model, &q, &u, &[], &tight(0.5, 0.001), &mut |_| {}).unwrap();

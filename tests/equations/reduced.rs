@@ -117,7 +117,7 @@ fn four_bar_reduced_motion_matches_sympy() {
         &AssemblyOptions::default(),
     )
     .unwrap();
-    assemble_speeds(model.as_ref(), 0.0, &q, &mut u, &[0]);
+    assemble_speeds(model.as_ref(), 0.0, &q, &mut u, &[0]).unwrap();
     let options = SimOptions {
         t_end: 1.0,
         output_interval: 0.01,

@@ -11,7 +11,7 @@
 //!   (zero exactly when the two axes are parallel); a compliant closure (with a twist axis
 //!   `t`) keeps only the 3 position rows: its twist about `t` and its lateral bending about
 //!   `n = a × t` are flexure angles held by springs;
-//! - distance: `|r_C − r_P| − length`.
+//! - distance: `(|r_C − r_P|² − length²) / (2 length)`, zero where `|r_C − r_P| = length`.
 //!
 //! `J` and `J̇u = Σᵢ ∂(J u)/∂qᵢ uᵢ` are exact symbolic derivatives of `φ`.
 
@@ -262,10 +262,18 @@ pub fn derive(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Model) -
                 }
             }
             ClosureKind::Distance { length } => {
+                // (|r|² − L²) / 2L rather than |r| − L: the same zeros for L > 0 (the front end
+                // rejects other lengths) and the same gradient r̂ᵀ∂r/∂q where satisfied (so λ
+                // is still the force along the line), but polynomial in r: finite where the
+                // points coincide, where |r| has no gradient.
                 let length = kinematics::lower_expr(pool, length);
                 let square = vector::dot(pool, gap, gap);
-                let distance = pool.sqrt(square);
-                residual.push(pool.sub(distance, length));
+                let length_squared = pool.pow(length, Number::int(2));
+                let excess = pool.sub(square, length_squared);
+                residual.push(pool.product(
+                    Number::rational(1, 2),
+                    &[(excess, Number::ONE), (length, Number::MINUS_ONE)],
+                ));
                 names.push(format!("{}.distance", closure.name));
             }
         }

@@ -66,7 +66,7 @@ fn four_bar() -> Result<(), RuntimeError> {
         .coordinate_index("crank_angle")
         .expect("declared in the model");
     mech_runtime::assemble(&model, 0.0, &mut q, &[crank], &AssemblyOptions::default())?;
-    mech_runtime::assemble_speeds(&model, 0.0, &q, &mut u, &[crank]);
+    mech_runtime::assemble_speeds(&model, 0.0, &q, &mut u, &[crank])?;
     println!("four-bar: assembled q = {q:.6?}, u = {u:.6?}");
 
     // Constrained accelerations: M u̇ = F + Jᵀλ with J u̇ = −J̇u; λ are the loop's forces.

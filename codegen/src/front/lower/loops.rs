@@ -299,11 +299,30 @@ impl<'a> Lowerer<'a> {
             self.error(missing_field("distance loop", &decl.name, "length", help));
             return None;
         };
+        let span = length.value.span;
         let length = self.lower_scalar_as(
             &length.value,
             Ctx::Static("a loop length"),
             &closure_expect("length"),
         )?;
+        // The closure divides by the length (kane::constraints), and at zero length the
+        // points' direction, which the row constrains, is undefined.
+        let value = self.evaluate(&length, span);
+        if value <= 0.0 {
+            self.error(
+                Diagnostic::error(
+                    "E0415",
+                    format!("a distance loop's `length` must be positive, found {value} m"),
+                )
+                .with_label(span, "not a positive length")
+                .with_help(format!(
+                    "to hold the two points together, use `loop {} = coincident(...)` (or \
+                     `revolute`) instead",
+                    decl.name.name
+                )),
+            );
+            return None;
+        }
         Some(ClosureKind::Distance { length })
     }
 
