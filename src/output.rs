@@ -299,6 +299,32 @@ fn create_temp_file(dir: &Path, file_name: &std::ffi::OsStr) -> io::Result<(Path
     }
 }
 
+/// Why `bytes` are not a UTF-8 text file, in words for the user (with the line where that
+/// is known), or `None` if they are one. Data files saved as UTF-16 ("Unicode text" in some
+/// spreadsheets), Latin-1 or a binary format are otherwise misread as rows of the wrong
+/// length.
+pub fn encoding_problem(bytes: &[u8]) -> Option<String> {
+    const HINT: &str = "save it as CSV in UTF-8";
+    if bytes.starts_with(b"\xFF\xFE") || bytes.starts_with(b"\xFE\xFF") {
+        return Some(format!(
+            "it is UTF-16 text (it starts with a UTF-16 byte-order mark); {HINT}"
+        ));
+    }
+    let line_of = |offset: usize| 1 + bytes[..offset].iter().filter(|&&b| b == b'\n').count();
+    if let Some(offset) = bytes.iter().position(|&b| b == 0) {
+        return Some(format!(
+            "line {}: it holds NUL bytes: binary data or UTF-16 text, not a text file; {HINT}",
+            line_of(offset)
+        ));
+    }
+    std::str::from_utf8(bytes).err().map(|error| {
+        format!(
+            "line {}: it is not valid UTF-8 (Latin-1 or another encoding?); {HINT}",
+            line_of(error.valid_up_to())
+        )
+    })
+}
+
 /// A numeric CSV table: the header and the values column by column.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CsvTable {
@@ -336,11 +362,8 @@ pub enum CsvErrorKind {
         /// The operating system's or the CSV reader's reason.
         reason: String,
     },
-    /// The bytes are not UTF-8.
-    NotUtf8 {
-        /// The line, when the reader knows it.
-        line: Option<u64>,
-    },
+    /// The bytes are not UTF-8 text ([`encoding_problem`]'s words).
+    NotText { problem: String },
     /// The first line names no column.
     NoHeader,
     /// A row whose number of fields differs from the header's.
@@ -377,14 +400,12 @@ impl CsvError {
         }
     }
 
-    /// A failure of the `csv` reader: I/O, UTF-8, or anything else it reports.
+    /// A failure of the `csv` reader: I/O, or anything else it reports (the text was
+    /// checked to be UTF-8 before).
     fn reading(path: &Path, error: &csv::Error) -> CsvError {
         let kind = match error.kind() {
             csv::ErrorKind::Io(e) => CsvErrorKind::Read {
                 reason: e.to_string(),
-            },
-            csv::ErrorKind::Utf8 { pos, .. } => CsvErrorKind::NotUtf8 {
-                line: pos.as_ref().map(csv::Position::line),
             },
             _ => CsvErrorKind::Read {
                 reason: error.to_string(),
@@ -399,12 +420,7 @@ impl std::fmt::Display for CsvError {
         let file = self.path.display();
         match &self.kind {
             CsvErrorKind::Read { reason } => write!(f, "cannot read `{file}`: {reason}"),
-            CsvErrorKind::NotUtf8 { line: Some(line) } => {
-                write!(f, "cannot read `{file}`: line {line}: not valid UTF-8")
-            }
-            CsvErrorKind::NotUtf8 { line: None } => {
-                write!(f, "cannot read `{file}`: not valid UTF-8")
-            }
+            CsvErrorKind::NotText { problem } => write!(f, "cannot read `{file}`: {problem}"),
             CsvErrorKind::NoHeader => write!(
                 f,
                 "`{file}` has no header row: the first line must name the columns, e.g. `t,voltage`"
@@ -443,13 +459,19 @@ impl std::error::Error for CsvError {}
 /// the header, and there must be at least one column and one data row.
 pub fn read_csv_table(path: &Path) -> Result<CsvTable, CsvError> {
     let reading = |e: csv::Error| CsvError::reading(path, &e);
+    let bytes = fs::read(path).map_err(|e| {
+        let reason = e.to_string();
+        CsvError::new(path, CsvErrorKind::Read { reason })
+    })?;
+    if let Some(problem) = encoding_problem(&bytes) {
+        return Err(CsvError::new(path, CsvErrorKind::NotText { problem }));
+    }
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(true)
         .flexible(true)
         .trim(csv::Trim::All)
         .comment(Some(b'#'))
-        .from_path(path)
-        .map_err(reading)?;
+        .from_reader(bytes.as_slice());
     let header: Vec<String> = reader
         .headers()
         .map_err(reading)?

@@ -72,6 +72,8 @@ pub struct MeasuredData {
 pub enum DataError {
     /// The file cannot be read.
     Io { path: PathBuf, message: String },
+    /// The file is not UTF-8 text ([`crate::output::encoding_problem`]'s words).
+    NotText { path: PathBuf, problem: String },
     /// The file has no header line (it is empty, or holds only comments and blank lines).
     Empty { path: PathBuf },
     /// The file has a header but no data rows.
@@ -114,6 +116,17 @@ pub enum DataError {
         index: usize,
         column: String,
         text: String,
+    },
+    /// A value beyond [`OUTLIER_FACTOR`] times the median magnitude of its column: a typo
+    /// or a logger's overflow, which a fit would chase as if the model were wrong.
+    Outlier {
+        path: PathBuf,
+        line: usize,
+        index: usize,
+        column: String,
+        text: String,
+        /// The column's median magnitude, in the file's unit.
+        median: f64,
     },
     /// A column does not increase strictly (see [`MeasuredData::check_time_monotonic`]).
     NotIncreasing {
@@ -170,6 +183,11 @@ impl MeasuredData {
     /// Parses and checks CSV `bytes`; `path` only names the file in messages.
     pub fn parse(path: &Path, bytes: &[u8]) -> Result<MeasuredData, DataErrors> {
         let mut errors = Collector::new(path);
+        if let Some(problem) = crate::output::encoding_problem(bytes) {
+            let path = path.to_path_buf();
+            errors.push(DataError::NotText { path, problem });
+            return Err(errors.finish());
+        }
         let data = parse_bytes(path, bytes, &mut errors);
         match data {
             Some(data) if errors.errors.is_empty() => Ok(data),
@@ -360,6 +378,19 @@ fn parse_bytes(path: &Path, bytes: &[u8], errors: &mut Collector) -> Option<Meas
         });
         return None;
     }
+    for (index, (column, values)) in fields.iter().zip(&columns).enumerate() {
+        for (row, median) in outliers(values) {
+            let scale = column.conversion.scale();
+            errors.push(DataError::Outlier {
+                path: path.to_path_buf(),
+                line: lines[row],
+                index: index + 1,
+                column: column.name.clone(),
+                text: format!("{:e}", values[row] / scale),
+                median: median / scale,
+            });
+        }
+    }
     let rows = lines.len();
     let columns = fields
         .into_iter()
@@ -378,6 +409,32 @@ fn parse_bytes(path: &Path, bytes: &[u8], errors: &mut Collector) -> Option<Meas
         rows,
         lines,
     })
+}
+
+/// How far beyond its column's median magnitude a value may lie. Measured series span a
+/// few decades at most (a ring-down from 10° to 0.01°, a force from µN to mN); 10⁶ leaves
+/// room for any of them and catches a stray exponent.
+pub const OUTLIER_FACTOR: f64 = 1e6;
+
+/// The rows of `values` beyond [`OUTLIER_FACTOR`] times the median of the nonzero
+/// magnitudes, each with that median.
+fn outliers(values: &[f64]) -> Vec<(usize, f64)> {
+    let mut magnitudes: Vec<f64> = values
+        .iter()
+        .map(|v| v.abs())
+        .filter(|m| *m > 0.0 && m.is_finite())
+        .collect();
+    if magnitudes.is_empty() {
+        return Vec::new();
+    }
+    let middle = magnitudes.len() / 2;
+    let median = *magnitudes.select_nth_unstable_by(middle, f64::total_cmp).1;
+    values
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| v.abs() > OUTLIER_FACTOR * median)
+        .map(|(row, _)| (row, median))
+        .collect()
 }
 
 /// Splits one line at commas into trimmed fields. A field may be quoted (`"a, b"`, with
@@ -605,6 +662,7 @@ impl DataError {
     fn place(&self) -> String {
         let (path, line, column) = match self {
             DataError::Io { path, .. }
+            | DataError::NotText { path, .. }
             | DataError::Empty { path }
             | DataError::MissingColumn { path, .. } => (path, None, None),
             DataError::NoRows { path, header_line } => (path, Some(*header_line), None),
@@ -631,6 +689,13 @@ impl DataError {
                 ..
             }
             | DataError::NonFinite {
+                path,
+                line,
+                index,
+                column: name,
+                ..
+            }
+            | DataError::Outlier {
                 path,
                 line,
                 index,
@@ -665,6 +730,7 @@ impl DataError {
     fn problem(&self) -> String {
         match self {
             DataError::Io { message, .. } => format!("cannot read the file: {message}"),
+            DataError::NotText { problem, .. } => problem.clone(),
             DataError::Empty { .. } => "the file is empty: the first line that is not a `#` \
                                         comment must be the header, e.g. `t [s], foot.x [mm]`"
                 .to_string(),
@@ -684,6 +750,10 @@ impl DataError {
                 "the field is empty".to_string()
             }
             DataError::BadNumber { text, .. } => format!("`{text}` is not a number"),
+            DataError::Outlier { text, median, .. } => format!(
+                "`{text}` is more than {OUTLIER_FACTOR:e} times the column's median magnitude \
+                 ({median:e}): a typo or an overflow of the logger? Correct or remove the row"
+            ),
             DataError::NonFinite { text, .. } => format!(
                 "`{text}` is not finite (NaN, infinite or out of range in SI units); remove \
                  the row or fill the gap"

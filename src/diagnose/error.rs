@@ -146,6 +146,20 @@ pub enum KeyError {
     NotPercentage { key: &'static str, text: String },
     /// A noise that is zero, negative or not finite.
     NoiseNotPositive { key: &'static str, text: String },
+    /// A key whose value has the wrong type (found by value: flattened keys lose their span).
+    Mistyped {
+        key: String,
+        line: usize,
+        /// The parser's message.
+        message: String,
+    },
+    /// A noise whose unit is not that of what it is the noise of (`0.05 mm` for an angle).
+    NoiseUnit {
+        key: &'static str,
+        text: String,
+        found: Dimension,
+        expected: Dimension,
+    },
     /// A quantity the unit parser rejects; `message` is the parser's.
     Quantity {
         key: &'static str,
@@ -329,6 +343,28 @@ impl fmt::Display for KeyError {
             KeyError::NoiseNotPositive { key, text } => {
                 write!(f, "key `{key}`: expected a positive noise, got `{text}`")
             }
+            KeyError::Mistyped { key, line, message } => {
+                crate::experiments::error::mistyped_text(f, key, *line, message)
+            }
+            KeyError::NoiseUnit {
+                key,
+                text,
+                found,
+                expected,
+            } => {
+                write!(
+                    f,
+                    "key `{key}`: `{text}` has unit {found}, but this noise needs "
+                )?;
+                if *expected == Dimension::NONE {
+                    write!(
+                        f,
+                        "an angle (`3 deg`), a plain number or a percentage (`5 %`)"
+                    )
+                } else {
+                    write!(f, "{expected}")
+                }
+            }
             KeyError::Quantity { key, text, message } => {
                 write!(f, "key `{key}`: `{text}`: {message}")
             }
@@ -418,11 +454,11 @@ mod tests {
     fn messages_name_the_key_and_the_value() {
         let message = |r: Result<f64, KeyError>| r.unwrap_err().to_string();
         assert_eq!(
-            message(noise_value("gain_noise", "five %")),
+            message(noise_value("gain_noise", "five %", Dimension::NONE)),
             "key `gain_noise`: `five %` is not a percentage"
         );
         assert_eq!(
-            message(noise_value("noise", "-2 um")),
+            message(noise_value("noise", "-2 um", Dimension::LENGTH)),
             "key `noise`: expected a positive noise, got `-2 um`"
         );
         assert_eq!(

@@ -152,11 +152,18 @@ pub fn load(path: &Path) -> Result<Experiment, Error> {
         error,
     })?;
     let experiment: Experiment = toml::from_str(&text).map_err(|error| {
-        match crate::experiments::error::unknown_key(&text, &error.to_string()) {
-            Some((key, line)) => Error::UnknownKey {
+        let message = error.to_string();
+        if let Some((key, line)) = crate::experiments::error::unknown_key(&text, &message) {
+            return Error::UnknownKey {
                 path: path_buf(),
                 key,
                 line,
+            };
+        }
+        match crate::experiments::error::mistyped_key(&text, &message) {
+            Some((key, line)) => Error::Experiment {
+                path: path_buf(),
+                error: KeyError::Mistyped { key, line, message },
             },
             None => Error::ExperimentToml {
                 path: path_buf(),
@@ -204,7 +211,7 @@ impl Experiment {
                     });
                 }
                 for text in &e.noise {
-                    noise_value("noise", text)?;
+                    noise_value("noise", text, Dimension::LENGTH)?;
                 }
             }
             Kind::FrequencyResponse(e) => {
@@ -216,16 +223,16 @@ impl Experiment {
                     return Err(KeyError::NoChannels);
                 }
                 if let Some(text) = &e.gain_noise {
-                    noise_value("gain_noise", text)?;
+                    noise_value("gain_noise", text, Dimension::NONE)?;
                 }
                 if let Some(text) = &e.phase_noise {
-                    noise_value("phase_noise", text)?;
+                    noise_value("phase_noise", text, Dimension::NONE)?;
                 }
             }
             Kind::ForceDeflection(e) => {
                 e.volts()?;
                 if let Some(text) = &e.noise {
-                    noise_value("noise", text)?;
+                    noise_value("noise", text, Dimension::FORCE)?;
                 }
                 if !(e.off_axis_fraction.is_finite() && e.off_axis_fraction.abs() <= 1.0) {
                     return Err(KeyError::OffAxisFraction {
@@ -295,7 +302,7 @@ impl QuasiStatic {
                 .ok_or_else(|| KeyError::UnknownOutput { name: name.clone() })?;
             let values = data.require(name, Dimension::LENGTH)?;
             let noise = match self.noise.get(k) {
-                Some(text) => Some(noise_value("noise", text)?),
+                Some(text) => Some(noise_value("noise", text, Dimension::LENGTH)?),
                 None => None,
             };
             for (row, &v) in values.iter().enumerate() {
@@ -361,11 +368,11 @@ impl FrequencyResponse {
         leg.require_hamr().map_err(Error::leg)?;
         let frequency = data.require("frequency", Dimension::FREQUENCY)?;
         let gain_sigma = match &self.gain_noise {
-            Some(t) => Some(noise_value("gain_noise", t)?),
+            Some(t) => Some(noise_value("gain_noise", t, Dimension::NONE)?),
             None => None,
         };
         let phase_sigma = match &self.phase_noise {
-            Some(t) => Some(noise_value("phase_noise", t)?),
+            Some(t) => Some(noise_value("phase_noise", t, Dimension::NONE)?),
             None => None,
         };
         let mut sigma = Vec::new();
@@ -475,7 +482,7 @@ impl ForceDeflectionTest {
             });
         }
         let noise = match &self.noise {
-            Some(text) => Some(noise_value("noise", text)?),
+            Some(text) => Some(noise_value("noise", text, Dimension::FORCE)?),
             None => None,
         };
         for (row, (&d, &f)) in distance.iter().zip(force).enumerate() {

@@ -4,6 +4,8 @@
 //! Consumes: nothing of the other diagnosis modules but their error type. Produces:
 //! [`Observations`] and [`noise_value`].
 
+use mech_codegen::ir::Dimension;
+
 use super::error::KeyError;
 
 /// The measured side of the residual: one flat vector of values, their σ (if known) and a
@@ -34,11 +36,20 @@ impl Observations {
     }
 }
 
-/// A noise level: a quantity (`5 um`, `3 deg`) or a percentage (`5 %`), as an SI number;
-/// `key` names the experiment file's key it is read from.
-pub fn noise_value(key: &'static str, text: &str) -> Result<f64, KeyError> {
+/// A noise level of a quantity of dimension `expected`: a quantity (`5 um`, `3 deg`), or for
+/// a dimensionless one a percentage (`5 %`), as an SI number; `key` names the experiment
+/// file's key it is read from.
+pub fn noise_value(key: &'static str, text: &str, expected: Dimension) -> Result<f64, KeyError> {
     let text = text.trim();
     let value = match text.strip_suffix('%') {
+        Some(_) if expected != Dimension::NONE => {
+            return Err(KeyError::NoiseUnit {
+                key,
+                text: text.to_string(),
+                found: Dimension::NONE,
+                expected,
+            })
+        }
         Some(percent) => {
             let value: f64 = percent
                 .trim()
@@ -50,13 +61,23 @@ pub fn noise_value(key: &'static str, text: &str) -> Result<f64, KeyError> {
             value / 100.0
         }
         None => {
-            mech_codegen::front::units::parse_quantity(text)
-                .map_err(|message| KeyError::Quantity {
+            let (value, found) =
+                mech_codegen::front::units::parse_quantity(text).map_err(|message| {
+                    KeyError::Quantity {
+                        key,
+                        text: text.to_string(),
+                        message,
+                    }
+                })?;
+            if found != expected {
+                return Err(KeyError::NoiseUnit {
                     key,
                     text: text.to_string(),
-                    message,
-                })?
-                .0
+                    found,
+                    expected,
+                });
+            }
+            value
         }
     };
     if value > 0.0 && value.is_finite() {

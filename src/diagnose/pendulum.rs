@@ -106,7 +106,7 @@ impl Pendulum {
     /// Checks the keys that do not need the model.
     pub fn check(&self) -> Result<(), KeyError> {
         if let Some(text) = &self.noise {
-            noise_value("noise", text)?;
+            noise_value("noise", text, Dimension::NONE)?;
         }
         if let Some(text) = &self.release {
             release_value(text)?;
@@ -192,7 +192,7 @@ impl Pendulum {
             });
         }
         let noise = match &self.noise {
-            Some(text) => Some(noise_value("noise", text)?),
+            Some(text) => Some(noise_value("noise", text, Dimension::NONE)?),
             None => None,
         };
         Ok(Observations {

@@ -66,6 +66,8 @@ pub fn parse(text: &str) -> Result<Experiment, Error> {
             Error::MissingKind
         } else if let Some((key, line)) = error::unknown_key(text, &message) {
             Error::UnknownKey { key, line }
+        } else if let Some((key, line)) = error::mistyped_key(text, &message) {
+            Error::MistypedKey { key, line, message }
         } else {
             Error::Toml {
                 message: message.trim_end().to_string(),

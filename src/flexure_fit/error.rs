@@ -12,6 +12,8 @@
 use std::fmt;
 use std::path::PathBuf;
 
+use mech_codegen::ir::Dimension;
+
 use super::trace::TraceError;
 
 /// Why the flexure characterization cannot go on.
@@ -99,6 +101,15 @@ pub enum Error {
     },
     /// The trace's amplitude is implausible for the rig in the declared angle unit; most
     /// often angles in degrees read as radians.
+    /// A unit in a trace's header that is unknown, of the wrong dimension, or in conflict
+    /// with the specimen's `angle_unit`.
+    TraceUnit {
+        path: PathBuf,
+        /// Column (1-based) and header.
+        column: usize,
+        name: String,
+        message: String,
+    },
     AngleAmplitude {
         /// The trace file.
         path: PathBuf,
@@ -174,6 +185,12 @@ pub enum SpecimenError {
     /// `pendulum.mass`).
     Quantity(crate::quantity::Error),
     /// A quantity that is zero, negative or not finite.
+    /// A plain number (SI) far too large for the rig: meant in another unit.
+    PlainNumberTooLarge {
+        key: &'static str,
+        value: f64,
+        unit: Dimension,
+    },
     NotPositive {
         /// The key.
         key: &'static str,
@@ -267,6 +284,16 @@ impl fmt::Display for Error {
                 f,
                 "`{}`, line {line}, column {column} (`{name}`): time {time} s does not increase \
                  (previous row {previous} s): times must be strictly increasing",
+                path.display()
+            ),
+            Error::TraceUnit {
+                path,
+                column,
+                name,
+                message,
+            } => write!(
+                f,
+                "`{}`, column {column} (`{name}`): {message}",
                 path.display()
             ),
             Error::AngleAmplitude {
@@ -380,6 +407,19 @@ impl fmt::Display for SpecimenError {
         match self {
             SpecimenError::Toml { message } => f.write_str(message),
             SpecimenError::Quantity(error) => write!(f, "{error}"),
+            SpecimenError::PlainNumberTooLarge { key, value, unit } => {
+                let short = key.rsplit('.').next().unwrap_or(key);
+                let example = match *unit {
+                    Dimension::MASS => "g",
+                    Dimension::LENGTH => "mm",
+                    _ => "g*mm^2",
+                };
+                write!(
+                    f,
+                    "{key} = {value} is {value} {unit} (plain numbers are SI), too large for a \
+                     flexure rig; give the unit, e.g. `{short} = \"{value} {example}\"`"
+                )
+            }
             SpecimenError::NotPositive { key, value } => {
                 write!(f, "{key} must be positive, got {value}")
             }

@@ -22,7 +22,10 @@
 //! gravity = "9.81 m/s^2"          # optional, default 9.81 m/s²
 //! ```
 //!
-//! Quantities are strings with a unit (any unit of the `.mech` language) or plain numbers in SI.
+//! Quantities are strings with a unit (any unit of the `.mech` language) or plain numbers in SI
+//! (a plain length of 0.1 m or more, mass of 0.1 kg or more, is refused as a unit slip).
+//! A trace's header may give the units of its columns (`time [ms], angle [deg]`); they are
+//! used, and must agree with `angle_unit` when both are given.
 //!
 //! Consumes: the command line's DATA paths, the TOML text, the trace CSV files. Produces:
 //! [`Specimen`]s and `(times, angles)` in SI, or an [`Error`] naming the file and the key.
@@ -92,8 +95,9 @@ pub struct Specimen {
     pub pendulum: Pendulum,
     /// Trace files (resolved against the TOML's directory).
     pub traces: Vec<PathBuf>,
-    /// Factor from the CSV's angle unit to radians.
-    pub angle_scale: f64,
+    /// Factor from the CSV's angle unit to radians, if `angle_unit` is given (else a unit in
+    /// the trace's header, else rad).
+    pub angle_scale: Option<f64>,
     /// Column of the angle (None: the second column).
     pub angle_column: Option<String>,
 }
@@ -136,8 +140,32 @@ enum Quantity {
     Text(String),
 }
 
+/// Plain numbers are SI, which suits a flexure rig badly (`width = 1` is a metre): a plain
+/// number at or above this for a length, a mass or an inertia of the rig is refused as a
+/// number meant in another unit.
+fn implausible_in_si(expected: Dimension) -> Option<f64> {
+    if expected == Dimension::LENGTH {
+        Some(0.1) // m: flexures are µm–mm, the pendulum's arm mm–cm
+    } else if expected == Dimension::MASS {
+        Some(0.1) // kg: the rig's pendulums weigh grams at most
+    } else if expected == Dimension::INERTIA {
+        Some(1e-3) // kg·m²: a 0.1 kg mass at 0.1 m
+    } else {
+        None
+    }
+}
+
 fn quantity(key: &'static str, q: &Quantity, expected: Dimension) -> Result<f64, SpecimenError> {
     let value = match q {
+        Quantity::Number(v)
+            if implausible_in_si(expected).is_some_and(|limit| v.abs() >= limit) =>
+        {
+            return Err(SpecimenError::PlainNumberTooLarge {
+                key,
+                value: *v,
+                unit: expected,
+            })
+        }
         Quantity::Number(v) => *v,
         Quantity::Text(text) => {
             parse_si(key, text, expected, true).map_err(SpecimenError::Quantity)?
@@ -174,8 +202,9 @@ fn parse_specimen_text(path: &Path, text: &str) -> Result<Specimen, SpecimenErro
     let flexure = flexure_geometry(&raw.flexure)?;
     let pendulum = pendulum(&raw.pendulum)?;
     let angle_scale = match raw.angle_unit.as_deref() {
-        None | Some("rad") => 1.0,
-        Some("deg") => std::f64::consts::PI / 180.0,
+        None => None,
+        Some("rad") => Some(1.0),
+        Some("deg") => Some(std::f64::consts::PI / 180.0),
         Some(other) => {
             return Err(SpecimenError::UnknownAngleUnit {
                 unit: other.to_string(),
@@ -297,6 +326,43 @@ pub struct Trace {
     pub angles: Vec<f64>,
 }
 
+/// The SI factor of the unit in brackets at the end of column `index`'s header
+/// (`time [ms]` → 1e-3), which must have dimension `expected`; `None` without brackets.
+fn header_unit(
+    path: &Path,
+    header: &[String],
+    index: usize,
+    expected: Dimension,
+) -> Result<Option<f64>, Error> {
+    let name = &header[index];
+    let Some(unit) = name
+        .trim_end()
+        .strip_suffix(']')
+        .and_then(|rest| rest.rsplit_once('[').map(|(_, unit)| unit.trim()))
+    else {
+        return Ok(None);
+    };
+    let error = |message: String| Error::TraceUnit {
+        path: path.to_path_buf(),
+        column: index + 1,
+        name: name.clone(),
+        message,
+    };
+    let (scale, found) = mech_codegen::front::units::parse_quantity(&format!("1 {unit}"))
+        .map_err(|e| error(format!("unit `{unit}`: {e}")))?;
+    if found != expected {
+        let what = if expected == Dimension::TIME {
+            "a time (`s`, `ms`)"
+        } else {
+            "an angle (`rad`, `deg`)"
+        };
+        return Err(error(format!(
+            "unit `{unit}` is {found}, but the column needs {what}"
+        )));
+    }
+    Ok(Some(scale))
+}
+
 /// Reads the angle trace `path` of `specimen`; errors name the file, the line and the column.
 pub fn read_trace(specimen: &Specimen, path: &Path) -> Result<Trace, Error> {
     let table = crate::output::read_csv_table(path).map_err(|error| Error::ReadTrace {
@@ -333,7 +399,26 @@ pub fn read_trace(specimen: &Specimen, path: &Path) -> Result<Trace, Error> {
             });
         }
     }
-    let times = &table.columns[0];
+    let time_scale = header_unit(path, &table.header, 0, Dimension::TIME)?.unwrap_or(1.0);
+    let angle_scale = match (
+        header_unit(path, &table.header, index, Dimension::NONE)?,
+        specimen.angle_scale,
+    ) {
+        (Some(header), Some(declared)) if (header / declared - 1.0).abs() > 1e-12 => {
+            return Err(Error::TraceUnit {
+                path: path.to_path_buf(),
+                column: index + 1,
+                name: table.header[index].clone(),
+                message: format!(
+                    "the header's unit disagrees with the specimen's `angle_unit` ({})",
+                    if declared == 1.0 { "rad" } else { "deg" }
+                ),
+            })
+        }
+        (Some(scale), _) | (None, Some(scale)) => scale,
+        (None, None) => 1.0,
+    };
+    let times: Vec<f64> = table.columns[0].iter().map(|t| t * time_scale).collect();
     if let Some(row) = (1..times.len()).find(|&i| times[i] <= times[i - 1]) {
         return Err(Error::TimeNotIncreasing {
             path: path.to_path_buf(),
@@ -346,7 +431,7 @@ pub fn read_trace(specimen: &Specimen, path: &Path) -> Result<Trace, Error> {
     }
     let angles: Vec<f64> = table.columns[index]
         .iter()
-        .map(|a| a * specimen.angle_scale)
+        .map(|a| a * angle_scale)
         .collect();
     let amplitude = super::trace::robust_amplitude(&angles);
     if amplitude > MAX_AMPLITUDE {
@@ -354,12 +439,8 @@ pub fn read_trace(specimen: &Specimen, path: &Path) -> Result<Trace, Error> {
             path: path.to_path_buf(),
             column: index + 1,
             name: table.header[index].clone(),
-            amplitude: amplitude / specimen.angle_scale,
-            unit: if specimen.angle_scale == 1.0 {
-                "rad"
-            } else {
-                "deg"
-            },
+            amplitude: amplitude / angle_scale,
+            unit: if angle_scale == 1.0 { "rad" } else { "deg" },
             specimen: specimen.source.clone(),
         });
     }

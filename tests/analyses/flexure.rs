@@ -172,7 +172,7 @@ fn simulate_specimen(
             flexure: geometry,
             pendulum: rig,
             traces: Vec::new(),
-            angle_scale: 1.0,
+            angle_scale: Some(1.0),
             angle_column: None,
         },
         k_true: k,
@@ -738,7 +738,7 @@ fn specimen_files_are_read_and_checked() {
     assert_eq!(s.name, "U01");
     assert_eq!(s.traces, vec![PathBuf::from("/data/u01_a.csv")]);
     assert!((s.flexure.width - 2e-3).abs() < 1e-15 && s.flexure.length == 5e-4);
-    assert!((s.angle_scale - PI / 180.0).abs() < 1e-15);
+    assert!((s.angle_scale.unwrap() - PI / 180.0).abs() < 1e-15);
     assert_eq!(s.pendulum.gravity, 9.81);
 
     let bad_unit = text.replace("\"3 mm\"", "\"3 g\"");

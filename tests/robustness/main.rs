@@ -5,5 +5,6 @@
 //! One test binary per group, so the suite links a few binaries instead of one per file.
 
 mod command_line;
+mod data_files;
 mod outputs;
 mod support;
