@@ -144,10 +144,9 @@ enum Quantity {
 /// number at or above this for a length, a mass or an inertia of the rig is refused as a
 /// number meant in another unit.
 fn implausible_in_si(expected: Dimension) -> Option<f64> {
-    if expected == Dimension::LENGTH {
-        Some(0.1) // m: flexures are µm–mm, the pendulum's arm mm–cm
-    } else if expected == Dimension::MASS {
-        Some(0.1) // kg: the rig's pendulums weigh grams at most
+    if expected == Dimension::LENGTH || expected == Dimension::MASS {
+        // m: flexures are µm–mm, the pendulum's arm mm–cm; kg: its mass grams at most.
+        Some(0.1)
     } else if expected == Dimension::INERTIA {
         Some(1e-3) // kg·m²: a 0.1 kg mass at 0.1 m
     } else {
