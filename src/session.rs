@@ -490,7 +490,7 @@ impl Session {
             .and_then(|(name, _)| self.compiled.model.loops.iter().find(|l| l.name == name));
         let site = match (closure, &self.compiled.source) {
             (Some(closure), Some(file)) => {
-                let diagnostic = Diagnostic::error("E0501", error.to_string()).with_label(
+                let diagnostic = Diagnostic::error("E0601", error.to_string()).with_label(
                     closure.span,
                     format!("loop `{}` cannot be closed here", closure.name),
                 );
