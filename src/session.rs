@@ -100,6 +100,15 @@ pub enum Error {
         found: Dimension,
         expected: Dimension,
     },
+    /// Parameter values that break a physical rule of the model (a negative mass, an
+    /// impossible inertia, a flexure dimension that is not positive).
+    Implausible {
+        option: &'static str,
+        /// The settings given, `NAME=VALUE`.
+        settings: Vec<String>,
+        /// The first rule broken (boxed: it holds the rule's expressions).
+        broken: Box<mech_codegen::ir::Implausible>,
+    },
     /// The loops could not be closed.
     Assembly(RuntimeError),
     /// No static equilibrium was found.
@@ -151,6 +160,11 @@ impl std::fmt::Display for Error {
                 f,
                 "{option} {name}: `{value}` has unit {found}, but `{name}` needs {expected}"
             ),
+            Error::Implausible {
+                option,
+                settings,
+                broken,
+            } => write!(f, "{option} {}: {broken}", settings.join(", ")),
             Error::Assembly(error) => write!(f, "{error}"),
             Error::Statics { model, error } => write!(f, "statics of `{model}`: {error}"),
             Error::Linearization(error) => write!(f, "linearization failed: {error}"),
@@ -205,17 +219,55 @@ impl Session {
             model,
             signals,
         };
+        // Checked together: one value may only be plausible with another (`I_p` and `L_cm`
+        // of the flexure rig).
         for assignment in sets {
-            session.set(assignment)?;
+            session.assign(assignment)?;
         }
+        session.check_plausible(sets)?;
         for assignment in inputs {
             session.input(assignment)?;
         }
         Ok(session)
     }
 
-    /// `--set m=12 g`: checks the name and the unit against the parameter's dimension.
+    /// `--set m=12 g`: checks the name, the unit against the parameter's dimension, and the
+    /// model's physical rules ([`Error::Implausible`], the value is then not kept).
     pub fn set(&mut self, assignment: &str) -> Result<(), Error> {
+        let previous: Vec<f64> = self.parameter_values();
+        self.assign(assignment)?;
+        let checked = self.check_plausible(&[assignment.to_string()]);
+        if checked.is_err() {
+            for (index, value) in previous.into_iter().enumerate() {
+                self.model.set_param(index, value);
+            }
+        }
+        checked
+    }
+
+    /// The parameter values, SI, by index.
+    fn parameter_values(&self) -> Vec<f64> {
+        (0..self.model.nparams())
+            .map(|i| self.model.param(i))
+            .collect()
+    }
+
+    /// The first physical rule of the model the current parameter values break, as an error
+    /// naming the `--set` `settings` that led there.
+    fn check_plausible(&self, settings: &[String]) -> Result<(), Error> {
+        let broken = self.compiled.model.implausible(&self.parameter_values());
+        match broken.into_iter().next() {
+            None => Ok(()),
+            Some(broken) => Err(Error::Implausible {
+                option: "--set",
+                settings: settings.to_vec(),
+                broken: Box::new(broken),
+            }),
+        }
+    }
+
+    /// [`Session::set`] without the physical rules.
+    fn assign(&mut self, assignment: &str) -> Result<(), Error> {
         let option = "--set";
         let (name, value, index) = self.assignment(option, NameKind::Parameter, assignment)?;
         let (si, dimension) =

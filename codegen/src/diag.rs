@@ -96,7 +96,8 @@ pub struct Label {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Diagnostic {
     pub severity: Severity,
-    /// Stable code, `E01xx` for syntax, `E02xx` names, `E03xx` dimensions, `E04xx` structure.
+    /// Stable code, `E01xx` for syntax, `E02xx` names, `E03xx` dimensions, `E04xx` structure,
+    /// `E05xx` physical plausibility.
     pub code: &'static str,
     pub message: String,
     pub labels: Vec<Label>,
