@@ -436,6 +436,24 @@ fn deep_nesting_is_an_error_not_a_crash() {
     check_code(&deep, "E0103");
     let long = format!("param a = 1{};", " + 1".repeat(10_000));
     check_code(&long, "E0103");
+    // Rejected before pest holds its tree: counted in the text (the `;` ends the count).
+    let huge = format!(
+        "param b = 1;\n  param a = 1{};\nparam c = 1{};",
+        " + 1".repeat(100_001),
+        " - 1".repeat(99_999)
+    );
+    let too_large = errors(&huge);
+    assert_eq!(too_large.diagnostics.len(), 1);
+    assert_eq!(too_large.diagnostics[0].message, "expression is too large");
+    assert_eq!(
+        too_large.diagnostics[0].labels[0].span.start, 15,
+        "at `param a`"
+    );
+    let below = format!("param a = 1;\nparam b = 1{};", " - 1".repeat(99_999));
+    assert_eq!(
+        errors(&below).diagnostics[0].message,
+        "expression is nested too deeply"
+    );
     let minus = format!("param a = {}1;", "-".repeat(100_000));
     check_code(&minus, "E0505");
     let mut lets = String::from("param a = 1;\nlet x0 = a;\n");

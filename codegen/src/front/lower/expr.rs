@@ -13,7 +13,7 @@ use crate::sym::Number;
 use super::{names, Lowerer, Value};
 
 /// Largest expression (in nodes) and deepest tree accepted after inlining `let`s.
-const MAX_SIZE: usize = 100_000;
+pub(in crate::front) const MAX_SIZE: usize = 100_000;
 const MAX_DEPTH: usize = 400;
 
 /// What an expression may refer to.

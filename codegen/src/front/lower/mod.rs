@@ -19,6 +19,8 @@ mod names;
 
 mod tree;
 
+pub(super) use expr::MAX_SIZE;
+
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
