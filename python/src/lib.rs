@@ -257,8 +257,8 @@ impl Model {
     }
 
     /// The equations `M(q) u̇ = F` and the outputs as s-expressions (`mech derive`).
-    fn equations(&self) -> String {
-        mech::describe::equations_text(&self.session().compiled)
+    fn equations(&self) -> PyResult<String> {
+        mech::describe::equations_text(&self.session().compiled).map_err(error)
     }
 
     /// The initial state with the loops closed: `independent` coordinates held
