@@ -234,9 +234,29 @@ impl Session {
     /// `--set m=12 g`: checks the name, the unit against the parameter's dimension, and the
     /// model's physical rules ([`Error::Implausible`], the value is then not kept).
     pub fn set(&mut self, assignment: &str) -> Result<(), Error> {
+        self.keep_if_plausible(assignment, |session| session.assign(assignment))
+    }
+
+    /// Parameter `index` set to `value` in SI units (no unit check), under the model's
+    /// physical rules as [`Session::set`].
+    pub fn set_si(&mut self, index: usize, value: f64) -> Result<(), Error> {
+        let shown = format!("{}={value}", self.model.param_name(index));
+        self.keep_if_plausible(&shown, |session| {
+            session.model.set_param(index, value);
+            Ok(())
+        })
+    }
+
+    /// Applies `change` (a setting shown as `shown`) and keeps it if the parameters then
+    /// obey the model's physical rules; otherwise restores them and returns the rule broken.
+    fn keep_if_plausible(
+        &mut self,
+        shown: &str,
+        change: impl FnOnce(&mut Session) -> Result<(), Error>,
+    ) -> Result<(), Error> {
         let previous: Vec<f64> = self.parameter_values();
-        self.assign(assignment)?;
-        let checked = self.check_plausible(&[assignment.to_string()]);
+        change(self)?;
+        let checked = self.check_plausible(&[shown.to_string()]);
         if checked.is_err() {
             for (index, value) in previous.into_iter().enumerate() {
                 self.model.set_param(index, value);

@@ -61,4 +61,11 @@ fn settings_are_checked_together_and_a_refused_one_is_not_kept() {
     assert_eq!(session.model.param(h), before, "the refused value was kept");
     session.set("h=30 um").expect("a positive thickness");
     assert_eq!(session.model.param(h), 30e-6);
+    // In SI without a unit (Python's `set_si`): the same rule.
+    let error = session.set_si(h, 0.0).expect_err("a zero thickness");
+    assert!(
+        error.to_string().starts_with("--set h=0: flexure"),
+        "{error}"
+    );
+    assert_eq!(session.model.param(h), 30e-6);
 }
