@@ -494,6 +494,7 @@ def main():
     L.extend(hamr_section(R))
     L.extend(statics_section(R))
     L.extend(diagnose_section())
+    L.extend(resources_section())
     with open(a.out, 'w') as f:
         f.write('\n'.join(L).rstrip('\n') + '\n')
     print(f'wrote {a.out}')
@@ -872,6 +873,16 @@ def diagnose_section():
     it shows: bench/analysis_diagnose.md)."""
     L = ['', '## 11. `mech diagnose`: the whole catalog on the HAMR leg', '']
     path = analysis_path('analysis_diagnose')
+    if os.path.exists(path):
+        L.append(analysis_text(path).rstrip('\n'))
+    return L
+
+
+def resources_section():
+    """Section 12: the command line's time and memory on long chains (measured by hand with
+    bench/chain_resources.py: bench/analysis_resources.md)."""
+    L = ['', '## 12. The command line on long chains: time and peak memory', '']
+    path = analysis_path('analysis_resources')
     if os.path.exists(path):
         L.append(analysis_text(path).rstrip('\n'))
     return L

@@ -18,9 +18,44 @@ pub fn operation_counts(tape: &mech_codegen::Tape) -> String {
     )
 }
 
-/// `M` (upper triangle), `F` and the outputs as s-expressions.
-pub fn equations_text(compiled: &Compiled) -> String {
+/// Largest printout [`equations_text`] makes, in expression nodes (a few bytes each: an
+/// 8-link chain prints about 2 MB, a 16-link one would print 560 MB).
+pub const MAX_PRINTED_NODES: u64 = 10_000_000;
+
+/// The equations are too large to print as trees.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "the equations of `{model}` would print as {} expression nodes, more than {limit}: \
+     printed as trees they repeat every shared subexpression at each of its uses; \
+     `--emit tape` or `--emit rust` write each one once",
+    if *nodes == u64::MAX { "over 1.8e19".to_string() } else { nodes.to_string() }
+)]
+pub struct TooLarge {
+    pub model: String,
+    /// [`mech_codegen::sym::ExprPool::printed_size`] of everything printed (saturated at
+    /// `u64::MAX`).
+    pub nodes: u64,
+    pub limit: u64,
+}
+
+/// `M` (upper triangle), `F` and the outputs as s-expressions; [`TooLarge`] rather than a
+/// printout of more than [`MAX_PRINTED_NODES`] nodes, measured before any is written.
+pub fn equations_text(compiled: &Compiled) -> Result<String, TooLarge> {
     let eqs = &compiled.equations;
+    let upper = (0..eqs.nu).flat_map(|r| (r..eqs.nu).map(move |s| r + eqs.nu * s));
+    let roots: Vec<_> = upper
+        .map(|i| eqs.mass_matrix[i])
+        .chain(eqs.forcing.iter().copied())
+        .chain(eqs.outputs.iter().copied())
+        .collect();
+    let nodes = eqs.pool.printed_size(&roots);
+    if nodes > MAX_PRINTED_NODES {
+        return Err(TooLarge {
+            model: compiled.model.name.clone(),
+            nodes,
+            limit: MAX_PRINTED_NODES,
+        });
+    }
     let names: Vec<&str> = compiled
         .model
         .coordinates
@@ -47,7 +82,7 @@ pub fn equations_text(compiled: &Compiled) -> String {
     for (name, &y) in eqs.output_names.iter().zip(&eqs.outputs) {
         text.push_str(&format!("{name} = {}\n", eqs.pool.sexpr(y)));
     }
-    text
+    Ok(text)
 }
 
 /// The register instructions of each tape program.

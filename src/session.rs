@@ -100,6 +100,15 @@ pub enum Error {
         found: Dimension,
         expected: Dimension,
     },
+    /// Parameter values that break a physical rule of the model (a negative mass, an
+    /// impossible inertia, a flexure dimension that is not positive).
+    Implausible {
+        option: &'static str,
+        /// The settings given, `NAME=VALUE`.
+        settings: Vec<String>,
+        /// The first rule broken (boxed: it holds the rule's expressions).
+        broken: Box<mech_codegen::ir::Implausible>,
+    },
     /// The same name set twice by one option.
     Repeated {
         option: &'static str,
@@ -180,6 +189,11 @@ impl std::fmt::Display for Error {
                 f,
                 "{option} {name}: given twice (`{first}` and `{second}`); give it once"
             ),
+            Error::Implausible {
+                option,
+                settings,
+                broken,
+            } => write!(f, "{option} {}: {broken}", settings.join(", ")),
             Error::Assembly {
                 site: Some(site), ..
             } => write!(f, "{site}"),
@@ -285,17 +299,75 @@ impl Session {
         };
         refuse_repeated("--set", sets)?;
         refuse_repeated("--input", inputs)?;
+        // Checked together: one value may only be plausible with another (`I_p` and `L_cm`
+        // of the flexure rig).
         for assignment in sets {
-            session.set(assignment)?;
+            session.assign(assignment)?;
         }
+        session.check_plausible(sets)?;
         for assignment in inputs {
             session.input(assignment)?;
         }
         Ok(session)
     }
 
-    /// `--set m=12 g`: checks the name and the unit against the parameter's dimension.
+    /// `--set m=12 g`: checks the name, the unit against the parameter's dimension, and the
+    /// model's physical rules ([`Error::Implausible`], the value is then not kept).
     pub fn set(&mut self, assignment: &str) -> Result<(), Error> {
+        self.keep_if_plausible(assignment, |session| session.assign(assignment))
+    }
+
+    /// Parameter `index` set to `value` in SI units (no unit check), under the model's
+    /// physical rules as [`Session::set`].
+    pub fn set_si(&mut self, index: usize, value: f64) -> Result<(), Error> {
+        let shown = format!("{}={value}", self.model.param_name(index));
+        self.keep_if_plausible(&shown, |session| {
+            session.model.set_param(index, value);
+            Ok(())
+        })
+    }
+
+    /// Applies `change` (a setting shown as `shown`) and keeps it if the parameters then
+    /// obey the model's physical rules; otherwise restores them and returns the rule broken.
+    fn keep_if_plausible(
+        &mut self,
+        shown: &str,
+        change: impl FnOnce(&mut Session) -> Result<(), Error>,
+    ) -> Result<(), Error> {
+        let previous: Vec<f64> = self.parameter_values();
+        change(self)?;
+        let checked = self.check_plausible(&[shown.to_string()]);
+        if checked.is_err() {
+            for (index, value) in previous.into_iter().enumerate() {
+                self.model.set_param(index, value);
+            }
+        }
+        checked
+    }
+
+    /// The parameter values, SI, by index.
+    fn parameter_values(&self) -> Vec<f64> {
+        (0..self.model.nparams())
+            .map(|i| self.model.param(i))
+            .collect()
+    }
+
+    /// The first physical rule of the model the current parameter values break, as an error
+    /// naming the `--set` `settings` that led there.
+    fn check_plausible(&self, settings: &[String]) -> Result<(), Error> {
+        let broken = self.compiled.model.implausible(&self.parameter_values());
+        match broken.into_iter().next() {
+            None => Ok(()),
+            Some(broken) => Err(Error::Implausible {
+                option: "--set",
+                settings: settings.to_vec(),
+                broken: Box::new(broken),
+            }),
+        }
+    }
+
+    /// [`Session::set`] without the physical rules.
+    fn assign(&mut self, assignment: &str) -> Result<(), Error> {
         let option = "--set";
         let (name, value, index) = self.assignment(option, NameKind::Parameter, assignment)?;
         let expected = self

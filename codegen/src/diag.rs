@@ -96,7 +96,8 @@ pub struct Label {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Diagnostic {
     pub severity: Severity,
-    /// Stable code, `E01xx` for syntax, `E02xx` names, `E03xx` dimensions, `E04xx` structure.
+    /// Stable code, `E01xx` for syntax, `E02xx` names, `E03xx` dimensions, `E04xx` structure,
+    /// `E05xx` physical plausibility.
     pub code: &'static str,
     pub message: String,
     pub labels: Vec<Label>,
@@ -161,13 +162,14 @@ impl Diagnostic {
             }
             out.push_str(&format!("{pad} │\n"));
             let text = file.line_text(line);
-            out.push_str(&format!("{line:>gutter$} │ {text}\n"));
             let (end_line, end_col) = file.line_col(label.span.end);
             let width = if end_line == line {
                 end_col.saturating_sub(col).max(1)
             } else {
                 text.chars().count().saturating_sub(col - 1).max(1)
             };
+            let (text, col, width) = excerpt(text, col, width);
+            out.push_str(&format!("{line:>gutter$} │ {text}\n"));
             let marker = if i == 0 { "^" } else { "-" };
             out.push_str(&format!(
                 "{pad} │ {}{} {}\n",
@@ -184,6 +186,30 @@ impl Diagnostic {
         }
         out
     }
+}
+
+/// Longest source line a diagnostic shows, in characters; a longer one (a generated file of
+/// megabytes on one line) is cut around the label, with `…` where it is cut.
+const MAX_LINE: usize = 160;
+
+/// The part of `text` shown for a label at 1-based character column `col`, `width`
+/// characters wide, and the label's column and width in that part.
+fn excerpt(text: &str, col: usize, width: usize) -> (String, usize, usize) {
+    if text.chars().count() <= MAX_LINE {
+        return (text.to_string(), col, width);
+    }
+    let start = (col - 1).saturating_sub(MAX_LINE / 4);
+    let shown: String = text.chars().skip(start).take(MAX_LINE).collect();
+    let cut_end = text.chars().count() > start + MAX_LINE;
+    let (before, after) = (
+        if start > 0 { "…" } else { "" },
+        if cut_end { "…" } else { "" },
+    );
+    let col = col - start + usize::from(start > 0);
+    let width = width
+        .min(MAX_LINE + 1 + usize::from(start > 0) - col)
+        .max(1);
+    (format!("{before}{shown}{after}"), col, width)
 }
 
 /// All errors of the phase that failed, with the file they refer to.
@@ -209,13 +235,21 @@ impl Errors {
     }
 }
 
+/// Diagnostics `Display` renders; the others are only counted. The first ones are what to
+/// fix, and thousands (a generated file gone wrong) took seconds to print.
+pub const MAX_SHOWN: usize = 100;
+
 impl fmt::Display for Errors {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        for (i, diagnostic) in self.diagnostics.iter().enumerate() {
+        for (i, diagnostic) in self.diagnostics.iter().take(MAX_SHOWN).enumerate() {
             if i > 0 {
                 writeln!(f)?;
             }
             f.write_str(&diagnostic.render(&self.file))?;
+        }
+        let hidden = self.diagnostics.len().saturating_sub(MAX_SHOWN);
+        if hidden > 0 {
+            writeln!(f, "\n… and {hidden} more not shown")?;
         }
         let errors = self
             .diagnostics
@@ -237,11 +271,16 @@ impl fmt::Debug for Errors {
 
 impl std::error::Error for Errors {}
 
+/// Most names [`closest`] searches.
+pub const MAX_CANDIDATES: usize = 1000;
+
 /// The candidate closest to `name` by edit distance, if it is close enough to be a typo.
+/// Not searched among more than [`MAX_CANDIDATES`]: a file of thousands of names and as many
+/// typos (generated text gone wrong) made the search quadratic, 80 s for 16,000.
 pub fn closest<'c>(name: &str, candidates: &[&'c str]) -> Option<&'c str> {
     const LONGEST: usize = 64;
     let length = name.chars().count();
-    if length > LONGEST {
+    if length > LONGEST || candidates.len() > MAX_CANDIDATES {
         return None;
     }
     // Short names only match up to case (`mn` → `mN`); longer ones allow a typo per 3 chars.
@@ -249,7 +288,8 @@ pub fn closest<'c>(name: &str, candidates: &[&'c str]) -> Option<&'c str> {
     let lower = name.to_lowercase();
     candidates
         .iter()
-        .filter(|c| c.chars().count() <= LONGEST && **c != name)
+        // The distance is at least the difference in length.
+        .filter(|c| c.chars().count().abs_diff(length) <= limit && **c != name)
         .map(|c| {
             (
                 (
@@ -283,6 +323,46 @@ pub fn edit_distance(a: &str, b: &str) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn shows_the_first_diagnostics_and_counts_the_rest() {
+        let text = "x\n".repeat(MAX_SHOWN + 5);
+        let file = Arc::new(SourceFile::new("m.mech", text));
+        let diagnostics = (0..MAX_SHOWN + 5)
+            .map(|i| {
+                Diagnostic::error("E0204", format!("unknown name number {i}"))
+                    .with_label(Span::new(2 * i, 2 * i + 1), "here")
+            })
+            .collect();
+        let shown = Errors::new(file, diagnostics).to_string();
+        assert!(shown.contains(&format!("number {}\n", MAX_SHOWN - 1)));
+        assert!(!shown.contains(&format!("number {}\n", MAX_SHOWN)));
+        assert!(shown.ends_with(&format!(
+            "\n… and 5 more not shown\n\n{} errors in m.mech\n",
+            MAX_SHOWN + 5
+        )));
+    }
+
+    #[test]
+    fn a_long_line_is_cut_around_its_label() {
+        let text = format!("param a = {}2 * ;\n", "1 + ".repeat(1000));
+        let at = text.find("* ;").expect("the error") + 2;
+        let file = SourceFile::new("m.mech", text);
+        let d =
+            Diagnostic::error("E0101", "syntax error").with_label(Span::new(at, at + 1), "here");
+        let rendered = d.render(&file);
+        let lines: Vec<&str> = rendered.lines().collect();
+        let (source, marker) = (lines[3], lines[4]);
+        assert!(
+            source.starts_with("1 │ …") && source.ends_with("2 * ;"),
+            "{source}"
+        );
+        assert!(source.chars().count() < MAX_LINE + 10);
+        // The marker stands under the `;`.
+        let column =
+            |line: &str, pattern: &str| line.find(pattern).map(|b| line[..b].chars().count());
+        assert_eq!(column(marker, "^ here"), column(source, ";"));
+    }
 
     #[test]
     fn renders_label_under_the_right_column_after_non_ascii() {

@@ -235,10 +235,10 @@ impl Model {
         self.session().set(assignment).map_err(error)
     }
 
-    /// Sets parameter `name` to `value` in SI units (no unit check).
+    /// Sets parameter `name` to `value` in SI units (no unit check; the physical rules are).
     fn set_si(&mut self, name: &str, value: f64) -> PyResult<()> {
         let mut session = self.session();
-        let model = &mut session.model;
+        let model = &session.model;
         let index = model.param_index(name).ok_or_else(|| {
             let known: Vec<&str> = (0..model.nparams()).map(|i| model.param_name(i)).collect();
             error(format!(
@@ -247,8 +247,7 @@ impl Model {
                 known.join(", ")
             ))
         })?;
-        model.set_param(index, value);
-        Ok(())
+        session.set_si(index, value).map_err(error)
     }
 
     /// `NAME=SIGNAL` (`drive=sine(amplitude=1 mN, frequency=10 Hz)`), checked as `--input` is.
@@ -257,8 +256,8 @@ impl Model {
     }
 
     /// The equations `M(q) u̇ = F` and the outputs as s-expressions (`mech derive`).
-    fn equations(&self) -> String {
-        mech::describe::equations_text(&self.session().compiled)
+    fn equations(&self) -> PyResult<String> {
+        mech::describe::equations_text(&self.session().compiled).map_err(error)
     }
 
     /// The initial state with the loops closed: `independent` coordinates held

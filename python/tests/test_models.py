@@ -254,3 +254,20 @@ def test_settings_by_unit_and_by_number_agree():
     by_text.set("l=45 mm")
     assert by_text.parameters["l"] == pytest.approx(0.045, rel=1e-15)
     assert "M[0,0]" in by_text.equations()
+
+
+def test_physically_impossible_values_are_refused():
+    """The model's physical rules (E05xx when written in the file) hold for `set`, `set_si`
+    and `load(set=...)`; a refused value is not kept, and settings are checked together."""
+    pendulum = model("pendulum")
+    with pytest.raises(mech.MechError, match="body `bob` has a negative mass"):
+        pendulum.set("m=-3 g")
+    with pytest.raises(mech.MechError, match="negative mass"):
+        pendulum.set_si("m", -0.003)
+    assert pendulum.parameters["m"] == pytest.approx(0.01, rel=1e-15)
+    pendulum.set_si("m", 0.0)  # a massless bob is legal
+    # The rig's pendulum has I_p − m L_cm² about its centre of mass.
+    with pytest.raises(mech.MechError, match="negative principal moment"):
+        model("flexure_rig", set={"L_cm": "30 mm"})
+    rig = model("flexure_rig", set={"L_cm": "30 mm", "I_p": "1e-6 kg*m^2"})
+    assert rig.parameters["L_cm"] == pytest.approx(0.03, rel=1e-15)

@@ -45,7 +45,7 @@ pub fn run(args: &DeriveArgs) -> Result<(), Error> {
             compiled.rust(&options)
         }
         Emit::Tape => describe::tape_text(&compiled),
-        Emit::Equations => describe::equations_text(&compiled),
+        Emit::Equations => describe::equations_text(&compiled)?,
     };
     match out {
         Some(file) => {

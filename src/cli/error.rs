@@ -25,6 +25,9 @@ pub enum Error {
     Compile(#[from] mech_codegen::Errors),
     #[error(transparent)]
     Session(#[from] session::Error),
+    /// `derive --emit equations` of a model too large to print as trees.
+    #[error(transparent)]
+    Equations(#[from] crate::describe::TooLarge),
     #[error(transparent)]
     Experiments(#[from] experiments::Error),
     #[error(transparent)]

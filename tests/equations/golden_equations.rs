@@ -24,7 +24,7 @@ fn golden_dir() -> PathBuf {
 fn check(stem: &str) {
     let compiled = mech_codegen::Compiled::from_path(root().join(format!("models/{stem}.mech")))
         .unwrap_or_else(|errors| panic!("models/{stem}.mech does not compile:{errors:?}"));
-    let actual = mech::describe::equations_text(&compiled);
+    let actual = mech::describe::equations_text(&compiled).expect("a bundled model prints");
     let golden = golden_dir().join(format!("{stem}.txt"));
     if support::blessing() {
         std::fs::create_dir_all(golden_dir()).expect("writable tests/golden");
@@ -85,5 +85,65 @@ fn every_bundled_model_has_a_golden_test() {
         &models,
         "mech",
         "tests/equations/golden_equations.rs",
+    );
+}
+
+/// `n` links hanging along -z, pins alternating about x and y (the benchmark's 3D chain with
+/// one set of parameters).
+fn chain(n: usize) -> String {
+    let mut text = String::from(
+        "param m = 1 kg; param l = 1 m; param d = 0.5 m; param I = 0.08 kg*m^2;\n\
+         gravity = [0, 0, -9.81 m/s^2];\n",
+    );
+    for k in 1..=n {
+        let parent = if k == 1 {
+            "newtonian".to_string()
+        } else {
+            format!("link{}", k - 1)
+        };
+        let at = if k == 1 {
+            ""
+        } else {
+            "parent_point = [0, 0, -l];"
+        };
+        let axis = if k % 2 == 1 { "x" } else { "y" };
+        text.push_str(&format!(
+            "body link{k} {{ mass = m; com = [0, 0, -d]; inertia = [I, I, I / 4]; }}\n\
+             joint q{k} = pin({parent}, link{k}) {{ axis = {axis}; {at} q0 = 0.5 rad; }}\n"
+        ));
+    }
+    text
+}
+
+#[test]
+fn equations_too_large_to_print_are_refused_before_printing() {
+    // The estimate is the printout's size: every token of the right-hand sides but brackets.
+    let small = crate::common::compile_text("chain6", &chain(6));
+    let text = mech::describe::equations_text(&small).expect("6 links print");
+    let tokens: u64 = text
+        .lines()
+        .filter(|line| !line.starts_with("//"))
+        .map(|line| {
+            let (_, rhs) = line.split_once(" = ").expect("NAME = EXPR");
+            rhs.replace(['(', ')'], " ").split_whitespace().count() as u64
+        })
+        .sum();
+    let roots = {
+        let eqs = &small.equations;
+        let upper = (0..eqs.nu).flat_map(|r| (r..eqs.nu).map(move |s| r + eqs.nu * s));
+        let mut roots: Vec<_> = upper.map(|i| eqs.mass_matrix[i]).collect();
+        roots.extend(eqs.forcing.iter().chain(&eqs.outputs));
+        roots
+    };
+    assert_eq!(small.equations.pool.printed_size(&roots), tokens);
+
+    // 16 links would print about half a gigabyte: refused, and the message says what to use.
+    let large = crate::common::compile_text("chain16", &chain(16));
+    let refused = mech::describe::equations_text(&large).expect_err("too large to print");
+    assert!(refused.nodes > mech::describe::MAX_PRINTED_NODES);
+    let message = refused.to_string();
+    assert!(
+        message.contains("`--emit tape` or `--emit rust`"),
+        "{message}"
     );
 }

@@ -156,7 +156,7 @@ fn flexure_losses_as_complex_stiffness_a_power_law_or_viscous_damper() {
         param arm = 20 mm;
         input torque = 0 N*m;
         gravity = [0, -9.81 m/s^2, 0];
-        body bob { mass = m; com = [0, -arm, 0]; inertia = [0 kg*m^2, 0 kg*m^2, 1e-8 kg*m^2]; }
+        body bob { mass = m; com = [0, -arm, 0]; inertia = [1e-8 kg*m^2, 0 kg*m^2, 1e-8 kg*m^2]; }
         joint hinge = pin(newtonian, bob) { axis = z; }
         flexure hinge_flexure on hinge {
             width = 2 mm; thickness = 25 um; length = 500 um;

@@ -20,6 +20,7 @@ mod language_doc;
 mod linear;
 mod loops;
 mod pendulum;
+mod plausible;
 mod reduced;
 mod resonances;
 mod springs;

@@ -259,8 +259,8 @@ fn a_spring_between_two_sliders_pulls_both_ends_equally() {
 /// Two pendulums hung side by side, a spring between points off their axes.
 const TWO_PENDULUMS: &str = "
 newtonian { point right = [40 mm, 5 mm, 0]; }
-body a { mass = 10 g; com = [0, -15 mm, 0]; inertia = [1e-7, 1e-7, 1e-6] * 1 kg*m^2; point tip = [3 mm, -30 mm, 0]; }
-body b { mass = 15 g; com = [0, -20 mm, 0]; inertia = [1e-7, 1e-7, 2e-6] * 1 kg*m^2; point tip = [-2 mm, -25 mm, 0]; }
+body a { mass = 10 g; com = [0, -15 mm, 0]; inertia = [5e-7, 5e-7, 1e-6] * 1 kg*m^2; point tip = [3 mm, -30 mm, 0]; }
+body b { mass = 15 g; com = [0, -20 mm, 0]; inertia = [1e-6, 1e-6, 2e-6] * 1 kg*m^2; point tip = [-2 mm, -25 mm, 0]; }
 joint qa = pin(newtonian, a) { axis = z; }
 joint qb = pin(newtonian, b) { axis = z; parent_point = newtonian.right; }
 gravity = [0, -9.81 m/s^2, 0];

@@ -50,11 +50,14 @@ impl Default for RustOptions {
 
 /// Formatted Rust source for `model`.
 pub fn emit(model: &Model, equations: &Equations, options: &RustOptions) -> String {
-    let file = Emitter::new(model, equations, options).file();
-    let syntax: syn::File = match syn::parse2(file.clone()) {
-        Ok(syntax) => syntax,
-        Err(error) => panic!("mech-codegen emitted invalid Rust ({error}); this is a bug:\n{file}"),
-    };
+    let (file, parts) = Emitter::new(model, equations, options).file();
+    let mut source = format_file(file);
+    // One part at a time: syn's tree of a whole large file was 3/4 of the peak memory
+    // (2.2 of 3 GB for the 64-link chain).
+    for part in parts {
+        source.push('\n');
+        source.push_str(&format_file(part));
+    }
     let count =
         |roots: &[ExprId]| super::tape::Program::compile(&equations.pool, roots).operation_count();
     let header = format!(
@@ -70,7 +73,17 @@ pub fn emit(model: &Model, equations: &Equations, options: &RustOptions) -> Stri
         count(&equations.forcing),
         count(&equations.outputs),
     );
-    header + &prettyplease::unparse(&syntax)
+    header + &source
+}
+
+/// `tokens` (whole items) formatted by prettyplease.
+fn format_file(tokens: TokenStream) -> String {
+    match syn::parse2::<syn::File>(tokens.clone()) {
+        Ok(syntax) => prettyplease::unparse(&syntax),
+        Err(error) => {
+            panic!("mech-codegen emitted invalid Rust ({error}); this is a bug:\n{tokens}")
+        }
+    }
 }
 
 /// The generated struct of model `name`: `cart_pendulum` → `CartPendulum`, prefixed with
@@ -259,7 +272,9 @@ impl<'a> Emitter<'a> {
         })
     }
 
-    fn file(&self) -> TokenStream {
+    /// The file's items, and the part functions of the split inherent functions, each in an
+    /// `impl` block of its own (formatted one by one).
+    fn file(&self) -> (TokenStream, Vec<TokenStream>) {
         let rt = &self.runtime;
         let (name, params) = (&self.struct_name, &self.params_name);
         let [nq, nu, ni] = State::ALL.map(|state| self.len(state));
@@ -307,7 +322,19 @@ impl<'a> Emitter<'a> {
         let forcing_in_trait = self.trait_method(Function::Forcing, "f");
         let outputs_in_trait = self.trait_method(Function::Outputs, "y");
 
-        quote! {
+        let parts = [mass_parts, forcing_parts, output_parts]
+            .into_iter()
+            .flatten()
+            .map(|part| {
+                quote! {
+                    #[allow(clippy::all, clippy::pedantic, unused_variables, unused_parens, non_snake_case)]
+                    impl #name {
+                        #part
+                    }
+                }
+            })
+            .collect();
+        let file = quote! {
             #model_docs
             #[derive(Clone, Debug, PartialEq, Default)]
             #[allow(clippy::all)]
@@ -374,9 +401,6 @@ impl<'a> Emitter<'a> {
                 /// Outputs, in the order of `OUTPUT_NAMES`.
                 #outputs
 
-                #(#mass_parts)*
-                #(#forcing_parts)*
-                #(#output_parts)*
                 #constraint_inherent
                 #flexure_inherent
             }
@@ -418,7 +442,8 @@ impl<'a> Emitter<'a> {
                 #constraint_trait
                 #flexure_trait
             }
-        }
+        };
+        (file, parts)
     }
 
     /// For models with flexures: `NFLEXURES`, `FLEXURE_NAMES` and `flexures` (`[θ…, k…, b…,

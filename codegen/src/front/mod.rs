@@ -9,7 +9,8 @@
 //! - [`load`]: both, with the model name defaulting to the file stem.
 //!
 //! The language is documented in `docs/mech-language.md`; error codes are `E01xx` syntax,
-//! `E02xx` names, `E03xx` dimensions, `E04xx` structure.
+//! `E02xx` names, `E03xx` dimensions, `E04xx` structure, `E05xx` physical plausibility
+//! (`ir::plausible`).
 
 pub mod ast;
 mod lower;

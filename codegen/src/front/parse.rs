@@ -9,6 +9,7 @@ use pest::iterators::Pair;
 use pest::Parser as _;
 
 use super::ast::{self, BinaryOp, Expr, ExprKind, Ident};
+use super::lower::MAX_SIZE;
 use crate::diag::{Diagnostic, SourceFile, Span};
 
 #[derive(pest_derive::Parser)]
@@ -686,10 +687,14 @@ fn too_deep(span: Span) -> Diagnostic {
 // ---------------------------------------------------------------------------------------------
 
 /// Rejects bracket nesting deeper than [`MAX_BRACKET_DEPTH`] (outside comments), so that
-/// neither pest nor the lowering can exhaust the stack.
+/// neither pest nor the lowering can exhaust the stack, and a statement with more than
+/// [`MAX_SIZE`] operators, which the lowering would reject as too large (E0103) only after
+/// pest had held the whole tree (about 150 bytes of memory per byte of text).
 fn check_bracket_depth(text: &str) -> Result<()> {
     let bytes = text.as_bytes();
     let mut depth = 0usize;
+    // Operators since the last `;`, `{` or `}`, and where that statement started.
+    let (mut operators, mut statement) = (0usize, 0usize);
     let mut i = 0;
     while i < bytes.len() {
         match bytes[i] {
@@ -706,6 +711,9 @@ fn check_bracket_depth(text: &str) -> Result<()> {
                 i += 1;
             }
             b'(' | b'[' | b'{' => {
+                if bytes[i] == b'{' {
+                    (operators, statement) = (0, i + 1);
+                }
                 depth += 1;
                 if depth > MAX_BRACKET_DEPTH {
                     return Err(Diagnostic::error("E0103", "brackets are nested too deeply")
@@ -716,7 +724,27 @@ fn check_bracket_depth(text: &str) -> Result<()> {
                         .with_help("split the expression with `let` definitions"));
                 }
             }
-            b')' | b']' | b'}' => depth = depth.saturating_sub(1),
+            b')' | b']' | b'}' => {
+                if bytes[i] == b'}' {
+                    (operators, statement) = (0, i + 1);
+                }
+                depth = depth.saturating_sub(1);
+            }
+            b';' => (operators, statement) = (0, i + 1),
+            // Units' operators count too (`kg*m^2`): an overestimate, far above real models.
+            b'+' | b'-' | b'*' | b'/' | b'^' => {
+                operators += 1;
+                if operators > MAX_SIZE {
+                    let rest = &text[statement..];
+                    let statement = statement + rest.len() - rest.trim_start().len();
+                    return Err(Diagnostic::error("E0103", "expression is too large")
+                        .with_label(
+                            Span::new(statement, statement + 1),
+                            format!("a statement of more than {MAX_SIZE} operators starts here"),
+                        )
+                        .with_help("an expression this large is not a model of a mechanism; generate fewer terms, or split it with `let` definitions"));
+                }
+            }
             _ => {}
         }
         i += 1;

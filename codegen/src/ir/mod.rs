@@ -18,9 +18,11 @@
 //! since derivation only ever walks frames in arena order, the result must keep parents first.
 
 pub mod arena;
+pub mod plausible;
 pub mod transform;
 
 pub use arena::{Arena, Handle};
+pub use plausible::{Implausible, Requirement};
 
 use crate::diag::Span;
 use crate::sym::Number;
@@ -233,6 +235,31 @@ impl Expr {
     pub fn one() -> Expr {
         Expr::Number(Number::ONE)
     }
+
+    /// The value with the params at `params` (SI, by index); `None` if it depends on an input
+    /// or time.
+    pub fn evaluate(&self, params: &[f64]) -> Option<f64> {
+        let eval = |e: &Expr| e.evaluate(params);
+        Some(match self {
+            Expr::Number(n) => n.to_f64(),
+            Expr::Pi => std::f64::consts::PI,
+            Expr::Param(handle) => *params.get(handle.index())?,
+            Expr::Input(_) | Expr::Time => return None,
+            Expr::Neg(a) => -eval(a)?,
+            Expr::Add(a, b) => eval(a)? + eval(b)?,
+            Expr::Sub(a, b) => eval(a)? - eval(b)?,
+            Expr::Mul(a, b) => eval(a)? * eval(b)?,
+            Expr::Div(a, b) => eval(a)? / eval(b)?,
+            Expr::Pow(a, e) => match e.as_integer().and_then(|e| i32::try_from(e).ok()) {
+                Some(e) => eval(a)?.powi(e),
+                None => eval(a)?.powf(e.to_f64()),
+            },
+            Expr::Call(f, args) => {
+                let values: Option<Vec<f64>> = args.iter().map(eval).collect();
+                f.apply(&values?)
+            }
+        })
+    }
 }
 
 // Operators build the node as written, without folding constants: the closed forms of
@@ -273,6 +300,20 @@ impl Function {
             Function::Ln => "ln",
             Function::Abs => "abs",
             Function::Atan2 => "atan2",
+        }
+    }
+    /// The function at `args` (NaN for a missing argument).
+    pub fn apply(self, args: &[f64]) -> f64 {
+        let x = args.first().copied().unwrap_or(f64::NAN);
+        match self {
+            Function::Sin => x.sin(),
+            Function::Cos => x.cos(),
+            Function::Tan => x.tan(),
+            Function::Sqrt => x.sqrt(),
+            Function::Exp => x.exp(),
+            Function::Ln => x.ln(),
+            Function::Abs => x.abs(),
+            Function::Atan2 => x.atan2(args.get(1).copied().unwrap_or(f64::NAN)),
         }
     }
     pub fn arity(self) -> usize {
@@ -671,6 +712,9 @@ pub struct Model {
     /// Gravitational acceleration, components in the Newtonian frame.
     pub gravity: Option<Vec3>,
     pub outputs: Vec<Output>,
+    /// Physical rules on masses, inertias and element dimensions, checked again when a
+    /// parameter changes at run time.
+    pub requirements: Vec<Requirement>,
 }
 
 impl Model {
@@ -691,6 +735,20 @@ impl Model {
             span: Span::default(),
         });
         model
+    }
+
+    /// The requirements that do not hold with the parameters at `params` (SI, by index).
+    pub fn implausible(&self, params: &[f64]) -> Vec<Implausible> {
+        self.requirements
+            .iter()
+            .filter_map(|requirement| {
+                let violation = requirement.check(params).err()?;
+                Some(Implausible {
+                    requirement: requirement.clone(),
+                    violation,
+                })
+            })
+            .collect()
     }
 
     /// The chain of frames from the root to `frame`, root first.

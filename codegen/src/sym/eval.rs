@@ -27,6 +27,69 @@ impl ExprPool {
             .collect()
     }
 
+    /// The number of atoms and operators (every token but the brackets) of the s-expressions
+    /// of `roots` (`sexpr`, which repeats a shared subexpression at each use), computed on the
+    /// DAG in time linear in its size, saturating: how large a printout is before making it.
+    pub fn printed_size(&self, roots: &[ExprId]) -> u64 {
+        let order = self.reachable(roots);
+        let len = order.last().map_or(0, |id| id.index() + 1);
+        // The whole s-expression, and the factors alone (`write_factors`).
+        let (mut whole, mut factors) = (vec![0u64; len], vec![0u64; len]);
+        let add = |a: u64, b: u64| a.saturating_add(b);
+        for id in order {
+            let i = id.index();
+            let (w, f) = match self.node(id) {
+                Node::Number(_) | Node::Symbol(_) => (1, 1),
+                Node::Add { constant, terms } => {
+                    let mut size = 1 + u64::from(!constant.is_zero());
+                    for &(term, c) in terms.iter() {
+                        size = add(
+                            size,
+                            if c.is_one() {
+                                whole[term.index()]
+                            } else {
+                                add(2, factors[term.index()])
+                            },
+                        );
+                    }
+                    (size, size)
+                }
+                Node::Mul {
+                    coefficient,
+                    factors: items,
+                } => {
+                    let mut f = 0u64;
+                    for &(base, e) in items.iter() {
+                        f = add(
+                            f,
+                            if e.is_one() {
+                                whole[base.index()]
+                            } else {
+                                add(2, whole[base.index()])
+                            },
+                        );
+                    }
+                    let w = if coefficient.is_one() && items.len() == 1 {
+                        f
+                    } else {
+                        add(f, 1 + u64::from(!coefficient.is_one()))
+                    };
+                    (w, f)
+                }
+                Node::Call(_, x) => {
+                    let w = add(1, whole[x.index()]);
+                    (w, w)
+                }
+                Node::Atan2(y, x) => {
+                    let w = add(1, add(whole[y.index()], whole[x.index()]));
+                    (w, w)
+                }
+            };
+            (whole[i], factors[i]) = (w, f);
+        }
+        roots.iter().fold(0, |acc, id| add(acc, whole[id.index()]))
+    }
+
     /// Evaluates `roots` with symbol values from `value_of`.
     pub fn eval(&self, roots: &[ExprId], value_of: &dyn Fn(Symbol) -> f64) -> Vec<f64> {
         let order = self.reachable(roots);

@@ -168,3 +168,44 @@ fn substitution_drops_vanishing_terms() {
     check_at_rest("(+ (sin q0) (atan2 u0 1))", Some("(sin q0)"));
     check_at_rest("(* q0 (^ u0 -1))", None);
 }
+
+/// Every token of the printout but the brackets.
+fn printed_tokens(text: &str) -> u64 {
+    text.replace(['(', ')'], " ").split_whitespace().count() as u64
+}
+
+#[test]
+fn printed_size_counts_the_printout_without_making_it() {
+    let mut pool = ExprPool::new();
+    let roots: Vec<ExprId> = [
+        "(+ 1 (* 2 x) (* 3 (^ x 2) y) (sin q0))",
+        "(* -1/2 (cos q0) (^ u0 2) m)",
+        "(atan2 (* 2 q0) (- x))",
+        "(/ (+ x 1) (^ (+ y 2) 3))",
+        "x",
+    ]
+    .iter()
+    .map(|text| pool.parse_sexpr(text).unwrap())
+    .collect();
+    for &root in &roots {
+        let text = pool.sexpr(root);
+        assert_eq!(pool.printed_size(&[root]), printed_tokens(&text), "{text}");
+    }
+    let all: u64 = roots.iter().map(|&r| printed_tokens(&pool.sexpr(r))).sum();
+    assert_eq!(pool.printed_size(&roots), all);
+
+    // Sharing: e_{k+1} = sin(e_k) · cos(e_k) holds e_k twice, so its printout doubles with k
+    // while the pool grows by a few nodes; 64 levels would print 2^64 tokens.
+    let mut e = pool.parse_sexpr("q0").unwrap();
+    let mut sizes = Vec::new();
+    for _ in 0..64 {
+        let (sin, cos) = (pool.call(Func::Sin, e), pool.call(Func::Cos, e));
+        e = pool.mul(sin, cos);
+        if sizes.len() < 4 {
+            assert_eq!(pool.printed_size(&[e]), printed_tokens(&pool.sexpr(e)));
+        }
+        sizes.push(pool.printed_size(&[e]));
+    }
+    assert_eq!(&sizes[..3], [5, 13, 29]);
+    assert_eq!(sizes[63], u64::MAX, "saturates instead of overflowing");
+}

@@ -7,6 +7,7 @@
 
 use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, ExprKind, Ident};
+use crate::ir::plausible::Rule;
 use crate::ir::{self, AxisAngle, Dimension, Expr, Handle, Vec3};
 use crate::sym::Number;
 
@@ -175,8 +176,14 @@ impl<'a> Lowerer<'a> {
                     what: "`mass`",
                     example: "10 g",
                 };
-                self.lower_scalar_as(&field.value, static_ctx, &expect)
-                    .unwrap_or_else(Expr::zero)
+                match self.lower_scalar_as(&field.value, static_ctx, &expect) {
+                    Some(mass) => {
+                        let rule = Rule::Mass(mass.clone());
+                        self.require("body", &body.name.name, rule, field.value.span);
+                        mass
+                    }
+                    None => Expr::zero(),
+                }
             }
             None => {
                 let help = "every body needs a mass, e.g. `mass = 10 g;`";
@@ -197,7 +204,14 @@ impl<'a> Lowerer<'a> {
             None => zeros(),
         };
         let inertia = match fields.iter().find(|f| f.name.name == "inertia") {
-            Some(field) => self.inertia(&field.value).unwrap_or_else(ir::Inertia::zero),
+            Some(field) => match self.inertia(&field.value) {
+                Some(inertia) => {
+                    let rule = Rule::Inertia(inertia.clone());
+                    self.require("body", &body.name.name, rule, field.value.span);
+                    inertia
+                }
+                None => ir::Inertia::zero(),
+            },
             None => ir::Inertia::zero(),
         };
         self.owners[owner].body = Some(BodyProps {

@@ -20,6 +20,7 @@ use std::collections::BTreeMap;
 
 use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, Ident};
+use crate::ir::plausible::Rule;
 use crate::ir::{self, ClosureKind, Dimension, Expr, FlexureAngle, JointKind};
 use crate::physics::{self, Scalar, TaperedBimorph};
 use crate::sym::Number;
@@ -226,6 +227,23 @@ impl<'a> Lowerer<'a> {
         material
     }
 
+    /// Requires dimension `field` (SI `unit`) of element `kind` `decl` to be positive.
+    fn require_positive(
+        &mut self,
+        (kind, decl): (&'static str, &ast::ElementDecl),
+        field: &'static str,
+        unit: &'static str,
+        value: &Expr,
+        span: Span,
+    ) {
+        let rule = Rule::Positive {
+            field,
+            unit,
+            value: value.clone(),
+        };
+        self.require(kind, &decl.name.name, rule, span);
+    }
+
     fn missing(&mut self, decl: &ast::ElementDecl, what: &str, message: &str, help: &str) {
         self.error(
             Diagnostic::error("E0402", format!("{what} `{}` {message}", decl.name.name))
@@ -352,6 +370,10 @@ impl<'a> Lowerer<'a> {
             return;
         };
         let frequency = self.element_scalar(&fields, "reference_frequency", false);
+        if let Some((value, span)) = &frequency {
+            // b = kη/ω_ref: a zero frequency gives an infinite damper.
+            self.require_positive(("flexure", decl), "reference_frequency", "Hz", value, *span);
+        }
         if frequency.is_none() {
             self.missing(
                 decl,
@@ -483,9 +505,19 @@ impl<'a> Lowerer<'a> {
     ) -> Option<Expr> {
         let width = self.element_scalar(fields, "width", false);
         let thickness = self.element_scalar(fields, "thickness", false);
-        let length = self
-            .element_scalar(fields, "effective_length", false)
-            .or_else(|| self.element_scalar(fields, "length", false));
+        let effective_length = self.element_scalar(fields, "effective_length", false);
+        let length = self.element_scalar(fields, "length", false);
+        for (field, given) in [
+            ("width", &width),
+            ("thickness", &thickness),
+            ("effective_length", &effective_length),
+            ("length", &length),
+        ] {
+            if let Some((value, span)) = given {
+                self.require_positive(("flexure", decl), field, "m", value, *span);
+            }
+        }
+        let length = effective_length.or(length);
         let (Some((width, _)), Some((thickness, _)), Some((length, _))) =
             (width, thickness, length)
         else {
@@ -633,6 +665,11 @@ impl<'a> Lowerer<'a> {
                     self.missing(decl, "actuator", &format!("has no `{name}`"), "a bimorph needs pzt_thickness, core_thickness, length, extension, nominal_width, width_ratio, f31_blocked, f31_free, pzt_modulus and core_modulus");
                 }
                 None => {}
+            }
+        }
+        for field in ["pzt_thickness", "core_thickness", "length", "nominal_width"] {
+            if let Some((value, span)) = values.get(field) {
+                self.require_positive(("actuator", decl), field, "m", value, *span);
             }
         }
         if values.len() != BIMORPH_FIELDS.len() {

@@ -13,7 +13,7 @@ use crate::sym::Number;
 use super::{names, Lowerer, Value};
 
 /// Largest expression (in nodes) and deepest tree accepted after inlining `let`s.
-const MAX_SIZE: usize = 100_000;
+pub(in crate::front) const MAX_SIZE: usize = 100_000;
 const MAX_DEPTH: usize = 400;
 
 /// What an expression may refer to.
@@ -194,7 +194,7 @@ impl Lowerer<'_> {
 
     /// Evaluates a static expression at the params' default values.
     pub(super) fn evaluate(&mut self, expr: &Expr, span: Span) -> f64 {
-        match evaluate(expr, &self.param_values) {
+        match expr.evaluate(&self.param_values) {
             Some(value) if value.is_finite() => value,
             _ => {
                 self.error(not_finite(span));
@@ -917,22 +917,8 @@ fn fold_call(f: Function, args: Vec<Expr>) -> Expr {
         })
         .collect();
     match values {
-        Some(values) => Expr::Number(Number::Float(apply(f, &values))),
+        Some(values) => Expr::Number(Number::Float(f.apply(&values))),
         None => Expr::Call(f, args),
-    }
-}
-
-fn apply(f: Function, args: &[f64]) -> f64 {
-    let x = args.first().copied().unwrap_or(f64::NAN);
-    match f {
-        Function::Sin => x.sin(),
-        Function::Cos => x.cos(),
-        Function::Tan => x.tan(),
-        Function::Sqrt => x.sqrt(),
-        Function::Exp => x.exp(),
-        Function::Ln => x.ln(),
-        Function::Abs => x.abs(),
-        Function::Atan2 => x.atan2(args.get(1).copied().unwrap_or(f64::NAN)),
     }
 }
 
@@ -956,31 +942,7 @@ pub fn fold(expr: &Expr) -> Option<Number> {
         Expr::Call(f, args) => {
             let values: Option<Vec<f64>> =
                 args.iter().map(|a| fold(a).map(Number::to_f64)).collect();
-            float(apply(*f, &values?))
+            float(f.apply(&values?))
         }
     }
-}
-
-/// Evaluates an expression of params (at `params`) and constants; `None` for inputs or time.
-pub fn evaluate(expr: &Expr, params: &[f64]) -> Option<f64> {
-    let eval = |e: &Expr| evaluate(e, params);
-    Some(match expr {
-        Expr::Number(n) => n.to_f64(),
-        Expr::Pi => std::f64::consts::PI,
-        Expr::Param(handle) => *params.get(handle.index())?,
-        Expr::Input(_) | Expr::Time => return None,
-        Expr::Neg(a) => -eval(a)?,
-        Expr::Add(a, b) => eval(a)? + eval(b)?,
-        Expr::Sub(a, b) => eval(a)? - eval(b)?,
-        Expr::Mul(a, b) => eval(a)? * eval(b)?,
-        Expr::Div(a, b) => eval(a)? / eval(b)?,
-        Expr::Pow(a, e) => match e.as_integer().and_then(|e| i32::try_from(e).ok()) {
-            Some(e) => eval(a)?.powi(e),
-            None => eval(a)?.powf(e.to_f64()),
-        },
-        Expr::Call(f, args) => {
-            let values: Option<Vec<f64>> = args.iter().map(eval).collect();
-            apply(*f, &values?)
-        }
-    })
 }

@@ -19,6 +19,8 @@ mod names;
 
 mod tree;
 
+pub(super) use expr::MAX_SIZE;
+
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
@@ -147,6 +149,29 @@ impl<'a> Lowerer<'a> {
         self.diagnostics.push(diagnostic);
     }
 
+    /// Records a physical rule on the values of declaration `kind` `name` (kept in the model,
+    /// so a run-time parameter change is checked too) and reports it if the parameters'
+    /// defaults break it; `span` is the value's text.
+    fn require(&mut self, kind: &'static str, name: &str, rule: ir::plausible::Rule, span: Span) {
+        let requirement = ir::Requirement {
+            kind,
+            name: name.to_string(),
+            rule,
+            span,
+        };
+        if let Err(violation) = requirement.check(&self.param_values) {
+            self.error(
+                Diagnostic::error(
+                    violation.code(),
+                    format!("{kind} `{name}` {}", violation.message()),
+                )
+                .with_label(span, violation.found())
+                .with_help(violation.help()),
+            );
+        }
+        self.model.requirements.push(requirement);
+    }
+
     /// All phases in dependency order; each collects its errors and goes on.
     fn run(&mut self, file: &'a ast::File) {
         self.lower_values(&file.items);
@@ -198,6 +223,15 @@ impl<'a> Lowerer<'a> {
     }
 
     fn finish(mut self) -> Result<ir::Model, Vec<Diagnostic>> {
+        // Without bodies nothing moves and every phase accepts it (`0 = 0`). Only reported
+        // alone: with other errors, those are what to fix.
+        if self.diagnostics.is_empty() && self.model.bodies.is_empty() {
+            self.error(
+                Diagnostic::error("E0505", "the model has no bodies")
+                    .with_label(Span::default(), "no `body` declared in this file")
+                    .with_help("declare a body and the joint that attaches it, e.g. `body arm { mass = 10 g; }` and `joint hinge = pin(newtonian, arm) { axis = z; }`"),
+            );
+        }
         if self.diagnostics.is_empty() {
             return Ok(self.model);
         }
