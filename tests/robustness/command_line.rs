@@ -166,6 +166,8 @@ fn settings_given_twice_or_signals_where_a_constant_is_held_are_refused() {
         &[
             (&["statics", "{model:pendulum}", "--set", "m=1 g", "--set", "m=2 g"], "--set m: given twice (`m=1 g` and `m=2 g`); give it once"),
             (&["statics", "{model:hamr_vi}", "--input", "v_lift=10 V", "--input", "v_lift=20 V"], "--input v_lift: given twice"),
+            // Was accepted: the statics found an "equilibrium" of a negative mass.
+            (&["statics", "{model:pendulum}", "--set", "m=-1 kg"], "--set m=-1 kg: body `bob` has a negative mass"),
             // Read at t = 0 without a word before.
             (&["statics", "{model:hamr_vi}", "--input", "v_lift=sine(amplitude=100 V, frequency=1 Hz)"], "--input v_lift: `mech statics` holds inputs constant; give a value such as `v_lift=2 V`"),
             (&["linearize", "{model:hamr_vi}", "--input", "v_lift=sine(amplitude=100 V, frequency=1 Hz)"], "`mech linearize` holds inputs constant"),
