@@ -1,8 +1,8 @@
 //! A proptest smoke run of the four cargo-fuzz targets (`fuzz/fuzz_targets/`, issue #18): the
 //! same entry points on arbitrary text and bytes and on mutations of the repository's own
 //! models, experiment files, data files and signal specs. Each must return `Ok` or `Err` and
-//! render its errors; a panic is the failure. The inputs the fuzzer found are kept as explicit
-//! regression cases at the end. docs/fuzzing.md says how to run the fuzzer itself.
+//! render its errors; a panic is the failure. An input the fuzzer finds goes in as an explicit
+//! regression case at the end (none so far). docs/fuzzing.md says how to run the fuzzer itself.
 
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, OnceLock};
