@@ -458,12 +458,17 @@ impl std::error::Error for CsvError {}
 /// are comments; `NaN` and `inf` are accepted as numbers. Every row must have as many fields as
 /// the header, and there must be at least one column and one data row.
 pub fn read_csv_table(path: &Path) -> Result<CsvTable, CsvError> {
-    let reading = |e: csv::Error| CsvError::reading(path, &e);
     let bytes = fs::read(path).map_err(|e| {
         let reason = e.to_string();
         CsvError::new(path, CsvErrorKind::Read { reason })
     })?;
-    if let Some(problem) = encoding_problem(&bytes) {
+    parse_csv_table(path, &bytes)
+}
+
+/// Parses CSV `bytes` as [`read_csv_table`] does; `path` only names the file in messages.
+pub fn parse_csv_table(path: &Path, bytes: &[u8]) -> Result<CsvTable, CsvError> {
+    let reading = |e: csv::Error| CsvError::reading(path, &e);
+    if let Some(problem) = encoding_problem(bytes) {
         return Err(CsvError::new(path, CsvErrorKind::NotText { problem }));
     }
     let mut reader = csv::ReaderBuilder::new()
@@ -471,7 +476,7 @@ pub fn read_csv_table(path: &Path) -> Result<CsvTable, CsvError> {
         .flexible(true)
         .trim(csv::Trim::All)
         .comment(Some(b'#'))
-        .from_reader(bytes.as_slice());
+        .from_reader(bytes);
     let header: Vec<String> = reader
         .headers()
         .map_err(reading)?

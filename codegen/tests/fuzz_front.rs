@@ -3,7 +3,7 @@
 //!
 //! Consumes: arbitrary strings, and byte-level mutations and splices of a valid model.
 //! Produces: proptest cases (a few hundred, so the test runs in seconds in debug builds).
-//! The same property runs unbounded under cargo-fuzz in `fuzz/fuzz_targets/front.rs`.
+//! The same property runs unbounded under cargo-fuzz in `fuzz/fuzz_targets/front_end.rs`.
 
 use std::sync::Arc;
 

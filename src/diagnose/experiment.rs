@@ -146,21 +146,27 @@ pub struct Extensions {
 
 /// Reads and checks a diagnosis experiment file.
 pub fn load(path: &Path) -> Result<Experiment, Error> {
-    let path_buf = || path.to_path_buf();
     let text = std::fs::read_to_string(path).map_err(|error| Error::ReadExperiment {
-        path: path_buf(),
+        path: path.to_path_buf(),
         error,
     })?;
-    let experiment: Experiment = toml::from_str(&text).map_err(|error| {
+    parse(path, &text)
+}
+
+/// Parses and checks a diagnosis experiment from TOML `text`; `path` only names the file in
+/// messages (the model path in the text stays as written).
+pub fn parse(path: &Path, text: &str) -> Result<Experiment, Error> {
+    let path_buf = || path.to_path_buf();
+    let experiment: Experiment = toml::from_str(text).map_err(|error| {
         let message = error.to_string();
-        if let Some((key, line)) = crate::experiments::error::unknown_key(&text, &message) {
+        if let Some((key, line)) = crate::experiments::error::unknown_key(text, &message) {
             return Error::UnknownKey {
                 path: path_buf(),
                 key,
                 line,
             };
         }
-        match crate::experiments::error::mistyped_key(&text, &message) {
+        match crate::experiments::error::mistyped_key(text, &message) {
             Some((key, line)) => Error::Experiment {
                 path: path_buf(),
                 error: KeyError::Mistyped { key, line, message },

@@ -6,5 +6,6 @@
 
 mod command_line;
 mod data_files;
+mod fuzz_smoke;
 mod outputs;
 mod support;
