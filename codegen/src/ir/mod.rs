@@ -440,6 +440,11 @@ pub struct Inertia {
 }
 
 impl Inertia {
+    /// The six entries in the order `xx, yy, zz, xy, yz, zx`.
+    pub fn entries(&self) -> [&Expr; 6] {
+        [&self.xx, &self.yy, &self.zz, &self.xy, &self.yz, &self.zx]
+    }
+
     pub fn zero() -> Inertia {
         Inertia {
             xx: Expr::zero(),

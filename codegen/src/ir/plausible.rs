@@ -89,16 +89,8 @@ impl Requirement {
                 _ => Ok(()),
             },
             Rule::Inertia(inertia) => {
-                let entries = [
-                    &inertia.xx,
-                    &inertia.yy,
-                    &inertia.zz,
-                    &inertia.xy,
-                    &inertia.yz,
-                    &inertia.zx,
-                ];
                 let mut values = [0.0; 6];
-                for (slot, entry) in values.iter_mut().zip(entries) {
+                for (slot, entry) in values.iter_mut().zip(inertia.entries()) {
                     let Some(v) = value(entry) else {
                         return Ok(());
                     };

@@ -288,15 +288,7 @@ impl BodyTerms {
 
 /// The symmetric inertia matrix from tensor entries.
 fn inertia_matrix(pool: &mut ExprPool, inertia: &ir::Inertia) -> [[ExprId; 3]; 3] {
-    let [xx, yy, zz, xy, yz, zx] = [
-        &inertia.xx,
-        &inertia.yy,
-        &inertia.zz,
-        &inertia.xy,
-        &inertia.yz,
-        &inertia.zx,
-    ]
-    .map(|e| lower_expr(pool, e));
+    let [xx, yy, zz, xy, yz, zx] = inertia.entries().map(|e| lower_expr(pool, e));
     [[xx, xy, zx], [xy, yy, yz], [zx, yz, zz]]
 }
 
