@@ -49,15 +49,20 @@ pub fn run(args: &ReportArgs) -> Result<(), Error> {
         args.out_dir.join("report.html"),
         args.out_dir.join("report.md"),
     );
-    let mut files: Vec<output::File> = outcomes.iter().flat_map(|o| o.rendered.clone()).collect();
-    files.push(output::File::new(
-        &html,
-        render_html(&outcomes, &args.out_dir, elapsed)?,
-    ));
-    files.push(output::File::new(
-        &markdown,
-        render_markdown(&outcomes, &args.out_dir, elapsed),
-    ));
+    let pages = [
+        output::File::new(&html, render_html(&outcomes, &args.out_dir, elapsed)?),
+        output::File::new(
+            &markdown,
+            render_markdown(&outcomes, &args.out_dir, elapsed),
+        ),
+    ];
+    let count = outcomes.len();
+    // The outcomes' files move into the list: no copy of the plots' bytes.
+    let files: Vec<output::File> = outcomes
+        .into_iter()
+        .flat_map(|o| o.rendered)
+        .chain(pages)
+        .collect();
     let reads: Vec<output::Read> = experiment_files
         .iter()
         .map(|path| output::Read {
@@ -67,8 +72,7 @@ pub fn run(args: &ReportArgs) -> Result<(), Error> {
         .collect();
     output::write_all(&files, &reads)?;
     println!(
-        "{} experiments in {elapsed:.1} s; report written to {} and {}",
-        outcomes.len(),
+        "{count} experiments in {elapsed:.1} s; report written to {} and {}",
         html.display(),
         markdown.display()
     );
