@@ -33,13 +33,12 @@ pub enum WrittenEffect {
     /// A force along y at the foot, the parameter `side_force` (N, 0 as written), for a
     /// sensor's side load computed outside the model ([`FOOT_SIDE_FORCE`]).
     FootSideForce,
-    /// Flexure `flexure`'s hinge also twists about the coordinate axis `about` (0 = x, 1 = y,
-    /// 2 = z) with Eq. 8's stiffness `2k/(1 + ν)`, ν = 0.34, and bends about the third axis
+    /// Each of `hinges` (flexure, coordinate axis 0 = x, 1 = y, 2 = z) also twists about its
+    /// axis with Eq. 8's stiffness `2k/(1 + ν)`, ν = 0.34, and bends about the third axis
     /// with `k/off_axis_compliance`; every other hinge is compliant off its axis,
     /// `k/off_axis_compliance` about both other coordinate axes.
     Twist {
-        flexure: &'static str,
-        about: usize,
+        hinges: &'static [(&'static str, usize)],
         off_axis_compliance: f64,
     },
     /// Flexure `flexure`'s bending axis turned by `angle` (rad) about the coordinate axis
@@ -112,17 +111,16 @@ pub fn hamr_vi_written(effect: WrittenEffect, dir: &Path) -> Leg {
              force sensor_side at leg.foot = [0, {FOOT_SIDE_FORCE}, 0] in newtonian;\n"
         ),
         WrittenEffect::Twist {
-            flexure,
-            about,
+            hinges,
             off_axis_compliance,
         } => compliant_hinges(&source, off_axis_compliance, |name, axis| {
             let others = [(axis + 1) % 3, (axis + 2) % 3];
-            if name != flexure {
+            let Some(&(_, about)) = hinges.iter().find(|(flexure, _)| *flexure == name) else {
                 return HingeSprings::off_axis(axis, others);
-            }
+            };
             assert!(
                 others.contains(&about),
-                "{flexure} cannot twist about its axis"
+                "{name} cannot twist about its axis"
             );
             let lateral = others[0] + others[1] - about;
             let eq8 = format!("* 2 / (1 + {POISSON_RATIO})");

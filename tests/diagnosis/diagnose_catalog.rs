@@ -105,8 +105,7 @@ fn blocked_swing_force(leg: &Leg) -> f64 {
 fn fb3_twisting(dir: &Path, compliance: f64) -> (Leg, f64) {
     let base = blocked_swing_force(&Leg::open(&common::hamr_vi_spec()).unwrap());
     let effect = WrittenEffect::Twist {
-        flexure: "fb3",
-        about: 1,
+        hinges: &[("fb3", 1)],
         off_axis_compliance: compliance,
     };
     let truth = common::hamr_vi_written(effect, dir);

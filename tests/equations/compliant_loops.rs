@@ -281,8 +281,7 @@ fn the_hinge_extensions_equal_the_effects_written_by_hand() {
 
     let c = 4e-4;
     let effect = WrittenEffect::Twist {
-        flexure: "fb3",
-        about: 1,
+        hinges: &[("fb3", 1)],
         off_axis_compliance: c,
     };
     let written = common::hamr_vi_written(effect, &dir);
@@ -331,4 +330,34 @@ fn largest_foot_difference(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
         .zip(b)
         .flat_map(|(a, b)| (0..3).map(move |i| (a[i] - b[i]).abs()))
         .fold(0.0_f64, f64::max)
+}
+
+/// The hinges around each loop of the HAMR-VI leg: each crank-slider's three (the slider
+/// is no hinge) and the spherical five-bar's five, which shares s3 and l3 with the
+/// crank-sliders (read off the model's comment: chassis, swing crank, SFB swing link, leg,
+/// lift crank); and the four-bar's four.
+#[test]
+fn the_hinges_around_each_loop_are_the_shortest_cycles() {
+    use mech_codegen::ir::transform::hinge::loop_flexures;
+    let loops = |path: &str| {
+        let compiled = mech_codegen::Compiled::from_path(path).unwrap();
+        loop_flexures(&compiled.model)
+    };
+    let names = |sets: &[&[&str]]| -> Vec<Vec<String>> {
+        sets.iter()
+            .map(|set| set.iter().map(|s| s.to_string()).collect())
+            .collect()
+    };
+    assert_eq!(
+        loops("models/hamr_vi.mech"),
+        names(&[
+            &["s1", "s2", "s3"],
+            &["l1", "l2", "l3"],
+            &["s3", "l3", "fb1", "fb2", "fb3"],
+        ])
+    );
+    assert_eq!(
+        loops("models/compliant_four_bar.mech"),
+        names(&[&["crank_hinge", "coupler_hinge", "rocker_hinge", "tip_hinge"]])
+    );
 }

@@ -226,3 +226,84 @@ fn rotate(axis: &mut Vec3, about: usize, angle: &Expr) -> Option<()> {
     }
     Some(())
 }
+
+/// The flexures around each loop closure, in `model.flexures` order: the closure's own
+/// hinge and those on the shortest path through the rest of the mechanism between its two
+/// points (a moving frame or another closure counts one step, a fixed frame none). A twist
+/// unlocks a closed loop only when its hinges give way together (the module docs), so these
+/// are the hinges a loop's twist acts at. Two closures sharing one shortest cycle give equal
+/// sets (the caller dedupes).
+pub fn loop_flexures(model: &Model) -> Vec<Vec<String>> {
+    #[derive(Clone, Copy, PartialEq)]
+    enum Edge {
+        /// A frame to its parent.
+        Frame(usize),
+        /// A loop closure.
+        Loop(usize),
+    }
+    let frames = model.frames.len();
+    let mut neighbours: Vec<Vec<(usize, Edge, usize)>> = vec![Vec::new(); frames];
+    for (handle, frame) in model.frames.iter() {
+        if let Some(parent) = frame.parent {
+            let cost = usize::from(frame.motion != Motion::Fixed);
+            let edge = Edge::Frame(handle.index());
+            neighbours[handle.index()].push((parent.index(), edge, cost));
+            neighbours[parent.index()].push((handle.index(), edge, cost));
+        }
+    }
+    let ends = |closure: &crate::ir::LoopClosure| {
+        (
+            model.points[closure.parent].frame.index(),
+            model.points[closure.child].frame.index(),
+        )
+    };
+    for (index, closure) in model.loops.iter().enumerate() {
+        let (a, b) = ends(closure);
+        neighbours[a].push((b, Edge::Loop(index), 1));
+        neighbours[b].push((a, Edge::Loop(index), 1));
+    }
+    model
+        .loops
+        .iter()
+        .enumerate()
+        .map(|(closure, loop_closure)| {
+            let (from, to) = ends(loop_closure);
+            // 0-1 breadth-first search (a deque: cost-0 steps in front) without this closure.
+            let mut distance = vec![usize::MAX; frames];
+            let mut reached_by: Vec<Option<(usize, Edge)>> = vec![None; frames];
+            let mut queue = std::collections::VecDeque::from([from]);
+            distance[from] = 0;
+            while let Some(node) = queue.pop_front() {
+                for &(next, edge, cost) in &neighbours[node] {
+                    if edge == Edge::Loop(closure) || distance[node] + cost >= distance[next] {
+                        continue;
+                    }
+                    distance[next] = distance[node] + cost;
+                    reached_by[next] = Some((node, edge));
+                    if cost == 0 {
+                        queue.push_front(next);
+                    } else {
+                        queue.push_back(next);
+                    }
+                }
+            }
+            let mut path = vec![Edge::Loop(closure)];
+            let mut node = to;
+            while let Some((previous, edge)) = reached_by[node] {
+                path.push(edge);
+                node = previous;
+            }
+            model
+                .flexures
+                .iter()
+                .filter(|flexure| match flexure.angle {
+                    FlexureAngle::Coordinate(coordinate) => super::pin_frame(model, coordinate)
+                        .is_some_and(|(frame, _)| path.contains(&Edge::Frame(frame.index()))),
+                    FlexureAngle::Loop(index) => path.contains(&Edge::Loop(index)),
+                    FlexureAngle::LoopTwist(_) | FlexureAngle::LoopLateral(_) => false,
+                })
+                .map(|flexure| flexure.name.clone())
+                .collect()
+        })
+        .collect()
+}
