@@ -104,6 +104,8 @@ pub enum Error {
     },
     /// The base model's trial failed, so nothing can be compared with it.
     BaseModel(Box<Error>),
+    /// No assignment of twist axes to a loop's hinges gave a prediction.
+    NoTwistAxes { hinges: String },
     /// The model file does not compile.
     Compile { model: PathBuf, errors: Errors },
     /// A model-form extension cannot be applied to the model.
@@ -303,6 +305,11 @@ impl fmt::Display for Error {
                 catalog.join(", ")
             ),
             Error::BaseModel(error) => write!(f, "the base model: {error}"),
+            Error::NoTwistAxes { hinges } => write!(
+                f,
+                "no static equilibrium with flexures {hinges} twisting about any of their \
+                 possible length axes"
+            ),
             Error::Compile { model, errors } => write!(f, "model `{}`: {errors}", model.display()),
             Error::Transform { model, error } => {
                 write!(f, "model `{}`: {error}", model.display())

@@ -22,6 +22,12 @@ pub enum Extension {
     /// every other hinge compliant off its axis. New parameters: [`hinge::TWIST_FACTOR`],
     /// [`hinge::OFF_AXIS_COMPLIANCE`].
     Twist(Vec<(String, usize)>),
+    /// These flexures (the hinges of one loop) twist together, each about one of the two
+    /// coordinate axes ⊥ its bending axis, picked by a parameter per hinge
+    /// ([`hinge::twist_choice`]): the model on which `mech diagnose` searches the axes before
+    /// fitting the [`Extension::Twist`] it finds. New parameters as for
+    /// [`Extension::Twist`], then the choices.
+    TwistChoices(Vec<String>),
     /// A flexure's bending axis tilted by a small angle (fabrication; a rotation of the whole
     /// hinge about a coordinate axis of its frame perpendicular to it), pins and loop closures,
     /// every hinge compliant off its axis so the loops take up the misfit. New parameters:
@@ -53,6 +59,7 @@ impl Extension {
                 .map(|(flexure, axis)| format!("{flexure} about {}", AXES[*axis]))
                 .collect::<Vec<_>>()
                 .join(", "),
+            Extension::TwistChoices(hinges) => hinges.join(", "),
             Extension::Misalignment { flexure, about } => {
                 format!("{flexure} tilted about {}", AXES[*about])
             }
@@ -108,6 +115,7 @@ pub fn extend_leg(base: &Compiled, spec: &ModelSpec, extension: &Extension) -> R
 pub fn apply(model: &mut ir::Model, extension: &Extension) -> Result<(), TransformError> {
     match extension {
         Extension::Twist(hinges) => hinge::twist(model, hinges),
+        Extension::TwistChoices(hinges) => hinge::twist_choices(model, hinges).map(|_| ()),
         Extension::Misalignment { flexure, about } => hinge::misalign(model, flexure, *about),
         Extension::BaseCompliance(slider) => actuator::base_compliance(model, slider),
         Extension::ActuatorStiffness(slider) => actuator::stiffness_factor(model, slider),

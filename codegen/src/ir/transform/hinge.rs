@@ -36,32 +36,14 @@ pub const MISALIGNMENT: &str = "misalignment";
 /// `hinges` (name, length axis in the hinge's frame: 0 = x, 1 = y, 2 = z) twist with
 /// stiffness [`TWIST_FACTOR`] · 2k/(1 + ν); every other hinge is compliant off its axis.
 pub fn twist(model: &mut Model, hinges: &[(String, usize)]) -> Result<(), TransformError> {
-    let factor = append_param(
-        model,
-        TWIST_FACTOR,
-        1.0,
-        Dimension::NONE,
-        "Factor on Eq. 8's twist stiffness 2k/(1 + ν) (mech diagnose).",
-    );
-    let stiff = off_axis_stiffness(model);
-    let eq8 = scaled(
-        &factor,
-        &Expr::Number(Number::rational(TWIST_RATIO.0, TWIST_RATIO.1)),
-    );
-    // The model's own hinges, before the springs added below get flexure records of their own.
-    let named: Vec<&str> = hinges.iter().map(|(name, _)| name.as_str()).collect();
-    let others: Vec<Flexure> = model
-        .flexures
-        .iter()
-        .filter(|f| !named.contains(&f.name.as_str()))
-        .cloned()
-        .collect();
+    let names: Vec<String> = hinges.iter().map(|(name, _)| name.clone()).collect();
+    let springs = TwistSprings::append(model, &names);
     for (name, axis) in hinges {
         let flexure = find_flexure(model, name)?;
         let twist = Twist {
             axis: unit(*axis),
-            twist: spring(&flexure, "twist", &eq8),
-            lateral: Some(spring(&flexure, "lateral", &stiff)),
+            twist: spring(&flexure, "twist", &springs.eq8),
+            lateral: Some(spring(&flexure, "lateral", &springs.stiff)),
             span: flexure.span,
         };
         add_twist(model, flexure.angle, twist).map_err(|error| TransformError::Twist {
@@ -70,7 +52,104 @@ pub fn twist(model: &mut Model, hinges: &[(String, usize)]) -> Result<(), Transf
             error,
         })?;
     }
-    compliant_off_axis(model, others, &stiff)
+    compliant_off_axis(model, springs.others, &springs.stiff)
+}
+
+/// The parameter of [`twist_choices`] that picks hinge `flexure`'s twist axis.
+pub fn twist_choice(flexure: &str) -> String {
+    format!("twist_axis_{flexure}")
+}
+
+/// [`twist`] with each hinge's length axis left open: each of `hinges` (bending about a
+/// coordinate axis) twists about one of the two coordinate axes ⊥ it, picked at run time by
+/// its parameter [`twist_choice`] (0: the first, 1: the second; the two springs trade
+/// stiffnesses linearly between) — so a search can try every assignment of length axes
+/// (2ⁿ for n hinges) on one derivation. At 0 or 1 it equals [`twist`] about that axis to
+/// first order in the angles (the twist and lateral frames nest in the other order).
+/// Appends [`TWIST_FACTOR`], [`OFF_AXIS_COMPLIANCE`], then the choices in the order of
+/// `hinges`; returns each hinge's two axes.
+pub fn twist_choices(
+    model: &mut Model,
+    hinges: &[String],
+) -> Result<Vec<[usize; 2]>, TransformError> {
+    let springs = TwistSprings::append(model, hinges);
+    let mut choices = Vec::new();
+    for name in hinges {
+        let flexure = find_flexure(model, name)?;
+        let axes = twist_axes(model, &flexure)
+            .ok_or_else(|| TransformError::AxisNotConstant(name.clone()))?;
+        let choice = append_param(
+            model,
+            &twist_choice(name),
+            0.0,
+            Dimension::NONE,
+            "Which axis ⊥ the bending axis the hinge twists about (0 or 1; mech diagnose).",
+        );
+        let blend = |soft: Expr, stiff: Expr| {
+            Expr::Add(
+                Box::new(scaled(&soft, &springs.eq8)),
+                Box::new(scaled(&stiff, &springs.stiff)),
+            )
+        };
+        let other = Expr::Sub(Box::new(Expr::one()), Box::new(choice.clone()));
+        // Soft about the first axis at 0 (lateral, about bending × first = ± the second,
+        // stiff), the other way round at 1.
+        let twist = Twist {
+            axis: unit(axes[0]),
+            twist: spring(&flexure, "twist", &blend(other.clone(), choice.clone())),
+            lateral: Some(spring(&flexure, "lateral", &blend(choice, other))),
+            span: flexure.span,
+        };
+        add_twist(model, flexure.angle, twist).map_err(|error| TransformError::Twist {
+            flexure: name.clone(),
+            about: "off its axis".into(),
+            error,
+        })?;
+        choices.push(axes);
+    }
+    compliant_off_axis(model, springs.others, &springs.stiff)?;
+    Ok(choices)
+}
+
+/// The two coordinate axes a hinge bending about a coordinate axis can twist about, in the
+/// order of [`twist_choice`] (`None`: its axis is not a coordinate axis).
+pub fn twist_axes(model: &Model, flexure: &Flexure) -> Option<[usize; 2]> {
+    let axis = constant_direction(&hinge_axis(model, flexure.angle)?)?;
+    let bending = (0..3).find(|&i| axis[i].abs() > 1.0 - 1e-12)?;
+    Some([(bending + 1) % 3, (bending + 2) % 3])
+}
+
+/// What [`twist`] and [`twist_choices`] share: the appended twist factor (as Eq. 8's
+/// stiffness factor) and off-axis stiffness factor, and the hinges not named.
+struct TwistSprings {
+    eq8: Expr,
+    stiff: Expr,
+    others: Vec<Flexure>,
+}
+
+impl TwistSprings {
+    fn append(model: &mut Model, named: &[String]) -> TwistSprings {
+        let factor = append_param(
+            model,
+            TWIST_FACTOR,
+            1.0,
+            Dimension::NONE,
+            "Factor on Eq. 8's twist stiffness 2k/(1 + ν) (mech diagnose).",
+        );
+        let stiff = off_axis_stiffness(model);
+        let eq8 = scaled(
+            &factor,
+            &Expr::Number(Number::rational(TWIST_RATIO.0, TWIST_RATIO.1)),
+        );
+        // The model's own hinges, before the springs added get flexure records of their own.
+        let others: Vec<Flexure> = model
+            .flexures
+            .iter()
+            .filter(|f| !named.contains(&f.name))
+            .cloned()
+            .collect();
+        TwistSprings { eq8, stiff, others }
+    }
 }
 
 /// The off-axis stiffness factor `1/c` of [`OFF_AXIS_COMPLIANCE`] `c` (appended): c → 0 is
