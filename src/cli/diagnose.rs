@@ -118,6 +118,7 @@ fn summary_json(
         "verdict": d.verdict,
         "summary": verdict,
         "tied_with_best": d.tied.saturating_sub(1),
+        "separations": d.separations,
         "base": trial(&d.base),
         "ranked": d.ranked.iter().map(trial).collect::<Vec<_>>(),
         "combined": d.combined.as_ref().map(trial),

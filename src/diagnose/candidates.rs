@@ -508,6 +508,9 @@ pub struct Diagnosis {
     /// changes at flexures in series that one measurement cannot tell apart. 0 or 1: the
     /// top one stands alone.
     pub tied: usize,
+    /// When the verdict names a tie: the standard tests that would tell the tied causes
+    /// apart, best first ([`super::separate`]).
+    pub separations: Vec<super::separate::Separation>,
     /// The measured values the trials predict.
     pub observations: super::experiment::Observations,
     /// The screening of the data before fitting (pendulum traces), with its flags.
@@ -583,14 +586,21 @@ pub fn diagnose_causes(
     } else {
         second_cause(&trials, &band, &base, &ranked_pairs)
     };
-    let mut ranked: Vec<Trial> = ranked_pairs.into_iter().map(|(_, t)| t).collect();
     let flagged = screening.as_ref().is_some_and(|s| !s.flags.is_empty());
-    let best = combined
-        .as_ref()
-        .or(ranked.first().filter(|t| !t.at_bound()));
-    let beyond = ranked.iter().find(|t| t.at_bound());
+    let best = combined.as_ref().or(ranked_pairs
+        .first()
+        .map(|(_, t)| t)
+        .filter(|t| !t.at_bound()));
+    let beyond = ranked_pairs.iter().map(|(_, t)| t).find(|t| t.at_bound());
     let verdict = verdict(flagged, base_consistent, &band, &base, best, beyond);
-    let tied = order_ties(&mut ranked);
+    let tied = order_ties(&mut ranked_pairs);
+    let named = matches!(verdict, Verdict::Explained | Verdict::PartlyExplained);
+    let separations = if named && combined.is_none() && tied > 1 {
+        trials.separations(&ranked_pairs[..tied])
+    } else {
+        Vec::new()
+    };
+    let ranked: Vec<Trial> = ranked_pairs.into_iter().map(|(_, t)| t).collect();
     Ok(Diagnosis {
         base,
         ranked,
@@ -602,6 +612,7 @@ pub fn diagnose_causes(
         train_values,
         noise_band: band.per_value,
         tied,
+        separations,
         observations,
         screening,
         train,
@@ -794,18 +805,18 @@ fn verdict(
 /// How many of `ranked`, from the top, the data support about equally (training AICc within
 /// 2 of the best's, none at a bound); among those, on equal evidence, the simpler
 /// explanation (fewer fitted parameters) first.
-fn order_ties(ranked: &mut [Trial]) -> usize {
+fn order_ties(ranked: &mut [(Candidate, Trial)]) -> usize {
     let tied = match ranked.first() {
-        Some(best) => ranked
+        Some((_, best)) => ranked
             .iter()
-            .take_while(|t| {
+            .take_while(|(_, t)| {
                 !t.at_bound() && ((t.aicc - best.aicc).abs() < 2.0 || t.aicc < best.aicc)
             })
             .count(),
         None => 0,
     };
     // Held parameters (standard error 0) are not fitted: they do not count.
-    ranked[..tied].sort_by_key(|t| t.parameters.iter().filter(|p| p.3 != 0.0).count());
+    ranked[..tied].sort_by_key(|(_, t)| t.parameters.iter().filter(|p| p.3 != 0.0).count());
     tied
 }
 
@@ -1047,6 +1058,31 @@ impl Trials<'_> {
             location: format!("the loop of flexures {}", extension.location()),
             extension: Some(extension),
             ..candidate.clone()
+        })
+    }
+
+    /// The separations of the tied `candidates` ([`super::separate::separations`]), each
+    /// model with its fitted values; empty when one cannot be built.
+    fn separations(&self, tied: &[(Candidate, Trial)]) -> Vec<super::separate::Separation> {
+        let legs: Option<Vec<(Leg, Extensions)>> = tied
+            .iter()
+            .map(|(candidate, trial)| {
+                let mut leg = match &candidate.extension {
+                    Some(extension) => super::extend::extend_leg(self.base, self.spec, extension),
+                    None => super::extend::base_leg(self.base, self.spec),
+                }
+                .ok()?;
+                let mut extensions = Extensions::default();
+                for (target, parameter) in self.user.iter().chain(&candidate.parameters) {
+                    let fitted = trial.parameters.iter().find(|p| p.0 == parameter.name);
+                    let value = fitted.map_or(parameter.initial, |p| p.2);
+                    target.apply(&mut leg, &mut extensions, value);
+                }
+                Some((leg, extensions))
+            })
+            .collect();
+        legs.map_or_else(Vec::new, |legs| {
+            super::separate::separations(self.spec, &legs)
         })
     }
 

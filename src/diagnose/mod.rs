@@ -17,6 +17,8 @@
 //!   frequency, quality factor, blocked force, …) and the residual RMS per series;
 //! - [`candidates`]: experiment + data + hold-out rule → every catalog candidate fitted and
 //!   ranked on held-out data, and a verdict (`mech diagnose`);
+//! - [`separate`]: causes the data support equally → the standard test that would tell them
+//!   apart;
 //! - [`error`]: what can go wrong in all of these, as [`Error`] (with a message for users).
 //!
 //! The file format and the fitting method are documented in `docs/diagnose.md`.
@@ -31,6 +33,7 @@ pub mod fit;
 pub mod lm;
 pub mod observations;
 pub mod pendulum;
+pub mod separate;
 
 pub use data::{Column, DataError, DataErrors, MeasuredData};
 pub use error::{Error, KeyError};

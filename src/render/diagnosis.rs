@@ -14,6 +14,7 @@ use crate::diagnose::candidates::{Diagnosis, Trial, Verdict};
 use crate::diagnose::experiment::{Experiment, Kind, Observations};
 use crate::diagnose::features::{features, series_rms, Feature, SeriesResidual};
 use crate::diagnose::pendulum::Screening;
+use crate::diagnose::separate::SEPARATES;
 use crate::output::File;
 use crate::render::plot;
 use crate::render::report::{render_page, Outcome};
@@ -246,10 +247,21 @@ fn named_cause(d: &Diagnosis, best: &Trial) -> String {
         let each: Vec<String> = tied.iter().map(cause_at).collect();
         format!("one of {}", each.join("; "))
     };
-    format!(
-        "{alternatives} — not separable by these data (a measurement that tells them apart is \
-         needed: another output, drive or frequency band)"
-    )
+    let separating = match d.separations.first() {
+        Some(best) if best.chi2 >= SEPARATES => format!(
+            "data that would separate them: {} (χ² {:.0} between the closest two)",
+            best.probe, best.chi2
+        ),
+        Some(best) => format!(
+            "no standard test separates them at its usual noise (the best, {}, gives χ² {:.1} \
+             between the closest two)",
+            best.probe, best.chi2
+        ),
+        None => "a measurement that tells them apart is needed: another output, drive or \
+                 frequency band"
+            .to_string(),
+    };
+    format!("{alternatives} — not separable by these data; {separating}")
 }
 
 /// `NAME = value ± σ (nominal …)` for a fitted parameter of a trial; a fit that ran into a

@@ -9,3 +9,4 @@ mod actuator_causes;
 mod diagnose;
 mod diagnose_catalog;
 mod pendulum_diagnose;
+mod separation;
