@@ -695,6 +695,15 @@ pub fn assembly_report(model: &dyn Model, state: &Assembled) -> String {
             "closed in {} Newton iteration(s), max |φ| = {worst:.1e}",
             state.iterations
         );
+        if worst > AssemblyOptions::default().tolerance {
+            let _ = writeln!(
+                text,
+                "warning: the loops close only to max |φ| = {worst:.1e} (a least-squares fit: \
+                 their rows contradict each other by about this much, e.g. axes meant to meet \
+                 that miss); results carry errors of this order — move the loop points onto \
+                 each other to close them exactly"
+            );
+        }
     }
     let _ = writeln!(text, "\n{:<20} {:>16} {:>16}  role", "coordinate", "q", "u");
     for i in 0..model.nq() {

@@ -192,6 +192,11 @@ pub struct AssemblyOptions {
     /// Converged when `max |φ| ≤ tolerance` (model units, SI).
     pub tolerance: f64,
     pub max_iterations: usize,
+    /// Loops that cannot close exactly — rows that contradict each other, as axes meant to
+    /// meet that miss by a little (HAMR-VI's published five-bar points: 1.4e-10 m) — are
+    /// accepted when the steps stall at a least-squares solution (`J_freeᵀ φ ≈ 0`) with
+    /// `max |φ|` at most this; the caller reads the `φ` left (a warning, not an error).
+    pub inconsistency: f64,
 }
 
 impl Default for AssemblyOptions {
@@ -199,6 +204,8 @@ impl Default for AssemblyOptions {
         AssemblyOptions {
             tolerance: 1e-13,
             max_iterations: 100,
+            // A nanometre: below any fabrication tolerance, far above round-off.
+            inconsistency: 1e-9,
         }
     }
 }
@@ -342,10 +349,20 @@ pub fn close(
             break;
         }
     }
-    if phi.amax() <= options.tolerance {
+    if phi.amax() <= options.tolerance || least_squares_floor(&phi, &j_free, options) {
         return Ok(options.max_iterations);
     }
     Err(stationary_row(&phi, &j_free, options.tolerance).unwrap_or(Unclosed::Open(phi)))
+}
+
+/// The stalled `φ` is a small least-squares residual of rows that contradict each other:
+/// `max |φ| ≤ options.inconsistency` and `φ` (nearly) normal to every free column of `j`,
+/// `|jᵀφ| ≤ 1e-6·‖j‖·|φ|`, so no step can reduce it.
+fn least_squares_floor(phi: &DVector<f64>, j: &DMatrix<f64>, options: &AssemblyOptions) -> bool {
+    if phi.amax() > options.inconsistency || j.nrows() != phi.len() || j.ncols() == 0 {
+        return false;
+    }
+    (j.transpose() * phi).norm() <= 1e-6 * j.norm() * phi.norm()
 }
 
 /// The open row (`|φ| > tolerance`) with the largest residual among those whose gradient

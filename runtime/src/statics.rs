@@ -673,6 +673,10 @@ fn newton<M: Model + ?Sized>(
         )));
     }
     let mut point = problem.point(q.to_vec())?;
+    // Loops that cannot close exactly (rows contradicting each other by up to
+    // `AssemblyOptions::inconsistency`, accepted by the close above) leave a floor no step
+    // goes below: converged within twice it.
+    let tolerance = tolerance.max(2.0 * point.phi.amax());
     let mut iterations = 0;
     let converged = |point: &Point| {
         let force_tolerance =

@@ -29,7 +29,10 @@ fn the_probes_score_how_far_apart_two_causes_predict() {
     let spec = common::hamr_vi_spec();
     let scored = separations(&spec, &legs());
     assert_eq!(scored.len(), 4, "{scored:?}");
-    assert!(scored.windows(2).all(|w| w[0].chi2 >= w[1].chi2), "{scored:?}");
+    assert!(
+        scored.windows(2).all(|w| w[0].chi2 >= w[1].chi2),
+        "{scored:?}"
+    );
     let lift = scored
         .iter()
         .find(|s| s.probe.starts_with("lift force/deflection"))

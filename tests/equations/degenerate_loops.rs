@@ -199,3 +199,39 @@ loop rod_link = distance(crank, slider) { parent_point = [r, 0, 0]; length = rod
     }
     assert_eq!(session.model.nc(), 1);
 }
+
+/// Two distance loops that contradict each other by `miss`: a slider 1 mm from the origin
+/// and 1 mm + `miss` from it at once.
+fn contradicting(miss: &str) -> String {
+    format!(
+        "body a {{ mass = 1 g; }}
+joint s = slider(newtonian, a) {{ axis = x; q0 = 0.9 mm; }}
+loop near = distance(newtonian, a) {{ length = 1 mm; }}
+loop far = distance(newtonian, a) {{ length = 1 mm + {miss}; }}
+"
+    )
+}
+
+/// Loop rows that contradict each other by a little (HAMR-VI's published five-bar points miss
+/// by 1.4e-10 m) close to their least-squares fit with a warning; by more than a nanometre,
+/// they are an error naming a loop. The fit is the midpoint: each row off by half the miss.
+#[test]
+fn loops_that_contradict_by_a_little_close_with_a_warning() {
+    let small = session("contradicting", &contradicting("2e-10 m"));
+    let assembled = small.assemble(&[]).unwrap();
+    let mut phi = vec![0.0; 2];
+    small.model.constraints(0.0, &assembled.q, &mut phi);
+    assert!(
+        (assembled.q[0] - (1e-3 + 1e-10)).abs() < 1e-15 && (phi[0].abs() - 1e-10).abs() < 1e-14,
+        "q {:e}, φ {phi:?}",
+        assembled.q[0]
+    );
+    let report = mech::session::assembly_report(&small.model, &assembled);
+    assert!(
+        report.contains("warning: the loops close only to max |φ| = 1.0e-10"),
+        "{report}"
+    );
+    let large = session("contradicting", &contradicting("1e-8 m"));
+    let error = large.assemble(&[]).unwrap_err().to_string();
+    assert!(error.contains("cannot close the loops"), "{error}");
+}
