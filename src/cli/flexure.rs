@@ -81,7 +81,8 @@ pub struct FitArgs {
     /// Young's modulus for the castellated fits (default: the uncastellated fit's).
     #[arg(long)]
     pub modulus: Option<String>,
-    /// Use Eq. 4 literally, without the finite-amplitude correction of the gravity stiffness.
+    /// Use Eq. 4 literally, without the finite-amplitude correction of the gravity stiffness
+    /// (the screening then does not assume gravity's softening either).
     #[arg(long)]
     pub small_angle: bool,
     /// Plausible Young's modulus, MIN and MAX: an uncastellated fit outside is rejected
