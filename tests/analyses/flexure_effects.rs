@@ -497,3 +497,139 @@ fn rates_of_issue_17_targets() {
         assert!(tally.rate() >= 0.9, "{kind}: {tally:?}\n{report}");
     }
 }
+
+/// A specimen file for `h` naming `traces`.
+fn specimen_toml(name: &str, h: &Hinge, traces: &[String]) -> String {
+    let list: Vec<String> = traces.iter().map(|t| format!("\"{t}\"")).collect();
+    let (g, p) = (&h.geometry, &h.pendulum);
+    format!(
+        "name = \"{name}\"\ntraces = [{}]\n[flexure]\nwidth = {:e}\nthickness = {:e}\nlength = \
+         {:e}\n[pendulum]\nmass = {:e}\ninertia = {:e}\ncom_distance = {:e}\n",
+        list.join(", "),
+        g.width,
+        g.thickness,
+        g.length,
+        p.mass,
+        p.inertia,
+        p.com_distance
+    )
+}
+
+/// `mech diagnose --dataset` on a set with air drag in one trace, a drifting baseline in
+/// another and `nan` in a third: one summary naming each flag at its trace, the bad trace
+/// listed with its line and column and exit code 1; without the bad trace, exit code 0 though
+/// traces are flagged, and `dataset.json` with the flags.
+#[test]
+fn diagnose_dataset_summarizes_flags_and_lists_bad_traces() {
+    let dir = common::scratch_dir("diagnose_dataset");
+    std::fs::remove_dir_all(&dir).unwrap();
+    std::fs::create_dir(&dir).unwrap();
+    let mut rng = Rng::new(17);
+    let effects = [
+        Effects {
+            drag: 0.6,
+            ..Effects::default()
+        },
+        Effects {
+            drift: 0.3f64.to_radians(),
+            ..Effects::default()
+        },
+        Effects::default(),
+    ];
+    for (i, effect) in effects.iter().enumerate() {
+        let h = hinge(Kind::Uncastellated, 8.0 + 5.0 * i as f64, 0.3, &mut rng);
+        let names: Vec<String> = (0..2).map(|trial| format!("h{i}_{trial}.csv")).collect();
+        for (trial, name) in names.iter().enumerate() {
+            let e = if trial == 1 {
+                *effect
+            } else {
+                Effects::default()
+            };
+            let (times, angles) = ring_down(&h, 10f64.to_radians(), e, &mut rng);
+            let mut csv = String::from("t,angle\n");
+            for (k, (t, a)) in times.iter().zip(&angles).enumerate() {
+                // Data row 100 of the third hinge's second trial: a dropped frame.
+                let a = if i == 2 && trial == 1 && k == 100 {
+                    "nan".to_string()
+                } else {
+                    format!("{a:?}")
+                };
+                csv += &format!("{t:?},{a}\n");
+            }
+            std::fs::write(dir.join(name), csv).unwrap();
+        }
+        let toml = specimen_toml(&format!("H{i}"), &h, &names);
+        std::fs::write(dir.join(format!("h{i}.toml")), toml).unwrap();
+    }
+    let out = dir.join("out");
+    let run = || {
+        std::process::Command::new(env!("CARGO_BIN_EXE_mech"))
+            .args(["diagnose", "--dataset"])
+            .arg(&dir)
+            .arg("--out-dir")
+            .arg(&out)
+            .output()
+            .unwrap()
+    };
+    let output = run();
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr),
+    );
+    assert_eq!(output.status.code(), Some(1), "{stdout}\n{stderr}");
+    let row = |trace: &str| {
+        stdout
+            .lines()
+            .find(|l| l.contains(trace))
+            .unwrap_or_else(|| panic!("no row for {trace}:\n{stdout}"))
+            .to_string()
+    };
+    assert!(
+        row("h0_1.csv").ends_with("amplitude_dependent_damping"),
+        "{stdout}"
+    );
+    assert!(row("h1_1.csv").ends_with("baseline_drift"), "{stdout}");
+    for clean in ["h0_0.csv", "h1_0.csv", "h2_0.csv"] {
+        assert!(row(clean).ends_with(" -"), "{stdout}");
+    }
+    assert!(stdout.contains("1 of 6 traces rejected"), "{stdout}");
+    // Air drag adds damping at the larger amplitudes only, so H0's trials disagree on b_m.
+    assert!(
+        stdout.contains("trial disagreement: 1 of 2 pairs"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("[trial_disagreement] H0: "), "{stdout}");
+    assert!(
+        stderr.contains("h2_1.csv") && stderr.contains("line 102, column 2"),
+        "{stderr}"
+    );
+
+    // Without the bad trace: flags alone leave the exit code 0.
+    let h2 = std::fs::read_to_string(dir.join("h2.toml")).unwrap();
+    std::fs::write(dir.join("h2.toml"), h2.replace(", \"h2_1.csv\"", "")).unwrap();
+    let output = run();
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(output.status.code(), Some(0), "{stdout}");
+    assert!(
+        stdout.contains(
+            "findings (1 × amplitude_dependent_damping, 1 × trial_disagreement, 1 × baseline_drift"
+        ),
+        "{stdout}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("dataset.json")).unwrap()).unwrap();
+    let flagged: Vec<&str> = json["findings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["kind"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        flagged[..3],
+        [
+            "amplitude_dependent_damping",
+            "trial_disagreement",
+            "baseline_drift"
+        ]
+    );
+}

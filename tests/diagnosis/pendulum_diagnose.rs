@@ -507,8 +507,9 @@ fn pendulum_commands_report_flags() {
         let args = mech::cli::diagnose::DiagnoseArgs {
             model: None,
             causes: Vec::new(),
-            experiment: example("flexure_rig_ringdown.toml"),
-            data: example(data),
+            experiment: Some(example("flexure_rig_ringdown.toml")),
+            data: Some(example(data)),
+            dataset: None,
             fit: Vec::new(),
             holdout: "every:3".into(),
             out_dir: out_dir.clone(),
