@@ -162,14 +162,7 @@ fn dataset(dir: &Path, out_dir: &Path) -> Result<(), Error> {
     let files = specimen_files(&[dir.to_path_buf()])?;
     let path = out_dir.join("dataset.json");
     let report = fit_files(&files, &FitOptions::default());
-    let traces = report.specimens.iter().flat_map(|s| &s.traces);
-    let reads: Vec<output::Read> = (files.iter().map(|path| (path, "a specimen file")))
-        .chain(traces.map(|trace| (&trace.file, "a trace")))
-        .map(|(path, what)| output::Read {
-            path: path.clone(),
-            what,
-        })
-        .collect();
+    let reads = super::flexure::data_set_reads(&files, &report);
     output::check_outputs([path.as_path()], &reads)?;
     print!("{}", dataset_text(&report));
     let text = serde_json::to_string_pretty(&dataset_json(&report))?;
