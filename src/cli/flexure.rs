@@ -12,7 +12,7 @@ use clap::{Args, Subcommand};
 use mech_codegen::ir::Dimension;
 
 use super::{angular_frequency, length, positive, Error};
-use crate::flexure_fit::fit::{fit_files, FitOptions, PLAUSIBLE_MODULUS};
+use crate::flexure_fit::fit::{fit_files, FitOptions, FitReport, PLAUSIBLE_MODULUS};
 use crate::flexure_fit::rig::specimen_files;
 use crate::output;
 use crate::physics::flexure::{
@@ -81,7 +81,8 @@ pub struct FitArgs {
     /// Young's modulus for the castellated fits (default: the uncastellated fit's).
     #[arg(long)]
     pub modulus: Option<String>,
-    /// Use Eq. 4 literally, without the finite-amplitude correction of the gravity stiffness.
+    /// Use Eq. 4 literally, without the finite-amplitude correction of the gravity stiffness
+    /// (the screening then does not assume gravity's softening either).
     #[arg(long)]
     pub small_angle: bool,
     /// Plausible Young's modulus, MIN and MAX: an uncastellated fit outside is rejected
@@ -313,15 +314,7 @@ fn fit(args: &FitArgs) -> Result<(), Error> {
     if plots != "none" {
         written.extend(report::plot_files(&fit_report, &args.out_dir, &plots)?);
     }
-    let traces = fit_report.specimens.iter().flat_map(|s| &s.traces);
-    let reads: Vec<output::Read> = (files.iter().map(|path| (path, "a specimen file")))
-        .chain(traces.map(|trace| (&trace.file, "a trace")))
-        .map(|(path, what)| output::Read {
-            path: path.clone(),
-            what,
-        })
-        .collect();
-    output::write_all(&written, &reads)?;
+    output::write_all(&written, &data_set_reads(&files, &fit_report))?;
     println!(
         "\nwritten: {}",
         written
@@ -331,4 +324,17 @@ fn fit(args: &FitArgs) -> Result<(), Error> {
             .join(", ")
     );
     Ok(fit_report.problems()?)
+}
+
+/// The files a data set's run read: its specimen files and their traces (outputs may not
+/// overwrite them).
+pub(super) fn data_set_reads(files: &[PathBuf], report: &FitReport) -> Vec<output::Read> {
+    let traces = report.specimens.iter().flat_map(|s| &s.traces);
+    (files.iter().map(|path| (path, "a specimen file")))
+        .chain(traces.map(|trace| (&trace.file, "a trace")))
+        .map(|(path, what)| output::Read {
+            path: path.clone(),
+            what,
+        })
+        .collect()
 }

@@ -5,16 +5,21 @@
 //! and their own loss factor.
 //!
 //! Consumes: specimen files, [`Specimen`]s (and reads their traces) or analysed traces.
-//! Produces: a [`FitReport`] of the good traces and specimens, with every rejected trace or
-//! file (an [`Error`] naming it) and warnings (a poor decay fit, trials that disagree beyond
-//! their uncertainties, a poor line across flexures). One bad trace does not stop the others.
+//! Produces: a [`FitReport`] of the good traces and specimens, each trace screened
+//! ([`super::screen`]), with every rejected trace or file (an [`Error`] naming it), the loss
+//! factor's frequency dependence across the set ([`LossFrequencyFit`]) and the findings, each
+//! named by its kind: the traces' screening flags, a poor decay fit, trials that disagree
+//! beyond their uncertainties, a loss factor that depends on frequency, a poor line across
+//! flexures. One bad trace does not stop the others.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use super::error::Error;
 use super::rig::{Kind, Pendulum, Specimen};
+use super::screen::{screen_analysis, Flag, ScreenOptions, Screening, FLAG_SIGMA};
 use super::trace::{analyze_trace, TraceAnalysis, TraceOptions};
+use crate::diagnose::lm::{levenberg_marquardt, LmOptions, Parameter};
 
 /// Options of the fits.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -22,7 +27,8 @@ pub struct FitOptions {
     /// Trace analysis options.
     pub trace: TraceOptions,
     /// Use Eq. 4 literally (`k_m = I_p ω_n² − m g L_cm`), without the finite-amplitude
-    /// correction of the gravity stiffness (see [`measured_stiffness`]).
+    /// correction of the gravity stiffness (see [`measured_stiffness`]); the screening then
+    /// allows the frequency any gravity softening from none to the largest.
     pub small_angle: bool,
     /// Young's modulus for the castellated fits (Pa); default: the uncastellated fit's, or
     /// Kapton's 2.56 GPa if there are no uncastellated specimens.
@@ -58,6 +64,16 @@ pub const AGREEMENT_SIGMA: f64 = 4.0;
 /// Below this R² a line across flexures is reported as poor (the seed's real data gave
 /// 0.83–0.97).
 pub const POOR_LINE_R2: f64 = 0.8;
+
+/// The smallest exponent α of `η(f) = η₀ (f/f₀)^α` worth finding: η changing by 26 % per
+/// decade of frequency (HAMR's hinges work from 1 to 150 Hz, over which it would change by
+/// 65 %).
+pub const SMALLEST_LOSS_EXPONENT: f64 = 0.1;
+
+/// A data set resolves the loss factor's frequency dependence when the standard error of α
+/// is at most this: α = [`SMALLEST_LOSS_EXPONENT`] then lies 4.78σ from 0, so it is flagged
+/// beyond [`FLAG_SIGMA`] with 90 % probability (3.5σ + 1.28σ, the normal 90 % quantile).
+pub const LOSS_EXPONENT_RESOLUTION: f64 = SMALLEST_LOSS_EXPONENT / (FLAG_SIGMA + 1.2816);
 /// Eq. 3: `b_m = 2 ζ ω_n I_p` (= 2 σ I_p), N·m·s/rad.
 pub fn measured_damping(analysis: &TraceAnalysis, pendulum: &Pendulum) -> f64 {
     2.0 * analysis.zeta * analysis.omega_n * pendulum.inertia
@@ -93,6 +109,21 @@ pub struct TraceResult {
     /// Standard errors of k_m and b_m from those of ω_d and σ (N·m/rad, N·m·s/rad).
     pub stiffness_se: f64,
     pub damping_se: f64,
+    /// The screening for amplitude-dependent damping and frequency, offset and drift, with
+    /// the pendulum's gravity share known.
+    pub screening: Screening,
+}
+
+impl TraceResult {
+    /// The loss factor `η = b_m ω_d / k_m` (Eq. 5 at the trace's frequency) and its standard
+    /// error.
+    pub fn loss_factor(&self) -> (f64, f64) {
+        let eta = self.damping * self.analysis.omega_d / self.stiffness;
+        let relative = ((self.damping_se / self.damping).powi(2)
+            + (self.stiffness_se / self.stiffness).powi(2))
+        .sqrt();
+        (eta, eta * relative)
+    }
 }
 
 /// One specimen: its traces and their means (the seed averages the trials of a flexure).
@@ -210,10 +241,14 @@ pub struct FitReport {
     pub uncastellated: Option<ModulusFit>,
     /// One fit per (thickness, length) group of castellated specimens with ≥ 2 members.
     pub castellated: Vec<CastellatedFit>,
+    /// The loss factor against frequency across the set, if it has enough hinges.
+    pub loss_frequency: Option<LossFrequencyFit>,
     /// Every trace, specimen file or fit rejected, each naming its file.
     pub rejected: Vec<Error>,
-    /// What was fitted but deserves a look, each naming its files.
-    pub warnings: Vec<String>,
+    /// What was fitted but deserves a look, each with its kind and naming its files: the
+    /// traces' screening flags, `poor_decay_fit`, `trial_disagreement`,
+    /// `frequency_dependent_loss`, `poor_line_fit`.
+    pub findings: Vec<Flag>,
     /// Traces read (accepted and rejected).
     pub traces: usize,
 }
@@ -253,6 +288,14 @@ pub fn analyze_specimen_trace(
             gravity: total - stiffness,
         });
     }
+    // With `small_angle` the traces are taken as those of the linearized rig, whose gravity
+    // does not soften: the screening then allows any share, linear gravity (0) included.
+    let gravity_share =
+        pendulum.gravity_stiffness() / (pendulum.inertia * analysis.omega_n.powi(2));
+    let screen_options = ScreenOptions {
+        gravity_share: (!options.small_angle).then_some(gravity_share),
+    };
+    let screening = screen_analysis(times, angles, &analysis, &screen_options);
     // k_m = I_p (σ² + ω_d²) − …, b_m = 2 I_p σ; ω_d and σ come from separate fits.
     let i2 = 2.0 * pendulum.inertia;
     let stiffness_se = i2
@@ -264,6 +307,7 @@ pub fn analyze_specimen_trace(
         damping: measured_damping(&analysis, pendulum),
         stiffness_se,
         damping_se: i2 * analysis.sigma_se,
+        screening,
         file,
         analysis,
     })
@@ -342,67 +386,223 @@ fn analyze_file(
     )
 }
 
-/// Warnings on the analysed traces: a poor decay fit, and trials of one specimen that
-/// disagree beyond their standard errors.
-fn trace_warnings(specimens: &[SpecimenResult]) -> Vec<String> {
-    let mut warnings = Vec::new();
+/// Findings on the analysed traces: their screening flags, a poor decay fit, and trials of
+/// one specimen that disagree beyond their standard errors.
+fn trace_findings(specimens: &[SpecimenResult]) -> Vec<Flag> {
+    let mut findings = Vec::new();
     for sr in specimens {
         for t in &sr.traces {
+            findings.extend(t.screening.flags.iter().map(|flag| Flag {
+                kind: flag.kind,
+                message: format!("`{}`: {}", t.file.display(), flag.message),
+            }));
             if t.analysis.log_fit_r2 < POOR_DECAY_R2 {
-                warnings.push(format!(
-                    "`{}`: the decay is not exponential (R² of ln A against time {:.4} < \
-                     {POOR_DECAY_R2}, {} peaks): damping that depends on the amplitude, a \
-                     drifting baseline or a disturbance; `mech diagnose` with `kind = \
-                     \"pendulum\"` screens for these",
-                    t.file.display(),
-                    t.analysis.log_fit_r2,
-                    t.analysis.peaks.len()
-                ));
+                findings.push(Flag {
+                    kind: "poor_decay_fit",
+                    message: format!(
+                        "`{}`: the decay is not exponential (R² of ln A against time {:.4} < \
+                         {POOR_DECAY_R2}, {} peaks): damping that depends on the amplitude, a \
+                         drifting baseline or a disturbance",
+                        t.file.display(),
+                        t.analysis.log_fit_r2,
+                        t.analysis.peaks.len()
+                    ),
+                });
             }
         }
         for (i, a) in sr.traces.iter().enumerate() {
             for b in &sr.traces[i + 1..] {
-                let quantities = [
-                    (
-                        "k_m",
-                        a.stiffness,
-                        a.stiffness_se,
-                        b.stiffness,
-                        b.stiffness_se,
-                        1e6,
-                        "µN·m/rad",
-                    ),
-                    (
-                        "b_m",
-                        a.damping,
-                        a.damping_se,
-                        b.damping,
-                        b.damping_se,
-                        1e9,
-                        "nN·m·s/rad",
-                    ),
-                ];
-                for (name, va, sa, vb, sb, scale, unit) in quantities {
-                    let z = (va - vb).abs() / (sa * sa + sb * sb).sqrt();
-                    if z > AGREEMENT_SIGMA {
-                        warnings.push(format!(
-                            "{}: trials `{}` and `{}` disagree on {name}: {:.4} ± {:.4} and \
-                             {:.4} ± {:.4} {unit}, {z:.1} standard errors apart (more than \
-                             {AGREEMENT_SIGMA}); the mean hides it",
-                            sr.specimen.name,
-                            a.file.display(),
-                            b.file.display(),
-                            va * scale,
-                            sa * scale,
-                            vb * scale,
-                            sb * scale
-                        ));
-                    }
+                if let Some(finding) = trial_disagreement(&sr.specimen.name, a, b) {
+                    findings.push(finding);
                 }
             }
         }
     }
-    warnings
+    findings
+}
+
+/// Two trials of one flexure whose k_m or b_m differ by more than [`AGREEMENT_SIGMA`]
+/// combined standard errors (each from its trace's scatter, so the noise sets the scale).
+fn trial_disagreement(specimen: &str, a: &TraceResult, b: &TraceResult) -> Option<Flag> {
+    let quantities = [
+        (
+            "k_m",
+            a.stiffness,
+            a.stiffness_se,
+            b.stiffness,
+            b.stiffness_se,
+            1e6,
+            "µN·m/rad",
+        ),
+        (
+            "b_m",
+            a.damping,
+            a.damping_se,
+            b.damping,
+            b.damping_se,
+            1e9,
+            "nN·m·s/rad",
+        ),
+    ];
+    let parts: Vec<String> = quantities
+        .into_iter()
+        .filter_map(|(name, va, sa, vb, sb, scale, unit)| {
+            let z = (va - vb).abs() / (sa * sa + sb * sb).sqrt();
+            (z > AGREEMENT_SIGMA).then(|| {
+                format!(
+                    "{name} {:.4} ± {:.4} and {:.4} ± {:.4} {unit} ({:+.2} %, {z:.1} standard \
+                     errors apart)",
+                    va * scale,
+                    sa * scale,
+                    vb * scale,
+                    sb * scale,
+                    100.0 * (vb - va) / va
+                )
+            })
+        })
+        .collect();
+    (!parts.is_empty()).then(|| Flag {
+        kind: "trial_disagreement",
+        message: format!(
+            "{specimen}: trials `{}` and `{}` disagree beyond their noise (more than \
+             {AGREEMENT_SIGMA} standard errors) on {}; the mean hides it: the flexure or its \
+             clamp changed between them",
+            a.file.display(),
+            b.file.display(),
+            parts.join(" and ")
+        ),
+    })
+}
+
+/// The loss factor against frequency across a data set, `ln η_i = ln η₀,c + α ln(f_i/f₀)`:
+/// one exponent α for the set, one level per kind of hinge (castellated hinges lose more,
+/// seed Sec. IV.B), weighted least squares on the hinges' `ln η` (the mean of their trials)
+/// with their standard errors, which the scatter widens when it exceeds them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LossFrequencyFit {
+    /// α and its standard error.
+    pub exponent: (f64, f64),
+    /// η₀ of each kind present at f₀, with its standard error.
+    pub levels: Vec<(Kind, f64, f64)>,
+    /// f₀, the geometric mean of the hinges' frequencies (Hz).
+    pub reference_frequency: f64,
+    /// Lowest and highest hinge frequency (Hz).
+    pub frequencies: (f64, f64),
+    /// Hinges used.
+    pub points: usize,
+    /// `χ²/dof` of the fit with the hinges' own standard errors.
+    pub chi2_dof: f64,
+}
+
+impl LossFrequencyFit {
+    /// Whether the set resolves α: its standard error is at most
+    /// [`LOSS_EXPONENT_RESOLUTION`].
+    pub fn resolved(&self) -> bool {
+        self.exponent.1 <= LOSS_EXPONENT_RESOLUTION
+    }
+
+    /// α in standard errors.
+    pub fn exponent_sigma(&self) -> f64 {
+        self.exponent.0 / self.exponent.1
+    }
+}
+
+/// Fits [`LossFrequencyFit`] to the specimens; `None` with fewer than two hinges beyond the
+/// fit's coefficients (its scatter could not be measured).
+pub fn fit_loss_frequency(specimens: &[SpecimenResult]) -> Option<LossFrequencyFit> {
+    let mut kinds: Vec<Kind> = specimens.iter().map(|s| s.specimen.flexure.kind).collect();
+    kinds.sort_by_key(|k| *k == Kind::Castellated);
+    kinds.dedup();
+    // Per hinge: ln f, ln η, its standard error, its kind's index.
+    let hinges: Vec<(f64, f64, f64, usize)> = specimens
+        .iter()
+        .map(|s| {
+            let n = s.traces.len() as f64;
+            let (mut eta, mut variance) = (0.0, 0.0);
+            for t in &s.traces {
+                let (e, se) = t.loss_factor();
+                eta += e / n;
+                variance += (se / n).powi(2);
+            }
+            let kind = kinds.iter().position(|k| *k == s.specimen.flexure.kind);
+            let frequency = s.omega_d / (2.0 * std::f64::consts::PI);
+            (
+                frequency.ln(),
+                eta.ln(),
+                variance.sqrt() / eta,
+                kind.unwrap_or(0),
+            )
+        })
+        .filter(|h| h.1.is_finite() && h.2.is_finite() && h.2 > 0.0)
+        .collect();
+    let coefficients = kinds.len() + 1;
+    if hinges.len() < coefficients + 2 {
+        return None;
+    }
+    let log_f0 = hinges.iter().map(|h| h.0).sum::<f64>() / hinges.len() as f64;
+    let residuals = |p: &[f64]| -> Result<Vec<f64>, &'static str> {
+        Ok(hinges
+            .iter()
+            .map(|&(lf, le, se, c)| (p[c] + p[kinds.len()] * (lf - log_f0) - le) / se)
+            .collect())
+    };
+    let mut parameters: Vec<Parameter> = kinds
+        .iter()
+        .enumerate()
+        .map(|(c, _)| {
+            let mean = hinges.iter().filter(|h| h.3 == c).map(|h| h.1).sum::<f64>()
+                / hinges.iter().filter(|h| h.3 == c).count() as f64;
+            Parameter::new(format!("ln_eta{c}"), mean).with_scale(1.0)
+        })
+        .collect();
+    parameters.push(Parameter::new("alpha", 0.0).with_scale(0.1));
+    let lm = LmOptions {
+        residuals_normalized: true,
+        ..LmOptions::default()
+    };
+    let result = levenberg_marquardt(residuals, &parameters, &lm).ok()?;
+    let chi2_dof = 2.0 * result.cost / (hinges.len() - coefficients) as f64;
+    let inflation = chi2_dof.max(1.0).sqrt();
+    let se = |k: usize| result.standard_errors[k] * inflation;
+    let frequencies = hinges.iter().fold((f64::INFINITY, 0.0_f64), |(lo, hi), h| {
+        (lo.min(h.0.exp()), hi.max(h.0.exp()))
+    });
+    let alpha = (result.params[kinds.len()], se(kinds.len()));
+    (alpha.0.is_finite() && alpha.1.is_finite()).then(|| LossFrequencyFit {
+        exponent: alpha,
+        levels: kinds
+            .iter()
+            .enumerate()
+            .map(|(c, &kind)| {
+                let eta0 = result.params[c].exp();
+                (kind, eta0, eta0 * se(c))
+            })
+            .collect(),
+        reference_frequency: log_f0.exp(),
+        frequencies,
+        points: hinges.len(),
+        chi2_dof,
+    })
+}
+
+/// The finding of a loss factor that depends on frequency: α beyond [`FLAG_SIGMA`] standard
+/// errors (whether or not the set resolves the smallest α worth finding).
+fn loss_frequency_finding(fit: &LossFrequencyFit) -> Option<Flag> {
+    (fit.exponent_sigma().abs() > FLAG_SIGMA).then(|| Flag {
+        kind: "frequency_dependent_loss",
+        message: format!(
+            "the loss factor depends on frequency: η(f) = η₀ (f/{:.2} Hz)^α with α = {:.3} ± \
+             {:.3} ({:.1}σ) over {} hinges at {:.2}–{:.2} Hz; the constant η of Eq. 7 (and of \
+             the time-domain b = kη/ω_ref) is an average over these frequencies",
+            fit.reference_frequency,
+            fit.exponent.0,
+            fit.exponent.1,
+            fit.exponent_sigma().abs(),
+            fit.points,
+            fit.frequencies.0,
+            fit.frequencies.1
+        ),
+    })
 }
 
 /// The fits across already analysed specimens.
@@ -411,7 +611,9 @@ pub fn fit_results(specimens: Vec<SpecimenResult>, options: &FitOptions) -> FitR
         .filter(|&i| specimens[i].specimen.flexure.kind == Kind::Uncastellated)
         .collect();
     let mut rejected = Vec::new();
-    let mut warnings = trace_warnings(&specimens);
+    let mut findings = trace_findings(&specimens);
+    let loss_frequency = fit_loss_frequency(&specimens);
+    findings.extend(loss_frequency.as_ref().and_then(loss_frequency_finding));
     let uncastellated = (unc.len() >= 2).then(|| {
         let widths: Vec<f64> = unc
             .iter()
@@ -456,7 +658,7 @@ pub fn fit_results(specimens: Vec<SpecimenResult>, options: &FitOptions) -> FitR
     if let Some(fit) = &uncastellated {
         for (what, line) in [("Eq. 6", &fit.stiffness_line), ("Eq. 7", &fit.damping_line)] {
             if line.r_squared < POOR_LINE_R2 {
-                warnings.push(line_warning(&format!("uncastellated {what}"), line));
+                findings.push(line_finding(&format!("uncastellated {what}"), line));
             }
         }
     }
@@ -513,7 +715,7 @@ pub fn fit_results(specimens: Vec<SpecimenResult>, options: &FitOptions) -> FitR
                     fit.thickness * 1e6,
                     fit.length * 1e6
                 );
-                warnings.push(line_warning(&group, line));
+                findings.push(line_finding(&group, line));
             }
         }
     }
@@ -522,16 +724,21 @@ pub fn fit_results(specimens: Vec<SpecimenResult>, options: &FitOptions) -> FitR
         specimens,
         uncastellated,
         castellated,
+        loss_frequency,
         rejected,
-        warnings,
+        findings,
         traces,
     }
 }
 
-fn line_warning(what: &str, line: &LineFit) -> String {
-    format!(
-        "{what} against width: R² = {:.3} < {POOR_LINE_R2} over {} flexures; the flexures \
-         scatter about the line (the seed's real data gave 0.83–0.97): check their geometry",
-        line.r_squared, line.points
-    )
+fn line_finding(what: &str, line: &LineFit) -> Flag {
+    Flag {
+        kind: "poor_line_fit",
+        message: format!(
+            "{what} against width: R² = {:.3} < {POOR_LINE_R2} over {} flexures; the \
+             flexures scatter about the line (the seed's real data gave 0.83–0.97): check their \
+             geometry, or a loss factor that depends on frequency",
+            line.r_squared, line.points
+        ),
+    }
 }

@@ -7,6 +7,8 @@
 //! - [`trace`]: one trace → ω_d (zero crossings), σ (log of the peaks), ω_n, ζ;
 //! - [`rig`]: the specimen description (flexure geometry, pendulum, trace files) in TOML, and
 //!   the trace files, checked (finite, increasing times, an amplitude plausible in radians);
+//! - [`screen`]: one trace screened for amplitude-dependent damping and frequency, an offset
+//!   or drifting baseline (also `mech diagnose`'s screening of pendulum traces);
 //! - [`fit`]: Eqs. 3–4 per trace, means per specimen, Eqs. 6–7 and the castellated fits;
 //!   every rejected trace listed, the good ones fitted, warnings on what looks wrong;
 //! - tables, CSV and plots: [`crate::render::flexure_fit`];
@@ -15,6 +17,7 @@
 pub mod error;
 pub mod fit;
 pub mod rig;
+pub mod screen;
 pub mod trace;
 
 pub use error::{Error, SpecimenError};

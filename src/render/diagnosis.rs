@@ -1,10 +1,10 @@
 //! The rendering shared by `mech fit` and `mech diagnose`: the screening's flags, the
-//! overlay plots of data and models, the comparison of features and residuals, and the
-//! self-contained `diagnosis.html`.
+//! overlay plots of data and models, the comparison of features and residuals, the
+//! self-contained `diagnosis.html`, and the summary of `mech diagnose --dataset`.
 //!
 //! Consumes: a [`crate::diagnose`] experiment, its observations and predictions, a
-//! [`Diagnosis`]. Produces: text, JSON values, SVG plots and the HTML page (written
-//! atomically).
+//! [`Diagnosis`]; for `--dataset`, a flexure [`FitReport`]. Produces: text, JSON values, SVG
+//! plots and the HTML page (written atomically).
 
 use std::path::{Path, PathBuf};
 
@@ -13,8 +13,9 @@ use serde_json::json;
 use crate::diagnose::candidates::{Diagnosis, Trial, Verdict};
 use crate::diagnose::experiment::{Experiment, Kind, Observations};
 use crate::diagnose::features::{features, series_rms, Feature, SeriesResidual};
-use crate::diagnose::pendulum::Screening;
+use crate::diagnose::pendulum::{Screening, FLAG_SIGMA};
 use crate::diagnose::separate::SEPARATES;
+use crate::flexure_fit::fit::{FitReport, AGREEMENT_SIGMA};
 use crate::output::File;
 use crate::render::plot;
 use crate::render::report::{render_page, Outcome};
@@ -31,6 +32,86 @@ pub fn screening_text(screening: Option<&Screening>) -> String {
         text += &format!("\n  !! {}\n", flag.message);
     }
     text
+}
+
+/// `mech diagnose --dataset`: one line per trace with its screening (the effects in standard
+/// errors, the flags by kind), then the set's findings: the loss factor against frequency,
+/// trial disagreement, and every finding with its message.
+pub fn dataset_text(report: &FitReport) -> String {
+    let rejected = report
+        .rejected
+        .iter()
+        .filter(|e| e.is_trace_problem())
+        .count();
+    let mut s = format!(
+        "{} traces of {} specimens screened as pendulum ring-downs (each with its specimen's \
+         pendulum); effects in standard errors, flagged beyond {FLAG_SIGMA}σ\n\n",
+        report.traces,
+        report.specimens.len(),
+    );
+    s += &format!(
+        "  {:<10} {:<18} {:>8} {:>15} {:>8} {:>8} {:>6} {:>6}  flags\n",
+        "specimen", "trace", "f_d [Hz]", "amplitude [°]", "damping", "stiffen", "drift", "offset"
+    );
+    for specimen in &report.specimens {
+        for t in &specimen.traces {
+            let name = t.file.file_name().map_or_else(
+                || t.file.display().to_string(),
+                |n| n.to_string_lossy().into_owned(),
+            );
+            let flags = if t.screening.flags.is_empty() {
+                "-".to_string()
+            } else {
+                flag_kinds(&t.screening)
+            };
+            let numbers = match &t.screening.fit {
+                Some(f) => format!(
+                    "{:>6.2} → {:<6.2} {:>7.1}σ {:>7.1}σ {:>5.1}σ {:>5.1}σ",
+                    f.amplitudes.0.to_degrees(),
+                    f.amplitudes.1.to_degrees(),
+                    f.decrement_trend_sigma,
+                    f.stiffening_sigma,
+                    f.drift_sigma,
+                    f.offset_sigma
+                ),
+                None => format!("{:>48}", "not screened"),
+            };
+            s += &format!(
+                "  {:<10} {:<18} {:>8.3} {numbers}  {flags}\n",
+                specimen.specimen.name,
+                name,
+                t.analysis.omega_d / std::f64::consts::TAU
+            );
+        }
+    }
+    if rejected > 0 {
+        s += &format!(
+            "  ({rejected} of {} traces rejected: listed at the end, on stderr)\n",
+            report.traces
+        );
+    }
+    s += &crate::render::flexure_fit::loss_frequency_text(report);
+    let pairs: usize = report
+        .specimens
+        .iter()
+        .map(|sp| sp.traces.len() * sp.traces.len().saturating_sub(1) / 2)
+        .sum();
+    let disagreeing = report
+        .findings
+        .iter()
+        .filter(|f| f.kind == "trial_disagreement")
+        .count();
+    s += &format!(
+        "\ntrial disagreement: {disagreeing} of {pairs} pairs of trials differ by more than \
+         {AGREEMENT_SIGMA} standard errors in k_m or b_m\n"
+    );
+    let findings = crate::render::flexure_fit::findings_text(report);
+    if findings.is_empty() {
+        s += "\nfindings: none\n";
+    } else {
+        s += &findings;
+    }
+    s
 }
 
 /// The kinds of the screening's flags, comma-separated.

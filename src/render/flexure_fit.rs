@@ -9,8 +9,12 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use crate::flexure_fit::error::Error;
-use crate::flexure_fit::fit::{CastellatedFit, FitReport, LineFit, ModulusFit, SpecimenResult};
+use crate::flexure_fit::fit::{
+    CastellatedFit, FitReport, LineFit, ModulusFit, SpecimenResult, LOSS_EXPONENT_RESOLUTION,
+    SMALLEST_LOSS_EXPONENT,
+};
 use crate::flexure_fit::rig::Kind;
+use crate::flexure_fit::screen::FLAG_SIGMA;
 use crate::output::File;
 use crate::render::plot;
 
@@ -28,7 +32,8 @@ fn kind_name(kind: Kind) -> &'static str {
     }
 }
 
-/// The report as text: per-trace table, per-specimen table, the fits, and the warnings.
+/// The report as text: per-trace table, per-specimen table, the fits, the loss factor
+/// against frequency and the findings.
 /// The rejected traces are not in it: they are the command's error ([`FitReport::problems`]).
 pub fn text_report(report: &FitReport) -> String {
     let mut s = String::new();
@@ -38,6 +43,7 @@ pub fn text_report(report: &FitReport) -> String {
     for fit in &report.castellated {
         write_castellated_fit(&mut s, fit);
     }
+    s += &loss_frequency_text(report);
     if !report.rejected.is_empty() {
         let _ = writeln!(
             s,
@@ -51,13 +57,77 @@ pub fn text_report(report: &FitReport) -> String {
             report.rejected.len()
         );
     }
-    if !report.warnings.is_empty() {
-        let _ = writeln!(s, "\nwarnings:");
-        for warning in &report.warnings {
-            let _ = writeln!(s, "  - {warning}");
+    s += &findings_text(report);
+    s
+}
+
+/// The loss factor against frequency across the set, or why it could not be fitted or
+/// resolved.
+pub fn loss_frequency_text(report: &FitReport) -> String {
+    let Some(fit) = &report.loss_frequency else {
+        return format!(
+            "\nloss factor against frequency: not fitted ({} hinges; need at least 2 more than \
+             the fit's coefficients, one level per kind of hinge and the exponent)\n",
+            report.specimens.len()
+        );
+    };
+    let levels: Vec<String> = fit
+        .levels
+        .iter()
+        .map(|(kind, eta, se)| format!("η₀ = {eta:.5} ± {se:.5} ({})", kind_name(*kind)))
+        .collect();
+    let mut s = format!(
+        "\nloss factor against frequency, η(f) = η₀ (f/{:.2} Hz)^α over {} hinges at \
+         {:.2}–{:.2} Hz:\n  α = {:.4} ± {:.4} ({:.1}σ from 0), {}; χ²/dof = {:.2}\n",
+        fit.reference_frequency,
+        fit.points,
+        fit.frequencies.0,
+        fit.frequencies.1,
+        fit.exponent.0,
+        fit.exponent.1,
+        fit.exponent_sigma(),
+        levels.join(", "),
+        fit.chi2_dof
+    );
+    if !fit.resolved() && fit.exponent_sigma().abs() <= FLAG_SIGMA {
+        let _ = writeln!(
+            s,
+            "  not resolved: the standard error of α exceeds {LOSS_EXPONENT_RESOLUTION:.4}, \
+             which α = {SMALLEST_LOSS_EXPONENT} needs to be found at {FLAG_SIGMA}σ 9 times in \
+             10; more hinges, or hinges spread over a wider range of frequencies, would resolve \
+             it (the standard error falls as 1/(√n · spread of ln f))"
+        );
+    }
+    s
+}
+
+/// The findings, each with its kind: what was fitted but deserves a look.
+pub fn findings_text(report: &FitReport) -> String {
+    let mut s = String::new();
+    if !report.findings.is_empty() {
+        let _ = writeln!(s, "\nfindings ({}):", finding_counts(report));
+        for finding in &report.findings {
+            let _ = writeln!(s, "  - [{}] {}", finding.kind, finding.message);
         }
     }
     s
+}
+
+/// `2 × trial_disagreement, 1 × baseline_drift`: the findings counted by kind, in order of
+/// first appearance.
+pub fn finding_counts(report: &FitReport) -> String {
+    let mut counts: Vec<(&str, usize)> = Vec::new();
+    for finding in &report.findings {
+        match counts.iter_mut().find(|(kind, _)| *kind == finding.kind) {
+            Some((_, n)) => *n += 1,
+            None => counts.push((finding.kind, 1)),
+        }
+    }
+    counts
+        .iter()
+        .map(|(kind, n)| format!("{n} × {kind}"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 // Writing to a `String` cannot fail, hence the `let _ =` on every `writeln!` below.

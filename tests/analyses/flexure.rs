@@ -332,12 +332,17 @@ fn pendulum_fit_recovers_modulus_loss_factor_and_stiffness() {
         // check must see it on some flexures (4 here, 4.2–5.3 standard errors), and on k_m
         // only, which is what the bias moves.
         if small_angle {
-            assert!(!report.warnings.is_empty());
-            for warning in &report.warnings {
-                assert!(warning.contains("disagree on k_m"), "{warning}");
+            assert!(!report.findings.is_empty());
+            for finding in &report.findings {
+                assert!(
+                    finding.kind == "trial_disagreement"
+                        && finding.message.contains("on k_m")
+                        && !finding.message.contains("b_m"),
+                    "{finding:?}"
+                );
             }
         } else {
-            assert!(report.warnings.is_empty(), "{:#?}", report.warnings);
+            assert!(report.findings.is_empty(), "{:#?}", report.findings);
         }
         let fit = report.uncastellated.expect("25 uncastellated specimens");
         let e_error = common::relative_error(fit.youngs_modulus, E_TRUE);
@@ -791,7 +796,7 @@ fn example_data_fit_end_to_end() {
         .collect();
     let report = mech::flexure_fit::fit_specimens(specimens, &FitOptions::default());
     assert!(report.rejected.is_empty(), "{:#?}", report.rejected);
-    assert!(report.warnings.is_empty(), "{:#?}", report.warnings);
+    assert!(report.findings.is_empty(), "{:#?}", report.findings);
     let fit = report.uncastellated.as_ref().unwrap();
     assert!(
         common::relative_error(fit.youngs_modulus, E_TRUE).abs() < 0.01,

@@ -358,7 +358,7 @@ fn bad_traces_are_rejected_together_and_good_hinges_still_fitted() {
     common::assert_close("E", fit.youngs_modulus, E, 1e-3, 0.0);
     common::assert_close("η", fit.loss_factor, ETA, 0.01, 0.0);
     // Clean trials agree within their uncertainties: no false warning.
-    assert!(report.warnings.is_empty(), "{:#?}", report.warnings);
+    assert!(report.findings.is_empty(), "{:#?}", report.findings);
 
     // The summary lists them all and says the rest was fitted.
     let summary = report.problems().unwrap_err().to_string();
@@ -469,15 +469,14 @@ fn stiffness_below_gravity_and_disagreeing_trials() {
     assert!(report.rejected[0].to_string().contains("pendulum.inertia"));
     assert_eq!(report.specimens.len(), 1);
     // b_m = kη/ω_d is 2.4 % larger too.
+    let [finding] = &report.findings[..] else {
+        panic!("{:#?}", report.findings);
+    };
     assert!(
-        report.warnings.len() == 2
-            && report.warnings[0].contains("disagree on k_m")
-            && report.warnings[1].contains("disagree on b_m")
-            && report
-                .warnings
-                .iter()
-                .all(|w| w.starts_with("pair: trials")),
-        "{:#?}",
-        report.warnings
+        finding.kind == "trial_disagreement"
+            && finding.message.starts_with("pair: trials")
+            && finding.message.contains("on k_m")
+            && finding.message.contains(" and b_m"),
+        "{finding:?}"
     );
 }

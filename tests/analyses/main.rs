@@ -11,5 +11,6 @@ mod actuator;
 mod docs_commands;
 mod experiments;
 mod flexure;
+mod flexure_effects;
 mod flexure_screening;
 mod readme;

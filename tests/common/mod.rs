@@ -155,6 +155,25 @@ pub fn box_muller(u1: f64, u2: f64) -> f64 {
     (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
 }
 
+/// One classical Runge–Kutta step of `θ̈ = accel(θ, θ̇)` (the pendulum generators' own
+/// integrator, independent of the runtime's).
+pub fn rk4_step((theta, omega): (f64, f64), h: f64, accel: impl Fn(f64, f64) -> f64) -> (f64, f64) {
+    let (k1x, k1v) = (omega, accel(theta, omega));
+    let (k2x, k2v) = (
+        omega + 0.5 * h * k1v,
+        accel(theta + 0.5 * h * k1x, omega + 0.5 * h * k1v),
+    );
+    let (k3x, k3v) = (
+        omega + 0.5 * h * k2v,
+        accel(theta + 0.5 * h * k2x, omega + 0.5 * h * k2v),
+    );
+    let (k4x, k4v) = (omega + h * k3v, accel(theta + h * k3x, omega + h * k3v));
+    (
+        theta + h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
+        omega + h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v),
+    )
+}
+
 /// A directory of `name` under Cargo's scratch directory for integration tests, created.
 pub fn scratch_dir(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);

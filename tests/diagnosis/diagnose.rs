@@ -189,8 +189,9 @@ fn diagnose_command_writes_the_page_and_the_summary() {
         // The model named on the command line, as `mech diagnose MODEL --experiment …`.
         model: Some(format!("{root}/models/hamr_vi.mech").into()),
         causes: Vec::new(),
-        experiment: format!("{root}/docs/examples/diagnose/hamr_vi_lift_bode.toml").into(),
-        data: format!("{root}/docs/examples/diagnose/hamr_vi_lift_bode.csv").into(),
+        experiment: Some(format!("{root}/docs/examples/diagnose/hamr_vi_lift_bode.toml").into()),
+        data: Some(format!("{root}/docs/examples/diagnose/hamr_vi_lift_bode.csv").into()),
+        dataset: None,
         fit: Vec::new(),
         holdout: "every:3".into(),
         out_dir: out_dir.clone(),

@@ -98,18 +98,7 @@ fn trace_csv(extra: Extra, seed: u64, noise_deg: f64) -> String {
         let angle = measured.to_degrees() + noise_deg * rng.normal();
         text += &format!("{t:.6}, {angle:.6}\n");
         for _ in 0..per_sample {
-            let (k1x, k1v) = (omega, accel(theta, omega));
-            let (k2x, k2v) = (
-                omega + 0.5 * h * k1v,
-                accel(theta + 0.5 * h * k1x, omega + 0.5 * h * k1v),
-            );
-            let (k3x, k3v) = (
-                omega + 0.5 * h * k2v,
-                accel(theta + 0.5 * h * k2x, omega + 0.5 * h * k2v),
-            );
-            let (k4x, k4v) = (omega + h * k3v, accel(theta + h * k3x, omega + h * k3v));
-            theta += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
-            omega += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+            (theta, omega) = common::rk4_step((theta, omega), h, accel);
         }
     }
     text
@@ -518,8 +507,9 @@ fn pendulum_commands_report_flags() {
         let args = mech::cli::diagnose::DiagnoseArgs {
             model: None,
             causes: Vec::new(),
-            experiment: example("flexure_rig_ringdown.toml"),
-            data: example(data),
+            experiment: Some(example("flexure_rig_ringdown.toml")),
+            data: Some(example(data)),
+            dataset: None,
             fit: Vec::new(),
             holdout: "every:3".into(),
             out_dir: out_dir.clone(),
