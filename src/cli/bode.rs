@@ -210,27 +210,21 @@ fn bode_plot(
     chirp: Option<&[Point]>,
 ) -> Result<output::File, Error> {
     let frequencies: Vec<f64> = response.iter().map(|p| p.frequency_hz).collect();
-    let mut magnitude = vec![(
-        "linear model".to_string(),
-        frequencies.clone(),
-        response.iter().map(Point::magnitude_db).collect(),
-    )];
-    let mut phase = vec![(
-        "linear model".to_string(),
-        frequencies.clone(),
-        response.iter().map(Point::phase_deg).collect(),
-    )];
-    if let Some(chirp) = chirp {
-        magnitude.push((
-            "chirp estimate".to_string(),
-            frequencies.clone(),
-            chirp.iter().map(Point::magnitude_db).collect(),
-        ));
-        phase.push((
-            "chirp estimate".to_string(),
-            frequencies.clone(),
-            chirp.iter().map(Point::phase_deg).collect(),
-        ));
-    }
+    let named: Vec<(&str, &[Point])> = std::iter::once(("linear model", response))
+        .chain(chirp.map(|c| ("chirp estimate", c)))
+        .collect();
+    let responses: Vec<&[Point]> = named.iter().map(|(_, r)| *r).collect();
+    let magnitude: Vec<_> = named
+        .iter()
+        .map(|(name, r)| {
+            let db = r.iter().map(Point::magnitude_db).collect();
+            (name.to_string(), frequencies.clone(), db)
+        })
+        .collect();
+    let phase: Vec<_> = named
+        .iter()
+        .zip(frequency::unwrapped_phases(&responses))
+        .map(|((name, _), phase)| (name.to_string(), frequencies.clone(), phase))
+        .collect();
     Ok(plot::plot_bode(path, title, &magnitude, &phase)?)
 }
