@@ -226,5 +226,11 @@ fn bode_plot(
         .zip(frequency::unwrapped_phases(&responses))
         .map(|((name, _), phase)| (name.to_string(), frequencies.clone(), phase))
         .collect();
-    Ok(plot::plot_bode(path, title, &magnitude, &phase)?)
+    Ok(plot::plot_bode(
+        path,
+        title,
+        "magnitude [dB]",
+        &magnitude,
+        &phase,
+    )?)
 }

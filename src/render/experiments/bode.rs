@@ -208,10 +208,8 @@ fn write_channel(
     let path = dir.join(format!("bode_{}.svg", channel.name));
     let plot = plot::plot_bode(
         &path,
-        &format!(
-            "{name}: {} → {} (dB re 1 µm/V)",
-            channel.input, channel.output
-        ),
+        &format!("{name}: {} → {}", channel.input, channel.output),
+        "magnitude [dB re 1 µm/V]",
         &magnitude,
         &phase,
     )?;
