@@ -89,6 +89,36 @@ pub struct Star {
     pub y: f64,
 }
 
+/// Measured values drawn as markers with error bars, not joined by lines (the paper's
+/// measurements, data a model is fitted to).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Measured {
+    /// Legend entry (no entry if empty); where no uncertainty is given it should say so.
+    pub name: String,
+    /// Palette index (wraps), e.g. the colour of the model curve it is compared with.
+    pub color: usize,
+    pub points: Vec<ErrorPoint>,
+}
+
+/// A measured point and the half-lengths of its error bars (±1 s.d., ±σ), in the plot's
+/// units; 0 or NaN: no bar.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ErrorPoint {
+    pub x: f64,
+    pub y: f64,
+    pub x_error: f64,
+    pub y_error: f64,
+}
+
+impl ErrorPoint {
+    /// Where the point and its bars reach: `(x_lo, x_hi, y_lo, y_hi)`.
+    fn extent(&self) -> [(f64, f64); 2] {
+        let bar = |e: f64| if e.is_finite() { e.abs() } else { 0.0 };
+        let (dx, dy) = (bar(self.x_error), bar(self.y_error));
+        [(self.x - dx, self.x + dx), (self.y - dy, self.y + dy)]
+    }
+}
+
 /// Why a plot could not be made. Displays as one line naming the output file.
 #[derive(Debug)]
 pub struct PlotError {
@@ -204,6 +234,8 @@ pub struct XyPlot<'a> {
     pub styles: Option<&'a [CurveStyle]>,
     /// Points marked with a star, e.g. the chosen designs on design curves.
     pub stars: &'a [Star],
+    /// Measured values, markers with error bars, drawn over the curves.
+    pub measured: &'a [Measured],
     /// x and y drawn to the same scale (the same length per pixel), the data centred: a
     /// path in a plane keeps its shape. Linear axes only.
     pub equal_scale: bool,
@@ -225,6 +257,7 @@ impl<'a> XyPlot<'a> {
             log_x: false,
             styles: None,
             stars: &[],
+            measured: &[],
             equal_scale: false,
         }
     }
@@ -235,7 +268,7 @@ impl<'a> XyPlot<'a> {
     pub fn render(&self, path: &Path) -> Result<File, PlotError> {
         let fail = |msg: String| PlotError::invalid(path, msg);
         let format = Format::of(path)?;
-        if self.curves.is_empty() {
+        if self.curves.is_empty() && self.measured.is_empty() {
             return Err(fail("nothing to plot (no curves)".into()));
         }
         for (name, xs, ys) in self.curves {
@@ -270,10 +303,18 @@ impl<'a> XyPlot<'a> {
         render(path, format, (WIDTH, XY_HEIGHT), self)
     }
 
-    /// Every x value drawn or marked.
+    /// Every x value drawn or marked, error bars' ends included.
     fn xs(&self) -> impl Iterator<Item = f64> + '_ {
         let curves = self.curves.iter().flat_map(|(_, xs, _)| xs.iter().copied());
-        curves.chain(self.stars.iter().map(|s| s.x))
+        let bars = self.measured_points().flat_map(|p| {
+            let [(lo, hi), _] = p.extent();
+            [lo, hi]
+        });
+        curves.chain(self.stars.iter().map(|s| s.x)).chain(bars)
+    }
+
+    fn measured_points(&self) -> impl Iterator<Item = &ErrorPoint> + '_ {
+        self.measured.iter().flat_map(|m| &m.points)
     }
 
     /// Curve `index`'s style: its `styles` entry, else its palette colour in order, solid.
@@ -287,20 +328,29 @@ impl<'a> XyPlot<'a> {
             })
     }
 
-    /// The legend: the named curves.
+    /// The legend: the named curves, then the named measurements.
     fn legend(&self) -> Vec<LegendEntry<'a>> {
         let curves = self.curves.iter().enumerate();
-        curves
-            .filter(|(_, (name, _, _))| !name.is_empty())
-            .map(|(index, (name, _, _))| {
-                let CurveStyle { color, dashed } = self.style(index);
-                LegendEntry {
-                    name,
-                    color,
-                    sample: Sample::Line { dashed },
-                }
-            })
-            .collect()
+        let lines =
+            curves
+                .filter(|(_, (name, _, _))| !name.is_empty())
+                .map(|(index, (name, _, _))| {
+                    let CurveStyle { color, dashed } = self.style(index);
+                    LegendEntry {
+                        name,
+                        color,
+                        sample: Sample::Line { dashed },
+                    }
+                });
+        let markers = self.measured.iter().filter(|m| !m.name.is_empty());
+        let markers = markers.map(|m| LegendEntry {
+            name: &m.name,
+            color: m.color,
+            sample: Sample::Marker {
+                bars: m.points.iter().any(|p| p.x_error > 0.0 || p.y_error > 0.0),
+            },
+        });
+        lines.chain(markers).collect()
     }
 }
 
@@ -571,7 +621,14 @@ fn draw_xy_panel<DB: DrawingBackend>(
             .map(|(_, &y)| y)
     });
     let star_ys = plot.stars.iter().filter(|s| visible(s.x)).map(|s| s.y);
-    let y_range = axis_range(curve_ys.chain(star_ys));
+    let bar_ys = plot
+        .measured_points()
+        .filter(|p| visible(p.x))
+        .flat_map(|p| {
+            let [_, (lo, hi)] = p.extent();
+            [lo, hi]
+        });
+    let y_range = axis_range(curve_ys.chain(star_ys).chain(bar_ys));
     let mut builder = ChartBuilder::on(&area);
     builder
         .margin(10)
@@ -593,6 +650,7 @@ fn draw_xy_panel<DB: DrawingBackend>(
         let x_format = |v: &f64| significant(*v, 3);
         configure_xy_mesh(&mut chart, plot.x_label, plot.y_label, &x_format, &y_format)?;
         draw_curves(&mut chart, curves, plot.stars, &star_color)?;
+        draw_measured(&mut chart, plot.measured)?;
         draw_legend(&legend_area, chart.plotting_area(), &legend)
     } else {
         let mut x_range = axis_range(xs);
@@ -612,6 +670,7 @@ fn draw_xy_panel<DB: DrawingBackend>(
         let y_format = |v: &f64| linear_tick(*v, &y_range);
         configure_xy_mesh(&mut chart, plot.x_label, plot.y_label, &x_format, &y_format)?;
         draw_curves(&mut chart, curves, plot.stars, &star_color)?;
+        draw_measured(&mut chart, plot.measured)?;
         draw_legend(&legend_area, chart.plotting_area(), &legend)
     }
 }
@@ -643,7 +702,23 @@ struct LegendEntry<'a> {
 
 #[derive(Debug, Clone, Copy)]
 enum Sample {
-    Line { dashed: bool },
+    Line {
+        dashed: bool,
+    },
+    /// A measured point, with a vertical error bar if the measurement has bars.
+    Marker {
+        bars: bool,
+    },
+}
+
+/// Radius of a measured point's marker, and half the width of an error bar's caps, in pixels.
+const MARKER_RADIUS: i32 = 5;
+const CAP: i32 = 5;
+
+/// The marker of a measured point, a circle of [`MARKER_RADIUS`] drawn in these styles in
+/// turn: filled in `color`, then outlined in black.
+fn marker_styles(color: RGBColor) -> [ShapeStyle; 2] {
+    [color.filled(), BLACK.stroke_width(1)]
 }
 
 /// Legend text size in pixels.
@@ -713,6 +788,26 @@ fn draw_legend<DB: DrawingBackend, X: Ranged, Y: Ranged>(
                     color.stroke_width(2),
                 ))
                 .map_err(e)?,
+            Sample::Marker { bars } => {
+                let middle = 8 + LEGEND_SAMPLE / 2;
+                if bars {
+                    let half = LEGEND_LINE / 2 - 2;
+                    for path in [
+                        vec![(middle, y - half), (middle, y + half)],
+                        vec![(middle - CAP, y - half), (middle + CAP, y - half)],
+                        vec![(middle - CAP, y + half), (middle + CAP, y + half)],
+                    ] {
+                        column
+                            .draw(&PathElement::new(path, color.stroke_width(1)))
+                            .map_err(e)?;
+                    }
+                }
+                for style in marker_styles(color) {
+                    column
+                        .draw(&Circle::new((middle, y), MARKER_RADIUS, style))
+                        .map_err(e)?;
+                }
+            }
         }
         column
             .draw(&Text::new(
@@ -826,6 +921,66 @@ where
                 }),
         )
         .map_err(e)?;
+    Ok(())
+}
+
+/// Draws each measurement's points as markers with their error bars (a line with caps each
+/// way that has a bar); points or bar ends off the axes (x <= 0 on a log axis) are left out.
+fn draw_measured<'a, DB, X>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<X, RangedCoordf64>>,
+    measured: &[Measured],
+) -> Result<(), String>
+where
+    DB: DrawingBackend + 'a,
+    X: Ranged<ValueType = f64>,
+{
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    let x_range = chart.x_range();
+    let in_range = |x: f64| x.is_finite() && x >= x_range.start.min(x_range.end);
+    for measurement in measured {
+        let color = PALETTE[measurement.color % PALETTE.len()];
+        let points = measurement
+            .points
+            .iter()
+            .filter(|p| in_range(p.x) && p.y.is_finite());
+        let style = color.stroke_width(1);
+        for point in points.clone() {
+            let [(x_lo, x_hi), (y_lo, y_hi)] = point.extent();
+            // A bar in data units, and a cap in pixels at each end.
+            let cap = |at: (f64, f64), vertical: bool| {
+                let tick = if vertical {
+                    vec![(-CAP, 0), (CAP, 0)]
+                } else {
+                    vec![(0, -CAP), (0, CAP)]
+                };
+                EmptyElement::at(at) + PathElement::new(tick, style)
+            };
+            if y_hi > y_lo {
+                let (low, high) = ((point.x, y_lo), (point.x, y_hi));
+                chart
+                    .draw_series([PathElement::new(vec![low, high], style)])
+                    .map_err(e)?;
+                chart
+                    .draw_series([cap(low, true), cap(high, true)])
+                    .map_err(e)?;
+            }
+            if x_hi > x_lo && in_range(x_lo) {
+                let (low, high) = ((x_lo, point.y), (x_hi, point.y));
+                chart
+                    .draw_series([PathElement::new(vec![low, high], style)])
+                    .map_err(e)?;
+                chart
+                    .draw_series([cap(low, false), cap(high, false)])
+                    .map_err(e)?;
+            }
+        }
+        for style in marker_styles(color) {
+            let circles = points
+                .clone()
+                .map(|p| Circle::new((p.x, p.y), MARKER_RADIUS, style));
+            chart.draw_series(circles).map_err(e)?;
+        }
+    }
     Ok(())
 }
 
@@ -1196,6 +1351,41 @@ mod tests {
         assert!((width - height).abs() <= 2.0, "{width} × {height} px");
         let (width, height) = extent(false);
         assert!(width > 1.3 * height, "{width} × {height} px");
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    /// Measured points are markers (filled, then outlined) with their error bars, and the
+    /// axes reach the bars' ends: a bar of ±5 around 10 over a curve below 1 takes the axis
+    /// to 15 (ticks to 14; to 10 without the bar).
+    #[test]
+    fn measured_points_with_error_bars() {
+        let dir = temp_dir("measured");
+        let curves = [("model".to_string(), vec![0.0, 2.0], vec![0.0, 1.0])];
+        let measured = [Measured {
+            name: "paper (± s.d.)".into(),
+            color: 0,
+            points: vec![
+                ErrorPoint {
+                    x: 1.0,
+                    y: 10.0,
+                    x_error: 0.0,
+                    y_error: 5.0,
+                },
+                ErrorPoint {
+                    x: 1.5,
+                    y: 0.5,
+                    ..ErrorPoint::default()
+                },
+            ],
+        }];
+        let plot = XyPlot {
+            measured: &measured,
+            ..XyPlot::new("measured", "x", "y", &curves)
+        };
+        let svg = String::from_utf8(plot.render(&dir.join("m.svg")).unwrap().bytes).unwrap();
+        assert_eq!(svg.matches("<circle").count(), 2 * (2 + 1), "{svg}");
+        assert!(svg.contains("paper (± s.d.)"));
+        assert!(svg.contains(">\n14\n<"), "no tick at 14: the bar is cut");
         let _ = fs::remove_dir_all(&dir);
     }
 
