@@ -128,7 +128,21 @@ pub fn run(args: &BodeArgs) -> Result<(), Error> {
     }
     if let Some(path) = &args.plot {
         let title = format!("{}: {} → {}", model.name(), args.drive, args.output);
-        files.push(bode_plot(path, &title, &response, chirp.as_deref())?);
+        // The reference of the dB: 1 output unit per input unit.
+        let output_unit = session.output_unit(&args.output);
+        let reference = format!(
+            "{}/{}",
+            output_unit.as_deref().unwrap_or("(output unit)"),
+            session.input_dimension(input)
+        );
+        let label = format!("magnitude [dB re 1 {reference}]");
+        files.push(bode_plot(
+            path,
+            &title,
+            &label,
+            &response,
+            chirp.as_deref(),
+        )?);
     }
     output::write_all(&files, &reads)?;
     if let Some(out) = &args.out {
@@ -206,6 +220,7 @@ fn response_table(response: &[Point], chirp: Option<&[Point]>) -> (Vec<String>, 
 fn bode_plot(
     path: &Path,
     title: &str,
+    magnitude_label: &str,
     response: &[Point],
     chirp: Option<&[Point]>,
 ) -> Result<output::File, Error> {
@@ -229,7 +244,7 @@ fn bode_plot(
     Ok(plot::plot_bode(
         path,
         title,
-        "magnitude [dB]",
+        magnitude_label,
         &magnitude,
         &phase,
     )?)
