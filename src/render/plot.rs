@@ -530,7 +530,7 @@ impl Figure for TimeSeriesFigure<'_> {
                 };
                 (self.times, s.values.as_slice(), style)
             });
-            draw_curves(&mut chart, curves, &[], &|_| 0)?;
+            draw_curves(&mut chart, curves, &[], &|_| 0, &[])?;
             draw_legend(&legend_area, chart.plotting_area(), legend)?;
         }
         Ok(())
@@ -649,8 +649,7 @@ fn draw_xy_panel<DB: DrawingBackend>(
             .map_err(e)?;
         let x_format = |v: &f64| significant(*v, 3);
         configure_xy_mesh(&mut chart, plot.x_label, plot.y_label, &x_format, &y_format)?;
-        draw_curves(&mut chart, curves, plot.stars, &star_color)?;
-        draw_measured(&mut chart, plot.measured)?;
+        draw_curves(&mut chart, curves, plot.stars, &star_color, plot.measured)?;
         draw_legend(&legend_area, chart.plotting_area(), &legend)
     } else {
         let mut x_range = axis_range(xs);
@@ -669,8 +668,7 @@ fn draw_xy_panel<DB: DrawingBackend>(
         let x_format = |v: &f64| linear_tick(*v, &x_range);
         let y_format = |v: &f64| linear_tick(*v, &y_range);
         configure_xy_mesh(&mut chart, plot.x_label, plot.y_label, &x_format, &y_format)?;
-        draw_curves(&mut chart, curves, plot.stars, &star_color)?;
-        draw_measured(&mut chart, plot.measured)?;
+        draw_curves(&mut chart, curves, plot.stars, &star_color, plot.measured)?;
         draw_legend(&legend_area, chart.plotting_area(), &legend)
     }
 }
@@ -863,12 +861,13 @@ where
 }
 
 /// Draws each `(xs, ys, style)` curve, broken at non-finite points, then the `stars`, each in
-/// the palette colour `star_color` gives for its curve.
+/// the palette colour `star_color` gives for its curve, then the `measured` points.
 fn draw_curves<'a, 'c, DB, X>(
     chart: &mut ChartContext<'a, DB, Cartesian2d<X, RangedCoordf64>>,
     curves: impl Iterator<Item = (&'c [f64], &'c [f64], CurveStyle)>,
     stars: &[Star],
     star_color: &dyn Fn(usize) -> usize,
+    measured: &[Measured],
 ) -> Result<(), String>
 where
     DB: DrawingBackend + 'a,
@@ -921,28 +920,14 @@ where
                 }),
         )
         .map_err(e)?;
-    Ok(())
-}
-
-/// Draws each measurement's points as markers with their error bars (a line with caps each
-/// way that has a bar); points or bar ends off the axes (x <= 0 on a log axis) are left out.
-fn draw_measured<'a, DB, X>(
-    chart: &mut ChartContext<'a, DB, Cartesian2d<X, RangedCoordf64>>,
-    measured: &[Measured],
-) -> Result<(), String>
-where
-    DB: DrawingBackend + 'a,
-    X: Ranged<ValueType = f64>,
-{
-    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
-    let x_range = chart.x_range();
-    let in_range = |x: f64| x.is_finite() && x >= x_range.start.min(x_range.end);
+    // The measurements: markers with their error bars (a line with caps each way that has
+    // a bar); points or bar ends off the axes (x <= 0 on a log axis) left out.
     for measurement in measured {
         let color = PALETTE[measurement.color % PALETTE.len()];
         let points = measurement
             .points
             .iter()
-            .filter(|p| in_range(p.x) && p.y.is_finite());
+            .filter(|p| p.x.is_finite() && in_range(p.x) && p.y.is_finite());
         let style = color.stroke_width(1);
         for point in points.clone() {
             let [(x_lo, x_hi), (y_lo, y_hi)] = point.extent();
