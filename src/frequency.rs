@@ -354,39 +354,108 @@ impl<M: Fn(f64) -> f64> CostFunction for LogFrequency<'_, M> {
 }
 
 /// Swept-sine estimate from a chirp record: `H(f) = Y(f) / U(f)` with single-bin Fourier
-/// transforms of the whole input and output records (trapezoid rule, rectangular window),
-/// evaluated at each analysis frequency; both means are removed. No taper: in a swept sine
-/// each frequency lives at one time of the record, and a window over the whole record would
-/// suppress the sweep's start and end, where its lowest and highest frequencies are.
+/// transforms of the whole input and output records ([`single_bin`]), evaluated at each
+/// analysis frequency; both means are removed. No taper: in a swept sine each frequency lives
+/// at one time of the record, and a window over the whole record would suppress the sweep's
+/// start and end, where its lowest and highest frequencies are.
 pub fn chirp_estimate(
     times: &[f64],
     input: &[f64],
     output: &[f64],
     frequencies: &[f64],
 ) -> Vec<Point> {
-    let n = times.len();
-    let mean = |values: &[f64]| values.iter().sum::<f64>() / values.len().max(1) as f64;
-    let (input_mean, output_mean) = (mean(input), mean(output));
-    let transform = |values: &[f64], offset: f64, omega: f64| {
-        let mut sum = Complex::new(0.0, 0.0);
-        for k in 1..n {
-            let dt = times[k] - times[k - 1];
-            let term = |j: usize| Complex::from_polar(values[j] - offset, -omega * times[j]);
-            sum += (term(k) + term(k - 1)) * (0.5 * dt);
-        }
-        sum
-    };
     frequencies
         .iter()
-        .map(|&f| {
-            let omega = std::f64::consts::TAU * f;
-            let gain = transform(output, output_mean, omega) / transform(input, input_mean, omega);
-            Point {
-                frequency_hz: f,
-                gain,
-            }
+        .map(|&f| Point {
+            frequency_hz: f,
+            gain: single_bin(times, output, f) / single_bin(times, input, f),
         })
         .collect()
+}
+
+/// The Fourier transform of the record `values(times)` at `frequency_hz` alone (trapezoid
+/// rule, rectangular window, the record's mean removed).
+fn single_bin(times: &[f64], values: &[f64], frequency_hz: f64) -> Complex<f64> {
+    let omega = std::f64::consts::TAU * frequency_hz;
+    let mean = values.iter().sum::<f64>() / values.len().max(1) as f64;
+    let term = |j: usize| Complex::from_polar(values[j] - mean, -omega * times[j]);
+    (1..times.len().min(values.len()))
+        .map(|k| (term(k) + term(k - 1)) * (0.5 * (times[k] - times[k - 1])))
+        .sum()
+}
+
+/// The fraction of a linear chirp's in-band input spectrum below which its estimate is not
+/// trusted: half (−6 dB). A sweep of amplitude `A` at rate `r` (Hz/s) has
+/// `|U(f)| ≈ A / (2√r)` inside its band (stationary phase), with a Fresnel ripple of about
+/// ±2 dB that falls to exactly half at its first and last frequencies. Below half the sweep has
+/// hardly excited `f`, and `Y/U` divides what the output holds there anyway (the start-up
+/// transient, the ringing cut off at the record's end) by almost nothing. A single simulated
+/// record has no coherence to compute (one record, no noise, `γ² = 1` by construction): the
+/// input's power is the measure of trust it has.
+pub const CHIRP_INPUT_FLOOR: f64 = 0.5;
+
+/// Blanks (NaN: not drawn, not searched for resonances) the points of a chirp estimate
+/// whose input spectrum `|U(f)|` over `times` is below [`CHIRP_INPUT_FLOOR`] of the
+/// in-band level of a linear sweep of `amplitude` at `rate_hz_per_s`. Returns how many.
+pub fn mask_weak_input(
+    points: &mut [Point],
+    times: &[f64],
+    input: &[f64],
+    amplitude: f64,
+    rate_hz_per_s: f64,
+) -> usize {
+    let floor = CHIRP_INPUT_FLOOR * amplitude / (2.0 * rate_hz_per_s.sqrt());
+    let mut masked = 0;
+    for point in points {
+        if single_bin(times, input, point.frequency_hz).norm() < floor {
+            point.gain = Complex::new(f64::NAN, f64::NAN);
+            masked += 1;
+        }
+    }
+    masked
+}
+
+/// Phases in degrees along increasing frequency, unwrapped: each finite sample moved by the
+/// multiple of 360° that brings it within 180° of the finite sample before it, and the first
+/// finite one within 180° of `start` (another curve's phase there, so that curves drawn
+/// together share a branch; the sample itself for none). NaN stays NaN, a gap bridged.
+pub fn unwrap_phase_deg(phases: &[f64], start: f64) -> Vec<f64> {
+    let mut previous = start;
+    phases
+        .iter()
+        .map(|&phase| {
+            if !phase.is_finite() {
+                return phase;
+            }
+            let reference = if previous.is_finite() {
+                previous
+            } else {
+                phase
+            };
+            let unwrapped = phase - 360.0 * ((phase - reference) / 360.0).round();
+            previous = unwrapped;
+            unwrapped
+        })
+        .collect()
+}
+
+/// The phases (degrees) of responses on one frequency grid, each unwrapped
+/// ([`unwrap_phase_deg`]), the first from its own first sample and every other one on the
+/// branch of the first at its own first finite sample: drawn together, the curves do not sit
+/// 360° apart.
+pub fn unwrapped_phases(responses: &[&[Point]]) -> Vec<Vec<f64>> {
+    let mut phases: Vec<Vec<f64>> = Vec::new();
+    for response in responses {
+        let raw: Vec<f64> = response.iter().map(Point::phase_deg).collect();
+        let first = raw.iter().position(|p| p.is_finite());
+        let start = match (phases.first(), first) {
+            (Some(reference), Some(k)) => reference.get(k).copied().unwrap_or(raw[k]),
+            (None, Some(k)) => raw[k],
+            (_, None) => f64::NAN,
+        };
+        phases.push(unwrap_phase_deg(&raw, start));
+    }
+    phases
 }
 
 /// A linear chirp on one input, and the output it is read from.
@@ -406,7 +475,8 @@ pub struct ChirpSweep {
 
 /// Simulates the model from `(q, u)` under `sweep` (the other inputs as `signals` give them;
 /// the driven input's value at t = 0 is the chirp's offset) and estimates `H(f)` at
-/// `frequencies` by [`chirp_estimate`]. Samples and steps are at most `1/(20 f_max)` apart,
+/// `frequencies` by [`chirp_estimate`], blanked where the sweep did not excite `f`
+/// ([`mask_weak_input`]). Samples and steps are at most `1/(20 f_max)` apart,
 /// so the highest frequency is resolved by 20 points per period.
 pub fn simulated_chirp(
     model: &dyn Model,
@@ -439,7 +509,10 @@ pub fn simulated_chirp(
     let run = mech_runtime::simulate(model, q, u, &signals, &options, &mut |_| {})?;
     let input: Vec<f64> = run.inputs.iter().map(|x| x[sweep.input]).collect();
     let output: Vec<f64> = run.outputs.iter().map(|x| x[sweep.output]).collect();
-    Ok(chirp_estimate(&run.times, &input, &output, frequencies))
+    let mut estimate = chirp_estimate(&run.times, &input, &output, frequencies);
+    let rate = (sweep.to_hz - sweep.from_hz).abs() / sweep.duration;
+    mask_weak_input(&mut estimate, &run.times, &input, sweep.amplitude, rate);
+    Ok(estimate)
 }
 
 #[cfg(test)]
@@ -498,6 +571,69 @@ mod tests {
         )[0]
         .quality_factor
         .is_none());
+    }
+
+    /// A linear phase that leaves (−180°, 180°] four times comes back as the straight line,
+    /// across a NaN gap, and on the branch of `start`.
+    #[test]
+    fn unwrap_restores_a_linear_phase() {
+        let line: Vec<f64> = (0..60).map(|k| 170.0 - 13.0 * k as f64).collect();
+        let mut wrapped: Vec<f64> = line
+            .iter()
+            .map(|p| p - 360.0 * ((p - 1e-9) / 360.0).round())
+            .collect();
+        assert!(wrapped.iter().all(|p| (-180.0..=180.0).contains(p)));
+        wrapped[20] = f64::NAN;
+        let unwrapped = unwrap_phase_deg(&wrapped, wrapped[0]);
+        for (k, (a, b)) in line.iter().zip(&unwrapped).enumerate() {
+            if k == 20 {
+                assert!(b.is_nan());
+            } else {
+                assert!((a - b).abs() < 1e-9, "sample {k}: {b} for {a}");
+            }
+        }
+        // A phase near ±180° flipping sign (the comb) is one branch; `start` picks which.
+        let comb = [179.0, -179.5, 179.8, -178.0];
+        assert_eq!(
+            unwrap_phase_deg(&comb, 180.0),
+            vec![179.0, 180.5, 179.8, 182.0]
+        );
+        assert_eq!(
+            unwrap_phase_deg(&comb, -180.0),
+            vec![-181.0, -179.5, -180.2, -178.0]
+        );
+    }
+
+    /// Outside a 10–50 Hz sweep (and at its Fresnel edges) the estimate is blanked; inside it
+    /// is kept, and there `H` of the identity is 1.
+    #[test]
+    fn chirp_estimate_is_blanked_where_the_sweep_did_not_reach() {
+        let (amplitude, f0, f1, duration, dt) = (2.0, 10.0, 50.0, 4.0, 1e-3);
+        let rate = (f1 - f0) / duration;
+        let times: Vec<f64> = (0..=(duration / dt) as usize)
+            .map(|k| k as f64 * dt)
+            .collect();
+        let input: Vec<f64> = times
+            .iter()
+            .map(|t| amplitude * (std::f64::consts::TAU * (f0 * t + 0.5 * rate * t * t)).sin())
+            .collect();
+        let frequencies = log_space(2.0, 100.0, 120);
+        let mut points = chirp_estimate(&times, &input, &input, &frequencies);
+        let masked = mask_weak_input(&mut points, &times, &input, amplitude, rate);
+        assert!(masked > 0 && masked < points.len());
+        for point in &points {
+            let f = point.frequency_hz;
+            if !(7.0..=53.0).contains(&f) {
+                assert!(point.gain.re.is_nan(), "{f} Hz kept: {}", point.gain);
+            }
+            if (13.0..=47.0).contains(&f) {
+                assert!(
+                    (point.gain.norm() - 1.0).abs() < 1e-9,
+                    "{f} Hz: {}",
+                    point.gain
+                );
+            }
+        }
     }
 
     /// Bad grids and a response that is not a number are typed errors, not panics or loops.

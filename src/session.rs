@@ -7,7 +7,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use mech_codegen::ir::Dimension;
+use mech_codegen::ir::{Dimension, OutputKind};
 use mech_codegen::{Compiled, Diagnostic, Errors};
 use mech_runtime::constraints::{choose_independent, complete_independent, jacobian};
 use mech_runtime::nalgebra::DMatrix;
@@ -264,6 +264,16 @@ pub struct Session {
     pub signals: Vec<Signal>,
 }
 
+/// The units of a coordinate of `dimension` and of its speed: angles (dimensionless) in rad.
+fn dimension_units(dimension: Dimension) -> (String, String) {
+    if dimension == Dimension::NONE {
+        ("rad".into(), "rad/s".into())
+    } else {
+        let speed = dimension.div(Dimension::TIME);
+        (dimension.to_string(), speed.to_string())
+    }
+}
+
 /// A state that satisfies the loop closures.
 #[derive(Clone, Debug)]
 pub struct Assembled {
@@ -391,6 +401,37 @@ impl Session {
             .nth(index)
             .map(|(_, i)| i.dimension)
             .unwrap_or_default()
+    }
+
+    /// The units of the coordinate named `name` and of its speed: `rad` and `rad/s` for an
+    /// angle, `m` and `m/s` for a slide (`None` if there is no such coordinate).
+    pub fn coordinate_units(&self, name: &str) -> Option<(String, String)> {
+        let coordinates = &self.compiled.model.coordinates;
+        let (_, coordinate) = coordinates.iter().find(|(_, c)| c.name == name)?;
+        Some(dimension_units(coordinate.dimension))
+    }
+
+    /// The unit of the scalar output named `name` (`foot.x`, `energy`), `None` for an
+    /// expression output (the model keeps no dimension for it) or an unknown name.
+    pub fn output_unit(&self, name: &str) -> Option<String> {
+        let model = &self.compiled.model;
+        let output = model.outputs.iter().find(|o| {
+            o.name == name
+                || [".x", ".y", ".z"]
+                    .iter()
+                    .any(|axis| name.strip_suffix(axis) == Some(o.name.as_str()))
+        })?;
+        let coordinate = |c: &mech_codegen::ir::Handle<mech_codegen::ir::Coordinate>| {
+            dimension_units(model.coordinates[*c].dimension)
+        };
+        Some(match &output.kind {
+            OutputKind::Position { .. } => "m".into(),
+            OutputKind::Velocity { .. } => "m/s".into(),
+            OutputKind::Coordinate(c) => coordinate(c).0,
+            OutputKind::Speed(c) => coordinate(c).1,
+            OutputKind::KineticEnergy | OutputKind::PotentialEnergy => "J".into(),
+            OutputKind::Expr(_) => return None,
+        })
     }
 
     /// `--input drive=sine(...)`: checks the name and the signal's units.
@@ -723,4 +764,25 @@ pub fn assembly_report(model: &dyn Model, state: &Assembled) -> String {
         );
     }
     text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Units by kind: a slide in m, a pin in rad, their speeds per second, a position output
+    /// in m per component, the energies in J; unknown names have none.
+    #[test]
+    fn units_of_coordinates_and_outputs() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let chain = Session::open(&root.join("models/mixed_chain.mech"), &[], &[]).unwrap();
+        let units = |a: &str, b: &str| Some((a.to_string(), b.to_string()));
+        assert_eq!(chain.coordinate_units("s1"), units("m", "m/s"));
+        assert_eq!(chain.coordinate_units("q2"), units("rad", "rad/s"));
+        assert_eq!(chain.coordinate_units("nope"), None);
+        let two = Session::open(&root.join("models/two_mass_chain.mech"), &[], &[]).unwrap();
+        assert_eq!(two.output_unit("x2.y").as_deref(), Some("m"));
+        assert_eq!(two.output_unit("ke").as_deref(), Some("J"));
+        assert_eq!(two.output_unit("nope"), None);
+    }
 }

@@ -128,7 +128,21 @@ pub fn run(args: &BodeArgs) -> Result<(), Error> {
     }
     if let Some(path) = &args.plot {
         let title = format!("{}: {} → {}", model.name(), args.drive, args.output);
-        files.push(bode_plot(path, &title, &response, chirp.as_deref())?);
+        // The reference of the dB: 1 output unit per input unit.
+        let output_unit = session.output_unit(&args.output);
+        let reference = format!(
+            "{}/{}",
+            output_unit.as_deref().unwrap_or("(output unit)"),
+            session.input_dimension(input)
+        );
+        let label = format!("magnitude [dB re 1 {reference}]");
+        files.push(bode_plot(
+            path,
+            &title,
+            &label,
+            &response,
+            chirp.as_deref(),
+        )?);
     }
     output::write_all(&files, &reads)?;
     if let Some(out) = &args.out {
@@ -206,31 +220,32 @@ fn response_table(response: &[Point], chirp: Option<&[Point]>) -> (Vec<String>, 
 fn bode_plot(
     path: &Path,
     title: &str,
+    magnitude_label: &str,
     response: &[Point],
     chirp: Option<&[Point]>,
 ) -> Result<output::File, Error> {
     let frequencies: Vec<f64> = response.iter().map(|p| p.frequency_hz).collect();
-    let mut magnitude = vec![(
-        "linear model".to_string(),
-        frequencies.clone(),
-        response.iter().map(Point::magnitude_db).collect(),
-    )];
-    let mut phase = vec![(
-        "linear model".to_string(),
-        frequencies.clone(),
-        response.iter().map(Point::phase_deg).collect(),
-    )];
-    if let Some(chirp) = chirp {
-        magnitude.push((
-            "chirp estimate".to_string(),
-            frequencies.clone(),
-            chirp.iter().map(Point::magnitude_db).collect(),
-        ));
-        phase.push((
-            "chirp estimate".to_string(),
-            frequencies.clone(),
-            chirp.iter().map(Point::phase_deg).collect(),
-        ));
-    }
-    Ok(plot::plot_bode(path, title, &magnitude, &phase)?)
+    let named: Vec<(&str, &[Point])> = std::iter::once(("linear model", response))
+        .chain(chirp.map(|c| ("chirp estimate", c)))
+        .collect();
+    let responses: Vec<&[Point]> = named.iter().map(|(_, r)| *r).collect();
+    let magnitude: Vec<_> = named
+        .iter()
+        .map(|(name, r)| {
+            let db = r.iter().map(Point::magnitude_db).collect();
+            (name.to_string(), frequencies.clone(), db)
+        })
+        .collect();
+    let phase: Vec<_> = named
+        .iter()
+        .zip(frequency::unwrapped_phases(&responses))
+        .map(|((name, _), phase)| (name.to_string(), frequencies.clone(), phase))
+        .collect();
+    Ok(plot::plot_bode(
+        path,
+        title,
+        magnitude_label,
+        &magnitude,
+        &phase,
+    )?)
 }

@@ -12,6 +12,7 @@ use mech_runtime::{Method, Model, SimOptions, Trajectory};
 use super::{parse_time, Error, ModelArgs};
 use crate::output;
 use crate::render::plot;
+use crate::session::Session;
 
 #[derive(Args, Clone, Debug)]
 pub struct SimulateArgs {
@@ -95,7 +96,7 @@ pub fn run(request: &SimulateArgs) -> Result<(), Error> {
     let mut files = vec![output::File::csv(&request.out, &header, &rows)?];
     if let Some(plot_path) = &request.plot {
         let title = format!("{} — {}", model.name(), path.display());
-        let panels = trajectory_panels(model, &trajectory);
+        let panels = trajectory_panels(&session, &trajectory);
         files.push(plot::plot_time_series(
             plot_path,
             &title,
@@ -161,37 +162,62 @@ fn trajectory_table(model: &dyn Model, trajectory: &Trajectory) -> (Vec<String>,
     (header, rows)
 }
 
-/// One panel each for the coordinates, the speeds and (if any) the outputs.
-fn trajectory_panels(model: &dyn Model, trajectory: &Trajectory) -> Vec<plot::Panel> {
-    let series = |names: &[String], values: &[Vec<f64>], prefix: &str| {
-        names
-            .iter()
-            .enumerate()
-            .map(|(i, n)| plot::Series {
-                name: format!("{prefix}{n}"),
-                values: values.iter().map(|row| row[i]).collect(),
-            })
-            .collect::<Vec<_>>()
-    };
+/// A panel of `mech simulate --plot`: its title, the y axis symbol and the unit (`None`: not
+/// declared).
+type PanelKey = (&'static str, &'static str, Option<String>);
+
+/// One panel per kind of value (coordinates, speeds, outputs) and unit, in order of first
+/// appearance, the unit on the y axis: a rad and a m coordinate never share an axis.
+fn trajectory_panels(session: &Session, trajectory: &Trajectory) -> Vec<plot::Panel> {
+    let model = &session.model;
     let (coordinates, outputs) = (coordinate_names(model), output_names(model));
-    let mut panels = vec![
-        plot::Panel {
-            title: "coordinates".into(),
-            y_label: "q".into(),
-            series: series(&coordinates, &trajectory.q, "q_"),
-        },
-        plot::Panel {
-            title: "speeds".into(),
-            y_label: "u".into(),
-            series: series(&coordinates, &trajectory.u, "u_"),
-        },
-    ];
-    if !outputs.is_empty() {
-        panels.push(plot::Panel {
-            title: "outputs".into(),
-            y_label: "y".into(),
-            series: series(&outputs, &trajectory.outputs, ""),
-        });
+    let units = |name: &str| session.coordinate_units(name).unwrap_or_default();
+    let mut panels: Vec<(PanelKey, Vec<plot::Series>)> = Vec::new();
+    let mut add = |key: PanelKey, name: String, values| {
+        let series = plot::Series { name, values };
+        match panels.iter_mut().find(|(k, _)| *k == key) {
+            Some((_, list)) => list.push(series),
+            None => panels.push((key, vec![series])),
+        }
+    };
+    let column = |rows: &[Vec<f64>], i: usize| rows.iter().map(|row| row[i]).collect();
+    for (i, name) in coordinates.iter().enumerate() {
+        let unit = units(name).0;
+        add(
+            ("coordinates", "q", Some(unit)),
+            format!("q_{name}"),
+            column(&trajectory.q, i),
+        );
+    }
+    for (i, name) in coordinates.iter().enumerate() {
+        let unit = units(name).1;
+        add(
+            ("speeds", "u", Some(unit)),
+            format!("u_{name}"),
+            column(&trajectory.u, i),
+        );
+    }
+    for (i, name) in outputs.iter().enumerate() {
+        let unit = session.output_unit(name);
+        add(
+            ("outputs", "y", unit),
+            name.clone(),
+            column(&trajectory.outputs, i),
+        );
     }
     panels
+        .into_iter()
+        .map(|((title, symbol, unit), series)| match unit {
+            Some(unit) => plot::Panel {
+                title: format!("{title} [{unit}]"),
+                y_label: format!("{symbol} [{unit}]"),
+                series,
+            },
+            None => plot::Panel {
+                title: format!("{title} (expressions: unit not declared)"),
+                y_label: symbol.to_string(),
+                series,
+            },
+        })
+        .collect()
 }

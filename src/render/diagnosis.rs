@@ -138,8 +138,9 @@ pub fn screening_json(screening: Option<&Screening>) -> (serde_json::Value, serd
     }
 }
 
-/// One plot per measured series (`PREFIX_SERIES.svg` in `dir`): the data and each of
-/// `curves` (a label and a prediction of every observed value).
+/// One plot per measured series (`PREFIX_SERIES.svg` in `dir`): the data as markers with
+/// ±σ error bars (none where the experiment file gives no noise, and the legend says so) and
+/// each of `curves` (a label and a prediction of every observed value) as a line.
 pub fn overlay_plots(
     dir: &Path,
     prefix: &str,
@@ -155,32 +156,55 @@ pub fn overlay_plots(
         Kind::ForceDeflection(_) => ("sensor distance [µm]", 1e6, " [mN]", 1e3),
         Kind::Pendulum(_) => ("time [s]", 1.0, " [rad]", 1.0),
     };
+    // The models in the palette's colours after the data's (0).
+    let styles: Vec<plot::CurveStyle> = (1..=curves.len())
+        .map(|color| plot::CurveStyle {
+            color,
+            dashed: false,
+        })
+        .collect();
     let mut plots = Vec::new();
     for name in obs.series_names() {
-        let pick = |values: &[f64]| -> (Vec<f64>, Vec<f64>) {
-            (0..values.len().min(obs.series.len()))
-                .filter(|&k| obs.series[k] == name)
-                .map(|k| (obs.abscissa[k] * x_scale, values[k] * y_scale))
-                .unzip()
-        };
-        let lines: Vec<(String, Vec<f64>, Vec<f64>)> =
-            std::iter::once(("measured".to_string(), obs.values.as_slice()))
-                .chain(
-                    curves
-                        .iter()
-                        .map(|(label, values)| (label.clone(), *values)),
-                )
-                .map(|(label, values)| {
-                    let (x, y) = pick(values);
-                    (label, x, y)
+        let in_series: Vec<usize> = (0..obs.values.len().min(obs.series.len()))
+            .filter(|&k| obs.series[k] == name)
+            .collect();
+        let lines: Vec<(String, Vec<f64>, Vec<f64>)> = curves
+            .iter()
+            .map(|(label, values)| {
+                let (x, y) = in_series
+                    .iter()
+                    .filter(|&&k| k < values.len())
+                    .map(|&k| (obs.abscissa[k] * x_scale, values[k] * y_scale))
+                    .unzip();
+                (label.clone(), x, y)
+            })
+            .collect();
+        let measured = [plot::Measured {
+            name: match obs.sigma {
+                Some(_) => "measured (± σ, the file's noise)".into(),
+                None => "measured (no noise given: no bars)".into(),
+            },
+            color: 0,
+            points: in_series
+                .iter()
+                .map(|&k| plot::ErrorPoint {
+                    x: obs.abscissa[k] * x_scale,
+                    y: obs.values[k] * y_scale,
+                    x_error: 0.0,
+                    y_error: obs.sigma.as_ref().map_or(0.0, |s| s[k] * y_scale),
                 })
-                .collect();
+                .collect(),
+        }];
         let path = dir.join(format!("{prefix}_{}.svg", name.replace(['|', '.'], "_")));
         let title = format!("{}: {name}", experiment.title);
         let y_label = format!("{name}{y_unit}");
-        plots.push(plot::plot_xy(
-            &path, &title, x_label, &y_label, &lines, log_x,
-        )?);
+        let plot = plot::XyPlot {
+            log_x,
+            styles: Some(&styles),
+            measured: &measured,
+            ..plot::XyPlot::new(&title, x_label, &y_label, &lines)
+        };
+        plots.push(plot.render(&path)?);
     }
     Ok(plots)
 }

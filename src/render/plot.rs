@@ -1,14 +1,16 @@
 //! Plots of simulation results and analyses, rendered headless (no system fonts needed).
 //!
-//! Consumes: sampled time series grouped into panels ([`plot_time_series`]) or `(x, y)` curves
-//! ([`plot_xy`], e.g. frequency responses and fits), and an output path whose extension picks
-//! the format (`.svg` or `.png`).
+//! Consumes: sampled time series grouped into panels ([`plot_time_series`]), `(x, y)` curves
+//! ([`plot_xy`], [`XyPlot`]: fits, paths in a plane drawn to equal scale) or a frequency
+//! response ([`plot_bode`]), and an output path whose extension picks the format (`.svg` or
+//! `.png`).
 //! Produces: the image as a [`File`] in memory, for the run to write with its other files
 //! ([`crate::output::write_all`]).
 //!
 //! Text is drawn with DejaVu Sans, bundled from `assets/` and registered with plotters as
 //! `sans-serif` on first use. Non-finite samples (NaN, ±inf) are skipped: the line is broken
-//! there rather than drawn through them. Constant data gets a padded axis range.
+//! there rather than drawn through them. Constant data gets a padded axis range. Legends
+//! stand in a column right of the data, never over it.
 
 use std::fmt;
 use std::ops::Range;
@@ -85,6 +87,36 @@ pub struct Star {
     pub curve: usize,
     pub x: f64,
     pub y: f64,
+}
+
+/// Measured values drawn as markers with error bars, not joined by lines (the paper's
+/// measurements, data a model is fitted to).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Measured {
+    /// Legend entry (no entry if empty); where no uncertainty is given it should say so.
+    pub name: String,
+    /// Palette index (wraps), e.g. the colour of the model curve it is compared with.
+    pub color: usize,
+    pub points: Vec<ErrorPoint>,
+}
+
+/// A measured point and the half-lengths of its error bars (±1 s.d., ±σ), in the plot's
+/// units; 0 or NaN: no bar.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ErrorPoint {
+    pub x: f64,
+    pub y: f64,
+    pub x_error: f64,
+    pub y_error: f64,
+}
+
+impl ErrorPoint {
+    /// Where the point and its bars reach: `(x_lo, x_hi, y_lo, y_hi)`.
+    fn extent(&self) -> [(f64, f64); 2] {
+        let bar = |e: f64| if e.is_finite() { e.abs() } else { 0.0 };
+        let (dx, dy) = (bar(self.x_error), bar(self.y_error));
+        [(self.x - dx, self.x + dx), (self.y - dy, self.y + dy)]
+    }
 }
 
 /// Why a plot could not be made. Displays as one line naming the output file.
@@ -172,7 +204,7 @@ pub fn plot_time_series(
 
 /// Plots `curves` given as `(name, xs, ys)` on one pair of axes, optionally with a logarithmic
 /// x axis (then only points with `x > 0` are drawn). Same formats and conventions as
-/// [`plot_time_series`].
+/// [`plot_time_series`]; [`XyPlot`] draws more (styles, stars, equal scale).
 pub fn plot_xy(
     path: &Path,
     title: &str,
@@ -181,85 +213,145 @@ pub fn plot_xy(
     curves: &[(String, Vec<f64>, Vec<f64>)],
     log_x: bool,
 ) -> Result<File, PlotError> {
-    let fail = |msg: String| PlotError::invalid(path, msg);
-    let format = check_curves(path, curves)?;
-    if log_x
-        && !curves
-            .iter()
-            .any(|(_, xs, _)| xs.iter().any(|&x| x > 0.0 && x.is_finite()))
-    {
-        return Err(fail(
-            "a logarithmic x axis needs some positive x values, but there are none".into(),
-        ));
-    }
-    let figure = XyFigure {
-        title,
-        x_label,
-        y_label,
-        curves,
+    XyPlot {
         log_x,
-        styles: None,
-        stars: &[],
-    };
-    render(path, format, (WIDTH, XY_HEIGHT), &figure)
+        ..XyPlot::new(title, x_label, y_label, curves)
+    }
+    .render(path)
 }
 
-/// The format of `path`, after checking there are curves and each has as many x as y values.
-fn check_curves(path: &Path, curves: &[(String, Vec<f64>, Vec<f64>)]) -> Result<Format, PlotError> {
-    let fail = |msg: String| PlotError::invalid(path, msg);
-    let format = Format::of(path)?;
-    if curves.is_empty() {
-        return Err(fail("nothing to plot (no curves)".into()));
-    }
-    for (name, xs, ys) in curves {
-        if xs.len() != ys.len() {
-            return Err(fail(format!(
-                "curve `{name}` has {} x values but {} y values",
-                xs.len(),
-                ys.len()
-            )));
+/// An x–y figure: named curves `(name, xs, ys)` on one pair of axes, the legend to the right
+/// of the data, and what else is drawn on them.
+#[derive(Debug, Clone, Copy)]
+pub struct XyPlot<'a> {
+    pub title: &'a str,
+    pub x_label: &'a str,
+    pub y_label: &'a str,
+    pub curves: &'a [(String, Vec<f64>, Vec<f64>)],
+    /// A logarithmic x axis: only points with `x > 0` are drawn.
+    pub log_x: bool,
+    /// One per curve (colour, dashes); `None`: palette colours in order, solid.
+    pub styles: Option<&'a [CurveStyle]>,
+    /// Points marked with a star, e.g. the chosen designs on design curves.
+    pub stars: &'a [Star],
+    /// Measured values, markers with error bars, drawn over the curves.
+    pub measured: &'a [Measured],
+    /// x and y drawn to the same scale (the same length per pixel), the data centred: a
+    /// path in a plane keeps its shape. Linear axes only.
+    pub equal_scale: bool,
+}
+
+impl<'a> XyPlot<'a> {
+    /// Plain curves on linear axes.
+    pub fn new(
+        title: &'a str,
+        x_label: &'a str,
+        y_label: &'a str,
+        curves: &'a [(String, Vec<f64>, Vec<f64>)],
+    ) -> XyPlot<'a> {
+        XyPlot {
+            title,
+            x_label,
+            y_label,
+            curves,
+            log_x: false,
+            styles: None,
+            stars: &[],
+            measured: &[],
+            equal_scale: false,
         }
     }
-    Ok(format)
-}
 
-/// As [`plot_xy`] on linear axes, each curve drawn in its `styles` entry (colour, dashes) and
-/// the `stars` marked, e.g. the chosen designs on design curves.
-pub fn plot_xy_styled(
-    path: &Path,
-    title: &str,
-    x_label: &str,
-    y_label: &str,
-    curves: &[(String, Vec<f64>, Vec<f64>)],
-    styles: &[CurveStyle],
-    stars: &[Star],
-) -> Result<File, PlotError> {
-    let fail = |msg: String| PlotError::invalid(path, msg);
-    if styles.len() != curves.len() {
-        return Err(fail(format!(
-            "{} curves but {} styles",
-            curves.len(),
-            styles.len()
-        )));
+    /// Renders the figure to a file whose extension picks the format (`.svg` or `.png`),
+    /// after checking its data: something to draw, as many x as y values, one style per
+    /// curve, stars on existing curves, positive x on a log axis.
+    pub fn render(&self, path: &Path) -> Result<File, PlotError> {
+        let fail = |msg: String| PlotError::invalid(path, msg);
+        let format = Format::of(path)?;
+        if self.curves.is_empty() && self.measured.is_empty() {
+            return Err(fail("nothing to plot (no curves)".into()));
+        }
+        for (name, xs, ys) in self.curves {
+            if xs.len() != ys.len() {
+                return Err(fail(format!(
+                    "curve `{name}` has {} x values but {} y values",
+                    xs.len(),
+                    ys.len()
+                )));
+            }
+        }
+        if let Some(styles) = self.styles.filter(|s| s.len() != self.curves.len()) {
+            return Err(fail(format!(
+                "{} curves but {} styles",
+                self.curves.len(),
+                styles.len()
+            )));
+        }
+        if let Some(star) = self.stars.iter().find(|s| s.curve >= self.curves.len()) {
+            return Err(fail(format!(
+                "a star refers to curve {} of {}",
+                star.curve,
+                self.curves.len()
+            )));
+        }
+        let positive = self.xs().any(|x| x > 0.0 && x.is_finite());
+        if self.log_x && !positive {
+            return Err(fail(
+                "a logarithmic x axis needs some positive x values, but there are none".into(),
+            ));
+        }
+        render(path, format, (WIDTH, XY_HEIGHT), self)
     }
-    if let Some(star) = stars.iter().find(|s| s.curve >= curves.len()) {
-        return Err(fail(format!(
-            "a star refers to curve {} of {}",
-            star.curve,
-            curves.len()
-        )));
+
+    /// Every x value drawn or marked, error bars' ends included.
+    fn xs(&self) -> impl Iterator<Item = f64> + '_ {
+        let curves = self.curves.iter().flat_map(|(_, xs, _)| xs.iter().copied());
+        let bars = self.measured_points().flat_map(|p| {
+            let [(lo, hi), _] = p.extent();
+            [lo, hi]
+        });
+        curves.chain(self.stars.iter().map(|s| s.x)).chain(bars)
     }
-    let format = check_curves(path, curves)?;
-    let figure = XyFigure {
-        title,
-        x_label,
-        y_label,
-        curves,
-        log_x: false,
-        styles: Some(styles),
-        stars,
-    };
-    render(path, format, (WIDTH, XY_HEIGHT), &figure)
+
+    fn measured_points(&self) -> impl Iterator<Item = &ErrorPoint> + '_ {
+        self.measured.iter().flat_map(|m| &m.points)
+    }
+
+    /// Curve `index`'s style: its `styles` entry, else its palette colour in order, solid.
+    fn style(&self, index: usize) -> CurveStyle {
+        self.styles
+            .and_then(|s| s.get(index))
+            .copied()
+            .unwrap_or(CurveStyle {
+                color: index,
+                dashed: false,
+            })
+    }
+
+    /// The legend: the named curves, then the named measurements.
+    fn legend(&self) -> Vec<LegendEntry<'a>> {
+        let curves = self.curves.iter().enumerate();
+        let lines =
+            curves
+                .filter(|(_, (name, _, _))| !name.is_empty())
+                .map(|(index, (name, _, _))| {
+                    let CurveStyle { color, dashed } = self.style(index);
+                    LegendEntry {
+                        name,
+                        color,
+                        sample: Sample::Line { dashed },
+                    }
+                });
+        let markers = self.measured.iter().filter(|m| !m.name.is_empty());
+        let markers = markers.map(|m| LegendEntry {
+            name: &m.name,
+            color: m.color,
+            sample: Sample::Marker {
+                bars: m.points.iter().any(|p| p.x_error > 0.0 || p.y_error > 0.0),
+            },
+        });
+        lines.chain(markers).collect()
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -382,12 +474,34 @@ impl Figure for TimeSeriesFigure<'_> {
         let (title_area, body) = root.split_vertically(TITLE_HEIGHT);
         draw_title(&title_area, self.title)?;
         let t_range = axis_range(self.times.iter().copied());
+        let legends: Vec<Vec<LegendEntry>> = self
+            .panels
+            .iter()
+            .map(|panel| {
+                let series = panel.series.iter().enumerate();
+                series
+                    .filter(|(_, s)| !s.name.is_empty())
+                    .map(|(index, s)| LegendEntry {
+                        name: &s.name,
+                        color: index,
+                        sample: Sample::Line { dashed: false },
+                    })
+                    .collect()
+            })
+            .collect();
+        // One legend width for all panels, so that their time axes line up.
+        let all: Vec<LegendEntry> = legends.iter().flatten().copied().collect();
+        let legend_width = legend_width(&body, &all)?;
         let areas = body.split_evenly((self.panels.len(), 1));
-        for (index, (area, panel)) in areas.iter().zip(self.panels).enumerate() {
+        for (index, ((area, panel), legend)) in
+            areas.iter().zip(self.panels).zip(&legends).enumerate()
+        {
             let last = index + 1 == self.panels.len();
+            let (width, _) = area.dim_in_pixel();
+            let (area, legend_area) = area.split_horizontally(width - legend_width);
             let values = panel.series.iter().flat_map(|s| s.values.iter().copied());
             let y_range = axis_range(values);
-            let mut chart = ChartBuilder::on(area)
+            let mut chart = ChartBuilder::on(&area)
                 .caption(&panel.title, ("sans-serif", 17))
                 .margin(8)
                 .margin_right(25)
@@ -409,47 +523,33 @@ impl Figure for TimeSeriesFigure<'_> {
                 mesh.x_desc("t [s]");
             }
             mesh.draw().map_err(e)?;
-            let curves = panel
-                .series
-                .iter()
-                .map(|s| (s.name.as_str(), self.times, s.values.as_slice()));
-            draw_curves(&mut chart, curves, None, &[])?;
+            let curves = panel.series.iter().enumerate().map(|(index, s)| {
+                let style = CurveStyle {
+                    color: index,
+                    dashed: false,
+                };
+                (self.times, s.values.as_slice(), style)
+            });
+            draw_curves(&mut chart, curves, &[], &|_| 0, &[])?;
+            draw_legend(&legend_area, chart.plotting_area(), legend)?;
         }
         Ok(())
     }
 }
 
-struct XyFigure<'a> {
-    title: &'a str,
-    x_label: &'a str,
-    y_label: &'a str,
-    curves: &'a [(String, Vec<f64>, Vec<f64>)],
-    log_x: bool,
-    /// One per curve; `None`: palette colours in order, solid.
-    styles: Option<&'a [CurveStyle]>,
-    stars: &'a [Star],
-}
-
-impl Figure for XyFigure<'_> {
+impl Figure for XyPlot<'_> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
         root.fill(&WHITE).map_err(|e| e.to_string())?;
         let (title_area, body) = root.split_vertically(TITLE_HEIGHT);
         draw_title(&title_area, self.title)?;
-        let marks = (self.styles, self.stars);
-        draw_xy_panel(
-            &body,
-            self.x_label,
-            self.y_label,
-            self.curves,
-            self.log_x,
-            marks,
-        )
+        draw_xy_panel(&body, self)
     }
 }
 
 /// A Bode plot: magnitude over phase, sharing a logarithmic frequency axis.
 struct BodeFigure<'a> {
     title: &'a str,
+    magnitude_label: &'a str,
     magnitude: &'a [(String, Vec<f64>, Vec<f64>)],
     phase: &'a [(String, Vec<f64>, Vec<f64>)],
 }
@@ -461,24 +561,23 @@ impl Figure for BodeFigure<'_> {
         draw_title(&title_area, self.title)?;
         let (_, height) = body.dim_in_pixel();
         let (top, bottom) = body.split_vertically(height / 2);
-        let plain = (None, &[][..]);
-        draw_xy_panel(
-            &top,
-            "f [Hz]",
-            "magnitude [dB]",
-            self.magnitude,
-            true,
-            plain,
-        )?;
-        draw_xy_panel(&bottom, "f [Hz]", "phase [deg]", self.phase, true, plain)
+        let panel = |y_label, curves| XyPlot {
+            log_x: true,
+            ..XyPlot::new("", "f [Hz]", y_label, curves)
+        };
+        draw_xy_panel(&top, &panel(self.magnitude_label, self.magnitude))?;
+        draw_xy_panel(&bottom, &panel("phase [deg]", self.phase))
     }
 }
 
-/// Plots a frequency response: `magnitude` (dB) and `phase` (degrees) curves `(name, f, value)`
-/// in two panels over a logarithmic frequency axis. Same formats as [`plot_time_series`].
+/// Plots a frequency response: `magnitude` (dB, the axis labelled `magnitude_label`, which
+/// names the reference: `magnitude [dB re 1 m/V]`) and `phase` (degrees) curves
+/// `(name, f, value)` in two panels over a logarithmic frequency axis. Same formats as
+/// [`plot_time_series`].
 pub fn plot_bode(
     path: &Path,
     title: &str,
+    magnitude_label: &str,
     magnitude: &[(String, Vec<f64>, Vec<f64>)],
     phase: &[(String, Vec<f64>, Vec<f64>)],
 ) -> Result<File, PlotError> {
@@ -496,67 +595,227 @@ pub fn plot_bode(
     }
     let figure = BodeFigure {
         title,
+        magnitude_label,
         magnitude,
         phase,
     };
     render(path, format, (WIDTH, 2 * XY_HEIGHT - TITLE_HEIGHT), &figure)
 }
 
-/// One pair of axes with `curves`, optionally with a logarithmic x axis (points at x <= 0 are
-/// then left out), styled and starred by `marks` (see [`draw_curves`]).
+/// `plot`'s axes, curves and marks in `area` (its title is the caller's), its legend to the
+/// right of the data.
 fn draw_xy_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
-    x_label: &str,
-    y_label: &str,
-    curves: &[(String, Vec<f64>, Vec<f64>)],
-    log_x: bool,
-    marks: (Option<&[CurveStyle]>, &[Star]),
+    plot: &XyPlot,
 ) -> Result<(), String> {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
-    let visible = |x: f64| !log_x || x > 0.0;
-    let xs = curves
-        .iter()
-        .flat_map(|(_, xs, _)| xs.iter().copied())
-        .filter(|&x| visible(x));
-    let (styles, stars) = marks;
-    let xs = xs.chain(stars.iter().map(|s| s.x).filter(|&x| visible(x)));
-    let ys = curves
-        .iter()
-        .flat_map(|(_, xs, ys)| {
-            xs.iter()
-                .zip(ys)
-                .filter(|(&x, _)| visible(x))
-                .map(|(_, &y)| y)
-        })
-        .chain(stars.iter().filter(|s| visible(s.x)).map(|s| s.y));
-    let y_range = axis_range(ys);
-    let mut builder = ChartBuilder::on(area);
+    let legend = plot.legend();
+    let (width, _) = area.dim_in_pixel();
+    let (area, legend_area) = area.split_horizontally(width - legend_width(area, &legend)?);
+    let visible = |x: f64| !plot.log_x || x > 0.0;
+    let xs = plot.xs().filter(|&x| visible(x));
+    let curve_ys = plot.curves.iter().flat_map(|(_, xs, ys)| {
+        xs.iter()
+            .zip(ys)
+            .filter(|(&x, _)| visible(x))
+            .map(|(_, &y)| y)
+    });
+    let star_ys = plot.stars.iter().filter(|s| visible(s.x)).map(|s| s.y);
+    let bar_ys = plot
+        .measured_points()
+        .filter(|p| visible(p.x))
+        .flat_map(|p| {
+            let [_, (lo, hi)] = p.extent();
+            [lo, hi]
+        });
+    let y_range = axis_range(curve_ys.chain(star_ys).chain(bar_ys));
+    let mut builder = ChartBuilder::on(&area);
     builder
         .margin(10)
         .margin_right(30)
         .x_label_area_size(50)
         .y_label_area_size(90);
-    let named = curves
+    let curves = plot
+        .curves
         .iter()
-        .map(|(name, xs, ys)| (name.as_str(), xs.as_slice(), ys.as_slice()));
-    let y_format = |v: &f64| linear_tick(*v, &y_range);
-    if log_x {
+        .enumerate()
+        .map(|(index, (_, xs, ys))| (xs.as_slice(), ys.as_slice(), plot.style(index)));
+    let star_color = |curve: usize| plot.style(curve).color;
+    if plot.log_x {
         let x_range = log_axis_range(xs);
+        let y_format = |v: &f64| linear_tick(*v, &y_range);
         let mut chart = builder
             .build_cartesian_2d(x_range.log_scale(), y_range.clone())
             .map_err(e)?;
         let x_format = |v: &f64| significant(*v, 3);
-        configure_xy_mesh(&mut chart, x_label, y_label, &x_format, &y_format)?;
-        draw_curves(&mut chart, named, styles, stars)
+        configure_xy_mesh(&mut chart, plot.x_label, plot.y_label, &x_format, &y_format)?;
+        draw_curves(&mut chart, curves, plot.stars, &star_color, plot.measured)?;
+        draw_legend(&legend_area, chart.plotting_area(), &legend)
     } else {
-        let x_range = axis_range(xs);
+        let mut x_range = axis_range(xs);
+        let mut y_range = y_range;
+        if plot.equal_scale {
+            // The plotting area's size in pixels (building the chart draws nothing).
+            let probe = builder
+                .build_cartesian_2d(x_range.clone(), y_range.clone())
+                .map_err(e)?;
+            let pixels = probe.plotting_area().dim_in_pixel();
+            (x_range, y_range) = equal_scale(x_range, y_range, pixels);
+        }
         let mut chart = builder
             .build_cartesian_2d(x_range.clone(), y_range.clone())
             .map_err(e)?;
         let x_format = |v: &f64| linear_tick(*v, &x_range);
-        configure_xy_mesh(&mut chart, x_label, y_label, &x_format, &y_format)?;
-        draw_curves(&mut chart, named, styles, stars)
+        let y_format = |v: &f64| linear_tick(*v, &y_range);
+        configure_xy_mesh(&mut chart, plot.x_label, plot.y_label, &x_format, &y_format)?;
+        draw_curves(&mut chart, curves, plot.stars, &star_color, plot.measured)?;
+        draw_legend(&legend_area, chart.plotting_area(), &legend)
     }
+}
+
+/// The ranges `x` and `y` widened about their centres so that one unit takes as many pixels
+/// along x as along y in a plotting area of `(width, height)` pixels.
+fn equal_scale(
+    x: Range<f64>,
+    y: Range<f64>,
+    (width, height): (u32, u32),
+) -> (Range<f64>, Range<f64>) {
+    let (width, height) = (f64::from(width.max(1)), f64::from(height.max(1)));
+    let per_pixel = ((x.end - x.start) / width).max((y.end - y.start) / height);
+    let widen = |range: Range<f64>, pixels: f64| {
+        let (centre, half) = (0.5 * (range.start + range.end), 0.5 * per_pixel * pixels);
+        centre - half..centre + half
+    };
+    (widen(x, width), widen(y, height))
+}
+
+/// How a legend entry is drawn: its name beside a sample of its line or marker.
+#[derive(Debug, Clone, Copy)]
+struct LegendEntry<'a> {
+    name: &'a str,
+    /// Palette index (wraps).
+    color: usize,
+    sample: Sample,
+}
+
+#[derive(Debug, Clone, Copy)]
+enum Sample {
+    Line {
+        dashed: bool,
+    },
+    /// A measured point, with a vertical error bar if the measurement has bars.
+    Marker {
+        bars: bool,
+    },
+}
+
+/// Radius of a measured point's marker, and half the width of an error bar's caps, in pixels.
+const MARKER_RADIUS: i32 = 5;
+const CAP: i32 = 5;
+
+/// The marker of a measured point, a circle of [`MARKER_RADIUS`] drawn in these styles in
+/// turn: filled in `color`, then outlined in black.
+fn marker_styles(color: RGBColor) -> [ShapeStyle; 2] {
+    [color.filled(), BLACK.stroke_width(1)]
+}
+
+/// Legend text size in pixels.
+const LEGEND_FONT: u32 = 13;
+/// Height of one legend line, and the length of a line sample, in pixels.
+const LEGEND_LINE: i32 = 20;
+const LEGEND_SAMPLE: i32 = 26;
+
+/// The width of the column right of the data that holds `entries`: their longest name, the
+/// sample and padding; 0 without entries, at most a third of `area`.
+fn legend_width<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[LegendEntry],
+) -> Result<u32, String> {
+    let font = TextStyle::from(("sans-serif", LEGEND_FONT).into_font());
+    let mut widest = 0;
+    for entry in entries {
+        let (width, _) = area
+            .estimate_text_size(entry.name, &font)
+            .map_err(|e| e.to_string())?;
+        widest = widest.max(width);
+    }
+    let (area_width, _) = area.dim_in_pixel();
+    Ok(if entries.is_empty() {
+        0
+    } else {
+        (widest + LEGEND_SAMPLE as u32 + 30).min(area_width / 3)
+    })
+}
+
+/// Draws `entries` in `column` (right of the data), from the top of the `plotting` area down,
+/// in a light box.
+fn draw_legend<DB: DrawingBackend, X: Ranged, Y: Ranged>(
+    column: &DrawingArea<DB, Shift>,
+    plotting: &DrawingArea<DB, Cartesian2d<X, Y>>,
+    entries: &[LegendEntry],
+) -> Result<(), String> {
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    if entries.is_empty() {
+        return Ok(());
+    }
+    let top = plotting.get_base_pixel().1 - column.get_base_pixel().1;
+    let (width, _) = column.dim_in_pixel();
+    let bottom = top + LEGEND_LINE * entries.len() as i32 + 8;
+    column
+        .draw(&Rectangle::new(
+            [(0, top), (width as i32 - 4, bottom)],
+            BLACK.mix(0.4),
+        ))
+        .map_err(e)?;
+    let text = TextStyle::from(("sans-serif", LEGEND_FONT).into_font())
+        .pos(Pos::new(HPos::Left, VPos::Center))
+        .color(&BLACK);
+    for (index, entry) in entries.iter().enumerate() {
+        let y = top + 4 + LEGEND_LINE / 2 + LEGEND_LINE * index as i32;
+        let color = PALETTE[entry.color % PALETTE.len()];
+        let (start, end) = ((8, y), (8 + LEGEND_SAMPLE, y));
+        match entry.sample {
+            Sample::Line { dashed: false } => column
+                .draw(&PathElement::new(vec![start, end], color.stroke_width(2)))
+                .map_err(e)?,
+            Sample::Line { dashed: true } => column
+                .draw(&DashedPathElement::new(
+                    vec![start, end],
+                    8,
+                    5,
+                    color.stroke_width(2),
+                ))
+                .map_err(e)?,
+            Sample::Marker { bars } => {
+                let middle = 8 + LEGEND_SAMPLE / 2;
+                if bars {
+                    let half = LEGEND_LINE / 2 - 2;
+                    for path in [
+                        vec![(middle, y - half), (middle, y + half)],
+                        vec![(middle - CAP, y - half), (middle + CAP, y - half)],
+                        vec![(middle - CAP, y + half), (middle + CAP, y + half)],
+                    ] {
+                        column
+                            .draw(&PathElement::new(path, color.stroke_width(1)))
+                            .map_err(e)?;
+                    }
+                }
+                for style in marker_styles(color) {
+                    column
+                        .draw(&Circle::new((middle, y), MARKER_RADIUS, style))
+                        .map_err(e)?;
+                }
+            }
+        }
+        column
+            .draw(&Text::new(
+                entry.name.to_string(),
+                (16 + LEGEND_SAMPLE, y),
+                text.clone(),
+            ))
+            .map_err(e)?;
+    }
+    Ok(())
 }
 
 /// Draws the figure title centred in `area`.
@@ -601,14 +860,14 @@ where
         .map_err(|e| e.to_string())
 }
 
-/// Draws each `(name, xs, ys)` curve, broken at non-finite points, in its `styles` entry (by
-/// default its palette colour in order, solid), then the `stars`, and a legend for the named
-/// curves.
+/// Draws each `(xs, ys, style)` curve, broken at non-finite points, then the `stars`, each in
+/// the palette colour `star_color` gives for its curve, then the `measured` points.
 fn draw_curves<'a, 'c, DB, X>(
     chart: &mut ChartContext<'a, DB, Cartesian2d<X, RangedCoordf64>>,
-    curves: impl Iterator<Item = (&'c str, &'c [f64], &'c [f64])>,
-    styles: Option<&[CurveStyle]>,
+    curves: impl Iterator<Item = (&'c [f64], &'c [f64], CurveStyle)>,
     stars: &[Star],
+    star_color: &dyn Fn(usize) -> usize,
+    measured: &[Measured],
 ) -> Result<(), String>
 where
     DB: DrawingBackend + 'a,
@@ -616,23 +875,12 @@ where
 {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     let x_range = chart.x_range();
-    let mut any_named = false;
-    let style_of = |index: usize| {
-        styles
-            .and_then(|s| s.get(index))
-            .copied()
-            .unwrap_or(CurveStyle {
-                color: index,
-                dashed: false,
-            })
-    };
     // Points outside the x range (x <= 0 on a log axis) are dropped like non-finite ones.
     let in_range = |x: f64| x >= x_range.start.min(x_range.end);
-    for (index, (name, xs, ys)) in curves.enumerate() {
-        let CurveStyle { color, dashed } = style_of(index);
+    for (xs, ys, CurveStyle { color, dashed }) in curves {
         let style = PALETTE[color % PALETTE.len()].stroke_width(2);
         let segments = finite_segments(xs, ys, in_range);
-        let annotation = if dashed {
+        if dashed {
             chart.draw_series(
                 segments
                     .into_iter()
@@ -646,16 +894,6 @@ where
             )
         }
         .map_err(e)?;
-        if !name.is_empty() {
-            any_named = true;
-            annotation.label(name).legend(move |(x, y)| {
-                if dashed {
-                    DashedPathElement::new(vec![(x, y), (x + 24, y)], 8, 5, style).into_dyn()
-                } else {
-                    PathElement::new(vec![(x, y), (x + 24, y)], style).into_dyn()
-                }
-            });
-        }
     }
     // A five-pointed star in pixels around each marked point, outlined in black.
     let star_shape: Vec<(i32, i32)> = (0..10)
@@ -675,22 +913,58 @@ where
                 .iter()
                 .filter(|s| s.x.is_finite() && s.y.is_finite() && in_range(s.x))
                 .map(|s| {
-                    let color = PALETTE[style_of(s.curve).color % PALETTE.len()];
+                    let color = PALETTE[star_color(s.curve) % PALETTE.len()];
                     EmptyElement::at((s.x, s.y))
                         + Polygon::new(star_shape.clone(), color.filled())
                         + PathElement::new(outline.clone(), BLACK.stroke_width(1))
                 }),
         )
         .map_err(e)?;
-    if any_named {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.4))
-            .label_font(("sans-serif", 13))
-            .draw()
-            .map_err(e)?;
+    // The measurements: markers with their error bars (a line with caps each way that has
+    // a bar); points or bar ends off the axes (x <= 0 on a log axis) left out.
+    for measurement in measured {
+        let color = PALETTE[measurement.color % PALETTE.len()];
+        let points = measurement
+            .points
+            .iter()
+            .filter(|p| p.x.is_finite() && in_range(p.x) && p.y.is_finite());
+        let style = color.stroke_width(1);
+        for point in points.clone() {
+            let [(x_lo, x_hi), (y_lo, y_hi)] = point.extent();
+            // A bar in data units, and a cap in pixels at each end.
+            let cap = |at: (f64, f64), vertical: bool| {
+                let tick = if vertical {
+                    vec![(-CAP, 0), (CAP, 0)]
+                } else {
+                    vec![(0, -CAP), (0, CAP)]
+                };
+                EmptyElement::at(at) + PathElement::new(tick, style)
+            };
+            if y_hi > y_lo {
+                let (low, high) = ((point.x, y_lo), (point.x, y_hi));
+                chart
+                    .draw_series([PathElement::new(vec![low, high], style)])
+                    .map_err(e)?;
+                chart
+                    .draw_series([cap(low, true), cap(high, true)])
+                    .map_err(e)?;
+            }
+            if x_hi > x_lo && in_range(x_lo) {
+                let (low, high) = ((x_lo, point.y), (x_hi, point.y));
+                chart
+                    .draw_series([PathElement::new(vec![low, high], style)])
+                    .map_err(e)?;
+                chart
+                    .draw_series([cap(low, false), cap(high, false)])
+                    .map_err(e)?;
+            }
+        }
+        for style in marker_styles(color) {
+            let circles = points
+                .clone()
+                .map(|p| Circle::new((p.x, p.y), MARKER_RADIUS, style));
+            chart.draw_series(circles).map_err(e)?;
+        }
     }
     Ok(())
 }
@@ -1002,6 +1276,101 @@ mod tests {
             fs::read_dir(&dir).unwrap().next().is_none(),
             "no files written"
         );
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    /// The pixel points of the SVG polylines with more than two points (curves, not legend
+    /// samples or ticks).
+    fn svg_curves(svg: &str) -> Vec<Vec<(f64, f64)>> {
+        svg.split("points=\"")
+            .skip(1)
+            .map(|rest| {
+                let points = &rest[..rest.find('"').unwrap()];
+                points
+                    .split_whitespace()
+                    .map(|pair| {
+                        let (x, y) = pair.split_once(',').unwrap();
+                        (x.parse().unwrap(), y.parse().unwrap())
+                    })
+                    .collect::<Vec<(f64, f64)>>()
+            })
+            .filter(|points| points.len() > 2)
+            .collect()
+    }
+
+    /// The x pixel of the SVG text element that holds `text`.
+    fn svg_text_x(svg: &str, text: &str) -> f64 {
+        let at = svg.find(text).unwrap_or_else(|| panic!("no `{text}`"));
+        let start = svg[..at].rfind("<text x=\"").unwrap() + "<text x=\"".len();
+        let end = start + svg[start..].find('"').unwrap();
+        svg[start..end].parse().unwrap()
+    }
+
+    /// A circle keeps its shape with `equal_scale` (as many pixels across as up) and not
+    /// without it, on a wide figure; its legend is right of every point of the data.
+    #[test]
+    fn equal_scale_and_legend_outside_the_data() {
+        let dir = temp_dir("equal");
+        let angles = (0..=72).map(|k| std::f64::consts::TAU * k as f64 / 72.0);
+        let (xs, ys): (Vec<f64>, Vec<f64>) = angles.map(|a| (a.cos(), a.sin())).unzip();
+        let curves = [("unit circle".to_string(), xs, ys)];
+        let extent = |equal_scale: bool| {
+            let plot = XyPlot {
+                equal_scale,
+                ..XyPlot::new("circle", "x [m]", "y [m]", &curves)
+            };
+            let svg = String::from_utf8(plot.render(&dir.join("c.svg")).unwrap().bytes).unwrap();
+            let points = svg_curves(&svg).concat();
+            let span = |pick: fn(&(f64, f64)) -> f64| {
+                let values = points.iter().map(pick);
+                values.clone().fold(f64::MIN, f64::max) - values.fold(f64::MAX, f64::min)
+            };
+            let right = points.iter().map(|p| p.0).fold(f64::MIN, f64::max);
+            assert!(
+                svg_text_x(&svg, "unit circle") > right + 20.0,
+                "legend over the data"
+            );
+            (span(|p| p.0), span(|p| p.1))
+        };
+        let (width, height) = extent(true);
+        assert!((width - height).abs() <= 2.0, "{width} × {height} px");
+        let (width, height) = extent(false);
+        assert!(width > 1.3 * height, "{width} × {height} px");
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    /// Measured points are markers (filled, then outlined) with their error bars, and the
+    /// axes reach the bars' ends: a bar of ±5 around 10 over a curve below 1 takes the axis
+    /// to 15 (ticks to 14; to 10 without the bar).
+    #[test]
+    fn measured_points_with_error_bars() {
+        let dir = temp_dir("measured");
+        let curves = [("model".to_string(), vec![0.0, 2.0], vec![0.0, 1.0])];
+        let measured = [Measured {
+            name: "paper (± s.d.)".into(),
+            color: 0,
+            points: vec![
+                ErrorPoint {
+                    x: 1.0,
+                    y: 10.0,
+                    x_error: 0.0,
+                    y_error: 5.0,
+                },
+                ErrorPoint {
+                    x: 1.5,
+                    y: 0.5,
+                    ..ErrorPoint::default()
+                },
+            ],
+        }];
+        let plot = XyPlot {
+            measured: &measured,
+            ..XyPlot::new("measured", "x", "y", &curves)
+        };
+        let svg = String::from_utf8(plot.render(&dir.join("m.svg")).unwrap().bytes).unwrap();
+        assert_eq!(svg.matches("<circle").count(), 2 * (2 + 1), "{svg}");
+        assert!(svg.contains("paper (± s.d.)"));
+        assert!(svg.contains(">\n14\n<"), "no tick at 14: the bar is cut");
         let _ = fs::remove_dir_all(&dir);
     }
 

@@ -131,9 +131,41 @@ pub fn render_html(outcomes: &[Outcome], base: &Path, seconds: f64) -> Result<St
     )
 }
 
-/// A self-contained HTML page in the report's style: `title`, an `intro` paragraph (text),
-/// a `footer` line (HTML), and one section per outcome with its tables, inlined plots, notes
-/// and files (paths shown relative to `base`).
+/// Tables longer than this many rows are folded in the HTML page (`<details>`, the title and
+/// the row count on the summary line), so that the text and figures are not pages apart.
+const FOLDED_ROWS: usize = 12;
+
+/// Inline Markdown (`code`, *emphasis*, links) as HTML, without the paragraph around it:
+/// the methods and notes are written in Markdown, and the page shows them rendered.
+fn inline_markdown(text: &str) -> String {
+    use pulldown_cmark::{Event, Parser, Tag, TagEnd};
+    let events = Parser::new(text).filter(|event| {
+        !matches!(
+            event,
+            Event::Start(Tag::Paragraph) | Event::End(TagEnd::Paragraph)
+        )
+    });
+    let mut html = String::new();
+    pulldown_cmark::html::push_html(&mut html, events);
+    html.trim_end().to_string()
+}
+
+/// A table as HTML, folded under a summary line if it is longer than [`FOLDED_ROWS`].
+fn table_html(table: &super::table::Table) -> String {
+    if table.rows.len() <= FOLDED_ROWS {
+        return table.html();
+    }
+    format!(
+        "<details>\n<summary>{} ({} rows)</summary>\n{}</details>\n",
+        escape_html(&table.title),
+        table.rows.len(),
+        table.html()
+    )
+}
+
+/// A self-contained HTML page in the report's style: `title`, an `intro` paragraph
+/// (Markdown), a `footer` line (HTML), and one section per outcome with its tables (long
+/// ones folded), inlined plots, notes (Markdown) and files (paths shown relative to `base`).
 pub fn render_page(
     title: &str,
     intro: &str,
@@ -161,10 +193,10 @@ pub fn render_page(
                     .clone()
                     .unwrap_or_else(|| format!("experiments/{}.toml", outcome.name))
             ),
-            escape_html(&outcome.method)
+            inline_markdown(&outcome.method)
         );
         for table in &outcome.tables {
-            body += &table.html();
+            body += &table_html(table);
         }
         for plot in &outcome.plots {
             // Rendered by this run, or else written before it.
@@ -188,7 +220,7 @@ pub fn render_page(
         if !outcome.notes.is_empty() {
             body += "<ul class=\"notes\">\n";
             for note in &outcome.notes {
-                let _ = writeln!(body, "<li>{}</li>", escape_html(note));
+                let _ = writeln!(body, "<li>{}</li>", inline_markdown(note));
             }
             body += "</ul>\n";
         }
@@ -205,7 +237,7 @@ pub fn render_page(
     }
     Ok(format!(
         "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>{title}</title>\n<style>\n{STYLE}\n</style>\n</head>\n<body>\n<h1>{title}</h1>\n<p>{}</p>\n<p>{footer}</p>\n<ol class=\"toc\">\n{toc}</ol>\n{body}</body>\n</html>\n",
-        escape_html(intro),
+        inline_markdown(intro),
         title = escape_html(title)
     ))
 }
@@ -218,4 +250,46 @@ th, td { border: 1px solid #bbb; padding: 0.25em 0.6em; text-align: right; }
 th { background: #eef; } td:first-child, th:first-child { text-align: left; }
 figure { margin: 1em 0; } figure svg { max-width: 100%; height: auto; border: 1px solid #ddd; }
 figcaption, .file { color: #666; font-size: 0.85em; }
-ul.notes li { margin: 0.3em 0; }";
+ul.notes li { margin: 0.3em 0; }
+details { margin: 1em 0; } summary { cursor: pointer; font-weight: bold; }";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::table::Table;
+
+    /// The prose is rendered (no literal backticks, HTML escaped once), and a long table is
+    /// folded under its title while a short one is not.
+    #[test]
+    fn markdown_rendered_and_long_tables_folded() {
+        let mut long = Table::new("every point", &["k"]);
+        for k in 0..=FOLDED_ROWS {
+            long.row(vec![k.to_string()]);
+        }
+        let mut short = Table::new("summary", &["k"]);
+        short.row(vec!["1".into()]);
+        let outcome = Outcome {
+            name: "x".into(),
+            title: "1. X".into(),
+            method: "Model `models/a.mech`, *quasi-static*, F < 2 mN.".into(),
+            tables: vec![short, long],
+            notes: vec!["Paper: `s3` & `fb3` twist.".into()],
+            ..Outcome::default()
+        };
+        let page =
+            render_page("t", "Intro `mech report`.", "", &[outcome], Path::new(".")).unwrap();
+        assert!(!page.contains('`'), "{page}");
+        for html in [
+            "Model <code>models/a.mech</code>, <em>quasi-static</em>, F &lt; 2 mN.",
+            "<li>Paper: <code>s3</code> &amp; <code>fb3</code> twist.</li>",
+            "<p>Intro <code>mech report</code>.</p>",
+            &format!(
+                "<details>\n<summary>every point ({} rows)</summary>\n<table>",
+                FOLDED_ROWS + 1
+            ),
+        ] {
+            assert!(page.contains(html), "no `{html}` in {page}");
+        }
+        assert_eq!(page.matches("<details>").count(), 1);
+    }
+}

@@ -250,6 +250,19 @@ fn force_deflection_blocked_force_and_work() {
 fn compare_work_ratio_is_consistent() {
     let spec = bundled("hamr_v2_vs_vi.toml", &[]);
     let outcome = run_and_write(&spec, "compare", &out("compare")).unwrap();
+    // Table IV on the figure: F_b and d of 2 robots × 2 DOFs, each a marker (filled, then
+    // outlined) with an error bar, and one legend marker each; the model as lines.
+    let plot = outcome
+        .rendered
+        .iter()
+        .find(|f| f.path.ends_with("compare.svg"))
+        .expect("compare.svg");
+    let svg = String::from_utf8_lossy(&plot.bytes);
+    assert_eq!(svg.matches("<circle").count(), 2 * (2 * 4 + 4), "{svg}");
+    assert_eq!(
+        svg.matches("Table IV, F_b and d (± s.d., n = 2)").count(),
+        4
+    );
     let v = &outcome.values;
     println!("{v:?}");
     let ratio =

@@ -7,7 +7,7 @@
 use super::csv;
 use crate::experiments::bode::{compute, Source, Spec};
 use crate::experiments::Error;
-use crate::frequency::{Channel, Point};
+use crate::frequency::{self, Channel, Point};
 use crate::render::plot;
 use crate::render::report::Outcome;
 use crate::render::table::Table;
@@ -117,10 +117,16 @@ fn method_text(spec: &Spec, from: f64, to: f64) -> String {
                 "Chirp: the nonlinear model simulated (DOPRI5) from rest under a linear chirp \
                  of {} from {from} to {to} Hz over {}, one input at a time; H estimated by \
                  single-bin Fourier transforms of the whole record (rectangular window; viscous \
-                 losses, as in the time domain). Magnitudes in dB re 1 µm/V.",
-                c.amplitude, c.duration
+                 losses, as in the time domain), not shown where the sweep hardly excited the \
+                 frequency: input spectrum |U(f)| below {:.0} % of the sweep's in-band level \
+                 A/(2√r) (−6 dB, the level at the sweep's own first and last frequency; one \
+                 noise-free record has no coherence to compute). Magnitudes in dB re 1 µm/V; \
+                 phases unwrapped along frequency.",
+                c.amplitude,
+                c.duration,
+                100.0 * frequency::CHIRP_INPUT_FLOOR
             ),
-            None => "Magnitudes in dB re 1 µm/V.".into(),
+            None => "Magnitudes in dB re 1 µm/V; phases unwrapped along frequency.".into(),
         }
     )
 }
@@ -166,19 +172,17 @@ fn write_channel(
     sources: &[Source],
 ) -> Result<(), Error> {
     let db = |p: &Point| 20.0 * (p.gain.norm() * 1e6).log10();
-    let curves = |value: &dyn Fn(&Point) -> f64| -> Vec<(String, Vec<f64>, Vec<f64>)> {
-        sources
-            .iter()
-            .map(|s| {
-                (
-                    s.name.to_string(),
-                    frequencies.to_vec(),
-                    s.response.iter().map(value).collect(),
-                )
-            })
-            .collect()
-    };
-    let (magnitude, phase) = (curves(&db), curves(&Point::phase_deg));
+    let curve = |s: &Source, values: Vec<f64>| (s.name.to_string(), frequencies.to_vec(), values);
+    let magnitude: Vec<_> = sources
+        .iter()
+        .map(|s| curve(s, s.response.iter().map(db).collect()))
+        .collect();
+    let responses: Vec<&[Point]> = sources.iter().map(|s| s.response.as_slice()).collect();
+    let phase: Vec<_> = sources
+        .iter()
+        .zip(frequency::unwrapped_phases(&responses))
+        .map(|(s, values)| curve(s, values))
+        .collect();
     let rows: Vec<Vec<f64>> = (0..frequencies.len())
         .map(|k| {
             let mut row = vec![frequencies[k]];
@@ -204,10 +208,8 @@ fn write_channel(
     let path = dir.join(format!("bode_{}.svg", channel.name));
     let plot = plot::plot_bode(
         &path,
-        &format!(
-            "{name}: {} → {} (dB re 1 µm/V)",
-            channel.input, channel.output
-        ),
+        &format!("{name}: {} → {}", channel.input, channel.output),
+        "magnitude [dB re 1 µm/V]",
         &magnitude,
         &phase,
     )?;

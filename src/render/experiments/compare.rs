@@ -5,10 +5,12 @@
 //! the files it lists.
 
 use super::csv;
+use super::force::table_iv_points;
 use crate::experiments::compare::{compute, Spec};
 use crate::experiments::leg::Dof;
 use crate::experiments::Error;
 use crate::quantity::positive;
+use crate::render::plot;
 use crate::render::report::Outcome;
 use crate::render::table::Table;
 use mech_codegen::ir::Dimension;
@@ -45,6 +47,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     let mut work = [[0.0; 2]; 2];
     let mut paper_work = [[f64::NAN; 2]; 2];
     let mut rows = Vec::new();
+    let (mut lines, mut measured) = (Vec::new(), Vec::new());
     for (r, (robot, tests)) in spec.robot.iter().zip(&robots).enumerate() {
         let fbdf = tests.actuator_work;
         for (k, (dof, test)) in [Dof::Lift, Dof::Swing].iter().zip(&tests.tests).enumerate() {
@@ -55,9 +58,17 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
                 .transpose()?;
             let (d, f, w) = (test.free_deflection, test.blocked_force(), test.work());
             work[r][k] = w;
+            let label = format!("{} {}", robot.name, dof.name());
             if let Some(p) = &paper {
                 paper_work[r][k] = p.work.0;
+                measured.push(table_iv_points(&label, p, lines.len()));
             }
+            // The model's blocked force and free deflection, joined straight.
+            lines.push((
+                format!("{label}: model, F_b to d"),
+                vec![0.0, d * 1e3],
+                vec![f * 1e3, 0.0],
+            ));
             table.row(vec![
                 robot.name.clone(),
                 dof.name().into(),
@@ -97,6 +108,19 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
         &rows,
     )?;
     outcome.tables.push(table);
+    let path = dir.join("compare.svg");
+    let title = format!("Blocked force and free deflection at {voltage} V: model against Table IV");
+    let plot = plot::XyPlot {
+        measured: &measured,
+        ..plot::XyPlot::new(
+            &title,
+            "foot distance from rest along the test axis [mm]",
+            "force [mN]",
+            &lines,
+        )
+    }
+    .render(&path)?;
+    outcome.add_plot(plot);
     let (increase, model_ratio) = increase_table(spec, work, paper_work);
     outcome.values.insert("work_ratio".into(), model_ratio);
     outcome.tables.push(increase);

@@ -5,7 +5,7 @@
 //! the files it lists.
 
 use super::{csv, percent_diff};
-use crate::experiments::force::{compute, PaperRow, Spec};
+use crate::experiments::force::{compute, Paper, PaperRow, Spec};
 use crate::experiments::leg::{Dof, ForceDeflection};
 use crate::experiments::Error;
 use crate::render::plot;
@@ -35,9 +35,15 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
         ],
     );
     let mut curves = Vec::new();
+    let mut measured = Vec::new();
     for (dof, cases) in &results.dofs {
         let dof = *dof;
         outcome.tables.push(points_table(model_name, dof, cases));
+        if let Some(row) = spec.paper.get(dof.name()) {
+            // In the colour of the DOF's on-axis curve, drawn next.
+            let paper = row.parse(&format!("paper.{}", dof.name()))?;
+            measured.push(table_iv_points(dof.name(), &paper, curves.len()));
+        }
         for (label, test) in cases {
             record(&mut outcome, &mut summary, dof, label, test, fbdf);
             let rows = write_test(&mut outcome, dir, dof, test)?;
@@ -53,16 +59,44 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
             .push(paper_table(model_name, &spec.paper, &outcome)?);
     }
     let path = dir.join("force_deflection.svg");
-    let plot = plot::plot_xy(
-        &path,
-        &format!("{model_name}: force on the sensor against its distance at {voltage} V"),
-        "sensor distance from the foot's rest position [mm]",
-        "on-axis force [mN]",
-        &curves,
-        false,
-    )?;
+    let title = format!("{model_name}: force on the sensor against its distance at {voltage} V");
+    let plot = plot::XyPlot {
+        measured: &measured,
+        ..plot::XyPlot::new(
+            &title,
+            "sensor distance from the foot's rest position [mm]",
+            "on-axis force [mN]",
+            &curves,
+        )
+    }
+    .render(&path)?;
     outcome.add_plot(plot);
     Ok(outcome)
+}
+
+/// Table IV's measurements of one DOF as points on a force/distance plot (mm, mN, bars
+/// ±1 s.d.): the blocked force at distance 0 and the free deflection at force 0, in palette
+/// colour `color`.
+pub(crate) fn table_iv_points(dof: &str, paper: &Paper, color: usize) -> plot::Measured {
+    let ((d, d_sd), (force, force_sd)) = (paper.d, paper.force);
+    plot::Measured {
+        name: format!("{dof}: Table IV, F_b and d (± s.d., n = 2)"),
+        color,
+        points: vec![
+            plot::ErrorPoint {
+                x: 0.0,
+                y: force * 1e3,
+                x_error: 0.0,
+                y_error: force_sd * 1e3,
+            },
+            plot::ErrorPoint {
+                x: d * 1e3,
+                y: 0.0,
+                x_error: d_sd * 1e3,
+                y_error: 0.0,
+            },
+        ],
+    }
 }
 
 fn method_text(spec: &Spec, voltage: f64, step: f64) -> String {

@@ -84,15 +84,19 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     }
     outcome.tables.insert(0, chosen_table);
     let path = dir.join("ratio_sweep.svg");
-    let plot = plot::plot_xy_styled(
-        &path,
-        &format!("Work done by the foot (F·d) against the transmission ratio at {voltage} V"),
-        "transmission ratio T (foot per actuator displacement; lift: z, swing: x)",
-        "F·d [µJ]",
-        &figure.curves,
-        &figure.styles,
-        &figure.stars,
-    )?;
+    let title =
+        format!("Work done by the foot (F·d) against the transmission ratio at {voltage} V");
+    let plot = plot::XyPlot {
+        styles: Some(&figure.styles),
+        stars: &figure.stars,
+        ..plot::XyPlot::new(
+            &title,
+            "transmission ratio T (foot per actuator displacement; lift: z, swing: x)",
+            "F·d [µJ]",
+            &figure.curves,
+        )
+    }
+    .render(&path)?;
     outcome.add_plot(plot);
     if !sweep.failed.is_empty() {
         outcome.notes.push(format!(

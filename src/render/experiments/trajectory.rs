@@ -111,14 +111,13 @@ fn plot_planes(
         ),
     ] {
         let path = dir.join(file);
-        let plot = plot::plot_xy(
-            &path,
-            &format!("{model_name}: quasi-static foot trajectory, {title}"),
-            x_label,
-            "foot Δz [mm] (up)",
-            curves,
-            false,
-        )?;
+        let title = format!("{model_name}: quasi-static foot trajectory, {title}");
+        // Equal scale: the path's shape (the step's height against its length) as it is.
+        let plot = plot::XyPlot {
+            equal_scale: true,
+            ..plot::XyPlot::new(&title, x_label, "foot Δz [mm] (up)", curves)
+        }
+        .render(&path)?;
         outcome.add_plot(plot);
     }
     Ok(())
