@@ -68,8 +68,21 @@ pub fn compute(spec: &Spec, voltage: f64) -> Result<Vec<RobotTests>, Error> {
         |robot| -> Result<_, Error> {
             let leg = Leg::open(&robot.model)?;
             let fbdf = actuator_work(&leg)?;
-            let tests = [Dof::Lift, Dof::Swing]
-                .map(|dof| ForceTest::new(dof, voltage, Sensor::Blocked).run(&leg));
+            // The foot moving the way of the paper's test (the drive reversed when the
+            // positive one moves it the other way: the lift test pushes the foot down).
+            let tests = [Dof::Lift, Dof::Swing].map(|dof| {
+                let forward = ForceTest::new(dof, voltage, Sensor::Blocked).run(&leg)?;
+                let wanted = match robot.paper.get(dof.name()) {
+                    Some(row) => row.parse(&format!("paper.{}", dof.name()))?.direction,
+                    None => None,
+                };
+                match wanted {
+                    Some(way) if way != forward.direction => {
+                        ForceTest::new(dof, -voltage, Sensor::Blocked).run(&leg)
+                    }
+                    _ => Ok(forward),
+                }
+            });
             Ok((fbdf, tests))
         },
     );

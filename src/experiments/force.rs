@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
-use super::leg::{Dof, ForceDeflection, ForceTest, Leg, Sensor};
+use super::leg::{Dof, ForceDeflection, ForceTest, Leg, Sensor, StrokeLimit};
 use super::Error;
 use crate::quantity::{paper_value, positive};
 use crate::session::ModelSpec;
@@ -44,6 +44,11 @@ pub struct PaperRow {
     pub work: String,
     /// `F·d/(F_b δ_f)`, e.g. `"0.38 +- 0.04"`.
     pub normalized: String,
+    /// The way the foot moved in the paper's test, along the DOF's axis: `"+z"` or `"-z"`
+    /// for lift (`"-z"`: the foot pushed down onto a sensor under the leg, Fig. 7b), `"+x"`
+    /// or `"-x"` for swing; omitted: the way the positive drive moves it.
+    #[serde(default)]
+    pub direction: Option<String>,
 }
 
 /// A parsed [`PaperRow`], SI means and spreads.
@@ -53,6 +58,8 @@ pub struct Paper {
     pub force: (f64, f64),
     pub work: (f64, f64),
     pub normalized: (f64, f64),
+    /// +1 or −1 along the DOF's axis ([`PaperRow::direction`]); `None`: the positive drive's.
+    pub direction: Option<f64>,
 }
 
 impl PaperRow {
@@ -66,7 +73,33 @@ impl PaperRow {
                 &self.normalized,
                 Dimension::NONE,
             )?,
+            direction: self
+                .direction
+                .as_deref()
+                .map(|text| parse_direction(key, text))
+                .transpose()?,
         })
+    }
+}
+
+/// `"+z"` → +1 for the key `….lift` (the lift axis is z; swing's is x).
+fn parse_direction(key: &str, text: &str) -> Result<f64, Error> {
+    let axis = if key.ends_with("lift") { 'z' } else { 'x' };
+    let bad = || Error::Key {
+        message: format!(
+            "key `{key}.direction`: expected `+{axis}` or `-{axis}` (the way the foot moved \
+             along the test's axis), got `{text}`"
+        ),
+    };
+    let mut chars = text.trim().chars();
+    let sign = match chars.next() {
+        Some('+') => 1.0,
+        Some('-') => -1.0,
+        _ => return Err(bad()),
+    };
+    match (chars.next(), chars.next()) {
+        (Some(a), None) if a == axis => Ok(sign),
+        _ => Err(bad()),
     }
 }
 
@@ -126,7 +159,13 @@ fn tests(
     step: f64,
 ) -> Result<Vec<(&'static str, ForceDeflection)>, Error> {
     let test = ForceTest::new(dof, voltage, Sensor::Steps(step));
-    let mut cases = vec![("on-axis only", test.run(leg)?)];
+    // Both ways: the paper's lift test pushes the foot down (Fig. 7b), the way a negative
+    // drive moves HAMR's foot.
+    let reversed = ForceTest::new(dof, -voltage, Sensor::Steps(step));
+    let mut cases = vec![
+        ("on-axis only", test.run(leg)?),
+        ("on-axis only, reversed drive", reversed.run(leg)?),
+    ];
     if let Some(c) = spec.off_axis_fraction {
         if c > 0.0 {
             let label = if (c - 0.3).abs() < 1e-12 {
@@ -150,8 +189,23 @@ pub struct ForceDeflections {
     /// `F_b δ_f` of the model's actuator.
     pub actuator_work: f64,
     /// Per degree of freedom of the spec, its tests, each with its label (`on-axis only`,
-    /// then the off-axis load's).
+    /// the same with the drive reversed, then the off-axis load's).
     pub dofs: Vec<(Dof, Vec<(&'static str, ForceDeflection)>)>,
+    /// Per degree of freedom, the way of the paper's test (±1 along its axis: the
+    /// [`PaperRow::direction`], else the positive drive's) and the kinematic limit of the
+    /// foot's travel that way ([`Leg::stroke_limit`], over 2 mm of actuator travel).
+    pub limits: Vec<(Dof, f64, Option<StrokeLimit>)>,
+}
+
+impl ForceDeflections {
+    /// The on-axis test of `dof` whose foot moves `direction` (±1) along the axis.
+    pub fn on_axis(&self, dof: Dof, direction: f64) -> Option<&ForceDeflection> {
+        let (_, cases) = self.dofs.iter().find(|(d, _)| *d == dof)?;
+        cases
+            .iter()
+            .map(|(_, test)| test)
+            .find(|test| test.off_axis_fraction == 0.0 && test.direction == direction)
+    }
 }
 
 /// Opens the leg and runs each degree of freedom's tests, in the spec's order.
@@ -160,16 +214,26 @@ pub fn compute(spec: &Spec) -> Result<ForceDeflections, Error> {
     let step = positive("sensor_step", &spec.sensor_step, Dimension::LENGTH)?;
     let leg = Leg::open(&spec.model)?;
     let actuator_work = actuator_work(&leg)?;
-    let dofs = spec
+    let dofs: Vec<(Dof, Vec<(&'static str, ForceDeflection)>)> = spec
         .dofs
         .iter()
         .map(|&dof| Ok((dof, tests(spec, &leg, dof, voltage, step)?)))
         .collect::<Result<_, Error>>()?;
+    let mut limits = Vec::new();
+    for (dof, cases) in &dofs {
+        let paper = match spec.paper.get(dof.name()) {
+            Some(row) => row.parse(&format!("paper.{}", dof.name()))?.direction,
+            None => None,
+        };
+        let direction = paper.unwrap_or(cases[0].1.direction);
+        limits.push((*dof, direction, leg.stroke_limit(*dof, direction, 2e-3)?));
+    }
     Ok(ForceDeflections {
         model_name: leg.model().name().to_string(),
         voltage,
         step,
         actuator_work,
         dofs,
+        limits,
     })
 }

@@ -272,6 +272,71 @@ impl Leg {
         }
     }
 
+    /// How far the loop kinematics alone let the foot move from its rest position along
+    /// `dof`'s axis in `direction` (±1), the other actuator held: `dof`'s actuator is walked
+    /// from rest in steps of 1 µm (each configuration closed from the last) until the foot
+    /// turns back (a toggle of the linkage: a maximum of the foot's travel, refined by a
+    /// parabola through the three steps around it) or the loops stop closing; `None` when the
+    /// foot still advances after `travel` of the actuator. No actuator force can push the foot
+    /// beyond this.
+    pub fn stroke_limit(
+        &self,
+        dof: Dof,
+        direction: f64,
+        travel: f64,
+    ) -> Result<Option<StrokeLimit>, Error> {
+        const STEP: f64 = 1e-6;
+        let actuator = self.session.coordinate_index(dof.actuator())?;
+        let axis = dof.axis();
+        let inputs = self.inputs(0.0, 0.0);
+        let rest = self.foot_at(&self.q0, &inputs)[axis];
+        // The actuator's way that moves the foot in `direction`.
+        let sign = direction * self.kinematic_ratio(&self.q0, dof, axis)?.signum();
+        let mut q = self.q0.clone();
+        // The foot's travel (along `direction`) at the last three steps.
+        let mut last: Vec<f64> = vec![0.0];
+        for k in 1..=(travel / STEP).ceil() as usize {
+            let mut next = q.clone();
+            next[actuator] = self.q0[actuator] + sign * STEP * k as f64;
+            let closed = assemble(
+                self.model(),
+                0.0,
+                &mut next,
+                &self.independent,
+                &AssemblyOptions::default(),
+            );
+            let moved = closed
+                .ok()
+                .map(|_| direction * (self.foot_at(&next, &inputs)[axis] - rest));
+            match moved {
+                Some(travelled) if travelled > *last.last().unwrap_or(&0.0) => {
+                    last.push(travelled);
+                    q = next;
+                }
+                // The foot turned back: the vertex of the parabola through the last three.
+                Some(travelled) if last.len() >= 2 => {
+                    let (a, b) = (last[last.len() - 2], last[last.len() - 1]);
+                    let curvature = a - 2.0 * b + travelled;
+                    let offset = 0.5 * (a - travelled) / curvature;
+                    let foot = b - 0.25 * (a - travelled) * offset;
+                    let actuator_travel = STEP * ((k - 1) as f64 + offset);
+                    return Ok(Some(StrokeLimit {
+                        foot,
+                        actuator: actuator_travel,
+                    }));
+                }
+                // The loops stop closing (or the foot never advanced): the last closed step.
+                _ => {
+                    return Ok(Some(StrokeLimit {
+                        foot: *last.last().unwrap_or(&0.0),
+                        actuator: STEP * (k - 1) as f64,
+                    }))
+                }
+            }
+        }
+        Ok(None)
+    }
+
     /// Small-motion ratio of foot displacement along `axis` to the actuator's displacement,
     /// from the loop kinematics at `q` (central differences of the assembled foot position).
     pub fn kinematic_ratio(&self, q: &[f64], dof: Dof, axis: usize) -> Result<f64, Error> {
@@ -382,6 +447,15 @@ impl ForceDeflection {
     pub fn work(&self) -> f64 {
         self.blocked_force() * self.free_deflection
     }
+}
+
+/// The kinematic limit of a foot's travel ([`Leg::stroke_limit`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StrokeLimit {
+    /// The foot's largest travel from rest along the axis, in the direction asked (m, ≥ 0).
+    pub foot: f64,
+    /// The actuator's travel from rest there (m, ≥ 0).
+    pub actuator: f64,
 }
 
 /// Where the force sensor of [`force_deflection`] is placed: distances from the foot's rest

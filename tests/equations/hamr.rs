@@ -453,3 +453,63 @@ fn the_actuator_grid_closes_everywhere_on_the_branch_of_the_rest_configuration()
         }
     }
 }
+
+/// HAMR-VI's lift foot cannot move down beyond its crank-slider's toggle whatever the
+/// actuator force (the paper's lift test pushes the foot down onto a sensor: Table IV's
+/// 2.2 ± 0.1 mm). `Leg::stroke_limit` walks the actuator in 1 µm steps and refines the turn
+/// by a parabola; here the turn is found independently, by bisection on the sign of
+/// dz/dq_lact (central differences of configurations closed from the last bisection point).
+/// Equal to 1e-6 m; a downward travel between the −225 V free deflection and 3 mm.
+#[test]
+fn the_lift_foot_stops_at_its_toggle() {
+    use mech::experiments::leg::{Dof, ForceTest, Leg, Sensor};
+    let leg = Leg::open(&common::hamr_vi_spec()).unwrap();
+    let limit = leg
+        .stroke_limit(Dof::Lift, -1.0, 2e-3)
+        .unwrap()
+        .expect("a toggle");
+    let model = leg.model();
+    let [_, lift] = actuators(model);
+    let inputs = leg.inputs(0.0, 0.0);
+    let mut q = leg.q0.clone();
+    let mut z_at = |actuator: f64| -> f64 {
+        q[lift] = actuator;
+        assemble(
+            model,
+            0.0,
+            &mut q,
+            &leg.independent,
+            &AssemblyOptions::default(),
+        )
+        .unwrap();
+        foot(model, &q, &inputs)[2]
+    };
+    let rest = z_at(0.0);
+    // The actuator's way that moves the foot down, from the rest slope.
+    let h = 1e-7;
+    let sign = -(z_at(h) - z_at(-h)).signum();
+    let mut slope = |actuator: f64| (z_at(actuator + h) - z_at(actuator - h)) / (2.0 * h);
+    let (mut inside, mut outside) = (0.0, limit.actuator * 1.2);
+    assert!(
+        slope(sign * outside) * sign > 0.0,
+        "no turn within 1.2× the walk's"
+    );
+    for _ in 0..40 {
+        let middle = 0.5 * (inside + outside);
+        if slope(sign * middle) * sign < 0.0 {
+            inside = middle;
+        } else {
+            outside = middle;
+        }
+    }
+    let travel = rest - z_at(sign * inside);
+    let free = ForceTest::new(Dof::Lift, -225.0, Sensor::Blocked)
+        .run(&leg)
+        .unwrap()
+        .free_deflection;
+    assert!(
+        (travel - limit.foot).abs() < 1e-6 && limit.foot > free && limit.foot < 3e-3,
+        "walk {:e} m, bisection {travel:e} m, free deflection at −225 V {free:e} m",
+        limit.foot
+    );
+}

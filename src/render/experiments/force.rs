@@ -5,7 +5,7 @@
 //! the files it lists.
 
 use super::{csv, percent_diff};
-use crate::experiments::force::{compute, Paper, PaperRow, Spec};
+use crate::experiments::force::{compute, ForceDeflections, Paper, PaperRow, Spec};
 use crate::experiments::leg::{Dof, ForceDeflection};
 use crate::experiments::Error;
 use crate::render::plot;
@@ -40,9 +40,13 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
         let dof = *dof;
         outcome.tables.push(points_table(model_name, dof, cases));
         if let Some(row) = spec.paper.get(dof.name()) {
-            // In the colour of the DOF's on-axis curve, drawn next.
+            // In the colour of the on-axis curve of the paper's way, drawn next.
             let paper = row.parse(&format!("paper.{}", dof.name()))?;
-            measured.push(table_iv_points(dof.name(), &paper, curves.len()));
+            let compared = cases
+                .iter()
+                .position(|(_, test)| Some(test) == compared_test(&results, dof))
+                .unwrap_or(0);
+            measured.push(table_iv_points(dof.name(), &paper, curves.len() + compared));
         }
         for (label, test) in cases {
             record(&mut outcome, &mut summary, dof, label, test, fbdf);
@@ -56,7 +60,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     if !spec.paper.is_empty() {
         outcome
             .tables
-            .push(paper_table(model_name, &spec.paper, &outcome)?);
+            .push(paper_table(&results, &spec.paper, &outcome)?);
     }
     let path = dir.join("force_deflection.svg");
     let title = format!("{model_name}: force on the sensor against its distance at {voltage} V");
@@ -137,8 +141,9 @@ fn points_table(model_name: &str, dof: Dof, cases: &[(&str, ForceDeflection)]) -
             "F_y, off-axis load [mN]",
         ],
     );
+    let offaxis = cases.iter().find(|(_, t)| t.off_axis_fraction > 0.0);
     for (k, p) in cases[0].1.points.iter().enumerate() {
-        let loaded = cases.get(1).and_then(|(_, t)| t.points.get(k));
+        let loaded = offaxis.and_then(|(_, t)| t.points.get(k));
         points.row(vec![
             format!("{:.0}", p.distance * 1e6),
             format!("{:.2}", p.force * 1e3),
@@ -150,18 +155,33 @@ fn points_table(model_name: &str, dof: Dof, cases: &[(&str, ForceDeflection)]) -
     points
 }
 
-/// `force_DOF[_offaxis].csv`: the sensor points and, last, the free foot; returns the rows.
+/// `_offaxis` for the test with the off-axis load, `_reversed` for the reversed drive, `""`
+/// for the on-axis test at the positive drive: the suffix of its CSV file and values.
+fn test_tag(test: &ForceDeflection) -> &'static str {
+    if test.off_axis_fraction > 0.0 {
+        "_offaxis"
+    } else if test.voltage < 0.0 {
+        "_reversed"
+    } else {
+        ""
+    }
+}
+
+/// The on-axis test of `dof` that moves the foot the paper's way (the compared one).
+fn compared_test(results: &ForceDeflections, dof: Dof) -> Option<&ForceDeflection> {
+    let (_, direction, _) = results.limits.iter().find(|(d, _, _)| *d == dof)?;
+    results.on_axis(dof, *direction)
+}
+
+/// `force_DOF[_reversed|_offaxis].csv`: the sensor points and, last, the free foot; returns
+/// the rows.
 fn write_test(
     outcome: &mut Outcome,
     dir: &Path,
     dof: Dof,
     test: &ForceDeflection,
 ) -> Result<Vec<Vec<f64>>, Error> {
-    let tag = if test.off_axis_fraction > 0.0 {
-        "_offaxis"
-    } else {
-        ""
-    };
+    let tag = test_tag(test);
     let rows: Vec<Vec<f64>> = test
         .points
         .iter()
@@ -183,7 +203,7 @@ fn write_test(
     Ok(rows)
 }
 
-/// Adds a summary row and the key values `{dof}[_offaxis]_{blocked_force, free_deflection,
+/// Adds a summary row and the key values `{dof}[_reversed|_offaxis]_{blocked_force, free_deflection,
 /// work, normalized, blocked_force_y}`.
 fn record(
     outcome: &mut Outcome,
@@ -195,11 +215,7 @@ fn record(
 ) {
     let blocked = test.points.first().copied();
     let force_y = blocked.map_or(0.0, |p| p.force_y);
-    let tag = if test.off_axis_fraction > 0.0 {
-        "_offaxis"
-    } else {
-        ""
-    };
+    let tag = test_tag(test);
     let name = dof.name();
     for (key, value) in [
         ("blocked_force", test.blocked_force()),
@@ -222,25 +238,61 @@ fn record(
     ]);
 }
 
-/// Model (on-axis load only) beside the paper's Table IV values.
+/// Model (on-axis load only, the foot moving the paper's way) beside the paper's Table IV
+/// values, and the kinematic limit of the foot's travel that way.
 fn paper_table(
-    model_name: &str,
+    results: &ForceDeflections,
     paper: &BTreeMap<String, PaperRow>,
     outcome: &Outcome,
 ) -> Result<Table, Error> {
     let mut table = Table::new(
-        &format!("{model_name}: model against the paper's measurements (seed Table IV, mean ± s.d., n = 2)"),
+        &format!(
+            "{}: model against the paper's measurements (seed Table IV, mean ± s.d., n = 2; \
+             the foot moving the way of the paper's test)",
+            results.model_name
+        ),
         &["DOF", "quantity", "model", "paper", "model vs paper"],
     );
     for (dof, row) in paper {
         let p = row.parse(&format!("paper.{dof}"))?;
+        let tested = results
+            .dofs
+            .iter()
+            .map(|(d, _)| *d)
+            .find(|d| d.name() == dof);
+        let tag = tested
+            .and_then(|d| compared_test(results, d))
+            .map_or("", test_tag);
         let value = |key: &str| {
             outcome
                 .values
-                .get(&format!("{dof}_{key}"))
+                .get(&format!("{dof}{tag}_{key}"))
                 .copied()
                 .unwrap_or(f64::NAN)
         };
+        let limit = results
+            .limits
+            .iter()
+            .find(|(d, _, _)| Some(*d) == tested)
+            .and_then(|(d, direction, limit)| limit.map(|l| (*d, *direction, l)));
+        if let Some((tested, direction, limit)) = limit {
+            let sign = if direction > 0.0 { "+" } else { "−" };
+            let way = format!("{sign}{}", AXES[tested.axis()]);
+            table.row(vec![
+                dof.clone(),
+                format!("d limit, loop kinematics ({way}) [mm]"),
+                format!("{:.2}", limit.foot * 1e3),
+                format!("{:.2} ± {:.2}", p.d.0 * 1e3, p.d.1 * 1e3),
+                if p.d.0 > limit.foot {
+                    format!(
+                        "measured beyond the model's reach by {:.1} s.d.",
+                        (p.d.0 - limit.foot) / p.d.1
+                    )
+                } else {
+                    percent_diff(limit.foot, p.d.0)
+                },
+            ]);
+        }
         for (label, model, (mean, sd), scale, digits) in [
             (
                 "d (free deflection) [mm]",
