@@ -770,7 +770,8 @@ mod tests {
         let code = JitProgram::compile(&program).unwrap();
         let mut scratch = Scratch::default();
         let (q, u, params, inputs) = ([1.0, 2.0, 3.0], [4.0], [5.0, 6.0], [7.0, 8.0, 9.0, 10.0]);
-        let cases: [(&[f64], &[f64], &[f64], &[f64]); 4] = [
+        type Slices<'a> = (&'a [f64], &'a [f64], &'a [f64], &'a [f64]);
+        let cases: [Slices; 4] = [
             (&q, &u, &params, &inputs),
             (&q[..2], &u, &params, &inputs),
             (&q, &[], &params[..1], &inputs[..3]),
