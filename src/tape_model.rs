@@ -53,11 +53,15 @@ enum Slot {
     ConstraintJacobian,
     ConstraintBias,
     Flexures,
+    /// `[M, F, J, J̇u]` in one program (native code only).
+    ConstrainedTerms,
+    /// `[M, F, J̇u]` in one program (native code only).
+    DynamicsTerms,
     OutputRow(usize),
 }
 
 impl Slot {
-    const FIXED: usize = 8;
+    const FIXED: usize = 10;
     fn index(self) -> usize {
         match self {
             Slot::MassMatrix => 0,
@@ -68,6 +72,8 @@ impl Slot {
             Slot::ConstraintJacobian => 5,
             Slot::ConstraintBias => 6,
             Slot::Flexures => 7,
+            Slot::ConstrainedTerms => 8,
+            Slot::DynamicsTerms => 9,
             Slot::OutputRow(row) => Slot::FIXED + row,
         }
     }
@@ -80,10 +86,16 @@ struct NativeProgram {
     code: OnceLock<Option<JitProgram>>,
 }
 
-/// The native code of all programs of one tape, shared by the clones of a model.
+/// The native code of all programs of one tape, shared by the clones of a model, and the
+/// fused programs only native code runs.
 #[derive(Debug)]
 struct Native {
     programs: Vec<NativeProgram>,
+    /// `[M, F, J, J̇u]` and `[M, F, J̇u]` (column-major matrices), each one program sharing
+    /// subexpressions across its parts, as the generated `constrained_terms` and
+    /// `dynamics_terms`; `None` without loops. Each value is computed by the same
+    /// instructions as in the separate programs, so the numbers are the same.
+    fused: Option<(Program, Program)>,
 }
 
 /// The tape of a model with its names, defaults and current parameter values.
@@ -107,6 +119,8 @@ pub struct TapeModel {
     native: Option<Arc<Native>>,
     /// This clone's memory for the native code (spilled values), reused like `registers`.
     scratch: RefCell<Scratch>,
+    /// The values of a fused program before they are split into its parts.
+    fused_out: RefCell<Vec<f64>>,
 }
 
 impl TapeModel {
@@ -130,10 +144,34 @@ impl TapeModel {
         let model = &compiled.model;
         let tape = compiled.tape();
         let native = (backend == Backend::Native).then(|| {
+            let equations = &compiled.equations;
+            let fused = (tape.nc > 0).then(|| {
+                let constraints = &equations.constraints;
+                let dynamics: Vec<_> = [&equations.mass_matrix, &equations.forcing]
+                    .into_iter()
+                    .flatten()
+                    .copied()
+                    .collect();
+                let constrained: Vec<_> = dynamics
+                    .iter()
+                    .chain(&constraints.jacobian)
+                    .chain(&constraints.bias)
+                    .copied()
+                    .collect();
+                let dynamics: Vec<_> = dynamics
+                    .into_iter()
+                    .chain(constraints.bias.iter().copied())
+                    .collect();
+                (
+                    Program::compile(&equations.pool, &constrained),
+                    Program::compile(&equations.pool, &dynamics),
+                )
+            });
             Arc::new(Native {
                 programs: (0..Slot::FIXED + tape.output_rows.len())
                     .map(|_| NativeProgram::default())
                     .collect(),
+                fused,
             })
         });
         TapeModel {
@@ -160,6 +198,7 @@ impl TapeModel {
             registers: RefCell::new(Vec::new()),
             native,
             scratch: RefCell::new(Scratch::default()),
+            fused_out: RefCell::new(Vec::new()),
         }
     }
 
@@ -189,6 +228,14 @@ impl TapeModel {
         ]
         .into_iter()
         .filter(|slot| !matches!(slot, Slot::StaticForcing) || self.tape.static_forcing.is_some())
+        .chain(
+            self.native
+                .as_ref()
+                .filter(|native| native.fused.is_some())
+                .map(|_| [Slot::ConstrainedTerms, Slot::DynamicsTerms])
+                .into_iter()
+                .flatten(),
+        )
         .chain((0..self.tape.output_rows.len()).map(Slot::OutputRow))
     }
 
@@ -220,8 +267,52 @@ impl TapeModel {
             Slot::ConstraintJacobian => &tape.constraint_jacobian,
             Slot::ConstraintBias => &tape.constraint_bias,
             Slot::Flexures => &tape.flexures,
+            Slot::ConstrainedTerms | Slot::DynamicsTerms => {
+                let fused = self
+                    .native
+                    .as_ref()
+                    .and_then(|native| native.fused.as_ref());
+                let (constrained, dynamics) = fused.expect("fused programs with native code");
+                match slot {
+                    Slot::ConstrainedTerms => constrained,
+                    _ => dynamics,
+                }
+            }
             Slot::OutputRow(row) => &tape.output_rows[row],
         }
+    }
+
+    /// Runs a fused program into its parts (`out` of the fused length as scratch).
+    fn run_fused(&self, slot: Slot, env: &Env, parts: &mut [&mut [f64]]) {
+        let lengths = self.fused_lengths(slot);
+        let mut out = std::mem::take(&mut *self.fused_out.borrow_mut());
+        out.resize(lengths.iter().sum(), 0.0);
+        self.run(slot, env, &mut out);
+        let mut rest = &out[..];
+        for (part, &length) in parts.iter_mut().zip(&lengths) {
+            let (values, tail) = rest.split_at(length);
+            for (slot, value) in part.iter_mut().zip(values) {
+                *slot = *value;
+            }
+            rest = tail;
+        }
+        *self.fused_out.borrow_mut() = out;
+    }
+
+    /// The lengths of the parts of a fused program.
+    fn fused_lengths(&self, slot: Slot) -> Vec<usize> {
+        let (nq, nu, nc) = (self.tape.nq, self.tape.nu, self.tape.nc);
+        match slot {
+            Slot::ConstrainedTerms => vec![nu * nu, nu, nc * nq, nc],
+            _ => vec![nu * nu, nu, nc],
+        }
+    }
+
+    /// Whether the fused programs exist (native code on a model with loops).
+    fn fused(&self) -> bool {
+        self.native
+            .as_ref()
+            .is_some_and(|native| native.fused.is_some())
     }
 
     fn run(&self, slot: Slot, env: &Env, out: &mut [f64]) {
@@ -347,6 +438,50 @@ impl mech_runtime::Model for TapeModel {
     }
     fn constraint_bias(&self, t: f64, q: &[f64], u: &[f64], out: &mut [f64]) {
         self.eval(Slot::ConstraintBias, t, q, u, &[], out);
+    }
+    #[allow(clippy::too_many_arguments)]
+    fn constrained_terms(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        inputs: &[f64],
+        mass: &mut [f64],
+        forcing: &mut [f64],
+        jacobian: &mut [f64],
+        bias: &mut [f64],
+    ) {
+        if !self.fused() {
+            self.mass_matrix(t, q, inputs, mass);
+            self.forcing(t, q, u, inputs, forcing);
+            self.constraint_jacobian(t, q, jacobian);
+            return self.constraint_bias(t, q, u, bias);
+        }
+        let env = self.env(t, q, u, inputs);
+        self.run_fused(
+            Slot::ConstrainedTerms,
+            &env,
+            &mut [mass, forcing, jacobian, bias],
+        );
+    }
+    #[allow(clippy::too_many_arguments)]
+    fn dynamics_terms(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        inputs: &[f64],
+        mass: &mut [f64],
+        forcing: &mut [f64],
+        bias: &mut [f64],
+    ) {
+        if !self.fused() {
+            self.mass_matrix(t, q, inputs, mass);
+            self.forcing(t, q, u, inputs, forcing);
+            return self.constraint_bias(t, q, u, bias);
+        }
+        let env = self.env(t, q, u, inputs);
+        self.run_fused(Slot::DynamicsTerms, &env, &mut [mass, forcing, bias]);
     }
     fn nflexures(&self) -> usize {
         self.tape.nflexures

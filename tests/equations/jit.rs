@@ -37,6 +37,21 @@ fn evaluate(model: &dyn Model, q: &[f64], u: &[f64], inputs: &[f64]) -> Vec<(Str
     model.constraint_bias(t, q, u, &mut bias);
     let mut flexures = vec![0.0; 4 * model.nflexures()];
     model.flexures(t, q, &mut flexures);
+    // The fused passes, into one vector each: `[M, F, J, J̇u]` and `[M, F, J̇u]`.
+    let mut fused = vec![
+        vec![0.0; nu * nu],
+        vec![0.0; nu],
+        vec![0.0; nc * nq],
+        vec![0.0; nc],
+    ];
+    if let [m, f, j, b] = &mut fused[..] {
+        model.constrained_terms(t, q, u, inputs, m, f, j, b);
+    }
+    let constrained = fused.concat();
+    if let [m, f, _, b] = &mut fused[..] {
+        model.dynamics_terms(t, q, u, inputs, m, f, b);
+    }
+    let dynamics = [&fused[0][..], &fused[1], &fused[3]].concat();
     [
         ("M", m),
         ("F", f),
@@ -47,6 +62,8 @@ fn evaluate(model: &dyn Model, q: &[f64], u: &[f64], inputs: &[f64]) -> Vec<(Str
         ("J", j),
         ("J̇u", bias),
         ("flexures", flexures),
+        ("[M, F, J, J̇u]", constrained),
+        ("[M, F, J̇u]", dynamics),
     ]
     .into_iter()
     .map(|(name, values)| (name.to_string(), values))
@@ -61,7 +78,8 @@ fn random_state(model: &dyn Model, rng: &mut Rng) -> (Vec<f64>, Vec<f64>, Vec<f6
     )
 }
 
-/// The model on both backends, every program of the native one compiled.
+/// The model on both backends, every program of the native one compiled (the fused passes
+/// of a model with loops among them).
 fn both(compiled: &Compiled) -> (TapeModel, TapeModel) {
     let native = TapeModel::with_backend(compiled, Backend::Native);
     let programs = native.compile_native();
