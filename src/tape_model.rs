@@ -93,7 +93,7 @@ struct Native {
     programs: Vec<NativeProgram>,
     /// `[M, F, J, J̇u]` and `[M, F, J̇u]` (column-major matrices), each one program sharing
     /// subexpressions across its parts, as the generated `constrained_terms` and
-    /// `dynamics_terms`; `None` without loops. Each value is computed by the same
+    /// `dynamics_terms` (for models without loops too). Each value is computed by the same
     /// instructions as in the separate programs, so the numbers are the same.
     fused: Option<(Program, Program)>,
 }
@@ -145,7 +145,9 @@ impl TapeModel {
         let tape = compiled.tape();
         let native = (backend == Backend::Native).then(|| {
             let equations = &compiled.equations;
-            let fused = (tape.nc > 0).then(|| {
+            // Also without loops (`J` and `J̇u` empty): `constrained_terms` is what the
+            // runtime's `ConstrainedSolver` calls for every model.
+            let fused = Some(()).map(|()| {
                 let constraints = &equations.constraints;
                 let dynamics: Vec<_> = [&equations.mass_matrix, &equations.forcing]
                     .into_iter()
@@ -308,7 +310,7 @@ impl TapeModel {
         }
     }
 
-    /// Whether the fused programs exist (native code on a model with loops).
+    /// Whether the fused programs exist (native code).
     fn fused(&self) -> bool {
         self.native
             .as_ref()

@@ -38,7 +38,7 @@ fn evaluate(model: &dyn Model, q: &[f64], u: &[f64], inputs: &[f64]) -> Vec<(Str
     let mut flexures = vec![0.0; 4 * model.nflexures()];
     model.flexures(t, q, &mut flexures);
     // The fused passes, into one vector each: `[M, F, J, J̇u]` and `[M, F, J̇u]`.
-    let mut fused = vec![
+    let mut fused = [
         vec![0.0; nu * nu],
         vec![0.0; nu],
         vec![0.0; nc * nq],
