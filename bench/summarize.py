@@ -889,10 +889,6 @@ def resources_section():
     return L
 
 
-if __name__ == '__main__':
-    main()
-
-
 def jit_section(R):
     """Section 13: native code for tapes (`examples/jit_performance.rs`, its tables as printed
     in bench/results/jit.md) and the hand-written interpretation in bench/analysis_jit.md."""
@@ -911,3 +907,7 @@ def jit_section(R):
     if os.path.exists(path):
         L.append(analysis_text(path).rstrip('\n'))
     return L
+
+
+if __name__ == '__main__':
+    main()

@@ -58,9 +58,9 @@ impl Default for Options {
 
 /// Programs longer than this compile without Cranelift's optimizer. Measured
 /// (`examples/jit_performance.rs`, docs/benchmarks.md §13): on the 32-link chain's `M` (88,768
-/// instructions, chunks of 2,000) `opt_level=speed` compiles 2.6–3.4× slower than `none`
-/// (1.8–2.1 s against 0.62–0.69 s) and ran no faster in two runs; on HAMR-VI's `M` and `F`
-/// (1,281) both compile in ~9 ms and `speed` ran 1.1–1.7× faster.
+/// instructions, chunks of 2,000) `opt_level=speed` compiles 2.6–3.6× slower than `none`
+/// (1.5–2.1 s against 0.43–0.69 s) and ran no faster in three runs; on HAMR-VI's `M` and `F`
+/// (1,281) both compile in 5–10 ms and `speed` ran 1.1–2.5× faster.
 pub const OPTIMIZE_UP_TO: usize = 20_000;
 
 impl Options {
