@@ -20,6 +20,7 @@
 #      for the loop targets;
 #   5d. the HAMR leg: `cargo run --release --example hamr_performance` (a Markdown table);
 #   5e. the HAMR leg's statics: `cargo run --release --example statics_timing` (Markdown tables);
+#   5f. tapes as native code: `cargo run --release --example jit_performance` (Markdown tables);
 #   6. bench/summarize.py: docs/benchmarks.md.
 # ../shared/peers is only read: every result goes to bench/results/ (JSON lines), and every
 # command run is logged in bench/results/commands.txt.
@@ -169,6 +170,11 @@ run cargo run --release -q --example hamr_performance > $R/hamr.md || failed ham
 echo "== 5e. HAMR statics" >&2
 load statics
 run cargo run --release -q --example statics_timing > $R/statics.md || failed statics_timing 0 $? >> $R/statics.md
+
+# Tapes as native code (issue 19): u̇ generated Rust / JIT / interpreter, JIT compile times.
+echo "== 5f. JIT" >&2
+load jit
+run cargo run --release -q --example jit_performance > $R/jit.md || failed jit_performance 0 $? >> $R/jit.md
 load end
 
 if [ "${SKIP_SUMMARY:-0}" != 1 ]; then

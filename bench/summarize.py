@@ -495,6 +495,7 @@ def main():
     L.extend(statics_section(R))
     L.extend(diagnose_section())
     L.extend(resources_section())
+    L.extend(jit_section(R))
     with open(a.out, 'w') as f:
         f.write('\n'.join(L).rstrip('\n') + '\n')
     print(f'wrote {a.out}')
@@ -883,6 +884,26 @@ def resources_section():
     bench/chain_resources.py: bench/analysis_resources.md)."""
     L = ['', '## 12. The command line on long chains: time and peak memory', '']
     path = analysis_path('analysis_resources')
+    if os.path.exists(path):
+        L.append(analysis_text(path).rstrip('\n'))
+    return L
+
+
+def jit_section(R):
+    """Section 13: native code for tapes (`examples/jit_performance.rs`, its tables as printed
+    in bench/results/jit.md) and the hand-written interpretation in bench/analysis_jit.md."""
+    L = ['', '## 13. Compiled speed without cargo (issue 19): tapes as native code', '']
+    table = os.path.join(R, 'jit.md')
+    if not os.path.exists(table):
+        L.append('Not measured in this run (`bench/results/jit.md` missing).')
+    else:
+        L.append('`cargo run --release --example jit_performance` (run by `bench/run.sh` after the '
+                 'statics), its tables as printed.')
+        L.append('')
+        with open(table) as f:
+            L.extend(line.rstrip('\n').replace('### ', '#### ') for line in f)
+        L.append('')
+    path = analysis_path('analysis_jit')
     if os.path.exists(path):
         L.append(analysis_text(path).rstrip('\n'))
     return L

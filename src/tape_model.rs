@@ -3,11 +3,100 @@
 //!
 //! Consumes: a [`Compiled`] model (IR + equations). Produces: a [`TapeModel`] implementing
 //! [`mech_runtime::Model`], the same contract generated code implements.
+//!
+//! Each program of the tape runs as native code ([`mech_jit`], Cranelift) once it has been
+//! called [`NATIVE_AFTER_CALLS`] times: compiled then, on the first thread that gets there,
+//! and shared (`Arc`) with every clone of the model. Programs called fewer times, or that
+//! Cranelift cannot compile, run through the interpreter ([`Program::eval`]); both give the
+//! same numbers bit for bit (`mech_jit`'s module header says why). `MECH_JIT=0` in the
+//! environment (read when a model is built) or [`Backend::Interpreter`] turns native code off.
 
 use std::cell::RefCell;
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::{Arc, OnceLock};
 
 use mech_codegen::back::tape::{Env, Program, Tape};
 use mech_codegen::Compiled;
+use mech_jit::{JitProgram, Scratch};
+
+/// How a [`TapeModel`] evaluates its programs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Backend {
+    /// Native code for programs called often, the interpreter for the others.
+    Native,
+    /// The interpreter only.
+    Interpreter,
+}
+
+impl Backend {
+    /// [`Backend::Interpreter`] if the environment sets `MECH_JIT=0`, else [`Backend::Native`].
+    pub fn from_env() -> Backend {
+        match std::env::var_os("MECH_JIT") {
+            Some(value) if value == "0" => Backend::Interpreter,
+            _ => Backend::Native,
+        }
+    }
+}
+
+/// Calls of a program through the interpreter before it is compiled: a program evaluated
+/// once or twice (a check, one output row) never pays Cranelift's compile time.
+pub const NATIVE_AFTER_CALLS: u32 = 3;
+
+/// The tape's programs in a fixed order: the slot of each in [`Native::programs`].
+#[derive(Clone, Copy, Debug)]
+enum Slot {
+    MassMatrix,
+    Forcing,
+    StaticForcing,
+    Outputs,
+    Constraints,
+    ConstraintJacobian,
+    ConstraintBias,
+    Flexures,
+    /// `[M, F, J, J̇u]` in one program (native code only).
+    ConstrainedTerms,
+    /// `[M, F, J̇u]` in one program (native code only).
+    DynamicsTerms,
+    OutputRow(usize),
+}
+
+impl Slot {
+    const FIXED: usize = 10;
+    fn index(self) -> usize {
+        match self {
+            Slot::MassMatrix => 0,
+            Slot::Forcing => 1,
+            Slot::StaticForcing => 2,
+            Slot::Outputs => 3,
+            Slot::Constraints => 4,
+            Slot::ConstraintJacobian => 5,
+            Slot::ConstraintBias => 6,
+            Slot::Flexures => 7,
+            Slot::ConstrainedTerms => 8,
+            Slot::DynamicsTerms => 9,
+            Slot::OutputRow(row) => Slot::FIXED + row,
+        }
+    }
+}
+
+/// One program's native code: compiled on demand, `None` inside if compilation failed.
+#[derive(Debug, Default)]
+struct NativeProgram {
+    calls: AtomicU32,
+    code: OnceLock<Option<JitProgram>>,
+}
+
+/// The native code of all programs of one tape, shared by the clones of a model, and the
+/// fused programs only native code runs.
+#[derive(Debug)]
+struct Native {
+    programs: Vec<NativeProgram>,
+    /// `[M, F, J, J̇u]` and `[M, F, J̇u]` (column-major matrices), each one program sharing
+    /// subexpressions across its parts, as the generated `constrained_terms` and
+    /// `dynamics_terms` (for models without loops too). Each value is computed by the same
+    /// instructions as in the separate programs, so the numbers are the same.
+    fused: Option<(Program, Program)>,
+}
 
 /// The tape of a model with its names, defaults and current parameter values.
 #[derive(Clone, Debug)]
@@ -26,6 +115,12 @@ pub struct TapeModel {
     u0: Vec<f64>,
     /// Registers reused across evaluations (the evaluator never allocates after warm-up).
     registers: RefCell<Vec<f64>>,
+    /// Native code, `None` for [`Backend::Interpreter`].
+    native: Option<Arc<Native>>,
+    /// This clone's memory for the native code (spilled values), reused like `registers`.
+    scratch: RefCell<Scratch>,
+    /// The values of a fused program before they are split into its parts.
+    fused_out: RefCell<Vec<f64>>,
 }
 
 impl TapeModel {
@@ -40,11 +135,50 @@ impl TapeModel {
         }
     }
 
+    /// The model with the backend of [`Backend::from_env`].
     pub fn new(compiled: &Compiled) -> TapeModel {
+        TapeModel::with_backend(compiled, Backend::from_env())
+    }
+
+    pub fn with_backend(compiled: &Compiled, backend: Backend) -> TapeModel {
         let model = &compiled.model;
+        let tape = compiled.tape();
+        let native = (backend == Backend::Native).then(|| {
+            let equations = &compiled.equations;
+            // Also without loops (`J` and `J̇u` empty): `constrained_terms` is what the
+            // runtime's `ConstrainedSolver` calls for every model.
+            let fused = Some(()).map(|()| {
+                let constraints = &equations.constraints;
+                let dynamics: Vec<_> = [&equations.mass_matrix, &equations.forcing]
+                    .into_iter()
+                    .flatten()
+                    .copied()
+                    .collect();
+                let constrained: Vec<_> = dynamics
+                    .iter()
+                    .chain(&constraints.jacobian)
+                    .chain(&constraints.bias)
+                    .copied()
+                    .collect();
+                let dynamics: Vec<_> = dynamics
+                    .into_iter()
+                    .chain(constraints.bias.iter().copied())
+                    .collect();
+                (
+                    Program::compile(&equations.pool, &constrained),
+                    Program::compile(&equations.pool, &dynamics),
+                )
+            });
+            Arc::new(Native {
+                programs: (0..Slot::FIXED + tape.output_rows.len())
+                    .map(|_| NativeProgram::default())
+                    .collect(),
+                fused,
+            })
+        });
         TapeModel {
             name: model.name.clone(),
-            tape: compiled.tape(),
+            tape,
             coordinate_names: model
                 .coordinates
                 .iter()
@@ -64,6 +198,9 @@ impl TapeModel {
                 .map(|(_, c)| c.initial_speed)
                 .collect(),
             registers: RefCell::new(Vec::new()),
+            native,
+            scratch: RefCell::new(Scratch::default()),
+            fused_out: RefCell::new(Vec::new()),
         }
     }
 
@@ -71,21 +208,137 @@ impl TapeModel {
         &self.tape
     }
 
-    fn run(&self, program: &Program, env: &Env, out: &mut [f64]) {
+    pub fn backend(&self) -> Backend {
+        if self.native.is_some() {
+            Backend::Native
+        } else {
+            Backend::Interpreter
+        }
+    }
+
+    /// The slots of the tape's programs.
+    fn slots(&self) -> impl Iterator<Item = Slot> + '_ {
+        [
+            Slot::MassMatrix,
+            Slot::Forcing,
+            Slot::StaticForcing,
+            Slot::Outputs,
+            Slot::Constraints,
+            Slot::ConstraintJacobian,
+            Slot::ConstraintBias,
+            Slot::Flexures,
+        ]
+        .into_iter()
+        .filter(|slot| !matches!(slot, Slot::StaticForcing) || self.tape.static_forcing.is_some())
+        .chain(
+            self.native
+                .as_ref()
+                .filter(|native| native.fused.is_some())
+                .map(|_| [Slot::ConstrainedTerms, Slot::DynamicsTerms])
+                .into_iter()
+                .flatten(),
+        )
+        .chain((0..self.tape.output_rows.len()).map(Slot::OutputRow))
+    }
+
+    /// Compiles every program to native code now (a no-op for [`Backend::Interpreter`]);
+    /// returns how many are native. For benchmarks and tests: models otherwise compile a
+    /// program when it has been called [`NATIVE_AFTER_CALLS`] times.
+    pub fn compile_native(&self) -> usize {
+        let Some(native) = &self.native else {
+            return 0;
+        };
+        self.slots()
+            .filter(|&slot| {
+                native.programs[slot.index()]
+                    .code
+                    .get_or_init(|| JitProgram::compile(self.program(slot)).ok())
+                    .is_some()
+            })
+            .count()
+    }
+
+    fn program(&self, slot: Slot) -> &Program {
+        let tape = &self.tape;
+        match slot {
+            Slot::MassMatrix => &tape.mass_matrix,
+            Slot::Forcing => &tape.forcing,
+            Slot::StaticForcing => tape.static_forcing.as_ref().unwrap_or(&tape.forcing),
+            Slot::Outputs => &tape.outputs,
+            Slot::Constraints => &tape.constraints,
+            Slot::ConstraintJacobian => &tape.constraint_jacobian,
+            Slot::ConstraintBias => &tape.constraint_bias,
+            Slot::Flexures => &tape.flexures,
+            Slot::ConstrainedTerms | Slot::DynamicsTerms => {
+                let fused = self
+                    .native
+                    .as_ref()
+                    .and_then(|native| native.fused.as_ref());
+                let (constrained, dynamics) = fused.expect("fused programs with native code");
+                match slot {
+                    Slot::ConstrainedTerms => constrained,
+                    _ => dynamics,
+                }
+            }
+            Slot::OutputRow(row) => &tape.output_rows[row],
+        }
+    }
+
+    /// Runs a fused program into its parts (`out` of the fused length as scratch).
+    fn run_fused(&self, slot: Slot, env: &Env, parts: &mut [&mut [f64]]) {
+        let lengths = self.fused_lengths(slot);
+        let mut out = std::mem::take(&mut *self.fused_out.borrow_mut());
+        out.resize(lengths.iter().sum(), 0.0);
+        self.run(slot, env, &mut out);
+        let mut rest = &out[..];
+        for (part, &length) in parts.iter_mut().zip(&lengths) {
+            let (values, tail) = rest.split_at(length);
+            for (slot, value) in part.iter_mut().zip(values) {
+                *slot = *value;
+            }
+            rest = tail;
+        }
+        *self.fused_out.borrow_mut() = out;
+    }
+
+    /// The lengths of the parts of a fused program.
+    fn fused_lengths(&self, slot: Slot) -> Vec<usize> {
+        let (nq, nu, nc) = (self.tape.nq, self.tape.nu, self.tape.nc);
+        match slot {
+            Slot::ConstrainedTerms => vec![nu * nu, nu, nc * nq, nc],
+            _ => vec![nu * nu, nu, nc],
+        }
+    }
+
+    /// Whether the fused programs exist (native code).
+    fn fused(&self) -> bool {
+        self.native
+            .as_ref()
+            .is_some_and(|native| native.fused.is_some())
+    }
+
+    fn run(&self, slot: Slot, env: &Env, out: &mut [f64]) {
+        let program = self.program(slot);
+        if let Some(native) = &self.native {
+            let entry = &native.programs[slot.index()];
+            let code = match entry.code.get() {
+                Some(code) => code.as_ref(),
+                None if entry.calls.fetch_add(1, Ordering::Relaxed) >= NATIVE_AFTER_CALLS => entry
+                    .code
+                    .get_or_init(|| JitProgram::compile(program).ok())
+                    .as_ref(),
+                None => None,
+            };
+            if let Some(code) = code {
+                return code.eval(env, &mut self.scratch.borrow_mut(), out);
+            }
+        }
         program.eval(env, &mut self.registers.borrow_mut(), out);
     }
 
-    /// Runs `program` at `(t, q, u, inputs)` into `out`.
-    fn eval(
-        &self,
-        program: &Program,
-        t: f64,
-        q: &[f64],
-        u: &[f64],
-        inputs: &[f64],
-        out: &mut [f64],
-    ) {
-        self.run(program, &self.env(t, q, u, inputs), out);
+    /// Runs the program of `slot` at `(t, q, u, inputs)` into `out`.
+    fn eval(&self, slot: Slot, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]) {
+        self.run(slot, &self.env(t, q, u, inputs), out);
     }
 }
 
@@ -144,19 +397,19 @@ impl mech_runtime::Model for TapeModel {
         }
     }
     fn mass_matrix(&self, t: f64, q: &[f64], inputs: &[f64], out: &mut [f64]) {
-        self.eval(&self.tape.mass_matrix, t, q, &[], inputs, out);
+        self.eval(Slot::MassMatrix, t, q, &[], inputs, out);
     }
     fn forcing(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]) {
-        self.eval(&self.tape.forcing, t, q, u, inputs, out);
+        self.eval(Slot::Forcing, t, q, u, inputs, out);
     }
     fn static_forcing(&self, t: f64, q: &[f64], inputs: &[f64], out: &mut [f64]) {
-        let Some(program) = &self.tape.static_forcing else {
+        if self.tape.static_forcing.is_none() {
             return self.forcing(t, q, &vec![0.0; self.tape.nu], inputs, out);
         };
-        self.eval(program, t, q, &[], inputs, out);
+        self.eval(Slot::StaticForcing, t, q, &[], inputs, out);
     }
     fn outputs(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]) {
-        self.eval(&self.tape.outputs, t, q, u, inputs, out);
+        self.eval(Slot::Outputs, t, q, u, inputs, out);
     }
     fn selected_outputs(
         &self,
@@ -169,11 +422,7 @@ impl mech_runtime::Model for TapeModel {
     ) -> bool {
         let env = self.env(t, q, u, inputs);
         for (&row, value) in which.iter().zip(out.iter_mut()) {
-            self.run(
-                &self.tape.output_rows[row],
-                &env,
-                std::slice::from_mut(value),
-            );
+            self.run(Slot::OutputRow(row), &env, std::slice::from_mut(value));
         }
         true
     }
@@ -184,13 +433,57 @@ impl mech_runtime::Model for TapeModel {
         name_at(&self.constraint_names, i)
     }
     fn constraints(&self, t: f64, q: &[f64], out: &mut [f64]) {
-        self.eval(&self.tape.constraints, t, q, &[], &[], out);
+        self.eval(Slot::Constraints, t, q, &[], &[], out);
     }
     fn constraint_jacobian(&self, t: f64, q: &[f64], out: &mut [f64]) {
-        self.eval(&self.tape.constraint_jacobian, t, q, &[], &[], out);
+        self.eval(Slot::ConstraintJacobian, t, q, &[], &[], out);
     }
     fn constraint_bias(&self, t: f64, q: &[f64], u: &[f64], out: &mut [f64]) {
-        self.eval(&self.tape.constraint_bias, t, q, u, &[], out);
+        self.eval(Slot::ConstraintBias, t, q, u, &[], out);
+    }
+    #[allow(clippy::too_many_arguments)]
+    fn constrained_terms(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        inputs: &[f64],
+        mass: &mut [f64],
+        forcing: &mut [f64],
+        jacobian: &mut [f64],
+        bias: &mut [f64],
+    ) {
+        if !self.fused() {
+            self.mass_matrix(t, q, inputs, mass);
+            self.forcing(t, q, u, inputs, forcing);
+            self.constraint_jacobian(t, q, jacobian);
+            return self.constraint_bias(t, q, u, bias);
+        }
+        let env = self.env(t, q, u, inputs);
+        self.run_fused(
+            Slot::ConstrainedTerms,
+            &env,
+            &mut [mass, forcing, jacobian, bias],
+        );
+    }
+    #[allow(clippy::too_many_arguments)]
+    fn dynamics_terms(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        inputs: &[f64],
+        mass: &mut [f64],
+        forcing: &mut [f64],
+        bias: &mut [f64],
+    ) {
+        if !self.fused() {
+            self.mass_matrix(t, q, inputs, mass);
+            self.forcing(t, q, u, inputs, forcing);
+            return self.constraint_bias(t, q, u, bias);
+        }
+        let env = self.env(t, q, u, inputs);
+        self.run_fused(Slot::DynamicsTerms, &env, &mut [mass, forcing, bias]);
     }
     fn nflexures(&self) -> usize {
         self.tape.nflexures
@@ -199,6 +492,6 @@ impl mech_runtime::Model for TapeModel {
         name_at(&self.flexure_names, i)
     }
     fn flexures(&self, t: f64, q: &[f64], out: &mut [f64]) {
-        self.eval(&self.tape.flexures, t, q, &[], &[], out);
+        self.eval(Slot::Flexures, t, q, &[], &[], out);
     }
 }
