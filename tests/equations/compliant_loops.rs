@@ -253,7 +253,7 @@ fn a_tilted_hinge_equals_one_written_tilted() {
 #[test]
 fn the_hinge_extensions_equal_the_effects_written_by_hand() {
     use common::WrittenEffect;
-    use mech::experiments::leg::{Dof, ForceTest, Leg, Sensor};
+    use mech::experiments::leg::Leg;
     use mech_codegen::ir::transform::hinge::{MISALIGNMENT, OFF_AXIS_COMPLIANCE, TWIST_FACTOR};
 
     let dir = common::scratch_dir("written_hinges");
@@ -264,13 +264,7 @@ fn the_hinge_extensions_equal_the_effects_written_by_hand() {
         }
         leg
     };
-    let blocked = |leg: &Leg| {
-        ForceTest::new(Dof::Swing, 225.0, Sensor::Blocked)
-            .off_axis(0.3)
-            .run(leg)
-            .unwrap()
-            .blocked_force()
-    };
+    let blocked = blocked_swing_force;
     let feet = |leg: &Leg| -> Vec<[f64; 3]> {
         common::feet_along_the_drive(leg)
             .into_iter()
@@ -370,17 +364,11 @@ fn the_hinges_around_each_loop_are_the_shortest_cycles() {
 #[test]
 fn the_twist_axis_search_equals_the_twist_written_by_hand() {
     use common::WrittenEffect;
-    use mech::experiments::leg::{Dof, ForceTest, Leg, Sensor};
+    use mech::experiments::leg::Leg;
     use mech_codegen::ir::transform::hinge::{twist_choice, OFF_AXIS_COMPLIANCE};
 
     let dir = common::scratch_dir("written_loop_twist");
-    let blocked = |leg: &Leg| {
-        ForceTest::new(Dof::Swing, 225.0, Sensor::Blocked)
-            .off_axis(0.3)
-            .run(leg)
-            .unwrap()
-            .blocked_force()
-    };
+    let blocked = blocked_swing_force;
     let c = 1e-4;
     let effect = WrittenEffect::Twist {
         hinges: &[("s3", 0), ("fb1", 2), ("fb2", 2), ("fb3", 0)],
@@ -408,4 +396,14 @@ fn the_twist_axis_search_equals_the_twist_written_by_hand() {
         "blocked swing force: written {written}, searched {same}, opposite {opposite}, \
          base {base}"
     );
+}
+
+/// The blocked swing force at 225 V with the sensor's 30 % side load (N).
+fn blocked_swing_force(leg: &mech::experiments::leg::Leg) -> f64 {
+    use mech::experiments::leg::{Dof, ForceTest, Sensor};
+    ForceTest::new(Dof::Swing, 225.0, Sensor::Blocked)
+        .off_axis(0.3)
+        .run(leg)
+        .unwrap()
+        .blocked_force()
 }
