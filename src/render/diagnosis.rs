@@ -453,6 +453,10 @@ pub fn diagnosis_page(
         files: vec![sources.data.to_path_buf(), json_path],
         ..Outcome::default()
     };
+    if !d.separations.is_empty() {
+        // Right after the ranking, whose tie it is about.
+        outcome.tables.insert(1, separations_table(d));
+    }
     if let Some(screening) = &d.screening {
         // First, above the ranking: what the fits cannot be trusted for.
         outcome.tables.insert(0, flags_table(screening));
@@ -502,6 +506,27 @@ fn flags_table(screening: &Screening) -> Table {
         flags.row(vec!["none".into(), screening.summary()]);
     }
     flags
+}
+
+/// The standard tests scored on how well they would tell the tied causes apart, best first
+/// ([`crate::diagnose::separate`]).
+fn separations_table(d: &Diagnosis) -> Table {
+    let mut table = Table::new(
+        &format!(
+            "Tests that would tell the {} tied causes apart (χ² between the predictions of the \
+             closest two; at least {SEPARATES:.0} separates them)",
+            d.tied
+        ),
+        &["test (noise assumed)", "χ² closest two", "separates"],
+    );
+    for s in &d.separations {
+        table.row(vec![
+            s.probe.clone(),
+            format!("{:.1}", s.chi2),
+            if s.chi2 >= SEPARATES { "yes" } else { "no" }.into(),
+        ]);
+    }
+    table
 }
 
 /// The candidates that could not change the response, and those whose fit failed (each

@@ -210,6 +210,23 @@ fn diagnose_command_writes_the_page_and_the_summary() {
             .unwrap();
     assert_eq!(json["verdict"], "explained");
     assert!(json["summary"].as_str().unwrap().contains("loss factor"));
+    // The tie (a constant and a frequency-dependent loss factor) and the tests that would
+    // separate it: a loss factor changes no static equilibrium, so the force and drive tests
+    // see no difference at all (χ² 0), and only the frequency response separates them.
+    let separations = json["separations"].as_array().unwrap();
+    assert_eq!(separations.len(), 4, "{separations:?}");
+    assert!(
+        separations[0]["probe"]
+            .as_str()
+            .unwrap()
+            .starts_with("the frequency response")
+            && separations[0]["chi2"].as_f64().unwrap() >= 9.0
+            && separations[1..]
+                .iter()
+                .all(|s| s["chi2"].as_f64().unwrap() < 1e-9),
+        "{separations:?}"
+    );
+    assert!(html.contains("Tests that would tell the 2 tied causes apart"));
     // The features, read the same way off the data and both models: the best candidate's
     // resonance and largest gain are closer to the data's than the base model's (the data
     // have η = 0.12 against the model's 0.08), and the held-out RMS falls in both series.
