@@ -7,14 +7,14 @@
 //! "no significant discrepancy", "unexplained", or "flagged" when the screening of the data
 //! (pendulum traces, [`super::pendulum`]) found what no parameter can produce.
 //!
-//! The catalog so far: the parameter changes of the model as written — a flexure's stiffness
-//! off by a factor (every `k_*` torsional stiffness), the loss factor (`eta`), the actuator
-//! preload (`preload`), the modulus of a flexure's material (`E` of the flexure rig, standing
-//! for `E w h³/l`) — and one model-form extension, a frequency-dependent loss factor
-//! `η(f) = η·(f/f_ref)^α` (in the frequency response). The extensions that transform the IR
-//! (twist degrees of freedom with compliant closures, misaligned axes, actuator base
-//! compliance or tip mass, an off-axis load) are not built yet; reports list them as not
-//! tried.
+//! The catalog: the parameter changes of the model as written — a flexure's stiffness off by
+//! a factor (every `k_*` torsional stiffness), the loss factor (`eta`), the actuator preload
+//! (`preload`), the modulus of a flexure's material (`E` of the flexure rig, standing for
+//! `E w h³/l`) — a frequency-dependent loss factor `η(f) = η·(f/f_ref)^α` (in the frequency
+//! response), an off-axis load at the foot (force/deflection), and the model-form extensions
+//! that transform the IR ([`super::extend`]): a hinge's twist, the hinges of one loop twisting
+//! together (their length axes searched first), a misaligned hinge axis, an actuator's base
+//! compliance, stiffness, force, tip mass and preload. `docs/diagnose.md` has the table.
 //!
 //! Ranking: with measurement noise σ given, χ² = Σ((predicted − measured)/σ)². The base model
 //! shows "no significant discrepancy" when its χ² per value is within `1 + 3·√(2/m)` of 1
