@@ -4,21 +4,14 @@
 //!
 //! Consumes: arbitrary bytes from libFuzzer, as the contents of a file.
 //! Produces: nothing; a panic, overflow or timeout is a finding.
+//! The entry point is `entry_points::data_csv`, shared with the test suite's smoke run.
 
 #![no_main]
 
-use std::path::Path;
-
 use libfuzzer_sys::fuzz_target;
-use mech::diagnose::data::MeasuredData;
-use mech::output::parse_csv_table;
 
-fuzz_target!(|data: &[u8]| {
-    let path = Path::new("fuzz.csv");
-    if let Err(errors) = MeasuredData::parse(path, data) {
-        let _ = errors.to_string();
-    }
-    if let Err(error) = parse_csv_table(path, data) {
-        let _ = error.to_string();
-    }
-});
+#[path = "../entry_points.rs"]
+#[allow(dead_code)]
+mod entry_points;
+
+fuzz_target!(|data: &[u8]| entry_points::data_csv(data));

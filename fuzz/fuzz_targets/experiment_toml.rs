@@ -4,19 +4,14 @@
 //!
 //! Consumes: arbitrary bytes from libFuzzer, decoded lossily as UTF-8.
 //! Produces: nothing; a panic, overflow or timeout is a finding.
+//! The entry point is `entry_points::experiment_toml`, shared with the test suite's smoke run.
 
 #![no_main]
 
-use std::path::Path;
-
 use libfuzzer_sys::fuzz_target;
 
-fuzz_target!(|data: &[u8]| {
-    let text = String::from_utf8_lossy(data);
-    if let Err(error) = mech::experiments::parse(&text) {
-        let _ = error.to_string();
-    }
-    if let Err(error) = mech::diagnose::experiment::parse(Path::new("fuzz.toml"), &text) {
-        let _ = error.to_string();
-    }
-});
+#[path = "../entry_points.rs"]
+#[allow(dead_code)]
+mod entry_points;
+
+fuzz_target!(|data: &[u8]| entry_points::experiment_toml(data));

@@ -3,24 +3,14 @@
 //!
 //! Consumes: arbitrary bytes from libFuzzer, decoded lossily as UTF-8.
 //! Produces: nothing; a panic, overflow, stack overflow or timeout is a finding.
+//! The entry point is `entry_points::front_end`, shared with the test suite's smoke run.
 
 #![no_main]
 
-use std::sync::Arc;
-
 use libfuzzer_sys::fuzz_target;
-use mech_codegen::diag::SourceFile;
-use mech_codegen::front;
 
-fuzz_target!(|data: &[u8]| {
-    let text = String::from_utf8_lossy(data).into_owned();
-    match front::load(Arc::new(SourceFile::new("fuzz.mech", text))) {
-        Ok(model) => {
-            let equations = mech_codegen::kane::derive(&model);
-            let _ = mech_codegen::Tape::new(&equations);
-        }
-        Err(errors) => {
-            let _ = errors.to_string();
-        }
-    }
-});
+#[path = "../entry_points.rs"]
+#[allow(dead_code)]
+mod entry_points;
+
+fuzz_target!(|data: &[u8]| entry_points::front_end(data));

@@ -3,34 +3,14 @@
 //!
 //! Consumes: arbitrary bytes from libFuzzer, decoded lossily as UTF-8.
 //! Produces: nothing; a panic, overflow or timeout is a finding.
+//! The entry point is `entry_points::signal_spec`, shared with the test suite's smoke run.
 
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use mech::signal_spec::{file_read, parse_assignment, parse_signal};
-use mech_codegen::ir::Dimension;
 
-const DIMENSIONS: [Dimension; 6] = [
-    Dimension::NONE,
-    Dimension::FORCE,
-    Dimension::TORQUE,
-    Dimension::VOLTAGE,
-    Dimension::LENGTH,
-    Dimension::FREQUENCY,
-];
+#[path = "../entry_points.rs"]
+#[allow(dead_code)]
+mod entry_points;
 
-fuzz_target!(|data: &[u8]| {
-    let text = String::from_utf8_lossy(data);
-    if let Err(error) = parse_assignment(&text) {
-        let _ = error.to_string();
-    }
-    // `csv(PATH, …)` would read whatever file the fuzzer names (`/dev/zero` never ends); the
-    // table reader is the `data_csv` target's.
-    if file_read(&text).is_some() {
-        return;
-    }
-    let dimension = DIMENSIONS[data.first().map_or(0, |b| *b as usize) % DIMENSIONS.len()];
-    if let Err(error) = parse_signal(&text, dimension) {
-        let _ = error.to_string();
-    }
-});
+fuzz_target!(|data: &[u8]| entry_points::signal_spec(data));

@@ -5,73 +5,17 @@
 //! regression case at the end (none so far). docs/fuzzing.md says how to run the fuzzer itself.
 
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, OnceLock};
+use std::sync::OnceLock;
 
-use mech::diagnose::data::MeasuredData;
-use mech::signal_spec::{file_read, parse_assignment, parse_signal};
-use mech_codegen::diag::SourceFile;
+use mech::signal_spec::{parse_assignment, parse_signal};
 use mech_codegen::ir::Dimension;
 use proptest::prelude::*;
 use proptest::sample::Index;
 
-// The entry points, as the fuzz targets call them.
-
-fn front_end(bytes: &[u8]) {
-    let text = String::from_utf8_lossy(bytes).into_owned();
-    match mech_codegen::front::load(Arc::new(SourceFile::new("smoke.mech", text))) {
-        Ok(model) => {
-            let equations = mech_codegen::kane::derive(&model);
-            let _ = mech_codegen::Tape::new(&equations);
-        }
-        Err(errors) => {
-            let _ = errors.to_string();
-        }
-    }
-}
-
-fn data_csv(bytes: &[u8]) {
-    let path = Path::new("smoke.csv");
-    if let Err(errors) = MeasuredData::parse(path, bytes) {
-        let _ = errors.to_string();
-    }
-    if let Err(error) = mech::output::parse_csv_table(path, bytes) {
-        let _ = error.to_string();
-    }
-}
-
-fn experiment_toml(bytes: &[u8]) {
-    let text = String::from_utf8_lossy(bytes);
-    if let Err(error) = mech::experiments::parse(&text) {
-        let _ = error.to_string();
-    }
-    if let Err(error) = mech::diagnose::experiment::parse(Path::new("smoke.toml"), &text) {
-        let _ = error.to_string();
-    }
-}
-
-const DIMENSIONS: [Dimension; 6] = [
-    Dimension::NONE,
-    Dimension::FORCE,
-    Dimension::TORQUE,
-    Dimension::VOLTAGE,
-    Dimension::LENGTH,
-    Dimension::FREQUENCY,
-];
-
-fn signal_spec(bytes: &[u8]) {
-    let text = String::from_utf8_lossy(bytes);
-    if let Err(error) = parse_assignment(&text) {
-        let _ = error.to_string();
-    }
-    // `csv(PATH, …)` reads the file it names; the table reader is `data_csv`'s.
-    if file_read(&text).is_some() {
-        return;
-    }
-    let dimension = DIMENSIONS[bytes.first().map_or(0, |b| *b as usize) % DIMENSIONS.len()];
-    if let Err(error) = parse_signal(&text, dimension) {
-        let _ = error.to_string();
-    }
-}
+// The entry points the fuzz targets call (the same file).
+#[path = "../../fuzz/entry_points.rs"]
+mod entry_points;
+use entry_points::{data_csv, experiment_toml, front_end, signal_spec};
 
 // Seeds: the files fuzz/seed.sh copies into the fuzz corpus.
 
