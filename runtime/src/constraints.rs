@@ -324,6 +324,10 @@ pub fn close(
                 jacobian: true,
             });
         }
+        // Already at the least-squares fit of contradicting rows: no step can do better.
+        if least_squares_floor(&phi, &j_free, options) {
+            return Ok(iteration);
+        }
         let Some(step) = solve_least_squares(&j_free, &(-&phi)) else {
             break;
         };

@@ -293,8 +293,8 @@ impl Leg {
         // The actuator's way that moves the foot in `direction`.
         let sign = direction * self.kinematic_ratio(&self.q0, dof, axis)?.signum();
         let mut q = self.q0.clone();
-        // The foot's travel (along `direction`) at the last three steps.
-        let mut last: Vec<f64> = vec![0.0];
+        // The foot's travel (along `direction`) at the last two closed steps.
+        let (mut before, mut last) = (f64::NAN, 0.0);
         for k in 1..=(travel / STEP).ceil() as usize {
             let mut next = q.clone();
             next[actuator] = self.q0[actuator] + sign * STEP * k as f64;
@@ -308,31 +308,28 @@ impl Leg {
             let moved = closed
                 .ok()
                 .map(|_| direction * (self.foot_at(&next, &inputs)[axis] - rest));
-            match moved {
-                Some(travelled) if travelled > *last.last().unwrap_or(&0.0) => {
-                    last.push(travelled);
+            let limit = match moved {
+                Some(travelled) if travelled > last => {
+                    (before, last) = (last, travelled);
                     q = next;
+                    continue;
                 }
                 // The foot turned back: the vertex of the parabola through the last three.
-                Some(travelled) if last.len() >= 2 => {
-                    let (a, b) = (last[last.len() - 2], last[last.len() - 1]);
-                    let curvature = a - 2.0 * b + travelled;
-                    let offset = 0.5 * (a - travelled) / curvature;
-                    let foot = b - 0.25 * (a - travelled) * offset;
-                    let actuator_travel = STEP * ((k - 1) as f64 + offset);
-                    return Ok(Some(StrokeLimit {
-                        foot,
-                        actuator: actuator_travel,
-                    }));
+                Some(travelled) if before.is_finite() => {
+                    let curvature = before - 2.0 * last + travelled;
+                    let offset = 0.5 * (before - travelled) / curvature;
+                    StrokeLimit {
+                        foot: last - 0.25 * (before - travelled) * offset,
+                        actuator: STEP * ((k - 1) as f64 + offset),
+                    }
                 }
                 // The loops stop closing (or the foot never advanced): the last closed step.
-                _ => {
-                    return Ok(Some(StrokeLimit {
-                        foot: *last.last().unwrap_or(&0.0),
-                        actuator: STEP * (k - 1) as f64,
-                    }))
-                }
-            }
+                _ => StrokeLimit {
+                    foot: last,
+                    actuator: STEP * (k - 1) as f64,
+                },
+            };
+            return Ok(Some(limit));
         }
         Ok(None)
     }

@@ -42,9 +42,10 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
         if let Some(row) = spec.paper.get(dof.name()) {
             // In the colour of the on-axis curve of the paper's way, drawn next.
             let paper = row.parse(&format!("paper.{}", dof.name()))?;
+            let paper_way = compared_test(&results, dof);
             let compared = cases
                 .iter()
-                .position(|(_, test)| Some(test) == compared_test(&results, dof))
+                .position(|(_, test)| Some(test) == paper_way)
                 .unwrap_or(0);
             measured.push(table_iv_points(dof.name(), &paper, curves.len() + compared));
         }
