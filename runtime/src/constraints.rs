@@ -324,13 +324,14 @@ pub fn close(
                 jacobian: true,
             });
         }
-        // Already at the least-squares fit of contradicting rows: no step can do better.
-        if least_squares_floor(&phi, &j_free, options) {
-            return Ok(iteration);
-        }
         let Some(step) = solve_least_squares(&j_free, &(-&phi)) else {
             break;
         };
+        // Next to the least-squares fit of contradicting rows: the Gauss–Newton step itself
+        // predicts no real decrease (for rows that can close it predicts φ ≈ 0); this step
+        // lands on the fit, and is the last.
+        let predicted = &phi + &j_free * &step;
+        let at_floor = phi.amax() <= options.inconsistency && predicted.norm() >= 0.99 * phi.norm();
         let mut scale = 1.0;
         let before = phi.norm();
         let mut trial = q.to_vec();
@@ -351,6 +352,9 @@ pub fn close(
         }
         if scale < 1e-6 {
             break;
+        }
+        if at_floor {
+            return Ok(iteration + 1);
         }
     }
     if phi.amax() <= options.tolerance || least_squares_floor(&phi, &j_free, options) {
