@@ -22,8 +22,8 @@ use crate::flexure_fit::fit::{fit_files, FitOptions, FitReport};
 use crate::flexure_fit::rig::specimen_files;
 use crate::output;
 use crate::render::diagnosis::{
-    dataset_text, diagnosis_page, finite_or_null, ranking_text, screening_json, screening_text,
-    verdict_text, Comparison, PageSources,
+    dataset_text, diagnosis_page, finite_or_null, ranked_on, ranking_text, screening_json,
+    screening_text, verdict_text, Comparison, PageSources,
 };
 
 #[derive(Args, Clone, Debug)]
@@ -45,7 +45,8 @@ pub struct DiagnoseArgs {
     /// Parameters the user lets vary in every model (as `mech fit --fit`).
     #[arg(long = "fit")]
     pub fit: Vec<String>,
-    /// Rows held out of every fit and used to rank: `every:N` (default `every:3`) or `last:P%`.
+    /// Rows held out of every fit and used to rank: `every:N` (default `every:3`), `last:P%`,
+    /// or `none` (a few summary values, e.g. a paper's table: the fitted values rank).
     #[arg(long, default_value = "every:3")]
     pub holdout: String,
     /// Try only the catalog causes whose name contains this (repeatable), e.g. `--cause twist
@@ -77,8 +78,13 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), Error> {
     let holdout = Holdout::parse(&args.holdout)?;
     let d = diagnose_causes(&experiment, &data, &args.fit, holdout, &args.causes)?;
     println!(
-        "{}: {} values fitted, {} held out ({}); noise band: held-out χ²/value ≤ {:.2}",
-        experiment.title, d.train_values, d.holdout_values, args.holdout, d.noise_band
+        "{}: {} values fitted, {} held out ({}); noise band: {} χ²/value ≤ {:.2}",
+        experiment.title,
+        d.train_values,
+        d.holdout_values,
+        args.holdout,
+        ranked_on(&d),
+        d.noise_band
     );
     print!("{}", screening_text(d.screening.as_ref()));
     print!("{}", ranking_text(&d));

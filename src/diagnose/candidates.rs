@@ -52,14 +52,22 @@ pub enum Holdout {
     Every(usize),
     /// The last fraction of the rows (e.g. the top of a frequency band).
     Last(f64),
+    /// Nothing: every value is fitted, and the ranking and the noise band use the fitted
+    /// values' χ² (AICc penalizes the parameters). For a handful of summary values, such as
+    /// a paper's table, where no value can be spared — the causes are then not tested on
+    /// data their fit did not see.
+    Nothing,
 }
 
 impl Holdout {
-    /// `every:3` or `last:30%`.
+    /// `every:3`, `last:30%` or `none`.
     pub fn parse(text: &str) -> Result<Holdout, Error> {
         let bad = || Error::HoldoutSyntax {
             text: text.to_string(),
         };
+        if text.trim() == "none" {
+            return Ok(Holdout::Nothing);
+        }
         match text.split_once(':') {
             Some(("every", n)) => match n.trim().parse::<usize>() {
                 Ok(n) if n >= 2 => Ok(Holdout::Every(n)),
@@ -78,6 +86,7 @@ impl Holdout {
         match self {
             Holdout::Every(n) => row % n == n - 1,
             Holdout::Last(fraction) => (row as f64) >= (1.0 - fraction) * rows as f64,
+            Holdout::Nothing => false,
         }
     }
 }
@@ -143,13 +152,18 @@ impl Candidate {
 pub fn catalog(leg: &Leg, experiment: &Experiment) -> Vec<Candidate> {
     let frequency_response = matches!(experiment.kind, Kind::FrequencyResponse(_));
     let mut out = parameter_candidates(leg, frequency_response);
-    if let Kind::ForceDeflection(test) = &experiment.kind {
+    let off_axis_fraction = match &experiment.kind {
+        Kind::ForceDeflection(test) => Some(test.off_axis_fraction),
+        Kind::ForceDeflectionTable(table) => Some(table.off_axis_fraction),
+        _ => None,
+    };
+    if let Some(fraction) = off_axis_fraction {
         out.push(Candidate::parameter_change(
             "unmodelled off-axis load at the foot",
             "foot (the sensor's y force)".into(),
             vec![(
                 Target::OffAxisFraction,
-                Parameter::new("off_axis_fraction", test.off_axis_fraction)
+                Parameter::new("off_axis_fraction", fraction)
                     .bounded(-1.0, 1.0)
                     .with_scale(0.1),
             )],
@@ -499,6 +513,7 @@ pub struct Diagnosis {
     /// Candidates that could not change the response, or whose fit failed.
     pub inert: Vec<Trial>,
     pub verdict: Verdict,
+    /// Values held out of every fit (0 with `Holdout::Nothing`).
     pub holdout_values: usize,
     pub train_values: usize,
     /// The noise band: held-out χ² per value up to this is consistent with the noise.
@@ -517,6 +532,18 @@ pub struct Diagnosis {
     pub screening: Option<super::pendulum::Screening>,
     /// Per observed value: fitted (true) or held out (false).
     pub train: Vec<bool>,
+}
+
+impl Diagnosis {
+    /// How many values the ranking χ² (`Trial::holdout_chi2`) is over: the held-out ones, or
+    /// every fitted one when nothing is held out.
+    pub fn ranking_values(&self) -> usize {
+        if self.holdout_values == 0 {
+            self.train_values
+        } else {
+            self.holdout_values
+        }
+    }
 }
 
 /// Runs the base model and every candidate (in parallel) on `data`.
@@ -568,7 +595,12 @@ pub fn diagnose_causes(
         cost_above: 0.5 * (base.train_chi2 - 1.0),
     });
     let results = trials.run(jobs.collect()).into_iter();
-    let band = NoiseBand::new(holdout_values);
+    // With nothing held out, the fitted values rank and set the band.
+    let band = NoiseBand::new(if holdout_values == 0 {
+        train_values
+    } else {
+        holdout_values
+    });
     let (ranked_pairs, inert) = sort_out(&base, results);
     let mut ranked_pairs = hold_undetermined(&trials, ranked_pairs);
     // A fit at a bound names no cause: those go after every other (stable: each group keeps
@@ -576,7 +608,7 @@ pub fn diagnose_causes(
     ranked_pairs.sort_by_key(|(_, trial)| trial.at_bound());
     // Without user parameters the base model is not fitted, so every value tests it (a
     // held-out subset alone may miss a narrow resonance).
-    let base_consistent = if user.is_empty() {
+    let base_consistent = if user.is_empty() && holdout_values > 0 {
         NoiseBand::new(train_values + holdout_values).holds_all(&base)
     } else {
         band.holds(&base)
@@ -641,7 +673,8 @@ fn split_values(
         .collect();
     let holdout_values = train.iter().filter(|t| !**t).count();
     let train_values = train.len() - holdout_values;
-    if holdout_values < 2 || train_values < 2 {
+    let too_few_held_out = holdout_values < 2 && holdout != Holdout::Nothing;
+    if too_few_held_out || train_values < 2 {
         return Err(Error::HoldoutTooSmall {
             train: train_values,
             holdout: holdout_values,
@@ -1169,8 +1202,13 @@ impl Trials<'_> {
     /// The trial of `candidate` predicting `predicted` with `k` fitted parameters: χ² on the
     /// fitted and the held-out values, and the training AICc (no parameters listed yet).
     fn judge(&self, candidate: &Candidate, predicted: Vec<f64>, k: usize) -> Trial {
-        let (train_chi2, holdout_chi2) =
-            (self.chi2(&predicted, true), self.chi2(&predicted, false));
+        let train_chi2 = self.chi2(&predicted, true);
+        // Nothing held out (`Holdout::Nothing`): the fitted values rank.
+        let holdout_chi2 = if self.train.iter().all(|t| *t) {
+            train_chi2
+        } else {
+            self.chi2(&predicted, false)
+        };
         let m = self.train.iter().filter(|t| **t).count();
         let aicc = information_criteria(train_chi2 / 2.0, m, k, NoiseModel::Normalized).aicc;
         Trial {

@@ -68,6 +68,18 @@ pub enum Error {
     GainNotPositive { path: PathBuf, line: usize },
     /// A negative sensor distance of a force/deflection test.
     NegativeDistance { path: PathBuf, line: usize },
+    /// A force/deflection table whose data rows are not one per `[[test]]`.
+    TableRows {
+        path: PathBuf,
+        rows: usize,
+        tests: usize,
+    },
+    /// A standard deviation (`…_sd` column) that is zero or negative.
+    SpreadNotPositive {
+        path: PathBuf,
+        line: usize,
+        column: &'static str,
+    },
     /// `--fit TEXT` is neither `NAME` nor `NAME=LO..HI UNIT`.
     FitSyntax { text: String },
     /// A bound of `--fit TEXT` is no quantity; `message` is the unit parser's.
@@ -178,6 +190,14 @@ pub enum KeyError {
     NoChannels,
     /// `off_axis_fraction` outside [-1, 1].
     OffAxisFraction { value: f64 },
+    /// A force/deflection table without `[[test]]` tables.
+    NoTests,
+    /// A `[[test]]`'s `direction` that is not `±z` (lift) or `±x` (swing); `index` 1-based.
+    TestDirection {
+        index: usize,
+        dof: &'static str,
+        text: String,
+    },
     /// A name of `outputs` that is no output of the model.
     UnknownOutput { name: String },
     /// A transfer function's input or output that the model does not have.
@@ -262,6 +282,18 @@ impl fmt::Display for Error {
                  from the foot's rest position along its free motion)",
                 path.display()
             ),
+            Error::TableRows { path, rows, tests } => write!(
+                f,
+                "`{}`: {rows} data rows, but the experiment lists {tests} `[[test]]` tables; \
+                 give one row per test, in the same order",
+                path.display()
+            ),
+            Error::SpreadNotPositive { path, line, column } => write!(
+                f,
+                "`{}`, line {line}, column `{column}`: a standard deviation must be positive \
+                 (it weighs the value in the fit)",
+                path.display()
+            ),
             Error::FitSyntax { text } => write!(
                 f,
                 "--fit `{text}`: expected NAME or NAME=LO..HI UNIT, e.g. `k_s3=10..100 uN*m/rad`"
@@ -286,12 +318,13 @@ impl fmt::Display for Error {
             ),
             Error::HoldoutSyntax { text } => write!(
                 f,
-                "--holdout `{text}`: expected `every:N` (N ≥ 2) or `last:P%` (0 < P < 100)"
+                "--holdout `{text}`: expected `every:N` (N ≥ 2), `last:P%` (0 < P < 100) or \
+                 `none`"
             ),
             Error::HoldoutTooSmall { train, holdout } => write!(
                 f,
                 "the hold-out rule leaves {train} values to fit and {holdout} to test; need at \
-                 least 2 of each"
+                 least 2 of each (or `--holdout none` for a few summary values)"
             ),
             Error::NoNoise => f.write_str(
                 "`mech diagnose` needs the measurement noise in the experiment file (`noise`, \
@@ -393,6 +426,18 @@ impl fmt::Display for KeyError {
                 f,
                 "key `off_axis_fraction`: expected a fraction between -1 and 1, got {value}"
             ),
+            KeyError::NoTests => f.write_str(
+                "no `[[test]]` tables: list each force/deflection test (`dof`, optional \
+                 `direction`), one per data row",
+            ),
+            KeyError::TestDirection { index, dof, text } => {
+                let axis = if *dof == "lift" { 'z' } else { 'x' };
+                write!(
+                    f,
+                    "key `test[{index}].direction`: expected `+{axis}` or `-{axis}` for {dof} \
+                     (the way the foot moved along the test's axis), got `{text}`"
+                )
+            }
             KeyError::UnknownOutput { name } => {
                 write!(f, "key `outputs`: the model has no output `{name}`")
             }
@@ -470,7 +515,7 @@ mod tests {
         );
         assert_eq!(
             Holdout::parse("every:1").unwrap_err().to_string(),
-            "--holdout `every:1`: expected `every:N` (N ≥ 2) or `last:P%` (0 < P < 100)"
+            "--holdout `every:1`: expected `every:N` (N ≥ 2), `last:P%` (0 < P < 100) or `none`"
         );
         let port = |channel: Option<&str>| KeyError::UnknownChannelPort {
             channel: channel.map(str::to_string),

@@ -20,6 +20,12 @@
 //!   the leg driven at `voltage` on `dof` against a sensor at each distance predicts them,
 //!   with the file's off-axis (y) load fraction (seed Sec. V-A, Fig. 6 a, b). A sensor that
 //!   the free foot no longer reaches reads 0.
+//! - `force_deflection_table`: the two numbers a paper's table gives for each force/deflection
+//!   test (seed Table IV), one data row per `[[test]]`: `free_deflection [mm]` (the free
+//!   foot's travel from rest along the test's axis) and `blocked_force [mN]` (the force with
+//!   the sensor at the foot's rest position), each with its standard deviation
+//!   (`free_deflection_sd`, `blocked_force_sd`, the σ of the fit); the same leg test predicts
+//!   them, driven the way the test's `direction` says.
 //! - `pendulum`: columns `time [s]` and the measured angle (`angle [deg]`): a ring-down of a
 //!   model without HAMR ports (the flexure rig), simulated from rest at the release angle
 //!   ([`super::pendulum`], which also screens the trace for what no parameter can fit).
@@ -57,7 +63,31 @@ pub enum Kind {
     QuasiStatic(QuasiStatic),
     FrequencyResponse(FrequencyResponse),
     ForceDeflection(ForceDeflectionTest),
+    ForceDeflectionTable(ForceDeflectionTable),
     Pendulum(Pendulum),
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ForceDeflectionTable {
+    /// Drive voltage of every test, e.g. `"225 V"`.
+    pub voltage: String,
+    /// As [`ForceDeflectionTest::off_axis_fraction`], for every test's blocked force.
+    #[serde(default)]
+    pub off_axis_fraction: f64,
+    /// The tests, one per data row, in order.
+    pub test: Vec<TableTest>,
+}
+
+/// One test of a [`ForceDeflectionTable`].
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TableTest {
+    pub dof: Dof,
+    /// The way the foot moved along the test's axis, `"+z"`/`"-z"` (lift) or `"+x"`/`"-x"`
+    /// (swing); omitted: the way the positive drive moves it.
+    #[serde(default)]
+    pub direction: Option<String>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -236,15 +266,19 @@ impl Experiment {
                 }
             }
             Kind::ForceDeflection(e) => {
-                e.volts()?;
+                volts(&e.voltage)?;
                 if let Some(text) = &e.noise {
                     noise_value("noise", text, Dimension::FORCE)?;
                 }
-                if !(e.off_axis_fraction.is_finite() && e.off_axis_fraction.abs() <= 1.0) {
-                    return Err(KeyError::OffAxisFraction {
-                        value: e.off_axis_fraction,
-                    });
+                check_off_axis(e.off_axis_fraction)?;
+            }
+            Kind::ForceDeflectionTable(e) => {
+                volts(&e.voltage)?;
+                check_off_axis(e.off_axis_fraction)?;
+                if e.test.is_empty() {
+                    return Err(KeyError::NoTests);
                 }
+                e.directions()?;
             }
             Kind::Pendulum(e) => e.check()?,
         }
@@ -258,6 +292,7 @@ impl Experiment {
             Kind::QuasiStatic(e) => e.observations(leg, data),
             Kind::FrequencyResponse(e) => e.observations(leg, data),
             Kind::ForceDeflection(e) => e.observations(leg, data),
+            Kind::ForceDeflectionTable(e) => e.observations(leg, data),
             Kind::Pendulum(e) => e.observations(leg, data),
         }
     }
@@ -288,6 +323,7 @@ impl Experiment {
             Kind::QuasiStatic(e) => e.predict_warm(leg, data, warm),
             Kind::FrequencyResponse(e) => e.predict_warm(leg, data, measured, extensions, warm),
             Kind::ForceDeflection(e) => e.predict_warm(leg, measured, extensions, warm),
+            Kind::ForceDeflectionTable(e) => e.predict_warm(leg, extensions, warm),
             // A frequency-dependent loss factor has no meaning at the one frequency of a
             // ring-down (the catalog leaves it out for every kind but frequency responses).
             Kind::Pendulum(e) => e.predict(leg, data),
@@ -342,7 +378,7 @@ impl QuasiStatic {
             .map(|name| model.output_index(name).expect("checked by observations"))
             .collect();
         let mut per_output = vec![Vec::with_capacity(rows); outputs.len()];
-        let mut q = leg.q0.clone();
+        let mut q = leg.rest_start.clone();
         let mut y = vec![0.0; model.noutputs()];
         let u = vec![0.0; model.nu()];
         for row in 0..rows {
@@ -435,7 +471,7 @@ impl FrequencyResponse {
         leg.require_hamr().map_err(Error::leg)?;
         let rest_inputs = leg.inputs(0.0, 0.0);
         let rest = leg
-            .warm_equilibrium(warm, 0, &leg.q0, &rest_inputs, &[], &[])
+            .warm_equilibrium(warm, 0, &leg.rest_start, &rest_inputs, &[], &[])
             .map_err(Error::leg)?
             .q;
         let linear = mech_runtime::linearize(model, 0.0, &rest, &rest_inputs, &leg.independent)
@@ -514,27 +550,133 @@ impl ForceDeflectionTest {
             .off_axis_fraction
             .unwrap_or(self.off_axis_fraction);
         let distances = measured.abscissa.clone();
-        let test = ForceTest::new(self.dof, self.volts()?, Sensor::At(distances))
+        let test = ForceTest::new(self.dof, volts(&self.voltage)?, Sensor::At(distances))
             .off_axis(fraction)
             .run_warm(leg, warm)
             .map_err(Error::leg)?;
         // A sensor beyond the free foot's reach is not touched: it reads 0.
         Ok(test.points.iter().map(|p| p.force.max(0.0)).collect())
     }
+}
 
-    fn volts(&self) -> Result<f64, KeyError> {
-        let key = "voltage";
-        let text = || self.voltage.clone();
-        let (value, dimension) = mech_codegen::front::units::parse_quantity(&self.voltage)
-            .map_err(|message| KeyError::Quantity {
-                key,
-                text: text(),
-                message,
-            })?;
-        if dimension != Dimension::VOLTAGE || !value.is_finite() {
-            return Err(KeyError::NotVoltage { key, text: text() });
+/// The sensor's y load fraction of a force/deflection test, within [-1, 1].
+fn check_off_axis(fraction: f64) -> Result<(), KeyError> {
+    if fraction.is_finite() && fraction.abs() <= 1.0 {
+        Ok(())
+    } else {
+        Err(KeyError::OffAxisFraction { value: fraction })
+    }
+}
+
+/// The key `voltage` of a force/deflection kind, in volts.
+fn volts(text: &str) -> Result<f64, KeyError> {
+    let key = "voltage";
+    let (value, dimension) =
+        mech_codegen::front::units::parse_quantity(text).map_err(|message| KeyError::Quantity {
+            key,
+            text: text.to_string(),
+            message,
+        })?;
+    if dimension != Dimension::VOLTAGE || !value.is_finite() {
+        return Err(KeyError::NotVoltage {
+            key,
+            text: text.to_string(),
+        });
+    }
+    Ok(value)
+}
+
+impl ForceDeflectionTable {
+    /// Each test's `direction` as ±1 (`None`: as the positive drive moves the foot).
+    fn directions(&self) -> Result<Vec<Option<f64>>, KeyError> {
+        self.test
+            .iter()
+            .enumerate()
+            .map(|(k, test)| match &test.direction {
+                None => Ok(None),
+                Some(text) => {
+                    test.dof
+                        .direction(text)
+                        .map(Some)
+                        .ok_or_else(|| KeyError::TestDirection {
+                            index: k + 1,
+                            dof: test.dof.name(),
+                            text: text.clone(),
+                        })
+                }
+            })
+            .collect()
+    }
+
+    /// Per test (data row), the free deflection, then per test the blocked force, each with
+    /// the σ of its `_sd` column.
+    fn observations(&self, leg: &Leg, data: &MeasuredData) -> Result<Observations, Error> {
+        leg.require_hamr().map_err(Error::leg)?;
+        if data.rows != self.test.len() {
+            return Err(Error::TableRows {
+                path: data.path.clone(),
+                rows: data.rows,
+                tests: self.test.len(),
+            });
         }
-        Ok(value)
+        let mut obs = Observations::default();
+        let mut sigma = Vec::new();
+        for (column, dimension) in [
+            ("free_deflection", Dimension::LENGTH),
+            ("blocked_force", Dimension::FORCE),
+        ] {
+            let values = data.require(column, dimension)?;
+            let sd_column = if column == "free_deflection" {
+                "free_deflection_sd"
+            } else {
+                "blocked_force_sd"
+            };
+            let spreads = data.require(sd_column, dimension)?;
+            for (row, (&value, &sd)) in values.iter().zip(spreads).enumerate() {
+                if sd <= 0.0 {
+                    return Err(Error::SpreadNotPositive {
+                        path: data.path.clone(),
+                        line: data.lines.get(row).copied().unwrap_or(0),
+                        column: sd_column,
+                    });
+                }
+                obs.values.push(value);
+                obs.series
+                    .push(format!("{column}.{}", self.test[row].dof.name()));
+                obs.abscissa.push(row as f64);
+                obs.row.push(row);
+                sigma.push(sd);
+            }
+        }
+        obs.sigma = Some(sigma);
+        Ok(obs)
+    }
+
+    /// Each test's free deflection, then each one's blocked force (with the off-axis load),
+    /// the foot driven the way the test's direction says.
+    fn predict_warm(
+        &self,
+        leg: &Leg,
+        extensions: &Extensions,
+        warm: &mut WarmStarts,
+    ) -> Result<Vec<f64>, Error> {
+        leg.require_hamr().map_err(Error::leg)?;
+        let fraction = extensions
+            .off_axis_fraction
+            .unwrap_or(self.off_axis_fraction);
+        let voltage = volts(&self.voltage)?;
+        let mut deflections = Vec::with_capacity(self.test.len());
+        let mut forces = Vec::with_capacity(self.test.len());
+        for ((k, test), direction) in self.test.iter().enumerate().zip(self.directions()?) {
+            let result = ForceTest::new(test.dof, voltage, Sensor::Blocked)
+                .off_axis(fraction)
+                .run_toward(leg, direction, warm.part(k))
+                .map_err(Error::leg)?;
+            deflections.push(result.free_deflection);
+            forces.push(result.blocked_force());
+        }
+        deflections.extend(forces);
+        Ok(deflections)
     }
 }
 

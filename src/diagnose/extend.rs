@@ -107,7 +107,13 @@ pub fn extend_leg(base: &Compiled, spec: &ModelSpec, extension: &Extension) -> R
                 error: Box::new(error),
             }
         })?;
-    Leg::from_session(session, spec, &[]).map_err(Error::leg)
+    let mut leg = Leg::from_session(session, spec, &[]).map_err(Error::leg)?;
+    // The base model's rest is a start its extension's Newton reaches (`Leg::rest_start`).
+    let base = base_leg(base, spec)?;
+    if let Ok(rest) = base.equilibrium(&base.q0, &base.inputs(0.0, 0.0), &[]) {
+        leg.start_rest_at(&base, &rest.q);
+    }
+    Ok(leg)
 }
 
 /// Transforms `model` in place by the IR transform of [`hinge`] or [`actuator`]; the new

@@ -6,7 +6,8 @@
 //! per frequency-response channel the low-frequency gain and phase, the largest gain, the
 //! resonance frequency and its quality factor (where the sampling resolves it); for
 //! force/deflection the blocked force and the free deflection (each from the points nearest
-//! its end of the curve: [`force_ends`]); per quasi-static
+//! its end of the curve: [`force_ends`]); for a force/deflection table its values; per
+//! quasi-static
 //! output its peak-to-peak range; for a ring-down its natural frequency and quality factor
 //! (`mech flexure fit`'s trace analysis). Also [`series_rms`]: the residual RMS per series.
 //!
@@ -73,6 +74,18 @@ pub fn features(
             .flat_map(|suffix| channel_features(&curves, suffix))
             .collect(),
         Kind::ForceDeflection(_) => force_deflection_features(&curves),
+        // The values are the features: one per test and quantity.
+        Kind::ForceDeflectionTable(_) => (0..values.len())
+            .map(|k| {
+                let name = &observations.series[k];
+                let (unit, scale) = if name.starts_with("free_deflection") {
+                    ("mm", 1e3)
+                } else {
+                    ("mN", 1e3)
+                };
+                Feature::new(name.replace('_', " "), Some(values[k]), unit, scale)
+            })
+            .collect(),
         Kind::QuasiStatic(_) => observations
             .series_names()
             .into_iter()

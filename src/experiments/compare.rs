@@ -8,7 +8,7 @@ use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
 use super::force::{actuator_work, check_paper, PaperRow};
-use super::leg::{Dof, ForceDeflection, ForceTest, Leg, Sensor};
+use super::leg::{Dof, ForceDeflection, ForceTest, Leg, Sensor, WarmStarts};
 use super::Error;
 use crate::parallel::parallel;
 use crate::quantity::positive;
@@ -71,17 +71,15 @@ pub fn compute(spec: &Spec, voltage: f64) -> Result<Vec<RobotTests>, Error> {
             // The foot moving the way of the paper's test (the drive reversed when the
             // positive one moves it the other way: the lift test pushes the foot down).
             let tests = [Dof::Lift, Dof::Swing].map(|dof| {
-                let forward = ForceTest::new(dof, voltage, Sensor::Blocked).run(&leg)?;
                 let wanted = match robot.paper.get(dof.name()) {
                     Some(row) => row.parse(&format!("paper.{}", dof.name()))?.direction,
                     None => None,
                 };
-                match wanted {
-                    Some(way) if way != forward.direction => {
-                        ForceTest::new(dof, -voltage, Sensor::Blocked).run(&leg)
-                    }
-                    _ => Ok(forward),
-                }
+                ForceTest::new(dof, voltage, Sensor::Blocked).run_toward(
+                    &leg,
+                    wanted,
+                    &mut WarmStarts::default(),
+                )
             });
             Ok((fbdf, tests))
         },

@@ -84,23 +84,20 @@ impl PaperRow {
 
 /// `"+z"` → +1 for the key `….lift` (the lift axis is z; swing's is x).
 fn parse_direction(key: &str, text: &str) -> Result<f64, Error> {
-    let axis = if key.ends_with("lift") { 'z' } else { 'x' };
-    let bad = || Error::Key {
-        message: format!(
-            "key `{key}.direction`: expected `+{axis}` or `-{axis}` (the way the foot moved \
-             along the test's axis), got `{text}`"
-        ),
+    let dof = if key.ends_with("lift") {
+        Dof::Lift
+    } else {
+        Dof::Swing
     };
-    let mut chars = text.trim().chars();
-    let sign = match chars.next() {
-        Some('+') => 1.0,
-        Some('-') => -1.0,
-        _ => return Err(bad()),
-    };
-    match (chars.next(), chars.next()) {
-        (Some(a), None) if a == axis => Ok(sign),
-        _ => Err(bad()),
-    }
+    dof.direction(text).ok_or_else(|| {
+        let axis = if dof == Dof::Lift { 'z' } else { 'x' };
+        Error::Key {
+            message: format!(
+                "key `{key}.direction`: expected `+{axis}` or `-{axis}` (the way the foot moved \
+                 along the test's axis), got `{text}`"
+            ),
+        }
+    })
 }
 
 pub(crate) fn check_paper(paper: &BTreeMap<String, PaperRow>, prefix: &str) -> Result<(), Error> {

@@ -54,6 +54,21 @@ impl Dof {
             Dof::Swing => 0,
         }
     }
+    /// `"+z"`/`"-z"` (lift) or `"+x"`/`"-x"` (swing): the way the foot moves along the
+    /// dof's axis, as ±1; `None` for any other text.
+    pub fn direction(self, text: &str) -> Option<f64> {
+        let axis = if self.axis() == 2 { 'z' } else { 'x' };
+        let mut chars = text.trim().chars();
+        let sign = match chars.next() {
+            Some('+') => 1.0,
+            Some('-') => -1.0,
+            _ => return None,
+        };
+        match (chars.next(), chars.next()) {
+            (Some(a), None) if a == axis => Some(sign),
+            _ => None,
+        }
+    }
     /// The crank-arm parameter (`l_i`, `s_i`) that sets the transmission ratio.
     pub fn arm(self) -> &'static str {
         match self {
@@ -72,6 +87,12 @@ pub struct Leg {
     ports: Option<Ports>,
     /// The assembled initial state (loops closed, no load).
     pub q0: Vec<f64>,
+    /// Where a rest equilibrium's Newton starts: `q0`, or for a model extension the base
+    /// model's rest with the new coordinates at 0 ([`Leg::start_rest_at`]). From `q0`, a
+    /// leg with stiff off-axis springs and a preload (HAMR-V2.0) must move its hinges by
+    /// 0.08 rad through nonlinear kinematics that couple into the stiff directions, and
+    /// Newton's halved steps stall; from the base model's rest it converges in 2–3.
+    pub rest_start: Vec<f64>,
 }
 
 /// A HAMR leg's drive inputs and foot output (indices into the model's inputs and outputs).
@@ -134,10 +155,29 @@ impl Leg {
         let state = session.assemble(&independent)?;
         Ok(Leg {
             independent: state.independent.clone(),
+            rest_start: state.q.clone(),
             q0: state.q,
             session,
             ports,
         })
+    }
+
+    /// Starts rest equilibria at `rest` of `other` (another model of the same mechanism,
+    /// e.g. the one this leg extends), coordinate by name; coordinates `other` lacks keep
+    /// their `q0` values. Kept only if the loops close there (else `q0` stays the start).
+    pub fn start_rest_at(&mut self, other: &Leg, rest: &[f64]) {
+        let model = self.model();
+        let mut start = self.q0.clone();
+        for (i, value) in start.iter_mut().enumerate() {
+            if let Some(j) = other.model().coordinate_index(model.coordinate_name(i)) {
+                *value = rest[j];
+            }
+        }
+        let mut phi = vec![0.0_f64; model.nc()];
+        model.constraints(0.0, &start, &mut phi);
+        if phi.iter().all(|p| p.abs() <= 1e-9) {
+            self.rest_start = start;
+        }
     }
 
     /// An error naming the model unless the leg has HAMR's drive inputs `v_lift` and
@@ -399,6 +439,18 @@ fn hamr_ports(model: &dyn Model, shown: &str) -> Result<Ports, Error> {
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct WarmStarts {
     slots: Vec<Option<Vec<f64>>>,
+    /// The warm starts of the separate sweeps of one prediction (one per test).
+    parts: Vec<WarmStarts>,
+}
+
+impl WarmStarts {
+    /// The warm starts of the `index`-th of several sweeps predicted together.
+    pub fn part(&mut self, index: usize) -> &mut WarmStarts {
+        if self.parts.len() <= index {
+            self.parts.resize_with(index + 1, WarmStarts::default);
+        }
+        &mut self.parts[index]
+    }
 }
 
 /// One sensor position of a force/deflection test.
@@ -517,6 +569,27 @@ impl ForceTest {
         self.run_warm(leg, &mut WarmStarts::default())
     }
 
+    /// The test with the foot moving the way `direction` (±1 along the axis) says: run at
+    /// `voltage`, and again at `−voltage` when that moves the foot the other way (the paper
+    /// pushes HAMR's lift foot down onto a sensor under the leg). `None`: as driven. Warm
+    /// starts: `warm.part(0)` forward, `warm.part(1)` reversed.
+    pub fn run_toward(
+        &self,
+        leg: &Leg,
+        direction: Option<f64>,
+        warm: &mut WarmStarts,
+    ) -> Result<ForceDeflection, Error> {
+        let forward = self.run_warm(leg, warm.part(0))?;
+        match direction {
+            Some(way) if way != forward.direction => ForceTest {
+                voltage: -self.voltage,
+                ..self.clone()
+            }
+            .run_warm(leg, warm.part(1)),
+            _ => Ok(forward),
+        }
+    }
+
     /// [`ForceTest::run`] with each equilibrium started from its counterpart in `warm`
     /// (and recorded there): slots 0 rest, 1 free, 2 + k the k-th sensor position.
     pub fn run_warm(&self, leg: &Leg, warm: &mut WarmStarts) -> Result<ForceDeflection, Error> {
@@ -529,7 +602,7 @@ impl ForceTest {
         let axis = dof.axis();
         let rest_inputs = leg.inputs(0.0, 0.0);
         let rest_q = leg
-            .warm_equilibrium(warm, 0, &leg.q0, &rest_inputs, &[], &[])?
+            .warm_equilibrium(warm, 0, &leg.rest_start, &rest_inputs, &[], &[])?
             .q;
         let rest = leg.foot_at(&rest_q, &rest_inputs);
         let inputs = leg.drive(dof, voltage);

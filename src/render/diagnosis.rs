@@ -154,6 +154,8 @@ pub fn overlay_plots(
         Kind::FrequencyResponse(_) => ("frequency [Hz]", 1.0, "", 1.0),
         Kind::QuasiStatic(_) => ("data row", 1.0, " [m]", 1.0),
         Kind::ForceDeflection(_) => ("sensor distance [µm]", 1e6, " [mN]", 1e3),
+        // One value per series: the features table shows them beside the models.
+        Kind::ForceDeflectionTable(_) => return Ok(Vec::new()),
         Kind::Pendulum(_) => ("time [s]", 1.0, " [rad]", 1.0),
     };
     // The models in the palette's colours after the data's (0).
@@ -212,7 +214,7 @@ pub fn overlay_plots(
 /// The ranking as terminal text: the base model, the candidates best first, the second
 /// round and the inert candidates, each with its χ² and fitted values.
 pub fn ranking_text(d: &Diagnosis) -> String {
-    let per = |chi2: f64| chi2 / d.holdout_values as f64;
+    let per = |chi2: f64| chi2 / d.ranking_values() as f64;
     let mut text = format!(
         "\n{:<36} {:<16} {:>12} {:>12} {:>10}  fitted\n",
         "cause", "where", "χ² fit", "χ²/value out", "ΔAICc"
@@ -257,6 +259,15 @@ pub fn ranking_text(d: &Diagnosis) -> String {
     text
 }
 
+/// The values the ranking χ² is over: `held-out`, or `fitted` when nothing is held out.
+pub fn ranked_on(d: &Diagnosis) -> &'static str {
+    if d.holdout_values == 0 {
+        "fitted"
+    } else {
+        "held-out"
+    }
+}
+
 /// The trials set aside, split: those whose fit failed (with the error), and the inert.
 fn inert_and_failed(d: &Diagnosis) -> (Vec<&Trial>, Vec<&Trial>) {
     d.inert.iter().partition(|t| t.error.is_some())
@@ -264,10 +275,11 @@ fn inert_and_failed(d: &Diagnosis) -> (Vec<&Trial>, Vec<&Trial>) {
 
 /// The verdict in one sentence: the cause with its held-out gain, a tie, a flag, or none.
 pub fn verdict_text(d: &Diagnosis) -> String {
-    let per = |chi2: f64| chi2 / d.holdout_values as f64;
+    let per = |chi2: f64| chi2 / d.ranking_values() as f64;
     let gain = |t: &Trial| {
         format!(
-            "held-out χ²/value {:.2} → {:.2}",
+            "{} χ²/value {:.2} → {:.2}",
+            ranked_on(d),
             per(d.base.holdout_chi2),
             per(t.holdout_chi2)
         )
@@ -275,7 +287,7 @@ pub fn verdict_text(d: &Diagnosis) -> String {
     let named = d.combined.as_ref().or(d.ranked.first());
     match (&d.verdict, named) {
         (Verdict::NoSignificantDiscrepancy, _) => {
-            "no significant discrepancy: the model as written explains the held-out data to the noise".to_string()
+            format!("no significant discrepancy: the model as written explains the {} data to the noise", ranked_on(d))
         }
         (Verdict::Explained, Some(best)) => format!(
             "cause: {} ({}, {:+.0} %)",
@@ -314,7 +326,9 @@ pub fn verdict_text(d: &Diagnosis) -> String {
                 None => String::new(),
             }
         ),
-        _ => "unexplained: the residual is above the noise and no candidate explains it".to_string(),
+        _ => {
+            "unexplained: the residual is above the noise and no candidate explains it".to_string()
+        }
     }
 }
 
@@ -414,7 +428,7 @@ pub fn diagnosis_page(
     comparison: &Comparison,
     json_path: PathBuf,
 ) -> Result<Vec<File>, Error> {
-    let per = |chi2: f64| chi2 / d.holdout_values as f64;
+    let per = |chi2: f64| chi2 / d.ranking_values() as f64;
     let mut ranking = Table::new(
         "Candidates, best first (χ² on the fitted values; χ² per value on the held-out ones)",
         &[
@@ -566,8 +580,11 @@ pub struct Comparison {
     pub best_label: Option<String>,
     /// Per feature: the data's, the base model's, the best candidate's.
     features: Vec<(Feature, Feature, Option<Feature>)>,
-    /// Held-out residual RMS per series: base model (`before`) and best (`after`).
+    /// Residual RMS per series on the ranking values: base model (`before`) and best
+    /// (`after`).
     rms: Vec<SeriesResidual>,
+    /// The values the RMS is over ([`ranked_on`]).
+    rms_on: &'static str,
 }
 
 impl Comparison {
@@ -589,7 +606,8 @@ impl Comparison {
                 (data, base, best)
             })
             .collect();
-        let held_out = |k: usize| !d.train.get(k).copied().unwrap_or(true);
+        // The values that rank: the held-out ones, or all when nothing is held out.
+        let held_out = |k: usize| d.holdout_values == 0 || !d.train.get(k).copied().unwrap_or(true);
         let rms = match best {
             Some(best) => series_rms(
                 &d.observations,
@@ -615,6 +633,7 @@ impl Comparison {
             best_label: best.map(cause_at),
             features,
             rms,
+            rms_on: ranked_on(d),
         }
     }
 
@@ -662,7 +681,10 @@ impl Comparison {
                 row[0], row[1], row[2], row[3]
             );
         }
-        text += "residual RMS on the held-out values (SI units; ln|H| relative):\n";
+        text += &format!(
+            "residual RMS on the {} values (SI units; ln|H| relative):\n",
+            self.rms_on
+        );
         for r in &self.rms {
             let [before, after, change] = Self::rms_cells(r);
             text += &format!(
@@ -721,8 +743,12 @@ impl Comparison {
     }
 
     fn rms_table(&self) -> Table {
+        let title = format!(
+            "Residual RMS on the {} values (SI units; ln|H| relative)",
+            self.rms_on
+        );
         let mut table = Table::new(
-            "Residual RMS on the held-out values (SI units; ln|H| relative)",
+            &title,
             &["series", "base model", "best candidate", "change"],
         );
         for r in &self.rms {
