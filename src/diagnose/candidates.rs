@@ -456,6 +456,9 @@ pub struct Trial {
     pub error: Option<String>,
     /// The prediction of every observed value with the fitted parameters.
     pub predicted: Vec<f64>,
+    /// The model-form change fitted (`None`: the model's own parameters only), to rebuild
+    /// the extended model with `parameters` for other analyses.
+    pub extension: Option<Extension>,
 }
 
 impl Trial {
@@ -925,6 +928,7 @@ fn sort_out(
             inert: true,
             error: Some(e.to_string()),
             predicted: Vec::new(),
+            extension: candidate.extension.clone(),
         });
         // Fitting it must lower the training χ² by at least 1 (one σ² in total): a smaller
         // change is below what the noise (and the predictions' own ~1e-5 relative numerical
@@ -1221,6 +1225,7 @@ impl Trials<'_> {
             inert: false,
             error: None,
             predicted,
+            extension: candidate.extension.clone(),
         }
     }
 }

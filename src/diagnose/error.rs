@@ -534,6 +534,43 @@ mod tests {
         assert_eq!(wrapped, "key `outputs`: name at least one measured output");
     }
 
+    /// A force/deflection table's keys: `--holdout none`, each test's direction, the tests.
+    #[test]
+    fn table_keys_are_checked_with_the_key_named() {
+        assert_eq!(Holdout::parse("none").unwrap(), Holdout::Nothing);
+        let parse = |text: &str| {
+            crate::diagnose::experiment::parse(
+                std::path::Path::new("t.toml"),
+                &format!(
+                    "kind = \"force_deflection_table\"\ntitle = \"t\"\nmodel = \"m.mech\"\n\
+                     voltage = \"225 V\"\n{text}"
+                ),
+            )
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+        };
+        assert_eq!(
+            parse("[[test]]\ndof = \"lift\"\ndirection = \"-x\"\n"),
+            Err(
+                "experiment `t.toml`: key `test[1].direction`: expected `+z` or `-z` for lift \
+                 (the way the foot moved along the test's axis), got `-x`"
+                    .into()
+            )
+        );
+        assert_eq!(
+            parse("test = []\n"),
+            Err(
+                "experiment `t.toml`: no `[[test]]` tables: list each force/deflection test \
+                 (`dof`, optional `direction`), one per data row"
+                    .into()
+            )
+        );
+        assert_eq!(
+            parse("[[test]]\ndof = \"swing\"\ndirection = \"+x\"\n"),
+            Ok(())
+        );
+    }
+
     /// A fit's failure shows the parameter values without Rust's debug notation.
     #[test]
     fn fit_errors_show_plain_numbers() {

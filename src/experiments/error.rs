@@ -64,6 +64,8 @@ pub enum Error {
     },
     /// Boxed, as in `Model`: a session error is large and these errors travel by value.
     Session(Box<session::Error>),
+    /// A diagnosis of the paper's values (`table_diagnosis`) failed.
+    Diagnosis(Box<crate::diagnose::Error>),
     /// The model lacks a port the HAMR experiments drive or read.
     NotHamr {
         model: String,
@@ -148,6 +150,7 @@ impl fmt::Display for Error {
             Error::In { part, error } => write!(f, "{part}: {error}"),
             Error::Model { model, error } => write!(f, "model `{}`: {error}", model.display()),
             Error::Session(error) => write!(f, "{error}"),
+            Error::Diagnosis(error) => write!(f, "{error}"),
             Error::NotHamr { model, missing } => write!(f, "model `{model}` has no {missing}"),
             Error::NoParameter {
                 model,

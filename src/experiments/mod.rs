@@ -3,7 +3,7 @@
 //! and run by `mech experiment FILE` or all together by `mech report`.
 //!
 //! Consumes: an experiment file (`kind = "trajectory" | "force_deflection" | "ratio_sweep" |
-//! "compare" | "bode"`, see `docs/experiments.md`) naming a `.mech` model and its settings.
+//! "compare" | "bode" | "table_diagnosis"`, see `docs/experiments.md`) naming a `.mech` model and its settings.
 //! Produces: each kind's `compute` returns its results as plain data (equilibria, forces,
 //! sweeps, responses); [`crate::render::experiments`] turns them into an `Outcome` (tables
 //! of the model beside the paper's measured values, notes, CSV files and plots, named key
@@ -18,6 +18,7 @@ pub mod error;
 pub mod force;
 pub mod leg;
 pub mod sweep;
+pub mod table_diagnosis;
 pub mod trajectory;
 
 use std::path::{Path, PathBuf};
@@ -46,6 +47,7 @@ pub enum Kind {
     RatioSweep(sweep::Spec),
     Compare(compare::Spec),
     Bode(bode::Spec),
+    TableDiagnosis(table_diagnosis::Spec),
 }
 
 /// Reads and checks an experiment file. Errors name the file and the key.
@@ -91,6 +93,7 @@ impl Experiment {
             Kind::RatioSweep(s) => s.check(),
             Kind::Compare(s) => s.check(),
             Kind::Bode(s) => s.check(),
+            Kind::TableDiagnosis(s) => s.check(),
         }
     }
 
@@ -99,6 +102,8 @@ impl Experiment {
         match &self.kind {
             Kind::Bode(s) => 1.0 + s.chirp.as_ref().map_or(0.0, |c| c.cost()),
             Kind::RatioSweep(_) => 4.0,
+            // Two diagnoses over the whole catalog, ~1 min each.
+            Kind::TableDiagnosis(_) => 8.0,
             _ => 1.0,
         }
     }

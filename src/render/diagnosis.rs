@@ -386,7 +386,7 @@ fn named_cause(d: &Diagnosis, best: &Trial) -> String {
 /// `NAME = value ± σ (nominal …)` for a fitted parameter of a trial; a fit that ran into a
 /// bound has no standard error (NaN), and says where it stopped instead; a parameter held
 /// fixed (standard error 0: the data do not determine it) says so.
-fn fitted_text((name, nominal, value, se): &(String, f64, f64, f64)) -> String {
+pub fn fitted_text((name, nominal, value, se): &(String, f64, f64, f64)) -> String {
     if *se == 0.0 {
         format!("{name} held at its starting value {value:.4e} (not determined by these data)")
     } else if se.is_nan() {

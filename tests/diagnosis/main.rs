@@ -10,3 +10,4 @@ mod diagnose;
 mod diagnose_catalog;
 mod pendulum_diagnose;
 mod separation;
+mod table;
