@@ -38,8 +38,8 @@ use serde::Deserialize;
 
 use super::data::MeasuredData;
 use super::error::{Error, KeyError};
-use super::observations::noise_value;
 pub use super::observations::Observations;
+use super::observations::{key_quantity, noise_value};
 use super::pendulum::{self, Pendulum, Screening};
 use crate::experiments::leg::{Dof, ForceTest, Leg, Sensor, WarmStarts};
 use crate::frequency::Channel;
@@ -570,20 +570,9 @@ fn check_off_axis(fraction: f64) -> Result<(), KeyError> {
 
 /// The key `voltage` of a force/deflection kind, in volts.
 fn volts(text: &str) -> Result<f64, KeyError> {
-    let key = "voltage";
-    let (value, dimension) =
-        mech_codegen::front::units::parse_quantity(text).map_err(|message| KeyError::Quantity {
-            key,
-            text: text.to_string(),
-            message,
-        })?;
-    if dimension != Dimension::VOLTAGE || !value.is_finite() {
-        return Err(KeyError::NotVoltage {
-            key,
-            text: text.to_string(),
-        });
-    }
-    Ok(value)
+    key_quantity("voltage", text, Dimension::VOLTAGE, |key, text| {
+        KeyError::NotVoltage { key, text }
+    })
 }
 
 impl ForceDeflectionTable {

@@ -2,7 +2,7 @@
 //! with their σ, series and abscissa, and the noise levels experiment files give.
 //!
 //! Consumes: nothing of the other diagnosis modules but their error type. Produces:
-//! [`Observations`] and [`noise_value`].
+//! [`Observations`], [`noise_value`] and [`key_quantity`].
 
 use mech_codegen::ir::Dimension;
 
@@ -88,4 +88,24 @@ pub fn noise_value(key: &'static str, text: &str, expected: Dimension) -> Result
             text: text.to_string(),
         })
     }
+}
+
+/// The key `key` of an experiment file as a finite quantity of dimension `expected` (SI);
+/// `wrong` makes the error for another dimension or a non-finite value.
+pub fn key_quantity(
+    key: &'static str,
+    text: &str,
+    expected: Dimension,
+    wrong: fn(&'static str, String) -> KeyError,
+) -> Result<f64, KeyError> {
+    let (value, dimension) =
+        mech_codegen::front::units::parse_quantity(text).map_err(|message| KeyError::Quantity {
+            key,
+            text: text.to_string(),
+            message,
+        })?;
+    if dimension != expected || !value.is_finite() {
+        return Err(wrong(key, text.to_string()));
+    }
+    Ok(value)
 }

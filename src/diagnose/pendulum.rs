@@ -27,7 +27,7 @@ use serde::Deserialize;
 
 use super::data::MeasuredData;
 use super::error::{Error, KeyError};
-use super::observations::{noise_value, Observations};
+use super::observations::{key_quantity, noise_value, Observations};
 use crate::experiments::leg::Leg;
 use crate::flexure_fit::trace::{analyze_trace, TraceOptions};
 
@@ -207,20 +207,9 @@ fn is_angle_unit(unit: &str) -> bool {
 }
 
 fn release_value(text: &str) -> Result<f64, KeyError> {
-    let key = "release";
-    let (value, dimension) =
-        mech_codegen::front::units::parse_quantity(text).map_err(|message| KeyError::Quantity {
-            key,
-            text: text.to_string(),
-            message,
-        })?;
-    if dimension != Dimension::NONE || !value.is_finite() {
-        return Err(KeyError::NotAngle {
-            key,
-            text: text.to_string(),
-        });
-    }
-    Ok(value)
+    key_quantity("release", text, Dimension::NONE, |key, text| {
+        KeyError::NotAngle { key, text }
+    })
 }
 
 /// The release angle from a trace that starts at the release: the least-squares amplitude
