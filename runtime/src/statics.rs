@@ -95,8 +95,7 @@ pub struct StaticsOptions {
     /// Converged when the constraint residual is below this (SI lengths) ...
     pub constraint_tolerance: f64,
     /// ... and the generalized force residual is below this fraction of the largest
-    /// generalized force magnitude at the start or at the model's initial configuration
-    /// (the forces the inputs apply) ...
+    /// generalized force magnitude seen at the start ...
     pub relative_force_tolerance: f64,
     /// ... or below this (SI forces and torques): a model without loads starts at a zero
     /// force scale, where only round-off (~1e-32) is left and the relative test can never
@@ -664,19 +663,7 @@ fn newton<M: Model + ?Sized>(
     q: &mut [f64],
     options: &StaticsOptions,
 ) -> Result<Equilibrium, RuntimeError> {
-    // The force scale: the larger of the imbalance at the start and the forces the inputs
-    // apply at the model's initial configuration. A warm start next to an equilibrium has
-    // a tiny imbalance, while round-off in F is relative to the forces that nearly cancel
-    // in it (an actuator's ~0.1 N against its own stiffness): relative to the imbalance
-    // alone, a converged 1e-11 N would never pass.
-    let mut initial = vec![0.0; problem.nq];
-    let mut speeds = vec![0.0; problem.model.nu()];
-    problem.model.initial_state(&mut initial, &mut speeds);
-    let force_scale = problem
-        .force(q)
-        .amax()
-        .max(problem.force(&initial).amax())
-        .max(f64::MIN_POSITIVE);
+    let force_scale = problem.force(q).amax().max(f64::MIN_POSITIVE);
     let tolerance = options.constraint_tolerance;
     if !problem.close(q, tolerance, None) {
         return Err(RuntimeError::InvalidOptions(format!(

@@ -378,7 +378,7 @@ impl QuasiStatic {
             .map(|name| model.output_index(name).expect("checked by observations"))
             .collect();
         let mut per_output = vec![Vec::with_capacity(rows); outputs.len()];
-        let mut q = leg.rest_start.clone();
+        let mut q = leg.q0.clone();
         let mut y = vec![0.0; model.noutputs()];
         let u = vec![0.0; model.nu()];
         for row in 0..rows {
@@ -470,10 +470,7 @@ impl FrequencyResponse {
         let model = leg.model();
         leg.require_hamr().map_err(Error::leg)?;
         let rest_inputs = leg.inputs(0.0, 0.0);
-        let rest = leg
-            .warm_equilibrium(warm, 0, &leg.rest_start, &rest_inputs, &[], &[])
-            .map_err(Error::leg)?
-            .q;
+        let rest = leg.warm_rest(warm, 0, &rest_inputs).map_err(Error::leg)?.q;
         let linear = mech_runtime::linearize(model, 0.0, &rest, &rest_inputs, &leg.independent)
             .map_err(Error::Linearization)?;
         let rows = data.rows;

@@ -123,7 +123,7 @@ pub fn compute(spec: &Spec) -> Result<Responses, Error> {
     let leg = Leg::open(&spec.model)?;
     let model = leg.model();
     let rest_inputs = leg.inputs(0.0, 0.0);
-    let rest_q = leg.equilibrium(&leg.rest_start, &rest_inputs, &[])?.q;
+    let rest_q = leg.equilibrium(&leg.q0, &rest_inputs, &[])?.q;
     let linear = mech_runtime::linearize(model, 0.0, &rest_q, &rest_inputs, &leg.independent)
         .map_err(Error::Linearization)?;
     let modes = linear.modes().ok_or(Error::NoModes)?;

@@ -21,7 +21,7 @@ use mech_codegen::Compiled;
 use mech_runtime::FlexureDamping;
 
 use super::compare;
-use super::leg::{Dof, Leg};
+use super::leg::{Dof, Leg, WarmStarts};
 use super::{Error, Kind};
 use crate::diagnose::candidates::{diagnose, Diagnosis, Holdout, Trial, Verdict};
 use crate::diagnose::data::MeasuredData;
@@ -217,7 +217,7 @@ fn resonances(spec: &ModelSpec, trial: &Trial) -> Result<Resonances, Error> {
 /// (NaN where the band holds none).
 fn largest_resonances(leg: &Leg) -> Result<[f64; 2], Error> {
     let inputs = leg.inputs(0.0, 0.0);
-    let rest = leg.equilibrium(&leg.rest_start, &inputs, &[])?.q;
+    let rest = leg.warm_rest(&mut WarmStarts::default(), 0, &inputs)?.q;
     let linear = mech_runtime::linearize(leg.model(), 0.0, &rest, &inputs, &leg.independent)
         .map_err(Error::Linearization)?;
     let (from, to, points) = RESONANCE_BAND;

@@ -140,9 +140,7 @@ pub fn compute(spec: &Spec) -> Result<Trajectories, Error> {
     let amplitude = positive("amplitude", &spec.amplitude, Dimension::VOLTAGE)?;
     let frequency = positive("frequency", &spec.frequency, Dimension::FREQUENCY)?;
     let leg = Leg::open(&spec.model)?;
-    let rest_q = leg
-        .equilibrium(&leg.rest_start, &leg.inputs(0.0, 0.0), &[])?
-        .q;
+    let rest_q = leg.equilibrium(&leg.q0, &leg.inputs(0.0, 0.0), &[])?.q;
     let cycles = CASES
         .into_iter()
         .map(|(name, lift_on, swing_on)| {
