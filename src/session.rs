@@ -411,6 +411,23 @@ impl Session {
         Some(dimension_units(coordinate.dimension))
     }
 
+    /// The unit of the speed named `name`: its coordinate's rate (`rad/s`, `m/s`), `rad/s` for
+    /// a quaternion's angular speed (`ball.wx`), empty for an unknown name.
+    pub fn speed_unit(&self, name: &str) -> String {
+        if let Some((_, speed)) = self.coordinate_units(name) {
+            return speed;
+        }
+        let model = &self.compiled.model;
+        let angular = model
+            .quaternions
+            .iter()
+            .any(|(_, e)| e.speed_names().iter().any(|speed| speed == name));
+        match angular {
+            true => dimension_units(Dimension::NONE).1,
+            false => String::new(),
+        }
+    }
+
     /// The unit of the scalar output named `name` (`foot.x`, `energy`), `None` for an
     /// expression output (the model keeps no dimension for it) or an unknown name.
     pub fn output_unit(&self, name: &str) -> Option<String> {
@@ -747,6 +764,9 @@ pub fn assembly_report(model: &dyn Model, state: &Assembled) -> String {
         }
     }
     let _ = writeln!(text, "\n{:<20} {:>16} {:>16}  role", "coordinate", "q", "u");
+    // A coordinate's speed shares its index and name (`u = q̇`); a quaternion's four
+    // coordinates have none, its angular speeds are listed after the coordinates.
+    let own_speed = |i: usize| i < model.nu() && model.speed_name(i) == model.coordinate_name(i);
     for i in 0..model.nq() {
         let role = if state.mobility.is_none() {
             "tree"
@@ -755,11 +775,23 @@ pub fn assembly_report(model: &dyn Model, state: &Assembled) -> String {
         } else {
             "dependent"
         };
+        let u = match own_speed(i) {
+            true => format!("{:>16.10}", state.u[i]),
+            false => format!("{:>16}", ""),
+        };
         let _ = writeln!(
             text,
-            "{:<20} {:>16.10} {:>16.10}  {role}",
+            "{:<20} {:>16.10} {u}  {role}",
             model.coordinate_name(i),
             state.q[i],
+        );
+    }
+    for i in (0..model.nu()).filter(|&i| !own_speed(i)) {
+        let _ = writeln!(
+            text,
+            "{:<20} {:>16} {:>16.10}  speed",
+            model.speed_name(i),
+            "",
             state.u[i]
         );
     }

@@ -307,14 +307,14 @@ impl Model {
             let state = session.assemble(independent)?;
             session.simulate(&state, &options, &mut |_| {})
         })?;
-        let (nq, no, ni) = {
+        let (nq, nu, no, ni) = {
             let model = &self.session().model;
-            (model.nq(), model.noutputs(), model.ninputs())
+            (model.nq(), model.nu(), model.noutputs(), model.ninputs())
         };
         let dict = PyDict::new(py);
         dict.set_item("t", PyArray1::from_vec(py, trajectory.times))?;
         dict.set_item("q", rows_array(py, &trajectory.q, nq))?;
-        dict.set_item("u", rows_array(py, &trajectory.u, nq))?;
+        dict.set_item("u", rows_array(py, &trajectory.u, nu))?;
         dict.set_item("outputs", rows_array(py, &trajectory.outputs, no))?;
         dict.set_item("inputs", rows_array(py, &trajectory.inputs, ni))?;
         dict.set_item("steps", trajectory.stats.accepted_steps)?;
