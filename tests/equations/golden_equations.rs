@@ -58,6 +58,7 @@ fn check(stem: &str) {
 
 tests_per_file! {
     check:
+    ball_double_pendulum,
     cart_pendulum,
     chain1,
     chain2,
