@@ -154,12 +154,17 @@ impl Model {
     /// A state vector of the model's length, or an error naming it.
     fn state(&self, what: &str, values: PyReadonlyArray1<f64>) -> PyResult<Vec<f64>> {
         let values = values.as_slice()?.to_vec();
-        let n = self.session().model.nq();
+        let model = &self.session().model;
+        // `u` has one entry per speed: fewer than `q` with quaternions (ball, free joints).
+        let (n, entries) = match what {
+            "u" => (model.nu(), "speeds"),
+            _ => (model.nq(), "coordinates"),
+        };
         if values.len() != n {
             return Err(error(format!(
-                "`{what}` has {} values; `{}` has {n} coordinates",
+                "`{what}` has {} values; `{}` has {n} {entries}",
                 values.len(),
-                self.session().model.name()
+                model.name()
             )));
         }
         Ok(values)
