@@ -405,9 +405,17 @@ impl Session {
 
     /// The units of the coordinate named `name` and of its speed: `rad` and `rad/s` for an
     /// angle, `m` and `m/s` for a slide (`None` if there is no such coordinate).
+    /// A quaternion's part (`ball.e0`) is a plain number: `1` (its rate has no speed).
     pub fn coordinate_units(&self, name: &str) -> Option<(String, String)> {
-        let coordinates = &self.compiled.model.coordinates;
-        let (_, coordinate) = coordinates.iter().find(|(_, c)| c.name == name)?;
+        let model = &self.compiled.model;
+        let quaternion_part = model
+            .quaternions
+            .iter()
+            .any(|(_, e)| e.coordinate_names().iter().any(|part| part == name));
+        if quaternion_part {
+            return Some(("1".into(), String::new()));
+        }
+        let (_, coordinate) = model.coordinates.iter().find(|(_, c)| c.name == name)?;
         Some(dimension_units(coordinate.dimension))
     }
 

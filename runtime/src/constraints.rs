@@ -429,6 +429,8 @@ pub fn assemble_speeds<M: Model + ?Sized>(
     u: &mut [f64],
     fixed: &[usize],
 ) -> Result<(), RuntimeError> {
+    // `J u = 0` with `u` indexed like `q`: the loop rows are written for `q̇ = u`.
+    model.require_rates_are_speeds("assembly of the speeds")?;
     let j = jacobian(model, t, q);
     let free: Vec<usize> = (0..model.nq()).filter(|c| !fixed.contains(c)).collect();
     let mut rhs = DVector::zeros(model.nc());

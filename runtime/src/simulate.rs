@@ -745,3 +745,24 @@ fn run<M: Model + ?Sized, S: Stepper>(
     traj.stats = stepper.stats();
     Ok(traj)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::normalize_quaternions;
+
+    #[test]
+    fn quaternions_are_scaled_to_unit_norm_and_nothing_else_moves() {
+        let mut q = [0.5, 2.0, 0.0, 0.0, 0.0, 3.0, 0.25];
+        assert!(normalize_quaternions(&[1], &mut q));
+        assert_eq!(q[0], 0.5);
+        assert_eq!(&q[1..5], &[1.0, 0.0, 0.0, 0.0]);
+        assert_eq!(&q[5..], &[3.0, 0.25]);
+        // Already unit: unchanged, reported as such; an index past the end is skipped.
+        assert!(!normalize_quaternions(&[1, 6], &mut q));
+        let mut zero = [0.0; 4];
+        assert!(
+            !normalize_quaternions(&[0], &mut zero),
+            "no direction to scale"
+        );
+    }
+}

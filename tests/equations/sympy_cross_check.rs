@@ -58,7 +58,13 @@ fn check_model(name: &str) {
                 let mut qdot = vec![0.0; model.nq()];
                 model.kinematic_rates(0.0, &q, &u, &mut qdot);
                 for (i, expected) in json_numbers(rates).iter().enumerate() {
-                    assert_close(&format!("{name} state {k} q̇[{i}]"), qdot[i], *expected, TOLERANCE, 1.0);
+                    assert_close(
+                        &format!("{name} state {k} q̇[{i}]"),
+                        qdot[i],
+                        *expected,
+                        TOLERANCE,
+                        1.0,
+                    );
                 }
             }
             let ke = state["kinetic_energy"].as_f64().unwrap();
