@@ -66,6 +66,7 @@ tests_per_file! {
     compliant_four_bar,
     double_pendulum_3d,
     flexure_rig,
+    floating_chain,
     four_bar,
     hamr_v2,
     hamr_vi,

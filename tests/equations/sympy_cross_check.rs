@@ -127,3 +127,10 @@ fn mixed_chain() {
 fn ball_double_pendulum() {
     check_model("ball_double_pendulum");
 }
+
+/// A free joint (slides and a quaternion), a sprung pin and a ball joint in one chain: the
+/// coordinates' and the quaternions' places in `q` and `u`.
+#[test]
+fn floating_chain() {
+    check_model("floating_chain");
+}

@@ -365,9 +365,29 @@ def ball_double_pendulum():
     return M
 
 
+def floating_chain():
+    """models/floating_chain.mech: a free joint (slides along N's axes with u = q', then a
+    ball), an arm on a sprung pin about the base's z, a hand on a ball joint."""
+    M = Model('floating_chain')
+    x, y, z = (M._coord(f'float.{a}') for a in 'xyz')
+    P = M.point('P', M.O, x * M.N.x + y * M.N.y + z * M.N.z)
+    A = M.ball('float', M.N, 'A')
+    M.body('base', A, P, 2.0, (0.01, 0, 0), (0.05, 0.04, 0.03, 0, 0, 0))
+    S = M.point('S', P, M.vec(A, (0.1, 0, 0)))
+    B = M.pin('shoulder', A, S, A.z, 'B')
+    M.body('arm', B, S, 0.5, (0.1, 0, 0), (0.001, 0.004, 0.0045, 0, 0, 0))
+    W = M.point('W', S, M.vec(B, (0.2, 0, 0)))
+    C = M.ball('wrist', B, 'C')
+    M.body('hand', C, W, 0.2, (0.03, 0.01, 0), (0.0002, 0.0003, 0.00025, 0, 0, 0))
+    M.spring('shoulder', 2.0, 0.1)
+    M.params.update({'base.shoulder': [0.1, 0, 0], 'arm.wrist': [0.2, 0, 0]})
+    return M
+
+
 MODELS = [lambda: chain(1), lambda: chain(2), lambda: chain(4),
           lambda: pendulum_3d(2, 'double_pendulum_3d'), lambda: pendulum_3d(3, 'triple_pendulum_3d'),
-          cart_pendulum, mixed_chain, four_bar, slider_crank, compliant_four_bar, ball_double_pendulum]
+          cart_pendulum, mixed_chain, four_bar, slider_crank, compliant_four_bar, ball_double_pendulum,
+          floating_chain]
 
 
 # ---------------------------------------------------------------- evaluation
