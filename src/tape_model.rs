@@ -386,11 +386,7 @@ impl mech_runtime::Model for TapeModel {
     fn kinematic_rates(&self, t: f64, q: &[f64], u: &[f64], out: &mut [f64]) {
         match self.tape.kinematic_rates {
             Some(_) => self.eval(Slot::KinematicRates, t, q, u, &[], out),
-            None => {
-                for (slot, value) in out.iter_mut().zip(u) {
-                    *slot = *value;
-                }
-            }
+            None => mech_runtime::model::rates_equal_speeds(u, out),
         }
     }
     fn unit_quaternions(&self) -> &[usize] {

@@ -9,6 +9,14 @@
 
 use crate::RuntimeError;
 
+/// `q̇ = u` into `out`; an entry of `out` past the end of `u` is NaN (a model with more
+/// coordinates than speeds that does not give its own `q̇` fails loudly, not silently).
+pub fn rates_equal_speeds(u: &[f64], out: &mut [f64]) {
+    for (i, slot) in out.iter_mut().enumerate() {
+        *slot = u.get(i).copied().unwrap_or(f64::NAN);
+    }
+}
+
 /// A multibody model in Kane's form `M(q) u̇ = F(t, q, u, inputs)`, `q̇ = W(q) u`
 /// ([`Model::kinematic_rates`]; `W = I` and `nq == nu` unless the model has unit quaternions).
 ///
@@ -58,11 +66,10 @@ pub trait Model {
         self.forcing(t, q, &vec![0.0; self.nu()], inputs, out);
     }
     /// The kinematic differential equations `q̇ = W(q) u` into `out` (length `nq`). The default
-    /// is `q̇ = u`, right for every model with `nq == nu`; a model with quaternions overrides it.
+    /// is `q̇ = u` ([`rates_equal_speeds`]), right for every model with `nq == nu`; a model with
+    /// quaternions overrides it.
     fn kinematic_rates(&self, _t: f64, _q: &[f64], u: &[f64], out: &mut [f64]) {
-        for (slot, value) in out.iter_mut().zip(u) {
-            *slot = *value;
-        }
+        rates_equal_speeds(u, out);
     }
     /// Index in `q` of the scalar part of each unit quaternion (followed by its vector part):
     /// integrators keep these four coordinates at unit norm. Empty by default.

@@ -277,12 +277,19 @@ pub struct ModelOde<'a, M: Model + ?Sized> {
 
 impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
     /// Wraps `model` with one signal per model input. Errors if `signals` has the wrong length,
-    /// a signal is invalid, or the model has both loops and quaternions (the loop rows are
-    /// written for `q̇ = u`).
+    /// a signal is invalid, the model has both loops and quaternions (the loop rows are
+    /// written for `q̇ = u`), or `nq != nu` without quaternions.
     pub fn new(model: &'a M, signals: &'a [Signal]) -> Result<Self, RuntimeError> {
         let (nq, nu) = (model.nq(), model.nu());
         if model.nc() > 0 {
             model.require_rates_are_speeds("simulation with loop closures")?;
+        }
+        if nq != nu && model.unit_quaternions().is_empty() {
+            return Err(RuntimeError::InvalidOptions(format!(
+                "model `{}` has {nq} coordinates but {nu} speeds and no unit quaternion; \
+                 simulation knows q̇ = W(q) u only for quaternions",
+                model.name()
+            )));
         }
         check_inputs(model, signals)?;
         Ok(ModelOde {

@@ -3,8 +3,9 @@
 //!
 //! Consumes: `joint` declarations and the [`Owner`](super::body::Owner)s.
 //! Produces: `model.frames` (newtonian, its frames, then per joint in depth-first order:
-//! `j`, optionally `j.child`, the child body's frame and its named frames), coordinates,
-//! joints, springs and dampers, points and bodies; `E04xx` tree errors.
+//! `j` (for a `free` joint `j.x`, `j.y`, `j.z` first), optionally `j.child`, the child body's
+//! frame and its named frames), coordinates, quaternions (`ball`, `free`), joints, springs
+//! and dampers, points and bodies; `E04xx` tree errors.
 
 use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, ExprKind};
@@ -181,28 +182,41 @@ impl<'a> Lowerer<'a> {
             Some(kind @ (JointKind::Pin | JointKind::Slider)) => {
                 self.lower_joint_dynamics(&mut info, kind, &field);
             }
-            Some(JointKind::Ball | JointKind::Free) => {
-                let rates = [
-                    ("u0", "`u0` (angular velocity)", "[0, 0, 10 rad/s]", -1, 0),
-                    ("v0", "`v0` (velocity)", "[0, 0, 1 m/s]", -1, 1),
-                ];
-                for (name, what, example, time, length) in rates {
-                    let Some(f) = field(name) else { continue };
-                    let expect = Expect::mechanical(what, example, [0, length, time]);
-                    let ctx = Ctx::Static("a joint property");
-                    let Some(vector) = self.lower_vector_as(&f.value, ctx, &expect) else {
-                        continue;
-                    };
-                    let values = vector.map(|e| self.evaluate(&e, f.value.span));
-                    match name {
-                        "u0" => info.angular_velocity0 = values,
-                        _ => info.velocity0 = values,
-                    }
-                }
-            }
+            Some(JointKind::Ball | JointKind::Free) => self.lower_initial_rates(&mut info, &field),
             _ => {}
         }
         info
+    }
+
+    /// `u0` (angular velocity, rad/s) and `v0` (velocity, m/s) of a `ball` or `free` joint:
+    /// constant vectors.
+    fn lower_initial_rates<'f>(
+        &mut self,
+        info: &mut JointInfo,
+        field: &dyn Fn(&str) -> Option<&'f ast::Field>,
+    ) {
+        let rates = [
+            (
+                "u0",
+                "`u0` (angular velocity)",
+                "[0, 0, 10 rad/s]",
+                [0, 0, -1],
+            ),
+            ("v0", "`v0` (velocity)", "[0, 0, 1 m/s]", [0, 1, -1]),
+        ];
+        for (name, what, example, dimension) in rates {
+            let Some(f) = field(name) else { continue };
+            let expect = Expect::mechanical(what, example, dimension);
+            let ctx = Ctx::Static("a joint property");
+            let Some(vector) = self.lower_vector_as(&f.value, ctx, &expect) else {
+                continue;
+            };
+            let values = vector.map(|e| self.evaluate(&e, f.value.span));
+            match name {
+                "u0" => info.angular_velocity0 = values,
+                _ => info.velocity0 = values,
+            }
+        }
     }
 
     fn lower_joint_dynamics<'f>(
