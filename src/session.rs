@@ -7,7 +7,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use mech_codegen::ir::{Dimension, OutputKind};
+use mech_codegen::ir::{Dimension, OutputKind, Quaternion};
 use mech_codegen::{Compiled, Diagnostic, Errors};
 use mech_runtime::constraints::{choose_independent, complete_independent, jacobian};
 use mech_runtime::nalgebra::DMatrix;
@@ -407,16 +407,24 @@ impl Session {
     /// angle, `m` and `m/s` for a slide (`None` if there is no such coordinate).
     /// A quaternion's part (`ball.e0`) is a plain number: `1` (its rate has no speed).
     pub fn coordinate_units(&self, name: &str) -> Option<(String, String)> {
-        let model = &self.compiled.model;
-        let quaternion_part = model
-            .quaternions
-            .iter()
-            .any(|(_, e)| e.coordinate_names().iter().any(|part| part == name));
-        if quaternion_part {
+        if self.is_quaternion_name(name, Quaternion::coordinate_names) {
             return Some(("1".into(), String::new()));
         }
-        let (_, coordinate) = model.coordinates.iter().find(|(_, c)| c.name == name)?;
+        let coordinates = &self.compiled.model.coordinates;
+        let (_, coordinate) = coordinates.iter().find(|(_, c)| c.name == name)?;
         Some(dimension_units(coordinate.dimension))
+    }
+
+    /// Whether `name` is one of the `names` (coordinates or speeds) of a quaternion.
+    fn is_quaternion_name<const N: usize>(
+        &self,
+        name: &str,
+        names: fn(&Quaternion) -> [String; N],
+    ) -> bool {
+        let quaternions = &self.compiled.model.quaternions;
+        quaternions
+            .iter()
+            .any(|(_, e)| names(e).iter().any(|n| n == name))
     }
 
     /// The unit of the speed named `name`: its coordinate's rate (`rad/s`, `m/s`), `rad/s` for
@@ -425,12 +433,7 @@ impl Session {
         if let Some((_, speed)) = self.coordinate_units(name) {
             return speed;
         }
-        let model = &self.compiled.model;
-        let angular = model
-            .quaternions
-            .iter()
-            .any(|(_, e)| e.speed_names().iter().any(|speed| speed == name));
-        match angular {
+        match self.is_quaternion_name(name, Quaternion::speed_names) {
             true => dimension_units(Dimension::NONE).1,
             false => String::new(),
         }
