@@ -43,10 +43,12 @@ pub struct TooLarge {
 pub fn equations_text(compiled: &Compiled) -> Result<String, TooLarge> {
     let eqs = &compiled.equations;
     let upper = (0..eqs.nu).flat_map(|r| (r..eqs.nu).map(move |s| r + eqs.nu * s));
+    let rates = eqs.kinematic_rates.as_deref().unwrap_or_default();
     let roots: Vec<_> = upper
         .map(|i| eqs.mass_matrix[i])
         .chain(eqs.forcing.iter().copied())
         .chain(eqs.outputs.iter().copied())
+        .chain(rates.iter().copied())
         .collect();
     let nodes = eqs.pool.printed_size(&roots);
     if nodes > MAX_PRINTED_NODES {
@@ -56,17 +58,19 @@ pub fn equations_text(compiled: &Compiled) -> Result<String, TooLarge> {
             limit: MAX_PRINTED_NODES,
         });
     }
-    let names: Vec<&str> = compiled
-        .model
-        .coordinates
-        .iter()
-        .map(|(_, c)| c.name.as_str())
-        .collect();
-    let mut text = format!(
-        "// M(q) u̇ = F for model `{}`; u = q̇ for q = [{}]\n",
-        compiled.model.name,
-        names.join(", ")
-    );
+    let model = &compiled.model;
+    let q = model.coordinate_names().join(", ");
+    let mut text = match eqs.kinematic_rates {
+        None => format!(
+            "// M(q) u̇ = F for model `{}`; u = q̇ for q = [{q}]\n",
+            model.name
+        ),
+        Some(_) => format!(
+            "// M(q) u̇ = F and q̇ = W(q) u for model `{}`; q = [{q}], u = [{}]\n",
+            model.name,
+            model.speed_names().join(", ")
+        ),
+    };
     text.push_str(&format!("// {}", operation_counts(&compiled.tape())));
     for r in 0..eqs.nu {
         for s in r..eqs.nu {
@@ -82,6 +86,9 @@ pub fn equations_text(compiled: &Compiled) -> Result<String, TooLarge> {
     for (name, &y) in eqs.output_names.iter().zip(&eqs.outputs) {
         text.push_str(&format!("{name} = {}\n", eqs.pool.sexpr(y)));
     }
+    for (i, &rate) in rates.iter().enumerate() {
+        text.push_str(&format!("qdot[{i}] = {}\n", eqs.pool.sexpr(rate)));
+    }
     Ok(text)
 }
 
@@ -93,11 +100,16 @@ pub fn tape_text(compiled: &Compiled) -> String {
         compiled.model.name,
         operation_counts(&tape)
     );
-    for (name, program) in [
-        ("mass_matrix", &tape.mass_matrix),
-        ("forcing", &tape.forcing),
-        ("outputs", &tape.outputs),
-    ] {
+    let programs = [
+        ("mass_matrix", Some(&tape.mass_matrix)),
+        ("forcing", Some(&tape.forcing)),
+        ("outputs", Some(&tape.outputs)),
+        ("kinematic_rates", tape.kinematic_rates.as_ref()),
+    ];
+    for (name, program) in programs
+        .into_iter()
+        .filter_map(|(name, program)| Some((name, program?)))
+    {
         text.push_str(&format!("\n{name}:\n"));
         for (i, op) in program.ops.iter().enumerate() {
             text.push_str(&format!("  r{i} = {op:?}\n"));

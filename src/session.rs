@@ -7,7 +7,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use mech_codegen::ir::{Dimension, OutputKind};
+use mech_codegen::ir::{Dimension, OutputKind, Quaternion};
 use mech_codegen::{Compiled, Diagnostic, Errors};
 use mech_runtime::constraints::{choose_independent, complete_independent, jacobian};
 use mech_runtime::nalgebra::DMatrix;
@@ -405,10 +405,38 @@ impl Session {
 
     /// The units of the coordinate named `name` and of its speed: `rad` and `rad/s` for an
     /// angle, `m` and `m/s` for a slide (`None` if there is no such coordinate).
+    /// A quaternion's part (`ball.e0`) is a plain number: `1` (its rate has no speed).
     pub fn coordinate_units(&self, name: &str) -> Option<(String, String)> {
+        if self.is_quaternion_name(name, Quaternion::coordinate_names) {
+            return Some(("1".into(), String::new()));
+        }
         let coordinates = &self.compiled.model.coordinates;
         let (_, coordinate) = coordinates.iter().find(|(_, c)| c.name == name)?;
         Some(dimension_units(coordinate.dimension))
+    }
+
+    /// Whether `name` is one of the `names` (coordinates or speeds) of a quaternion.
+    fn is_quaternion_name<const N: usize>(
+        &self,
+        name: &str,
+        names: fn(&Quaternion) -> [String; N],
+    ) -> bool {
+        let quaternions = &self.compiled.model.quaternions;
+        quaternions
+            .iter()
+            .any(|(_, e)| names(e).iter().any(|n| n == name))
+    }
+
+    /// The unit of the speed named `name`: its coordinate's rate (`rad/s`, `m/s`), `rad/s` for
+    /// a quaternion's angular speed (`ball.wx`), empty for an unknown name.
+    pub fn speed_unit(&self, name: &str) -> String {
+        if let Some((_, speed)) = self.coordinate_units(name) {
+            return speed;
+        }
+        match self.is_quaternion_name(name, Quaternion::speed_names) {
+            true => dimension_units(Dimension::NONE).1,
+            false => String::new(),
+        }
     }
 
     /// The unit of the scalar output named `name` (`foot.x`, `energy`), `None` for an
@@ -747,6 +775,9 @@ pub fn assembly_report(model: &dyn Model, state: &Assembled) -> String {
         }
     }
     let _ = writeln!(text, "\n{:<20} {:>16} {:>16}  role", "coordinate", "q", "u");
+    // A coordinate's speed shares its index and name (`u = q̇`); a quaternion's four
+    // coordinates have none, its angular speeds are listed after the coordinates.
+    let own_speed = |i: usize| i < model.nu() && model.speed_name(i) == model.coordinate_name(i);
     for i in 0..model.nq() {
         let role = if state.mobility.is_none() {
             "tree"
@@ -755,11 +786,23 @@ pub fn assembly_report(model: &dyn Model, state: &Assembled) -> String {
         } else {
             "dependent"
         };
+        let u = match own_speed(i) {
+            true => format!("{:>16.10}", state.u[i]),
+            false => format!("{:>16}", ""),
+        };
         let _ = writeln!(
             text,
-            "{:<20} {:>16.10} {:>16.10}  {role}",
+            "{:<20} {:>16.10} {u}  {role}",
             model.coordinate_name(i),
             state.q[i],
+        );
+    }
+    for i in (0..model.nu()).filter(|&i| !own_speed(i)) {
+        let _ = writeln!(
+            text,
+            "{:<20} {:>16} {:>16.10}  speed",
+            model.speed_name(i),
+            "",
             state.u[i]
         );
     }

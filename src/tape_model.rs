@@ -57,11 +57,13 @@ enum Slot {
     ConstrainedTerms,
     /// `[M, F, J̇u]` in one program (native code only).
     DynamicsTerms,
+    /// `q̇ = W(q) u`, for models with quaternions.
+    KinematicRates,
     OutputRow(usize),
 }
 
 impl Slot {
-    const FIXED: usize = 10;
+    const FIXED: usize = 11;
     fn index(self) -> usize {
         match self {
             Slot::MassMatrix => 0,
@@ -74,6 +76,7 @@ impl Slot {
             Slot::Flexures => 7,
             Slot::ConstrainedTerms => 8,
             Slot::DynamicsTerms => 9,
+            Slot::KinematicRates => 10,
             Slot::OutputRow(row) => Slot::FIXED + row,
         }
     }
@@ -104,6 +107,9 @@ pub struct TapeModel {
     name: String,
     tape: Tape,
     coordinate_names: Vec<String>,
+    speed_names: Vec<String>,
+    /// Index in `q` of each quaternion's scalar part.
+    unit_quaternions: Vec<usize>,
     input_names: Vec<String>,
     output_names: Vec<String>,
     constraint_names: Vec<String>,
@@ -179,10 +185,12 @@ impl TapeModel {
         TapeModel {
             name: model.name.clone(),
             tape,
-            coordinate_names: model
-                .coordinates
+            coordinate_names: model.coordinate_names(),
+            speed_names: model.speed_names(),
+            unit_quaternions: model
+                .quaternions
                 .iter()
-                .map(|(_, c)| c.name.clone())
+                .map(|(e, _)| model.quaternion_coordinate(e, 0))
                 .collect(),
             input_names: model.inputs.iter().map(|(_, i)| i.name.clone()).collect(),
             output_names: compiled.equations.output_names.clone(),
@@ -191,12 +199,8 @@ impl TapeModel {
             param_names: model.params.iter().map(|(_, p)| p.name.clone()).collect(),
             params: model.params.iter().map(|(_, p)| p.value).collect(),
             input_defaults: model.inputs.iter().map(|(_, i)| i.default).collect(),
-            q0: model.coordinates.iter().map(|(_, c)| c.initial).collect(),
-            u0: model
-                .coordinates
-                .iter()
-                .map(|(_, c)| c.initial_speed)
-                .collect(),
+            q0: model.initial_coordinates(),
+            u0: model.initial_speeds(),
             registers: RefCell::new(Vec::new()),
             native,
             scratch: RefCell::new(Scratch::default()),
@@ -230,6 +234,12 @@ impl TapeModel {
         ]
         .into_iter()
         .filter(|slot| !matches!(slot, Slot::StaticForcing) || self.tape.static_forcing.is_some())
+        .chain(
+            self.tape
+                .kinematic_rates
+                .as_ref()
+                .map(|_| Slot::KinematicRates),
+        )
         .chain(
             self.native
                 .as_ref()
@@ -269,6 +279,8 @@ impl TapeModel {
             Slot::ConstraintJacobian => &tape.constraint_jacobian,
             Slot::ConstraintBias => &tape.constraint_bias,
             Slot::Flexures => &tape.flexures,
+            // Only listed in `slots` (and called) for a tape with the program.
+            Slot::KinematicRates => tape.kinematic_rates.as_ref().unwrap_or(&tape.forcing),
             Slot::ConstrainedTerms | Slot::DynamicsTerms => {
                 let fused = self
                     .native
@@ -367,6 +379,18 @@ impl mech_runtime::Model for TapeModel {
     }
     fn coordinate_name(&self, i: usize) -> &str {
         name_at(&self.coordinate_names, i)
+    }
+    fn speed_name(&self, i: usize) -> &str {
+        name_at(&self.speed_names, i)
+    }
+    fn kinematic_rates(&self, t: f64, q: &[f64], u: &[f64], out: &mut [f64]) {
+        match self.tape.kinematic_rates {
+            Some(_) => self.eval(Slot::KinematicRates, t, q, u, &[], out),
+            None => mech_runtime::model::rates_equal_speeds(u, out),
+        }
+    }
+    fn unit_quaternions(&self) -> &[usize] {
+        &self.unit_quaternions
     }
     fn input_name(&self, i: usize) -> &str {
         name_at(&self.input_names, i)

@@ -10,7 +10,8 @@
 //! error of a phase into [`Errors`] (file, line, column, label, help).
 //!
 //! # Symbols
-//! `q` generalized coordinates, `u = q̇` generalized speeds, `M(q)` the mass matrix,
+//! `q` generalized coordinates, `u` generalized speeds (`u = q̇`, except for the unit
+//! quaternions of `ball` and `free` joints: `q̇ = W(q) u`), `M(q)` the mass matrix,
 //! `F(t, q, u, inputs)` the forcing, so that `M u̇ = F`. Kane's method gives
 //! `F_r + F_r* = 0` for each speed r (see [`kane`]). Internally every quantity is in SI units
 //! (kg, m, s, rad, A).

@@ -154,12 +154,17 @@ impl Model {
     /// A state vector of the model's length, or an error naming it.
     fn state(&self, what: &str, values: PyReadonlyArray1<f64>) -> PyResult<Vec<f64>> {
         let values = values.as_slice()?.to_vec();
-        let n = self.session().model.nq();
+        let model = &self.session().model;
+        // `u` has one entry per speed: fewer than `q` with quaternions (ball, free joints).
+        let (n, entries) = match what {
+            "u" => (model.nu(), "speeds"),
+            _ => (model.nq(), "coordinates"),
+        };
         if values.len() != n {
             return Err(error(format!(
-                "`{what}` has {} values; `{}` has {n} coordinates",
+                "`{what}` has {} values; `{}` has {n} {entries}",
                 values.len(),
-                self.session().model.name()
+                model.name()
             )));
         }
         Ok(values)
@@ -307,14 +312,14 @@ impl Model {
             let state = session.assemble(independent)?;
             session.simulate(&state, &options, &mut |_| {})
         })?;
-        let (nq, no, ni) = {
+        let (nq, nu, no, ni) = {
             let model = &self.session().model;
-            (model.nq(), model.noutputs(), model.ninputs())
+            (model.nq(), model.nu(), model.noutputs(), model.ninputs())
         };
         let dict = PyDict::new(py);
         dict.set_item("t", PyArray1::from_vec(py, trajectory.times))?;
         dict.set_item("q", rows_array(py, &trajectory.q, nq))?;
-        dict.set_item("u", rows_array(py, &trajectory.u, nq))?;
+        dict.set_item("u", rows_array(py, &trajectory.u, nu))?;
         dict.set_item("outputs", rows_array(py, &trajectory.outputs, no))?;
         dict.set_item("inputs", rows_array(py, &trajectory.inputs, ni))?;
         dict.set_item("steps", trajectory.stats.accepted_steps)?;

@@ -17,10 +17,13 @@ use crate::{dense, Model, RuntimeError};
 /// Relative threshold on singular values for rank decisions.
 pub const RANK_TOLERANCE: f64 = 1e-9;
 
-/// Mobility of a constrained model at one configuration: `dof = nq − rank(J)`.
+/// Mobility of a constrained model at one configuration: `dof = nq − quaternions − rank(J)`
+/// (each unit quaternion's norm is one more condition on `q`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Mobility {
     pub coordinates: usize,
+    /// Unit quaternions among the coordinates (four coordinates, three degrees of freedom).
+    pub unit_quaternions: usize,
     pub rows: usize,
     pub rank: usize,
     /// Singular values of `J`, descending.
@@ -32,7 +35,7 @@ pub struct Mobility {
 impl Mobility {
     /// Degrees of freedom.
     pub fn dof(&self) -> usize {
-        self.coordinates - self.rank
+        self.coordinates - self.unit_quaternions - self.rank
     }
 
     /// The singular values within three decades of the threshold, on either side: the rank
@@ -49,9 +52,14 @@ impl Mobility {
 impl fmt::Display for Mobility {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let plural = if self.dof() == 1 { "" } else { "s" };
+        let quaternions = match self.unit_quaternions {
+            0 => String::new(),
+            1 => " (1 unit quaternion)".to_string(),
+            n => format!(" ({n} unit quaternions)"),
+        };
         write!(
             f,
-            "{} coordinates, {} constraint rows, rank {}: {} degree{plural} of freedom",
+            "{} coordinates{quaternions}, {} constraint rows, rank {}: {} degree{plural} of freedom",
             self.coordinates,
             self.rows,
             self.rank,
@@ -122,6 +130,7 @@ pub fn mobility<M: Model + ?Sized>(model: &M, t: f64, q: &[f64]) -> Result<Mobil
     let rank = singular_values.iter().filter(|&&s| s > threshold).count();
     Ok(Mobility {
         coordinates: model.nq(),
+        unit_quaternions: model.unit_quaternions().len(),
         rows: model.nc(),
         rank,
         singular_values,
@@ -420,6 +429,8 @@ pub fn assemble_speeds<M: Model + ?Sized>(
     u: &mut [f64],
     fixed: &[usize],
 ) -> Result<(), RuntimeError> {
+    // `J u = 0` with `u` indexed like `q`: the loop rows are written for `q̇ = u`.
+    model.require_rates_are_speeds("assembly of the speeds")?;
     let j = jacobian(model, t, q);
     let free: Vec<usize> = (0..model.nq()).filter(|c| !fixed.contains(c)).collect();
     let mut rhs = DVector::zeros(model.nc());

@@ -72,6 +72,15 @@ pub enum RuntimeError {
         /// Time at which the loops were closed.
         t: f64,
     },
+    /// `analysis` (statics, linearization, assembly, reduced coordinates) is written for
+    /// `q̇ = u` and the model has unit quaternions (`ball` or `free` joints: `q̇ = W(q) u`,
+    /// four coordinates and three speeds each).
+    QuaternionsUnsupported {
+        /// What was asked, e.g. `"statics"`.
+        analysis: &'static str,
+        /// The model's name.
+        model: String,
+    },
     /// Dense output was requested outside the last step `[t_start, t_end]`.
     InterpolationOutOfRange {
         /// Requested time.
@@ -165,6 +174,13 @@ impl fmt::Display for RuntimeError {
                 "at t = {t} the independent coordinates no longer determine the others (the \
                  loop Jacobian of the dependent coordinates is singular): choose other \
                  independent coordinates, or check the mechanism for a lock-up there"
+            ),
+            RuntimeError::QuaternionsUnsupported { analysis, model } => write!(
+                f,
+                "{analysis} of model `{model}` is not supported yet: it has a ball or free \
+                 joint, whose orientation is a unit quaternion (q̇ = W(q) u, not q̇ = u), and \
+                 {analysis} is written for q̇ = u; simulate it in full coordinates (Dopri5, \
+                 Dop853 or RK4), or write the joint as pins and sliders"
             ),
             RuntimeError::InterpolationOutOfRange { t, t_start, t_end } => write!(
                 f,

@@ -1,7 +1,8 @@
 //! Runtime for mech models.
 //!
-//! Symbols used throughout (defined once here): `q` generalized coordinates, `u = q̇`
-//! generalized speeds, `M(q)` the mass matrix, `F(t, q, u, inputs)` the forcing, so that the
+//! Symbols used throughout (defined once here): `q` generalized coordinates, `u` generalized
+//! speeds (`u = q̇`, except for the unit quaternions of ball and free joints, where
+//! `q̇ = W(q) u`: [`Model::kinematic_rates`]), `M(q)` the mass matrix, `F(t, q, u, inputs)` the forcing, so that the
 //! equations of motion are `M u̇ = F`.
 //!
 //! * [`Model`]: the interface of a compiled model (generated Rust or the tape evaluator).

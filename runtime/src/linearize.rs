@@ -122,6 +122,7 @@ pub fn linearize<M: Model + ?Sized>(
     inputs: &[f64],
     independent: &[usize],
 ) -> Result<Linearization, RuntimeError> {
+    model.require_rates_are_speeds("linearization")?;
     let n = independent.len();
     let (ni, ny) = (model.ninputs(), model.noutputs());
     let signals = default_signals(model);

@@ -1,12 +1,24 @@
 //! The contract between a model (generated Rust, or the tape evaluator) and everything that
 //! runs it: integrators, analyses, the command line.
 //!
-//! A model is `M(q) u̇ = F(t, q, u, inputs)` with `q̇ = u`, plus outputs `y(t, q, u, inputs)`.
+//! A model is `M(q) u̇ = F(t, q, u, inputs)` with `q̇ = W(q) u` (`q̇ = u` unless it has
+//! quaternions), plus outputs `y(t, q, u, inputs)`.
 //! Slices keep the trait object-safe and size-agnostic; generated models also offer
 //! fixed-size inherent methods (`mass_matrix_fixed` → `SMatrix<f64, NU, NU>`, …) for
 //! embedding, named apart from the trait's so that neither shadows the other.
 
-/// A multibody model in Kane's form `M(q) u̇ = F(t, q, u, inputs)`, `q̇ = u`.
+use crate::RuntimeError;
+
+/// `q̇ = u` into `out`; an entry of `out` past the end of `u` is NaN (a model with more
+/// coordinates than speeds that does not give its own `q̇` fails loudly, not silently).
+pub fn rates_equal_speeds(u: &[f64], out: &mut [f64]) {
+    for (i, slot) in out.iter_mut().enumerate() {
+        *slot = u.get(i).copied().unwrap_or(f64::NAN);
+    }
+}
+
+/// A multibody model in Kane's form `M(q) u̇ = F(t, q, u, inputs)`, `q̇ = W(q) u`
+/// ([`Model::kinematic_rates`]; `W = I` and `nq == nu` unless the model has unit quaternions).
 ///
 /// Matrices are written column-major into `out` (the layout of nalgebra's `DMatrix`).
 /// Implementations never allocate and never panic for slices of the documented lengths.
@@ -15,7 +27,8 @@ pub trait Model {
     fn name(&self) -> &str;
     /// Number of generalized coordinates `q`.
     fn nq(&self) -> usize;
-    /// Number of generalized speeds `u` (equal to `nq` for tree models).
+    /// Number of generalized speeds `u` (equal to `nq` unless the model has quaternions: each
+    /// has four coordinates and three speeds).
     fn nu(&self) -> usize;
     /// Number of named inputs.
     fn ninputs(&self) -> usize;
@@ -25,6 +38,11 @@ pub trait Model {
     fn nparams(&self) -> usize;
 
     fn coordinate_name(&self, i: usize) -> &str;
+    /// Name of speed `i`: the coordinate's where `u_i = q̇_i` (the default), `ball.wx` for
+    /// an angular speed of a quaternion joint.
+    fn speed_name(&self, i: usize) -> &str {
+        self.coordinate_name(i)
+    }
     fn input_name(&self, i: usize) -> &str;
     fn output_name(&self, i: usize) -> &str;
     fn param_name(&self, i: usize) -> &str;
@@ -46,6 +64,32 @@ pub trait Model {
     /// velocity terms.
     fn static_forcing(&self, t: f64, q: &[f64], inputs: &[f64], out: &mut [f64]) {
         self.forcing(t, q, &vec![0.0; self.nu()], inputs, out);
+    }
+    /// The kinematic differential equations `q̇ = W(q) u` into `out` (length `nq`). The default
+    /// is `q̇ = u` ([`rates_equal_speeds`]), right for every model with `nq == nu`; a model with
+    /// quaternions overrides it.
+    fn kinematic_rates(&self, _t: f64, _q: &[f64], u: &[f64], out: &mut [f64]) {
+        rates_equal_speeds(u, out);
+    }
+    /// Index in `q` of the scalar part of each unit quaternion (followed by its vector part):
+    /// integrators keep these four coordinates at unit norm. Empty by default.
+    fn unit_quaternions(&self) -> &[usize] {
+        &[]
+    }
+    /// Whether `q̇ = u` ([`Model::kinematic_rates`] is the identity): as many speeds as
+    /// coordinates and no quaternion. Analyses written for `q̇ = u` refuse other models.
+    fn rates_are_speeds(&self) -> bool {
+        self.nq() == self.nu() && self.unit_quaternions().is_empty()
+    }
+    /// `Ok` where `q̇ = u`; else [`RuntimeError::QuaternionsUnsupported`] for `analysis`.
+    fn require_rates_are_speeds(&self, analysis: &'static str) -> Result<(), RuntimeError> {
+        match self.rates_are_speeds() {
+            true => Ok(()),
+            false => Err(RuntimeError::QuaternionsUnsupported {
+                analysis,
+                model: self.name().to_string(),
+            }),
+        }
     }
     /// Outputs `y(t, q, u, inputs)`.
     fn outputs(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]);

@@ -90,13 +90,7 @@ impl<'a, M: Model + ?Sized> Reduced<'a, M> {
         tolerance: f64,
     ) -> Result<Self, RuntimeError> {
         let (nq, nc) = (model.nq(), model.nc());
-        if model.nu() != nq {
-            return Err(RuntimeError::InvalidOptions(format!(
-                "model `{}` has {nq} coordinates but {} speeds; the reduced dynamics need q̇ = u",
-                model.name(),
-                model.nu()
-            )));
-        }
+        model.require_rates_are_speeds("the reduced dynamics")?;
         check_len("q", nq, q.len())?;
         check_inputs(model, signals)?;
         if !(tolerance > 0.0 && tolerance.is_finite()) {

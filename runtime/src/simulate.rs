@@ -2,8 +2,9 @@
 //! that integrates it and samples the trajectory on a regular output grid.
 //!
 //! Two formulations: in full coordinates ([`simulate`] with the explicit methods) the state is
-//! `x = [q; u]` and `ẋ = [u; M(q)⁻¹·F(t, q, u, inputs)]`, and loops are held by projection after
-//! every step; in minimal coordinates ([`simulate_reduced`], and [`simulate`] with the
+//! `x = [q; u]` and `ẋ = [W(q) u; M(q)⁻¹·F(t, q, u, inputs)]` (`W = I` unless the model has unit
+//! quaternions, which are scaled back to unit norm after every step and at every sample),
+//! and loops are held by projection after every step; in minimal coordinates ([`simulate_reduced`], and [`simulate`] with the
 //! Rosenbrock methods) the state is `[z; ż]` of the independent coordinates ([`Reduced`]),
 //! which closes the loops at every evaluation, and each sample is closed again from its `z`. The accelerations are
 //! obtained by a Cholesky factorisation of `M` (symmetric positive definite for a well-posed
@@ -257,7 +258,7 @@ impl AccelSolver {
 }
 
 /// A [`Model`] driven by input [`Signal`]s, as a first-order [`Ode`] on `x = [q; u]`:
-/// `ẋ = [u; M(q)⁻¹·F(t, q, u, inputs(t))]`.
+/// `ẋ = [W(q) u; M(q)⁻¹·F(t, q, u, inputs(t))]` ([`Model::kinematic_rates`]).
 ///
 /// Holds preallocated storage for `M`, `F`, the factorisation and the inputs, so evaluating the
 /// right-hand side never allocates. A non-finite `M`, `F` or `u̇` yields a NaN derivative (which
@@ -267,6 +268,7 @@ pub struct ModelOde<'a, M: Model + ?Sized> {
     model: &'a M,
     signals: &'a [Signal],
     nq: usize,
+    nu: usize,
     inputs: Vec<f64>,
     solver: AccelSolver,
     /// Present for models with loop closures: `M u̇ = F + Jᵀλ`, `J u̇ = −J̇u`.
@@ -275,13 +277,17 @@ pub struct ModelOde<'a, M: Model + ?Sized> {
 
 impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
     /// Wraps `model` with one signal per model input. Errors if `signals` has the wrong length,
-    /// a signal is invalid, or `nq != nu` (the kinematic equation is `q̇ = u`).
+    /// a signal is invalid, the model has both loops and quaternions (the loop rows are
+    /// written for `q̇ = u`), or `nq != nu` without quaternions.
     pub fn new(model: &'a M, signals: &'a [Signal]) -> Result<Self, RuntimeError> {
         let (nq, nu) = (model.nq(), model.nu());
-        if nq != nu {
+        if model.nc() > 0 {
+            model.require_rates_are_speeds("simulation with loop closures")?;
+        }
+        if nq != nu && model.unit_quaternions().is_empty() {
             return Err(RuntimeError::InvalidOptions(format!(
-                "model `{}` has {nq} coordinates but {nu} speeds; simulation needs q̇ = u, \
-                 i.e. as many speeds as coordinates",
+                "model `{}` has {nq} coordinates but {nu} speeds and no unit quaternion; \
+                 simulation knows q̇ = W(q) u only for quaternions",
                 model.name()
             )));
         }
@@ -290,6 +296,7 @@ impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
             model,
             signals,
             nq,
+            nu,
             inputs: vec![0.0; model.ninputs()],
             solver: AccelSolver::new(nu),
             constrained: (model.nc() > 0).then(|| ConstrainedSolver::new(nq, model.nc())),
@@ -323,9 +330,9 @@ impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
         udot: &mut [f64],
     ) -> Result<(), RuntimeError> {
         check_len("q", self.nq, q.len())?;
-        check_len("u", self.nq, u.len())?;
+        check_len("u", self.nu, u.len())?;
         check_len("inputs", self.inputs.len(), inputs.len())?;
-        check_len("udot", self.nq, udot.len())?;
+        check_len("udot", self.nu, udot.len())?;
         self.inputs.copy_from_slice(inputs);
         self.solve(t, q, u, udot)
     }
@@ -348,14 +355,14 @@ impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
 
 impl<M: Model + ?Sized> Ode for ModelOde<'_, M> {
     fn dim(&self) -> usize {
-        2 * self.nq
+        self.nq + self.nu
     }
 
     fn rhs(&mut self, t: f64, x: &[f64], dxdt: &mut [f64]) -> Result<(), RuntimeError> {
         let (q, u) = x.split_at(self.nq);
         values_at(self.signals, t, &mut self.inputs);
         let (qdot, udot) = dxdt.split_at_mut(self.nq);
-        qdot.copy_from_slice(u);
+        self.model.kinematic_rates(t, q, u, qdot);
         // A non-finite derivative (NaN) makes the adaptive integrator retry a smaller step.
         match self.solve(t, q, u, udot) {
             Ok(()) | Err(RuntimeError::NonFiniteState { .. }) => Ok(()),
@@ -419,6 +426,7 @@ pub fn simulate<M: Model + ?Sized>(
 ) -> Result<Trajectory, RuntimeError> {
     let nq = check_initial_state(model, q0, u0)?;
     if options.method.is_reduced() {
+        model.require_rates_are_speeds("simulation in reduced coordinates (Rosenbrock)")?;
         let independent = if model.nc() == 0 {
             (0..nq).collect()
         } else {
@@ -428,9 +436,10 @@ pub fn simulate<M: Model + ?Sized>(
     }
     let ode = ModelOde::new(model, signals)?;
     let sampling = Sampling::new(model, signals, options, progress)?;
-    let mut x0 = Vec::with_capacity(2 * nq);
+    let mut x0 = Vec::with_capacity(nq + model.nu());
     x0.extend_from_slice(q0);
     x0.extend_from_slice(u0);
+    normalize_quaternions(model.unit_quaternions(), &mut x0[..nq]);
     let mut full = FullCoordinates {
         model,
         signals,
@@ -460,6 +469,7 @@ pub fn simulate_reduced<M: Model + ?Sized>(
     progress: &mut dyn FnMut(f64),
 ) -> Result<Trajectory, RuntimeError> {
     check_initial_state(model, q0, u0)?;
+    model.require_rates_are_speeds("simulation in reduced coordinates")?;
     let sampling = Sampling::new(model, signals, options, progress)?;
     let (t0, tolerance) = (options.t_start, options.constraint_tolerance);
     let ode = Reduced::new(model, signals, t0, q0, independent, tolerance)?;
@@ -472,7 +482,8 @@ pub fn simulate_reduced<M: Model + ?Sized>(
     integrate(ode, &x0, options, sampling, &mut reduced)
 }
 
-/// Checks that `q0` and `u0` have one entry per coordinate of `model`; returns their number.
+/// Checks that `q0` and `u0` have one entry per coordinate and speed of `model`; returns the
+/// number of coordinates.
 fn check_initial_state<M: Model + ?Sized>(
     model: &M,
     q0: &[f64],
@@ -480,8 +491,26 @@ fn check_initial_state<M: Model + ?Sized>(
 ) -> Result<usize, RuntimeError> {
     let nq = model.nq();
     check_len("q0", nq, q0.len())?;
-    check_len("u0", nq, u0.len())?;
+    check_len("u0", model.nu(), u0.len())?;
     Ok(nq)
+}
+
+/// Scales each unit quaternion of `q` (four coordinates from each index in `quaternions`)
+/// back to unit norm, the projection onto `|e| = 1` along `e`; returns whether any changed.
+/// Integrating `ė = ½ e ⊗ (0, ω)` keeps `|e|` constant only up to the integrator's error.
+pub fn normalize_quaternions(quaternions: &[usize], q: &mut [f64]) -> bool {
+    let mut changed = false;
+    for &start in quaternions {
+        let Some(e) = q.get_mut(start..start + 4) else {
+            continue;
+        };
+        let norm = e.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if norm > 0.0 && norm.is_finite() && norm != 1.0 {
+            e.iter_mut().for_each(|v| *v /= norm);
+            changed = true;
+        }
+    }
+    changed
 }
 
 /// Most samples a trajectory stores: a typo in the output interval (`1e-12 s`) must not
@@ -582,8 +611,9 @@ impl<M: Model + ?Sized> StateMap for FullCoordinates<'_, M> {
     /// Projects `x` in place; returns whether it changed (a state already within tolerance is
     /// left bit for bit as it was).
     fn after_step(&mut self, t: f64, x: &mut [f64]) -> Result<bool, RuntimeError> {
+        let normalized = normalize_quaternions(self.model.unit_quaternions(), &mut x[..self.nq]);
         let Some(projector) = self.projector.as_mut() else {
-            return Ok(false);
+            return Ok(normalized);
         };
         values_at(self.signals, t, &mut self.inputs);
         let (q, u) = x.split_at_mut(self.nq);
@@ -592,6 +622,7 @@ impl<M: Model + ?Sized> StateMap for FullCoordinates<'_, M> {
 
     fn full_state(&mut self, t: f64, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>), RuntimeError> {
         let (mut q, mut u) = (x[..self.nq].to_vec(), x[self.nq..].to_vec());
+        normalize_quaternions(self.model.unit_quaternions(), &mut q);
         if let Some(projector) = self.projector.as_mut() {
             values_at(self.signals, t, &mut self.inputs);
             projector.project(self.model, t, &mut q, &mut u, &self.inputs, self.tolerance)?;
@@ -720,4 +751,25 @@ fn run<M: Model + ?Sized, S: Stepper>(
     traj.times = grid;
     traj.stats = stepper.stats();
     Ok(traj)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::normalize_quaternions;
+
+    #[test]
+    fn quaternions_are_scaled_to_unit_norm_and_nothing_else_moves() {
+        let mut q = [0.5, 2.0, 0.0, 0.0, 0.0, 3.0, 0.25];
+        assert!(normalize_quaternions(&[1], &mut q));
+        assert_eq!(q[0], 0.5);
+        assert_eq!(&q[1..5], &[1.0, 0.0, 0.0, 0.0]);
+        assert_eq!(&q[5..], &[3.0, 0.25]);
+        // Already unit: unchanged, reported as such; an index past the end is skipped.
+        assert!(!normalize_quaternions(&[1, 6], &mut q));
+        let mut zero = [0.0; 4];
+        assert!(
+            !normalize_quaternions(&[0], &mut zero),
+            "no direction to scale"
+        );
+    }
 }

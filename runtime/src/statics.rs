@@ -587,6 +587,7 @@ pub fn solve_statics_with_loads<M: Model + ?Sized>(
     loads: &[SideLoad],
     options: &StaticsOptions,
 ) -> Result<Equilibrium, RuntimeError> {
+    model.require_rates_are_speeds("statics")?;
     let start = q.to_vec();
     let first = newton(
         &Problem::new(model, t, inputs, fixtures, loads)?,
@@ -647,6 +648,7 @@ pub fn reduced_equilibrium<M: Model + ?Sized>(
     fixtures: &[Fixture],
     loads: &[SideLoad],
 ) -> Result<ReducedEquilibrium, RuntimeError> {
+    model.require_rates_are_speeds("statics")?;
     let problem = Problem::new(model, t, inputs, fixtures, loads)?;
     let point = problem.point(q.to_vec())?;
     Ok(ReducedEquilibrium {

@@ -30,9 +30,10 @@ pub fn run(args: &AssembleArgs) -> Result<(), Error> {
     print!("{}", session::assembly_report(&session.model, &state));
     if let Some(out) = &args.out {
         let model = &session.model;
-        let names: Vec<&str> = (0..model.nq()).map(|i| model.coordinate_name(i)).collect();
-        let mut header: Vec<String> = names.iter().map(|n| format!("q_{n}")).collect();
-        header.extend(names.iter().map(|n| format!("u_{n}")));
+        let mut header: Vec<String> = (0..model.nq())
+            .map(|i| format!("q_{}", model.coordinate_name(i)))
+            .collect();
+        header.extend((0..model.nu()).map(|i| format!("u_{}", model.speed_name(i))));
         let row: Vec<f64> = state.q.iter().chain(&state.u).copied().collect();
         output::write_all(&[output::File::csv(out, &header, &[row])?], &reads)?;
         println!("\nwritten to {}", out.display());

@@ -27,7 +27,7 @@ pub fn run(args: &CheckArgs) -> Result<(), Error> {
             "  {} bodies, {} joints, {} degrees of freedom",
             model.bodies.len(),
             model.joints.len(),
-            model.coordinates.len()
+            model.nu()
         );
     } else {
         let state = session.assemble(&[])?;
@@ -48,7 +48,10 @@ pub fn run(args: &CheckArgs) -> Result<(), Error> {
             println!("  {line}");
         }
     }
-    println!("\ncoordinates (q, with u = q̇):");
+    match model.quaternions.is_empty() {
+        true => println!("\ncoordinates (q, with u = q̇):"),
+        false => println!("\ncoordinates (q, with u = q̇ except for quaternions: q̇ = W(q) u):"),
+    }
     for (_, joint) in model.joints.iter() {
         for &c in &joint.coordinates {
             let coordinate = &model.coordinates[c];
@@ -64,6 +67,18 @@ pub fn run(args: &CheckArgs) -> Result<(), Error> {
                 joint.name,
                 coordinate.initial,
                 coordinate.initial_speed
+            );
+        }
+        if let Some(quaternion) = joint.quaternion.map(|e| &model.quaternions[e]) {
+            let [wx, wy, wz] = quaternion.initial_angular_velocity;
+            println!(
+                "  {:<16} {:?} joint `{}`: unit quaternion ({}), q0 = (1, 0, 0, 0); \
+                 speeds {} (angular velocity in the child frame), u0 = [{wx}, {wy}, {wz}] rad/s",
+                quaternion.name,
+                joint.kind,
+                joint.name,
+                quaternion.coordinate_names().join(", "),
+                quaternion.speed_names().join(", "),
             );
         }
     }

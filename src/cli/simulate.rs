@@ -137,6 +137,12 @@ fn coordinate_names(model: &dyn Model) -> Vec<String> {
         .collect()
 }
 
+fn speed_names(model: &dyn Model) -> Vec<String> {
+    (0..model.nu())
+        .map(|i| model.speed_name(i).to_string())
+        .collect()
+}
+
 fn output_names(model: &dyn Model) -> Vec<String> {
     (0..model.noutputs())
         .map(|i| model.output_name(i).to_string())
@@ -145,10 +151,9 @@ fn output_names(model: &dyn Model) -> Vec<String> {
 
 /// The CSV of a run: `t`, `q_NAME`…, `u_NAME`…, the outputs; one row per sample.
 fn trajectory_table(model: &dyn Model, trajectory: &Trajectory) -> (Vec<String>, Vec<Vec<f64>>) {
-    let coordinates = coordinate_names(model);
     let mut header = vec!["t".to_string()];
-    header.extend(coordinates.iter().map(|n| format!("q_{n}")));
-    header.extend(coordinates.iter().map(|n| format!("u_{n}")));
+    header.extend(coordinate_names(model).iter().map(|n| format!("q_{n}")));
+    header.extend(speed_names(model).iter().map(|n| format!("u_{n}")));
     header.extend(output_names(model));
     let rows = (0..trajectory.times.len())
         .map(|k| {
@@ -189,8 +194,8 @@ fn trajectory_panels(session: &Session, trajectory: &Trajectory) -> Vec<plot::Pa
             column(&trajectory.q, i),
         );
     }
-    for (i, name) in coordinates.iter().enumerate() {
-        let unit = units(name).1;
+    for (i, name) in speed_names(model).iter().enumerate() {
+        let unit = session.speed_unit(name);
         add(
             ("speeds", "u", Some(unit)),
             format!("u_{name}"),

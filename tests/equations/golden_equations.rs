@@ -58,6 +58,7 @@ fn check(stem: &str) {
 
 tests_per_file! {
     check:
+    ball_double_pendulum,
     cart_pendulum,
     chain1,
     chain2,
@@ -65,6 +66,7 @@ tests_per_file! {
     compliant_four_bar,
     double_pendulum_3d,
     flexure_rig,
+    floating_chain,
     four_bar,
     hamr_v2,
     hamr_vi,

@@ -22,6 +22,7 @@ mod linear;
 mod loops;
 mod pendulum;
 mod plausible;
+mod quaternion_joints;
 mod reduced;
 mod resonances;
 mod springs;

@@ -21,6 +21,11 @@ fn check_model(name: &str) {
     for model in [&tape as &dyn Model, compiled.as_ref()] {
         let ours: Vec<&str> = (0..model.nq()).map(|i| model.coordinate_name(i)).collect();
         assert_eq!(ours, coordinates, "{name}: coordinate order");
+        // Models with quaternions name their speeds apart (`shoulder.wx`).
+        if let Some(speeds) = reference.get("speeds") {
+            let ours: Vec<&str> = (0..model.nu()).map(|i| model.speed_name(i)).collect();
+            assert_eq!(ours, json_strings(speeds), "{name}: speed order");
+        }
         for (k, state) in reference["states"].as_array().unwrap().iter().enumerate() {
             let (q, u) = (json_numbers(&state["q"]), json_numbers(&state["u"]));
             let m = mass_matrix(model, &q);
@@ -48,6 +53,19 @@ fn check_model(name: &str) {
                     TOLERANCE,
                     floor,
                 );
+            }
+            if let Some(rates) = state.get("kinematic_rates") {
+                let mut qdot = vec![0.0; model.nq()];
+                model.kinematic_rates(0.0, &q, &u, &mut qdot);
+                for (i, expected) in json_numbers(rates).iter().enumerate() {
+                    assert_close(
+                        &format!("{name} state {k} q̇[{i}]"),
+                        qdot[i],
+                        *expected,
+                        TOLERANCE,
+                        1.0,
+                    );
+                }
             }
             let ke = state["kinetic_energy"].as_f64().unwrap();
             let pe = state["potential_energy"].as_f64().unwrap();
@@ -102,4 +120,17 @@ fn cart_pendulum() {
 #[test]
 fn mixed_chain() {
     check_model("mixed_chain");
+}
+
+/// Ball joints: unit quaternions and angular speeds, `q̇ = W(q) u` checked too.
+#[test]
+fn ball_double_pendulum() {
+    check_model("ball_double_pendulum");
+}
+
+/// A free joint (slides and a quaternion), a sprung pin and a ball joint in one chain: the
+/// coordinates' and the quaternions' places in `q` and `u`.
+#[test]
+fn floating_chain() {
+    check_model("floating_chain");
 }

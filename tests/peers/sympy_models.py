@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Independent SymPy reference for mech: derives each model below with
 sympy.physics.mechanics.KanesMethod and writes M(q), forcing F(q, u) (with
-M u' = F, q' = u), kinetic and potential energy at fixed pseudo-random states
+M u' = F, q' = u; q' = W(q) u for the unit quaternions of ball joints), kinetic and potential energy at fixed pseudo-random states
 to tests/peers/fixture.json.  For the loop models (four_bar, slider_crank: open tree plus
 coincident closures; compliant_four_bar: a flexure at every pin, one of them on a revolute
 closure) also phi(q), J = dphi/dq and J'u.  Model definitions and conventions:
@@ -45,6 +45,10 @@ class Model:
         self.O = me.Point('O')
         self.O.set_vel(self.N, 0)
         self.q, self.u, self.coords = [], [], []
+        # Ball joints, in mech's layout after the pins' and sliders' coordinates and speeds:
+        # quaternion coordinates (scalar first), angular speeds and q' = W(q) u.
+        self.quaternions, self.angular_speeds, self.quaternion_rates = [], [], []
+        self.quaternion_names, self.speed_names = [], []
         self.bodies, self.loads, self.nc_loads = [], [], []
         self.joints, self.pe, self.params = {}, sm.S(0), {'g': float(G_ACC)}
         self.up = self.N.z             # gravity acts along -up
@@ -68,6 +72,27 @@ class Model:
         q = self._coord(name)
         B = parent.orientnew(frame_name, 'Axis', [q, axis])
         self.joints[name] = ('pin', parent, B, axis, joint_pt, None)
+        return B
+
+    def ball(self, name, parent, frame_name):
+        """Child frame = parent turned by the unit quaternion e (scalar first, SymPy's
+        'Quaternion' orientation: parent.dcm(child) = (e0^2 - eps.eps) I + 2 eps eps^T
+        + 2 e0 [eps]x); speeds w = the child's angular velocity relative to the parent in the
+        child's basis, e' = 1/2 e (x) (0, w) (Hamilton product)."""
+        e = me.dynamicsymbols(' '.join(f'{name}.e{k}' for k in range(4)))
+        w = me.dynamicsymbols(' '.join(f'u_{name}.w{a}' for a in 'xyz'))
+        B = parent.orientnew(frame_name, 'Quaternion', e)
+        B.set_ang_vel(parent, w[0] * B.x + w[1] * B.y + w[2] * B.z)
+        p = [0, *w]
+        rates = [(e[0] * p[0] - e[1] * p[1] - e[2] * p[2] - e[3] * p[3]) / 2,
+                 (e[0] * p[1] + e[1] * p[0] + e[2] * p[3] - e[3] * p[2]) / 2,
+                 (e[0] * p[2] - e[1] * p[3] + e[2] * p[0] + e[3] * p[1]) / 2,
+                 (e[0] * p[3] + e[1] * p[2] - e[2] * p[1] + e[3] * p[0]) / 2]
+        self.quaternions += e
+        self.angular_speeds += w
+        self.quaternion_rates += rates
+        self.quaternion_names += [f'{name}.e{k}' for k in range(4)]
+        self.speed_names += [f'{name}.w{a}' for a in 'xyz']
         return B
 
     def slider(self, name, parent, parent_origin, offset, axis, frame_name):
@@ -328,23 +353,58 @@ def compliant_four_bar():
     return M
 
 
+def ball_double_pendulum():
+    """models/ball_double_pendulum.mech: two links on ball joints under gravity."""
+    M = Model('ball_double_pendulum')
+    A = M.ball('shoulder', M.N, 'A')
+    M.body('upper', A, M.O, 1.0, (0, 0, -0.15), (0.02, 0.015, 0.01, 0, 0, 0))
+    E = M.point('E', M.O, -R(0.3) * A.z)
+    B = M.ball('elbow', A, 'B')
+    M.body('lower', B, E, 0.5, (0.02, 0, -0.1), (0.004, 0.003, 0.002, 0, 0, 0))
+    M.params['upper.tip'] = [0, 0, -0.3]
+    return M
+
+
+def floating_chain():
+    """models/floating_chain.mech: a free joint (slides along N's axes with u = q', then a
+    ball), an arm on a sprung pin about the base's z, a hand on a ball joint."""
+    M = Model('floating_chain')
+    x, y, z = (M._coord(f'float.{a}') for a in 'xyz')
+    P = M.point('P', M.O, x * M.N.x + y * M.N.y + z * M.N.z)
+    A = M.ball('float', M.N, 'A')
+    M.body('base', A, P, 2.0, (0.01, 0, 0), (0.05, 0.04, 0.03, 0, 0, 0))
+    S = M.point('S', P, M.vec(A, (0.1, 0, 0)))
+    B = M.pin('shoulder', A, S, A.z, 'B')
+    M.body('arm', B, S, 0.5, (0.1, 0, 0), (0.001, 0.004, 0.0045, 0, 0, 0))
+    W = M.point('W', S, M.vec(B, (0.2, 0, 0)))
+    C = M.ball('wrist', B, 'C')
+    M.body('hand', C, W, 0.2, (0.03, 0.01, 0), (0.0002, 0.0003, 0.00025, 0, 0, 0))
+    M.spring('shoulder', 2.0, 0.1)
+    M.params.update({'base.shoulder': [0.1, 0, 0], 'arm.wrist': [0.2, 0, 0]})
+    return M
+
+
 MODELS = [lambda: chain(1), lambda: chain(2), lambda: chain(4),
           lambda: pendulum_3d(2, 'double_pendulum_3d'), lambda: pendulum_3d(3, 'triple_pendulum_3d'),
-          cart_pendulum, mixed_chain, four_bar, slider_crank, compliant_four_bar]
+          cart_pendulum, mixed_chain, four_bar, slider_crank, compliant_four_bar, ball_double_pendulum,
+          floating_chain]
 
 
 # ---------------------------------------------------------------- evaluation
 def derive(M):
     qd = {qi.diff(t): ui for qi, ui in zip(M.q, M.u)}
-    kane = me.KanesMethod(M.N, q_ind=M.q, u_ind=M.u, kd_eqs=[a - b for a, b in qd.items()])
+    qd.update({e.diff(t): rate for e, rate in zip(M.quaternions, M.quaternion_rates)})
+    q_all, u_all = M.q + M.quaternions, M.u + M.angular_speeds
+    kane = me.KanesMethod(M.N, q_ind=q_all, u_ind=u_all, kd_eqs=[a - b for a, b in qd.items()])
     kane.kanes_equations(M.bodies, M.loads)
     ke = sum(b.kinetic_energy(M.N) for b in M.bodies).xreplace(qd)
     power = sum(v.dot(x.vel(M.N) if isinstance(x, me.Point) else x.ang_vel_in(M.N))
                 for x, v in M.nc_loads).xreplace(qd) if M.nc_loads else sm.S(0)
     E = ke + M.pe
-    dE = [E.diff(s) for s in M.q + M.u]
-    exprs = [kane.mass_matrix.xreplace(qd), kane.forcing.xreplace(qd), ke, M.pe, power, dE]
-    args = M.q + M.u
+    dE = [E.diff(s) for s in q_all + u_all]
+    qdot = [d.xreplace(qd) for d in (s.diff(t) for s in q_all)]
+    exprs = [kane.mass_matrix.xreplace(qd), kane.forcing.xreplace(qd), ke, M.pe, power, dE, qdot]
+    args = q_all + u_all
     if M.loops:
         q, u = sm.Matrix(M.q), sm.Matrix(M.u)
         phi = sm.Matrix([r.dot(e) for r, e in M.loops])
@@ -359,7 +419,7 @@ def derive(M):
         vel = sm.Matrix([r.dt(M.N).dot(e) + r.dot(e.dt(M.N))
                          for r, e in M.loops]).xreplace(qd)   # = J u
         exprs += [phi, J, Jdu, acc - Jdu, vel - J * u]
-    for e in exprs[:5] + exprs[6:9]:   # only q, u may remain (no q', no unsubstituted symbols)
+    for e in exprs[:5] + exprs[7:10]:   # only q, u may remain (no q', no unsubstituted symbols)
         e = sm.sympify(e)
         assert e.free_symbols <= {t} and me.find_dynamicsymbols(e) <= set(args), e
     return sm.lambdify(args, exprs, modules='mpmath')
@@ -369,25 +429,39 @@ def mat(x):
     return mpmath.matrix(x.tolist() if hasattr(x, 'tolist') else x)
 
 
-def check(name, Mm, F, ke, pe, power, dE, u):
+def check(name, Mm, F, ke, pe, power, dE, qdot, u):
     n = len(u)
     scale = max(abs(x) for x in Mm)
     asym = max(abs(Mm[i, j] - Mm[j, i]) for i in range(n) for j in range(n))
     assert asym <= mpmath.mpf(10) ** (-DPS + 10) * scale, f'{name}: M not symmetric ({asym})'
     mpmath.cholesky(Mm)  # raises ValueError unless positive definite
     assert ke > 0 or all(x == 0 for x in u)
-    # energy balance: dE/dt = sum dE/dq u + dE/du u' = power of non-conservative loads
+    # energy balance: dE/dt = sum dE/dq q' + dE/du u' = power of non-conservative loads
     ud = mpmath.lu_solve(Mm, F)
-    rate = sum(dE[i] * u[i] + dE[n + i] * ud[i] for i in range(n))
+    nq = len(qdot)
+    rate = sum(dE[i] * qdot[i] for i in range(nq)) + sum(dE[nq + i] * ud[i] for i in range(n))
     err = abs(rate - power)
     assert err <= mpmath.mpf(10) ** (-DPS + 15) * (1 + abs(rate) + abs(power)), f'{name}: dE/dt {rate} != {power}'
     return err
 
 
-def states(name, n):
+def states(name, n, quaternions=0):
+    """Coordinates and speeds uniform in [-1, 1], then per quaternion a unit quaternion
+    (four normal deviates, normalized) and three angular speeds in [-1, 1]."""
     rng = random.Random(f'mech-peer:{name}')
-    return [([rng.uniform(-1, 1) for _ in range(n)], [rng.uniform(-1, 1) for _ in range(n)])
-            for _ in range(N_STATES)]
+
+    def unit():
+        e = [rng.gauss(0, 1) for _ in range(4)]
+        norm = math.sqrt(sum(x * x for x in e))
+        return [x / norm for x in e]
+    out = []
+    for _ in range(N_STATES):
+        q, u = [rng.uniform(-1, 1) for _ in range(n)], [rng.uniform(-1, 1) for _ in range(n)]
+        for _ in range(quaternions):
+            q += unit()
+            u += [rng.uniform(-1, 1) for _ in range(3)]
+        out.append((q, u))
+    return out
 
 
 def f64(x):
@@ -443,26 +517,37 @@ def main():
         t0 = time.perf_counter()
         f = derive(M)
         t_derive = time.perf_counter() - t0
-        n, out, worst = len(M.q), [], 0
-        for q, u in states(M.name, n):
-            Ms, Fs, ke, pe, power, dE, *loop = f(*map(mpmath.mpf, q + u))
+        out, worst = [], 0
+        for q, u in states(M.name, len(M.q), len(M.quaternions) // 4):
+            args = list(map(mpmath.mpf, q + u))
+            # Each quaternion at unit norm to working precision (the equations hold on
+            # |e| = 1; the doubles written to the fixture are within 1e-16 of it).
+            for k in range(len(M.q), len(q), 4):
+                norm = mpmath.sqrt(sum(x * x for x in args[k:k + 4]))
+                args[k:k + 4] = [x / norm for x in args[k:k + 4]]
+            Ms, Fs, ke, pe, power, dE, qdot, *loop = f(*args)
             Mm, F = mat(Ms), mat(Fs)
-            worst = max(worst, check(M.name, Mm, F, ke, pe, power, dE, list(map(mpmath.mpf, u))))
+            worst = max(worst, check(M.name, Mm, F, ke, pe, power, dE, qdot, list(map(mpmath.mpf, u))))
+            n = len(u)
             out.append({'q': q, 'u': u, 'mass_matrix': [[f64(Mm[i, j]) for j in range(n)] for i in range(n)],
                         'forcing': [f64(F[i]) for i in range(n)],
                         'kinetic_energy': f64(ke), 'potential_energy': f64(pe)})
+            if M.quaternions:
+                out[-1]['kinematic_rates'] = [f64(x) for x in qdot]
             if loop:
                 phi, J, Jdu, acc_err, vel_err = map(mat, loop)
                 nc = len(M.loops)
                 for e in (acc_err, vel_err):   # vector kinematics agree with d/dt of phi
                     assert max(abs(x) for x in e) <= mpmath.mpf(10) ** (-DPS + 10), f'{M.name}: {e}'
                 out[-1].update({'constraints': [f64(phi[i]) for i in range(nc)],
-                                'constraint_jacobian': [[f64(J[i, j]) for j in range(n)] for i in range(nc)],
+                                'constraint_jacobian': [[f64(J[i, j]) for j in range(len(q))] for i in range(nc)],
                                 'constraint_bias': [f64(Jdu[i]) for i in range(nc)]})
-        models[M.name] = {'coordinates': M.coords, 'params': M.params, 'states': out}
+        models[M.name] = {'coordinates': M.coords + M.quaternion_names, 'params': M.params, 'states': out}
+        if M.quaternions:
+            models[M.name]['speeds'] = M.coords + M.speed_names
         if M.loops:
             models[M.name]['constraint_names'] = M.loop_names
-        print(f'{M.name:20s} n={n}  derivation {t_derive:6.2f} s  '
+        print(f'{M.name:20s} n={len(u)}  derivation {t_derive:6.2f} s  '
               f'(M symmetric+PD, |dE/dt - P_nc| <= {mpmath.nstr(worst, 2)})')
     print('cross-check:')
     cross_check_shared(models)

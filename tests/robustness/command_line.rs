@@ -186,3 +186,41 @@ fn escape_sequences_in_an_input_file_are_shown_not_sent_to_the_terminal() {
     assert!(run.stderr.contains("param ␛[2Jq = 3;"), "{}", run.stderr);
     assert!(run.stderr.contains("escape.mech:3:7"), "{}", run.stderr);
 }
+
+/// A model with ball joints (unit quaternions, `q̇ = W(q) u`): the analyses written for
+/// `q̇ = u` refuse it with one message naming what is not supported and what works, and
+/// nothing indexes `u` by a coordinate's index past its end.
+#[test]
+fn analyses_not_written_for_quaternions_refuse_a_ball_joint_model() {
+    let dir = scratch("quaternion_analyses");
+    let refused = "is not supported yet: it has a ball or free joint, whose orientation is a \
+                   unit quaternion (q̇ = W(q) u, not q̇ = u)";
+    let model = "{model:ball_double_pendulum}";
+    expect_errors(
+        &dir,
+        &[
+            (&["statics", model], refused),
+            (&["linearize", model], refused),
+            (
+                &["simulate", model, "--t-end", "0.1", "--out", "run.csv", "--method", "rosenbrock"],
+                "simulation in reduced coordinates of model `ball_double_pendulum` is not supported yet",
+            ),
+        ],
+    );
+    for args in [
+        &["check", model][..],
+        &["assemble", model, "--out", "state.csv"],
+        &[
+            "simulate", model, "--t-end", "0.1", "--out", "run.csv", "--plot", "run.svg",
+        ],
+    ] {
+        let run = crate::support::mech(&dir, args);
+        assert_eq!(run.code, Some(0), "mech {}: {}", args.join(" "), run.stderr);
+    }
+    let header = std::fs::read_to_string(dir.join("run.csv")).unwrap();
+    let header = header.lines().next().unwrap();
+    assert!(
+        header.starts_with("t,q_shoulder.e0,") && header.contains(",u_elbow.wz,ke,pe,"),
+        "{header}"
+    );
+}

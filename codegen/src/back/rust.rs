@@ -186,6 +186,7 @@ enum Function {
     Flexures,
     ConstrainedTerms,
     DynamicsTerms,
+    KinematicRates,
 }
 
 impl Function {
@@ -200,6 +201,7 @@ impl Function {
             Function::Flexures => "flexures",
             Function::ConstrainedTerms => "constrained_terms",
             Function::DynamicsTerms => "dynamics_terms",
+            Function::KinematicRates => "kinematic_rates",
         }
     }
 
@@ -222,7 +224,7 @@ impl Function {
             Function::Constraints | Function::ConstraintJacobian | Function::Flexures => {
                 &[State::Q]
             }
-            Function::ConstraintBias => &[State::Q, State::U],
+            Function::ConstraintBias | Function::KinematicRates => &[State::Q, State::U],
             Function::Forcing
             | Function::Outputs
             | Function::ConstrainedTerms
@@ -286,7 +288,6 @@ impl<'a> Emitter<'a> {
             format!(" Parameters of [`{name}`], in SI units; defaults from the model.");
 
         let parameters: Vec<_> = self.model.params.iter().map(|(_, p)| p).collect();
-        let coordinates: Vec<_> = self.model.coordinates.iter().map(|(_, c)| c).collect();
         let inputs: Vec<_> = self.model.inputs.iter().map(|(_, i)| i).collect();
 
         let field_docs = parameters.iter().map(|p| {
@@ -302,13 +303,14 @@ impl<'a> Emitter<'a> {
         let param_indices: Vec<Literal> = (0..fields.len()).map(usize_literal).collect();
 
         let names = |items: Vec<&String>| quote!([#(#items),*]);
-        let coordinate_names = names(coordinates.iter().map(|c| &c.name).collect());
+        let all_coordinate_names = self.model.coordinate_names();
+        let coordinate_names = names(all_coordinate_names.iter().collect());
         let input_names = names(inputs.iter().map(|i| &i.name).collect());
         let output_names = names(self.equations.output_names.iter().collect());
         let param_names = names(parameters.iter().map(|p| &p.name).collect());
         let input_defaults = inputs.iter().map(|i| f64_tokens(i.default));
-        let q0 = coordinates.iter().map(|c| f64_tokens(c.initial));
-        let u0 = coordinates.iter().map(|c| f64_tokens(c.initial_speed));
+        let q0 = self.model.initial_coordinates().into_iter().map(f64_tokens);
+        let u0 = self.model.initial_speeds().into_iter().map(f64_tokens);
 
         let (mass_parts, mass_matrix) =
             self.inherent_function(Function::MassMatrix, &self.equations.mass_matrix);
@@ -316,6 +318,7 @@ impl<'a> Emitter<'a> {
             self.inherent_function(Function::Forcing, &self.equations.forcing);
         let (constraint_inherent, constraint_trait) = self.constraint_functions();
         let (flexure_inherent, flexure_trait) = self.flexure_functions();
+        let (rates_inherent, rates_trait) = self.kinematic_functions();
         let (output_parts, outputs) =
             self.inherent_function(Function::Outputs, &self.equations.outputs);
         let mass_matrix_in_trait = self.trait_method(Function::MassMatrix, "m");
@@ -403,6 +406,7 @@ impl<'a> Emitter<'a> {
 
                 #constraint_inherent
                 #flexure_inherent
+                #rates_inherent
             }
 
             #[allow(clippy::all, unused_variables)]
@@ -441,6 +445,7 @@ impl<'a> Emitter<'a> {
                 #outputs_in_trait
                 #constraint_trait
                 #flexure_trait
+                #rates_trait
             }
         };
         (file, parts)
@@ -472,6 +477,42 @@ impl<'a> Emitter<'a> {
             fn nflexures(&self) -> usize { #count }
             fn flexure_name(&self, i: usize) -> &str { Self::FLEXURE_NAMES.get(i).copied().unwrap_or("") }
             #flexures_in_trait
+        };
+        (inherent, in_trait)
+    }
+
+    /// For models with quaternions (`q̇ ≠ u`): `SPEED_NAMES`, `UNIT_QUATERNIONS` (the index in
+    /// `q` of each quaternion's scalar part) and `kinematic_rates` (`q̇ = W(q) u`), inherent
+    /// and in the trait; other models keep the trait's defaults (`q̇ = u`).
+    fn kinematic_functions(&self) -> (TokenStream, TokenStream) {
+        let Some(rates) = &self.equations.kinematic_rates else {
+            return (TokenStream::new(), TokenStream::new());
+        };
+        let nu = self.len(State::U);
+        let speed_names = self.model.speed_names();
+        let quaternions: Vec<Literal> = self
+            .model
+            .quaternions
+            .iter()
+            .map(|(e, _)| usize_literal(self.model.quaternion_coordinate(e, 0)))
+            .collect();
+        let count = usize_literal(quaternions.len());
+        let (parts, rates) = self.inherent_function(Function::KinematicRates, rates);
+        let rates_in_trait = self.trait_method(Function::KinematicRates, "qdot");
+        let inherent = quote! {
+            pub const SPEED_NAMES: [&'static str; #nu] = [#(#speed_names),*];
+            /// Index in `q` of the scalar part of each unit quaternion (four coordinates).
+            pub const UNIT_QUATERNIONS: [usize; #count] = [#(#quaternions),*];
+
+            /// Kinematic differential equations `q̇ = W(q) u`.
+            #rates
+
+            #(#parts)*
+        };
+        let in_trait = quote! {
+            fn speed_name(&self, i: usize) -> &str { Self::SPEED_NAMES.get(i).copied().unwrap_or("") }
+            fn unit_quaternions(&self) -> &[usize] { &Self::UNIT_QUATERNIONS }
+            #rates_in_trait
         };
         (inherent, in_trait)
     }

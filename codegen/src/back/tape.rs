@@ -1,7 +1,7 @@
 //! The tape back end: straight-line programs over `f64` registers, and their evaluator.
 //!
-//! Consumes: [`Equations`]. Produces: a [`Tape`] with one [`Program`] each for `M`, `F` and
-//! the outputs, so the command line can run any `.mech` file without compiling Rust.
+//! Consumes: [`Equations`]. Produces: a [`Tape`] with one [`Program`] each for `M`, `F`, the
+//! outputs (and `q̇ = W(q) u` for models with quaternions), so the command line can run any `.mech` file without compiling Rust.
 //! Instruction `i` writes register `i` (static single assignment); operands are earlier
 //! registers. Constants and symbol loads are deduplicated.
 
@@ -229,6 +229,8 @@ pub struct Tape {
     pub nflexures: usize,
     /// `[θ…, k…, b…, η…]` of the flexures.
     pub flexures: Program,
+    /// `q̇ = W(q) u` (`Equations::kinematic_rates`); `None` where `q̇ = u`.
+    pub kinematic_rates: Option<Program>,
 }
 
 impl Tape {
@@ -254,6 +256,10 @@ impl Tape {
             constraint_bias: Program::compile(&equations.pool, &equations.constraints.bias),
             nflexures: equations.flexures.names.len(),
             flexures: Program::compile(&equations.pool, &equations.flexures.all()),
+            kinematic_rates: equations
+                .kinematic_rates
+                .as_ref()
+                .map(|roots| Program::compile(&equations.pool, roots)),
         }
     }
 }

@@ -9,6 +9,10 @@
 //!   parents first (the kinematic tree in topological order). A tree joint is nothing but a
 //!   frame with a [`Motion`]; a body is attached to one frame; massless frames are allowed.
 //! - Each coordinate is driven by exactly one frame's motion; `u_i = q̇_i`.
+//! - Each quaternion (`Model::quaternions`) is driven by exactly one spherical motion. The
+//!   state is laid out as `q = [coordinates…; quaternions, 4 each, scalar first…]` and
+//!   `u = [coordinate speeds…; angular speeds, 3 each…]` ([`Model::quaternion_coordinate`],
+//!   [`Model::angular_speed`]), so a coordinate's index addresses both `q` and `u`.
 //! - All expressions are dimensionally consistent and in SI units (kg, m, s, rad, A).
 //! - Joint axes have unit length.
 //! - Loop closures (`Model::loops`) are additional constraints between two points or
@@ -371,6 +375,31 @@ pub struct Coordinate {
     pub span: Span,
 }
 
+/// The orientation of a spherical motion relative to its parent: a unit quaternion
+/// `e = (e₀, e₁, e₂, e₃)`, scalar first, with speeds the measure numbers of the frame's
+/// angular velocity relative to the parent, in the frame's own basis, and `ė = ½ e ⊗ (0, ω)`.
+/// It starts at the identity rotation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Quaternion {
+    /// The joint's name; its coordinates are `NAME.e0` … `NAME.e3`, its speeds `NAME.wx` …
+    /// `NAME.wz`.
+    pub name: String,
+    /// Initial angular velocity relative to the parent, in rad/s, components in the frame.
+    pub initial_angular_velocity: [f64; 3],
+    pub span: Span,
+}
+
+impl Quaternion {
+    /// Names of the four coordinates, scalar first.
+    pub fn coordinate_names(&self) -> [String; 4] {
+        ["e0", "e1", "e2", "e3"].map(|part| format!("{}.{part}", self.name))
+    }
+    /// Names of the three angular speeds.
+    pub fn speed_names(&self) -> [String; 3] {
+        ["wx", "wy", "wz"].map(|part| format!("{}.{part}", self.name))
+    }
+}
+
 /// Rotation by `angle` about the unit vector `axis` (components in the rotating frame).
 #[derive(Clone, Debug, PartialEq)]
 pub struct AxisAngle {
@@ -394,12 +423,14 @@ pub enum Motion {
         axis: Vec3,
         coordinate: Handle<Coordinate>,
     },
+    /// Rotation by the unit quaternion `quaternion` about the frame's origin (a ball joint).
+    Spherical { quaternion: Handle<Quaternion> },
 }
 
 impl Motion {
     pub fn coordinate(&self) -> Option<Handle<Coordinate>> {
         match self {
-            Motion::Fixed => None,
+            Motion::Fixed | Motion::Spherical { .. } => None,
             Motion::Revolute { coordinate, .. } | Motion::Prismatic { coordinate, .. } => {
                 Some(*coordinate)
             }
@@ -501,6 +532,11 @@ pub enum JointKind {
     Pin,
     Slider,
     Weld,
+    /// Spherical: a unit quaternion and three angular speeds.
+    Ball,
+    /// Six degrees of freedom (a floating base): three slides along the joint frame's axes
+    /// (`u = q̇`, the origin's velocity in the parent) and a ball.
+    Free,
 }
 
 /// A joint as declared in the model; kept for reports and diagnostics.
@@ -512,6 +548,8 @@ pub struct Joint {
     pub parent: Option<Handle<Body>>,
     pub child: Handle<Body>,
     pub coordinates: Vec<Handle<Coordinate>>,
+    /// The orientation of a `ball` or `free` joint.
+    pub quaternion: Option<Handle<Quaternion>>,
     pub span: Span,
 }
 
@@ -704,6 +742,9 @@ pub struct Model {
     pub params: Arena<Param>,
     pub inputs: Arena<Input>,
     pub coordinates: Arena<Coordinate>,
+    /// Orientations of spherical motions; their coordinates and speeds follow the
+    /// coordinates' in `q` and `u`.
+    pub quaternions: Arena<Quaternion>,
     /// The kinematic tree, parents first; `frames[NEWTONIAN]` is the root.
     pub frames: Arena<Frame>,
     pub bodies: Arena<Body>,
@@ -754,6 +795,53 @@ impl Model {
                 })
             })
             .collect()
+    }
+
+    /// Number of generalized coordinates: one per coordinate, four per quaternion.
+    pub fn nq(&self) -> usize {
+        self.coordinates.len() + 4 * self.quaternions.len()
+    }
+    /// Number of generalized speeds: one per coordinate, three per quaternion.
+    pub fn nu(&self) -> usize {
+        self.coordinates.len() + 3 * self.quaternions.len()
+    }
+    /// Index in `q` of part `part` (0 = scalar) of `quaternion`.
+    pub fn quaternion_coordinate(&self, quaternion: Handle<Quaternion>, part: usize) -> usize {
+        self.coordinates.len() + 4 * quaternion.index() + part
+    }
+    /// Index in `u` of the angular speed about axis `axis` (0 = x) of `quaternion`.
+    pub fn angular_speed(&self, quaternion: Handle<Quaternion>, axis: usize) -> usize {
+        self.coordinates.len() + 3 * quaternion.index() + axis
+    }
+    /// Names of `q` in order: the coordinates', then each quaternion's four.
+    pub fn coordinate_names(&self) -> Vec<String> {
+        let coordinates = self.coordinates.iter().map(|(_, c)| c.name.clone());
+        let quaternions = self
+            .quaternions
+            .iter()
+            .flat_map(|(_, e)| e.coordinate_names());
+        coordinates.chain(quaternions).collect()
+    }
+    /// Names of `u` in order: the coordinates', then each quaternion's three angular speeds.
+    pub fn speed_names(&self) -> Vec<String> {
+        let coordinates = self.coordinates.iter().map(|(_, c)| c.name.clone());
+        let quaternions = self.quaternions.iter().flat_map(|(_, e)| e.speed_names());
+        coordinates.chain(quaternions).collect()
+    }
+    /// Initial `q`: the coordinates' `q0`, then identity rotations `(1, 0, 0, 0)`.
+    pub fn initial_coordinates(&self) -> Vec<f64> {
+        let coordinates = self.coordinates.iter().map(|(_, c)| c.initial);
+        let quaternions = self.quaternions.iter().flat_map(|_| [1.0, 0.0, 0.0, 0.0]);
+        coordinates.chain(quaternions).collect()
+    }
+    /// Initial `u`: the coordinates' `u0`, then the quaternions' angular velocities.
+    pub fn initial_speeds(&self) -> Vec<f64> {
+        let coordinates = self.coordinates.iter().map(|(_, c)| c.initial_speed);
+        let quaternions = self
+            .quaternions
+            .iter()
+            .flat_map(|(_, e)| e.initial_angular_velocity);
+        coordinates.chain(quaternions).collect()
     }
 
     /// The chain of frames from the root to `frame`, root first.

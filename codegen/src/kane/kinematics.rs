@@ -12,9 +12,10 @@
 //! The recursion, for frame k with parent p, C = C_{p←k} and d = O_k − O_p (in p):
 //! ```text
 //! ω_k   = Cᵀ ω_p + a u_j                                  (revolute about a, speed u_j)
-//! W_k,r = Cᵀ W_p,r  (+ a for r = j, revolute)
+//!       = Cᵀ ω_p + Σ_i n_i u_i                            (spherical: C = C₀ C(e), n_i = k's axes)
+//! W_k,r = Cᵀ W_p,r  (+ a for r = j, revolute; + n_i for r = i, spherical)
 //! V_k,r = Cᵀ (V_p,r + W_p,r × d)  (+ a for r = j, prismatic)
-//! α_k   = Cᵀ α_p + (Cᵀ ω_p) × a u_j                       (u̇-free part)
+//! α_k   = Cᵀ α_p + (Cᵀ ω_p) × a u_j                       (u̇-free part; Σ n_i u_i if spherical)
 //! a_O,k = Cᵀ (a_O,p + α_p × d + ω_p × (ω_p × d) + 2 ω_p × a_p u_j)   (last term prismatic)
 //! ```
 
@@ -131,7 +132,7 @@ impl Kinematics {
         for (handle, frame) in model.frames.iter() {
             let kinematics = match frame.parent {
                 None => root(model, pool),
-                Some(parent) => child(pool, frame, &frames[parent.index()]),
+                Some(parent) => child(pool, model, frame, &frames[parent.index()]),
             };
             debug_assert_eq!(frames.len(), handle.index());
             frames.push(kinematics);
@@ -257,8 +258,37 @@ fn root(model: &Model, pool: &mut ExprPool) -> FrameKinematics {
     }
 }
 
+/// The symbols `e₀ … e₃` of a quaternion.
+pub fn quaternion_symbols(
+    pool: &mut ExprPool,
+    model: &Model,
+    quaternion: Handle<ir::Quaternion>,
+) -> [ExprId; 4] {
+    [0, 1, 2, 3].map(|part| {
+        let index = model.quaternion_coordinate(quaternion, part);
+        pool.symbol(Symbol::Coordinate(index as u32))
+    })
+}
+
+/// The speed symbols `u_i` of a quaternion's angular velocity, with their indices.
+pub fn angular_speed_symbols(
+    pool: &mut ExprPool,
+    model: &Model,
+    quaternion: Handle<ir::Quaternion>,
+) -> [(usize, ExprId); 3] {
+    [0, 1, 2].map(|axis| {
+        let index = model.angular_speed(quaternion, axis);
+        (index, pool.symbol(Symbol::Speed(index as u32)))
+    })
+}
+
 /// One step of the recursion in the module docs.
-fn child(pool: &mut ExprPool, frame: &ir::Frame, parent: &FrameKinematics) -> FrameKinematics {
+fn child(
+    pool: &mut ExprPool,
+    model: &Model,
+    frame: &ir::Frame,
+    parent: &FrameKinematics,
+) -> FrameKinematics {
     let placement = orientation(pool, &frame.orientation);
     let origin = lower_vec(pool, &frame.origin);
     let speed_symbol = |pool: &mut ExprPool, c: Handle<ir::Coordinate>| {
@@ -269,13 +299,25 @@ fn child(pool: &mut ExprPool, frame: &ir::Frame, parent: &FrameKinematics) -> Fr
     };
 
     let (to_parent, offset, own_rotation, own_translation) = match &frame.motion {
-        Motion::Fixed => (placement, origin, None, None),
+        Motion::Fixed => (placement, origin, Vec::new(), None),
         Motion::Revolute { axis, coordinate } => {
             let axis = lower_vec(pool, axis);
             let (q, u) = speed_symbol(pool, *coordinate);
             let rotation = vector::rotation(pool, axis, q);
             let dcm = vector::mat_mul(pool, &placement, &rotation);
-            (dcm, origin, Some((coordinate.index(), axis, u)), None)
+            (dcm, origin, vec![(coordinate.index(), axis, u)], None)
+        }
+        Motion::Spherical { quaternion } => {
+            let e = quaternion_symbols(pool, model, *quaternion);
+            let rotation = vector::quaternion_rotation(pool, e);
+            let dcm = vector::mat_mul(pool, &placement, &rotation);
+            let axes = vector::identity(pool);
+            let spins = angular_speed_symbols(pool, model, *quaternion)
+                .into_iter()
+                .zip(axes)
+                .map(|((r, u), axis)| (r, axis, u))
+                .collect();
+            (dcm, origin, spins, None)
         }
         Motion::Prismatic { axis, coordinate } => {
             let axis = lower_vec(pool, axis);
@@ -286,7 +328,7 @@ fn child(pool: &mut ExprPool, frame: &ir::Frame, parent: &FrameKinematics) -> Fr
             (
                 placement,
                 offset,
-                None,
+                Vec::new(),
                 Some((coordinate.index(), axis, axis_in_parent, u)),
             )
         }
@@ -303,9 +345,12 @@ fn child(pool: &mut ExprPool, frame: &ir::Frame, parent: &FrameKinematics) -> Fr
         .collect();
     let mut omega = parent_omega_here;
     let mut alpha_rest = to_child(pool, parent.alpha_rest);
-    if let Some((r, axis, u)) = own_rotation {
+    let mut spins = Vec::with_capacity(own_rotation.len());
+    for (r, axis, u) in own_rotation {
         partial_omega.push((r, axis));
-        let spin = vector::scale(pool, axis, u);
+        spins.push(vector::scale(pool, axis, u));
+    }
+    if let Some(spin) = spins.into_iter().reduce(|a, b| vector::add(pool, a, b)) {
         omega = vector::add(pool, omega, spin);
         let transport = vector::cross(pool, parent_omega_here, spin);
         alpha_rest = vector::add(pool, alpha_rest, transport);

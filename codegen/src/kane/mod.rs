@@ -28,9 +28,12 @@ use vector::Vec3;
 #[derive(Clone, Debug)]
 pub struct Equations {
     pub pool: ExprPool,
-    /// Number of generalized coordinates and speeds (equal for tree models).
+    /// Number of generalized coordinates and speeds (equal without quaternions).
     pub nq: usize,
     pub nu: usize,
+    /// The kinematic differential equations `q̇ = W(q) u`, length `nq`, where they are not
+    /// `q̇ = u`: `None` for models without quaternions.
+    pub kinematic_rates: Option<Vec<ExprId>>,
     /// `M(q)`, `nu × nu`, column-major; symmetric (`M[r + nu*s] == M[s + nu*r]`, same id).
     pub mass_matrix: Vec<ExprId>,
     /// `F(t, q, u, inputs)`, length `nu`.
@@ -133,7 +136,7 @@ pub fn derive(model: &Model) -> Equations {
     let mut pool = ExprPool::new();
     name_symbols(model, &mut pool);
     let mut kinematics = Kinematics::new(model, &mut pool);
-    let nu = model.coordinates.len();
+    let nu = model.nu();
 
     // Terms of M_rs (r ≤ s) and F_r, summed once at the end so each sum is built once.
     let mut mass_terms: BTreeMap<(usize, usize), Vec<ExprId>> = BTreeMap::new();
@@ -171,10 +174,12 @@ pub fn derive(model: &Model) -> Equations {
             outputs.push(id);
         }
     }
+    let kinematic_rates = kinematic_rates(&mut pool, model);
     Equations {
         pool,
-        nq: nu,
+        nq: model.nq(),
         nu,
+        kinematic_rates,
         mass_matrix,
         forcing,
         static_forcing,
@@ -185,12 +190,31 @@ pub fn derive(model: &Model) -> Equations {
     }
 }
 
-/// Display names: `q_<coordinate>`, `u_<coordinate>`, parameter and input names, `t`.
+/// `q̇ = W(q) u`: `q̇ᵢ = uᵢ` for the coordinates, `ė = ½ e ⊗ (0, ω)` for each quaternion;
+/// `None` without quaternions (`q̇ = u`).
+fn kinematic_rates(pool: &mut ExprPool, model: &Model) -> Option<Vec<ExprId>> {
+    if model.quaternions.is_empty() {
+        return None;
+    }
+    let mut rates: Vec<ExprId> = (0..model.coordinates.len())
+        .map(|i| pool.symbol(Symbol::Speed(i as u32)))
+        .collect();
+    for (quaternion, _) in model.quaternions.iter() {
+        let e = kinematics::quaternion_symbols(pool, model, quaternion);
+        let omega = kinematics::angular_speed_symbols(pool, model, quaternion).map(|(_, u)| u);
+        rates.extend(vector::quaternion_rates(pool, e, omega));
+    }
+    Some(rates)
+}
+
+/// Display names: `q_<coordinate>`, `u_<speed>` (as [`Model::coordinate_names`] and
+/// [`Model::speed_names`] spell them), parameter and input names, `t`.
 fn name_symbols(model: &Model, pool: &mut ExprPool) {
-    for (handle, coordinate) in model.coordinates.iter() {
-        let i = handle.index() as u32;
-        pool.set_name(Symbol::Coordinate(i), format!("q_{}", coordinate.name));
-        pool.set_name(Symbol::Speed(i), format!("u_{}", coordinate.name));
+    for (i, name) in model.coordinate_names().into_iter().enumerate() {
+        pool.set_name(Symbol::Coordinate(i as u32), format!("q_{name}"));
+    }
+    for (i, name) in model.speed_names().into_iter().enumerate() {
+        pool.set_name(Symbol::Speed(i as u32), format!("u_{name}"));
     }
     for (handle, param) in model.params.iter() {
         pool.set_name(Symbol::Param(handle.index() as u32), param.name.clone());

@@ -123,3 +123,51 @@ pub fn rotation(pool: &mut ExprPool, axis: Vec3, angle: ExprId) -> Mat3 {
     }
     out
 }
+
+/// The DCM `C_{P←F}` of the unit quaternion `e = (e₀, ε)`, scalar first, that turns P into F
+/// (Euler parameters; Kane, Likins & Levinson, *Spacecraft Dynamics*, §1.3):
+/// `C = (e₀² − ε·ε) I + 2 ε εᵀ + 2 e₀ [ε]×`.
+pub fn quaternion_rotation(pool: &mut ExprPool, e: [ExprId; 4]) -> Mat3 {
+    let [e0, e1, e2, e3] = e;
+    let vector = [e1, e2, e3];
+    let squares = e.map(|part| pool.pow(part, Number::int(2)));
+    let mut out = [[pool.zero(); 3]; 3];
+    for (i, row) in out.iter_mut().enumerate() {
+        for (j, entry) in row.iter_mut().enumerate() {
+            *entry = if i == j {
+                // e₀² + εᵢ² − the other two squares.
+                let others: Vec<usize> = (1..4).filter(|&k| k != i + 1).collect();
+                let plus = pool.add(squares[0], squares[i + 1]);
+                let minus = pool.add(squares[others[0]], squares[others[1]]);
+                pool.sub(plus, minus)
+            } else {
+                // 2 (εᵢ εⱼ − ε_ijk e₀ εₖ): the skew part has the sign of (i, j, k) cyclic.
+                let k = 3 - i - j;
+                let outer = pool.mul(vector[i], vector[j]);
+                let skew = pool.mul(e0, vector[k]);
+                let cyclic = (j + 3 - i) % 3 == 1;
+                let sum = if cyclic {
+                    pool.sub(outer, skew)
+                } else {
+                    pool.add(outer, skew)
+                };
+                pool.scale(sum, Number::int(2))
+            };
+        }
+    }
+    out
+}
+
+/// `ė = ½ e ⊗ (0, ω)` for `ω` in F's basis: `ė₀ = −½ ε·ω`, `ε̇ = ½ (e₀ ω + ε × ω)` (the
+/// kinematic differential equations of Euler parameters, Kane, Likins & Levinson §1.13).
+pub fn quaternion_rates(pool: &mut ExprPool, e: [ExprId; 4], omega: Vec3) -> [ExprId; 4] {
+    let vector = [e[1], e[2], e[3]];
+    let half = Number::rational(1, 2);
+    let projection = dot(pool, vector, omega);
+    let scalar = pool.scale(projection, Number::rational(-1, 2));
+    let along = scale(pool, omega, e[0]);
+    let across = cross(pool, vector, omega);
+    let rate = add(pool, along, across);
+    let rate = scale_number(pool, rate, half);
+    [scalar, rate[0], rate[1], rate[2]]
+}

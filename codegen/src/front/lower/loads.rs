@@ -330,15 +330,37 @@ impl Lowerer<'_> {
                     && (which.name == "q" || which.name == "u") =>
             {
                 let j = self.joint_index[&joint.name];
-                if self.joints.get(j).and_then(|info| info.kind) == Some(JointKind::Weld) {
-                    self.error(
-                        Diagnostic::error(
-                            "E0213",
-                            format!("weld joint `{}` has no coordinate", joint.name),
-                        )
-                        .with_label(path.span, "a weld has no degree of freedom"),
-                    );
-                    return None;
+                match self.joints.get(j).and_then(|info| info.kind) {
+                    Some(JointKind::Weld) => {
+                        self.error(
+                            Diagnostic::error(
+                                "E0213",
+                                format!("weld joint `{}` has no coordinate", joint.name),
+                            )
+                            .with_label(path.span, "a weld has no degree of freedom"),
+                        );
+                        return None;
+                    }
+                    Some(kind @ (JointKind::Ball | JointKind::Free)) => {
+                        let what = if kind == JointKind::Ball {
+                            "ball"
+                        } else {
+                            "free"
+                        };
+                        self.error(
+                            Diagnostic::error(
+                                "E0213",
+                                format!("{what} joint `{}` has no single coordinate", joint.name),
+                            )
+                            .with_label(path.span, "its orientation is a unit quaternion")
+                            .with_help(
+                                "output the motion of a point of the child body, \
+                                 `position(body.point)` or `velocity(body.point)`",
+                            ),
+                        );
+                        return None;
+                    }
+                    _ => {}
                 }
                 if which.name == "q" {
                     PendingKind::Coordinate(j)

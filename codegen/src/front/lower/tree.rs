@@ -3,8 +3,9 @@
 //!
 //! Consumes: `joint` declarations and the [`Owner`](super::body::Owner)s.
 //! Produces: `model.frames` (newtonian, its frames, then per joint in depth-first order:
-//! `j`, optionally `j.child`, the child body's frame and its named frames), coordinates,
-//! joints, springs and dampers, points and bodies; `E04xx` tree errors.
+//! `j` (for a `free` joint `j.x`, `j.y`, `j.z` first), optionally `j.child`, the child body's
+//! frame and its named frames), coordinates, quaternions (`ball`, `free`), joints, springs
+//! and dampers, points and bodies; `E04xx` tree errors.
 
 use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, ExprKind};
@@ -29,6 +30,10 @@ pub struct JointInfo<'a> {
     child_frame: Option<Vec<AxisAngle>>,
     q0: f64,
     u0: f64,
+    /// `ball` and `free`: the initial angular velocity relative to the parent (child frame).
+    angular_velocity0: [f64; 3],
+    /// `free`: the initial velocity of the child's origin, components in the joint frame.
+    velocity0: [f64; 3],
     stiffness: Option<(Expr, Span)>,
     rest: Expr,
     damping: Option<(Expr, Span)>,
@@ -36,7 +41,7 @@ pub struct JointInfo<'a> {
     pub frame: Option<Handle<ir::Frame>>,
 }
 
-const JOINT_FIELDS: [&str; 10] = [
+const JOINT_FIELDS: [&str; 11] = [
     "axis",
     "parent_point",
     "child_point",
@@ -44,12 +49,39 @@ const JOINT_FIELDS: [&str; 10] = [
     "child_frame",
     "q0",
     "u0",
+    "v0",
     "stiffness",
     "rest",
     "damping",
 ];
-/// Fields that describe a degree of freedom, so a weld has none of them.
-const DOF_FIELDS: [&str; 6] = ["axis", "q0", "u0", "stiffness", "rest", "damping"];
+
+/// The fields of `JOINT_FIELDS` a joint of `kind` does not take, and why (the label of E0403).
+fn fields_not_allowed(kind: JointKind) -> (&'static [&'static str], &'static str) {
+    match kind {
+        JointKind::Pin | JointKind::Slider => (&["v0"], "only a free joint has `v0`"),
+        JointKind::Weld => (
+            &["axis", "q0", "u0", "v0", "stiffness", "rest", "damping"],
+            "a weld has no degree of freedom",
+        ),
+        JointKind::Ball => (
+            &["axis", "q0", "v0", "stiffness", "rest", "damping"],
+            "a ball joint has no single axis or angle",
+        ),
+        JointKind::Free => (
+            &["axis", "q0", "stiffness", "rest", "damping"],
+            "a free joint has no single axis or angle",
+        ),
+    }
+}
+
+/// Every joint kind, as written.
+const JOINT_KINDS: [(&str, JointKind); 5] = [
+    ("pin", JointKind::Pin),
+    ("slider", JointKind::Slider),
+    ("weld", JointKind::Weld),
+    ("ball", JointKind::Ball),
+    ("free", JointKind::Free),
+];
 
 /// The dimension a scalar joint field must have (pin: angles, slider: lengths).
 fn joint_expect(field: &'static str, kind: JointKind) -> Expect<'static> {
@@ -116,6 +148,8 @@ impl<'a> Lowerer<'a> {
             child_frame: None,
             q0: 0.0,
             u0: 0.0,
+            angular_velocity0: [0.0; 3],
+            velocity0: [0.0; 3],
             stiffness: None,
             rest: Expr::zero(),
             damping: None,
@@ -144,10 +178,45 @@ impl<'a> Lowerer<'a> {
         if let Some(f) = field("child_frame") {
             info.child_frame = self.joint_frame(f, child, "child").flatten();
         }
-        if let Some(kind @ (JointKind::Pin | JointKind::Slider)) = kind {
-            self.lower_joint_dynamics(&mut info, kind, &field);
+        match kind {
+            Some(kind @ (JointKind::Pin | JointKind::Slider)) => {
+                self.lower_joint_dynamics(&mut info, kind, &field);
+            }
+            Some(JointKind::Ball | JointKind::Free) => self.lower_initial_rates(&mut info, &field),
+            _ => {}
         }
         info
+    }
+
+    /// `u0` (angular velocity, rad/s) and `v0` (velocity, m/s) of a `ball` or `free` joint:
+    /// constant vectors.
+    fn lower_initial_rates<'f>(
+        &mut self,
+        info: &mut JointInfo,
+        field: &dyn Fn(&str) -> Option<&'f ast::Field>,
+    ) {
+        let rates = [
+            (
+                "u0",
+                "`u0` (angular velocity)",
+                "[0, 0, 10 rad/s]",
+                [0, 0, -1],
+            ),
+            ("v0", "`v0` (velocity)", "[0, 0, 1 m/s]", [0, 1, -1]),
+        ];
+        for (name, what, example, dimension) in rates {
+            let Some(f) = field(name) else { continue };
+            let expect = Expect::mechanical(what, example, dimension);
+            let ctx = Ctx::Static("a joint property");
+            let Some(vector) = self.lower_vector_as(&f.value, ctx, &expect) else {
+                continue;
+            };
+            let values = vector.map(|e| self.evaluate(&e, f.value.span));
+            match name {
+                "u0" => info.angular_velocity0 = values,
+                _ => info.velocity0 = values,
+            }
+        }
     }
 
     fn lower_joint_dynamics<'f>(
@@ -204,11 +273,8 @@ impl<'a> Lowerer<'a> {
     }
 
     fn joint_kind(&mut self, kind: &ast::Ident) -> Option<JointKind> {
-        match kind.name.as_str() {
-            "pin" => return Some(JointKind::Pin),
-            "slider" => return Some(JointKind::Slider),
-            "weld" => return Some(JointKind::Weld),
-            _ => {}
+        if let Some(&(_, known)) = JOINT_KINDS.iter().find(|(name, _)| *name == kind.name) {
+            return Some(known);
         }
         let mut diagnostic = names::unknown(
             "E0208",
@@ -216,13 +282,15 @@ impl<'a> Lowerer<'a> {
             "joint kinds",
             &kind.name,
             kind.span,
-            &["pin", "slider", "weld"],
+            &JOINT_KINDS.map(|(name, _)| name),
             "not a joint kind",
         );
         let synonym = match kind.name.as_str() {
             "revolute" | "hinge" => Some("pin"),
             "prismatic" => Some("slider"),
             "fixed" | "rigid" => Some("weld"),
+            "spherical" | "socket" => Some("ball"),
+            "floating" | "free_flyer" | "freejoint" | "six_dof" => Some("free"),
             _ => None,
         };
         if let Some(synonym) = synonym {
@@ -264,11 +332,33 @@ impl<'a> Lowerer<'a> {
                 continue;
             }
             let name = field.name.name.as_str();
-            if kind == Some(JointKind::Weld) && DOF_FIELDS.contains(&name) {
+            let Some(kind) = kind else {
+                fields.push(field);
+                continue;
+            };
+            let (not_allowed, why) = fields_not_allowed(kind);
+            if not_allowed.contains(&name) {
+                let takes: Vec<&str> = JOINT_FIELDS
+                    .iter()
+                    .copied()
+                    .filter(|f| !not_allowed.contains(f))
+                    .collect();
+                let kind_name = &decl.kind.name;
                 self.error(
-                    Diagnostic::error("E0403", format!("`{name}` is not allowed on a weld joint"))
-                        .with_label(field.name.span, "a weld has no degree of freedom")
-                        .with_help("remove this field, or use a `pin` or `slider` joint"),
+                    Diagnostic::error(
+                        "E0403",
+                        format!("`{name}` is not allowed on a {kind_name} joint"),
+                    )
+                    .with_label(field.name.span, why)
+                    .with_help(match kind {
+                        JointKind::Weld => {
+                            "remove this field, or use a `pin` or `slider` joint".to_string()
+                        }
+                        _ => format!(
+                            "remove this field; a {kind_name} joint takes {}",
+                            names::list(&takes)
+                        ),
+                    }),
                 );
                 continue;
             }
@@ -586,6 +676,40 @@ impl<'a> Lowerer<'a> {
         };
         let decl = info.decl;
         let kind = info.kind.unwrap_or(JointKind::Weld);
+        let joint_frame = match kind {
+            JointKind::Ball | JointKind::Free => self.build_spherical(j, parent_frame),
+            _ => self.build_single(j, parent_frame),
+        };
+        let info = &self.joints[j];
+        let mut previous = joint_frame;
+        if let Some(rotation) = &info.child_frame {
+            previous = self.model.frames.append(ir::Frame {
+                name: format!("{}.child", decl.name.name),
+                parent: Some(joint_frame),
+                origin: zeros(),
+                orientation: inverse(rotation),
+                motion: Motion::Fixed,
+                span: decl.span,
+            });
+        }
+        let child_origin = info.child_point.clone().map(neg);
+        let child_frame = self.model.frames.append(ir::Frame {
+            name: self.owners[c].name.clone(),
+            parent: Some(previous),
+            origin: child_origin,
+            orientation: Vec::new(),
+            motion: Motion::Fixed,
+            span: self.owners[c].name_span,
+        });
+        self.owners[c].frame = Some(child_frame);
+        self.append_named_frames(c);
+    }
+
+    /// The frame of a `pin`, `slider` or `weld` joint: at `parent_point`, oriented by
+    /// `parent_frame`, moved by the joint's one coordinate (none for a weld).
+    fn build_single(&mut self, j: usize, parent_frame: Handle<ir::Frame>) -> Handle<ir::Frame> {
+        let info = &self.joints[j];
+        let (decl, kind) = (info.decl, info.kind.unwrap_or(JointKind::Weld));
         let coordinate = match kind {
             JointKind::Weld => None,
             _ => Some(self.model.coordinates.append(ir::Coordinate {
@@ -619,39 +743,81 @@ impl<'a> Lowerer<'a> {
             motion,
             span: decl.span,
         });
-        let mut previous = joint_frame;
-        if let Some(rotation) = &info.child_frame {
-            previous = self.model.frames.append(ir::Frame {
-                name: format!("{}.child", decl.name.name),
-                parent: Some(joint_frame),
-                origin: zeros(),
-                orientation: inverse(rotation),
-                motion: Motion::Fixed,
-                span: decl.span,
-            });
-        }
-        let child_origin = info.child_point.clone().map(neg);
-        let child_frame = self.model.frames.append(ir::Frame {
-            name: self.owners[c].name.clone(),
-            parent: Some(previous),
-            origin: child_origin,
-            orientation: Vec::new(),
-            motion: Motion::Fixed,
-            span: self.owners[c].name_span,
-        });
-        self.owners[c].frame = Some(child_frame);
-        self.append_named_frames(c);
-        self.record_joint(j, kind, coordinate, joint_frame);
+        self.record_joint(j, coordinate.into_iter().collect(), None, joint_frame);
+        joint_frame
     }
 
+    /// The frames of a `ball` joint (one, turned by a quaternion) or a `free` joint (slides
+    /// `j.x`, `j.y`, `j.z` along the axes of the frame at `parent_point` oriented by
+    /// `parent_frame`, then the ball `j`): the free joint's speeds are the velocity of the
+    /// child's origin in that frame (`u = q̇`) and the child's angular velocity in its own.
+    fn build_spherical(&mut self, j: usize, parent_frame: Handle<ir::Frame>) -> Handle<ir::Frame> {
+        let info = &self.joints[j];
+        let decl = info.decl;
+        let name = decl.name.name.clone();
+        let mut coordinates = Vec::new();
+        let (mut parent, mut origin, mut orientation) = (
+            parent_frame,
+            info.parent_point.clone(),
+            info.parent_frame.clone(),
+        );
+        if info.kind == Some(JointKind::Free) {
+            let velocity0 = info.velocity0;
+            for (axis, part) in ["x", "y", "z"].into_iter().enumerate() {
+                let coordinate = self.model.coordinates.append(ir::Coordinate {
+                    name: format!("{name}.{part}"),
+                    dimension: Dimension::LENGTH,
+                    initial: 0.0,
+                    initial_speed: velocity0[axis],
+                    span: decl.name.span,
+                });
+                coordinates.push(coordinate);
+                let mut unit = zeros();
+                unit[axis] = Expr::one();
+                parent = self.model.frames.append(ir::Frame {
+                    name: format!("{name}.{part}"),
+                    parent: Some(parent),
+                    origin: std::mem::replace(&mut origin, zeros()),
+                    orientation: std::mem::take(&mut orientation),
+                    motion: Motion::Prismatic {
+                        axis: unit,
+                        coordinate,
+                    },
+                    span: decl.span,
+                });
+            }
+        }
+        let info = &self.joints[j];
+        let quaternion = self.model.quaternions.append(ir::Quaternion {
+            name: name.clone(),
+            initial_angular_velocity: info.angular_velocity0,
+            span: decl.name.span,
+        });
+        let joint_frame = self.model.frames.append(ir::Frame {
+            name,
+            parent: Some(parent),
+            origin,
+            orientation,
+            motion: Motion::Spherical { quaternion },
+            span: decl.span,
+        });
+        self.record_joint(j, coordinates, Some(quaternion), joint_frame);
+        joint_frame
+    }
+
+    /// The IR joint, and the spring and damper of a joint with one coordinate.
     fn record_joint(
         &mut self,
         j: usize,
-        kind: JointKind,
-        coordinate: Option<Handle<ir::Coordinate>>,
+        coordinates: Vec<Handle<ir::Coordinate>>,
+        quaternion: Option<Handle<ir::Quaternion>>,
         frame: Handle<ir::Frame>,
     ) {
         let info = &mut self.joints[j];
+        let coordinate = match (info.kind, coordinates.as_slice()) {
+            (Some(JointKind::Pin | JointKind::Slider), &[coordinate]) => Some(coordinate),
+            _ => None,
+        };
         info.coordinate = coordinate;
         info.frame = Some(frame);
         let (Some(p), Some(c)) = (info.parent, info.child) else {
@@ -659,10 +825,11 @@ impl<'a> Lowerer<'a> {
         };
         self.model.joints.append(ir::Joint {
             name: info.decl.name.name.clone(),
-            kind,
+            kind: info.kind.unwrap_or(JointKind::Weld),
             parent: (p != 0).then(|| Handle::new(p - 1)),
             child: Handle::new(c - 1),
-            coordinates: coordinate.into_iter().collect(),
+            coordinates,
+            quaternion,
             span: info.decl.span,
         });
         let Some(coordinate) = coordinate else { return };
