@@ -8,6 +8,8 @@ mod common;
 mod actuator_causes;
 mod diagnose;
 mod diagnose_catalog;
+mod independent;
+mod independent_leg;
 mod pendulum_diagnose;
 mod separation;
 mod table;

@@ -1,0 +1,226 @@
+//! Hidden effects in data from a second formulation of the leg (issue 17: "tests that cannot
+//! pass by construction"): force/deflection data made by [`IndependentLeg`] — the published
+//! URDFs read at test time, reduced coordinates, statics by energy — with an effect built in,
+//! diagnosed against `models/hamr_vi.mech`. First the two formulations are checked to agree
+//! on the leg as built, so that what the diagnosis finds is the effect, not a difference of
+//! formulations.
+
+use crate::common;
+use crate::diagnose_catalog::{diagnose_data, summary};
+use crate::independent_leg::{Actuator, Effect, IndependentLeg};
+
+use common::{Rng, WrittenEffect};
+use mech::diagnose::candidates::{Diagnosis, Verdict};
+use mech::experiments::leg::{Dof, ForceTest, Leg, Sensor};
+use mech_codegen::ir::transform::actuator::{BASE_COMPLIANCE, STIFFNESS_FACTOR};
+
+/// Noise of the force sensor (one standard deviation) and the paper's sensor step.
+const FORCE_NOISE: f64 = 0.3e-3;
+const SENSOR_STEP: f64 = 127e-6;
+
+fn actuator(dof: Dof) -> Actuator {
+    match dof {
+        Dof::Lift => Actuator::Lift,
+        Dof::Swing => Actuator::Swing,
+    }
+}
+
+/// `test` run by mech on `leg` and by `independent`: free deflection and the sensor force at
+/// each of mech's sensor positions must agree to `1e-8` of the free deflection and of the
+/// blocked force (seen: 3e-10).
+fn assert_same_test(what: &str, test: &ForceTest, leg: &Leg, independent: &IndependentLeg) {
+    let by_mech = test.run(leg).unwrap();
+    let distances: Vec<f64> = by_mech.points.iter().map(|p| p.distance).collect();
+    let (free, forces) = independent.force_test(
+        actuator(test.dof),
+        test.dof.axis(),
+        test.voltage,
+        &distances,
+        test.off_axis_fraction,
+    );
+    let blocked = by_mech.blocked_force();
+    assert!(
+        (free / by_mech.free_deflection - 1.0).abs() < 1e-8,
+        "{what}: free deflection {free} (independent) vs {} (mech)",
+        by_mech.free_deflection
+    );
+    for (point, force) in by_mech.points.iter().zip(&forces) {
+        assert!(
+            (force - point.force).abs() < 1e-8 * blocked,
+            "{what} at {} m: force {force} (independent) vs {} (mech)",
+            point.distance,
+            point.force
+        );
+    }
+    println!(
+        "{what}: free {free:.10e} vs {:.10e}; blocked {:.10e} vs {blocked:.10e}; {} points",
+        by_mech.free_deflection,
+        forces[0],
+        forces.len()
+    );
+}
+
+/// The same tests run by mech on `models/hamr_vi.mech` and by the independent leg: free
+/// deflection and the sensor force at 0, 127, 254, … µm with the paper's 30 % off-axis load,
+/// for lift (both ways) and swing. The formulations differ (Kane's method with symbolic
+/// derivatives and the runtime's statics against energy and finite differences; the `.mech`
+/// transcription against the URDF read at run time); their results agree to round-off and
+/// difference steps.
+#[test]
+fn independent_leg_agrees_with_mech() {
+    let leg = Leg::open(&common::hamr_vi_spec()).unwrap();
+    let independent = IndependentLeg::hamr_vi(&[]);
+    for (dof, voltage) in [(Dof::Lift, 225.0), (Dof::Lift, -225.0), (Dof::Swing, 225.0)] {
+        let test = ForceTest::new(dof, voltage, Sensor::Steps(SENSOR_STEP)).off_axis(0.3);
+        assert_same_test(&format!("{dof:?} {voltage} V"), &test, &leg, &independent);
+    }
+}
+
+/// The effects the other hidden-effect tests write into the model's text
+/// (`common::WrittenEffect`) or set as parameters, against the same effects built into the
+/// independent leg: each pair must give the same tests, so those tests' truths are the
+/// physical effects they claim.
+#[test]
+fn written_effects_agree_with_the_independent_leg() {
+    let dir = common::scratch_dir("written_effects_agree");
+    let lift = ForceTest::new(Dof::Lift, 225.0, Sensor::Steps(2.0 * SENSOR_STEP)).off_axis(0.3);
+    let cases = [
+        (
+            WrittenEffect::LiftActuatorStiffness(0.8),
+            Effect::ActuatorStiffness(Actuator::Lift, 0.8),
+        ),
+        (
+            WrittenEffect::LiftActuatorForce(0.85),
+            Effect::ActuatorForce(Actuator::Lift, 0.85),
+        ),
+        (
+            WrittenEffect::LiftBaseCompliance(0.4),
+            Effect::BaseCompliance(Actuator::Lift, 0.4),
+        ),
+    ];
+    for (written, built) in cases {
+        let leg = common::hamr_vi_written(written, &dir);
+        let independent = IndependentLeg::hamr_vi(&[built]);
+        assert_same_test(&format!("{written:?}"), &lift, &leg, &independent);
+    }
+    // A flexure's stiffness, a parameter of the model (`k_l2`) and a spring of the URDF.
+    let mut leg = Leg::open(&common::hamr_vi_spec()).unwrap();
+    let k_l2 = leg.param("k_l2").unwrap();
+    common::set_leg_param(&mut leg, "k_l2", 2.5 * k_l2);
+    let independent = IndependentLeg::hamr_vi(&[Effect::FlexureStiffness("FLql2", 2.5)]);
+    assert_same_test("k_l2 × 2.5", &lift, &leg, &independent);
+}
+
+/// Force/deflection data of `dof` at 225 V from the independent leg with `effects` (no
+/// off-axis load, as the catalog's force cases), 0.3 mN noise, diagnosed with the whole
+/// catalog against the model as written.
+fn independent_case(name: &str, effects: &[Effect], dof: Dof, rng: &mut Rng) -> Diagnosis {
+    let dir = common::scratch_dir(name);
+    let truth = IndependentLeg::hamr_vi(effects);
+    // The sensor positions: every 127 µm until the free foot no longer reaches it.
+    let (free, _) = truth.force_test(actuator(dof), dof.axis(), 225.0, &[], 0.0);
+    let distances: Vec<f64> = (0..)
+        .map(|k| k as f64 * SENSOR_STEP)
+        .take_while(|&d| d < free)
+        .collect();
+    let (_, forces) = truth.force_test(actuator(dof), dof.axis(), 225.0, &distances, 0.0);
+    let mut text = String::from("distance [um], force [mN]\n");
+    for (distance, force) in distances.iter().zip(&forces) {
+        let force = force + FORCE_NOISE * rng.normal();
+        text += &format!("{}, {}\n", distance * 1e6, force * 1e3);
+    }
+    let dof_name = dof.name();
+    let experiment = common::hamr_vi_experiment_in(
+        &dir,
+        &format!(
+            "kind = \"force_deflection\"\ntitle = \"{dof_name} force\"\ndof = \"{dof_name}\"\n\
+             voltage = \"225 V\"\noff_axis_fraction = 0\nnoise = \"0.3 mN\"\n"
+        ),
+    );
+    diagnose_data(&dir, &experiment, &text)
+}
+
+/// The named candidate's fitted `parameter` (value, standard error), the top cause or one of
+/// a tie the verdict states.
+fn named(d: &Diagnosis, cause: &str, location: &str, parameter: &str) -> (f64, f64) {
+    let named = &d.ranked[..d.tied.max(1)];
+    let trial = named
+        .iter()
+        .find(|t| t.cause == cause && t.location == location)
+        .unwrap_or_else(|| panic!("{cause} at {location} not named\n{}", summary(d)));
+    let (_, _, value, se) = trial
+        .parameters
+        .iter()
+        .find(|p| p.0 == parameter)
+        .cloned()
+        .unwrap_or_else(|| panic!("no {parameter}\n{}", summary(d)));
+    (value, se)
+}
+
+/// The leg as built, lift and swing data: nothing to explain.
+#[test]
+#[ignore = "slow: two whole-catalog diagnoses, run by .ci/run's `hidden_effect` filter"]
+fn hidden_effect_independent_clean_data() {
+    let mut rng = Rng::new(21);
+    for dof in [Dof::Lift, Dof::Swing] {
+        let d = independent_case(&format!("independent_clean_{dof:?}"), &[], dof, &mut rng);
+        assert_eq!(
+            d.verdict,
+            Verdict::NoSignificantDiscrepancy,
+            "{}",
+            summary(&d)
+        );
+    }
+}
+
+/// The issue's own case, in data mech did not make: the lift actuator 20 % softer than its
+/// data sheet (its blocked force as written). The actuator's stiffness is named at the lift
+/// actuator, its factor within 3σ of 0.8 and pinned by the data to σ < 0.02 (seen: 0.784 ±
+/// 0.008; a bound of 2 % as `actuator_causes.rs` has would be 2σ at this noise).
+#[test]
+#[ignore = "slow: a whole-catalog diagnosis, run by .ci/run's `hidden_effect` filter"]
+fn hidden_effect_independent_softer_lift_actuator() {
+    let d = independent_case(
+        "independent_softer_lift_actuator",
+        &[Effect::ActuatorStiffness(Actuator::Lift, 0.8)],
+        Dof::Lift,
+        &mut Rng::new(22),
+    );
+    assert_eq!(d.verdict, Verdict::Explained, "{}", summary(&d));
+    let (value, se) = named(
+        &d,
+        "actuator stiffness off by a factor",
+        "actuator along qlact",
+        STIFFNESS_FACTOR,
+    );
+    assert!(
+        (value - 0.8).abs() < 3.0 * se && se < 0.02,
+        "{STIFFNESS_FACTOR} {value} ± {se} vs 0.8\n{}",
+        summary(&d)
+    );
+}
+
+/// The swing actuator's clamp gives: a base spring k_a/0.5 in series. Named as the swing
+/// actuator's base compliance (alone or in a tie the verdict states), within 3σ of 0.5.
+#[test]
+#[ignore = "slow: a whole-catalog diagnosis, run by .ci/run's `hidden_effect` filter"]
+fn hidden_effect_independent_swing_base_compliance() {
+    let d = independent_case(
+        "independent_swing_base_compliance",
+        &[Effect::BaseCompliance(Actuator::Swing, 0.5)],
+        Dof::Swing,
+        &mut Rng::new(23),
+    );
+    assert_eq!(d.verdict, Verdict::Explained, "{}", summary(&d));
+    let (value, se) = named(
+        &d,
+        "actuator base compliance",
+        "actuator along qsact",
+        BASE_COMPLIANCE,
+    );
+    assert!(
+        (value - 0.5).abs() < 3.0 * se,
+        "{BASE_COMPLIANCE} {value} ± {se} vs 0.5\n{}",
+        summary(&d)
+    );
+}
