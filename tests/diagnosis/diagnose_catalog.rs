@@ -444,14 +444,17 @@ fn misalignment_case(dir: &Path, rng: &mut Rng) {
 }
 
 /// The Bode experiment's frequencies: 30 log-spaced from 1 to 150 Hz.
-fn bode_frequencies() -> impl Iterator<Item = f64> {
+pub(crate) fn bode_frequencies() -> impl Iterator<Item = f64> {
     (0..30).map(|k| 150.0f64.powf(k as f64 / 29.0))
 }
 
 /// Noise-free lift and swing responses of `leg` at [`bode_frequencies`] with `damping`:
 /// per frequency, `[gain, phase (deg)]` of lift (v_lift → foot.z), then swing
 /// (v_swing → foot.x).
-fn bode_responses(leg: &Leg, damping: mech_runtime::FlexureDamping) -> Vec<[[f64; 2]; 2]> {
+pub(crate) fn bode_responses(
+    leg: &Leg,
+    damping: mech_runtime::FlexureDamping,
+) -> Vec<[[f64; 2]; 2]> {
     let rest_inputs = leg.inputs(0.0, 0.0);
     let rest = leg.equilibrium(&leg.q0, &rest_inputs, &[]).unwrap().q;
     let linear =
@@ -485,6 +488,16 @@ fn bode_case(
     damping: mech_runtime::FlexureDamping,
     rng: &mut Rng,
 ) -> (Experiment, String) {
+    bode_data(dir, &bode_responses(truth, damping), rng)
+}
+
+/// [`bode_case`] from noise-free `responses` at [`bode_frequencies`] (`[gain, phase (deg)]`
+/// of lift, then swing).
+pub(crate) fn bode_data(
+    dir: &Path,
+    responses: &[[[f64; 2]; 2]],
+    rng: &mut Rng,
+) -> (Experiment, String) {
     let experiment = common::hamr_vi_experiment_in(
         dir,
         "kind = \"frequency_response\"\ntitle = \"lift and swing\"\n\
@@ -495,7 +508,7 @@ fn bode_case(
     let mut text = String::from(
         "frequency [Hz], gain.lift [mm/V], phase.lift [deg], gain.swing [mm/V], phase.swing [deg]\n",
     );
-    for (f, channels) in bode_frequencies().zip(bode_responses(truth, damping)) {
+    for (f, channels) in bode_frequencies().zip(responses) {
         text += &format!("{f}");
         for [gain, phase] in channels {
             let gain = gain * (1.0 + GAIN_NOISE * rng.normal());

@@ -6,7 +6,9 @@
 //! formulations.
 
 use crate::common;
-use crate::diagnose_catalog::{diagnose_data, summary};
+use crate::diagnose_catalog::{
+    bode_data, bode_frequencies, bode_responses, diagnose_data, summary,
+};
 use crate::independent_leg::{Actuator, Effect, IndependentLeg};
 
 use common::{Rng, WrittenEffect};
@@ -143,6 +145,7 @@ fn independent_case(name: &str, effects: &[Effect], dof: Dof, rng: &mut Rng) -> 
 /// The named candidate's fitted `parameter` (value, standard error), the top cause or one of
 /// a tie the verdict states.
 fn named(d: &Diagnosis, cause: &str, location: &str, parameter: &str) -> (f64, f64) {
+    println!("{}", summary(d));
     let named = &d.ranked[..d.tied.max(1)];
     let trial = named
         .iter()
@@ -221,6 +224,96 @@ fn hidden_effect_independent_swing_base_compliance() {
     assert!(
         (value - 0.5).abs() < 3.0 * se,
         "{BASE_COMPLIANCE} {value} ± {se} vs 0.5\n{}",
+        summary(&d)
+    );
+}
+
+/// `[gain (m/V), phase (deg)]` of the independent leg's lift and swing responses at the Bode
+/// experiment's frequencies.
+fn independent_bode(leg: &IndependentLeg) -> Vec<[[f64; 2]; 2]> {
+    let frequencies: Vec<f64> = bode_frequencies().collect();
+    leg.frequency_response(&frequencies)
+        .into_iter()
+        .map(|channels| channels.map(|h| [h.norm(), h.arg().to_degrees()]))
+        .collect()
+}
+
+/// The largest relative gain and phase (deg) differences of two sets of Bode responses.
+fn bode_difference(a: &[[[f64; 2]; 2]], b: &[[[f64; 2]; 2]]) -> (f64, f64) {
+    let pairs = a.iter().zip(b).flat_map(|(a, b)| a.iter().zip(b));
+    pairs.fold((0.0f64, 0.0f64), |(gain, phase), (a, b)| {
+        (
+            gain.max((a[0] / b[0] - 1.0).abs()),
+            phase.max((a[1] - b[1]).abs()),
+        )
+    })
+}
+
+/// mech's linearization (`models/hamr_vi.mech`, hysteretic flexures) against the independent
+/// leg's, as built and with 15 mg on the lift actuator's tip (written into the model's text):
+/// the lift and swing Bode responses from 1 to 150 Hz, through both resonances. Seen: gain
+/// within 8.9e-6 (largest beside the 79 Hz mode; 6e-7 static for lift, 4e-9 for swing), phase
+/// within 6.2e-4°: both linearizations difference their energies or forces, mech with steps
+/// of 1e-5 of the coordinate (floor 1e-8) and one Richardson step, this one nested central
+/// differences. Asserted: 3e-5 and 3e-3°, a thousandth of the Bode data's 2 % and 1° noise.
+#[test]
+fn independent_frequency_response_agrees_with_mech() {
+    let damping = mech_runtime::FlexureDamping::Hysteretic;
+    let dir = common::scratch_dir("independent_bode");
+    let cases = [
+        (Leg::open(&common::hamr_vi_spec()).unwrap(), Vec::new()),
+        (
+            common::hamr_vi_written(WrittenEffect::LiftTipMass(15e-6), &dir),
+            vec![Effect::TipMass(Actuator::Lift, 15e-6)],
+        ),
+    ];
+    for (leg, effects) in cases {
+        let (gain, phase) = bode_difference(
+            &independent_bode(&IndependentLeg::hamr_vi(&effects)),
+            &bode_responses(&leg, damping),
+        );
+        println!("{effects:?}: gain within {gain:.2e}, phase within {phase:.2e}°");
+        assert!(gain < 3e-5 && phase < 3e-3, "{effects:?}: {gain}, {phase}°");
+    }
+}
+
+/// The leg as built, lift and swing Bode data (2 %, 1°): nothing to explain.
+#[test]
+#[ignore = "slow: a whole-catalog diagnosis, run by .ci/run's `hidden_effect` filter"]
+fn hidden_effect_independent_clean_bode() {
+    let dir = common::scratch_dir("independent_clean_bode");
+    let responses = independent_bode(&IndependentLeg::hamr_vi(&[]));
+    let (experiment, text) = bode_data(&dir, &responses, &mut Rng::new(24));
+    let d = diagnose_data(&dir, &experiment, &text);
+    assert_eq!(
+        d.verdict,
+        Verdict::NoSignificantDiscrepancy,
+        "{}",
+        summary(&d)
+    );
+}
+
+/// Every flexure's loss factor 0.12 instead of 0.08 (the resonances' Q a third lower), lift
+/// and swing Bode data: a loss-factor cause on top (the frequency-dependent one nests the
+/// constant one: they may tie), the constant η within 3σ and 0.01 of 0.12.
+#[test]
+#[ignore = "slow: a whole-catalog diagnosis, run by .ci/run's `hidden_effect` filter"]
+fn hidden_effect_independent_loss_factor() {
+    let dir = common::scratch_dir("independent_loss_factor");
+    let responses = independent_bode(&IndependentLeg::hamr_vi(&[Effect::LossFactor(0.12)]));
+    let (experiment, text) = bode_data(&dir, &responses, &mut Rng::new(25));
+    let d = diagnose_data(&dir, &experiment, &text);
+    assert_eq!(d.verdict, Verdict::Explained, "{}", summary(&d));
+    let supported = &d.ranked[..d.tied.max(1)];
+    assert!(
+        supported.iter().all(|t| t.cause.contains("loss factor")),
+        "{}",
+        summary(&d)
+    );
+    let (value, se) = named(&d, "loss factor differs", "all flexures", "eta");
+    assert!(
+        (value - 0.12).abs() < 3.0 * se && (value - 0.12).abs() < 0.01,
+        "η = {value} ± {se} vs 0.12\n{}",
         summary(&d)
     );
 }

@@ -4,7 +4,8 @@
 //! Consumes the published URDFs at test time (`../shared/reference/hamr-vi-urdf/`, read by the
 //! small XML reader below, not by mech and not from `models/hamr_vi.mech`); produces the
 //! paper's force/deflection test (seed Sec. V-A): the foot's free deflection and the sensor
-//! force at given distances, with the sensor's off-axis load.
+//! force at given distances, with the sensor's off-axis load; and the frequency response of
+//! the foot to each actuator about the rest position (seed Sec. VI, Fig. 10).
 //!
 //! The formulation shares nothing with mech's: reduced coordinates are the two actuator
 //! deflections `a = (a_swing, a_lift)`; the six flexure angles of the tree follow from the
@@ -17,7 +18,9 @@
 //! F_j = F_b V_j/V_rated, gravity on each link's centre of mass), its gradient by central
 //! differences of V over closed configurations. A sensor holding the foot's coordinate `x_s`
 //! adds the multiplier `f` (its force on the foot) and a side load `r f` along y:
-//! `∂V/∂a = f (∂x_s/∂a + r ∂y_foot/∂a)`, `x_s(a) = target`.
+//! `∂V/∂a = f (∂x_s/∂a + r ∂y_foot/∂a)`, `x_s(a) = target`. The linear dynamics about rest are
+//! the 2×2 Hessian of V, the kinetic energy's mass matrix from each link's velocity and angular
+//! velocity per unit actuator rate, and the flexures' hysteretic loss `η k_i` on their angles.
 //!
 //! The physical choices are the model header's (seed Table I actuators, the URDF's flexure
 //! stiffnesses with the loop ones from `HAMRVariational_scaledV2_LB.urdf`, the leg's centre of
@@ -26,7 +29,7 @@
 
 use std::collections::BTreeMap;
 
-use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, Unit, Vector3};
+use nalgebra::{Complex, DMatrix, DVector, Matrix2, Matrix3, Rotation3, Unit, Vector2, Vector3};
 
 /// Gravity (m/s²), as `models/hamr_vi.mech` states it.
 const GRAVITY: f64 = 9.81;
@@ -37,6 +40,8 @@ const GRAM: f64 = 1e-3;
 const BLOCKED_FORCE: f64 = 0.320;
 const FREE_DEFLECTION: f64 = 300e-6;
 const RATED_VOLTAGE: f64 = 225.0;
+/// The castellated Kapton hinges' loss factor η'_m (seed Sec. IV-B).
+const LOSS_FACTOR: f64 = 0.08;
 
 // ---------------------------------------------------------------- a minimal XML reader
 
@@ -202,6 +207,10 @@ pub enum Effect {
     ActuatorForce(Actuator, f64),
     /// The actuator's base on a spring `k_a / c` in series with it (its clamp gives).
     BaseCompliance(Actuator, f64),
+    /// This mass (kg) added to the actuator's slider (its tip).
+    TipMass(Actuator, f64),
+    /// Every flexure's loss factor this value instead of the seed's 0.08.
+    LossFactor(f64),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -210,13 +219,23 @@ pub enum Actuator {
     Lift = 1,
 }
 
+/// A link's mass (kg), centre of mass in its frame (m), inertia about the centre of mass in
+/// the link's axes (kg·m², tensor convention).
+#[derive(Debug, Clone, Copy)]
+struct Inertial {
+    mass: f64,
+    com: Vector3<f64>,
+    inertia: Matrix3<f64>,
+}
+
 /// Link poses in the chassis frame: rotation and origin.
 type Poses = Vec<(Matrix3<f64>, Vector3<f64>)>;
 
 pub struct IndependentLeg {
     links: Vec<String>,
-    /// Each link's mass (kg) and centre of mass in its frame (m).
-    inertial: Vec<(f64, Vector3<f64>)>,
+    /// Each link's mass (kg), centre of mass in its frame (m) and inertia about it in its
+    /// axes (kg·m²).
+    inertial: Vec<Inertial>,
     /// In order from the chassis (parents before children).
     joints: Vec<TreeJoint>,
     loops: Vec<LoopJoint>,
@@ -228,6 +247,10 @@ pub struct IndependentLeg {
     actuator_stiffness: [f64; 2],
     actuator_force: [f64; 2],
     base_stiffness: [f64; 2],
+    /// Mass added to each actuator's slider (kg).
+    tip_mass: [f64; 2],
+    /// The flexures' loss factor (hysteretic damping, `k (1 + iη)`).
+    loss_factor: f64,
     /// The last closed configuration: the next closure starts there.
     last_q: std::cell::RefCell<Vec<f64>>,
 }
@@ -245,7 +268,7 @@ impl IndependentLeg {
         let mut springs = torsional_springs(robot);
         let loop_springs = torsional_springs(loop_urdf.child("robot").unwrap());
 
-        let link_element = |robot: &'_ Element, name: &str| -> Option<(f64, Vector3<f64>)> {
+        let link_element = |robot: &'_ Element, name: &str| -> Option<Inertial> {
             let link = robot
                 .all("link")
                 .find(|l| l.attribute("name") == Some(name))?;
@@ -257,7 +280,16 @@ impl IndependentLeg {
                 .parse()
                 .ok()?;
             let com = vector(inertial.child("origin")?.attribute("xyz")?);
-            Some((mass * GRAM, com * MM))
+            let tensor = inertial.child("inertia")?;
+            let moment = |key: &str| -> Option<f64> { tensor.attribute(key)?.trim().parse().ok() };
+            let (xx, yy, zz) = (moment("ixx")?, moment("iyy")?, moment("izz")?);
+            let (xy, xz, yz) = (moment("ixy")?, moment("ixz")?, moment("iyz")?);
+            let inertia = Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz);
+            Some(Inertial {
+                mass: mass * GRAM,
+                com: com * MM,
+                inertia: inertia * GRAM * MM * MM,
+            })
         };
         let links: Vec<String> = robot
             .all("link")
@@ -268,9 +300,16 @@ impl IndependentLeg {
             .map(|name| {
                 // The leg's (FLL4) inertial data of FL_scaled.urdf put its centre of mass
                 // above the five-bar although the leg hangs below it (reference/README.md):
-                // the whole robot's file is used for it, as in the model.
-                let source = if name == "FLL4" { whole } else { robot };
-                link_element(source, name).unwrap()
+                // the whole robot's file is used for it, as in the model, with its products
+                // of inertia negated (they then match the split links of the LB file).
+                if name == "FLL4" {
+                    let leg = link_element(whole, name).unwrap();
+                    let mut inertia = -leg.inertia;
+                    inertia.set_diagonal(&leg.inertia.diagonal());
+                    Inertial { inertia, ..leg }
+                } else {
+                    link_element(robot, name).unwrap()
+                }
             })
             .collect();
         let index = |name: &str| links.iter().position(|l| l == name).unwrap();
@@ -355,6 +394,8 @@ impl IndependentLeg {
             actuator_stiffness: [stiffness; 2],
             actuator_force: [BLOCKED_FORCE; 2],
             base_stiffness: [f64::INFINITY; 2],
+            tip_mass: [0.0; 2],
+            loss_factor: LOSS_FACTOR,
             last_q: Default::default(),
         };
         // The fb2 loop points of FL_scaled.urdf miss the fb2 axis through the five-bar centre
@@ -402,6 +443,8 @@ impl IndependentLeg {
             Effect::BaseCompliance(a, c) => {
                 self.base_stiffness[a as usize] = self.actuator_stiffness[a as usize] / c
             }
+            Effect::TipMass(a, mass) => self.tip_mass[a as usize] += mass,
+            Effect::LossFactor(eta) => self.loss_factor = eta,
         }
     }
 
@@ -509,14 +552,8 @@ impl IndependentLeg {
         let q = self.close(a);
         let poses = self.poses(&q);
         let mut v = 0.0;
-        for (joint, &angle) in self.joints.iter().zip(&q) {
-            v += 0.5 * joint.stiffness * angle * angle;
-        }
-        for closure in &self.loops {
-            let turn = poses[closure.link1].0.transpose() * poses[closure.link2].0;
-            let (e1, e2) = perpendiculars(&closure.axis);
-            let angle = (e2.dot(&(turn * e1))).atan2(e1.dot(&(turn * e1)));
-            v += 0.5 * closure.stiffness * angle * angle;
+        for (stiffness, angle) in self.flexures(&q, &poses) {
+            v += 0.5 * stiffness * angle * angle;
         }
         for k in 0..2 {
             // A force source F in parallel with k_a, on a base spring k_b in series: the base
@@ -532,10 +569,28 @@ impl IndependentLeg {
             let rest = force / ka;
             v += 0.5 * series * (a[k] - rest) * (a[k] - rest);
         }
-        for ((mass, com), (rotation, origin)) in self.inertial.iter().zip(&poses) {
-            v += mass * GRAVITY * (rotation * com + origin).z;
+        for (link, (rotation, origin)) in self.inertial.iter().zip(&poses) {
+            v += link.mass * GRAVITY * (rotation * link.com + origin).z;
         }
         v
+    }
+
+    /// Every flexure's stiffness and angle at closed coordinates `q` (tree, then loops; the
+    /// loop angle is link 2's turn relative to link 1 about the loop's axis).
+    fn flexures(&self, q: &[f64], poses: &Poses) -> Vec<(f64, f64)> {
+        let tree = self
+            .joints
+            .iter()
+            .zip(q)
+            .filter(|(joint, _)| !joint.prismatic)
+            .map(|(joint, &angle)| (joint.stiffness, angle));
+        let loops = self.loops.iter().map(|closure| {
+            let turn = poses[closure.link1].0.transpose() * poses[closure.link2].0;
+            let (e1, e2) = perpendiculars(&closure.axis);
+            let angle = (e2.dot(&(turn * e1))).atan2(e1.dot(&(turn * e1)));
+            (closure.stiffness, angle)
+        });
+        tree.chain(loops).collect()
     }
 
     /// `∂f/∂a` by central differences (step 1 nm).
@@ -610,6 +665,111 @@ impl IndependentLeg {
             assert!(iteration < 40, "no equilibrium: step {step}");
         }
         (a, force)
+    }
+
+    /// The leg linearized about its rest position: the response of the foot to each
+    /// actuator's voltage at `frequency` (Hz), lift (v_lift → foot z) then swing (v_swing →
+    /// foot x), in m/V: `C (K + i K_η − ω² M)⁻¹ B`, with K the Hessian of the potential
+    /// energy (gravity's share included), M the kinetic energy's `Σ m vᵀv + ωᵀ I ω` over the
+    /// links, `K_η = η Σ k_i ∇θ_i ∇θ_iᵀ` the flexures' hysteretic loss, B the actuator forces
+    /// per volt and C the foot's gradient, all differenced over closed configurations.
+    pub fn frequency_response(&self, frequencies: &[f64]) -> Vec<[Complex<f64>; 2]> {
+        let (rest, _) = self.equilibrium([0.0; 2], [0.0; 2], None);
+        let h = 1e-7;
+        let shifted = |k: usize, sign: f64| {
+            let mut a = rest;
+            a[k] += sign * h;
+            a
+        };
+        let mut stiffness = Matrix2::zeros();
+        for k in 0..2 {
+            let plus = self.gradient(|a| self.energy(a, [0.0; 2]), shifted(k, 1.0));
+            let minus = self.gradient(|a| self.energy(a, [0.0; 2]), shifted(k, -1.0));
+            for j in 0..2 {
+                stiffness[(j, k)] = (plus[j] - minus[j]) / (2.0 * h);
+            }
+        }
+        let stiffness = (stiffness + stiffness.transpose()) / 2.0;
+
+        let rest_poses = self.poses(&self.close(rest));
+        // Per coordinate: each link's centre-of-mass velocity and angular velocity (chassis
+        // frame) per unit rate, each flexure's angle rate, the foot's velocity.
+        let mut velocities = Vec::new();
+        let mut angle_rates = Vec::new();
+        let mut foot_rates = Vec::new();
+        for k in 0..2 {
+            let (q_plus, q_minus) = (self.close(shifted(k, 1.0)), self.close(shifted(k, -1.0)));
+            let (plus, minus) = (self.poses(&q_plus), self.poses(&q_minus));
+            let link_rates: Vec<(Vector3<f64>, Vector3<f64>)> = (0..self.links.len())
+                .map(|i| {
+                    let com = |p: &Poses| p[i].0 * self.inertial[i].com + p[i].1;
+                    let v = (com(&plus) - com(&minus)) / (2.0 * h);
+                    // Ṙ Rᵀ = [ω]×.
+                    let spin = (plus[i].0 - minus[i].0) / (2.0 * h) * rest_poses[i].0.transpose();
+                    (v, Vector3::new(spin[(2, 1)], spin[(0, 2)], spin[(1, 0)]))
+                })
+                .collect();
+            velocities.push(link_rates);
+            let (fp, fm) = (
+                self.flexures(&q_plus, &plus),
+                self.flexures(&q_minus, &minus),
+            );
+            angle_rates.push(
+                fp.iter()
+                    .zip(&fm)
+                    .map(|(p, m)| (p.1 - m.1) / (2.0 * h))
+                    .collect::<Vec<f64>>(),
+            );
+            foot_rates.push((self.foot_at(&q_plus) - self.foot_at(&q_minus)) / (2.0 * h));
+        }
+        let mut mass = Matrix2::from_diagonal(&Vector2::from(self.tip_mass));
+        let mut loss = Matrix2::zeros();
+        let springs = self.flexures(&self.close(rest), &rest_poses);
+        for j in 0..2 {
+            for k in 0..2 {
+                for (i, link) in self.inertial.iter().enumerate() {
+                    let rotation = rest_poses[i].0;
+                    let inertia = rotation * link.inertia * rotation.transpose();
+                    let (vj, wj) = velocities[j][i];
+                    let (vk, wk) = velocities[k][i];
+                    mass[(j, k)] += link.mass * vj.dot(&vk) + wj.dot(&(inertia * wk));
+                }
+                for (f, (stiffness, _)) in springs.iter().enumerate() {
+                    loss[(j, k)] +=
+                        self.loss_factor * stiffness * angle_rates[j][f] * angle_rates[k][f];
+                }
+            }
+        }
+        // Generalized force per volt on each actuator coordinate: F_b/V_rated through the
+        // base spring's share k_s/k_a (1 without a base spring).
+        let per_volt = [0, 1].map(|k| {
+            let (ka, kb) = (self.actuator_stiffness[k], self.base_stiffness[k]);
+            let share = if kb.is_infinite() {
+                1.0
+            } else {
+                kb / (ka + kb)
+            };
+            share * self.actuator_force[k] / RATED_VOLTAGE
+        });
+        let channels = [(Actuator::Lift as usize, 2), (Actuator::Swing as usize, 0)];
+        frequencies
+            .iter()
+            .map(|&f| {
+                let omega = 2.0 * std::f64::consts::PI * f;
+                let dynamic = Matrix2::from_fn(|r, c| {
+                    Complex::new(
+                        stiffness[(r, c)] - omega * omega * mass[(r, c)],
+                        loss[(r, c)],
+                    )
+                });
+                let inverse = dynamic.try_inverse().expect("a regular dynamic stiffness");
+                channels.map(|(input, axis)| {
+                    (0..2)
+                        .map(|k| foot_rates[k][axis] * inverse[(k, input)] * per_volt[input])
+                        .sum()
+                })
+            })
+            .collect()
     }
 
     /// The force/deflection test of the actuator `dof` at `voltage` (seed Sec. V-A, as
