@@ -473,19 +473,73 @@ pub struct ChirpSweep {
     pub rtol: f64,
 }
 
+/// A simulated chirp ([`simulate_chirp`]): the record of the driven input and the output, and
+/// the sweep's amplitude and rate (what [`mask_weak_input`] needs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChirpRecord {
+    pub times: Vec<f64>,
+    pub input: Vec<f64>,
+    pub output: Vec<f64>,
+    amplitude: f64,
+    rate_hz_per_s: f64,
+}
+
+impl ChirpRecord {
+    /// The swept-sine estimate at `frequencies` ([`chirp_estimate`]), blanked where the sweep
+    /// did not excite `f` ([`mask_weak_input`]).
+    pub fn estimate(&self, frequencies: &[f64]) -> Vec<Point> {
+        let mut estimate = chirp_estimate(&self.times, &self.input, &self.output, frequencies);
+        mask_weak_input(
+            &mut estimate,
+            &self.times,
+            &self.input,
+            self.amplitude,
+            self.rate_hz_per_s,
+        );
+        estimate
+    }
+
+    /// The resonances of `estimate` (this record's, possibly blanked further) refined on the
+    /// continuous estimate `|Y(f)/U(f)|`, which the record gives at any frequency
+    /// ([`refined_resonances`] over the longest run of `estimate`'s finite points, the band
+    /// the sweep excited): the grid only has to show each peak, so f_r and Q do not depend
+    /// on it. They remain the estimate's: its error (sweep rate, record length) is theirs.
+    pub fn resonances(&self, estimate: &[Point]) -> Result<Vec<Resonance>, RefineError> {
+        let mut best = 0..0;
+        let mut run_start = 0;
+        for (k, point) in estimate.iter().enumerate() {
+            if !point.gain.norm().is_finite() {
+                run_start = k + 1;
+            } else if k + 1 - run_start > best.len() {
+                best = run_start..k + 1;
+            }
+        }
+        let frequencies: Vec<f64> = estimate[best].iter().map(|p| p.frequency_hz).collect();
+        refined_resonances(&frequencies, |f| {
+            (single_bin(&self.times, &self.output, f) / single_bin(&self.times, &self.input, f))
+                .norm()
+        })
+    }
+}
+
+/// How long the record runs on after the sweep, as a fraction of the sweep's duration.
+pub const CHIRP_RING_DOWN: f64 = 0.25;
+
 /// Simulates the model from `(q, u)` under `sweep` (the other inputs as `signals` give them;
-/// the driven input's value at t = 0 is the chirp's offset) and estimates `H(f)` at
-/// `frequencies` by [`chirp_estimate`], blanked where the sweep did not excite `f`
-/// ([`mask_weak_input`]). Samples and steps are at most `1/(20 f_max)` apart,
-/// so the highest frequency is resolved by 20 points per period.
-pub fn simulated_chirp(
+/// the driven input's value at t = 0 is the chirp's offset), then for
+/// [`CHIRP_RING_DOWN`] of its duration more with the input back at the offset. `Y = H U` holds
+/// for the transforms of whole records only when the output's record holds the whole
+/// response: cut at the sweep's end, it loses the free decay of what the sweep left ringing,
+/// which near a resonance is a tenth of `Y` (HAMR-VI's swing Q read 17 % high). Samples
+/// and steps are at most `1/(20 f_max)` apart, so the highest frequency is resolved by 20
+/// points per period.
+pub fn simulate_chirp(
     model: &dyn Model,
     q: &[f64],
     u: &[f64],
     signals: &[Signal],
     sweep: &ChirpSweep,
-    frequencies: &[f64],
-) -> Result<Vec<Point>, RuntimeError> {
+) -> Result<ChirpRecord, RuntimeError> {
     let mut signals = signals.to_vec();
     let offset = signals[sweep.input].value(0.0);
     signals[sweep.input] = Signal::Chirp {
@@ -506,13 +560,32 @@ pub fn simulated_chirp(
         },
         ..SimOptions::default()
     };
-    let run = mech_runtime::simulate(model, q, u, &signals, &options, &mut |_| {})?;
-    let input: Vec<f64> = run.inputs.iter().map(|x| x[sweep.input]).collect();
-    let output: Vec<f64> = run.outputs.iter().map(|x| x[sweep.output]).collect();
-    let mut estimate = chirp_estimate(&run.times, &input, &output, frequencies);
-    let rate = (sweep.to_hz - sweep.from_hz).abs() / sweep.duration;
-    mask_weak_input(&mut estimate, &run.times, &input, sweep.amplitude, rate);
-    Ok(estimate)
+    let mut run = mech_runtime::simulate(model, q, u, &signals, &options, &mut |_| {})?;
+    let (last_q, last_u) = (run.q.last().unwrap().clone(), run.u.last().unwrap().clone());
+    signals[sweep.input] = Signal::Constant(offset);
+    let ring_down = mech_runtime::simulate(
+        model,
+        &last_q,
+        &last_u,
+        &signals,
+        &SimOptions {
+            t_start: sweep.duration,
+            t_end: sweep.duration * (1.0 + CHIRP_RING_DOWN),
+            ..options
+        },
+        &mut |_| {},
+    )?;
+    // The ring-down's first sample is the sweep's last (at the sweep's end): skipped.
+    run.times.extend_from_slice(&ring_down.times[1..]);
+    run.inputs.extend_from_slice(&ring_down.inputs[1..]);
+    run.outputs.extend_from_slice(&ring_down.outputs[1..]);
+    Ok(ChirpRecord {
+        input: run.inputs.iter().map(|x| x[sweep.input]).collect(),
+        output: run.outputs.iter().map(|x| x[sweep.output]).collect(),
+        times: run.times,
+        amplitude: sweep.amplitude,
+        rate_hz_per_s: (sweep.to_hz - sweep.from_hz).abs() / sweep.duration,
+    })
 }
 
 #[cfg(test)]

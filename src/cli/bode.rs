@@ -102,15 +102,10 @@ pub fn run(args: &BodeArgs) -> Result<(), Error> {
             rtol: 1e-8,
         };
         let state = session.assemble(&args.common.independent)?;
-        let estimate = frequency::simulated_chirp(
-            model,
-            &state.q,
-            &state.u,
-            &session.signals,
-            &sweep,
-            &frequencies,
-        )
-        .map_err(Error::Chirp)?;
+        let estimate =
+            frequency::simulate_chirp(model, &state.q, &state.u, &session.signals, &sweep)
+                .map_err(Error::Chirp)?
+                .estimate(&frequencies);
         Some(estimate)
     } else {
         None

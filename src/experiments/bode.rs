@@ -4,8 +4,8 @@
 //!
 //! Consumes: a [`Spec`] (model, sweep, channels, optional chirp). Produces:
 //! [`Responses`]: every channel's response from each source, the modes and resonances.
-//! The linear model's resonances are refined on its continuous response (independent of
-//! `points`); the chirp's are read off the grid of its estimate, and say so.
+//! Every source's resonances are refined on its continuous response (the linear model's
+//! `|H|`, the chirp record's `|Y/U|`), so they do not depend on `points`.
 
 use mech_codegen::ir::Dimension;
 use serde::Deserialize;
@@ -111,8 +111,6 @@ pub struct Source {
     pub key: &'static str,
     pub response: Vec<Point>,
     pub resonances: Vec<Resonance>,
-    /// Refined on the continuous response (the linear model), or read off the grid (chirp).
-    pub refined: bool,
 }
 
 /// Linearizes the leg at rest and computes every channel's responses (chirps in parallel,
@@ -157,15 +155,15 @@ pub fn compute(spec: &Spec) -> Result<Responses, Error> {
                     rtol: 1e-7,
                 };
                 let u0 = vec![0.0; leg.model().nu()];
-                let mut estimate = frequency::simulated_chirp(
+                let record = frequency::simulate_chirp(
                     leg.model(),
                     &rest_q,
                     &u0,
                     &leg.session.signals,
                     &sweep,
-                    &frequencies,
                 )
                 .map_err(Error::Chirp)?;
+                let mut estimate = record.estimate(&frequencies);
                 // Blank the start of the sweep (NaN: not drawn, not searched).
                 for point in estimate
                     .iter_mut()
@@ -173,7 +171,8 @@ pub fn compute(spec: &Spec) -> Result<Responses, Error> {
                 {
                     point.gain = mech_runtime::nalgebra::Complex::new(f64::NAN, f64::NAN);
                 }
-                Ok(Some(estimate))
+                let resonances = record.resonances(&estimate)?;
+                Ok(Some((estimate, resonances)))
             })
             .into_iter()
             .collect::<Result<Vec<_>, Error>>()?
@@ -192,7 +191,6 @@ pub fn compute(spec: &Spec) -> Result<Responses, Error> {
                     &frequencies,
                     frequency::linear_magnitude(&linear, input, output, damping),
                 )?,
-                refined: true,
             })
         };
         let mut sources = vec![
@@ -207,13 +205,12 @@ pub fn compute(spec: &Spec) -> Result<Responses, Error> {
                 mech_runtime::FlexureDamping::Viscous,
             )?,
         ];
-        if let Some(e) = estimate {
+        if let Some((response, resonances)) = estimate {
             sources.push(Source {
                 name: "chirp simulation",
                 key: "chirp",
-                resonances: frequency::resonances(&e),
-                response: e,
-                refined: false,
+                resonances,
+                response,
             });
         }
         channels.push(sources);

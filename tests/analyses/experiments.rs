@@ -361,10 +361,7 @@ fn bode_resonances_do_not_depend_on_the_grid() {
             .channels
             .iter()
             .flatten()
-            .map(|source| {
-                assert!(source.refined, "{}", source.name);
-                source.resonances[0]
-            })
+            .map(|source| source.resonances[0])
             .collect::<Vec<_>>()
     };
     let (coarse, fine) = (resonances(50), resonances(2000));
@@ -380,6 +377,42 @@ fn bode_resonances_do_not_depend_on_the_grid() {
         let (qc, qf) = (c.quality_factor.unwrap(), f.quality_factor.unwrap());
         assert!(close(qc, qf, 1e-4), "Q {qc} (50 points) vs {qf} (2000)");
         assert!(close(qf, q, 1e-4), "Q {qf}, pinned {q}");
+    }
+}
+
+/// The chirp's resonances (HAMR-VI, the bundled 2 V, 2 s sweep) are solved on its estimate's
+/// continuous `|Y/U|` with the record's free decay after the sweep: on 50 and 2000 points
+/// they agree within 1e-4, and their Q with the viscous linear model's converged values
+/// (the same losses) within 1 % (seen: lift 21.250 vs 21.248, swing 17.727 vs 17.766). Read off
+/// the grid of a record cut at the sweep's end, the swing's was 8.8 and 20.6 on these grids.
+#[test]
+fn chirp_resonances_do_not_depend_on_the_grid() {
+    let resonances = |points: usize| {
+        let spec = bundled(
+            "hamr_vi_bode.toml",
+            &[("points = 300", &format!("points = {points}"))],
+        );
+        let Kind::Bode(b) = &spec.kind else { panic!() };
+        let responses = experiments::bode::compute(b).unwrap();
+        responses
+            .channels
+            .iter()
+            .map(|sources| {
+                let chirp = sources.iter().find(|s| s.key == "chirp").unwrap();
+                chirp.resonances[0]
+            })
+            .collect::<Vec<_>>()
+    };
+    let (coarse, fine) = (resonances(50), resonances(2000));
+    // Lift, swing: the viscous linear model's converged Q (above).
+    for ((c, f), q) in coarse.iter().zip(&fine).zip([21.2477, 17.7662]) {
+        println!("50 points: {c:?}\n2000 points: {f:?}");
+        let (qc, qf) = (c.quality_factor.unwrap(), f.quality_factor.unwrap());
+        assert!(
+            close(c.frequency_hz, f.frequency_hz, 1e-4) && close(qc, qf, 1e-4),
+            "{c:?} vs {f:?}"
+        );
+        assert!(close(qf, q, 0.01), "chirp Q {qf} vs the viscous linear {q}");
     }
 }
 

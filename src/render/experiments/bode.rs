@@ -63,12 +63,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
                 channel.name.clone(),
                 source.name.to_string(),
                 peak.map_or("–".into(), |r| format!("{:.1}", r.frequency_hz)),
-                // A grid-read Q is low by an amount that depends on `points`: marked.
-                if source.refined || q == "n/a" {
-                    q
-                } else {
-                    format!("{q} (grid)")
-                },
+                q,
                 peak.map_or("–".into(), |r| format!("{:.2}", r.peak_magnitude * 1e6)),
                 format!("{:.2}", low * 1e6),
             ]);
@@ -95,12 +90,11 @@ fn q_note(spec: &Spec) -> String {
                   depend on the frequency grid.";
     match spec.chirp {
         Some(_) => format!(
-            "{linear} Chirp rows, marked (grid): read off the {}-point grid of the swept-sine \
-             estimate (parabola through the peak's samples, −3 dB points interpolated \
-             between samples), so their Q depends on that grid and on the estimate's \
-             ripple (sweep rate, record length) and can read low or high: compare it with \
-             the viscous linear row, the same losses.",
-            spec.points
+            "{linear} Chirp rows: the same search on the swept-sine estimate's continuous \
+             |Y(f)/U(f)| (the record's Fourier transforms at any frequency) within the band \
+             the sweep excited, so they do not depend on the grid either; they keep the \
+             estimate's own error (sweep rate, record length): compare them with the viscous \
+             linear row, the same losses."
         ),
         None => linear.to_string(),
     }
@@ -115,8 +109,10 @@ fn method_text(spec: &Spec, from: f64, to: f64) -> String {
         match &spec.chirp {
             Some(c) => format!(
                 "Chirp: the nonlinear model simulated (DOPRI5) from rest under a linear chirp \
-                 of {} from {from} to {to} Hz over {}, one input at a time; H estimated by \
-                 single-bin Fourier transforms of the whole record (rectangular window; viscous \
+                 of {} from {from} to {to} Hz over {}, then {:.0} % of that again with the \
+                 drive at rest (the free decay belongs to the response), one input at a time; \
+                 H estimated by single-bin Fourier transforms of the whole record (rectangular \
+                 window; viscous \
                  losses, as in the time domain), not shown where the sweep hardly excited the \
                  frequency: input spectrum |U(f)| below {:.0} % of the sweep's in-band level \
                  A/(2√r) (−6 dB, the level at the sweep's own first and last frequency; one \
@@ -124,6 +120,7 @@ fn method_text(spec: &Spec, from: f64, to: f64) -> String {
                  phases unwrapped along frequency.",
                 c.amplitude,
                 c.duration,
+                100.0 * frequency::CHIRP_RING_DOWN,
                 100.0 * frequency::CHIRP_INPUT_FLOOR
             ),
             None => "Magnitudes in dB re 1 µm/V; phases unwrapped along frequency.".into(),
