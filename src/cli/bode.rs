@@ -190,7 +190,8 @@ fn resonances_text(
     text
 }
 
-/// The CSV of `--out`: frequency, magnitude and phase, and the chirp estimate's if any.
+/// The CSV of `--out`: frequency, magnitude and phase, and the chirp estimate's if any; the
+/// phases unwrapped along frequency, as plotted.
 fn response_table(response: &[Point], chirp: Option<&[Point]>) -> (Vec<String>, Vec<Vec<f64>>) {
     let mut header: Vec<String> = ["frequency_hz", "magnitude_db", "phase_deg"]
         .map(String::from)
@@ -198,13 +199,15 @@ fn response_table(response: &[Point], chirp: Option<&[Point]>) -> (Vec<String>, 
     if chirp.is_some() {
         header.extend(["chirp_magnitude_db", "chirp_phase_deg"].map(String::from));
     }
+    let responses: Vec<&[Point]> = std::iter::once(response).chain(chirp).collect();
+    let phases = frequency::unwrapped_phases(&responses);
     let rows = response
         .iter()
         .enumerate()
         .map(|(k, p)| {
-            let mut row = vec![p.frequency_hz, p.magnitude_db(), p.phase_deg()];
+            let mut row = vec![p.frequency_hz, p.magnitude_db(), phases[0][k]];
             if let Some(estimate) = chirp {
-                row.extend([estimate[k].magnitude_db(), estimate[k].phase_deg()]);
+                row.extend([estimate[k].magnitude_db(), phases[1][k]]);
             }
             row
         })

@@ -158,8 +158,8 @@ fn modes_table(name: &str, modes: &[Mode]) -> Table {
     table
 }
 
-/// `bode_NAME.csv` (magnitude in m/V, phase) and `bode_NAME.svg` (dB re 1 µm/V) of one
-/// channel, every source side by side.
+/// `bode_NAME.csv` (magnitude in m/V, phase unwrapped as plotted) and `bode_NAME.svg` (dB re
+/// 1 µm/V) of one channel, every source side by side.
 fn write_channel(
     outcome: &mut Outcome,
     dir: &Path,
@@ -180,11 +180,12 @@ fn write_channel(
         .zip(frequency::unwrapped_phases(&responses))
         .map(|(s, values)| curve(s, values))
         .collect();
+    // The phases as plotted (unwrapped along frequency, the curves on one branch).
     let rows: Vec<Vec<f64>> = (0..frequencies.len())
         .map(|k| {
             let mut row = vec![frequencies[k]];
-            for s in sources {
-                row.extend([s.response[k].gain.norm(), s.response[k].phase_deg()]);
+            for (s, (_, _, phase)) in sources.iter().zip(&phase) {
+                row.extend([s.response[k].gain.norm(), phase[k]]);
             }
             row
         })
