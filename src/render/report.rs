@@ -93,7 +93,7 @@ pub fn render_markdown(outcomes: &[Outcome], base: &Path, seconds: f64) -> Strin
             outcome.title, outcome.name, outcome.method
         );
         for table in &outcome.tables {
-            text += &table.markdown();
+            text += &table_markdown(table);
             text += "\n";
         }
         for plot in &outcome.plots {
@@ -148,6 +148,21 @@ fn inline_markdown(text: &str) -> String {
     let mut html = String::new();
     pulldown_cmark::html::push_html(&mut html, events);
     html.trim_end().to_string()
+}
+
+/// A table as Markdown, folded as in the HTML page if it is longer than [`FOLDED_ROWS`]
+/// (GitHub-flavoured Markdown renders `<details>`; the blank line after the summary lets the
+/// table inside be read as Markdown).
+fn table_markdown(table: &super::table::Table) -> String {
+    if table.rows.len() <= FOLDED_ROWS {
+        return table.markdown();
+    }
+    format!(
+        "<details>\n<summary>{} ({} rows)</summary>\n\n{}\n</details>\n",
+        escape_html(&table.title),
+        table.rows.len(),
+        table.markdown()
+    )
 }
 
 /// A table as HTML, folded under a summary line if it is longer than [`FOLDED_ROWS`].
@@ -258,16 +273,25 @@ mod tests {
     use super::*;
     use crate::render::table::Table;
 
-    /// The prose is rendered (no literal backticks, HTML escaped once), and a long table is
-    /// folded under its title while a short one is not.
-    #[test]
-    fn markdown_rendered_and_long_tables_folded() {
+    fn long_table() -> Table {
         let mut long = Table::new("every point", &["k"]);
         for k in 0..=FOLDED_ROWS {
             long.row(vec![k.to_string()]);
         }
+        long
+    }
+
+    fn short_table() -> Table {
         let mut short = Table::new("summary", &["k"]);
         short.row(vec!["1".into()]);
+        short
+    }
+
+    /// The prose is rendered (no literal backticks, HTML escaped once), and a long table is
+    /// folded under its title while a short one is not, in the page and in report.md.
+    #[test]
+    fn markdown_rendered_and_long_tables_folded() {
+        let (short, long) = (short_table(), long_table());
         let outcome = Outcome {
             name: "x".into(),
             title: "1. X".into(),
@@ -291,5 +315,21 @@ mod tests {
             assert!(page.contains(html), "no `{html}` in {page}");
         }
         assert_eq!(page.matches("<details>").count(), 1);
+        let markdown = render_markdown(
+            &[Outcome {
+                tables: vec![short_table(), long_table()],
+                ..Outcome::default()
+            }],
+            Path::new("."),
+            1.0,
+        );
+        assert_eq!(markdown.matches("<details>").count(), 1, "{markdown}");
+        assert!(
+            markdown.contains(&format!(
+                "<details>\n<summary>every point ({} rows)</summary>\n\n**every point**",
+                FOLDED_ROWS + 1
+            )),
+            "{markdown}"
+        );
     }
 }
