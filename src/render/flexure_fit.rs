@@ -367,32 +367,6 @@ pub fn csv_files(report: &FitReport, dir: &Path) -> Result<Vec<File>, Error> {
     Ok(vec![traces, flexures])
 }
 
-/// Cross markers at `(xs, ys)` as one curve broken by NaN (the plot module skips non-finite
-/// points), sized to 1.2 % of the data span.
-fn markers(xs: &[f64], ys: &[f64], line_ys: &[f64]) -> (Vec<f64>, Vec<f64>) {
-    let span = |v: &mut dyn Iterator<Item = f64>| {
-        let (lo, hi) = v.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
-            (lo.min(x), hi.max(x))
-        });
-        (hi - lo).max(hi.abs() * 1e-3).max(f64::MIN_POSITIVE)
-    };
-    let dx = 0.012 * span(&mut xs.iter().copied().chain(std::iter::once(0.0)));
-    let dy = 0.012
-        * span(
-            &mut ys
-                .iter()
-                .chain(line_ys)
-                .copied()
-                .chain(std::iter::once(0.0)),
-        );
-    let (mut px, mut py) = (Vec::new(), Vec::new());
-    for (&x, &y) in xs.iter().zip(ys) {
-        px.extend([x - dx, x + dx, f64::NAN, x - dx, x + dx, f64::NAN]);
-        py.extend([y - dy, y + dy, f64::NAN, y + dy, y - dy, f64::NAN]);
-    }
-    (px, py)
-}
-
 /// One Fig. 5-style panel: a quantity of the fitted specimens against their width, and its
 /// fitted line through the origin, all in the units of the axes.
 struct Panel {
@@ -441,24 +415,33 @@ fn draw_panel(dir: &Path, extension: &str, widths_mm: &[f64], panel: Panel) -> R
     let w_max = widths_mm.iter().fold(0.0_f64, |m, &w| m.max(w)) * 1.05;
     let line_x = vec![0.0, w_max];
     let line_y: Vec<f64> = line_x.iter().map(|x| panel.line.slope * x).collect();
-    let (mx, my) = markers(widths_mm, &panel.values, &line_y);
-    // The line first, so that the markers are drawn on top of it.
-    let curves = vec![
-        (
-            format!("{}, R² = {:.3}", panel.fit_label, panel.line.r_squared),
-            line_x,
-            line_y,
+    let curves = vec![(
+        format!("{}, R² = {:.3}", panel.fit_label, panel.line.r_squared),
+        line_x,
+        line_y,
+    )];
+    // One marker per specimen (the mean over its trials), drawn over the line.
+    let measured = [plot::Measured {
+        name: format!(
+            "measured (n = {}, mean of each specimen's trials)",
+            panel.line.points
         ),
-        (format!("measured (n = {})", panel.line.points), mx, my),
-    ];
-    plot::plot_xy(
-        &path,
-        &panel.title,
-        "width w [mm]",
-        panel.y_label,
-        &curves,
-        false,
-    )
+        color: 1,
+        points: widths_mm
+            .iter()
+            .zip(&panel.values)
+            .map(|(&x, &y)| plot::ErrorPoint {
+                x,
+                y,
+                ..plot::ErrorPoint::default()
+            })
+            .collect(),
+    }];
+    plot::XyPlot {
+        measured: &measured,
+        ..plot::XyPlot::new(&panel.title, "width w [mm]", panel.y_label, &curves)
+    }
+    .render(&path)
     .map_err(|e| Error::Plot {
         path: path.clone(),
         message: e.to_string(),
