@@ -1,5 +1,6 @@
 """mech from Python: load a `.mech` model, then assemble, simulate, solve statics and
-linearize it, with NumPy arrays in and out.
+linearize it, with NumPy arrays in and out; run an experiment file (:func:`experiment`) or a
+diagnosis of measured data (:func:`diagnose`) and get their results as dicts.
 
     >>> import mech
     >>> pendulum = mech.load("models/pendulum.mech", set={"l": "30 mm"})
@@ -20,9 +21,9 @@ from __future__ import annotations
 from os import PathLike
 from typing import Mapping, Union
 
-from ._mech import MechError, Model
+from ._mech import MechError, Model, diagnose, experiment
 
-__all__ = ["load", "Model", "MechError"]
+__all__ = ["load", "experiment", "diagnose", "Model", "MechError"]
 
 Value = Union[str, float, int]
 

@@ -54,3 +54,19 @@ class Model:
     def mass_matrix(self, q: Array, inputs: Optional[Array] = None, t: float = 0.0) -> Array: ...
     def forcing(self, q: Array, u: Array, inputs: Optional[Array] = None, t: float = 0.0) -> Array: ...
     def evaluate_outputs(self, q: Array, u: Array, inputs: Optional[Array] = None, t: float = 0.0) -> Array: ...
+
+def experiment(path: Union[str, PathLike[str]], out_dir: Optional[Union[str, PathLike[str]]] = None) -> dict[str, Any]:
+    """Runs an experiment file as `mech experiment` does: `name`, `title`, `method`, `tables`
+    (each `title`, `header`, `rows` of text cells), `notes`, `values` (SI units) and the `files`
+    written (only with `out_dir`)."""
+
+def diagnose(
+    experiment: Union[str, PathLike[str]],
+    data: Union[str, PathLike[str]],
+    model: Optional[Union[str, PathLike[str]]] = None,
+    fit: list[str] = ...,
+    holdout: str = "every:3",
+    causes: list[str] = ...,
+) -> dict[str, Any]:
+    """Diagnoses measured data as `mech diagnose` does and returns what `diagnosis.json` holds
+    (`verdict`, `summary`, `base`, `ranked`, `combined`, `features`, ...); writes nothing."""

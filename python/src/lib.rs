@@ -539,9 +539,115 @@ impl Model {
     }
 }
 
+/// A JSON value as the Python object `json.loads` gives.
+fn json_object<'py>(py: Python<'py>, value: &serde_json::Value) -> PyResult<Bound<'py, PyAny>> {
+    let text = serde_json::to_string(value).map_err(error)?;
+    py.import("json")?.call_method1("loads", (text,))
+}
+
+/// Runs the experiment file at `path` (`mech experiment`): its title, method, tables (title,
+/// header, rows of text cells), notes and key values (SI units). With `out_dir`, its CSV files
+/// and plots are written there (in a subfolder named after the file), all or none, as the
+/// command writes them; without, nothing is written.
+#[pyfunction]
+#[pyo3(signature = (path, out_dir=None))]
+fn experiment<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    out_dir: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let outcome = py
+        .detach(|| {
+            let dir = out_dir
+                .clone()
+                .unwrap_or_else(|| PathBuf::from("out/experiments"));
+            let outcome =
+                mech::render::experiments::run_file(&path, &dir).map_err(|e| e.to_string())?;
+            if out_dir.is_some() {
+                let read = mech::output::Read {
+                    path: path.clone(),
+                    what: "the experiment file",
+                };
+                mech::output::write_all(&outcome.rendered, &[read]).map_err(|e| e.to_string())?;
+            }
+            Ok::<_, String>(outcome)
+        })
+        .map_err(error)?;
+    let tables: Vec<serde_json::Value> = outcome
+        .tables
+        .iter()
+        .map(|t| serde_json::json!({"title": t.title, "header": t.header, "rows": t.rows}))
+        .collect();
+    let written: Vec<String> = match out_dir {
+        Some(_) => outcome
+            .rendered
+            .iter()
+            .map(|f| f.path.display().to_string())
+            .collect(),
+        None => Vec::new(),
+    };
+    json_object(
+        py,
+        &serde_json::json!({
+            "name": outcome.name,
+            "title": outcome.title,
+            "method": outcome.method,
+            "tables": tables,
+            "notes": outcome.notes,
+            "values": outcome.values,
+            "files": written,
+        }),
+    )
+}
+
+/// Diagnoses measured data against a model (`mech diagnose`): every catalog cause fitted,
+/// ranked on the held-out rows, the verdict. Returns what `diagnosis.json` holds (verdict,
+/// summary sentence, every trial with its fitted values and standard errors, features, held-out
+/// residuals); writes nothing.
+#[pyfunction]
+#[pyo3(signature = (experiment, data, model=None, fit=Vec::new(), holdout="every:3", causes=Vec::new()))]
+fn diagnose<'py>(
+    py: Python<'py>,
+    experiment: PathBuf,
+    data: PathBuf,
+    model: Option<PathBuf>,
+    fit: Vec<String>,
+    holdout: &str,
+    causes: Vec<String>,
+) -> PyResult<Bound<'py, PyAny>> {
+    use mech::diagnose::candidates::{diagnose_causes, Holdout};
+    use mech::render::diagnosis::{diagnosis_json, verdict_text, Comparison};
+    let summary = py
+        .detach(|| {
+            let text = |e: &dyn std::fmt::Display| e.to_string();
+            let mut spec = mech::diagnose::experiment::load(&experiment).map_err(|e| text(&e))?;
+            if let Some(model) = model {
+                spec.set_model(model);
+            }
+            let measured = mech::diagnose::data::MeasuredData::load(&data).map_err(|e| text(&e))?;
+            let holdout_rows = Holdout::parse(holdout).map_err(|e| text(&e))?;
+            let d = diagnose_causes(&spec, &measured, &fit, holdout_rows, &causes)
+                .map_err(|e| text(&e))?;
+            let verdict = verdict_text(&d);
+            let comparison = Comparison::new(&spec, &d);
+            Ok::<_, String>(diagnosis_json(
+                holdout,
+                &data,
+                &spec,
+                &d,
+                &verdict,
+                &comparison,
+            ))
+        })
+        .map_err(error)?;
+    json_object(py, &summary)
+}
+
 #[pymodule]
 fn _mech(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Model>()?;
+    m.add_function(wrap_pyfunction!(experiment, m)?)?;
+    m.add_function(wrap_pyfunction!(diagnose, m)?)?;
     m.add("MechError", m.py().get_type::<MechError>())?;
     Ok(())
 }

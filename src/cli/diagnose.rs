@@ -15,14 +15,14 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use serde_json::json;
 
-use crate::diagnose::candidates::{diagnose_causes, Diagnosis, Holdout, Trial};
+use crate::diagnose::candidates::{diagnose_causes, Holdout};
 use crate::diagnose::data::MeasuredData;
-use crate::diagnose::experiment::{self, Experiment};
+use crate::diagnose::experiment;
 use crate::flexure_fit::fit::{fit_files, FitOptions, FitReport};
 use crate::flexure_fit::rig::specimen_files;
 use crate::output;
 use crate::render::diagnosis::{
-    dataset_text, diagnosis_page, finite_or_null, ranked_on, ranking_text, screening_json,
+    dataset_text, diagnosis_json, diagnosis_page, ranked_on, ranking_text, screening_json,
     screening_text, verdict_text, Comparison, PageSources,
 };
 
@@ -92,7 +92,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), Error> {
     let comparison = Comparison::new(&experiment, &d);
     print!("{}", comparison.text());
     println!("\nverdict: {verdict}");
-    let summary = summary_json(
+    let summary = diagnosis_json(
         &args.holdout,
         data_path,
         &experiment,
@@ -118,49 +118,6 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), Error> {
     output::write_all(&files, &reads)?;
     println!("wrote {} and its data", html.display());
     Ok(())
-}
-
-/// `diagnosis.json`: every trial with its fitted values, the verdict, the features and the
-/// held-out residuals — the facts of the terminal text, for scripts.
-fn summary_json(
-    holdout: &str,
-    data: &Path,
-    experiment: &Experiment,
-    d: &Diagnosis,
-    verdict: &str,
-    comparison: &Comparison,
-) -> serde_json::Value {
-    let trial = |t: &Trial| {
-        json!({
-            "cause": t.cause, "location": t.location,
-            "train_chi2": t.train_chi2, "holdout_chi2": finite_or_null(t.holdout_chi2),
-            "delta_aicc": finite_or_null(t.aicc - d.base.aicc),
-            "parameters": t.parameters.iter().map(|(n, nominal, v, se)| json!({
-                "name": n, "nominal": nominal, "value": v, "standard_error": finite_or_null(*se),
-            })).collect::<Vec<_>>(),
-            "error": t.error,
-        })
-    };
-    let (flags, screened) = screening_json(d.screening.as_ref());
-    json!({
-        "experiment": experiment.title,
-        "data": data.display().to_string(),
-        "flags": flags,
-        "screening": screened,
-        "holdout": holdout,
-        "verdict": d.verdict,
-        "summary": verdict,
-        "tied_with_best": d.tied.saturating_sub(1),
-        "separations": d.separations,
-        "base": trial(&d.base),
-        "ranked": d.ranked.iter().map(trial).collect::<Vec<_>>(),
-        "combined": d.combined.as_ref().map(trial),
-        "second_round": d.second_round.iter().map(trial).collect::<Vec<_>>(),
-        "inert": d.inert.iter().map(trial).collect::<Vec<_>>(),
-        "best": comparison.best_label,
-        "features": comparison.features_json(),
-        "residual_rms_held_out": comparison.rms_json(),
-    })
 }
 
 /// `mech diagnose --dataset DIR`: the summary on stdout and `dataset.json`; then every trace

@@ -399,6 +399,50 @@ pub fn fitted_text((name, nominal, value, se): &(String, f64, f64, f64)) -> Stri
     }
 }
 
+/// `diagnosis.json` (and the Python package's `diagnose`): every trial with its fitted values,
+/// the verdict, the features and the held-out residuals — the facts of the terminal text, for
+/// scripts.
+pub fn diagnosis_json(
+    holdout: &str,
+    data: &Path,
+    experiment: &Experiment,
+    d: &Diagnosis,
+    verdict: &str,
+    comparison: &Comparison,
+) -> serde_json::Value {
+    let trial = |t: &Trial| {
+        json!({
+            "cause": t.cause, "location": t.location,
+            "train_chi2": t.train_chi2, "holdout_chi2": finite_or_null(t.holdout_chi2),
+            "delta_aicc": finite_or_null(t.aicc - d.base.aicc),
+            "parameters": t.parameters.iter().map(|(n, nominal, v, se)| json!({
+                "name": n, "nominal": nominal, "value": v, "standard_error": finite_or_null(*se),
+            })).collect::<Vec<_>>(),
+            "error": t.error,
+        })
+    };
+    let (flags, screened) = screening_json(d.screening.as_ref());
+    json!({
+        "experiment": experiment.title,
+        "data": data.display().to_string(),
+        "flags": flags,
+        "screening": screened,
+        "holdout": holdout,
+        "verdict": d.verdict,
+        "summary": verdict,
+        "tied_with_best": d.tied.saturating_sub(1),
+        "separations": d.separations,
+        "base": trial(&d.base),
+        "ranked": d.ranked.iter().map(trial).collect::<Vec<_>>(),
+        "combined": d.combined.as_ref().map(trial),
+        "second_round": d.second_round.iter().map(trial).collect::<Vec<_>>(),
+        "inert": d.inert.iter().map(trial).collect::<Vec<_>>(),
+        "best": comparison.best_label,
+        "features": comparison.features_json(),
+        "residual_rms_held_out": comparison.rms_json(),
+    })
+}
+
 /// A JSON number, or `null` for NaN and infinities (which JSON cannot hold).
 pub fn finite_or_null(x: f64) -> serde_json::Value {
     if x.is_finite() {

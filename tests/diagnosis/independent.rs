@@ -7,7 +7,7 @@
 
 use crate::common;
 use crate::diagnose_catalog::{
-    bode_data, bode_frequencies, bode_responses, diagnose_data, summary,
+    bode_data, bode_frequencies, bode_responses, diagnose_data, loss_factor_named, summary,
 };
 use crate::independent_leg::{Actuator, Effect, IndependentLeg};
 
@@ -302,18 +302,5 @@ fn hidden_effect_independent_loss_factor() {
     let dir = common::scratch_dir("independent_loss_factor");
     let responses = independent_bode(&IndependentLeg::hamr_vi(&[Effect::LossFactor(0.12)]));
     let (experiment, text) = bode_data(&dir, &responses, &mut Rng::new(25));
-    let d = diagnose_data(&dir, &experiment, &text);
-    assert_eq!(d.verdict, Verdict::Explained, "{}", summary(&d));
-    let supported = &d.ranked[..d.tied.max(1)];
-    assert!(
-        supported.iter().all(|t| t.cause.contains("loss factor")),
-        "{}",
-        summary(&d)
-    );
-    let (value, se) = named(&d, "loss factor differs", "all flexures", "eta");
-    assert!(
-        (value - 0.12).abs() < 3.0 * se && (value - 0.12).abs() < 0.01,
-        "η = {value} ± {se} vs 0.12\n{}",
-        summary(&d)
-    );
+    loss_factor_named(&diagnose_data(&dir, &experiment, &text), 0.12);
 }

@@ -367,19 +367,21 @@ fn bimorph_actuator_matches_the_closed_form() {
     assert!((free / 300e-6 - 1.0).abs() < 0.1 && (blocked / 0.320 - 1.0).abs() < 0.1);
 }
 
+/// A mass on a spring and damper driven by `push`: f_n = √(k/m)/2π = 10 Hz,
+/// ζ = c/(2√(km)) = 0.05, Q ≈ 1/(2ζ) = 10.
+const OSCILLATOR: &str = "
+    input push = 0 N;
+    body mass { mass = 1 kg; }
+    joint x = slider(newtonian, mass) { axis = x; stiffness = 3947.8 N/m; damping = 6.2832 N*s/m; }
+    force drive at mass = [push, 0, 0];
+    output x = x.q;
+";
+
 /// The time-domain alternative: a simulated chirp turned into a swept-sine estimate agrees
 /// with the linearization's exact response, and both give the same resonance and Q.
 #[test]
 fn chirp_estimate_agrees_with_the_linear_response() {
-    let source = "
-        input push = 0 N;
-        body mass { mass = 1 kg; }
-        joint x = slider(newtonian, mass) { axis = x; stiffness = 3947.8 N/m; damping = 6.2832 N*s/m; }
-        force drive at mass = [push, 0, 0];
-        output x = x.q;
-    ";
-    // f_n = √(k/m)/2π = 10 Hz, ζ = c/(2√(km)) = 0.05, Q ≈ 1/(2ζ) = 10.
-    let model = common::tape_from_text("oscillator", source);
+    let model = common::tape_from_text("oscillator", OSCILLATOR);
     let output = model.output_index("x").unwrap();
     let linear = linearize(&model, 0.0, &[0.0], &[0.0], &[0]).unwrap();
     let frequencies = mech::frequency::log_space(4.0, 30.0, 200);
@@ -449,14 +451,7 @@ fn chirp_estimate_agrees_with_the_linear_response() {
 /// 9.950 (0.5 %); with the record cut at the sweep's end, f_r 9.909 Hz and Q 15.5.
 #[test]
 fn chirp_resonance_is_grid_independent_and_the_linear_one() {
-    let source = "
-        input push = 0 N;
-        body mass { mass = 1 kg; }
-        joint x = slider(newtonian, mass) { axis = x; stiffness = 3947.8 N/m; damping = 6.2832 N*s/m; }
-        force drive at mass = [push, 0, 0];
-        output x = x.q;
-    ";
-    let model = common::tape_from_text("oscillator", source);
+    let model = common::tape_from_text("oscillator", OSCILLATOR);
     let output = model.output_index("x").unwrap();
     let linear = linearize(&model, 0.0, &[0.0], &[0.0], &[0]).unwrap();
     let exact = mech::frequency::refined_resonances(
