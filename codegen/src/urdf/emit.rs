@@ -205,9 +205,7 @@ pub fn emit(file: &Arc<SourceFile>, robot: Robot, options: &Options) -> Result<I
             .with_label(name.span, "no `<link>` has this name");
         error = match diag::closest(&name.text, &link_names) {
             Some(close) => error.with_help(format!("did you mean `{close}`?")),
-            None => {
-                error.with_help("declare it with `<link name=\"...\">` or name an existing link")
-            }
+            None => error.with_help(format!("the links of this file: {}", listing(&link_names))),
         };
         errors.push(error);
         None
@@ -735,9 +733,13 @@ pub fn emit(file: &Arc<SourceFile>, robot: Robot, options: &Options) -> Result<I
                                 force.name.text
                             ),
                         );
-                if let Some(close) = diag::closest(&joint.text, &candidates) {
-                    error = error.with_help(format!("did you mean `{close}`?"));
-                }
+                error = error.with_help(match diag::closest(&joint.text, &candidates) {
+                    Some(close) => format!("did you mean `{close}`?"),
+                    None => format!(
+                        "the joints and loop joints of this file: {}",
+                        listing(&candidates)
+                    ),
+                });
                 errors.push(error);
                 continue;
             }
@@ -1274,6 +1276,21 @@ pub fn emit(file: &Arc<SourceFile>, robot: Robot, options: &Options) -> Result<I
 /// `body.point`, or `newtonian.point` for the fixed root.
 fn point_of(body: &str, point: &str) -> String {
     format!("{body}.{point}")
+}
+
+/// Names for a help line: the first ten, then how many more.
+fn listing(names: &[&str]) -> String {
+    const SHOWN: usize = 10;
+    let mut text = names
+        .iter()
+        .take(SHOWN)
+        .map(|n| format!("`{n}`"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    if names.len() > SHOWN {
+        text.push_str(&format!(" and {} more", names.len() - SHOWN));
+    }
+    text
 }
 
 /// Digits after the decimal point of a literal written without an exponent (0 otherwise).
