@@ -1268,7 +1268,7 @@ pub fn emit(file: &Arc<SourceFile>, robot: Robot, options: &Options) -> Result<I
         text: out,
         warnings,
         bodies,
-        joints: robot.joints.len(),
+        joints: robot.joints.len() + usize::from(!fixed_root),
         loops: closures.iter().flatten().count(),
     })
 }
