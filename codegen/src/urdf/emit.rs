@@ -12,7 +12,7 @@ use std::fmt::Write;
 use std::sync::Arc;
 
 use super::pose::{self, Axis, Frame, Vec3};
-use super::read::{float_literal, ForceKind, Name, Num, Pose, Robot, SkippedKind};
+use super::read::{float_literal, ForceKind, LinearSpring, Name, Num, Pose, Robot, SkippedKind};
 use super::{Base, Import, Options};
 use crate::diag::{self, Diagnostic, Errors, SourceFile, Span};
 
@@ -626,15 +626,16 @@ pub fn emit(file: &Arc<SourceFile>, robot: Robot, options: &Options) -> Result<I
                 stiffness,
                 rest,
             } => (joint, stiffness, rest, false),
-            ForceKind::LinearSpringDamper {
-                stiffness,
-                damping,
-                rest_length,
-                link1,
-                point1,
-                link2,
-                point2,
-            } => {
+            ForceKind::LinearSpringDamper(spring) => {
+                let LinearSpring {
+                    stiffness,
+                    damping,
+                    rest_length,
+                    link1,
+                    point1,
+                    link2,
+                    point2,
+                } = spring.as_ref();
                 let (Some(a), Some(b)) = (
                     resolve(link1, &mut errors, &mut warnings),
                     resolve(link2, &mut errors, &mut warnings),

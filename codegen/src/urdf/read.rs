@@ -144,17 +144,21 @@ pub enum ForceKind {
         stiffness: Num,
         rest: Option<Num>,
     },
-    /// `<linear_spring_damper stiffness damping rest_length>` between a point of `<link1>` and
-    /// one of `<link2>`.
-    LinearSpringDamper {
-        stiffness: Num,
-        damping: Option<Num>,
-        rest_length: Option<Num>,
-        link1: Name,
-        point1: [Num; 3],
-        link2: Name,
-        point2: [Num; 3],
-    },
+    /// `<linear_spring_damper>`, boxed: much larger than the others.
+    LinearSpringDamper(Box<LinearSpring>),
+}
+
+/// `<linear_spring_damper stiffness damping rest_length>` between a point of `<link1>` and one
+/// of `<link2>`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinearSpring {
+    pub stiffness: Num,
+    pub damping: Option<Num>,
+    pub rest_length: Option<Num>,
+    pub link1: Name,
+    pub point1: [Num; 3],
+    pub link2: Name,
+    pub point2: [Num; 3],
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -786,7 +790,7 @@ impl Reader {
                     self.missing_child(element, "link1> and a `<link2");
                     return None;
                 };
-                ForceKind::LinearSpringDamper {
+                ForceKind::LinearSpringDamper(Box::new(LinearSpring {
                     stiffness: self.required_number(
                         element,
                         "stiffness",
@@ -798,7 +802,7 @@ impl Reader {
                     point1,
                     link2,
                     point2,
-                }
+                }))
             }
             _ => {
                 self.skip(&name.text, element, SkippedKind::Other);
