@@ -33,22 +33,7 @@ fn render(path: &Path) -> String {
 
 fn check(stem: &str) {
     let path = ui_dir().join(format!("{stem}.urdf"));
-    let actual = render(&path);
-    let golden = path.with_extension("stderr");
-    if support::blessing() {
-        std::fs::write(&golden, &actual).expect("writable .stderr file");
-        return;
-    }
-    let expected = std::fs::read_to_string(&golden).unwrap_or_default();
-    assert!(
-        actual != "(imported without errors)\n",
-        "tests/urdf_ui/{stem}.urdf imported without errors; a ui file must fail"
-    );
-    assert!(
-        actual == expected,
-        "{} differs (MECH_BLESS=1 to update):\nexpected:\n{expected}\nactual:\n{actual}",
-        golden.display()
-    );
+    support::check_failure(&path, &render(&path), "(imported without errors)\n");
 }
 
 tests_per_file! {

@@ -15,26 +15,12 @@ use super::pose::{self, Axis, Frame, Vec3};
 use super::read::{float_literal, ForceKind, LinearSpring, Name, Num, Pose, Robot, SkippedKind};
 use super::{Base, Import, Options};
 use crate::diag::{self, Diagnostic, Errors, SourceFile, Span};
+use crate::front::DECLARATION_KEYWORDS;
 
-/// Words the `.mech` grammar keeps for itself, and reserved names: an identifier from the
-/// URDF that is one of these gets a `_` appended.
+/// Words of the `.mech` grammar besides the declaration keywords, and reserved names: an
+/// identifier from the URDF that is one of these gets a `_` appended.
 const RESERVED: &[&str] = &[
     "model",
-    "param",
-    "let",
-    "input",
-    "gravity",
-    "newtonian",
-    "body",
-    "joint",
-    "loop",
-    "material",
-    "flexure",
-    "actuator",
-    "spring",
-    "force",
-    "torque",
-    "output",
     "point",
     "frame",
     "at",
@@ -83,7 +69,7 @@ impl Identifiers {
         if base.is_empty() || base.starts_with(|c: char| c.is_ascii_digit()) {
             base.insert(0, '_');
         }
-        if RESERVED.contains(&base.as_str()) {
+        if RESERVED.contains(&base.as_str()) || DECLARATION_KEYWORDS.contains(&base.as_str()) {
             base.push('_');
         }
         let mut name = base.clone();
