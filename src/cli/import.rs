@@ -46,6 +46,10 @@ pub struct UrdfArgs {
     /// closure's axis where the other hinge axes meet it (documented in the model's header).
     #[arg(long)]
     pub snap: bool,
+    /// Another URDF of the same robot: the inertial data of the links both files name are
+    /// compared, each disagreement a warning with both files' numbers.
+    #[arg(long, value_name = "OTHER.urdf")]
+    pub compare: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -61,26 +65,33 @@ pub fn run(command: &ImportCommand) -> Result<(), Error> {
 }
 
 fn urdf(args: &UrdfArgs) -> Result<(), Error> {
-    let options = Options {
+    let mut options = Options {
         units: Units::new(&args.length, &args.mass, &args.time)?,
         base: match args.base {
             BaseArg::Fixed => Base::Fixed,
             BaseArg::Floating => Base::Floating,
         },
         snap: args.snap,
+        compare: None,
     };
     let source = args.file.as_path();
     let read = output::Read {
         path: source.to_path_buf(),
         what: "the URDF file",
     };
-    output::check_outputs([args.out.as_path()], std::slice::from_ref(&read))?;
-    let shown = source.display().to_string();
-    let text = std::fs::read_to_string(source).map_err(|error| Errors::io(&shown, &error))?;
-    let imported = urdf::import(Arc::new(SourceFile::new(shown, text)), &options)?;
+    let mut reads = vec![read];
+    if let Some(other) = &args.compare {
+        reads.push(output::Read {
+            path: other.clone(),
+            what: "the URDF file compared",
+        });
+        options.compare = Some(Arc::new(source_file(other)?));
+    }
+    output::check_outputs([args.out.as_path()], &reads)?;
+    let imported = urdf::import(Arc::new(source_file(source)?), &options)?;
     output::write_all(
         &[output::File::new(&args.out, imported.text.as_bytes())],
-        &[read],
+        &reads,
     )?;
     if !imported.warnings.is_empty() {
         eprintln!("{}", terminal_safe(imported.render_warnings().trim_end()));
@@ -94,4 +105,11 @@ fn urdf(args: &UrdfArgs) -> Result<(), Error> {
         imported.warnings.len()
     );
     Ok(())
+}
+
+/// A file's text, shown in messages by its path as given.
+fn source_file(path: &std::path::Path) -> Result<SourceFile, Errors> {
+    let shown = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|error| Errors::io(&shown, &error))?;
+    Ok(SourceFile::new(shown, text))
 }

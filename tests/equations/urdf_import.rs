@@ -360,6 +360,47 @@ fn snapping_removes_the_spurious_singular_value() {
     assert!(snapped[6] / snapped[0] < 1e-15, "{snapped:?}");
 }
 
+/// The leg's inertia is the one disagreement between the single-leg file and the robot's:
+/// `--compare` reports it on `FLL4` alone, with both files' numbers.
+#[test]
+fn compare_reports_the_disagreeing_leg_inertia() {
+    let robot = reference_urdf("HAMR_scaledV2");
+    let other = SourceFile::new(
+        "HAMR_scaledV2.urdf",
+        std::fs::read_to_string(robot).unwrap(),
+    );
+    let imported = import(
+        "FL_scaled",
+        &Options {
+            compare: Some(Arc::new(other)),
+            ..hamr_options()
+        },
+    );
+    let warnings = imported.render_warnings();
+    assert_eq!(warnings.matches("U0611").count(), 1, "{warnings}");
+    for expected in [
+        "link `FLL4`'s inertial data differ from `HAMR_scaledV2.urdf` (line 352)",
+        "mass 3.0037e-02 vs 3.0948e-02 g",
+        "centre of mass [-1.1371, 3.3487, 3.3706] vs [-1.0887, 3.2212, -3.5924] mm",
+        "the three products of inertia have opposite signs",
+    ] {
+        assert!(warnings.contains(expected), "{expected}\n{warnings}");
+    }
+    // The same file compared with itself agrees.
+    let itself = SourceFile::new(
+        "FL_scaled.urdf",
+        std::fs::read_to_string(reference_urdf("FL_scaled")).unwrap(),
+    );
+    let same = import(
+        "FL_scaled",
+        &Options {
+            compare: Some(Arc::new(itself)),
+            ..hamr_options()
+        },
+    );
+    assert!(!same.render_warnings().contains("U0611"));
+}
+
 #[test]
 fn every_reference_urdf_imports_and_compiles() {
     for name in URDF_FILES {

@@ -22,6 +22,7 @@
 //! Numbers are copied as written (exact decimals), with the units given; only computed values
 //! (snapped points, turned inertias) are printed from `f64`.
 
+mod compare;
 mod emit;
 mod pose;
 mod read;
@@ -116,6 +117,9 @@ pub struct Options {
     /// Move loop points that miss each other at the zero pose by round-off onto the
     /// closure's axis where the other hinge axes meet it (see `pose::snap`).
     pub snap: bool,
+    /// Another URDF of the same robot (`--compare`): the links both have are compared and
+    /// every disagreement of their inertial data is a warning with both files' numbers.
+    pub compare: Option<Arc<SourceFile>>,
 }
 
 /// A translated robot.
@@ -143,8 +147,18 @@ impl Import {
     }
 }
 
-/// Translates a URDF file into `.mech` text.
+/// Translates a URDF file into `.mech` text. The errors are the imported file's or, with
+/// `compare`, the other file's (their [`Errors`] name the file).
 pub fn import(file: Arc<SourceFile>, options: &Options) -> Result<Import, Errors> {
     let robot = read::read(&file)?;
-    emit::emit(&file, robot, options)
+    let differences = match &options.compare {
+        Some(other_file) => {
+            let other = read::read(other_file)?;
+            compare::compare(&robot, &other, other_file, &options.units)
+        }
+        None => Vec::new(),
+    };
+    let mut imported = emit::emit(&file, robot, options)?;
+    imported.warnings.extend(differences);
+    Ok(imported)
 }
