@@ -1373,6 +1373,16 @@ fn rotated_inertia(entries: &[Num; 6], r: &pose::Mat3) -> String {
         turned[1][2],
         turned[0][2],
     ];
+    // Entries that are round-off of the rotation (a product of 6e-17 after a quarter turn)
+    // are zero.
+    let largest = items.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    let items = items.map(|v| {
+        if v.abs() <= 8.0 * f64::EPSILON * largest {
+            0.0
+        } else {
+            v
+        }
+    });
     format!("[{}]", items.map(float_literal).join(", "))
 }
 
