@@ -26,6 +26,7 @@ mod compare;
 mod emit;
 mod pose;
 mod read;
+mod tree;
 
 use std::sync::Arc;
 
@@ -158,7 +159,7 @@ pub fn import(file: Arc<SourceFile>, options: &Options) -> Result<Import, Errors
         }
         None => Vec::new(),
     };
-    let mut imported = emit::emit(&file, robot, options)?;
+    let mut imported = emit::emit(&file, &robot, options)?;
     imported.warnings.extend(differences);
     Ok(imported)
 }
