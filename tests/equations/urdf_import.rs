@@ -401,9 +401,13 @@ fn compare_reports_the_disagreeing_leg_inertia() {
     assert!(!same.render_warnings().contains("U0611"));
 }
 
+/// What `mech check` says of each import: the loops close at the zero pose and the
+/// mobility is the leg's 2 degrees of freedom per leg (chassis fixed); the cut-open
+/// `HAMRVariational_scaledV2_LB.urdf` is a tree of 44.
 #[test]
-fn every_reference_urdf_imports_and_compiles() {
-    for name in URDF_FILES {
+fn every_reference_urdf_imports_and_passes_check() {
+    let degrees_of_freedom = [2, 2, 8, 44, 2];
+    for (name, expected) in URDF_FILES.into_iter().zip(degrees_of_freedom) {
         let imported = import(name, &hamr_options());
         let compiled = mech_codegen::Compiled::from_source(SourceFile::new(
             format!("{name}.mech"),
@@ -417,8 +421,28 @@ fn every_reference_urdf_imports_and_compiles() {
         // Every link but the fixed root is a body.
         assert_eq!(compiled.model.bodies.len(), links - 1, "{name}");
         assert_eq!(imported.bodies, links - 1, "{name}");
+        let session = mech::session::Session::from_compiled(compiled, &[], &[]).unwrap();
+        let state = session
+            .assemble(&[])
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let found = match &state.mobility {
+            Some(mobility) => {
+                let text = mobility.to_string();
+                assert!(
+                    text.ends_with(&format!("{expected} degrees of freedom")),
+                    "{name}: {text}"
+                );
+                // Closed at the zero pose: assembly did not move the coordinates.
+                assert!(largest(&state.q) < 1e-12, "{name}: {:?}", state.q);
+                text
+            }
+            None => {
+                assert_eq!(session.model.nu(), expected, "{name}");
+                format!("a tree of {expected} degrees of freedom")
+            }
+        };
         println!(
-            "{name}: {} bodies, {} joints, {} loops, {} warnings",
+            "{name}: {} bodies, {} joints, {} loops, {} warnings; {found}",
             imported.bodies,
             imported.joints,
             imported.loops,

@@ -135,12 +135,14 @@ impl Tree {
                     .with_label(Span::new(0, 1), "no `<link>` in this file")
                     .with_help("a URDF robot has at least one `<link name=\"...\">`")])
             }
-            [] => return fail(vec![Diagnostic::error(
+            [] => {
+                return fail(vec![Diagnostic::error(
                 "U0401",
                 "every link has a parent joint: the joints form a cycle and the tree has no root",
             )
             .with_label(robot.joints[0].span, "one joint of the cycle")
-            .with_help(CLOSE_THE_CYCLE)]),
+            .with_help(CLOSE_THE_CYCLE)])
+            }
             _ => {
                 let mut error = Diagnostic::error(
                     "U0403",
