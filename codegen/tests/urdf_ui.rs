@@ -49,6 +49,7 @@ tests_per_file! {
     not_a_robot,
     spring_on_unknown_joint,
     two_roots,
+    undeclared_drake_prefix,
     unknown_joint_type,
     wrong_vector_length,
 }

@@ -288,9 +288,18 @@ pub fn read(file: &Arc<SourceFile>) -> Result<Robot, Errors> {
 fn xml_error(text: &str, error: &roxmltree::Error) -> Diagnostic {
     let position = error.pos();
     let offset = offset_of(text, position.row as usize, position.col as usize);
+    let help = match error {
+        roxmltree::Error::UnknownNamespace(prefix, _) if prefix == "drake" => {
+            "declare Drake's prefix on the root element: `<robot name=\"...\" xmlns:drake=\"http://drake.mit.edu\">`".to_string()
+        }
+        roxmltree::Error::UnknownNamespace(prefix, _) => {
+            format!("declare the prefix on the root element: `xmlns:{prefix}=\"...\"`")
+        }
+        _ => "a URDF file must be well-formed XML: every tag closed, attributes quoted".to_string(),
+    };
     Diagnostic::error("U0101", "malformed XML")
         .with_label(Span::new(offset, offset + 1), error.to_string())
-        .with_help("a URDF file must be well-formed XML: every tag closed, attributes quoted")
+        .with_help(help)
 }
 
 /// The byte offset of a 1-based line and character column.
