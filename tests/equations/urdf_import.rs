@@ -571,7 +571,7 @@ fn rotated_frames_springs_and_closures_are_translated() {
 }
 
 #[test]
-fn a_floating_base_is_a_free_joint_and_a_planar_joint_is_welded_with_a_warning() {
+fn a_floating_base_is_a_free_joint_and_a_planar_joint_two_sliders_and_a_pin() {
     let planar = FEATURES.replace(
         r#"<joint name="rail" type="prismatic">"#,
         r#"<joint name="rail" type="planar">"#,
@@ -583,23 +583,17 @@ fn a_floating_base_is_a_free_joint_and_a_planar_joint_is_welded_with_a_warning()
             ..Options::default()
         },
     );
-    assert!(
-        imported
-            .text
-            .contains("joint world_base = free(newtonian, world);"),
-        "{}",
-        imported.text
-    );
-    assert!(
-        imported.text.contains("joint rail = weld(world, cart) {"),
-        "{}",
-        imported.text
-    );
+    let text = &imported.text;
+    for expected in [
+        "joint world_base = free(newtonian, world);",
+        "body rail_slide1 { mass = 0 kg; }",
+        "joint rail_1 = slider(world, rail_slide1) {\n    axis = x;\n    parent_point = [0, 2, 0] * 1 m;\n}",
+        "joint rail_2 = slider(rail_slide1, rail_slide2) { axis = y; }",
+        "joint rail = pin(rail_slide2, cart) { axis = z; }",
+    ] {
+        assert!(text.contains(expected), "{expected}\n{text}");
+    }
     let warnings = imported.render_warnings();
-    assert!(
-        warnings.contains("joint `rail` is planar: `.mech` has no planar joint; welded instead"),
-        "{warnings}"
-    );
     assert!(
         warnings.contains("a prismatic spring needs a prismatic joint"),
         "{warnings}"
@@ -608,4 +602,15 @@ fn a_floating_base_is_a_free_joint_and_a_planar_joint_is_welded_with_a_warning()
         warnings.contains("loop closures in a model with a free joint are not supported"),
         "{warnings}"
     );
+    // Without the closure (E0416 with a free joint) the model has the free joint's 6, the
+    // shoulder's 1, the planar joint's 3 and the ball's 3 degrees of freedom.
+    let without_loop = text.replace(
+        &text[text.find("/// Drake loop_joint `tie`").unwrap()
+            ..text
+                .find("// ---------------------------------------------------------------- springs between")
+                .unwrap()],
+        "",
+    );
+    let model = common::tape_from_text("planar", &without_loop);
+    assert_eq!(model.nu(), 6 + 1 + 3 + 3);
 }

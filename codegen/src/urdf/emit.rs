@@ -10,7 +10,7 @@
 use std::fmt::Write;
 use std::sync::Arc;
 
-use super::pose::{self, Axis};
+use super::pose::{self, Axis, Vec3};
 use super::read::{float_literal, ForceKind, LinearSpring, LoopJoint, Num, Robot, SkippedKind};
 use super::tree::{listing, rotation, values, Tree};
 use super::{Base, Import, Options};
@@ -91,6 +91,9 @@ enum Kind {
     Weld,
     Ball,
     Free,
+    /// No `.mech` kind: two sliders in the plane and a pin about its normal (the URDF
+    /// axis), through two massless bodies.
+    Planar,
 }
 
 impl Kind {
@@ -101,6 +104,7 @@ impl Kind {
             Kind::Weld => "weld",
             Kind::Ball => "ball",
             Kind::Free => "free",
+            Kind::Planar => "planar",
         }
     }
 }
@@ -283,22 +287,7 @@ impl<'a> Translation<'a> {
                 "fixed" | "Fixed" => Kind::Weld,
                 "floating" => Kind::Free,
                 "ball" | "spherical" => Kind::Ball,
-                "planar" => {
-                    self.warnings.push(
-                        Diagnostic::warning(
-                            "U0602",
-                            format!(
-                                "joint `{}` is planar: `.mech` has no planar joint; welded instead",
-                                joint.name.text
-                            ),
-                        )
-                        .with_label(joint.kind.span, "3 degrees of freedom lost")
-                        .with_help(
-                            "replace the weld by two sliders and a pin through massless bodies",
-                        ),
-                    );
-                    Kind::Weld
-                }
+                "planar" => Kind::Planar,
                 other => {
                     self.errors.push(
                         Diagnostic::error("U0204", format!("unknown joint type `{other}`"))
@@ -308,7 +297,9 @@ impl<'a> Translation<'a> {
                     Kind::Weld
                 }
             };
-            if matches!(kind, Kind::Pin | Kind::Slider) && values(&joint.axis) == [0.0; 3] {
+            if matches!(kind, Kind::Pin | Kind::Slider | Kind::Planar)
+                && values(&joint.axis) == [0.0; 3]
+            {
                 self.errors.push(
                     Diagnostic::error(
                         "U0303",
@@ -316,7 +307,7 @@ impl<'a> Translation<'a> {
                     )
                     .with_label(joint.axis[0].span, "axis `0 0 0`")
                     .with_help(
-                        "a revolute or prismatic joint needs a nonzero `<axis xyz=\"...\"/>`",
+                        "a revolute, prismatic or planar joint needs a nonzero `<axis xyz=\"...\"/>`",
                     ),
                 );
             }
@@ -1067,7 +1058,8 @@ impl<'a> Translation<'a> {
         }
         // In the order of the tree (parents first), siblings in the file's order, as `.mech`
         // orders coordinates.
-        for &c in self.tree.order.iter().skip(1) {
+        let order = self.tree.order.clone();
+        for &c in order.iter().skip(1) {
             let Some(j) = self.tree.parent_joint[c] else {
                 continue;
             };
@@ -1086,6 +1078,10 @@ impl<'a> Translation<'a> {
                 .filter(|s| s.owner == joint.name.text && s.kind != SkippedKind::Display)
             {
                 let _ = writeln!(out, "// Not translated: {}", skipped.what);
+            }
+            if self.kinds[j] == Kind::Planar {
+                self.write_planar(out, j, members);
+                continue;
             }
             let mut fields = Vec::new();
             if matches!(self.kinds[j], Kind::Pin | Kind::Slider) {
@@ -1127,6 +1123,55 @@ impl<'a> Translation<'a> {
                 let _ = writeln!(out, "}}\n");
             }
         }
+    }
+
+    /// A planar joint as two sliders along directions in the plane and a pin about its
+    /// normal, through two massless bodies: three coordinates, `NAME_1`, `NAME_2` (lengths)
+    /// and `NAME` (the angle).
+    fn write_planar(&mut self, out: &mut String, j: usize, members: &Members) {
+        let joint = &self.robot.joints[j];
+        let (parent, child) = self.tree.ends[j];
+        let normal = pose::unit(values(&joint.axis)).unwrap_or([0.0, 0.0, 1.0]);
+        let [first, second] = in_plane(normal);
+        let bodies = [1, 2].map(|i| self.frames.take(&format!("{}_slide{i}", joint.name.text)));
+        let slides = [1, 2].map(|i| self.frames.take(&format!("{}_{i}", joint.name.text)));
+        let _ = writeln!(
+            out,
+            "// As two sliders in the plane and a pin about its normal, through two massless bodies."
+        );
+        for body in &bodies {
+            let _ = writeln!(out, "body {body} {{ mass = 0 {}; }}", self.units.mass);
+        }
+        let _ = writeln!(
+            out,
+            "joint {} = slider({}, {}) {{",
+            slides[0], self.body_ident[parent], bodies[0]
+        );
+        let _ = writeln!(out, "    axis = {};", direction(first));
+        if values(&joint.origin.xyz) != [0.0; 3] {
+            let point = vector(&joint.origin.xyz, self.units.length);
+            let _ = writeln!(out, "    parent_point = {point};");
+        }
+        if let Some(frame) = &members.joint_frames[j] {
+            let _ = writeln!(out, "    parent_frame = {frame};");
+        }
+        let _ = writeln!(out, "}}");
+        let _ = writeln!(
+            out,
+            "joint {} = slider({}, {}) {{ axis = {}; }}",
+            slides[1],
+            bodies[0],
+            bodies[1],
+            direction(second)
+        );
+        let _ = writeln!(
+            out,
+            "joint {} = pin({}, {}) {{ axis = {}; }}\n",
+            self.joint_ident[j],
+            bodies[1],
+            self.body_ident[child],
+            axis(&joint.axis)
+        );
     }
 
     fn write_loops(&self, out: &mut String, members: &Members) {
@@ -1315,6 +1360,35 @@ fn axis(numbers: &[Num; 3]) -> String {
             ["x", "y", "z"][i]
         ),
         _ => literals(numbers),
+    }
+}
+
+/// Two unit vectors spanning the plane normal to `normal`: the coordinate axis least along
+/// the normal, made normal to it, then the normal crossed with that (x, y for a normal z).
+fn in_plane(normal: Vec3) -> [Vec3; 2] {
+    let least = (0..3)
+        .min_by(|&a, &b| normal[a].abs().total_cmp(&normal[b].abs()))
+        .unwrap_or(0);
+    let mut along = [0.0; 3];
+    along[least] = 1.0;
+    let first = pose::unit(pose::sub(
+        along,
+        pose::scale(normal, pose::dot(along, normal)),
+    ))
+    .unwrap_or(along);
+    [first, pose::cross(normal, first)]
+}
+
+/// `x`, `-y`, … for a coordinate axis, else the components.
+fn direction(v: Vec3) -> String {
+    let nonzero: Vec<usize> = (0..3).filter(|&i| v[i] != 0.0).collect();
+    match nonzero[..] {
+        [i] if v[i].abs() == 1.0 => format!(
+            "{}{}",
+            if v[i] < 0.0 { "-" } else { "" },
+            ["x", "y", "z"][i]
+        ),
+        _ => format!("[{}]", v.map(float_literal).join(", ")),
     }
 }
 
