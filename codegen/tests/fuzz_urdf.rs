@@ -11,6 +11,9 @@ use mech_codegen::diag::SourceFile;
 use mech_codegen::{front, urdf};
 use proptest::prelude::*;
 
+#[path = "support/mutate.rs"]
+mod mutate;
+
 const VALID: &str = r#"<?xml version="1.0"?>
 <robot name="seed" xmlns:drake="http://drake.mit.edu">
   <link name="base"><inertial><origin xyz="0 0 -0.1"/><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" iyz="0" ixz="0"/></inertial></link>
@@ -112,23 +115,12 @@ proptest! {
 
     #[test]
     fn mutated_urdf_does_not_panic(mutations in prop::collection::vec(mutation(), 1..6), snap in any::<bool>()) {
-        let mut bytes = VALID.as_bytes().to_vec();
-        for (at, remove, insert) in mutations {
-            let at = at.min(bytes.len());
-            let end = (at + remove).min(bytes.len());
-            bytes.splice(at..end, insert);
-        }
-        import_bytes(&bytes, snap);
+        import_bytes(&mutate::mutated(VALID, mutations), snap);
     }
 
     #[test]
     fn spliced_urdf_does_not_panic(a in 0..VALID.len(), b in 0..VALID.len(), c in 0..VALID.len()) {
-        let bytes = VALID.as_bytes();
-        let (from, to) = (a.min(b), a.max(b));
-        let mut spliced = bytes[..c].to_vec();
-        spliced.extend_from_slice(&bytes[from..to]);
-        spliced.extend_from_slice(&bytes[c..]);
-        import_bytes(&spliced, true);
+        import_bytes(&mutate::spliced(VALID, a, b, c), true);
     }
 }
 
