@@ -463,7 +463,7 @@ fn importing_twice_gives_the_same_bytes() {
 
 /// A URDF in SI units with what the HAMR files do not use: rotated joint origins and inertial
 /// frames, a fixed joint, a prismatic joint with a spring, a Drake `drake:joint` of type
-/// ball, a ball `loop_joint`, a torsional spring on a loop joint, a spring between points.
+/// ball, a ball `loop_joint`, Drake's `drake:ball_constraint`, a spring between points.
 const FEATURES: &str = r#"<?xml version="1.0"?>
 <robot name="features" xmlns:drake="http://drake.mit.edu">
   <link name="world"/>
@@ -500,6 +500,12 @@ const FEATURES: &str = r#"<?xml version="1.0"?>
     <link1 link="hand" xyz="1 0 0"/>
     <link2 link="bob" xyz="0 0 0"/>
   </loop_joint>
+  <drake:ball_constraint>
+    <drake:ball_constraint_body_A name="hand"/>
+    <drake:ball_constraint_body_B name="cart"/>
+    <drake:ball_constraint_p_AP value="0.5 0 0"/>
+    <drake:ball_constraint_p_BQ value="0 0 0.25"/>
+  </drake:ball_constraint>
   <force_element name="k_rail">
     <prismatic_spring stiffness="40" rest_length="0.1"><joint name="rail"/></prismatic_spring>
   </force_element>
@@ -530,6 +536,7 @@ fn rotated_frames_springs_and_closures_are_translated() {
         "joint wrist = weld(arm, hand) {",
         "frame wrist_origin = rotate(z, 1.5707963267948966);",
         "loop tie = coincident(hand, bob) {",
+        "loop ball_constraint_2 = coincident(hand, cart) {\n    parent_point = [0.5, 0, 0] * 1 m;\n    child_point = [0, 0, 0.25] * 1 m;\n}",
         "spring band between newtonian.band and cart.band { stiffness = band; damping = band_damping; }",
         "output hand_fingertip = position(hand.fingertip) in newtonian;",
     ] {

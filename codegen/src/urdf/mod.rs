@@ -14,7 +14,8 @@
 //! - joint → `joint`: revolute, continuous → `pin`, prismatic → `slider`, fixed → `weld`,
 //!   floating → `free`, Drake's ball → `ball`; planar (no `.mech` kind) → two sliders and a
 //!   pin through massless bodies; `<dynamics damping>` → `damping`; limits and friction → comments;
-//! - Drake `loop_joint` → `loop` (`continuous`/`revolute` → `revolute`, `ball` → `coincident`);
+//! - Drake `loop_joint` → `loop` (`continuous`/`revolute` → `revolute`, `ball` → `coincident`),
+//!   Drake's `drake:ball_constraint` → `coincident`;
 //! - Drake force elements → parameters: `torsional_spring` → `stiffness`/`rest` of its pin
 //!   or revolute loop, `prismatic_spring` → of its slider, `linear_spring_damper` → `spring`;
 //! - transmissions → comments.

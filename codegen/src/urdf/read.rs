@@ -266,6 +266,12 @@ pub fn read(file: &Arc<SourceFile>) -> Result<Robot, Errors> {
                     robot.loops.push(closure);
                 }
             }
+            "ball_constraint" => {
+                let count = robot.loops.len();
+                if let Some(closure) = reader.ball_constraint(node, count) {
+                    robot.loops.push(closure);
+                }
+            }
             "force_element" => {
                 if let Some(force) = reader.force_element(node) {
                     robot.forces.push(force);
@@ -649,13 +655,13 @@ impl Reader {
         let parent = child(node, "parent")
             .map(|p| self.name(p, "link", "`<parent link=\"base\"/>`"))
             .unwrap_or_else(|| {
-                self.missing_child(node, "parent");
+                self.missing_child(node, "parent", "`<parent link=\"NAME\"/>` names the link");
                 None
             });
         let child_link = child(node, "child")
             .map(|c| self.name(c, "link", "`<child link=\"arm\"/>`"))
             .unwrap_or_else(|| {
-                self.missing_child(node, "child");
+                self.missing_child(node, "child", "`<child link=\"NAME\"/>` names the link");
                 None
             });
         let origin = self.origin(node);
@@ -694,14 +700,14 @@ impl Reader {
         })
     }
 
-    fn missing_child(&mut self, node: Node, element: &str) {
+    fn missing_child(&mut self, node: Node, element: &str, help: &str) {
         self.diagnostics.push(
             Diagnostic::error(
                 "U0104",
                 format!("`<{}>` needs a `<{element}>`", node.tag_name().name()),
             )
             .with_label(tag_span(node), format!("no `<{element}>` inside"))
-            .with_help(format!("`<{element} link=\"NAME\"/>` names the link")),
+            .with_help(help.to_string()),
         );
     }
 
@@ -753,6 +759,58 @@ impl Reader {
         })
     }
 
+    /// Drake's `<drake:ball_constraint>` (body A's point P coincides with body B's point Q):
+    /// a loop joint of type ball named `ball_constraint` (Drake's has no name), or
+    /// `ball_constraint_N` for the closure numbered N in the file.
+    fn ball_constraint(&mut self, node: Node, closures_before: usize) -> Option<LoopJoint> {
+        let span = tag_span(node);
+        let name = match closures_before {
+            0 => "ball_constraint".to_string(),
+            n => format!("ball_constraint_{}", n + 1),
+        };
+        let mut side = |body: &str, point: &str| -> Option<(Name, Pose)> {
+            let Some(element) = child(node, body) else {
+                self.missing_child(
+                    node,
+                    body,
+                    &format!("`<drake:{body} name=\"NAME\"/>` names the link"),
+                );
+                return None;
+            };
+            let link = self.name(element, "name", "names the link: `name=\"NAME\"`")?;
+            let mut pose = Pose::identity(span);
+            match child(node, point) {
+                Some(element) => pose.xyz = self.vector(element, "value")?,
+                None => {
+                    self.missing_child(
+                        node,
+                        point,
+                        &format!("`<drake:{point} value=\"x y z\"/>`: the point on that link"),
+                    );
+                    return None;
+                }
+            }
+            Some((link, pose))
+        };
+        let first = side("ball_constraint_body_A", "ball_constraint_p_AP");
+        let second = side("ball_constraint_body_B", "ball_constraint_p_BQ");
+        let (link1, pose1) = first?;
+        let (link2, pose2) = second?;
+        Some(LoopJoint {
+            name: Name { text: name, span },
+            kind: Name {
+                text: "ball".to_string(),
+                span,
+            },
+            axis: [Num::zero(span), Num::zero(span), Num::zero(span)],
+            link1,
+            pose1,
+            link2,
+            pose2,
+            span,
+        })
+    }
+
     fn force_element(&mut self, node: Node) -> Option<ForceElement> {
         let name = self.name(node, "name", "every `<force_element>` is named")?;
         let Some(element) = node.children().find(Node::is_element) else {
@@ -796,7 +854,11 @@ impl Reader {
                 let first = side("link1");
                 let second = side("link2");
                 let (Some((link1, point1)), Some((link2, point2))) = (first, second) else {
-                    self.missing_child(element, "link1> and a `<link2");
+                    self.missing_child(
+                        element,
+                        "link1>` and a `<link2",
+                        "`<link1 link=\"NAME\" xyz=\"x y z\"/>` and `<link2 .../>`: the spring's ends",
+                    );
                     return None;
                 };
                 ForceKind::LinearSpringDamper(Box::new(LinearSpring {
