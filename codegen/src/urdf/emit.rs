@@ -779,7 +779,7 @@ impl<'a> Translation<'a> {
             .with_label(first.span, "the first of them");
             if kind != SkippedKind::Display {
                 warning = warning
-                    .with_note("each is listed as a comment at its link or joint in the output");
+                    .with_note("each is listed as a comment in the output, at its link or joint");
             }
             self.warnings.push(warning);
             notes.push(format!("{} {what} ({why})", items.len()));
@@ -1005,6 +1005,14 @@ impl<'a> Translation<'a> {
                 link.name.text,
                 self.file.line_col(link.span.start).0
             );
+            for skipped in self
+                .robot
+                .skipped
+                .iter()
+                .filter(|s| s.owner == link.name.text && s.kind != SkippedKind::Display)
+            {
+                let _ = writeln!(out, "// Not translated: {}", skipped.what);
+            }
             let _ = writeln!(out, "body {} {{", self.body_ident[i]);
             match &link.inertial {
                 Some(inertial) => {
@@ -1242,6 +1250,23 @@ impl<'a> Translation<'a> {
                     t.actuators.join(", "),
                     t.joints.join(", "),
                     t.reduction.as_deref().unwrap_or("not given")
+                );
+            }
+            out.push('\n');
+        }
+        let of_robot: Vec<_> = robot
+            .skipped
+            .iter()
+            .filter(|s| s.owner == "robot" && s.kind != SkippedKind::Display)
+            .collect();
+        if !of_robot.is_empty() {
+            let _ = writeln!(out, "// ---------------------------------------------------------------- other elements (not translated)");
+            for skipped in of_robot {
+                let _ = writeln!(
+                    out,
+                    "// line {}: {}",
+                    self.file.line_col(skipped.span.start).0,
+                    skipped.what
                 );
             }
             out.push('\n');
