@@ -57,6 +57,7 @@ pub mod ir;
 pub mod kane;
 pub mod physics;
 pub mod sym;
+pub mod urdf;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

@@ -11,6 +11,9 @@ use mech_codegen::diag::SourceFile;
 use mech_codegen::front;
 use proptest::prelude::*;
 
+#[path = "support/mutate.rs"]
+mod mutate;
+
 const VALID: &str = "/// A pendulum.
 model pendulum;
 param m = 10 g;
@@ -162,23 +165,12 @@ proptest! {
 
     #[test]
     fn mutated_models_do_not_panic(mutations in prop::collection::vec(mutation(), 1..6)) {
-        let mut bytes = VALID.as_bytes().to_vec();
-        for (at, remove, insert) in mutations {
-            let at = at.min(bytes.len());
-            let end = (at + remove).min(bytes.len());
-            bytes.splice(at..end, insert);
-        }
-        load_bytes(&bytes);
+        load_bytes(&mutate::mutated(VALID, mutations));
     }
 
     #[test]
     fn spliced_models_do_not_panic(a in 0..VALID.len(), b in 0..VALID.len(), c in 0..VALID.len()) {
-        let bytes = VALID.as_bytes();
-        let (from, to) = (a.min(b), a.max(b));
-        let mut spliced = bytes[..c].to_vec();
-        spliced.extend_from_slice(&bytes[from..to]);
-        spliced.extend_from_slice(&bytes[c..]);
-        load_bytes(&spliced);
+        load_bytes(&mutate::spliced(VALID, a, b, c));
     }
 }
 

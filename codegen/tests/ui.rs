@@ -35,22 +35,7 @@ fn render(path: &Path) -> String {
 /// Checks (or, with `MECH_BLESS=1`, rewrites) the golden file of `tests/ui/<stem>.mech`.
 fn check(stem: &str) {
     let path = ui_dir().join(format!("{stem}.mech"));
-    let actual = render(&path);
-    let golden = path.with_extension("stderr");
-    if support::blessing() {
-        std::fs::write(&golden, &actual).expect("writable .stderr file");
-        return;
-    }
-    let expected = std::fs::read_to_string(&golden).unwrap_or_default();
-    assert!(
-        actual != "(loaded without errors)\n",
-        "tests/ui/{stem}.mech loaded without errors; a ui file must fail"
-    );
-    assert!(
-        actual == expected,
-        "{} differs (MECH_BLESS=1 to update):\nexpected:\n{expected}\nactual:\n{actual}",
-        golden.display()
-    );
+    support::check_failure(&path, &render(&path), "(loaded without errors)\n");
 }
 
 tests_per_file! {

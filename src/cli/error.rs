@@ -23,6 +23,9 @@ pub enum Error {
     Usage(String),
     #[error(transparent)]
     Compile(#[from] mech_codegen::Errors),
+    /// `mech import urdf --length/--mass/--time` with a unit of another quantity.
+    #[error("{0}")]
+    ImportUnits(#[from] mech_codegen::urdf::UnitError),
     #[error(transparent)]
     Session(#[from] session::Error),
     /// `derive --emit equations` of a model too large to print as trees.

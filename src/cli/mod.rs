@@ -34,6 +34,7 @@ pub mod error;
 pub mod experiment;
 pub mod fit;
 pub mod flexure;
+pub mod import;
 pub mod linearize;
 pub mod report;
 pub mod simulate;
@@ -99,6 +100,11 @@ enum Command {
     /// Find what the model gets wrong: fit every catalog cause, rank on held-out data, and
     /// name the cause (or say there is none, or that none explains it); see docs/diagnose.md.
     Diagnose(diagnose::DiagnoseArgs),
+    /// Translate a robot description into a `.mech` model (`mech import urdf FILE --out M.mech`).
+    Import {
+        #[command(subcommand)]
+        command: import::ImportCommand,
+    },
 }
 
 /// Restores the default SIGPIPE action, so `mech ... | head` ends quietly instead of
@@ -142,6 +148,7 @@ pub fn main() -> ExitCode {
         Command::Report(args) => report::run(&args),
         Command::Fit(args) => fit::run(&args),
         Command::Diagnose(args) => diagnose::run(&args),
+        Command::Import { command } => import::run(&command),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

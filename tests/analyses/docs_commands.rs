@@ -1,6 +1,7 @@
 //! The commands the README and `docs/` show are real: every fenced block line `$ mech …` is
 //! run (by `sh`, from a scratch folder that links the repository's `models/`, `docs/`,
-//! `examples/` and `experiments/`), and what it prints, stdout then stderr, must be the lines
+//! `examples/` and `experiments/`, and `reference/`, the shared reference folder beside the
+//! repository), and what it prints, stdout then stderr, must be the lines
 //! the page shows under it. A line `...` or `[...]` on the page stands for any number of
 //! printed lines; `$ echo $?` shows the exit code of the command before it; timings
 //! (`in 1.2 s`) are masked. A page marks a block before its fence with
@@ -24,13 +25,14 @@ struct Documented {
     slow: bool,
 }
 
-const PAGES: [&str; 7] = [
+const PAGES: [&str; 8] = [
     "README.md",
     "docs/analysis.md",
     "docs/benchmarks.md",
     "docs/diagnose.md",
     "docs/experiments.md",
     "docs/flexure-and-actuator.md",
+    "docs/import.md",
     "docs/mech-language.md",
 ];
 
@@ -86,6 +88,9 @@ fn workspace() -> PathBuf {
         ("docs", root.join("docs")),
         ("examples", root.join("examples")),
         ("experiments", root.join("experiments")),
+        // The URDF files of docs/import.md: the shared reference folder beside the
+        // repository (read in place, never copied into it).
+        ("reference", root.join("../shared/reference")),
         ("bin/mech", PathBuf::from(env!("CARGO_BIN_EXE_mech"))),
     ] {
         let link = dir.join(link);
@@ -251,6 +256,7 @@ fn every_page_with_commands_is_read() {
         "docs/analysis.md",
         "docs/diagnose.md",
         "docs/flexure-and-actuator.md",
+        "docs/import.md",
     ] {
         assert!(commands.iter().any(|c| c.page == page), "{page}");
     }

@@ -30,3 +30,4 @@ mod statics;
 mod sympy_cross_check;
 mod sympy_loops;
 mod triple_pendulum;
+mod urdf_import;

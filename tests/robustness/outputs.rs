@@ -228,3 +228,65 @@ fn a_run_killed_while_it_works_leaves_the_old_outputs_and_no_temporary_file() {
     assert_eq!(fs::read_to_string(dir.join("run.csv")).unwrap(), "old run");
     assert_eq!(entries(&dir), ["run.csv"]);
 }
+
+/// `mech import urdf`: the model is never written over the URDF (or the file compared), a
+/// URDF with an error or a bad option leaves an earlier model as it was, and no temporary
+/// file is left behind.
+#[test]
+fn a_urdf_import_writes_all_or_nothing_and_never_over_its_inputs() {
+    let dir = scratch("urdf_import");
+    let good = "<robot name=\"r\"><link name=\"base\"/><link name=\"arm\"/>\
+                <joint name=\"hinge\" type=\"continuous\"><parent link=\"base\"/><child link=\"arm\"/></joint></robot>";
+    fs::write(dir.join("robot.urdf"), good).unwrap();
+    fs::write(dir.join("other.urdf"), good).unwrap();
+    fs::write(
+        dir.join("broken.urdf"),
+        good.replace("child link=\"arm\"", "child link=\"leg\""),
+    )
+    .unwrap();
+    fs::write(dir.join("old.mech"), "old model").unwrap();
+    let import = |file: &'static str, out: &'static str| -> Vec<&'static str> {
+        vec!["import", "urdf", file, "--out", out]
+    };
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            import("robot.urdf", "robot.urdf"),
+            "refusing to write `robot.urdf`: it is the URDF file `robot.urdf`",
+        ),
+        (
+            [
+                import("robot.urdf", "other.urdf"),
+                vec!["--compare", "other.urdf"],
+            ]
+            .concat(),
+            "it is the URDF file compared `other.urdf`",
+        ),
+        (import("broken.urdf", "old.mech"), "broken.urdf:1:"),
+        (import("missing.urdf", "old.mech"), "missing.urdf"),
+        (
+            [import("robot.urdf", "old.mech"), vec!["--length", "g"]].concat(),
+            "`g` is not a unit of length (for example m, mm, um)",
+        ),
+        (
+            [import("robot.urdf", "old.mech"), vec!["--time", "Hz"]].concat(),
+            "`Hz` is not a unit of time",
+        ),
+    ];
+    let cases: Vec<(&[&str], &str)> = cases.iter().map(|(a, e)| (a.as_slice(), *e)).collect();
+    expect_errors(&dir, &cases);
+    assert_eq!(
+        fs::read_to_string(dir.join("old.mech")).unwrap(),
+        "old model"
+    );
+    assert_eq!(fs::read_to_string(dir.join("robot.urdf")).unwrap(), good);
+    assert_eq!(
+        entries(&dir),
+        ["broken.urdf", "old.mech", "other.urdf", "robot.urdf"]
+    );
+    // And a good import replaces the old model.
+    let run = crate::support::mech(&dir, &["import", "urdf", "robot.urdf", "--out", "old.mech"]);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    assert!(fs::read_to_string(dir.join("old.mech"))
+        .unwrap()
+        .contains("joint hinge = pin(newtonian, arm)"));
+}

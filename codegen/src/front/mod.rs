@@ -17,6 +17,8 @@ mod lower;
 
 /// "Did you mean …?": the candidate closest to a misspelt name (also used for data files).
 mod parse;
+
+pub(crate) use parse::DECLARATION_KEYWORDS;
 pub mod units;
 
 #[cfg(test)]

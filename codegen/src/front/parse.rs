@@ -893,28 +893,30 @@ fn found_token(text: &str, position: usize) -> String {
     }
 }
 
+/// The keywords that start a top-level declaration (besides `model`).
+pub(crate) const DECLARATION_KEYWORDS: [&str; 15] = [
+    "param",
+    "let",
+    "input",
+    "gravity",
+    "newtonian",
+    "body",
+    "joint",
+    "loop",
+    "material",
+    "flexure",
+    "actuator",
+    "spring",
+    "force",
+    "torque",
+    "output",
+];
+
 /// The top-level keyword right before `position`, if any (a field named `joint` means a `}`
 /// is missing).
 fn keyword_before(text: &str, position: usize) -> Option<&'static str> {
-    const KEYWORDS: [&str; 15] = [
-        "param",
-        "let",
-        "input",
-        "gravity",
-        "newtonian",
-        "body",
-        "joint",
-        "loop",
-        "material",
-        "flexure",
-        "actuator",
-        "spring",
-        "force",
-        "torque",
-        "output",
-    ];
     let before = text.get(..position)?.trim_end();
-    KEYWORDS.into_iter().find(|k| {
+    DECLARATION_KEYWORDS.into_iter().find(|k| {
         before.ends_with(k)
             && !before[..before.len() - k.len()]
                 .ends_with(|c: char| c.is_ascii_alphanumeric() || c == '_')

@@ -52,3 +52,27 @@ macro_rules! tests_per_file {
         )*
     };
 }
+
+/// Checks the diagnostics `actual` of `input`, a file that must fail, against its golden
+/// `.stderr` file beside it, or rewrites that with `MECH_BLESS=1`. `succeeded` is what
+/// `actual` reads when the input did not fail.
+#[allow(dead_code)] // used by the ui tests, not by every file that includes this one
+pub fn check_failure(input: &Path, actual: &str, succeeded: &str) {
+    let golden = input.with_extension("stderr");
+    if blessing() {
+        std::fs::write(&golden, actual).expect("writable .stderr file");
+        return;
+    }
+    let expected = std::fs::read_to_string(&golden).unwrap_or_default();
+    assert!(
+        actual != succeeded,
+        "{}: {}; a ui file must fail",
+        input.display(),
+        succeeded.trim_end()
+    );
+    assert!(
+        actual == expected,
+        "{} differs (MECH_BLESS=1 to update):\nexpected:\n{expected}\nactual:\n{actual}",
+        golden.display()
+    );
+}

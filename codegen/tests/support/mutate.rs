@@ -1,0 +1,24 @@
+//! Byte-level mutations and splices of a valid input, shared by the fuzz-style proptests
+//! (`fuzz_front.rs`, `fuzz_urdf.rs`).
+
+/// `seed` with each `(at, remove, insert)` applied in turn: `remove` bytes from `at`
+/// replaced by `insert` (positions clamped to the text).
+pub fn mutated(seed: &str, mutations: Vec<(usize, usize, Vec<u8>)>) -> Vec<u8> {
+    let mut bytes = seed.as_bytes().to_vec();
+    for (at, remove, insert) in mutations {
+        let at = at.min(bytes.len());
+        let end = (at + remove).min(bytes.len());
+        bytes.splice(at..end, insert);
+    }
+    bytes
+}
+
+/// `seed` with its bytes between `a` and `b` copied in at `c`.
+pub fn spliced(seed: &str, a: usize, b: usize, c: usize) -> Vec<u8> {
+    let bytes = seed.as_bytes();
+    let (from, to) = (a.min(b), a.max(b));
+    let mut spliced = bytes[..c].to_vec();
+    spliced.extend_from_slice(&bytes[from..to]);
+    spliced.extend_from_slice(&bytes[c..]);
+    spliced
+}
