@@ -21,7 +21,7 @@ use std::collections::BTreeMap;
 
 use crate::ir::{self, Load, Model, OutputKind};
 use crate::sym::{ExprId, ExprPool, Number, Symbol};
-pub use kinematics::{lower_expr, Kinematics};
+pub use kinematics::{lower_expr, lower_expr_with, Kinematics};
 use vector::Vec3;
 
 /// The equations of motion of a model, ready for the back ends.
@@ -420,6 +420,41 @@ impl SpringLine {
     }
 }
 
+/// Lowers an expression of a load or output: its [`ir::StateTerm`]s become the coordinate
+/// and speed symbols, a distance `L = |r_B − r_A|`, its rate `L̇ = ê·(v_B − v_A)`, or the
+/// energies, from the kinematics.
+pub fn lower_state_expr(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    model: &Model,
+    expr: &ir::Expr,
+) -> ExprId {
+    lower_expr_with(pool, expr, &mut |pool, term| match term {
+        ir::StateTerm::Coordinate(c) => pool.symbol(Symbol::Coordinate(c.index() as u32)),
+        ir::StateTerm::Speed(c) => pool.symbol(Symbol::Speed(c.index() as u32)),
+        ir::StateTerm::Distance(ends) => spring_length(pool, kinematics, model, ends).1,
+        ir::StateTerm::DistanceRate(ends) => {
+            SpringLine::new(pool, kinematics, model, ends).stretch_speed(pool)
+        }
+        ir::StateTerm::KineticEnergy => kinetic_energy(pool, kinematics, model),
+        ir::StateTerm::PotentialEnergy => potential_energy(pool, kinematics, model),
+    })
+}
+
+/// [`lower_state_expr`] of each component.
+fn lower_state_vec(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    model: &Model,
+    v: &ir::Vec3,
+) -> Vec3 {
+    [
+        lower_state_expr(pool, kinematics, model, &v[0]),
+        lower_state_expr(pool, kinematics, model, &v[1]),
+        lower_state_expr(pool, kinematics, model, &v[2]),
+    ]
+}
+
 /// Contribution of one applied load to the generalized active forces `F_r`.
 fn add_load(
     pool: &mut ExprPool,
@@ -432,14 +467,14 @@ fn add_load(
         Load::Force { point, force, .. } => {
             let point = &model.points[*point];
             let offset = kinematics::lower_vec(pool, &point.position);
-            let f = kinematics::lower_vec(pool, &force.components);
+            let f = lower_state_vec(pool, kinematics, model, &force.components);
             let f = kinematics.express(pool, f, force.frame, point.frame);
             for (r, v) in kinematics.point_partials(pool, point.frame, offset) {
                 forcing[r].push(vector::dot(pool, f, v));
             }
         }
         Load::Torque { frame, torque, .. } => {
-            let t = kinematics::lower_vec(pool, &torque.components);
+            let t = lower_state_vec(pool, kinematics, model, &torque.components);
             let t = kinematics.express(pool, t, torque.frame, *frame);
             for (r, w) in kinematics.frames[frame.index()].partial_omega.clone() {
                 forcing[r].push(vector::dot(pool, t, w));
@@ -469,7 +504,8 @@ fn add_load(
         Load::GeneralizedForce {
             coordinate, force, ..
         } => {
-            forcing[coordinate.index()].push(lower_expr(pool, force));
+            let force = lower_state_expr(pool, kinematics, model, force);
+            forcing[coordinate.index()].push(force);
         }
         Load::PointSpring {
             ends,
@@ -574,7 +610,7 @@ fn lower_output(
         OutputKind::Speed(c) => vec![("", pool.symbol(Symbol::Speed(c.index() as u32)))],
         OutputKind::KineticEnergy => vec![("", kinetic_energy(pool, kinematics, model))],
         OutputKind::PotentialEnergy => vec![("", potential_energy(pool, kinematics, model))],
-        OutputKind::Expr(e) => vec![("", lower_expr(pool, e))],
+        OutputKind::Expr(e) => vec![("", lower_state_expr(pool, kinematics, model, e))],
     }
 }
 

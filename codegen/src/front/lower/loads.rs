@@ -10,7 +10,7 @@ use crate::front::ast::{self, ExprKind, Ident};
 use crate::ir::{self, Dimension, Expr, Handle, JointKind, Vec3};
 
 use super::body::{missing_field, FrameRef, PointRef};
-use super::expr::{unparen, Ctx, Expect};
+use super::expr::{unparen, Ctx, Expect, Typed};
 use super::names::Namespace;
 use super::Lowerer;
 
@@ -252,7 +252,7 @@ impl Lowerer<'_> {
         frame: Option<&ast::Path>,
         expect: &Expect,
     ) -> Option<(Vec3, FrameRef)> {
-        let components = self.lower_vector_as(value, Ctx::Dynamic, expect);
+        let components = self.lower_vector_as(value, Ctx::Load, expect);
         let frame = self.frame_clause(frame);
         Some((components?, frame?))
     }
@@ -329,39 +329,7 @@ impl Lowerer<'_> {
                 if self.joint_index.contains_key(&joint.name)
                     && (which.name == "q" || which.name == "u") =>
             {
-                let j = self.joint_index[&joint.name];
-                match self.joints.get(j).and_then(|info| info.kind) {
-                    Some(JointKind::Weld) => {
-                        self.error(
-                            Diagnostic::error(
-                                "E0213",
-                                format!("weld joint `{}` has no coordinate", joint.name),
-                            )
-                            .with_label(path.span, "a weld has no degree of freedom"),
-                        );
-                        return None;
-                    }
-                    Some(kind @ (JointKind::Ball | JointKind::Free)) => {
-                        let what = if kind == JointKind::Ball {
-                            "ball"
-                        } else {
-                            "free"
-                        };
-                        self.error(
-                            Diagnostic::error(
-                                "E0213",
-                                format!("{what} joint `{}` has no single coordinate", joint.name),
-                            )
-                            .with_label(path.span, "its orientation is a unit quaternion")
-                            .with_help(
-                                "output the motion of a point of the child body, \
-                                 `position(body.point)` or `velocity(body.point)`",
-                            ),
-                        );
-                        return None;
-                    }
-                    _ => {}
-                }
+                let j = self.single_coordinate_joint(joint, path.span)?;
                 if which.name == "q" {
                     PendingKind::Coordinate(j)
                 } else {
@@ -371,13 +339,78 @@ impl Lowerer<'_> {
             _ => return self.expr_output(decl),
         };
         self.reject_frame_clause(decl)?;
+        if let Some(value) = self.output_value(&kind, path.span) {
+            self.scalar_outputs.insert(decl.name.name.clone(), value);
+        }
         Some(kind)
     }
 
+    /// A scalar output as an expression later outputs may use.
+    fn output_value(&self, kind: &PendingKind, span: Span) -> Option<Typed> {
+        let (term, dim) = match *kind {
+            PendingKind::KineticEnergy => (ir::StateTerm::KineticEnergy, Dimension::ENERGY),
+            PendingKind::PotentialEnergy => (ir::StateTerm::PotentialEnergy, Dimension::ENERGY),
+            PendingKind::Coordinate(j) | PendingKind::Speed(j) => {
+                let coordinate = self.joints.get(j)?.coordinate?;
+                let dim = self.model.coordinates[coordinate].dimension;
+                if let PendingKind::Coordinate(_) = kind {
+                    (ir::StateTerm::Coordinate(coordinate), dim)
+                } else {
+                    let rate = crate::front::units::dim_div(dim, Dimension::TIME)?;
+                    (ir::StateTerm::Speed(coordinate), rate)
+                }
+            }
+            _ => return None,
+        };
+        Some(Typed::leaf(Expr::State(term), dim, Some(span)))
+    }
+
+    /// The index of `joint` if it has one coordinate (a pin or slider); E0213 for a weld (none)
+    /// and for `ball` and `free` (a quaternion).
+    pub(super) fn single_coordinate_joint(&mut self, joint: &Ident, span: Span) -> Option<usize> {
+        let j = *self.joint_index.get(&joint.name)?;
+        match self.joints.get(j).and_then(|info| info.kind) {
+            Some(JointKind::Weld) => {
+                self.error(
+                    Diagnostic::error(
+                        "E0213",
+                        format!("weld joint `{}` has no coordinate", joint.name),
+                    )
+                    .with_label(span, "a weld has no degree of freedom"),
+                );
+                None
+            }
+            Some(kind @ (JointKind::Ball | JointKind::Free)) => {
+                let what = if kind == JointKind::Ball {
+                    "ball"
+                } else {
+                    "free"
+                };
+                self.error(
+                    Diagnostic::error(
+                        "E0213",
+                        format!("{what} joint `{}` has no single coordinate", joint.name),
+                    )
+                    .with_label(span, "its orientation is a unit quaternion")
+                    .with_help(
+                        "use the motion of a point of the child body, \
+                         `position(body.point)` or `velocity(body.point)` as outputs, \
+                         `distance(A, B)` in a load",
+                    ),
+                );
+                None
+            }
+            _ => Some(j),
+        }
+    }
+
     fn expr_output(&mut self, decl: &ast::OutputDecl) -> Option<PendingKind> {
-        let typed = self.lower_scalar(&decl.value, Ctx::Dynamic);
+        let typed = self.lower_scalar(&decl.value, Ctx::Output);
         self.reject_frame_clause(decl)?;
-        Some(PendingKind::Expr(typed?.expr))
+        let typed = typed?;
+        self.scalar_outputs
+            .insert(decl.name.name.clone(), typed.clone());
+        Some(PendingKind::Expr(typed.expr))
     }
 
     fn reject_frame_clause(&mut self, decl: &ast::OutputDecl) -> Option<()> {
@@ -398,7 +431,7 @@ impl Lowerer<'_> {
     // Handles
     // -----------------------------------------------------------------------------------------
 
-    fn point_handle(&self, point: PointRef) -> Option<Handle<ir::Point>> {
+    pub(super) fn point_handle(&self, point: PointRef) -> Option<Handle<ir::Point>> {
         match point {
             PointRef::Origin(owner) => self.owners[owner].origin_point,
             PointRef::Com(owner) => self.owners[owner].com_point,

@@ -107,6 +107,8 @@ struct Lowerer<'a> {
     joint_index: BTreeMap<String, usize>,
     loads: Vec<PendingLoad>,
     outputs: Vec<PendingOutput>,
+    /// The scalar outputs lowered so far, as expressions later outputs may use.
+    scalar_outputs: BTreeMap<String, Typed>,
     /// Twist degrees of freedom of flexures, inserted into the tree once everything else
     /// refers to frames (the insertion renumbers them).
     twists: Vec<PendingTwist>,
@@ -141,6 +143,7 @@ impl<'a> Lowerer<'a> {
             joint_index: BTreeMap::new(),
             loads: Vec::new(),
             outputs: Vec::new(),
+            scalar_outputs: BTreeMap::new(),
             twists: Vec::new(),
         }
     }
@@ -291,7 +294,7 @@ impl<'a> Lowerer<'a> {
         });
         for (index, decl) in lets.enumerate() {
             self.current_let = Some(index);
-            let value = self.lower_scalar(&decl.value, expr::Ctx::Dynamic);
+            let value = self.lower_scalar(&decl.value, expr::Ctx::Dynamic("a `let`"));
             self.lets[index] = value;
         }
         self.current_let = None;
