@@ -370,9 +370,33 @@ fn spring_length(
     (d, pool.sqrt(square))
 }
 
+/// `∂(v_B − v_A)/∂u_r` of two points `ends = [A, B]`, in N's basis: the partial velocities of
+/// each end (B with `+`, A with `−`, each from [`Kinematics::point_partials`] re-expressed in N).
+fn relative_partials(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    model: &Model,
+    ends: [ir::Handle<ir::Point>; 2],
+) -> kinematics::Partials {
+    let mut relative: kinematics::Partials = Vec::new();
+    for (end, sign) in [(ends[1], Number::ONE), (ends[0], Number::MINUS_ONE)] {
+        let point = &model.points[end];
+        let offset = kinematics::lower_vec(pool, &point.position);
+        let partials: kinematics::Partials = kinematics
+            .point_partials(pool, point.frame, offset)
+            .into_iter()
+            .map(|(r, v)| {
+                let v = kinematics.express(pool, v, point.frame, Model::NEWTONIAN);
+                (r, vector::scale_number(pool, v, sign))
+            })
+            .collect();
+        relative = kinematics::merge(pool, &relative, &partials);
+    }
+    relative
+}
+
 impl SpringLine {
-    /// `ê` from the ends' positions, and the partial velocities of each end (B with `+`, A
-    /// with `−`, each from [`Kinematics::point_partials`] re-expressed in N) projected on it.
+    /// `ê` from the ends' positions, and the ends' relative partial velocities projected on it.
     fn new(
         pool: &mut ExprPool,
         kinematics: &mut Kinematics,
@@ -382,20 +406,7 @@ impl SpringLine {
         let (d, length) = spring_length(pool, kinematics, model, ends);
         let inverse = pool.pow(length, Number::MINUS_ONE);
         let direction = vector::scale(pool, d, inverse);
-        let mut relative: kinematics::Partials = Vec::new();
-        for (end, sign) in [(ends[1], Number::ONE), (ends[0], Number::MINUS_ONE)] {
-            let point = &model.points[end];
-            let offset = kinematics::lower_vec(pool, &point.position);
-            let partials: kinematics::Partials = kinematics
-                .point_partials(pool, point.frame, offset)
-                .into_iter()
-                .map(|(r, v)| {
-                    let v = kinematics.express(pool, v, point.frame, Model::NEWTONIAN);
-                    (r, vector::scale_number(pool, v, sign))
-                })
-                .collect();
-            relative = kinematics::merge(pool, &relative, &partials);
-        }
+        let relative = relative_partials(pool, kinematics, model, ends);
         let stretch_rates = relative
             .into_iter()
             .map(|(r, v)| (r, vector::dot(pool, direction, v)))
@@ -455,6 +466,54 @@ fn lower_state_vec(
     ]
 }
 
+/// The length `L` of each point-to-point spring whose direction `ê = d/L` enters its force
+/// (a rest length or a damper), at the model's initial coordinates (quaternions at the
+/// identity) and the params at `params`, with the larger distance of its ends from the
+/// Newtonian origin (a scale for "zero"): `(index in model.loads, L, scale)`.
+pub fn spring_lengths_at_start(model: &Model, params: &[f64]) -> Vec<(usize, f64, f64)> {
+    let springs: Vec<(usize, [ir::Handle<ir::Point>; 2])> = model
+        .loads
+        .iter()
+        .enumerate()
+        .filter_map(|(index, load)| match load {
+            Load::PointSpring {
+                rest_length: ir::Expr::Number(rest),
+                damping: None,
+                ..
+            } if rest.is_zero() => None,
+            Load::PointSpring { ends, .. } => Some((index, *ends)),
+            _ => None,
+        })
+        .collect();
+    if springs.is_empty() {
+        return Vec::new();
+    }
+    let mut pool = ExprPool::new();
+    let mut kinematics = Kinematics::new(model, &mut pool);
+    let mut roots = Vec::new();
+    for &(_, ends) in &springs {
+        let [a, b] = ends.map(|end| point_position(&mut pool, &mut kinematics, &model.points[end]));
+        let d = vector::sub(&mut pool, b, a);
+        let length = vector::dot(&mut pool, d, d);
+        let far = [a, b].map(|r| vector::dot(&mut pool, r, r));
+        roots.extend([length, far[0], far[1]]);
+    }
+    let q = model.initial_coordinates();
+    let values = pool.eval(&roots, &|symbol| match symbol {
+        Symbol::Coordinate(i) => q.get(i as usize).copied().unwrap_or(f64::NAN),
+        Symbol::Param(i) => params.get(i as usize).copied().unwrap_or(f64::NAN),
+        _ => 0.0,
+    });
+    springs
+        .iter()
+        .zip(values.chunks(3))
+        .map(|(&(index, _), squares)| {
+            let scale = squares[1].max(squares[2]).sqrt();
+            (index, squares[0].sqrt(), scale)
+        })
+        .collect()
+}
+
 /// Contribution of one applied load to the generalized active forces `F_r`.
 fn add_load(
     pool: &mut ExprPool,
@@ -506,6 +565,23 @@ fn add_load(
         } => {
             let force = lower_state_expr(pool, kinematics, model, force);
             forcing[coordinate.index()].push(force);
+        }
+        Load::PointSpring {
+            ends,
+            stiffness,
+            rest_length: ir::Expr::Number(rest),
+            damping: None,
+            ..
+        } if rest.is_zero() => {
+            // A zero-length spring: T ê = k L ê = k d, so F_r = −k d·∂(v_B − v_A)/∂u_r, with
+            // no direction to divide out: defined where the points meet.
+            let k = lower_expr(pool, stiffness);
+            let (d, _) = spring_length(pool, kinematics, model, *ends);
+            for (r, v) in relative_partials(pool, kinematics, model, *ends) {
+                let rate = vector::dot(pool, d, v);
+                let force = pool.mul(k, rate);
+                forcing[r].push(pool.neg(force));
+            }
         }
         Load::PointSpring {
             ends,

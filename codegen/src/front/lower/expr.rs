@@ -366,12 +366,16 @@ impl Lowerer<'_> {
             self.not_a_number(path);
             return None;
         };
-        if !self.joint_index.contains_key(&joint.name) || !matches!(which.name.as_str(), "q" | "u")
-        {
+        if !matches!(which.name.as_str(), "q" | "u") {
             self.not_a_number(path);
             return None;
         }
+        // Before the joints are known (a `let`), any `NAME.q` reads as a coordinate.
         self.allow_state(ctx, path.span, "a joint's coordinate or speed")?;
+        if !self.joint_index.contains_key(&joint.name) {
+            self.not_a_number(path);
+            return None;
+        }
         let index = self.single_coordinate_joint(joint, path.span)?;
         let coordinate = self.joints.get(index).and_then(|info| info.coordinate)?;
         let angle_or_length = self.model.coordinates[coordinate].dimension;

@@ -192,6 +192,42 @@ impl<'a> Lowerer<'a> {
         self.build_loads();
         self.build_outputs();
         self.apply_twists();
+        self.check_springs_apart();
+    }
+
+    /// E0417: a point-to-point spring whose ends meet at the initial coordinates, where its
+    /// direction `ê = d/L` (and so its force) is undefined. Checked on a complete model only
+    /// (the kinematics need every frame); a zero-length undamped spring is exempt (its force
+    /// `−k d` needs no direction).
+    fn check_springs_apart(&mut self) {
+        if !self.diagnostics.is_empty() {
+            return;
+        }
+        let lengths = crate::kane::spring_lengths_at_start(&self.model, &self.param_values);
+        for (index, length, scale) in lengths {
+            if length > 1e-12 * scale {
+                continue;
+            }
+            let Some(ir::Load::PointSpring { span, .. }) = self.model.loads.get(index) else {
+                continue;
+            };
+            let span = *span;
+            let label = if length == 0.0 {
+                "its ends coincide at the initial coordinates".to_string()
+            } else {
+                format!("its ends are {length:.1e} m apart at the initial coordinates")
+            };
+            self.error(
+                Diagnostic::error("E0417", "the ends of this spring meet at the start")
+                    .with_label(span, label)
+                    .with_help(
+                        "its force acts along the line between the ends, which has no direction \
+                         where they meet: start the joints (`q0`) with the ends apart, or make it \
+                         a zero-length spring (`rest_length` 0, no `damping`), whose force `−k d` \
+                         is defined everywhere",
+                    ),
+            );
+        }
     }
 
     /// E0416: loop closures in a model with a `ball` or `free` joint. Their rows are written
