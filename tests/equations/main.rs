@@ -26,6 +26,7 @@ mod quaternion_joints;
 mod reduced;
 mod resonances;
 mod springs;
+mod state_forces;
 mod statics;
 mod sympy_cross_check;
 mod sympy_loops;
