@@ -11,6 +11,7 @@
 //!   the geometric stiffness of the tension) and a force written as an expression
 //!   (`−k x − k3 x³ − c u`: `K = k`, `C = c`), and the linearization of `state_forces`
 //!   against central differences of `M⁻¹F` taken here.
+//!
 //! The SymPy cross-check of `models/state_forces.mech` is in `sympy_cross_check.rs`.
 //!
 //! Consumes: `models/andrews.mech`, `models/state_forces.mech` and model texts written here.
