@@ -42,6 +42,18 @@ pub struct SimulateArgs {
     /// Output sampling interval, with a unit or in seconds (default: t_end / 1000).
     #[arg(long)]
     pub dt_out: Option<String>,
+    /// Start a coordinate at VALUE instead of its `q0`, with its unit: `--q0 'swing=20 deg'`
+    /// (repeatable; with loops, a starting guess: hold it with `--independent NAME=VALUE`).
+    #[arg(long = "q0", value_name = "NAME=VALUE")]
+    pub q0: Vec<String>,
+    /// Start a speed at VALUE instead of its `u0`: `--u0 'x=2 mm/s'` (repeatable; with loops,
+    /// the speeds are then made consistent with them).
+    #[arg(long = "u0", value_name = "NAME=VALUE")]
+    pub u0: Vec<String>,
+    /// Budget of integration steps, accepted and rejected: the run stops with an error when it
+    /// is used up.
+    #[arg(long, default_value_t = SimOptions::default().max_steps, value_parser = super::positive_count)]
+    pub max_steps: usize,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -64,7 +76,8 @@ pub fn run(request: &SimulateArgs) -> Result<(), Error> {
     let plot_path = request.plot.as_deref();
     let reads = (request.common).check_outputs(&[Some(&request.out)], plot_path)?;
     let session = request.common.open_with_signals()?;
-    let state = session.assemble(&request.common.independent)?;
+    let start = session.initial_state(&request.q0, &request.u0)?;
+    let state = session.assemble_from(&request.common.independent, start)?;
     if let Some(mobility) = &state.mobility {
         println!("assembled `{}`: {mobility}", session.model.name());
     }
@@ -77,6 +90,7 @@ pub fn run(request: &SimulateArgs) -> Result<(), Error> {
             None => t_end / 1000.0,
         },
         method: method(request)?,
+        max_steps: request.max_steps,
         ..SimOptions::default()
     };
 
