@@ -235,17 +235,6 @@ force restoring at cart = [-{k} N/m * x.q - k3 * x.q^3 - {c} N*s/m * x.u, 0, 0];
     assert!((omega - (k / m).sqrt()).abs() < 1e-8 * omega);
 }
 
-/// `M⁻¹F` of `state_forces` by LU.
-fn accelerations(model: &dyn Model, q: &[f64], u: &[f64]) -> Vec<f64> {
-    use mech_runtime::nalgebra::{DMatrix, DVector};
-    let n = model.nu();
-    let mut mass = vec![0.0; n * n];
-    model.mass_matrix(0.0, q, &common::default_inputs(model), &mut mass);
-    let force = DVector::from_vec(common::forcing(model, q, u));
-    let solved = DMatrix::from_vec(n, n, mass).lu().solve(&force);
-    solved.expect("M is invertible").iter().copied().collect()
-}
-
 /// The linearization of `state_forces` about its equilibrium (`K = −M ∂f/∂q`,
 /// `C = −M ∂f/∂u` with `f = M⁻¹F`) against five-point central differences of `M⁻¹F` taken
 /// here at the same point: the forces of q, u and the distances enter both.
@@ -267,7 +256,7 @@ fn the_linearization_takes_the_forces_of_the_state_into_account() {
             } else {
                 q[column] += step;
             }
-            accelerations(&model, &q, &u)
+            common::accelerations(&model, &q, &u)
         };
         let (f2, f1, b1, b2) = (at(2.0 * h), at(h), at(-h), at(-2.0 * h));
         (0..n)

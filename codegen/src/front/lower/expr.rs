@@ -444,17 +444,7 @@ impl Lowerer<'_> {
             );
             return None;
         };
-        let ends = [a, b].map(|arg| match &unparen(arg).kind {
-            ExprKind::Path(path) => self.resolve_point(path),
-            _ => {
-                self.error(
-                    Diagnostic::error("E0412", format!("expected a point in `{}`", function.name))
-                        .with_label(arg.span, "not a point")
-                        .with_help("write a point such as `arm.tip`, `arm.com`, `arm` or `newtonian.anchor`"),
-                );
-                None
-            }
-        });
+        let ends = [a, b].map(|arg| self.point_argument(function, arg));
         let [a, b] = ends;
         let ends = [self.point_handle(a?)?, self.point_handle(b?)?];
         let (term, dim) = if function.name == "distance" {

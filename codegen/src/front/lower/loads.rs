@@ -304,15 +304,7 @@ impl Lowerer<'_> {
             );
             return None;
         };
-        let ExprKind::Path(path) = &unparen(arg).kind else {
-            self.error(
-                Diagnostic::error("E0412", format!("expected a point in `{}`", function.name))
-                    .with_label(arg.span, "not a point")
-                    .with_help("write a point such as `arm.tip`, `arm.com` or `arm`"),
-            );
-            return None;
-        };
-        let point = self.resolve_point(path);
+        let point = self.point_argument(function, arg);
         let frame = self.frame_clause(frame);
         let (point, frame) = (point?, frame?);
         Some(match function.name.as_str() {
@@ -363,6 +355,21 @@ impl Lowerer<'_> {
             _ => return None,
         };
         Some(Typed::leaf(Expr::State(term), dim, Some(span)))
+    }
+
+    /// A point given as an argument of `function` (`position(arm.tip)`, `distance(A, B)`).
+    pub(super) fn point_argument(&mut self, function: &Ident, arg: &ast::Expr) -> Option<PointRef> {
+        let ExprKind::Path(path) = &unparen(arg).kind else {
+            self.error(
+                Diagnostic::error("E0412", format!("expected a point in `{}`", function.name))
+                    .with_label(arg.span, "not a point")
+                    .with_help(
+                        "write a point such as `arm.tip`, `arm.com`, `arm` or `newtonian.anchor`",
+                    ),
+            );
+            return None;
+        };
+        self.resolve_point(path)
     }
 
     /// The index of `joint` if it has one coordinate (a pin or slider); E0213 for a weld (none)
