@@ -50,6 +50,10 @@ pub struct SimulateArgs {
     /// the speeds are then made consistent with them).
     #[arg(long = "u0", value_name = "NAME=VALUE")]
     pub u0: Vec<String>,
+    /// Add the accelerations `u̇` (columns `udot_NAME`) and, for a model with loops, the
+    /// constraint multipliers `λ` of `M u̇ = F + Jᵀλ` (columns `lambda_ROW`) to the CSV.
+    #[arg(long)]
+    pub accelerations: bool,
     /// Budget of integration steps, accepted and rejected: the run stops with an error when it
     /// is used up.
     #[arg(long, default_value_t = SimOptions::default().max_steps, value_parser = super::positive_count)]
@@ -106,7 +110,22 @@ pub fn run(request: &SimulateArgs) -> Result<(), Error> {
     bar.finish_and_clear();
     let trajectory = trajectory?;
 
-    let (header, rows) = trajectory_table(model, &trajectory);
+    let (mut header, mut rows) = trajectory_table(model, &trajectory);
+    if request.accelerations {
+        let (udots, multipliers) =
+            mech_runtime::accelerations_along(model, &session.signals, &trajectory).map_err(
+                |error| crate::session::Error::Simulation {
+                    model: model.name().to_string(),
+                    error,
+                },
+            )?;
+        header.extend(speed_names(model).iter().map(|n| format!("udot_{n}")));
+        header.extend((0..model.nc()).map(|i| format!("lambda_{}", model.constraint_name(i))));
+        for ((row, udot), lambda) in rows.iter_mut().zip(&udots).zip(&multipliers) {
+            row.extend(udot);
+            row.extend(lambda);
+        }
+    }
     let mut files = vec![output::File::csv(&request.out, &header, &rows)?];
     if let Some(plot_path) = &request.plot {
         let title = format!("{} — {}", model.name(), path.display());

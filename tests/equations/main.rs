@@ -25,6 +25,7 @@ mod plausible;
 mod quaternion_joints;
 mod reduced;
 mod resonances;
+mod simulation_outputs;
 mod springs;
 mod state_forces;
 mod statics;
