@@ -421,14 +421,14 @@ def state_forces():
     d = end.pos_from(post)
     length = d.magnitude()
     rate = (d / length).dot(end.vel(M.N))
-    tether = (-3 * (length - R(0.1)) - R(0.2) * rate) * Rk.z
+    tether = (-3 * (length - R(0.1)) - R(0.2) * rate) * Rk.y
     for load in ((Co, cubic), (A, wind), (end, tether)):
         M.loads.append(load), M.nc_loads.append(load)
     M.params.update({'spring link': {'tip': [0.02, 0.01, -0.5], 'end': [0.3, 0, 0.05], 'k': 30,
                                      'rest_length': 0.2, 'damping': 0.4},
                      'force cubic at cart (N)': '-8 s^3 - 0.5 u_s cos(swing)',
                      'torque wind on arm (arm y)': '0.3 sin(swing) - 0.05 u_rock',
-                     'force tether at rocker.end (rocker z)': '-3 (L - 0.1) - 0.2 L\', L = |end - post|',
+                     'force tether at rocker.end (rocker y)': '-3 (L - 0.1) - 0.2 L\', L = |end - post|',
                      'post': [-0.2, 0.1, 0.6], 'anchor': [0.4, 0.3, 0.2], 'swing.joint': [0.1, 0, 0]})
     return M
 
