@@ -105,6 +105,7 @@ tests_per_file! {
     spherical_joint_kind,
     spring_ends_meet,
     spring_missing_stiffness,
+    spring_tension_unit,
     spring_to_itself,
     spring_unknown_field,
     spring_unknown_point,

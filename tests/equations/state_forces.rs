@@ -283,3 +283,67 @@ fn the_linearization_takes_the_forces_of_the_state_into_account() {
     // the speed-dependent ones give C ≠ 0 where no joint has a damper.
     assert!(linear.damping.iter().any(|c| c.abs() > 1e-3));
 }
+
+/// A mass on two sliders hung from an anchor by a spring whose law is written out,
+/// `tension = k (L − L0) + k3 (L − L0)³ + c L̇` with `L = distance(anchor, bob)`.
+fn tension_law_pendulum(spring: &str) -> String {
+    format!(
+        "
+gravity = [0, -9.81 m/s^2, 0];
+newtonian {{ point anchor = [5 mm, 10 mm, 0]; }}
+body carriage {{ mass = 0 kg; }}
+body bob {{ mass = 20 g; }}
+joint x = slider(newtonian, carriage) {{ axis = x; q0 = 40 mm; }}
+joint y = slider(carriage, bob) {{ axis = y; q0 = -60 mm; }}
+spring hanger between newtonian.anchor and bob {{ {spring} }}
+"
+    )
+}
+
+/// The law as a `tension` field against the Cartesian equations written here,
+/// `m r̈ = −T (r − r_A)/L − m g ŷ`, at 50 random states; and its linear part written as a law
+/// gives the forcing of the built-in `stiffness`, `rest_length` and `damping`.
+#[test]
+fn a_tension_law_acts_along_the_line_between_the_points() {
+    let (m, k, k3, rest, c, g) = (0.02, 40.0, 2e5, 0.05, 0.02, 9.81);
+    let (ax, ay) = (0.005, 0.010);
+    let law = "tension = 40 N/m * (distance(newtonian.anchor, bob) - 50 mm) \
+               + 2e5 N/m^3 * (distance(newtonian.anchor, bob) - 50 mm)^3 \
+               + 0.02 N*s/m * distance_rate(newtonian.anchor, bob);";
+    let written = common::tape_from_text("tension_law", &tension_law_pendulum(law));
+    let linear_law = "tension = 40 N/m * (distance(newtonian.anchor, bob) - 50 mm) \
+                      + 0.02 N*s/m * distance_rate(newtonian.anchor, bob);";
+    let as_law = common::tape_from_text("linear_law", &tension_law_pendulum(linear_law));
+    let built_in = common::tape_from_text(
+        "built_in",
+        &tension_law_pendulum("stiffness = 40 N/m; rest_length = 50 mm; damping = 0.02 N*s/m;"),
+    );
+    let mut rng = common::Rng::new(15);
+    for _ in 0..50 {
+        let q = vec![rng.uniform(-0.1, 0.1), rng.uniform(-0.1, 0.1)];
+        let u = vec![rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0)];
+        let (dx, dy) = (q[0] - ax, q[1] - ay);
+        let length = dx.hypot(dy);
+        let rate = (dx * u[0] + dy * u[1]) / length;
+        let stretch = length - rest;
+        let tension = k * stretch + k3 * stretch.powi(3) + c * rate;
+        let expected = [-tension * dx / length / m, -tension * dy / length / m - g];
+        let derived = common::accelerations(&written, &q, &u);
+        for i in 0..2 {
+            assert!(
+                (derived[i] - expected[i]).abs() < 1e-10 * (1.0 + expected[i].abs()),
+                "{derived:?} vs {expected:?}"
+            );
+        }
+        let (a, b) = (
+            common::forcing(&as_law, &q, &u),
+            common::forcing(&built_in, &q, &u),
+        );
+        for i in 0..2 {
+            assert!(
+                (a[i] - b[i]).abs() < 1e-12 * (1.0 + b[i].abs()),
+                "{a:?} vs {b:?}"
+            );
+        }
+    }
+}

@@ -690,6 +690,9 @@ pub enum Load {
         stiffness: Expr,
         rest_length: Expr,
         damping: Option<Expr>,
+        /// A tension law of the motion (`tension = EXPR`, e.g. of `distance(A, B)`) added to
+        /// `T`; its work is not in the potential energy.
+        tension: Option<Expr>,
         span: Span,
     },
     /// A generalized force acting directly on one coordinate (an actuator's force source).

@@ -479,6 +479,7 @@ pub fn spring_lengths_at_start(model: &Model, params: &[f64]) -> Vec<(usize, f64
             Load::PointSpring {
                 rest_length: ir::Expr::Number(rest),
                 damping: None,
+                tension: None,
                 ..
             } if rest.is_zero() => None,
             Load::PointSpring { ends, .. } => Some((index, *ends)),
@@ -571,6 +572,7 @@ fn add_load(
             stiffness,
             rest_length: ir::Expr::Number(rest),
             damping: None,
+            tension: None,
             ..
         } if rest.is_zero() => {
             // A zero-length spring: T ê = k L ê = k d, so F_r = −k d·∂(v_B − v_A)/∂u_r, with
@@ -588,9 +590,10 @@ fn add_load(
             stiffness,
             rest_length,
             damping,
+            tension: law,
             ..
         } => {
-            // T = k (L − L0) + c L̇; −T ê on B and +T ê on A give
+            // T = k (L − L0) + c L̇ (+ a tension law); −T ê on B and +T ê on A give
             // F_r = −T ê·(∂v_B/∂u_r − ∂v_A/∂u_r).
             let line = SpringLine::new(pool, kinematics, model, *ends);
             let mut tension = spring_moment(pool, stiffness, rest_length, |_| line.length);
@@ -599,6 +602,10 @@ fn add_load(
                 let speed = line.stretch_speed(pool);
                 let viscous = pool.mul(c, speed);
                 tension = pool.add(tension, viscous);
+            }
+            if let Some(law) = law {
+                let law = lower_state_expr(pool, kinematics, model, law);
+                tension = pool.add(tension, law);
             }
             for &(r, rate) in &line.stretch_rates {
                 let force = pool.mul(tension, rate);

@@ -32,18 +32,20 @@ pub enum PendingLoad {
         stiffness: Expr,
         rest_length: Expr,
         damping: Option<Expr>,
+        tension: Option<Expr>,
         span: Span,
     },
 }
 
 /// The fields of a `spring` block.
-const SPRING_FIELDS: [&str; 3] = ["stiffness", "rest_length", "damping"];
+const SPRING_FIELDS: [&str; 4] = ["stiffness", "rest_length", "damping", "tension"];
 
-/// The dimension of a spring field: N/m, m, N·s/m.
+/// The dimension of a spring field: N/m, m, N·s/m, N.
 fn spring_expect(field: &str) -> Expect<'static> {
     match field {
         "stiffness" => Expect::mechanical("`stiffness`", "10 N/m", [1, 0, -2]),
         "damping" => Expect::mechanical("`damping`", "0.01 N*s/m", [1, 0, -1]),
+        "tension" => Expect::mechanical("`tension`", "2 mN", [1, 1, -2]),
         _ => Expect::mechanical("`rest_length`", "5 mm", [0, 1, 0]),
     }
 }
@@ -175,9 +177,10 @@ impl Lowerer<'_> {
         }
     }
 
-    /// `spring NAME between A and B { stiffness; rest_length; damping; }`: `stiffness` is
-    /// required (a pure damper writes `stiffness = 0 N/m;` on purpose), `rest_length` defaults
-    /// to 0 and `damping` to none; the ends are on two different bodies.
+    /// `spring NAME between A and B { stiffness; rest_length; damping; tension; }`: `stiffness`
+    /// is required unless a `tension` law is given (a pure damper writes `stiffness = 0 N/m;`
+    /// on purpose), `rest_length` defaults to 0, `damping` and `tension` to none; the ends are
+    /// on two different bodies. `tension` may use the motion (as a force may).
     fn lower_spring(&mut self, decl: &ast::SpringDecl) {
         let ends = decl.ends.each_ref().map(|path| self.resolve_point(path));
         let fields = self.known_fields(
@@ -194,16 +197,32 @@ impl Lowerer<'_> {
         let stiffness = scalar(self, "stiffness");
         let rest_length = scalar(self, "rest_length");
         let damping = scalar(self, "damping");
-        if stiffness.is_none() {
-            let help = "add the spring's stiffness along its line, e.g. `stiffness = 10 N/m;`";
+        let tension = fields
+            .iter()
+            .find(|f| f.name.name == "tension")
+            .map(|field| self.lower_scalar_as(&field.value, Ctx::Load, &spring_expect("tension")));
+        if stiffness.is_none() && tension.is_none() {
+            let help =
+                "add the spring's stiffness along its line, e.g. `stiffness = 10 N/m;`, or a \
+                    tension law, e.g. `tension = 1e4 N/m^3 * (distance(A, B) - 5 mm)^3;`";
             self.error(missing_field("spring", &decl.name, "stiffness", help));
         }
         if let [Some(a), Some(b)] = ends {
             self.check_spring_ends(decl, a, b);
         }
         // Each `Some(None)` is a field whose error is already reported.
-        let (Some(Some(stiffness)), [Some(a), Some(b)]) = (stiffness, ends) else {
+        let stiffness = match stiffness {
+            None => Expr::zero(),
+            Some(Some(stiffness)) => stiffness,
+            Some(None) => return,
+        };
+        let [Some(a), Some(b)] = ends else {
             return;
+        };
+        let tension = match tension {
+            None => None,
+            Some(Some(tension)) => Some(tension),
+            Some(None) => return,
         };
         let rest_length = match rest_length {
             None => Expr::zero(),
@@ -220,6 +239,7 @@ impl Lowerer<'_> {
             stiffness,
             rest_length,
             damping,
+            tension,
             span: decl.span,
         });
     }
@@ -513,6 +533,7 @@ impl Lowerer<'_> {
                     stiffness,
                     rest_length,
                     damping,
+                    tension,
                     span,
                 } => {
                     let handles = self.point_handle(ends[0]).zip(self.point_handle(ends[1]));
@@ -521,6 +542,7 @@ impl Lowerer<'_> {
                         stiffness: stiffness.clone(),
                         rest_length: rest_length.clone(),
                         damping: damping.clone(),
+                        tension: tension.clone(),
                         span: *span,
                     })
                 }

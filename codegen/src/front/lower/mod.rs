@@ -223,7 +223,7 @@ impl<'a> Lowerer<'a> {
                     .with_help(
                         "its force acts along the line between the ends, which has no direction \
                          where they meet: start the joints (`q0`) with the ends apart, or make it \
-                         a zero-length spring (`rest_length` 0, no `damping`), whose force `−k d` \
+                         a zero-length spring (`rest_length` 0, no `damping` or `tension`), whose force `−k d` \
                          is defined everywhere",
                     ),
             );
