@@ -395,6 +395,15 @@ pub fn accelerations<M: Model + ?Sized>(
     ode.accelerations(t, q, u, inputs, udot)
 }
 
+/// What [`accelerations_along`] finds at each sample of a run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SampledAccelerations {
+    /// `u̇` at each sample.
+    pub udot: Vec<Vec<f64>>,
+    /// `λ` at each sample (empty rows for a model without loops).
+    pub multipliers: Vec<Vec<f64>>,
+}
+
 /// The accelerations `u̇` and the constraint multipliers `λ` (empty without loops) at every
 /// sample of `run`, from the sample's own `t`, `q`, `u` and inputs: `M u̇ = F + Jᵀλ`,
 /// `J u̇ = −J̇u`, as the integrator solved them.
@@ -402,7 +411,7 @@ pub fn accelerations_along<M: Model + ?Sized>(
     model: &M,
     signals: &[Signal],
     run: &Trajectory,
-) -> Result<(Vec<Vec<f64>>, Vec<Vec<f64>>), RuntimeError> {
+) -> Result<SampledAccelerations, RuntimeError> {
     let mut ode = ModelOde::new(model, signals)?;
     let mut udots = Vec::with_capacity(run.len());
     let mut multipliers = Vec::with_capacity(run.len());
@@ -418,7 +427,10 @@ pub fn accelerations_along<M: Model + ?Sized>(
         udots.push(udot);
         multipliers.push(ode.multipliers().to_vec());
     }
-    Ok((udots, multipliers))
+    Ok(SampledAccelerations {
+        udot: udots,
+        multipliers,
+    })
 }
 
 /// The output grid: `t_start + k·dt` while `<= t_end` (a point within `1e-9·dt` of `t_end` is

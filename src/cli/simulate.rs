@@ -112,16 +112,15 @@ pub fn run(request: &SimulateArgs) -> Result<(), Error> {
 
     let (mut header, mut rows) = trajectory_table(model, &trajectory);
     if request.accelerations {
-        let (udots, multipliers) =
-            mech_runtime::accelerations_along(model, &session.signals, &trajectory).map_err(
-                |error| crate::session::Error::Simulation {
-                    model: model.name().to_string(),
-                    error,
-                },
-            )?;
+        let sampled = mech_runtime::accelerations_along(model, &session.signals, &trajectory)
+            .map_err(|error| crate::session::Error::Simulation {
+                model: model.name().to_string(),
+                error,
+            })?;
         header.extend(speed_names(model).iter().map(|n| format!("udot_{n}")));
         header.extend((0..model.nc()).map(|i| format!("lambda_{}", model.constraint_name(i))));
-        for ((row, udot), lambda) in rows.iter_mut().zip(&udots).zip(&multipliers) {
+        let columns = sampled.udot.iter().zip(&sampled.multipliers);
+        for (row, (udot, lambda)) in rows.iter_mut().zip(columns) {
             row.extend(udot);
             row.extend(lambda);
         }
