@@ -471,8 +471,6 @@ pub struct ChirpSweep {
     pub duration: f64,
     /// Relative tolerance of the DOPRI5 simulation (absolute: 1e-12).
     pub rtol: f64,
-    /// Budget of integration steps (`SimOptions::max_steps`).
-    pub max_steps: usize,
 }
 
 /// Simulates the model from `(q, u)` under `sweep` (the other inputs as `signals` give them;
@@ -506,7 +504,6 @@ pub fn simulated_chirp(
             atol: 1e-12,
             h_max: sample,
         },
-        max_steps: sweep.max_steps,
         ..SimOptions::default()
     };
     let run = mech_runtime::simulate(model, q, u, &signals, &options, &mut |_| {})?;
