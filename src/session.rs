@@ -45,6 +45,7 @@ pub enum NameKind {
     Input,
     Output,
     Coordinate,
+    Speed,
 }
 
 impl NameKind {
@@ -54,6 +55,7 @@ impl NameKind {
             NameKind::Input => "input",
             NameKind::Output => "output",
             NameKind::Coordinate => "coordinate",
+            NameKind::Speed => "speed",
         }
     }
 }
@@ -109,6 +111,8 @@ pub enum Error {
         /// The first rule broken (boxed: it holds the rule's expressions).
         broken: Box<mech_codegen::ir::Implausible>,
     },
+    /// `--q0` on a part of a quaternion (`tip.e0`): the parts must stay a unit quaternion.
+    QuaternionPart { name: String },
     /// The same name set twice by one option.
     Repeated {
         option: &'static str,
@@ -171,15 +175,24 @@ impl std::fmt::Display for Error {
                 write!(f, "{option} {name}: `{value}` ")?;
                 if *found == Dimension::NONE {
                     write!(f, "has no unit, but `{name}` needs ")?;
+                } else if *option == "--u0" && *found == Dimension::FREQUENCY {
+                    write!(f, "is an angular speed, but `{name}` needs ")?;
                 } else {
                     write!(f, "has unit {found}, but `{name}` needs ")?;
                 }
                 if *expected == Dimension::NONE {
                     write!(f, "no unit (a plain number, or an angle such as `30 deg`)")
+                } else if *option == "--u0" && *expected == Dimension::FREQUENCY {
+                    write!(f, "an angular speed (e.g. `{name}=2 rad/s`)")
                 } else {
                     write!(f, "{expected} (e.g. `{name}=2 {expected}`)")
                 }
             }
+            Error::QuaternionPart { name } => write!(
+                f,
+                "--q0 {name}: a quaternion's parts cannot be set one by one (they must stay a \
+                 unit quaternion); turn the joint's start with its `parent_frame`"
+            ),
             Error::Repeated {
                 option,
                 name,
@@ -522,12 +535,14 @@ impl Session {
             NameKind::Input => model.ninputs(),
             NameKind::Output => model.noutputs(),
             NameKind::Coordinate => model.nq(),
+            NameKind::Speed => model.nu(),
         };
         let name_of = |i: usize| match kind {
             NameKind::Parameter => model.param_name(i),
             NameKind::Input => model.input_name(i),
             NameKind::Output => model.output_name(i),
             NameKind::Coordinate => model.coordinate_name(i),
+            NameKind::Speed => model.speed_name(i),
         };
         (0..count)
             .find(|&i| name_of(i) == name)
@@ -540,14 +555,52 @@ impl Session {
             })
     }
 
-    /// The initial state of the model, with `--independent NAME[=VALUE]` coordinates held
-    /// (at VALUE, or at their `q0`) and the loops closed. Without independent coordinates,
-    /// they are chosen by column pivoting on `J` at `q0`.
-    pub fn assemble(&self, independent: &[String]) -> Result<Assembled, Error> {
+    /// The model's `q0` and `u0` with `--q0 NAME=VALUE` and `--u0 NAME=VALUE` in place of some:
+    /// each value checked for the unit of its coordinate (rad, m) or speed (rad/s, m/s). A
+    /// quaternion's parts cannot be set one by one (they must stay a unit quaternion); its
+    /// angular speeds can.
+    pub fn initial_state(
+        &self,
+        q0: &[String],
+        u0: &[String],
+    ) -> Result<(Vec<f64>, Vec<f64>), Error> {
         let model = &self.model;
         let mut q = vec![0.0; model.nq()];
         let mut u = vec![0.0; model.nu()];
         model.initial_state(&mut q, &mut u);
+        let coordinates = &self.compiled.model.coordinates;
+        let dimension = |index: usize| coordinates.iter().nth(index).map(|(_, c)| c.dimension);
+        for text in q0 {
+            let (name, value, index) = self.assignment("--q0", NameKind::Coordinate, text)?;
+            let Some(expected) = dimension(index) else {
+                return Err(Error::QuaternionPart { name });
+            };
+            q[index] = quantity("--q0", &name, &value, expected)?;
+        }
+        for text in u0 {
+            let (name, value, index) = self.assignment("--u0", NameKind::Speed, text)?;
+            // A pin's or slider's speed, or an angular speed of a quaternion (rad/s).
+            let expected = dimension(index).unwrap_or(Dimension::NONE);
+            u[index] = quantity("--u0", &name, &value, expected.div(Dimension::TIME))?;
+        }
+        Ok((q, u))
+    }
+
+    /// The initial state of the model, with `--independent NAME[=VALUE]` coordinates held
+    /// (at VALUE, or at their `q0`) and the loops closed. Without independent coordinates,
+    /// they are chosen by column pivoting on `J` at `q0`.
+    pub fn assemble(&self, independent: &[String]) -> Result<Assembled, Error> {
+        self.assemble_from(independent, self.initial_state(&[], &[])?)
+    }
+
+    /// [`Session::assemble`] from `(q, u)` in place of the model's `q0`, `u0` (the
+    /// starting guess of the loop closure, whose speeds are then made consistent).
+    pub fn assemble_from(
+        &self,
+        independent: &[String],
+        (mut q, mut u): (Vec<f64>, Vec<f64>),
+    ) -> Result<Assembled, Error> {
+        let model = &self.model;
         let q0 = q.clone();
         if model.nc() == 0 {
             return Ok(Assembled {

@@ -337,6 +337,14 @@ impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
         self.solve(t, q, u, udot)
     }
 
+    /// The constraint multipliers `λ` of the last [`accelerations`](Self::accelerations) (rows
+    /// found redundant hold zero; `M u̇ = F + Jᵀλ`); empty for a model without loops.
+    pub fn multipliers(&self) -> &[f64] {
+        self.constrained
+            .as_ref()
+            .map_or(&[], ConstrainedSolver::multipliers)
+    }
+
     /// `u̇` at `(t, q, u)` under the input values in `self.inputs`, with the loops closed where
     /// the model has them. A non-finite `u̇` is [`RuntimeError::NonFiniteState`], `udot` NaN.
     fn solve(
@@ -385,6 +393,44 @@ pub fn accelerations<M: Model + ?Sized>(
     let signals = default_signals(model);
     let mut ode = ModelOde::new(model, &signals)?;
     ode.accelerations(t, q, u, inputs, udot)
+}
+
+/// What [`accelerations_along`] finds at each sample of a run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SampledAccelerations {
+    /// `u̇` at each sample.
+    pub udot: Vec<Vec<f64>>,
+    /// `λ` at each sample (empty rows for a model without loops).
+    pub multipliers: Vec<Vec<f64>>,
+}
+
+/// The accelerations `u̇` and the constraint multipliers `λ` (empty without loops) at every
+/// sample of `run`, from the sample's own `t`, `q`, `u` and inputs: `M u̇ = F + Jᵀλ`,
+/// `J u̇ = −J̇u`, as the integrator solved them.
+pub fn accelerations_along<M: Model + ?Sized>(
+    model: &M,
+    signals: &[Signal],
+    run: &Trajectory,
+) -> Result<SampledAccelerations, RuntimeError> {
+    let mut ode = ModelOde::new(model, signals)?;
+    let mut udots = Vec::with_capacity(run.len());
+    let mut multipliers = Vec::with_capacity(run.len());
+    for k in 0..run.len() {
+        let mut udot = vec![0.0; model.nu()];
+        ode.accelerations(
+            run.times[k],
+            &run.q[k],
+            &run.u[k],
+            &run.inputs[k],
+            &mut udot,
+        )?;
+        udots.push(udot);
+        multipliers.push(ode.multipliers().to_vec());
+    }
+    Ok(SampledAccelerations {
+        udot: udots,
+        multipliers,
+    })
 }
 
 /// The output grid: `t_start + k·dt` while `<= t_end` (a point within `1e-9·dt` of `t_end` is

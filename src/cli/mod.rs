@@ -359,6 +359,14 @@ pub(crate) fn point_count(text: &str) -> Result<usize, String> {
     }
 }
 
+/// clap value parser: a whole number at least 1 (`--max-steps 20000`).
+pub(crate) fn positive_count(text: &str) -> Result<usize, String> {
+    match text.trim().parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err("expected a whole number of at least 1".to_string()),
+    }
+}
+
 /// A time given with a unit (`2 s`, `500 ms`) or as plain seconds.
 pub(crate) fn parse_time(what: &str, text: &str) -> Result<f64, Error> {
     let (value, dimension) = mech_codegen::front::units::parse_quantity(text)

@@ -42,6 +42,22 @@ pub struct SimulateArgs {
     /// Output sampling interval, with a unit or in seconds (default: t_end / 1000).
     #[arg(long)]
     pub dt_out: Option<String>,
+    /// Start a coordinate at VALUE instead of its `q0`, with its unit: `--q0 'swing=20 deg'`
+    /// (repeatable; with loops, a starting guess: hold it with `--independent NAME=VALUE`).
+    #[arg(long = "q0", value_name = "NAME=VALUE")]
+    pub q0: Vec<String>,
+    /// Start a speed at VALUE instead of its `u0`: `--u0 'x=2 mm/s'` (repeatable; with loops,
+    /// the speeds are then made consistent with them).
+    #[arg(long = "u0", value_name = "NAME=VALUE")]
+    pub u0: Vec<String>,
+    /// Add the accelerations `u̇` (columns `udot_NAME`) and, for a model with loops, the
+    /// constraint multipliers `λ` of `M u̇ = F + Jᵀλ` (columns `lambda_ROW`) to the CSV.
+    #[arg(long)]
+    pub accelerations: bool,
+    /// Budget of integration steps, accepted and rejected: the run stops with an error when it
+    /// is used up.
+    #[arg(long, default_value_t = SimOptions::default().max_steps, value_parser = super::positive_count)]
+    pub max_steps: usize,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -64,7 +80,8 @@ pub fn run(request: &SimulateArgs) -> Result<(), Error> {
     let plot_path = request.plot.as_deref();
     let reads = (request.common).check_outputs(&[Some(&request.out)], plot_path)?;
     let session = request.common.open_with_signals()?;
-    let state = session.assemble(&request.common.independent)?;
+    let start = session.initial_state(&request.q0, &request.u0)?;
+    let state = session.assemble_from(&request.common.independent, start)?;
     if let Some(mobility) = &state.mobility {
         println!("assembled `{}`: {mobility}", session.model.name());
     }
@@ -77,6 +94,7 @@ pub fn run(request: &SimulateArgs) -> Result<(), Error> {
             None => t_end / 1000.0,
         },
         method: method(request)?,
+        max_steps: request.max_steps,
         ..SimOptions::default()
     };
 
@@ -92,7 +110,21 @@ pub fn run(request: &SimulateArgs) -> Result<(), Error> {
     bar.finish_and_clear();
     let trajectory = trajectory?;
 
-    let (header, rows) = trajectory_table(model, &trajectory);
+    let (mut header, mut rows) = trajectory_table(model, &trajectory);
+    if request.accelerations {
+        let sampled = mech_runtime::accelerations_along(model, &session.signals, &trajectory)
+            .map_err(|error| crate::session::Error::Simulation {
+                model: model.name().to_string(),
+                error,
+            })?;
+        header.extend(speed_names(model).iter().map(|n| format!("udot_{n}")));
+        header.extend((0..model.nc()).map(|i| format!("lambda_{}", model.constraint_name(i))));
+        let columns = sampled.udot.iter().zip(&sampled.multipliers);
+        for (row, (udot, lambda)) in rows.iter_mut().zip(columns) {
+            row.extend(udot);
+            row.extend(lambda);
+        }
+    }
     let mut files = vec![output::File::csv(&request.out, &header, &rows)?];
     if let Some(plot_path) = &request.plot {
         let title = format!("{} — {}", model.name(), path.display());

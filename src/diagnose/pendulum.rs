@@ -336,7 +336,7 @@ fn collect_params(expr: &Expr, out: &mut Vec<usize>) {
                 out.push(handle.index());
             }
         }
-        Expr::Number(_) | Expr::Input(_) | Expr::Time | Expr::Pi => {}
+        Expr::Number(_) | Expr::Input(_) | Expr::Time | Expr::State(_) | Expr::Pi => {}
         Expr::Neg(a) | Expr::Pow(a, _) => collect_params(a, out),
         Expr::Add(a, b) | Expr::Sub(a, b) | Expr::Mul(a, b) | Expr::Div(a, b) => {
             collect_params(a, out);

@@ -82,6 +82,17 @@ pub fn forcing(model: &dyn Model, q: &[f64], u: &[f64]) -> Vec<f64> {
     f
 }
 
+/// `u̇ = M⁻¹F` at `(q, u)` and the default inputs, by LU.
+pub fn accelerations(model: &dyn Model, q: &[f64], u: &[f64]) -> Vec<f64> {
+    use mech_runtime::nalgebra::{DMatrix, DVector};
+    let n = model.nu();
+    let mut m = vec![0.0; n * n];
+    model.mass_matrix(0.0, q, &default_inputs(model), &mut m);
+    let f = DVector::from_vec(forcing(model, q, u));
+    let solved = DMatrix::from_vec(n, n, m).lu().solve(&f);
+    solved.expect("M is invertible").iter().copied().collect()
+}
+
 pub fn outputs(model: &dyn Model, q: &[f64], u: &[f64]) -> Vec<f64> {
     let mut y = vec![0.0; model.noutputs()];
     let inputs = default_inputs(model);

@@ -127,18 +127,17 @@ fn least_squares_refuses_input_that_is_not_finite() {
     assert_eq!(solve_least_squares(&a, &infinite_b), None);
 }
 
-/// A spring whose ends coincide at `q0` has no direction there: `F` is NaN, and the statics
-/// say so instead of iterating on it (it used to run its 60 iterations and report "no
-/// static equilibrium found").
+/// A force infinite at `q0` (`1/q` at q = 0): `F` is not finite, and the statics say so
+/// instead of iterating on it (they used to run their 60 iterations and report "no static
+/// equilibrium found"). This test used a spring whose ends meet at `q0`, now error E0417.
 #[test]
 fn statics_with_forces_that_are_not_finite_is_a_typed_error() {
     let text = "
-newtonian { point anchor = [0, 0, 0]; }
 body bob { mass = 20 g; }
 joint x = slider(newtonian, bob) { axis = x; }
-spring hanger between newtonian.anchor and bob { stiffness = 40 N/m; rest_length = 5 mm; }
+force repulsion at bob = [1 mN * 1 mm / x.q, 0, 0];
 ";
-    let session = session("spring_at_anchor", text);
+    let session = session("force_infinite_at_the_start", text);
     match session.equilibrium(&[], &[], &[]).unwrap_err() {
         Error::Statics {
             error: RuntimeError::NonFinite { what },

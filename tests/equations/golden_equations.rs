@@ -58,6 +58,7 @@ fn check(stem: &str) {
 
 tests_per_file! {
     check:
+    andrews,
     ball_double_pendulum,
     cart_pendulum,
     chain1,
@@ -75,6 +76,7 @@ tests_per_file! {
     slider_crank,
     spherical_five_bar,
     spring_pendulum,
+    state_forces,
     triple_pendulum_3d,
     two_mass_chain,
 }

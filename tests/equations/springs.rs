@@ -14,17 +14,6 @@ use common::Rng;
 use mech::tape_model::TapeModel;
 use mech_runtime::Model;
 
-/// `M⁻¹F` by LU.
-fn accelerations(model: &dyn Model, q: &[f64], u: &[f64]) -> Vec<f64> {
-    use mech_runtime::nalgebra::{DMatrix, DVector};
-    let n = model.nu();
-    let mut m = vec![0.0; n * n];
-    model.mass_matrix(0.0, q, &common::default_inputs(model), &mut m);
-    let f = DVector::from_vec(common::forcing(model, q, u));
-    let solved = DMatrix::from_vec(n, n, m).lu().solve(&f);
-    solved.expect("M is invertible").iter().copied().collect()
-}
-
 fn param(model: &dyn Model, name: &str) -> f64 {
     model.param(model.param_index(name).unwrap())
 }
@@ -89,7 +78,7 @@ fn spring_pendulum_accelerations_match_the_cartesian_equations() {
     for _ in 0..50 {
         let q = [rng.uniform(-0.1, 0.1), rng.uniform(-0.15, 0.05)];
         let u = [rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0)];
-        let derived = accelerations(&model, &q, &u);
+        let derived = common::accelerations(&model, &q, &u);
         let expected = pendulum.acceleration([q[0], q[1], u[0], u[1]]);
         let scale = expected[0].abs().max(expected[1].abs());
         for i in 0..2 {
@@ -245,7 +234,7 @@ fn a_spring_between_two_sliders_pulls_both_ends_equally() {
         let stretch_speed = e[0] * (0.0 - u[0]) + e[1] * u[1];
         let tension = k * (length - rest) + c * stretch_speed;
         let expected = [tension * e[0] / ma, -tension * e[1] / mb - g];
-        let derived = accelerations(&model, &q, &u);
+        let derived = common::accelerations(&model, &q, &u);
         let scale = expected[0].abs().max(expected[1].abs());
         for i in 0..2 {
             let error = (derived[i] - expected[i]).abs() / scale;

@@ -134,3 +134,10 @@ fn ball_double_pendulum() {
 fn floating_chain() {
     check_model("floating_chain");
 }
+
+/// Forces and torques of the motion (coordinates, speeds, a distance and its rate) and a
+/// spring–damper between two moving bodies.
+#[test]
+fn state_forces() {
+    check_model("state_forces");
+}

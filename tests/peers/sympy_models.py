@@ -136,6 +136,20 @@ class Model:
         self._joint_load(coord, -R(c) * self.u[self.coords.index(coord)], False)
         self.params[f'{coord}.damper_c'] = c
 
+    def point_spring(self, a, b, k, rest, c):
+        """A spring-damper between points a and b: with d = r_b - r_a, L = |d|, e = d/L and
+        L' = e.(v_b - v_a), the tension T = k (L - rest) + c L' acts as -T e on b and +T e on
+        a; (1/2) k (L - rest)^2 of potential energy; the damper's part is non-conservative."""
+        d = b.pos_from(a)
+        length = d.magnitude()
+        e = d / length
+        rate = e.dot(b.vel(self.N) - a.vel(self.N))
+        self.pe += R(k) / 2 * (length - R(rest)) ** 2
+        spring, damper = R(k) * (length - R(rest)), R(c) * rate
+        self.loads += [(b, -(spring + damper) * e), (a, (spring + damper) * e)]
+        self.nc_loads += [(b, -damper * e), (a, damper * e)]
+        return length, rate
+
     def external(self, key, target, vector, value):
         self.loads.append((target, vector)), self.nc_loads.append((target, vector))
         self.params[key] = value
@@ -384,10 +398,45 @@ def floating_chain():
     return M
 
 
+def state_forces():
+    """models/state_forces.mech: forces of the motion (the coordinates, speeds, a distance and
+    its rate) and a spring-damper between two moving bodies. The loads other than the
+    spring's are all counted as non-conservative in the energy balance."""
+    M = Model('state_forces')
+    C, Co = M.slider('s', M.N, M.O, me.Vector(0), M.N.x, 'C')
+    M.body('cart', C, Co, 1.2, (0, 0, 0), (0.02, 0.03, 0.04, 0, 0, 0))
+    So = M.point('So', Co, M.vec(C, (0.1, 0, 0)))
+    A = M.pin('swing', C, So, C.y, 'A')
+    M.body('arm', A, So, 0.6, (0, 0, -0.25), (0.01, 0.012, 0.003, 0.001, 0, 0.0005))
+    tip = M.point('tip', So, M.vec(A, (0.02, 0.01, -0.5)))
+    anchor = M.point('anchor', M.O, M.vec(M.N, (0.4, 0.3, 0.2)))
+    Rk = M.pin('rock', M.N, anchor, M.N.z, 'Rk')
+    M.body('rocker', Rk, anchor, 0.4, (0.15, 0.02, 0), (0.002, 0.006, 0.007, 0, 0, 0))
+    end = M.point('end', anchor, M.vec(Rk, (0.3, 0, 0.05)))
+    M.point_spring(tip, end, 30, 0.2, 0.4)
+    (s, swing, rock), (us, _, urock) = M.q, M.u
+    cubic = (-8 * s ** 3 - R(0.5) * us * sm.cos(swing)) * M.N.x
+    wind = (R(0.3) * sm.sin(swing) - R(0.05) * urock) * A.y
+    post = M.point('post', M.O, M.vec(M.N, (-0.2, 0.1, 0.6)))
+    d = end.pos_from(post)
+    length = d.magnitude()
+    rate = (d / length).dot(end.vel(M.N))
+    tether = (-3 * (length - R(0.1)) - R(0.2) * rate) * Rk.y
+    for load in ((Co, cubic), (A, wind), (end, tether)):
+        M.loads.append(load), M.nc_loads.append(load)
+    M.params.update({'spring link': {'tip': [0.02, 0.01, -0.5], 'end': [0.3, 0, 0.05], 'k': 30,
+                                     'rest_length': 0.2, 'damping': 0.4},
+                     'force cubic at cart (N)': '-8 s^3 - 0.5 u_s cos(swing)',
+                     'torque wind on arm (arm y)': '0.3 sin(swing) - 0.05 u_rock',
+                     'force tether at rocker.end (rocker y)': '-3 (L - 0.1) - 0.2 L\', L = |end - post|',
+                     'post': [-0.2, 0.1, 0.6], 'anchor': [0.4, 0.3, 0.2], 'swing.joint': [0.1, 0, 0]})
+    return M
+
+
 MODELS = [lambda: chain(1), lambda: chain(2), lambda: chain(4),
           lambda: pendulum_3d(2, 'double_pendulum_3d'), lambda: pendulum_3d(3, 'triple_pendulum_3d'),
           cart_pendulum, mixed_chain, four_bar, slider_crank, compliant_four_bar, ball_double_pendulum,
-          floating_chain]
+          floating_chain, state_forces]
 
 
 # ---------------------------------------------------------------- evaluation

@@ -1,6 +1,6 @@
 //! Bad command-line values: each gets an error that names the option and the expected form.
 
-use crate::support::{expect_errors, scratch};
+use crate::support::{expect_errors, mech, model, scratch};
 
 #[test]
 fn a_value_that_is_not_a_quantity_names_the_option_and_the_form() {
@@ -223,4 +223,94 @@ fn analyses_not_written_for_quaternions_refuse_a_ball_joint_model() {
         header.starts_with("t,q_shoulder.e0,") && header.contains(",u_elbow.wz,ke,pe,"),
         "{header}"
     );
+}
+
+/// `simulate --q0`, `--u0` (each value in its coordinate's or speed's unit) and
+/// `--max-steps` (a budget the run stops at, with the time it reached).
+#[test]
+fn initial_states_and_the_step_budget_are_checked() {
+    let dir = scratch("initial_state");
+    let simulate = |model: &'static str| ["simulate", model, "--t-end", "1 s", "--out", "run.csv"];
+    let with = |model: &'static str, extra: [&'static str; 2]| {
+        let [a, b, c, d, e, f] = simulate(model);
+        [a, b, c, d, e, f, extra[0], extra[1]]
+    };
+    let cases = [
+        (
+            with("{model:pendulum}", ["--q0", "hinge=10 mm"]),
+            "--q0 hinge: `10 mm` has unit m, but `hinge` needs no unit",
+        ),
+        (
+            with("{model:pendulum}", ["--u0", "hinge=2"]),
+            "--u0 hinge: `2` has no unit, but `hinge` needs an angular speed (e.g. `hinge=2 rad/s`)",
+        ),
+        (
+            with("{model:cart_pendulum}", ["--u0", "x=2 rad/s"]),
+            "--u0 x: `2 rad/s` is an angular speed, but `x` needs m/s (e.g. `x=2 m/s`)",
+        ),
+        (
+            with("{model:pendulum}", ["--q0", "hing=2 deg"]),
+            "--q0: unknown coordinate `hing`; coordinates of `pendulum`: hinge",
+        ),
+        (
+            with("{model:pendulum}", ["--u0", "hing=2 rad/s"]),
+            "--u0: unknown speed `hing`; speeds of `pendulum`: hinge",
+        ),
+        (
+            with("{model:ball_double_pendulum}", ["--q0", "shoulder.e0=1"]),
+            "--q0 shoulder.e0: a quaternion's parts cannot be set one by one",
+        ),
+        (
+            with("{model:pendulum}", ["--max-steps", "0"]),
+            "expected a whole number of at least 1",
+        ),
+        (
+            with("{model:pendulum}", ["--max-steps", "20"]),
+            "simulation of `pendulum` failed: gave up at t = ",
+        ),
+    ];
+    let cases: Vec<(&[&str], &str)> = cases
+        .iter()
+        .map(|(args, message)| (&args[..], *message))
+        .collect();
+    expect_errors(&dir, &cases);
+}
+
+/// `--q0` and `--u0` are where the run starts: the CSV's first row holds them, in SI.
+#[test]
+fn the_run_starts_where_q0_and_u0_say() {
+    let dir = scratch("initial_state_used");
+    let pendulum = model("pendulum");
+    let args = [
+        "simulate",
+        &pendulum,
+        "--t-end",
+        "10 ms",
+        "--dt-out",
+        "5 ms",
+        "--out",
+        "run.csv",
+        "--q0",
+        "hinge=10 deg",
+        "--u0",
+        "hinge=2 rad/s",
+    ];
+    let run = mech(&dir, &args);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    let csv = std::fs::read_to_string(dir.join("run.csv")).unwrap();
+    let first: Vec<f64> = csv
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    // t, q_hinge, u_hinge, …
+    assert_eq!(first[0], 0.0);
+    assert!(
+        (first[1] - 10f64.to_radians()).abs() < 1e-15,
+        "{}",
+        first[1]
+    );
+    assert_eq!(first[2], 2.0);
 }

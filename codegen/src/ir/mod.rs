@@ -95,6 +95,12 @@ impl Dimension {
     };
     /// J = kg·m²/s², the dimension of a torque.
     pub const ENERGY: Dimension = Dimension::TORQUE;
+    /// m/s.
+    pub const VELOCITY: Dimension = Dimension {
+        length: 1,
+        time: -1,
+        ..Dimension::NONE
+    };
     /// V = kg·m²/(s³·A)
     pub const VOLTAGE: Dimension = Dimension {
         mass: 1,
@@ -209,8 +215,9 @@ impl std::fmt::Display for Dimension {
     }
 }
 
-/// A scalar expression over parameters, inputs and time, as written in the model (after
-/// name resolution, unit scaling and dimension checking). `let` definitions are inlined.
+/// A scalar expression over parameters, inputs, time and (in loads and outputs) the state,
+/// as written in the model (after name resolution, unit scaling and dimension checking).
+/// `let` definitions are inlined.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Expr {
     Number(Number),
@@ -218,6 +225,8 @@ pub enum Expr {
     Input(Handle<Input>),
     /// Simulation time `t`, in s.
     Time,
+    /// A quantity of the motion; only in forces, torques and outputs (the front end checks).
+    State(StateTerm),
     Pi,
     Neg(Box<Expr>),
     Add(Box<Expr>, Box<Expr>),
@@ -240,15 +249,15 @@ impl Expr {
         Expr::Number(Number::ONE)
     }
 
-    /// The value with the params at `params` (SI, by index); `None` if it depends on an input
-    /// or time.
+    /// The value with the params at `params` (SI, by index); `None` if it depends on an input,
+    /// time or the state.
     pub fn evaluate(&self, params: &[f64]) -> Option<f64> {
         let eval = |e: &Expr| e.evaluate(params);
         Some(match self {
             Expr::Number(n) => n.to_f64(),
             Expr::Pi => std::f64::consts::PI,
             Expr::Param(handle) => *params.get(handle.index())?,
-            Expr::Input(_) | Expr::Time => return None,
+            Expr::Input(_) | Expr::Time | Expr::State(_) => return None,
             Expr::Neg(a) => -eval(a)?,
             Expr::Add(a, b) => eval(a)? + eval(b)?,
             Expr::Sub(a, b) => eval(a)? - eval(b)?,
@@ -264,6 +273,24 @@ impl Expr {
             }
         })
     }
+}
+
+/// A quantity of the motion that an expression may use (`hinge.q`, `distance(a, b)`,
+/// `kinetic_energy`, …): the kinematics lowers it (`kane::lower_state_expr`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum StateTerm {
+    /// The coordinate `q` of a pin or slider.
+    Coordinate(Handle<Coordinate>),
+    /// Its speed `u = q̇`.
+    Speed(Handle<Coordinate>),
+    /// `L = |r_B − r_A|` of two points `[A, B]`, in m.
+    Distance([Handle<Point>; 2]),
+    /// `L̇ = ê·(v_B − v_A)`, `ê = (r_B − r_A)/L`, in m/s.
+    DistanceRate([Handle<Point>; 2]),
+    /// The total kinetic energy (outputs only).
+    KineticEnergy,
+    /// The potential energy as [`OutputKind::PotentialEnergy`] (outputs only).
+    PotentialEnergy,
 }
 
 // Operators build the node as written, without folding constants: the closed forms of
@@ -663,6 +690,9 @@ pub enum Load {
         stiffness: Expr,
         rest_length: Expr,
         damping: Option<Expr>,
+        /// A tension law of the motion (`tension = EXPR`, e.g. of `distance(A, B)`) added to
+        /// `T`; its work is not in the potential energy.
+        tension: Option<Expr>,
         span: Span,
     },
     /// A generalized force acting directly on one coordinate (an actuator's force source).

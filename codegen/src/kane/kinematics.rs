@@ -47,21 +47,39 @@ pub struct Kinematics {
     to_newtonian: Vec<Option<(Mat3, Vec3)>>,
 }
 
-/// Lowers an IR scalar expression into the pool.
+/// Lowers an IR scalar expression into the pool. A coordinate or speed becomes its symbol;
+/// the terms that need the kinematics (distances, energies) only occur in loads and outputs,
+/// which lower through `kane::lower_state_expr` (elsewhere they would be NaN).
 pub fn lower_expr(pool: &mut ExprPool, expr: &ir::Expr) -> ExprId {
+    lower_expr_with(pool, expr, &mut |pool, term| match term {
+        ir::StateTerm::Coordinate(c) => pool.symbol(Symbol::Coordinate(c.index() as u32)),
+        ir::StateTerm::Speed(c) => pool.symbol(Symbol::Speed(c.index() as u32)),
+        _ => pool.float(f64::NAN),
+    })
+}
+
+/// Lowers an IR scalar expression, each [`ir::StateTerm`] through `state`.
+pub fn lower_expr_with(
+    pool: &mut ExprPool,
+    expr: &ir::Expr,
+    state: &mut dyn FnMut(&mut ExprPool, ir::StateTerm) -> ExprId,
+) -> ExprId {
     use ir::{Expr, Function};
+    let mut lower_expr = |pool: &mut ExprPool, e: &ir::Expr| lower_expr_with(pool, e, state);
     match expr {
         Expr::Number(n) => pool.number(*n),
         Expr::Param(p) => pool.symbol(Symbol::Param(p.index() as u32)),
         Expr::Input(i) => pool.symbol(Symbol::Input(i.index() as u32)),
         Expr::Time => pool.symbol(Symbol::Time),
+        Expr::State(term) => state(pool, *term),
         Expr::Pi => pool.float(std::f64::consts::PI),
         Expr::Neg(a) => {
             let a = lower_expr(pool, a);
             pool.neg(a)
         }
         Expr::Add(a, b) | Expr::Sub(a, b) | Expr::Mul(a, b) | Expr::Div(a, b) => {
-            let (x, y) = (lower_expr(pool, a), lower_expr(pool, b));
+            let x = lower_expr(pool, a);
+            let y = lower_expr(pool, b);
             match expr {
                 Expr::Add(..) => pool.add(x, y),
                 Expr::Sub(..) => pool.sub(x, y),

@@ -21,7 +21,7 @@ use std::collections::BTreeMap;
 
 use crate::ir::{self, Load, Model, OutputKind};
 use crate::sym::{ExprId, ExprPool, Number, Symbol};
-pub use kinematics::{lower_expr, Kinematics};
+pub use kinematics::{lower_expr, lower_expr_with, Kinematics};
 use vector::Vec3;
 
 /// The equations of motion of a model, ready for the back ends.
@@ -370,9 +370,33 @@ fn spring_length(
     (d, pool.sqrt(square))
 }
 
+/// `∂(v_B − v_A)/∂u_r` of two points `ends = [A, B]`, in N's basis: the partial velocities of
+/// each end (B with `+`, A with `−`, each from [`Kinematics::point_partials`] re-expressed in N).
+fn relative_partials(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    model: &Model,
+    ends: [ir::Handle<ir::Point>; 2],
+) -> kinematics::Partials {
+    let mut relative: kinematics::Partials = Vec::new();
+    for (end, sign) in [(ends[1], Number::ONE), (ends[0], Number::MINUS_ONE)] {
+        let point = &model.points[end];
+        let offset = kinematics::lower_vec(pool, &point.position);
+        let partials: kinematics::Partials = kinematics
+            .point_partials(pool, point.frame, offset)
+            .into_iter()
+            .map(|(r, v)| {
+                let v = kinematics.express(pool, v, point.frame, Model::NEWTONIAN);
+                (r, vector::scale_number(pool, v, sign))
+            })
+            .collect();
+        relative = kinematics::merge(pool, &relative, &partials);
+    }
+    relative
+}
+
 impl SpringLine {
-    /// `ê` from the ends' positions, and the partial velocities of each end (B with `+`, A
-    /// with `−`, each from [`Kinematics::point_partials`] re-expressed in N) projected on it.
+    /// `ê` from the ends' positions, and the ends' relative partial velocities projected on it.
     fn new(
         pool: &mut ExprPool,
         kinematics: &mut Kinematics,
@@ -382,20 +406,7 @@ impl SpringLine {
         let (d, length) = spring_length(pool, kinematics, model, ends);
         let inverse = pool.pow(length, Number::MINUS_ONE);
         let direction = vector::scale(pool, d, inverse);
-        let mut relative: kinematics::Partials = Vec::new();
-        for (end, sign) in [(ends[1], Number::ONE), (ends[0], Number::MINUS_ONE)] {
-            let point = &model.points[end];
-            let offset = kinematics::lower_vec(pool, &point.position);
-            let partials: kinematics::Partials = kinematics
-                .point_partials(pool, point.frame, offset)
-                .into_iter()
-                .map(|(r, v)| {
-                    let v = kinematics.express(pool, v, point.frame, Model::NEWTONIAN);
-                    (r, vector::scale_number(pool, v, sign))
-                })
-                .collect();
-            relative = kinematics::merge(pool, &relative, &partials);
-        }
+        let relative = relative_partials(pool, kinematics, model, ends);
         let stretch_rates = relative
             .into_iter()
             .map(|(r, v)| (r, vector::dot(pool, direction, v)))
@@ -420,6 +431,90 @@ impl SpringLine {
     }
 }
 
+/// Lowers an expression of a load or output: its [`ir::StateTerm`]s become the coordinate
+/// and speed symbols, a distance `L = |r_B − r_A|`, its rate `L̇ = ê·(v_B − v_A)`, or the
+/// energies, from the kinematics.
+pub fn lower_state_expr(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    model: &Model,
+    expr: &ir::Expr,
+) -> ExprId {
+    lower_expr_with(pool, expr, &mut |pool, term| match term {
+        ir::StateTerm::Coordinate(c) => pool.symbol(Symbol::Coordinate(c.index() as u32)),
+        ir::StateTerm::Speed(c) => pool.symbol(Symbol::Speed(c.index() as u32)),
+        ir::StateTerm::Distance(ends) => spring_length(pool, kinematics, model, ends).1,
+        ir::StateTerm::DistanceRate(ends) => {
+            SpringLine::new(pool, kinematics, model, ends).stretch_speed(pool)
+        }
+        ir::StateTerm::KineticEnergy => kinetic_energy(pool, kinematics, model),
+        ir::StateTerm::PotentialEnergy => potential_energy(pool, kinematics, model),
+    })
+}
+
+/// [`lower_state_expr`] of each component.
+fn lower_state_vec(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    model: &Model,
+    v: &ir::Vec3,
+) -> Vec3 {
+    [
+        lower_state_expr(pool, kinematics, model, &v[0]),
+        lower_state_expr(pool, kinematics, model, &v[1]),
+        lower_state_expr(pool, kinematics, model, &v[2]),
+    ]
+}
+
+/// The length `L` of each point-to-point spring whose direction `ê = d/L` enters its force
+/// (a rest length or a damper), at the model's initial coordinates (quaternions at the
+/// identity) and the params at `params`, with the larger distance of its ends from the
+/// Newtonian origin (a scale for "zero"): `(index in model.loads, L, scale)`.
+pub fn spring_lengths_at_start(model: &Model, params: &[f64]) -> Vec<(usize, f64, f64)> {
+    let springs: Vec<(usize, [ir::Handle<ir::Point>; 2])> = model
+        .loads
+        .iter()
+        .enumerate()
+        .filter_map(|(index, load)| match load {
+            Load::PointSpring {
+                rest_length: ir::Expr::Number(rest),
+                damping: None,
+                tension: None,
+                ..
+            } if rest.is_zero() => None,
+            Load::PointSpring { ends, .. } => Some((index, *ends)),
+            _ => None,
+        })
+        .collect();
+    if springs.is_empty() {
+        return Vec::new();
+    }
+    let mut pool = ExprPool::new();
+    let mut kinematics = Kinematics::new(model, &mut pool);
+    let mut roots = Vec::new();
+    for &(_, ends) in &springs {
+        let [a, b] = ends.map(|end| point_position(&mut pool, &mut kinematics, &model.points[end]));
+        let d = vector::sub(&mut pool, b, a);
+        let length = vector::dot(&mut pool, d, d);
+        let far = [a, b].map(|r| vector::dot(&mut pool, r, r));
+        roots.extend([length, far[0], far[1]]);
+    }
+    let q = model.initial_coordinates();
+    let values = pool.eval(&roots, &|symbol| match symbol {
+        Symbol::Coordinate(i) => q.get(i as usize).copied().unwrap_or(f64::NAN),
+        Symbol::Param(i) => params.get(i as usize).copied().unwrap_or(f64::NAN),
+        _ => 0.0,
+    });
+    springs
+        .iter()
+        .zip(values.chunks(3))
+        .map(|(&(index, _), squares)| {
+            let scale = squares[1].max(squares[2]).sqrt();
+            (index, squares[0].sqrt(), scale)
+        })
+        .collect()
+}
+
 /// Contribution of one applied load to the generalized active forces `F_r`.
 fn add_load(
     pool: &mut ExprPool,
@@ -432,14 +527,14 @@ fn add_load(
         Load::Force { point, force, .. } => {
             let point = &model.points[*point];
             let offset = kinematics::lower_vec(pool, &point.position);
-            let f = kinematics::lower_vec(pool, &force.components);
+            let f = lower_state_vec(pool, kinematics, model, &force.components);
             let f = kinematics.express(pool, f, force.frame, point.frame);
             for (r, v) in kinematics.point_partials(pool, point.frame, offset) {
                 forcing[r].push(vector::dot(pool, f, v));
             }
         }
         Load::Torque { frame, torque, .. } => {
-            let t = kinematics::lower_vec(pool, &torque.components);
+            let t = lower_state_vec(pool, kinematics, model, &torque.components);
             let t = kinematics.express(pool, t, torque.frame, *frame);
             for (r, w) in kinematics.frames[frame.index()].partial_omega.clone() {
                 forcing[r].push(vector::dot(pool, t, w));
@@ -469,16 +564,36 @@ fn add_load(
         Load::GeneralizedForce {
             coordinate, force, ..
         } => {
-            forcing[coordinate.index()].push(lower_expr(pool, force));
+            let force = lower_state_expr(pool, kinematics, model, force);
+            forcing[coordinate.index()].push(force);
+        }
+        Load::PointSpring {
+            ends,
+            stiffness,
+            rest_length: ir::Expr::Number(rest),
+            damping: None,
+            tension: None,
+            ..
+        } if rest.is_zero() => {
+            // A zero-length spring: T ê = k L ê = k d, so F_r = −k d·∂(v_B − v_A)/∂u_r, with
+            // no direction to divide out: defined where the points meet.
+            let k = lower_expr(pool, stiffness);
+            let (d, _) = spring_length(pool, kinematics, model, *ends);
+            for (r, v) in relative_partials(pool, kinematics, model, *ends) {
+                let rate = vector::dot(pool, d, v);
+                let force = pool.mul(k, rate);
+                forcing[r].push(pool.neg(force));
+            }
         }
         Load::PointSpring {
             ends,
             stiffness,
             rest_length,
             damping,
+            tension: law,
             ..
         } => {
-            // T = k (L − L0) + c L̇; −T ê on B and +T ê on A give
+            // T = k (L − L0) + c L̇ (+ a tension law); −T ê on B and +T ê on A give
             // F_r = −T ê·(∂v_B/∂u_r − ∂v_A/∂u_r).
             let line = SpringLine::new(pool, kinematics, model, *ends);
             let mut tension = spring_moment(pool, stiffness, rest_length, |_| line.length);
@@ -487,6 +602,10 @@ fn add_load(
                 let speed = line.stretch_speed(pool);
                 let viscous = pool.mul(c, speed);
                 tension = pool.add(tension, viscous);
+            }
+            if let Some(law) = law {
+                let law = lower_state_expr(pool, kinematics, model, law);
+                tension = pool.add(tension, law);
             }
             for &(r, rate) in &line.stretch_rates {
                 let force = pool.mul(tension, rate);
@@ -574,7 +693,7 @@ fn lower_output(
         OutputKind::Speed(c) => vec![("", pool.symbol(Symbol::Speed(c.index() as u32)))],
         OutputKind::KineticEnergy => vec![("", kinetic_energy(pool, kinematics, model))],
         OutputKind::PotentialEnergy => vec![("", potential_energy(pool, kinematics, model))],
-        OutputKind::Expr(e) => vec![("", lower_expr(pool, e))],
+        OutputKind::Expr(e) => vec![("", lower_state_expr(pool, kinematics, model, e))],
     }
 }
 

@@ -199,7 +199,7 @@ impl<'a> Lowerer<'a> {
     ) -> Option<(Expr, Span)> {
         let field = fields.iter().find(|f| f.name.name == name)?;
         let ctx = if dynamic {
-            Ctx::Dynamic
+            Ctx::Dynamic("an actuator's `voltage`")
         } else {
             Ctx::Static("an element property")
         };

@@ -23,8 +23,23 @@ pub enum Ctx {
     Constant(&'static str),
     /// Also params and `let`s of params (body properties, initial values); not time or inputs.
     Static(&'static str),
-    /// Anything: params, lets, inputs and time `t` (loads, outputs, `let`s).
-    Dynamic,
+    /// Also inputs and time `t` (`let`s, an actuator's voltage); names what is being lowered.
+    Dynamic(&'static str),
+    /// Also the motion: `joint.q`, `joint.u`, `distance(A, B)`, `distance_rate(A, B)` (forces
+    /// and torques).
+    Load,
+    /// Also the energies and the scalar outputs declared above (outputs).
+    Output,
+}
+
+impl Ctx {
+    /// What is being lowered, for messages (`None` where the state is allowed).
+    fn what(self) -> Option<&'static str> {
+        match self {
+            Ctx::Constant(what) | Ctx::Static(what) | Ctx::Dynamic(what) => Some(what),
+            Ctx::Load | Ctx::Output => None,
+        }
+    }
 }
 
 /// A lowered scalar expression with its dimension.
@@ -39,7 +54,7 @@ pub struct Typed {
 }
 
 impl Typed {
-    fn leaf(expr: Expr, dim: Dimension, varying: Option<Span>) -> Typed {
+    pub(super) fn leaf(expr: Expr, dim: Dimension, varying: Option<Span>) -> Typed {
         Typed {
             expr,
             dim,
@@ -302,16 +317,19 @@ impl Lowerer<'_> {
 
     fn path_value(&mut self, path: &ast::Path, ctx: Ctx) -> Option<Typed> {
         let [name] = path.segments.as_slice() else {
-            self.not_a_number(path);
-            return None;
+            return self.joint_state(path, ctx);
         };
         match name.name.as_str() {
             "t" => return self.time(name.span, ctx),
             "pi" => return Some(Typed::leaf(Expr::Pi, Dimension::NONE, None)),
+            "kinetic_energy" | "potential_energy" => return self.energy(name, ctx),
             _ => {}
         }
         let Some(&value) = self.values.get(&name.name) else {
-            self.unknown_value(name);
+            if let (Ctx::Output, Some(output)) = (ctx, self.scalar_outputs.get(&name.name)) {
+                return Some(output.clone());
+            }
+            self.unknown_value(name, ctx);
             return None;
         };
         match value {
@@ -340,6 +358,117 @@ impl Lowerer<'_> {
             Value::Let(index) => self.let_value(index, name, ctx),
             Value::Failed => None,
         }
+    }
+
+    /// `joint.q` or `joint.u` of a pin or slider, where the motion may be used.
+    fn joint_state(&mut self, path: &ast::Path, ctx: Ctx) -> Option<Typed> {
+        let [joint, which] = path.segments.as_slice() else {
+            self.not_a_number(path);
+            return None;
+        };
+        if !matches!(which.name.as_str(), "q" | "u") {
+            self.not_a_number(path);
+            return None;
+        }
+        // Before the joints are known (a `let`), any `NAME.q` reads as a coordinate.
+        self.allow_state(ctx, path.span, "a joint's coordinate or speed")?;
+        if !self.joint_index.contains_key(&joint.name) {
+            self.not_a_number(path);
+            return None;
+        }
+        let index = self.single_coordinate_joint(joint, path.span)?;
+        let coordinate = self.joints.get(index).and_then(|info| info.coordinate)?;
+        let angle_or_length = self.model.coordinates[coordinate].dimension;
+        let (term, dim) = if which.name == "q" {
+            (ir::StateTerm::Coordinate(coordinate), angle_or_length)
+        } else {
+            let rate = dim_div(angle_or_length, Dimension::TIME)?;
+            (ir::StateTerm::Speed(coordinate), rate)
+        };
+        Some(Typed::leaf(Expr::State(term), dim, Some(path.span)))
+    }
+
+    /// `kinetic_energy` or `potential_energy`: in outputs only.
+    fn energy(&mut self, name: &ast::Ident, ctx: Ctx) -> Option<Typed> {
+        if !matches!(ctx, Ctx::Output) {
+            let place = ctx.what().unwrap_or("a force or torque");
+            self.error(
+                Diagnostic::error(
+                    "E0213",
+                    format!("`{}` is only allowed in an output", name.name),
+                )
+                .with_label(name.span, format!("used in {place}"))
+                .with_help(
+                    "the energies are outputs of the motion (`output total = kinetic_energy \
+                         + potential_energy;`); a load uses the motion through `joint.q`, \
+                         `joint.u`, `distance(A, B)` and `distance_rate(A, B)`",
+                ),
+            );
+            return None;
+        }
+        let term = if name.name == "kinetic_energy" {
+            ir::StateTerm::KineticEnergy
+        } else {
+            ir::StateTerm::PotentialEnergy
+        };
+        Some(Typed::leaf(
+            Expr::State(term),
+            Dimension::ENERGY,
+            Some(name.span),
+        ))
+    }
+
+    /// `distance(A, B)` (m) or `distance_rate(A, B)` (m/s) of two points.
+    fn point_distance(
+        &mut self,
+        function: &ast::Ident,
+        args: &[ast::Expr],
+        span: Span,
+        ctx: Ctx,
+    ) -> Option<Typed> {
+        self.allow_state(ctx, function.span, "a distance between points")?;
+        let [a, b] = args else {
+            self.error(
+                Diagnostic::error(
+                    "E0404",
+                    format!(
+                        "`{}` takes 2 arguments, found {}",
+                        function.name,
+                        args.len()
+                    ),
+                )
+                .with_label(
+                    span,
+                    format!("expected `{}(A, B)` of two points", function.name),
+                ),
+            );
+            return None;
+        };
+        let ends = [a, b].map(|arg| self.point_argument(function, arg));
+        let [a, b] = ends;
+        let ends = [self.point_handle(a?)?, self.point_handle(b?)?];
+        let (term, dim) = if function.name == "distance" {
+            (ir::StateTerm::Distance(ends), Dimension::LENGTH)
+        } else {
+            (ir::StateTerm::DistanceRate(ends), Dimension::VELOCITY)
+        };
+        Some(Typed::leaf(Expr::State(term), dim, Some(span)))
+    }
+
+    /// E0401 where an expression may not use the motion.
+    fn allow_state(&mut self, ctx: Ctx, span: Span, kind: &str) -> Option<()> {
+        let Some(what) = ctx.what() else {
+            return Some(());
+        };
+        self.error(
+            Diagnostic::error("E0401", format!("{what} cannot depend on the motion"))
+                .with_label(span, format!("{kind} changes as the model moves"))
+                .with_help(
+                    "only `force`, `torque` and `output` expressions may use `joint.q`, `joint.u`, \
+                     `distance(A, B)` and `distance_rate(A, B)`; write the expression there",
+                ),
+        );
+        None
     }
 
     fn time(&mut self, span: Span, ctx: Ctx) -> Option<Typed> {
@@ -402,7 +531,7 @@ impl Lowerer<'_> {
             _ => false,
         };
         let help = if is_coordinate {
-            format!("coordinates and speeds can only be outputs on their own: `output x = {text};`")
+            format!("`{text}` is not a pin's or slider's coordinate or speed")
         } else {
             "points and frames can only be used where a point or frame is expected".to_string()
         };
@@ -413,9 +542,12 @@ impl Lowerer<'_> {
         );
     }
 
-    fn unknown_value(&mut self, name: &ast::Ident) {
+    fn unknown_value(&mut self, name: &ast::Ident, ctx: Ctx) {
         let mut candidates: Vec<&str> = self.value_names.names().collect();
         candidates.extend(["t", "pi"]);
+        if let Ctx::Output = ctx {
+            candidates.extend(self.scalar_outputs.keys().map(String::as_str));
+        }
         let mut diagnostic = names::unknown(
             "E0204",
             "name",
@@ -441,6 +573,9 @@ impl Lowerer<'_> {
         span: Span,
         ctx: Ctx,
     ) -> Option<Typed> {
+        if matches!(function.name.as_str(), "distance" | "distance_rate") {
+            return self.point_distance(function, args, span, ctx);
+        }
         let Some(f) = function_named(&function.name) else {
             self.unknown_function(function);
             return None;
@@ -535,7 +670,18 @@ impl Lowerer<'_> {
     }
 
     fn unknown_function(&mut self, function: &ast::Ident) {
-        let candidates = ["sin", "cos", "tan", "sqrt", "exp", "ln", "abs", "atan2"];
+        let candidates = [
+            "sin",
+            "cos",
+            "tan",
+            "sqrt",
+            "exp",
+            "ln",
+            "abs",
+            "atan2",
+            "distance",
+            "distance_rate",
+        ];
         let mut diagnostic = names::unknown(
             "E0207",
             "function",
@@ -929,7 +1075,7 @@ pub fn fold(expr: &Expr) -> Option<Number> {
     match expr {
         Expr::Number(n) => Some(*n),
         Expr::Pi => float(std::f64::consts::PI),
-        Expr::Param(_) | Expr::Input(_) | Expr::Time => None,
+        Expr::Param(_) | Expr::Input(_) | Expr::Time | Expr::State(_) => None,
         Expr::Neg(a) => Some(fold(a)?.neg()),
         Expr::Add(a, b) => Some(fold(a)?.add(fold(b)?)),
         Expr::Sub(a, b) => Some(fold(a)?.sub(fold(b)?)),

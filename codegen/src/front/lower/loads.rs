@@ -10,7 +10,7 @@ use crate::front::ast::{self, ExprKind, Ident};
 use crate::ir::{self, Dimension, Expr, Handle, JointKind, Vec3};
 
 use super::body::{missing_field, FrameRef, PointRef};
-use super::expr::{unparen, Ctx, Expect};
+use super::expr::{unparen, Ctx, Expect, Typed};
 use super::names::Namespace;
 use super::Lowerer;
 
@@ -32,18 +32,20 @@ pub enum PendingLoad {
         stiffness: Expr,
         rest_length: Expr,
         damping: Option<Expr>,
+        tension: Option<Expr>,
         span: Span,
     },
 }
 
 /// The fields of a `spring` block.
-const SPRING_FIELDS: [&str; 3] = ["stiffness", "rest_length", "damping"];
+const SPRING_FIELDS: [&str; 4] = ["stiffness", "rest_length", "damping", "tension"];
 
-/// The dimension of a spring field: N/m, m, N·s/m.
+/// The dimension of a spring field: N/m, m, N·s/m, N.
 fn spring_expect(field: &str) -> Expect<'static> {
     match field {
         "stiffness" => Expect::mechanical("`stiffness`", "10 N/m", [1, 0, -2]),
         "damping" => Expect::mechanical("`damping`", "0.01 N*s/m", [1, 0, -1]),
+        "tension" => Expect::mechanical("`tension`", "2 mN", [1, 1, -2]),
         _ => Expect::mechanical("`rest_length`", "5 mm", [0, 1, 0]),
     }
 }
@@ -175,9 +177,10 @@ impl Lowerer<'_> {
         }
     }
 
-    /// `spring NAME between A and B { stiffness; rest_length; damping; }`: `stiffness` is
-    /// required (a pure damper writes `stiffness = 0 N/m;` on purpose), `rest_length` defaults
-    /// to 0 and `damping` to none; the ends are on two different bodies.
+    /// `spring NAME between A and B { stiffness; rest_length; damping; tension; }`: `stiffness`
+    /// is required unless a `tension` law is given (a pure damper writes `stiffness = 0 N/m;`
+    /// on purpose), `rest_length` defaults to 0, `damping` and `tension` to none; the ends are
+    /// on two different bodies. `tension` may use the motion (as a force may).
     fn lower_spring(&mut self, decl: &ast::SpringDecl) {
         let ends = decl.ends.each_ref().map(|path| self.resolve_point(path));
         let fields = self.known_fields(
@@ -194,16 +197,32 @@ impl Lowerer<'_> {
         let stiffness = scalar(self, "stiffness");
         let rest_length = scalar(self, "rest_length");
         let damping = scalar(self, "damping");
-        if stiffness.is_none() {
-            let help = "add the spring's stiffness along its line, e.g. `stiffness = 10 N/m;`";
+        let tension = fields
+            .iter()
+            .find(|f| f.name.name == "tension")
+            .map(|field| self.lower_scalar_as(&field.value, Ctx::Load, &spring_expect("tension")));
+        if stiffness.is_none() && tension.is_none() {
+            let help =
+                "add the spring's stiffness along its line, e.g. `stiffness = 10 N/m;`, or a \
+                    tension law, e.g. `tension = 1e4 N/m^3 * (distance(A, B) - 5 mm)^3;`";
             self.error(missing_field("spring", &decl.name, "stiffness", help));
         }
         if let [Some(a), Some(b)] = ends {
             self.check_spring_ends(decl, a, b);
         }
         // Each `Some(None)` is a field whose error is already reported.
-        let (Some(Some(stiffness)), [Some(a), Some(b)]) = (stiffness, ends) else {
+        let stiffness = match stiffness {
+            None => Expr::zero(),
+            Some(Some(stiffness)) => stiffness,
+            Some(None) => return,
+        };
+        let [Some(a), Some(b)] = ends else {
             return;
+        };
+        let tension = match tension {
+            None => None,
+            Some(Some(tension)) => Some(tension),
+            Some(None) => return,
         };
         let rest_length = match rest_length {
             None => Expr::zero(),
@@ -220,6 +239,7 @@ impl Lowerer<'_> {
             stiffness,
             rest_length,
             damping,
+            tension,
             span: decl.span,
         });
     }
@@ -252,7 +272,7 @@ impl Lowerer<'_> {
         frame: Option<&ast::Path>,
         expect: &Expect,
     ) -> Option<(Vec3, FrameRef)> {
-        let components = self.lower_vector_as(value, Ctx::Dynamic, expect);
+        let components = self.lower_vector_as(value, Ctx::Load, expect);
         let frame = self.frame_clause(frame);
         Some((components?, frame?))
     }
@@ -304,15 +324,7 @@ impl Lowerer<'_> {
             );
             return None;
         };
-        let ExprKind::Path(path) = &unparen(arg).kind else {
-            self.error(
-                Diagnostic::error("E0412", format!("expected a point in `{}`", function.name))
-                    .with_label(arg.span, "not a point")
-                    .with_help("write a point such as `arm.tip`, `arm.com` or `arm`"),
-            );
-            return None;
-        };
-        let point = self.resolve_point(path);
+        let point = self.point_argument(function, arg);
         let frame = self.frame_clause(frame);
         let (point, frame) = (point?, frame?);
         Some(match function.name.as_str() {
@@ -329,39 +341,7 @@ impl Lowerer<'_> {
                 if self.joint_index.contains_key(&joint.name)
                     && (which.name == "q" || which.name == "u") =>
             {
-                let j = self.joint_index[&joint.name];
-                match self.joints.get(j).and_then(|info| info.kind) {
-                    Some(JointKind::Weld) => {
-                        self.error(
-                            Diagnostic::error(
-                                "E0213",
-                                format!("weld joint `{}` has no coordinate", joint.name),
-                            )
-                            .with_label(path.span, "a weld has no degree of freedom"),
-                        );
-                        return None;
-                    }
-                    Some(kind @ (JointKind::Ball | JointKind::Free)) => {
-                        let what = if kind == JointKind::Ball {
-                            "ball"
-                        } else {
-                            "free"
-                        };
-                        self.error(
-                            Diagnostic::error(
-                                "E0213",
-                                format!("{what} joint `{}` has no single coordinate", joint.name),
-                            )
-                            .with_label(path.span, "its orientation is a unit quaternion")
-                            .with_help(
-                                "output the motion of a point of the child body, \
-                                 `position(body.point)` or `velocity(body.point)`",
-                            ),
-                        );
-                        return None;
-                    }
-                    _ => {}
-                }
+                let j = self.single_coordinate_joint(joint, path.span)?;
                 if which.name == "q" {
                     PendingKind::Coordinate(j)
                 } else {
@@ -371,13 +351,93 @@ impl Lowerer<'_> {
             _ => return self.expr_output(decl),
         };
         self.reject_frame_clause(decl)?;
+        if let Some(value) = self.output_value(&kind, path.span) {
+            self.scalar_outputs.insert(decl.name.name.clone(), value);
+        }
         Some(kind)
     }
 
+    /// A scalar output as an expression later outputs may use.
+    fn output_value(&self, kind: &PendingKind, span: Span) -> Option<Typed> {
+        let (term, dim) = match *kind {
+            PendingKind::KineticEnergy => (ir::StateTerm::KineticEnergy, Dimension::ENERGY),
+            PendingKind::PotentialEnergy => (ir::StateTerm::PotentialEnergy, Dimension::ENERGY),
+            PendingKind::Coordinate(j) | PendingKind::Speed(j) => {
+                let coordinate = self.joints.get(j)?.coordinate?;
+                let dim = self.model.coordinates[coordinate].dimension;
+                if let PendingKind::Coordinate(_) = kind {
+                    (ir::StateTerm::Coordinate(coordinate), dim)
+                } else {
+                    let rate = crate::front::units::dim_div(dim, Dimension::TIME)?;
+                    (ir::StateTerm::Speed(coordinate), rate)
+                }
+            }
+            _ => return None,
+        };
+        Some(Typed::leaf(Expr::State(term), dim, Some(span)))
+    }
+
+    /// A point given as an argument of `function` (`position(arm.tip)`, `distance(A, B)`).
+    pub(super) fn point_argument(&mut self, function: &Ident, arg: &ast::Expr) -> Option<PointRef> {
+        let ExprKind::Path(path) = &unparen(arg).kind else {
+            self.error(
+                Diagnostic::error("E0412", format!("expected a point in `{}`", function.name))
+                    .with_label(arg.span, "not a point")
+                    .with_help(
+                        "write a point such as `arm.tip`, `arm.com`, `arm` or `newtonian.anchor`",
+                    ),
+            );
+            return None;
+        };
+        self.resolve_point(path)
+    }
+
+    /// The index of `joint` if it has one coordinate (a pin or slider); E0213 for a weld (none)
+    /// and for `ball` and `free` (a quaternion).
+    pub(super) fn single_coordinate_joint(&mut self, joint: &Ident, span: Span) -> Option<usize> {
+        let j = *self.joint_index.get(&joint.name)?;
+        match self.joints.get(j).and_then(|info| info.kind) {
+            Some(JointKind::Weld) => {
+                self.error(
+                    Diagnostic::error(
+                        "E0213",
+                        format!("weld joint `{}` has no coordinate", joint.name),
+                    )
+                    .with_label(span, "a weld has no degree of freedom"),
+                );
+                None
+            }
+            Some(kind @ (JointKind::Ball | JointKind::Free)) => {
+                let what = if kind == JointKind::Ball {
+                    "ball"
+                } else {
+                    "free"
+                };
+                self.error(
+                    Diagnostic::error(
+                        "E0213",
+                        format!("{what} joint `{}` has no single coordinate", joint.name),
+                    )
+                    .with_label(span, "its orientation is a unit quaternion")
+                    .with_help(
+                        "use the motion of a point of the child body, \
+                         `position(body.point)` or `velocity(body.point)` as outputs, \
+                         `distance(A, B)` in a load",
+                    ),
+                );
+                None
+            }
+            _ => Some(j),
+        }
+    }
+
     fn expr_output(&mut self, decl: &ast::OutputDecl) -> Option<PendingKind> {
-        let typed = self.lower_scalar(&decl.value, Ctx::Dynamic);
+        let typed = self.lower_scalar(&decl.value, Ctx::Output);
         self.reject_frame_clause(decl)?;
-        Some(PendingKind::Expr(typed?.expr))
+        let typed = typed?;
+        self.scalar_outputs
+            .insert(decl.name.name.clone(), typed.clone());
+        Some(PendingKind::Expr(typed.expr))
     }
 
     fn reject_frame_clause(&mut self, decl: &ast::OutputDecl) -> Option<()> {
@@ -398,7 +458,7 @@ impl Lowerer<'_> {
     // Handles
     // -----------------------------------------------------------------------------------------
 
-    fn point_handle(&self, point: PointRef) -> Option<Handle<ir::Point>> {
+    pub(super) fn point_handle(&self, point: PointRef) -> Option<Handle<ir::Point>> {
         match point {
             PointRef::Origin(owner) => self.owners[owner].origin_point,
             PointRef::Com(owner) => self.owners[owner].com_point,
@@ -473,6 +533,7 @@ impl Lowerer<'_> {
                     stiffness,
                     rest_length,
                     damping,
+                    tension,
                     span,
                 } => {
                     let handles = self.point_handle(ends[0]).zip(self.point_handle(ends[1]));
@@ -481,6 +542,7 @@ impl Lowerer<'_> {
                         stiffness: stiffness.clone(),
                         rest_length: rest_length.clone(),
                         damping: damping.clone(),
+                        tension: tension.clone(),
                         span: *span,
                     })
                 }

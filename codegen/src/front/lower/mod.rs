@@ -107,6 +107,8 @@ struct Lowerer<'a> {
     joint_index: BTreeMap<String, usize>,
     loads: Vec<PendingLoad>,
     outputs: Vec<PendingOutput>,
+    /// The scalar outputs lowered so far, as expressions later outputs may use.
+    scalar_outputs: BTreeMap<String, Typed>,
     /// Twist degrees of freedom of flexures, inserted into the tree once everything else
     /// refers to frames (the insertion renumbers them).
     twists: Vec<PendingTwist>,
@@ -141,6 +143,7 @@ impl<'a> Lowerer<'a> {
             joint_index: BTreeMap::new(),
             loads: Vec::new(),
             outputs: Vec::new(),
+            scalar_outputs: BTreeMap::new(),
             twists: Vec::new(),
         }
     }
@@ -189,6 +192,42 @@ impl<'a> Lowerer<'a> {
         self.build_loads();
         self.build_outputs();
         self.apply_twists();
+        self.check_springs_apart();
+    }
+
+    /// E0417: a point-to-point spring whose ends meet at the initial coordinates, where its
+    /// direction `ê = d/L` (and so its force) is undefined. Checked on a complete model only
+    /// (the kinematics need every frame); a zero-length undamped spring is exempt (its force
+    /// `−k d` needs no direction).
+    fn check_springs_apart(&mut self) {
+        if !self.diagnostics.is_empty() {
+            return;
+        }
+        let lengths = crate::kane::spring_lengths_at_start(&self.model, &self.param_values);
+        for (index, length, scale) in lengths {
+            if length > 1e-12 * scale {
+                continue;
+            }
+            let Some(ir::Load::PointSpring { span, .. }) = self.model.loads.get(index) else {
+                continue;
+            };
+            let span = *span;
+            let label = if length == 0.0 {
+                "its ends coincide at the initial coordinates".to_string()
+            } else {
+                format!("its ends are {length:.1e} m apart at the initial coordinates")
+            };
+            self.error(
+                Diagnostic::error("E0417", "the ends of this spring meet at the start")
+                    .with_label(span, label)
+                    .with_help(
+                        "its force acts along the line between the ends, which has no direction \
+                         where they meet: start the joints (`q0`) with the ends apart, or make it \
+                         a zero-length spring (`rest_length` 0, no `damping` or `tension`), whose force `−k d` \
+                         is defined everywhere",
+                    ),
+            );
+        }
     }
 
     /// E0416: loop closures in a model with a `ball` or `free` joint. Their rows are written
@@ -291,7 +330,7 @@ impl<'a> Lowerer<'a> {
         });
         for (index, decl) in lets.enumerate() {
             self.current_let = Some(index);
-            let value = self.lower_scalar(&decl.value, expr::Ctx::Dynamic);
+            let value = self.lower_scalar(&decl.value, expr::Ctx::Dynamic("a `let`"));
             self.lets[index] = value;
         }
         self.current_let = None;
