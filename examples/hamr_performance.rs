@@ -144,7 +144,7 @@ fn main() {
             .expect("the starting equilibrium")
             .q;
 
-        let mut solver = ConstrainedSolver::new(model.nq(), model.nc());
+        let mut solver = ConstrainedSolver::for_model(model.as_ref());
         let (u0, mut udot) = (vec![0.0; model.nu()], vec![0.0; model.nu()]);
         let (udot_time, _) = median_time(1000, Duration::from_millis(300), || {
             for _ in 0..100 {

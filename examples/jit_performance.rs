@@ -89,7 +89,7 @@ fn udot_table() {
         let interpreted = TapeModel::with_backend(&compiled, Backend::Interpreter);
         let models: [&dyn Model; 3] = [generated.as_ref(), &native, &interpreted];
         let (q, u, inputs) = state(name, generated.as_ref());
-        let mut solver = ConstrainedSolver::new(native.nq(), native.nc());
+        let mut solver = ConstrainedSolver::for_model(&native);
         let mut udots = vec![vec![0.0; native.nu()]; 3];
         for (model, udot) in models.iter().zip(&mut udots) {
             solver

@@ -111,8 +111,9 @@ pub enum Error {
         /// The first rule broken (boxed: it holds the rule's expressions).
         broken: Box<mech_codegen::ir::Implausible>,
     },
-    /// `--q0` on a part of a quaternion (`tip.e0`): the parts must stay a unit quaternion.
-    QuaternionPart { name: String },
+    /// `--q0` or `--independent` on a part of a quaternion (`tip.e0`): the parts must stay
+    /// a unit quaternion.
+    QuaternionPart { option: &'static str, name: String },
     /// The same name set twice by one option.
     Repeated {
         option: &'static str,
@@ -188,10 +189,11 @@ impl std::fmt::Display for Error {
                     write!(f, "{expected} (e.g. `{name}=2 {expected}`)")
                 }
             }
-            Error::QuaternionPart { name } => write!(
+            Error::QuaternionPart { option, name } => write!(
                 f,
-                "--q0 {name}: a quaternion's parts cannot be set one by one (they must stay a \
-                 unit quaternion); turn the joint's start with its `parent_frame`"
+                "{option} {name}: a quaternion's parts cannot be set or held one by one (they \
+                 must stay a unit quaternion); turn the joint's start with its `parent_frame`, \
+                 and hold a pin or slider coordinate instead"
             ),
             Error::Repeated {
                 option,
@@ -573,7 +575,10 @@ impl Session {
         for text in q0 {
             let (name, value, index) = self.assignment("--q0", NameKind::Coordinate, text)?;
             let Some(expected) = dimension(index) else {
-                return Err(Error::QuaternionPart { name });
+                return Err(Error::QuaternionPart {
+                    option: "--q0",
+                    name,
+                });
             };
             q[index] = quantity("--q0", &name, &value, expected)?;
         }
@@ -606,7 +611,7 @@ impl Session {
             return Ok(Assembled {
                 q,
                 u,
-                independent: (0..model.nq()).collect(),
+                independent: (0..model.nu()).collect(),
                 mobility: None,
                 iterations: 0,
             });
@@ -618,6 +623,12 @@ impl Session {
                 None => (item.trim(), None),
             };
             let index = self.coordinate_index(name)?;
+            if index >= model.plain_coordinates() {
+                return Err(Error::QuaternionPart {
+                    option: "--independent",
+                    name: name.to_string(),
+                });
+            }
             if let Some(value) = value {
                 let coordinates = &self.compiled.model.coordinates;
                 let expected = coordinates.iter().nth(index).map(|(_, c)| c.dimension);
@@ -632,7 +643,9 @@ impl Session {
             assemble(model, 0.0, &mut q, &[], &AssemblyOptions::default())
                 .map_err(|error| self.assembly_error(error))?;
             fixed = choose_independent(&jacobian(model, 0.0, &q));
-            for &i in &fixed {
+            // A chosen angular speed of a quaternion holds its rotation where the minimum-norm
+            // closure left it; a pin or slider goes back to its `q0`.
+            for &i in fixed.iter().filter(|&&i| i < model.plain_coordinates()) {
                 q[i] = q0[i];
             }
         }
@@ -834,6 +847,8 @@ pub fn assembly_report(model: &dyn Model, state: &Assembled) -> String {
     for i in 0..model.nq() {
         let role = if state.mobility.is_none() {
             "tree"
+        } else if !own_speed(i) {
+            "rotation"
         } else if state.independent.contains(&i) {
             "independent"
         } else {
@@ -851,9 +866,13 @@ pub fn assembly_report(model: &dyn Model, state: &Assembled) -> String {
         );
     }
     for i in (0..model.nu()).filter(|&i| !own_speed(i)) {
+        let role = match state.mobility.is_some() && state.independent.contains(&i) {
+            true => "independent speed",
+            false => "speed",
+        };
         let _ = writeln!(
             text,
-            "{:<20} {:>16} {:>16.10}  speed",
+            "{:<20} {:>16} {:>16.10}  {role}",
             model.speed_name(i),
             "",
             state.u[i]

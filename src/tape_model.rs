@@ -315,9 +315,9 @@ impl TapeModel {
 
     /// The lengths of the parts of a fused program.
     fn fused_lengths(&self, slot: Slot) -> Vec<usize> {
-        let (nq, nu, nc) = (self.tape.nq, self.tape.nu, self.tape.nc);
+        let (nu, nc) = (self.tape.nu, self.tape.nc);
         match slot {
-            Slot::ConstrainedTerms => vec![nu * nu, nu, nc * nq, nc],
+            Slot::ConstrainedTerms => vec![nu * nu, nu, nc * nu, nc],
             _ => vec![nu * nu, nu, nc],
         }
     }

@@ -12,7 +12,7 @@ use std::hint::black_box;
 
 fn run<M: Model>(model: &M, fixed: &[usize], what: &str, n: usize) {
     let (q, u, _) = assembled(model, fixed);
-    let mut solver = ConstrainedSolver::new(model.nq(), model.nc());
+    let mut solver = ConstrainedSolver::for_model(model);
     let mut udot = vec![0.0; model.nq()];
     match what {
         "udot" => {

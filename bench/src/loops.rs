@@ -280,7 +280,7 @@ pub fn measure_loop<M: Model>(
         batch,
     );
 
-    let mut solver = ConstrainedSolver::new(nq, nc);
+    let mut solver = ConstrainedSolver::new(nq, nq, nc);
     let mut udot = vec![0.0; nq];
     let udot_time = per_call_ns(
         || {

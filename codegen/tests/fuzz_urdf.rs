@@ -1,6 +1,5 @@
 //! Robustness: `urdf::import` never panics, whatever the file, and what it writes goes
-//! through the front end without a panic either (it may be rejected, e.g. a loop in a model
-//! with a ball joint, E0416).
+//! through the front end without a panic either (it may be rejected).
 //!
 //! Consumes: arbitrary strings, and byte-level mutations and splices of a valid URDF that
 //! uses every element the importer translates. Produces: proptest cases (a few hundred).

@@ -68,7 +68,6 @@ tests_per_file! {
     loop_bad_component,
     loop_field_of_other_kind,
     loop_missing_axis,
-    loop_with_ball_joint,
     loop_zero_length,
     many_errors,
     missing_axis,

@@ -68,9 +68,9 @@ impl fmt::Display for Mobility {
     }
 }
 
-/// `J(q)` as a matrix.
+/// `J(q)` as a matrix (`nc × nu`: `φ̇ = J u`).
 pub fn jacobian<M: Model + ?Sized>(model: &M, t: f64, q: &[f64]) -> DMatrix<f64> {
-    let mut j = DMatrix::zeros(model.nc(), model.nq());
+    let mut j = DMatrix::zeros(model.nc(), model.nu());
     model.constraint_jacobian(t, q, j.as_mut_slice());
     j
 }
@@ -219,10 +219,11 @@ impl Default for AssemblyOptions {
     }
 }
 
-/// Solves `φ(q) = 0` for the coordinates not listed in `fixed`, starting from `q` (updated
-/// in place): damped Newton steps `Δq_free = −J_free⁺ φ` (rank-revealing least squares),
-/// halved until `|φ|` decreases. Fails with the loop rows that remain open, that are not
-/// finite, or that no step can move (see [`Unclosed`]).
+/// Solves `φ(q) = 0` moving along the speeds not listed in `fixed`, starting from `q`
+/// (updated in place): damped Newton steps `δ_free = −J_free⁺ φ` (rank-revealing least
+/// squares), `q ← q ⊕ δ` ([`retract`]: `q + δ` where `q̇ = u`), halved until `|φ|` decreases.
+/// Fails with the loop rows that remain open, that are not finite, or that no step can move
+/// (see [`Unclosed`]).
 pub fn assemble<M: Model + ?Sized>(
     model: &M,
     t: f64,
@@ -230,14 +231,15 @@ pub fn assemble<M: Model + ?Sized>(
     fixed: &[usize],
     options: &AssemblyOptions,
 ) -> Result<usize, RuntimeError> {
-    close(
-        |q| residual(model, t, q),
-        |q| jacobian(model, t, q),
-        q,
-        fixed,
-        options,
-    )
-    .map_err(|unclosed| match unclosed {
+    let residual = |q: &[f64]| residual(model, t, q);
+    let jacobian = |q: &[f64]| jacobian(model, t, q);
+    let closed = if model.rates_are_speeds() {
+        close(residual, jacobian, q, fixed, options)
+    } else {
+        let retract = |q: &[f64], delta: &[f64], out: &mut [f64]| retract(model, t, q, delta, out);
+        close_with(residual, jacobian, &retract, q, fixed, options)
+    };
+    closed.map_err(|unclosed| match unclosed {
         Unclosed::Open(phi) => assembly_error(model, phi.as_slice()),
         Unclosed::NonFinite { rows, jacobian } => RuntimeError::NonFiniteConstraints {
             rows: row_names(model, &rows),
@@ -300,9 +302,21 @@ pub enum Unclosed {
     Stationary { row: usize, residual: f64 },
 }
 
+/// `q ⊕ δ = q + W(q) δ` into `out`, each unit quaternion scaled back to unit norm: a step of
+/// `δ` along the speeds' directions (`δ` has length `nu`). To first order it moves `φ` by
+/// `J δ`, so Newton steps through it converge as in coordinates where `q̇ = u`.
+pub fn retract<M: Model + ?Sized>(model: &M, t: f64, q: &[f64], delta: &[f64], out: &mut [f64]) {
+    model.kinematic_rates(t, q, delta, out);
+    for (value, start) in out.iter_mut().zip(q) {
+        *value += start;
+    }
+    crate::simulate::normalize_quaternions(model.unit_quaternions(), out);
+}
+
 /// [`assemble`] for any residual `φ(q)` and its Jacobian (e.g. loops and fixtures together,
-/// in the statics): returns the iterations taken, or why it stopped. No step is taken to a
-/// `q` where `φ` is not finite, so `q` stays where `φ` was last finite.
+/// in the statics), for coordinates where `q̇ = u`: returns the iterations taken, or why it
+/// stopped. No step is taken to a `q` where `φ` is not finite, so `q` stays where `φ` was
+/// last finite.
 pub fn close(
     residual: impl Fn(&[f64]) -> DVector<f64>,
     jacobian: impl Fn(&[f64]) -> DMatrix<f64>,
@@ -310,7 +324,27 @@ pub fn close(
     fixed: &[usize],
     options: &AssemblyOptions,
 ) -> Result<usize, Unclosed> {
-    let free: Vec<usize> = (0..q.len()).filter(|c| !fixed.contains(c)).collect();
+    let add = |q: &[f64], delta: &[f64], out: &mut [f64]| {
+        for ((value, start), step) in out.iter_mut().zip(q).zip(delta) {
+            *value = start + step;
+        }
+    };
+    close_with(residual, jacobian, &add, q, fixed, options)
+}
+
+/// `retract(q, δ, out)`: the configuration a step `δ` along the Jacobian's columns reaches.
+pub type Retraction<'a> = &'a dyn Fn(&[f64], &[f64], &mut [f64]);
+
+/// [`close`] with the Jacobian's columns along the directions of `retract(q, δ, out)`
+/// ([`retract`] for a model with quaternions): `fixed` lists columns held.
+pub fn close_with(
+    residual: impl Fn(&[f64]) -> DVector<f64>,
+    jacobian: impl Fn(&[f64]) -> DMatrix<f64>,
+    retract: Retraction<'_>,
+    q: &mut [f64],
+    fixed: &[usize],
+    options: &AssemblyOptions,
+) -> Result<usize, Unclosed> {
     let mut phi = residual(q);
     let non_finite = |phi: &DVector<f64>| phi.iter().any(|x| !x.is_finite());
     if non_finite(&phi) {
@@ -325,7 +359,10 @@ pub fn close(
         if phi.amax() <= options.tolerance {
             return Ok(iteration);
         }
-        j_free = jacobian(q).select_columns(&free);
+        let j = jacobian(q);
+        let columns = j.ncols();
+        let free: Vec<usize> = (0..columns).filter(|c| !fixed.contains(c)).collect();
+        j_free = j.select_columns(&free);
         let rows = non_finite_rows(&j_free);
         if !rows.is_empty() {
             return Err(Unclosed::NonFinite {
@@ -344,10 +381,12 @@ pub fn close(
         let mut scale = 1.0;
         let before = phi.norm();
         let mut trial = q.to_vec();
+        let mut delta = vec![0.0; columns];
         loop {
             for (k, &c) in free.iter().enumerate() {
-                trial[c] = q[c] + scale * step[k];
+                delta[c] = scale * step[k];
             }
+            retract(q, &delta, &mut trial);
             let trial_phi = residual(&trial);
             if trial_phi.norm() < before || (scale < 1e-6 && !non_finite(&trial_phi)) {
                 q.copy_from_slice(&trial);
@@ -419,9 +458,9 @@ pub(crate) fn assembly_error<M: Model + ?Sized>(model: &M, phi: &[f64]) -> Runti
     }
 }
 
-/// Speeds consistent with `J u = 0`: keeps `u` of the `fixed` coordinates and solves the
-/// others by least squares (`J_free u_free = −J_fixed u_fixed`). An error naming the rows if
-/// `J` is not finite at `q`.
+/// Speeds consistent with `J u = 0`: keeps the `fixed` speeds and solves the others by least
+/// squares (`J_free u_free = −J_fixed u_fixed`). An error naming the rows if `J` is not finite
+/// at `q`.
 pub fn assemble_speeds<M: Model + ?Sized>(
     model: &M,
     t: f64,
@@ -429,10 +468,8 @@ pub fn assemble_speeds<M: Model + ?Sized>(
     u: &mut [f64],
     fixed: &[usize],
 ) -> Result<(), RuntimeError> {
-    // `J u = 0` with `u` indexed like `q`: the loop rows are written for `q̇ = u`.
-    model.require_rates_are_speeds("assembly of the speeds")?;
     let j = jacobian(model, t, q);
-    let free: Vec<usize> = (0..model.nq()).filter(|c| !fixed.contains(c)).collect();
+    let free: Vec<usize> = (0..model.nu()).filter(|c| !fixed.contains(c)).collect();
     let mut rhs = DVector::zeros(model.nc());
     for &c in fixed {
         rhs -= j.column(c) * u[c];
@@ -463,15 +500,19 @@ pub fn assemble_speeds<M: Model + ?Sized>(
 /// drops redundant rows (`u̇` is unique even where `λ` is not).
 #[derive(Clone, Debug)]
 pub struct ConstrainedSolver {
-    nq: usize,
+    /// Speeds (the size of `M`) and constraint rows.
+    nu: usize,
     nc: usize,
+    /// `W(q) δ`, the coordinates' step of a speed-space correction `δ` (models with
+    /// quaternions; empty where `q̇ = u`).
+    rates: Vec<f64>,
     /// `M`, then its Cholesky factor `L` (lower triangle).
     mass: DMatrix<f64>,
     force: DVector<f64>,
     jacobian: DMatrix<f64>,
     bias: DVector<f64>,
     phi: DVector<f64>,
-    /// `Z = L⁻¹ Jᵀ`, `nq × nc` column-major: column r is `L⁻¹` (row r of J).
+    /// `Z = L⁻¹ Jᵀ`, `nu × nc` column-major: column r is `L⁻¹` (row r of J).
     scaled: Vec<f64>,
     /// `Zᵀ Z = J M⁻¹ Jᵀ` (or `J Jᵀ`), then its pivoted factor, `nc × nc`.
     coupling: Vec<f64>,
@@ -492,16 +533,25 @@ fn all_finite(s: &[f64]) -> bool {
 const PIVOT_TOLERANCE: f64 = 1e-12;
 
 impl ConstrainedSolver {
-    pub fn new(nq: usize, nc: usize) -> ConstrainedSolver {
+    /// Storage for `model`'s sizes ([`ConstrainedSolver::new`]).
+    pub fn for_model<M: Model + ?Sized>(model: &M) -> ConstrainedSolver {
+        ConstrainedSolver::new(model.nq(), model.nu(), model.nc())
+    }
+
+    /// Storage for a model with `nu` speeds and `nc` constraint rows (`nq == nu`, or `nq`
+    /// coordinates for a model with quaternions, whose position corrections go through
+    /// `q̇ = W(q) u`).
+    pub fn new(nq: usize, nu: usize, nc: usize) -> ConstrainedSolver {
         ConstrainedSolver {
-            nq,
+            rates: if nq == nu { Vec::new() } else { vec![0.0; nq] },
+            nu,
             nc,
-            mass: DMatrix::zeros(nq, nq),
-            force: DVector::zeros(nq),
-            jacobian: DMatrix::zeros(nc, nq),
+            mass: DMatrix::zeros(nu, nu),
+            force: DVector::zeros(nu),
+            jacobian: DMatrix::zeros(nc, nu),
             bias: DVector::zeros(nc),
             phi: DVector::zeros(nc),
-            scaled: vec![0.0; nq * nc],
+            scaled: vec![0.0; nu * nc],
             coupling: vec![0.0; nc * nc],
             mismatch: vec![0.0; nc],
             multipliers: vec![0.0; nc],
@@ -518,7 +568,7 @@ impl ConstrainedSolver {
 
     /// `Z = L⁻¹ Jᵀ` from the factor in `mass` and the Jacobian in `jacobian`.
     fn scale_jacobian(&mut self) {
-        let (n, nc) = (self.nq, self.nc);
+        let (n, nc) = (self.nu, self.nc);
         let jacobian = self.jacobian.as_slice();
         for c in 0..n {
             for r in 0..nc {
@@ -556,7 +606,7 @@ impl ConstrainedSolver {
         inputs: &[f64],
         udot: &mut [f64],
     ) -> Result<(), RuntimeError> {
-        let (n, nc) = (self.nq, self.nc);
+        let (n, nc) = (self.nu, self.nc);
         model.constrained_terms(
             t,
             q,
@@ -620,7 +670,7 @@ impl ConstrainedSolver {
         inputs: &[f64],
         tolerance: f64,
     ) -> Result<bool, RuntimeError> {
-        let (n, nc) = (self.nq, self.nc);
+        let (n, nc) = (self.nu, self.nc);
         let mut changed = false;
         for _ in 0..10 {
             model.constraints(t, q, self.phi.as_mut_slice());
@@ -631,14 +681,30 @@ impl ConstrainedSolver {
             dense::outer_gram_lower(self.jacobian.as_slice(), nc, n, &mut self.coupling);
             self.mismatch.copy_from_slice(self.phi.as_slice());
             self.solve_coupling();
-            // Δq = −Jᵀ x: J (nc × nq, column-major) is Jᵀ stored as an nc-by-nq Z.
-            for (c, value) in q.iter_mut().enumerate() {
-                let column = &self.jacobian.as_slice()[nc * c..nc * (c + 1)];
-                *value -= column
+            // Δq = −Jᵀ x: J (nc × nu, column-major) is Jᵀ stored as an nc-by-nu Z; with
+            // quaternions the step is along the speeds, `q ← q ⊕ (−Jᵀ x)`.
+            let step = |c: usize, multipliers: &[f64], jacobian: &[f64]| {
+                let column = &jacobian[nc * c..nc * (c + 1)];
+                column
                     .iter()
-                    .zip(&self.multipliers)
+                    .zip(multipliers)
                     .map(|(j, x)| j * x)
-                    .sum::<f64>();
+                    .sum::<f64>()
+            };
+            if self.rates.is_empty() {
+                for (c, value) in q.iter_mut().enumerate() {
+                    *value -= step(c, &self.multipliers, self.jacobian.as_slice());
+                }
+            } else {
+                let delta = self.force.as_mut_slice();
+                for (c, value) in delta.iter_mut().enumerate() {
+                    *value = -step(c, &self.multipliers, self.jacobian.as_slice());
+                }
+                model.kinematic_rates(t, q, self.force.as_slice(), &mut self.rates);
+                for (value, rate) in q.iter_mut().zip(&self.rates) {
+                    *value += rate;
+                }
+                crate::simulate::normalize_quaternions(model.unit_quaternions(), q);
             }
             changed = true;
         }

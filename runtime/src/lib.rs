@@ -42,8 +42,8 @@ pub use nalgebra::{SMatrix, SVector};
 pub use reduced::Reduced;
 pub use signal::{default_signals, Signal, Table};
 pub use simulate::{
-    accelerations, accelerations_along, simulate, simulate_reduced, Method, ModelOde,
-    SampledAccelerations, SimOptions, Trajectory,
+    accelerations, accelerations_along, normalize_quaternions, simulate, simulate_reduced, Method,
+    ModelOde, SampledAccelerations, SimOptions, Trajectory,
 };
 pub use statics::{
     reduced_equilibrium, solve_statics, solve_statics_with_loads, Equilibrium, Fixture,

@@ -76,6 +76,15 @@ pub trait Model {
     fn unit_quaternions(&self) -> &[usize] {
         &[]
     }
+    /// Number of coordinates with `q̇ᵢ = uᵢ` (pins, sliders): they come first in `q`, and
+    /// the same index addresses their speed. The first quaternion's index, or `nq`.
+    fn plain_coordinates(&self) -> usize {
+        self.unit_quaternions()
+            .iter()
+            .copied()
+            .min()
+            .unwrap_or(self.nq())
+    }
     /// Whether `q̇ = u` ([`Model::kinematic_rates`] is the identity): as many speeds as
     /// coordinates and no quaternion. Analyses written for `q̇ = u` refuse other models.
     fn rates_are_speeds(&self) -> bool {
@@ -120,7 +129,8 @@ pub trait Model {
     }
     /// `φ(q)`, length `nc`.
     fn constraints(&self, _t: f64, _q: &[f64], _out: &mut [f64]) {}
-    /// `J(q) = ∂φ/∂q`, `nc × nq`, column-major.
+    /// `J(q)` with `φ̇ = J u`, `nc × nu`, column-major: `∂φ/∂q` where `q̇ = u`, `∂φ/∂q W(q)`
+    /// with quaternions (so that `J u = 0`, `M u̇ = F + Jᵀλ` hold in the speeds).
     fn constraint_jacobian(&self, _t: f64, _q: &[f64], _out: &mut [f64]) {}
     /// `J̇(q, u) u`, so that `J u̇ + J̇u = 0` keeps `J u = 0`.
     fn constraint_bias(&self, _t: f64, _q: &[f64], _u: &[f64], _out: &mut [f64]) {}

@@ -277,13 +277,9 @@ pub struct ModelOde<'a, M: Model + ?Sized> {
 
 impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
     /// Wraps `model` with one signal per model input. Errors if `signals` has the wrong length,
-    /// a signal is invalid, the model has both loops and quaternions (the loop rows are
-    /// written for `q̇ = u`), or `nq != nu` without quaternions.
+    /// a signal is invalid, or `nq != nu` without quaternions.
     pub fn new(model: &'a M, signals: &'a [Signal]) -> Result<Self, RuntimeError> {
         let (nq, nu) = (model.nq(), model.nu());
-        if model.nc() > 0 {
-            model.require_rates_are_speeds("simulation with loop closures")?;
-        }
         if nq != nu && model.unit_quaternions().is_empty() {
             return Err(RuntimeError::InvalidOptions(format!(
                 "model `{}` has {nq} coordinates but {nu} speeds and no unit quaternion; \
@@ -299,7 +295,7 @@ impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
             nu,
             inputs: vec![0.0; model.ninputs()],
             solver: AccelSolver::new(nu),
-            constrained: (model.nc() > 0).then(|| ConstrainedSolver::new(nq, model.nc())),
+            constrained: (model.nc() > 0).then(|| ConstrainedSolver::new(nq, nu, model.nc())),
         })
     }
 
@@ -490,7 +486,7 @@ pub fn simulate<M: Model + ?Sized>(
         model,
         signals,
         nq,
-        projector: (model.nc() > 0).then(|| ConstrainedSolver::new(nq, model.nc())),
+        projector: (model.nc() > 0).then(|| ConstrainedSolver::new(nq, model.nu(), model.nc())),
         inputs: vec![0.0; signals.len()],
         tolerance: options.constraint_tolerance,
     };

@@ -68,6 +68,7 @@ tests_per_file! {
     double_pendulum_3d,
     flexure_rig,
     floating_chain,
+    floating_four_bar,
     four_bar,
     hamr_v2,
     hamr_vi,

@@ -14,7 +14,7 @@ use mech_runtime::Model;
 
 /// Every function of the trait at one state, by name.
 fn evaluate(model: &dyn Model, q: &[f64], u: &[f64], inputs: &[f64]) -> Vec<(String, Vec<f64>)> {
-    let (nq, nu, nc) = (model.nq(), model.nu(), model.nc());
+    let (_, nu, nc) = (model.nq(), model.nu(), model.nc());
     let t = 0.3;
     let mut m = vec![0.0; nu * nu];
     model.mass_matrix(t, q, inputs, &mut m);
@@ -31,7 +31,7 @@ fn evaluate(model: &dyn Model, q: &[f64], u: &[f64], inputs: &[f64]) -> Vec<(Str
     }
     let mut phi = vec![0.0; nc];
     model.constraints(t, q, &mut phi);
-    let mut j = vec![0.0; nc * nq];
+    let mut j = vec![0.0; nc * nu];
     model.constraint_jacobian(t, q, &mut j);
     let mut bias = vec![0.0; nc];
     model.constraint_bias(t, q, u, &mut bias);
@@ -41,7 +41,7 @@ fn evaluate(model: &dyn Model, q: &[f64], u: &[f64], inputs: &[f64]) -> Vec<(Str
     let mut fused = [
         vec![0.0; nu * nu],
         vec![0.0; nu],
-        vec![0.0; nc * nq],
+        vec![0.0; nc * nu],
         vec![0.0; nc],
     ];
     if let [m, f, j, b] = &mut fused[..] {

@@ -220,29 +220,40 @@ fn redundant_closure_reports_mobility_and_simulates() {
     assert!((q1 - 3.3500951900).abs() < 5e-9, "q1(1 s) = {q1}");
 }
 
-/// `J` against central differences of `φ`, and `J̇u` against central differences of `J u`
-/// along `u`, at random states of every bundled model with loops.
+/// `q + h W(q) v`: a straight step along the coordinates' rates for speeds `v` (`q + h v`
+/// where `q̇ = u`).
+fn step_along(model: &dyn Model, q: &[f64], v: &[f64], h: f64) -> Vec<f64> {
+    let mut rates = vec![0.0; model.nq()];
+    model.kinematic_rates(0.0, q, v, &mut rates);
+    q.iter().zip(&rates).map(|(q, r)| q + h * r).collect()
+}
+
+/// `J` against central differences of `φ` along each speed's direction (`∂φ/∂q` where
+/// `q̇ = u`, `∂φ/∂q W(q)` with a quaternion), and `J̇u` against central differences of `J u`
+/// along `q̇ = W(q) u`, at random states (unit quaternions) of every bundled model with loops.
 #[test]
 fn jacobian_and_bias_match_finite_differences() {
     let mut rng = Rng::new(11);
     let mut checked = 0;
     for name in mech::models::NAMES {
         let model = common::tape(name);
-        let (nq, nc) = (model.nq(), model.nc());
+        let (nq, nu, nc) = (model.nq(), model.nu(), model.nc());
         if nc == 0 {
             continue;
         }
         checked += 1;
         for _ in 0..5 {
-            let q = rng.vector(nq, -1.0, 1.0);
-            let u = rng.vector(nq, -1.0, 1.0);
-            let mut j = vec![0.0; nc * nq];
+            let mut q = rng.vector(nq, -1.0, 1.0);
+            mech_runtime::normalize_quaternions(model.unit_quaternions(), &mut q);
+            let u = rng.vector(nu, -1.0, 1.0);
+            let mut j = vec![0.0; nc * nu];
             model.constraint_jacobian(0.0, &q, &mut j);
             let h = 1e-6;
-            for c in 0..nq {
-                let (mut plus, mut minus) = (q.clone(), q.clone());
-                plus[c] += h;
-                minus[c] -= h;
+            for c in 0..nu {
+                let mut direction = vec![0.0; nu];
+                direction[c] = 1.0;
+                let plus = step_along(&model, &q, &direction, h);
+                let minus = step_along(&model, &q, &direction, -h);
                 let (mut phi_plus, mut phi_minus) = (vec![0.0; nc], vec![0.0; nc]);
                 model.constraints(0.0, &plus, &mut phi_plus);
                 model.constraints(0.0, &minus, &mut phi_minus);
@@ -256,14 +267,14 @@ fn jacobian_and_bias_match_finite_differences() {
                 }
             }
             let ju = |q: &[f64]| {
-                let mut j = vec![0.0; nc * nq];
+                let mut j = vec![0.0; nc * nu];
                 model.constraint_jacobian(0.0, q, &mut j);
                 (0..nc)
-                    .map(|r| (0..nq).map(|c| j[r + nc * c] * u[c]).sum::<f64>())
+                    .map(|r| (0..nu).map(|c| j[r + nc * c] * u[c]).sum::<f64>())
                     .collect::<Vec<f64>>()
             };
-            let ahead: Vec<f64> = q.iter().zip(&u).map(|(q, u)| q + h * u).collect();
-            let behind: Vec<f64> = q.iter().zip(&u).map(|(q, u)| q - h * u).collect();
+            let ahead = step_along(&model, &q, &u, h);
+            let behind = step_along(&model, &q, &u, -h);
             let (a, b) = (ju(&ahead), ju(&behind));
             let mut bias = vec![0.0; nc];
             model.constraint_bias(0.0, &q, &u, &mut bias);

@@ -23,6 +23,7 @@ mod loops;
 mod pendulum;
 mod plausible;
 mod quaternion_joints;
+mod quaternion_loops;
 mod reduced;
 mod resonances;
 mod simulation_outputs;

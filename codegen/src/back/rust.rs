@@ -556,7 +556,7 @@ impl<'a> Emitter<'a> {
             /// Loop-closure residual `φ(q)`.
             #phi
 
-            /// Constraint Jacobian `J(q) = ∂φ/∂q`.
+            /// Constraint Jacobian `J(q)`, `φ̇ = J u` (`∂φ/∂q` where `q̇ = u`).
             #jacobian
 
             /// Acceleration bias `J̇(q, u) u`: `J u̇ + J̇u = 0` along constrained motion.
@@ -626,12 +626,12 @@ impl<'a> Emitter<'a> {
     /// What `function` returns for `count` roots: `SMatrix<f64, rows, columns>` (column-major)
     /// or `SVector<f64, count>`, as the type's name and its dimensions.
     fn result_shape(&self, function: Function, count: usize) -> (Ident, TokenStream) {
-        let (nq, nu) = (self.len(State::Q), self.len(State::U));
+        let nu = self.len(State::U);
         match function {
             Function::MassMatrix => (format_ident!("SMatrix"), quote!(#nu, #nu)),
             Function::ConstraintJacobian => {
                 let nc = usize_literal(self.equations.nc());
-                (format_ident!("SMatrix"), quote!(#nc, #nq))
+                (format_ident!("SMatrix"), quote!(#nc, #nu))
             }
             _ => {
                 let count = usize_literal(count);

@@ -1,5 +1,6 @@
-//! Loop-closure constraints: `φ(q) = 0`, its Jacobian `J = ∂φ/∂q` and the acceleration bias
-//! `J̇u`, so that `J u = 0` and `J u̇ + J̇u = 0` along any motion (with `q̇ = u`).
+//! Loop-closure constraints: `φ(q) = 0`, its Jacobian `J` with `φ̇ = J u` (`J = ∂φ/∂q` where
+//! `q̇ = u`; `∂φ/∂q W(q)` with quaternions, [`KinematicRates`]) and the acceleration bias
+//! `J̇u`, so that `J u = 0` and `J u̇ + J̇u = 0` along any motion.
 //!
 //! Consumes: `model.loops` and the tree kinematics. Produces: [`Constraints`] (root ids in
 //! the pool) and the generalized forces of closure springs and dampers.
@@ -13,9 +14,10 @@
 //!   `n = a × t` are flexure angles held by springs;
 //! - distance: `(|r_C − r_P|² − length²) / (2 length)`, zero where `|r_C − r_P| = length`.
 //!
-//! `J` and `J̇u = Σᵢ ∂(J u)/∂qᵢ uᵢ` are exact symbolic derivatives of `φ`.
+//! `J` and `J̇u = Σᵢ ∂(J u)/∂qᵢ q̇ᵢ` are exact symbolic derivatives of `φ`.
 
 use super::kinematics::{self, lower_vec, orientation, Kinematics};
+use super::rates::KinematicRates;
 use super::vector::{self, Mat3, Vec3};
 use crate::ir::{self, ClosureKind, Model};
 use crate::sym::{ExprId, ExprPool, Number, Symbol};
@@ -25,7 +27,7 @@ use crate::sym::{ExprId, ExprPool, Number, Symbol};
 pub struct Constraints {
     /// `φ(q)`, one entry per row.
     pub residual: Vec<ExprId>,
-    /// `J(q) = ∂φ/∂q`, `rows × nq`, column-major.
+    /// `J(q)` with `φ̇ = J u`, `rows × nu`, column-major (`∂φ/∂q` where `q̇ = u`).
     pub jacobian: Vec<ExprId>,
     /// `J̇(q, u) u`.
     pub bias: Vec<ExprId>,
@@ -214,7 +216,12 @@ pub(super) fn off_axis_angle(
 }
 
 /// Derives every constraint row of the model.
-pub fn derive(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Model) -> Constraints {
+pub fn derive(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    rates: &KinematicRates,
+    model: &Model,
+) -> Constraints {
     let mut residual = Vec::new();
     let mut names = Vec::new();
     for closure in &model.loops {
@@ -279,32 +286,25 @@ pub fn derive(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Model) -
         }
     }
 
-    let nq = model.coordinates.len();
+    let (nq, nu) = (model.nq(), model.nu());
     let rows = residual.len();
     let zero = pool.zero();
-    let mut jacobian = vec![zero; rows * nq];
+    let mut jacobian = vec![zero; rows * nu];
     for (r, &phi) in residual.iter().enumerate() {
-        for j in 0..nq {
-            jacobian[r + rows * j] = pool.diff(phi, Symbol::Coordinate(j as u32));
+        for (j, entry) in rates.partial_rates(pool, phi).into_iter().enumerate() {
+            jacobian[r + rows * j] = entry;
         }
     }
     let mut bias = Vec::with_capacity(rows);
     for r in 0..rows {
-        let terms: Vec<ExprId> = (0..nq)
+        let terms: Vec<ExprId> = (0..nu)
             .map(|j| {
                 let u = pool.symbol(Symbol::Speed(j as u32));
                 pool.mul(jacobian[r + rows * j], u)
             })
             .collect();
         let velocity = pool.add_all(&terms);
-        let rates: Vec<ExprId> = (0..nq)
-            .map(|i| {
-                let d = pool.diff(velocity, Symbol::Coordinate(i as u32));
-                let u = pool.symbol(Symbol::Speed(i as u32));
-                pool.mul(d, u)
-            })
-            .collect();
-        bias.push(pool.add_all(&rates));
+        bias.push(rates.rate_at_fixed_speeds(pool, velocity, nq));
     }
     Constraints {
         residual,

@@ -15,6 +15,7 @@
 
 pub mod constraints;
 mod kinematics;
+mod rates;
 pub mod vector;
 
 use std::collections::BTreeMap;
@@ -22,6 +23,7 @@ use std::collections::BTreeMap;
 use crate::ir::{self, Load, Model, OutputKind};
 use crate::sym::{ExprId, ExprPool, Number, Symbol};
 pub use kinematics::{lower_expr, lower_expr_with, Kinematics};
+use rates::KinematicRates;
 use vector::Vec3;
 
 /// The equations of motion of a model, ready for the back ends.
@@ -117,13 +119,6 @@ fn flexure_angle(
     }
 }
 
-/// `∂θ/∂q_r` for every coordinate.
-fn angle_gradient(pool: &mut ExprPool, angle: ExprId, nq: usize) -> Vec<ExprId> {
-    (0..nq)
-        .map(|r| pool.diff(angle, Symbol::Coordinate(r as u32)))
-        .collect()
-}
-
 impl Equations {
     /// Number of constraint rows `NC` (redundant rows included).
     pub fn nc(&self) -> usize {
@@ -136,6 +131,7 @@ pub fn derive(model: &Model) -> Equations {
     let mut pool = ExprPool::new();
     name_symbols(model, &mut pool);
     let mut kinematics = Kinematics::new(model, &mut pool);
+    let rates = KinematicRates::new(&mut pool, model);
     let nu = model.nu();
 
     // Terms of M_rs (r ≤ s) and F_r, summed once at the end so each sum is built once.
@@ -147,9 +143,16 @@ pub fn derive(model: &Model) -> Equations {
         body_terms.add_to(&mut pool, &mut mass_terms, &mut forcing_terms);
     }
     for load in &model.loads {
-        add_load(&mut pool, &mut kinematics, model, load, &mut forcing_terms);
+        add_load(
+            &mut pool,
+            &mut kinematics,
+            &rates,
+            model,
+            load,
+            &mut forcing_terms,
+        );
     }
-    let constraints = constraints::derive(&mut pool, &mut kinematics, model);
+    let constraints = constraints::derive(&mut pool, &mut kinematics, &rates, model);
     let flexures = flexure_rows(&mut pool, &mut kinematics, model);
 
     let zero = pool.zero();
@@ -174,7 +177,7 @@ pub fn derive(model: &Model) -> Equations {
             outputs.push(id);
         }
     }
-    let kinematic_rates = kinematic_rates(&mut pool, model);
+    let kinematic_rates = rates::rates(&mut pool, model);
     Equations {
         pool,
         nq: model.nq(),
@@ -188,23 +191,6 @@ pub fn derive(model: &Model) -> Equations {
         constraints,
         flexures,
     }
-}
-
-/// `q̇ = W(q) u`: `q̇ᵢ = uᵢ` for the coordinates, `ė = ½ e ⊗ (0, ω)` for each quaternion;
-/// `None` without quaternions (`q̇ = u`).
-fn kinematic_rates(pool: &mut ExprPool, model: &Model) -> Option<Vec<ExprId>> {
-    if model.quaternions.is_empty() {
-        return None;
-    }
-    let mut rates: Vec<ExprId> = (0..model.coordinates.len())
-        .map(|i| pool.symbol(Symbol::Speed(i as u32)))
-        .collect();
-    for (quaternion, _) in model.quaternions.iter() {
-        let e = kinematics::quaternion_symbols(pool, model, quaternion);
-        let omega = kinematics::angular_speed_symbols(pool, model, quaternion).map(|(_, u)| u);
-        rates.extend(vector::quaternion_rates(pool, e, omega));
-    }
-    Some(rates)
 }
 
 /// Display names: `q_<coordinate>`, `u_<speed>` (as [`Model::coordinate_names`] and
@@ -335,14 +321,16 @@ fn spring_moment(
     pool.mul(k, stretch)
 }
 
-/// `Q_r −= moment ∂θ/∂q_r`: the generalized forces of a moment resisting the angle `theta`.
+/// `Q_r −= moment ∂θ̇/∂u_r` (`∂θ/∂q_r` where `q̇ = u`): the generalized forces of a moment
+/// resisting the angle `theta`.
 fn push_angle_forces(
     pool: &mut ExprPool,
+    rates: &KinematicRates,
     forcing: &mut [Vec<ExprId>],
     theta: ExprId,
     moment: ExprId,
 ) {
-    let gradient = angle_gradient(pool, theta, forcing.len());
+    let gradient = rates.partial_rates(pool, theta);
     for (r, slope) in gradient.into_iter().enumerate() {
         let force = pool.mul(moment, slope);
         forcing[r].push(pool.neg(force));
@@ -519,6 +507,7 @@ pub fn spring_lengths_at_start(model: &Model, params: &[f64]) -> Vec<(usize, f64
 fn add_load(
     pool: &mut ExprPool,
     kinematics: &mut Kinematics,
+    rates: &KinematicRates,
     model: &Model,
     load: &Load,
     forcing: &mut [Vec<ExprId>],
@@ -640,15 +629,15 @@ fn add_load(
             let theta = flexure_angle(pool, kinematics, model, *angle);
             let stretch = pool.sub(theta, rest);
             let moment = pool.mul(k, stretch);
-            push_angle_forces(pool, forcing, theta, moment);
+            push_angle_forces(pool, rates, forcing, theta, moment);
         }
         Load::AngleDamper { angle, damping, .. } => {
-            // Q_r = −c θ̇ ∂θ/∂q_r with θ̇ = Σ ∂θ/∂q_i u_i (q̇ = u).
+            // Q_r = −c θ̇ ∂θ̇/∂u_r with θ̇ = Σ ∂θ/∂q_i q̇_i.
             let c = lower_expr(pool, damping);
             let theta = flexure_angle(pool, kinematics, model, *angle);
-            let rate = pool.time_derivative(theta);
+            let rate = rates.rate(pool, theta);
             let moment = pool.mul(c, rate);
-            push_angle_forces(pool, forcing, theta, moment);
+            push_angle_forces(pool, rates, forcing, theta, moment);
         }
         Load::LoopDamper {
             closure, damping, ..

@@ -752,13 +752,6 @@ impl<'a> Translation<'a> {
     /// One warning per kind of element not translated, and the header's notes.
     fn not_translated(&mut self) {
         let robot = self.robot;
-        if !self.fixed_root && !robot.loops.is_empty() {
-            self.warnings.push(
-                Diagnostic::warning("U0607", "loop closures in a model with a free joint are not supported by `mech` yet")
-                    .with_label(robot.loops[0].span, "the first of the closures")
-                    .with_help("`mech check` rejects the imported model (E0416) until it is; `--base fixed` holds the root link still"),
-            );
-        }
         let mut notes = Vec::new();
         for kind in [SkippedKind::Display, SkippedKind::Limit, SkippedKind::Other] {
             let items: Vec<_> = robot.skipped.iter().filter(|s| s.kind == kind).collect();

@@ -70,7 +70,7 @@ fn four_bar() -> Result<(), RuntimeError> {
     println!("four-bar: assembled q = {q:.6?}, u = {u:.6?}");
 
     // Constrained accelerations: M u̇ = F + Jᵀλ with J u̇ = −J̇u; λ are the loop's forces.
-    let mut solver = ConstrainedSolver::new(model.nq(), model.nc());
+    let mut solver = ConstrainedSolver::for_model(&model);
     let mut udot = vec![0.0; model.nu()];
     solver.accelerations(&model, 0.0, &q, &u, &[], &mut udot)?;
     println!("u̇ = {udot:.6?}, λ = {:.6?} N", solver.multipliers());

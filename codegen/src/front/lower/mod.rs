@@ -186,7 +186,6 @@ impl<'a> Lowerer<'a> {
         self.build_points();
         self.build_bodies();
         self.lower_loops(&file.items);
-        self.refuse_loops_with_quaternions();
         self.lower_elements(&file.items);
         self.lower_loads_and_outputs(&file.items);
         self.build_loads();
@@ -226,33 +225,6 @@ impl<'a> Lowerer<'a> {
                          a zero-length spring (`rest_length` 0, no `damping` or `tension`), whose force `−k d` \
                          is defined everywhere",
                     ),
-            );
-        }
-    }
-
-    /// E0416: loop closures in a model with a `ball` or `free` joint. Their rows are written
-    /// for `q̇ = u` (`J = ∂φ/∂q` acting on `u`, `J̇u`); with a quaternion the speed rows
-    /// would be `J W(q)`, which is not derived yet.
-    fn refuse_loops_with_quaternions(&mut self) {
-        let Some((_, quaternion)) = self.model.quaternions.iter().next() else {
-            return;
-        };
-        let (joint, joint_span) = (quaternion.name.clone(), quaternion.span);
-        for closure in self.model.loops.clone() {
-            self.error(
-                Diagnostic::error(
-                    "E0416",
-                    format!(
-                        "loop `{}` in a model with a ball or free joint is not supported yet",
-                        closure.name
-                    ),
-                )
-                .with_label(closure.span, "a loop closure")
-                .with_label(joint_span, format!("`{joint}` turns by a quaternion"))
-                .with_help(
-                    "loop closures work with `pin`, `slider` and `weld` joints; a ball joint \
-                     in a loop can be written as three `pin` joints on massless frames",
-                ),
             );
         }
     }

@@ -1,0 +1,125 @@
+//! The kinematic differential equations `q̇ = W(q) u` and the chain rule through them.
+//!
+//! Consumes: a model's coordinates and unit quaternions. Produces: [`KinematicRates`], which
+//! turns a function `f(q)` into its rate `ḟ = Σᵢ ∂f/∂qᵢ q̇ᵢ` and its partial rates
+//! `∂ḟ/∂u_r = Σᵢ ∂f/∂qᵢ W_ir` (Kane & Levinson §2.14: what a partial velocity is to a
+//! position). Without quaternions `W = I`, and both reduce to `∂f/∂q_r` and `Σ ∂f/∂qᵢ uᵢ`
+//! built exactly as before quaternions existed, so the equations of such models (and their
+//! golden files) do not change.
+//!
+//! With a quaternion the coordinates `e₀…e₃` have no speeds of their own: their rates are
+//! `ė = ½ e ⊗ (0, ω)`, linear in the body's angular speeds, so a loop row `φ(q)` has
+//! `J_r = ∂φ̇/∂u_r = Σᵢ ∂φ/∂qᵢ W_ir`, `nc × nu` like the mass matrix.
+
+use super::{kinematics, vector};
+use crate::ir::Model;
+use crate::sym::{ExprId, ExprPool, Symbol};
+
+/// Per speed r, the nonzero `W_ir = ∂q̇ᵢ/∂u_r` as `(i, W_ir)`.
+type Columns = Vec<Vec<(usize, ExprId)>>;
+
+/// `q̇ = W(q) u`, for derivatives along the motion.
+pub struct KinematicRates {
+    nu: usize,
+    /// `q̇ᵢ` per coordinate, and `W` by columns; `None` where `q̇ = u`.
+    chain: Option<(Vec<ExprId>, Columns)>,
+}
+
+impl KinematicRates {
+    /// `q̇ = u` for a model without quaternions, else `q̇ᵢ = uᵢ` for the coordinates and
+    /// `ė = ½ e ⊗ (0, ω)` for each quaternion (as [`rates`] builds them). The chain is built
+    /// only for a model with loops, the one place a function of a quaternion's coordinates
+    /// meets it (loop rows, loop flexure angles): a pin or slider coordinate's partial rates
+    /// are `∂q_c/∂q_r` either way, and a model without loops keeps its pool numbering.
+    pub fn new(pool: &mut ExprPool, model: &Model) -> KinematicRates {
+        let nu = model.nu();
+        let needed = !model.loops.is_empty();
+        let chain = needed.then(|| rates(pool, model)).flatten().map(|rates| {
+            let mut columns = vec![Vec::new(); nu];
+            for (i, &rate) in rates.iter().enumerate() {
+                for (r, column) in columns.iter_mut().enumerate() {
+                    let entry = pool.diff(rate, Symbol::Speed(r as u32));
+                    if !pool.is_zero(entry) {
+                        column.push((i, entry));
+                    }
+                }
+            }
+            (rates, columns)
+        });
+        KinematicRates { nu, chain }
+    }
+
+    /// `∂ḟ/∂u_r` for every speed r: `∂f/∂q_r` where `q̇ = u`.
+    pub fn partial_rates(&self, pool: &mut ExprPool, f: ExprId) -> Vec<ExprId> {
+        let Some((_, columns)) = &self.chain else {
+            return (0..self.nu)
+                .map(|r| pool.diff(f, Symbol::Coordinate(r as u32)))
+                .collect();
+        };
+        columns
+            .iter()
+            .map(|column| {
+                let terms: Vec<ExprId> = column
+                    .iter()
+                    .map(|&(i, w)| {
+                        let slope = pool.diff(f, Symbol::Coordinate(i as u32));
+                        pool.mul(slope, w)
+                    })
+                    .collect();
+                pool.add_all(&terms)
+            })
+            .collect()
+    }
+
+    /// `ḟ = Σᵢ ∂f/∂qᵢ q̇ᵢ + ∂f/∂t` of a function of `q` and `t` ([`ExprPool::time_derivative`]
+    /// where `q̇ = u`).
+    pub fn rate(&self, pool: &mut ExprPool, f: ExprId) -> ExprId {
+        let Some((rates, _)) = &self.chain else {
+            return pool.time_derivative(f);
+        };
+        let mut terms = Vec::new();
+        for symbol in pool.free_symbols(f) {
+            let rate = match symbol {
+                Symbol::Coordinate(i) => rates[i as usize],
+                Symbol::Time => pool.one(),
+                _ => continue,
+            };
+            let partial = pool.diff(f, symbol);
+            terms.push(pool.mul(partial, rate));
+        }
+        pool.add_all(&terms)
+    }
+
+    /// `ḟ` of `f(q, u)` with `u̇` held (the velocity-dependent part of a second derivative:
+    /// `J̇u = Σᵢ ∂(J u)/∂qᵢ q̇ᵢ`), written as the loop bias has always been where `q̇ = u`.
+    pub fn rate_at_fixed_speeds(&self, pool: &mut ExprPool, f: ExprId, nq: usize) -> ExprId {
+        let terms: Vec<ExprId> = (0..nq)
+            .map(|i| {
+                let d = pool.diff(f, Symbol::Coordinate(i as u32));
+                let rate = match &self.chain {
+                    Some((rates, _)) => rates[i],
+                    None => pool.symbol(Symbol::Speed(i as u32)),
+                };
+                pool.mul(d, rate)
+            })
+            .collect();
+        pool.add_all(&terms)
+    }
+}
+
+/// `q̇ = W(q) u`: `q̇ᵢ = uᵢ` for the coordinates, `ė = ½ e ⊗ (0, ω)` for each quaternion;
+/// `None` without quaternions (`q̇ = u`).
+pub fn rates(pool: &mut ExprPool, model: &Model) -> Option<Vec<ExprId>> {
+    if model.quaternions.is_empty() {
+        return None;
+    }
+    let mut rates: Vec<ExprId> = (0..model.coordinates.len())
+        .map(|i| pool.symbol(Symbol::Speed(i as u32)))
+        .collect();
+    for (quaternion, _) in model.quaternions.iter() {
+        let e = kinematics::quaternion_symbols(pool, model, quaternion);
+        let omega = kinematics::angular_speed_symbols(pool, model, quaternion).map(|(_, u)| u);
+        rates.extend(vector::quaternion_rates(pool, e, omega));
+    }
+    Some(rates)
+}
