@@ -16,6 +16,7 @@ mod compliant_loops;
 mod degenerate_loops;
 mod golden_equations;
 mod hamr;
+mod hamr_robot;
 mod jit;
 mod language_doc;
 mod linear;
