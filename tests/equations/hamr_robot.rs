@@ -237,6 +237,23 @@ fn the_committed_robot_is_the_import_with_the_leg_model() {
     if support::blessing() {
         std::fs::write(&path, &text).unwrap();
     }
+    // `--snap` centres each leg's fb2 closure on that leg's own hinge axes, not on the other
+    // legs' axes that happen to cross its line.
+    for leg in LEGS {
+        let note = text
+            .lines()
+            .find(|line| line.contains(&format!("loop_joint `{leg}qfb2`: moved")))
+            .unwrap();
+        let through = &note[note.find("where the axes of").unwrap()..note.find("meet it").unwrap()];
+        let others = LEGS.iter().filter(|other| **other != leg);
+        assert!(
+            others
+                .clone()
+                .all(|other| !through.contains(&format!("`{other}"))),
+            "{note}"
+        );
+        assert_eq!(through.matches('`').count(), 8, "{note}");
+    }
     let committed = std::fs::read_to_string(&path).unwrap_or_default();
     assert!(
         committed == text,

@@ -346,8 +346,10 @@ impl<'a> Translation<'a> {
         }
     }
 
-    /// Hinge axes at the zero pose (revolute joints and revolute loop joints), for snapping.
-    fn hinge_axes(&self) -> Vec<Axis> {
+    /// Hinge axes at the zero pose (revolute joints and revolute loop joints), for snapping,
+    /// each with the links it joins below the root (a joint's child twice; a loop joint's
+    /// `link1` and `link2`).
+    fn hinge_axes(&self) -> Vec<(Axis, [usize; 2])> {
         let world = &self.tree.world;
         let mut axes = Vec::new();
         for ((joint, &(_, child)), kind) in self
@@ -358,11 +360,12 @@ impl<'a> Translation<'a> {
             .zip(&self.kinds)
         {
             if let (Kind::Pin, Some(direction)) = (kind, pose::unit(values(&joint.axis))) {
-                axes.push(Axis {
+                let axis = Axis {
                     name: joint.name.text.clone(),
                     point: world[child].origin,
                     direction: world[child].direction(direction),
-                });
+                };
+                axes.push((axis, [child, child]));
             }
         }
         for (closure, c) in self.robot.loops.iter().zip(&self.closures) {
@@ -370,11 +373,12 @@ impl<'a> Translation<'a> {
                 if c.revolute {
                     let frame =
                         world[c.link1].then(values(&closure.pose1.xyz), &rotation(&closure.pose1));
-                    axes.push(Axis {
+                    let axis = Axis {
                         name: closure.name.text.clone(),
                         point: frame.origin,
                         direction: frame.direction(direction),
-                    });
+                    };
+                    axes.push((axis, [c.link1, c.link2]));
                 }
             }
         }
@@ -436,10 +440,20 @@ impl<'a> Translation<'a> {
                 let direction = world[c.link1]
                     .then(values(&closure.pose1.xyz), &rotation(&closure.pose1))
                     .direction(direction);
+                // The hinges of the mechanism the closure belongs to: those below the same
+                // children of the root (one leg of a robot, not the axes of the other legs
+                // that happen to cross this one).
+                let branches = [self.tree.branch(c.link1), self.tree.branch(c.link2)];
                 let others: Vec<Axis> = axes
                     .iter()
-                    .filter(|a| a.name != closure.name.text)
-                    .cloned()
+                    .filter(|(a, links)| {
+                        let root = self.tree.root;
+                        let mine = |link: &usize| {
+                            *link != root && branches.contains(&self.tree.branch(*link))
+                        };
+                        a.name != closure.name.text && links.iter().any(mine)
+                    })
+                    .map(|(a, _)| a.clone())
                     .collect();
                 let tolerance = (CROSSING_FACTOR * miss.distance).max(MISS_FRACTION * size);
                 pose::snap(direction, first, second, &others, tolerance)

@@ -77,6 +77,20 @@ pub struct Tree {
 }
 
 impl Tree {
+    /// The child of the root whose subtree holds `link` (the root for itself): one leg of a
+    /// robot whose legs hang from the root.
+    pub fn branch(&self, link: usize) -> usize {
+        let mut link = link;
+        while let Some(joint) = self.parent_joint[link] {
+            let parent = self.ends[joint].0;
+            if parent == self.root {
+                return link;
+            }
+            link = parent;
+        }
+        link
+    }
+
     pub fn build(
         file: &Arc<SourceFile>,
         robot: &Robot,
