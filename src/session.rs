@@ -189,11 +189,16 @@ impl std::fmt::Display for Error {
                     write!(f, "{expected} (e.g. `{name}=2 {expected}`)")
                 }
             }
+            Error::QuaternionPart { option, name } if *option == "--q0" => write!(
+                f,
+                "--q0 {name}: a quaternion's parts cannot be set one by one (they must stay a \
+                 unit quaternion); turn the joint's start with its `parent_frame`"
+            ),
             Error::QuaternionPart { option, name } => write!(
                 f,
-                "{option} {name}: a quaternion's parts cannot be set or held one by one (they \
-                 must stay a unit quaternion); turn the joint's start with its `parent_frame`, \
-                 and hold a pin or slider coordinate instead"
+                "{option} {name}: a quaternion's parts cannot be held one by one (they must \
+                 stay a unit quaternion); hold a pin or slider coordinate, or let the assembly \
+                 choose"
             ),
             Error::Repeated {
                 option,

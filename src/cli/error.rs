@@ -69,6 +69,11 @@ pub enum Error {
     /// A resonance could not be refined on the linear model's response.
     #[error("resonance refinement: {0}")]
     Refine(#[from] crate::frequency::RefineError),
+    /// A CSV file named on the command line cannot be read (the message names it).
+    #[error(transparent)]
+    Csv(#[from] crate::output::CsvError),
+    #[error(transparent)]
+    Animation(#[from] crate::animation::Error),
     /// A file could not be rendered (the message names the file).
     #[error(transparent)]
     Io(#[from] std::io::Error),

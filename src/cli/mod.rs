@@ -25,6 +25,7 @@ macro_rules! println {
 }
 
 pub mod actuator;
+pub mod animate;
 pub mod assemble;
 pub mod bode;
 pub mod check;
@@ -105,6 +106,9 @@ enum Command {
         #[command(subcommand)]
         command: import::ImportCommand,
     },
+    /// Play a simulated run in 3D: a self-contained HTML page of the model's bodies moving
+    /// (`mech animate MODEL RUN.csv --out view.html`).
+    Animate(animate::AnimateArgs),
 }
 
 /// Restores the default SIGPIPE action, so `mech ... | head` ends quietly instead of
@@ -149,6 +153,7 @@ pub fn main() -> ExitCode {
         Command::Fit(args) => fit::run(&args),
         Command::Diagnose(args) => diagnose::run(&args),
         Command::Import { command } => import::run(&command),
+        Command::Animate(args) => animate::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

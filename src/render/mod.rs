@@ -5,6 +5,7 @@
 use std::fmt;
 use std::path::PathBuf;
 
+pub mod animation;
 pub mod diagnosis;
 pub mod experiments;
 pub mod flexure_fit;

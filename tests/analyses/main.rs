@@ -8,6 +8,7 @@ mod common;
 mod markdown;
 
 mod actuator;
+mod animate;
 mod docs_commands;
 mod experiments;
 mod flexure;

@@ -268,6 +268,10 @@ fn initial_states_and_the_step_budget_are_checked() {
             with("{model:pendulum}", ["--max-steps", "20"]),
             "simulation of `pendulum` failed: gave up at t = ",
         ),
+        (
+            with("{model:floating_four_bar}", ["--independent", "base.e1"]),
+            "--independent base.e1: a quaternion's parts cannot be held one by one",
+        ),
     ];
     let cases: Vec<(&[&str], &str)> = cases
         .iter()

@@ -20,6 +20,7 @@ use crate::sym::Number;
 
 pub mod actuator;
 pub mod hinge;
+pub mod skeleton;
 
 /// Lateral (in-plane) bending stiffness of a compliant loop closure, per unit bending
 /// stiffness `k`. A thin hinge's in-plane stiffness is `(w/t)²·k` (Eq. 2 with width and
