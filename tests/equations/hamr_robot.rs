@@ -8,8 +8,10 @@
 //! - mobility 6 + 4 × 2 = 14 with the 12 loop closures;
 //! - the translational block of `M` is the total mass times the identity (against the sum of
 //!   the bodies' masses, and beside the paper's 1.44 g);
-//! - with the chassis held at rest, each leg's rows of `M`, `F` and its loop rows equal
-//!   `hamr_vi.mech`'s (the front-left leg, the hand transcription) or its mirror image.
+//! - with the chassis held at rest, the front-left leg's rows of `M`, `F` and its loop rows
+//!   equal `hamr_vi.mech`'s (the hand transcription), and every other foot is the mirror
+//!   image of the front-left one (rear legs in x, right legs in y) when driven alike, the
+//!   right legs' actuators with the opposite sign.
 
 use crate::common;
 use crate::support;
@@ -407,5 +409,80 @@ fn the_front_left_leg_of_the_robot_is_the_leg_model() {
                 phi[row]
             );
         }
+    }
+}
+
+/// Each foot (in the chassis frame, the chassis held at rest) where the loops put it with
+/// every leg's actuators at `drive(leg)` = (swing, lift) deflections.
+fn feet(robot: &dyn Model, drive: &dyn Fn(&str) -> (f64, f64)) -> Vec<[f64; 3]> {
+    let (mut q, _) = robot_state(robot, &|_, _| (0.0, 0.0));
+    let mut held: Vec<usize> = ["x", "y", "z", "wx", "wy", "wz"]
+        .iter()
+        .map(|axis| {
+            let name = format!("Chassis_base.{axis}");
+            (0..robot.nu())
+                .find(|&i| robot.speed_name(i) == name)
+                .unwrap()
+        })
+        .collect();
+    for leg in LEGS {
+        let (swing, lift) = drive(leg);
+        for (name, value) in [("qsact", swing), ("qlact", lift)] {
+            let i = robot.coordinate_index(&format!("{leg}{name}")).unwrap();
+            q[i] = value;
+            held.push(i);
+        }
+    }
+    assemble(robot, 0.0, &mut q, &held, &AssemblyOptions::default()).unwrap();
+    let mut y = vec![0.0; robot.noutputs()];
+    robot.outputs(
+        0.0,
+        &q,
+        &vec![0.0; robot.nu()],
+        &vec![0.0; robot.ninputs()],
+        &mut y,
+    );
+    LEGS.iter()
+        .map(|leg| {
+            let at = robot.output_index(&format!("{leg}L4_collision.x")).unwrap();
+            [y[at], y[at + 1], y[at + 2]]
+        })
+        .collect()
+}
+
+/// The legs are mirror images of the front-left one: the rear legs in x, the right legs in y.
+/// Driven by the same actuator deflections, up to a sign per actuator, each foot is the
+/// mirror image of the front-left foot driven the same way (the signs found here are the
+/// gaits' drive conventions).
+#[test]
+fn the_legs_are_mirror_images_of_the_front_left_leg() {
+    let robot = robot();
+    let (swing, lift) = (60e-6, -40e-6);
+    let reference = feet(&robot, &|_| (swing, lift))[0];
+    for (k, leg) in LEGS.iter().enumerate().skip(1) {
+        let mirror = [
+            if leg.starts_with('R') { -1.0 } else { 1.0 },
+            if leg.ends_with('R') { -1.0 } else { 1.0 },
+            1.0,
+        ];
+        let expected: Vec<f64> = (0..3).map(|c| mirror[c] * reference[c]).collect();
+        let mut matches = Vec::new();
+        for (s, l) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+            let foot = feet(&robot, &|name| {
+                if name == *leg {
+                    (s * swing, l * lift)
+                } else {
+                    (swing, lift)
+                }
+            })[k];
+            let miss = (0..3)
+                .map(|c| (foot[c] - expected[c]).abs())
+                .fold(0.0, f64::max);
+            if miss < 1e-9 {
+                matches.push((s, l));
+            }
+        }
+        println!("{leg}: drive signs (swing, lift) that mirror the front-left foot: {matches:?}");
+        assert_eq!(matches.len(), 1, "{leg}: {matches:?}");
     }
 }
