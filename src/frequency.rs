@@ -471,6 +471,8 @@ pub struct ChirpSweep {
     pub duration: f64,
     /// Relative tolerance of the DOPRI5 simulation (absolute: 1e-12).
     pub rtol: f64,
+    /// Budget of integration steps (`SimOptions::max_steps`).
+    pub max_steps: usize,
 }
 
 /// A simulated chirp ([`simulate_chirp`]): the record of the driven input and the output, and
@@ -558,6 +560,7 @@ pub fn simulate_chirp(
             atol: 1e-12,
             h_max: sample,
         },
+        max_steps: sweep.max_steps,
         ..SimOptions::default()
     };
     let mut run = mech_runtime::simulate(model, q, u, &signals, &options, &mut |_| {})?;

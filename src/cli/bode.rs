@@ -45,6 +45,9 @@ pub struct BodeArgs {
     /// Chirp amplitude (with the input's unit; default: 1 in SI units).
     #[arg(long)]
     pub chirp_amplitude: Option<String>,
+    /// Budget of the chirp simulation's integration steps, accepted and rejected.
+    #[arg(long, default_value_t = mech_runtime::SimOptions::default().max_steps, value_parser = super::positive_count)]
+    pub max_steps: usize,
     /// CSV file (frequency, magnitude, phase, and the chirp estimate if any).
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -100,6 +103,7 @@ pub fn run(args: &BodeArgs) -> Result<(), Error> {
             // frequency, at least 2 s.
             duration: (200.0 / from).max(2.0),
             rtol: 1e-8,
+            max_steps: args.max_steps,
         };
         let state = session.assemble(&args.common.independent)?;
         let estimate =

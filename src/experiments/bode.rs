@@ -153,6 +153,7 @@ pub fn compute(spec: &Spec) -> Result<Responses, Error> {
                     to_hz: to,
                     duration,
                     rtol: 1e-7,
+                    max_steps: mech_runtime::SimOptions::default().max_steps,
                 };
                 let u0 = vec![0.0; leg.model().nu()];
                 let record = frequency::simulate_chirp(

@@ -467,6 +467,7 @@ fn chirp_resonance_is_grid_independent_and_the_linear_one() {
         to_hz: 11.3,
         duration: 8.0,
         rtol: 1e-9,
+        max_steps: mech_runtime::SimOptions::default().max_steps,
     };
     let signals = [mech_runtime::Signal::Constant(0.0)];
     let record = mech::frequency::simulate_chirp(&model, &[0.0], &[0.0], &signals, &sweep).unwrap();

@@ -226,7 +226,7 @@ fn analyses_not_written_for_quaternions_refuse_a_ball_joint_model() {
 }
 
 /// `simulate --q0`, `--u0` (each value in its coordinate's or speed's unit) and
-/// `--max-steps` (a budget the run stops at, with the time it reached).
+/// `--max-steps` (a budget the run stops at, with the time it reached; `bode --chirp` too).
 #[test]
 fn initial_states_and_the_step_budget_are_checked() {
     let dir = scratch("initial_state");
@@ -273,10 +273,27 @@ fn initial_states_and_the_step_budget_are_checked() {
             "--independent base.e1: a quaternion's parts cannot be held one by one",
         ),
     ];
-    let cases: Vec<(&[&str], &str)> = cases
+    let bode = [
+        "bode",
+        "{model:two_mass_chain}",
+        "--drive",
+        "push",
+        "--output",
+        "x2.x",
+        "--from",
+        "1 Hz",
+        "--to",
+        "10 Hz",
+        "--chirp",
+        "--max-steps",
+        "50",
+    ];
+    let chirp = (&bode[..], "gave up at t = ");
+    let mut cases: Vec<(&[&str], &str)> = cases
         .iter()
         .map(|(args, message)| (&args[..], *message))
         .collect();
+    cases.push(chirp);
     expect_errors(&dir, &cases);
 }
 
