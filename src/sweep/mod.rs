@@ -280,7 +280,7 @@ fn parameter(
     robots: &mut [Robot],
 ) -> Result<Parameter, Error> {
     let name = p.name.get_ref().clone();
-    let key = |field: &str| format!("parameter[{k}].{field}");
+    let key = |field: &str| format!("parameter[{}].{field}", k + 1);
     let mut dimension = None;
     for robot in robots.iter_mut() {
         let session = robot.session().clone();
@@ -342,7 +342,7 @@ fn source(
     text: &str,
     read: &dyn Fn(&str, &toml::Spanned<Value>) -> Result<f64, Error>,
 ) -> Result<Source, Error> {
-    let key = |field: &str| format!("parameter[{k}].{field}");
+    let key = |field: &str| format!("parameter[{}].{field}", k + 1);
     let line = line_of(text, p.name.span().start);
     let given = |field: &'static str, v: &Option<toml::Spanned<Value>>| {
         v.as_ref()

@@ -14,3 +14,4 @@ mod flexure;
 mod flexure_effects;
 mod flexure_screening;
 mod readme;
+mod sweep;
