@@ -17,6 +17,9 @@ use crate::sweep::{Study, Table};
 /// Failed samples listed by name in the text (all are in `failures.csv`).
 const FAILURES_SHOWN: usize = 5;
 
+/// Parameters shown per output in the printed ranking (all are in `ranking.csv`).
+const RANKED_SHOWN: usize = 5;
+
 /// Why a sweep's outcome could not be rendered.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
@@ -62,6 +65,7 @@ pub fn render(study: &Study, table: &Table, dir: &Path) -> Result<Outcome, Error
     outcome.tables.push(ranking_table(table));
     failures(table, dir, &mut outcome)?;
     outcome.add_file(samples_csv(table, &dir.join("samples.csv"))?);
+    outcome.add_file(ranking_csv(table, &dir.join("ranking.csv"))?);
     for (k, name) in table.outputs.iter().enumerate() {
         let column = table.output_column(k);
         let summary = crate::sweep::stats::summary(&column);
@@ -177,14 +181,17 @@ fn summary_table(table: &Table) -> TextTable {
     text
 }
 
-/// Per output, the parameters by |Spearman ρ|, largest first.
+/// Per output, the [`RANKED_SHOWN`] parameters of largest |Spearman ρ|, largest first.
 fn ranking_table(table: &Table) -> TextTable {
     let mut text = TextTable::new(
-        "Sensitivity: Spearman rank correlation, by |rho| per output",
+        &format!(
+            "Sensitivity: Spearman rank correlation, the {RANKED_SHOWN} largest |rho| per output \
+             (all in ranking.csv)"
+        ),
         &["output", "parameter", "rho"],
     );
     for row in table.ranking() {
-        for c in row {
+        for c in row.into_iter().take(RANKED_SHOWN) {
             text.row(vec![
                 table.outputs[c.output].clone(),
                 table.parameters[c.parameter].clone(),
@@ -237,6 +244,26 @@ fn failures(table: &Table, dir: &Path, outcome: &mut Outcome) -> Result<(), Erro
     let bytes = writer.into_inner().map_err(|e| error(&e))?;
     outcome.add_file(File::new(&path, bytes));
     Ok(())
+}
+
+/// Every (output, parameter) pair's Spearman ρ, by output, largest |ρ| first.
+fn ranking_csv(table: &Table, path: &Path) -> Result<File, Error> {
+    let error = |e: &dyn std::fmt::Display| Error::Csv {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
+    let mut writer = csv::Writer::from_writer(Vec::new());
+    writer.write_record(["output", "parameter", "rho"]).map_err(|e| error(&e))?;
+    for c in table.ranking().into_iter().flatten() {
+        let record = [
+            table.outputs[c.output].clone(),
+            table.parameters[c.parameter].clone(),
+            format!("{:?}", c.rho),
+        ];
+        writer.write_record(&record).map_err(|e| error(&e))?;
+    }
+    let bytes = writer.into_inner().map_err(|e| error(&e))?;
+    Ok(File::new(path, bytes))
 }
 
 /// Every sample: its index, parameter values, outputs (SI; NaN where failed), and `failed`.

@@ -101,13 +101,29 @@ pub struct Failure {
     pub error: SampleError,
 }
 
-/// Reads a study file and prepares it ([`prepare`]); errors name the file.
+/// Reads a study file and prepares it ([`prepare`]); errors name the file. Model paths are
+/// relative to the current directory.
 pub fn load(path: &Path) -> Result<Study, Error> {
+    load_in(path, None)
+}
+
+/// [`load`] with relative model paths taken from `base` (a cluster's worker runs where the
+/// client's current directory is not).
+pub fn load_in(path: &Path, base: Option<&Path>) -> Result<Study, Error> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::Read {
         path: path.to_path_buf(),
         message: e.to_string(),
     })?;
     study::parse(&text)
+        .map(|mut file| {
+            if let Some(base) = base {
+                file.model = file.model.map(|m| base.join(m));
+                for robot in &mut file.robot {
+                    robot.model.path = base.join(&robot.model.path);
+                }
+            }
+            file
+        })
         .and_then(|file| prepare(&file, &text))
         .map_err(|e| e.in_file(path))
 }
