@@ -253,7 +253,9 @@ fn ranking_csv(table: &Table, path: &Path) -> Result<File, Error> {
         message: e.to_string(),
     };
     let mut writer = csv::Writer::from_writer(Vec::new());
-    writer.write_record(["output", "parameter", "rho"]).map_err(|e| error(&e))?;
+    writer
+        .write_record(["output", "parameter", "rho"])
+        .map_err(|e| error(&e))?;
     for c in table.ranking().into_iter().flatten() {
         let record = [
             table.outputs[c.output].clone(),
