@@ -351,13 +351,11 @@ fn parameter(
     })
 }
 
+/// Reads a parameter's value at a key (`mean`, `values`, …) in SI or as a factor.
+type ValueReader<'a> = &'a dyn Fn(&str, &toml::Spanned<Value>) -> Result<f64, Error>;
+
 /// Where `[[parameter]]` `k`'s values come from: its distribution's keys, or its grid.
-fn source(
-    k: usize,
-    p: &ParameterFile,
-    text: &str,
-    read: &dyn Fn(&str, &toml::Spanned<Value>) -> Result<f64, Error>,
-) -> Result<Source, Error> {
+fn source(k: usize, p: &ParameterFile, text: &str, read: ValueReader<'_>) -> Result<Source, Error> {
     let key = |field: &str| format!("parameter[{}].{field}", k + 1);
     let line = line_of(text, p.name.span().start);
     let given = |field: &'static str, v: &Option<toml::Spanned<Value>>| {
