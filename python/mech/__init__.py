@@ -1,6 +1,7 @@
 """mech from Python: load a `.mech` model, then assemble, simulate, solve statics and
-linearize it, with NumPy arrays in and out; run an experiment file (:func:`experiment`) or a
-diagnosis of measured data (:func:`diagnose`) and get their results as dicts.
+linearize it, with NumPy arrays in and out; run an experiment file (:func:`experiment`), a
+diagnosis of measured data (:func:`diagnose`) or a tolerance study (:func:`sweep`, locally or
+on a Dask cluster) and get their results as dicts.
 
     >>> import mech
     >>> pendulum = mech.load("models/pendulum.mech", set={"l": "30 mm"})

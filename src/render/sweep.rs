@@ -227,41 +227,40 @@ fn failures(table: &Table, dir: &Path, outcome: &mut Outcome) -> Result<(), Erro
     if failed.is_empty() {
         return Ok(());
     }
-    let path = dir.join("failures.csv");
-    let mut writer = csv::Writer::from_writer(Vec::new());
-    let error = |e: &dyn std::fmt::Display| Error::Csv {
-        path: path.clone(),
-        message: e.to_string(),
-    };
-    writer
-        .write_record(["sample", "robot", "error"])
-        .map_err(|e| error(&e))?;
-    for (index, failure) in &failed {
+    let records = failed.iter().map(|(index, failure)| {
         let robot = failure.robot.clone().unwrap_or_default();
-        let record = [index.to_string(), robot, failure.error.to_string()];
-        writer.write_record(&record).map_err(|e| error(&e))?;
-    }
-    let bytes = writer.into_inner().map_err(|e| error(&e))?;
-    outcome.add_file(File::new(&path, bytes));
+        [index.to_string(), robot, failure.error.to_string()]
+    });
+    let path = dir.join("failures.csv");
+    outcome.add_file(text_csv(&path, ["sample", "robot", "error"], records)?);
     Ok(())
 }
 
 /// Every (output, parameter) pair's Spearman ρ, by output, largest |ρ| first.
 fn ranking_csv(table: &Table, path: &Path) -> Result<File, Error> {
+    let records = table.ranking().into_iter().flatten().map(|c| {
+        [
+            table.outputs[c.output].clone(),
+            table.parameters[c.parameter].clone(),
+            format!("{:?}", c.rho),
+        ]
+    });
+    text_csv(path, ["output", "parameter", "rho"], records)
+}
+
+/// A CSV file of text records under a header.
+fn text_csv(
+    path: &Path,
+    header: [&str; 3],
+    records: impl Iterator<Item = [String; 3]>,
+) -> Result<File, Error> {
     let error = |e: &dyn std::fmt::Display| Error::Csv {
         path: path.to_path_buf(),
         message: e.to_string(),
     };
     let mut writer = csv::Writer::from_writer(Vec::new());
-    writer
-        .write_record(["output", "parameter", "rho"])
-        .map_err(|e| error(&e))?;
-    for c in table.ranking().into_iter().flatten() {
-        let record = [
-            table.outputs[c.output].clone(),
-            table.parameters[c.parameter].clone(),
-            format!("{:?}", c.rho),
-        ];
+    writer.write_record(header).map_err(|e| error(&e))?;
+    for record in records {
         writer.write_record(&record).map_err(|e| error(&e))?;
     }
     let bytes = writer.into_inner().map_err(|e| error(&e))?;

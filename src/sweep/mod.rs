@@ -145,10 +145,20 @@ pub fn prepare(file: &StudyFile, text: &str) -> Result<Study, Error> {
     let settings = settings(file, text, &features)?;
     let mut parameters = Vec::new();
     let mut robots = robots;
+    let mut sources: Vec<Source> = Vec::new();
     for (k, p) in file.parameter.iter().enumerate() {
-        parameters.push(parameter(k, p, text, &mut robots)?);
+        let parameter = parameter(k, p, text, &mut robots)?;
+        sources.push(parameter.source.clone());
+        parameters.push(parameter);
+        // Checked as the grid grows, so that no more than the cap's values are ever held.
+        if sample::grid_size(&sources).is_none_or(|n| n > MAX_SAMPLES) {
+            return Err(Error::TooManySamples {
+                key: format!("parameter[{}]", k + 1),
+                line: Some(line_of(text, p.name.span().start)),
+                max: MAX_SAMPLES,
+            });
+        }
     }
-    let sources: Vec<Source> = parameters.iter().map(|p| p.source.clone()).collect();
     let samples = sample_count(file, text, &sources)?;
     Ok(Study {
         title: file.title.clone(),
@@ -451,14 +461,8 @@ fn sample_count(file: &StudyFile, text: &str, sources: &[Source]) -> Result<usiz
             line(s),
             "a grid has as many samples as points; remove `samples`",
         )),
-        (_, false, _) => {
-            let size = sample::grid_size(sources).filter(|&n| n <= MAX_SAMPLES);
-            size.ok_or(Error::TooManySamples {
-                key: "parameter".into(),
-                line: None,
-                max: MAX_SAMPLES,
-            })
-        }
+        // Within the cap: checked as the parameters were read.
+        (_, false, _) => Ok(sample::grid_size(sources).unwrap_or(MAX_SAMPLES)),
         (None, true, false) => Err(Error::key(
             "samples",
             1,

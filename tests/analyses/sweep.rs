@@ -243,6 +243,17 @@ fn study_errors_name_the_key_and_line() {
     ))
     .err().expect("an error");
     assert!(e.contains("a study is a grid"), "{e}");
+    let big = "range = \"1 N/m .. 2 N/m : 1000\"\n";
+    let e = prepare(&format!(
+        "outputs = [\"natural_frequency.1\"]\n[[parameter]]\nname = \"k1\"\n{big}\
+         [[parameter]]\nname = \"k2\"\n{big}[[parameter]]\nname = \"m1\"\n{big}"
+    ))
+    .err()
+    .expect("an error");
+    assert_eq!(
+        e,
+        "line 11: key `parameter[3]`: more than 1000000 samples; split the study"
+    );
     let e = prepare("samples = 3\noutputs = [\"stroke\"]\nparameter = []\n")
         .err()
         .expect("an error");
