@@ -147,6 +147,20 @@ pub fn prepare(file: &StudyFile, text: &str) -> Result<Study, Error> {
     let mut robots = robots;
     let mut sources: Vec<Source> = Vec::new();
     for (k, p) in file.parameter.iter().enumerate() {
+        if let Some(first) = parameters
+            .iter()
+            .position(|q: &Parameter| q.name == *p.name.get_ref())
+        {
+            return Err(Error::key(
+                &format!("parameter[{}].name", k + 1),
+                line_of(text, p.name.span().start),
+                format!(
+                    "`{}` is already parameter[{}]; give each parameter once",
+                    p.name.get_ref(),
+                    first + 1
+                ),
+            ));
+        }
         let parameter = parameter(k, p, text, &mut robots)?;
         sources.push(parameter.source.clone());
         parameters.push(parameter);

@@ -243,16 +243,29 @@ fn study_errors_name_the_key_and_line() {
     ))
     .err().expect("an error");
     assert!(e.contains("a study is a grid"), "{e}");
-    let big = "range = \"1 N/m .. 2 N/m : 1000\"\n";
+    let big = |unit: &str| format!("range = \"1 {unit} .. 2 {unit} : 1000\"\n");
     let e = prepare(&format!(
-        "outputs = [\"natural_frequency.1\"]\n[[parameter]]\nname = \"k1\"\n{big}\
-         [[parameter]]\nname = \"k2\"\n{big}[[parameter]]\nname = \"m1\"\n{big}"
+        "outputs = [\"natural_frequency.1\"]\n[[parameter]]\nname = \"k1\"\n{}\
+         [[parameter]]\nname = \"k2\"\n{}[[parameter]]\nname = \"m1\"\n{}",
+        big("N/m"),
+        big("N/m"),
+        big("kg")
     ))
     .err()
     .expect("an error");
     assert_eq!(
         e,
         "line 11: key `parameter[3]`: more than 1000000 samples; split the study"
+    );
+    let twice = "[[parameter]]\nname = \"k1\"\nvalues = [\"1 N/m\"]\n";
+    let e = prepare(&format!(
+        "outputs = [\"natural_frequency.1\"]\n{twice}{twice}"
+    ))
+    .err()
+    .expect("an error");
+    assert_eq!(
+        e,
+        "line 8: key `parameter[2].name`: `k1` is already parameter[1]; give each parameter once"
     );
     let e = prepare("samples = 3\noutputs = [\"stroke\"]\nparameter = []\n")
         .err()
