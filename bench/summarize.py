@@ -496,6 +496,7 @@ def main():
     L.extend(diagnose_section())
     L.extend(resources_section())
     L.extend(jit_section(R))
+    L.extend(sweep_section())
     with open(a.out, 'w') as f:
         f.write('\n'.join(L).rstrip('\n') + '\n')
     print(f'wrote {a.out}')
@@ -904,6 +905,16 @@ def jit_section(R):
             L.extend(line.rstrip('\n').replace('### ', '#### ') for line in f)
         L.append('')
     path = analysis_path('analysis_jit')
+    if os.path.exists(path):
+        L.append(analysis_text(path).rstrip('\n'))
+    return L
+
+
+def sweep_section():
+    """Section 14: `mech sweep`'s 10,000-sample tolerance study of the HAMR-VI leg (measured
+    by hand with the commands it shows: bench/analysis_sweep.md)."""
+    L = ['', '## 14. `mech sweep`: 10,000 Monte-Carlo samples of the HAMR-VI leg', '']
+    path = analysis_path('analysis_sweep')
     if os.path.exists(path):
         L.append(analysis_text(path).rstrip('\n'))
     return L

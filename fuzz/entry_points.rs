@@ -39,11 +39,14 @@ pub fn data_csv(bytes: &[u8]) {
     }
 }
 
-/// The experiment files, `experiments::parse` (the paper's experiments) and
-/// `diagnose::experiment::parse` (diagnosis experiments); neither reads the model the file
-/// names.
+/// The experiment files, `experiments::parse` (the paper's experiments),
+/// `diagnose::experiment::parse` (diagnosis experiments) and `sweep::study::parse` (`mech
+/// sweep`'s studies); none reads the model the file names.
 pub fn experiment_toml(bytes: &[u8]) {
     let text = String::from_utf8_lossy(bytes);
+    if let Err(error) = mech::sweep::study::parse(&text) {
+        let _ = error.to_string();
+    }
     if let Err(error) = mech::experiments::parse(&text) {
         let _ = error.to_string();
     }

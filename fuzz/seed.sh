@@ -16,7 +16,7 @@ seed() { # target file
 for f in models/*.mech codegen/tests/ui/*.mech; do
     [ -e "$f" ] && seed front_end "$f"
 done
-for f in experiments/*.toml; do
+for f in experiments/*.toml experiments/studies/*.toml; do
     [ -e "$f" ] && seed experiment_toml "$f"
 done
 find docs/examples examples -name '*.toml' ! -name Cargo.toml | while read -r f; do

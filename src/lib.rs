@@ -19,6 +19,7 @@ pub mod quantity;
 pub mod render;
 pub mod session;
 pub mod signal_spec;
+pub mod sweep;
 pub mod tape_model;
 
 /// The models of `models/`, compiled to Rust by `build.rs` through the public build API.

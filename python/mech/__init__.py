@@ -1,6 +1,7 @@
 """mech from Python: load a `.mech` model, then assemble, simulate, solve statics and
-linearize it, with NumPy arrays in and out; run an experiment file (:func:`experiment`) or a
-diagnosis of measured data (:func:`diagnose`) and get their results as dicts.
+linearize it, with NumPy arrays in and out; run an experiment file (:func:`experiment`), a
+diagnosis of measured data (:func:`diagnose`) or a tolerance study (:func:`sweep`, locally or
+on a Dask cluster) and get their results as dicts.
 
     >>> import mech
     >>> pendulum = mech.load("models/pendulum.mech", set={"l": "30 mm"})
@@ -21,9 +22,11 @@ from __future__ import annotations
 from os import PathLike
 from typing import Mapping, Union
 
-from ._mech import MechError, Model, diagnose, experiment
+import os
 
-__all__ = ["load", "experiment", "diagnose", "Model", "MechError"]
+from ._mech import MechError, Model, diagnose, experiment, sweep_ranking, sweep_run, sweep_size
+
+__all__ = ["load", "experiment", "diagnose", "sweep", "Model", "MechError"]
 
 Value = Union[str, float, int]
 
@@ -48,3 +51,59 @@ def load(
         if not isinstance(value, str):
             model.set_si(name, float(value))
     return model
+
+
+def sweep(
+    study_path: str | PathLike,
+    samples: int | None = None,
+    seed: int | None = None,
+    client=None,
+    chunk: int | None = None,
+) -> dict:
+    """Runs a parameter grid or Monte-Carlo tolerance study (``mech sweep``).
+
+    Returns a dict: ``columns`` (name -> NumPy array: ``sample``, each parameter, each output
+    in SI units, ``failed``), ``parameters`` and ``outputs`` (column names), ``units``,
+    ``failures`` (``(sample, robot, message)`` of every failed sample) and ``ranking``
+    (``(output, parameter, rho)``, Spearman's rank correlation, by output, largest ``|rho|``
+    first). `samples` and `seed` replace the study's own.
+
+    With `client` (a ``dask.distributed.Client``) the samples are split into chunks of
+    `chunk` indices (default: about four per worker) run on the workers, each through the same
+    Rust function; a sample's values depend only on the seed and its index, so the result is
+    the local run's. Each worker needs this package installed and the study and its models at
+    the same paths (relative model paths are taken from the client's current directory).
+    """
+    import numpy as np
+
+    study = os.path.abspath(os.fspath(study_path))
+    cwd = os.getcwd()
+    if client is None:
+        result = sweep_run(study, samples, seed, None, cwd)
+    else:
+        total = sweep_size(study, samples, seed, cwd)
+        workers = max(1, len(client.scheduler_info().get("workers", {})))
+        size = chunk or max(1, -(-total // (4 * workers)))
+        chunks = [list(range(start, min(start + size, total))) for start in range(0, total, size)]
+        futures = client.map(
+            sweep_run,
+            [study] * len(chunks),
+            [samples] * len(chunks),
+            [seed] * len(chunks),
+            chunks,
+            [cwd] * len(chunks),
+            pure=False,
+        )
+        parts = client.gather(futures)
+        result = parts[0]
+        result["columns"] = {
+            name: np.concatenate([part["columns"][name] for part in parts])
+            for name in result["columns"]
+        }
+        result["failures"] = [f for part in parts for f in part["failures"]]
+    columns = result["columns"]
+    result["ranking"] = sweep_ranking(
+        [(name, columns[name]) for name in result["parameters"]],
+        [(name, columns[name]) for name in result["outputs"]],
+    )
+    return result

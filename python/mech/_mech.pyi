@@ -70,3 +70,26 @@ def diagnose(
 ) -> dict[str, Any]:
     """Diagnoses measured data as `mech diagnose` does and returns what `diagnosis.json` holds
     (`verdict`, `summary`, `base`, `ranked`, `combined`, `features`, ...); writes nothing."""
+
+def sweep_size(
+    study: Union[str, PathLike[str]],
+    samples: Optional[int] = None,
+    seed: Optional[int] = None,
+    cwd: Optional[Union[str, PathLike[str]]] = None,
+) -> int:
+    """The number of samples of a study (its grid's points, or `samples` draws)."""
+
+def sweep_run(
+    study: Union[str, PathLike[str]],
+    samples: Optional[int] = None,
+    seed: Optional[int] = None,
+    indices: Optional[list[int]] = None,
+    cwd: Optional[Union[str, PathLike[str]]] = None,
+) -> dict[str, Any]:
+    """Runs the samples `indices` (default all) of a study: `columns` (name -> array),
+    `parameters`, `outputs`, `units`, `failures`; model paths relative to `cwd`."""
+
+def sweep_ranking(
+    parameters: list[tuple[str, Any]], outputs: list[tuple[str, Any]]
+) -> list[tuple[str, str, float]]:
+    """`(output, parameter, rho)` by output, largest |Spearman rho| first."""

@@ -643,11 +643,119 @@ fn diagnose<'py>(
     json_object(py, &summary)
 }
 
+/// A study (`mech sweep`) with `samples` and `seed` in place of its own, model paths relative
+/// to `cwd` (else the current directory).
+fn sweep_study(
+    study: &std::path::Path,
+    samples: Option<u64>,
+    seed: Option<u64>,
+    cwd: Option<PathBuf>,
+) -> PyResult<mech::sweep::Study> {
+    let mut loaded = mech::sweep::load_in(study, cwd.as_deref()).map_err(error)?;
+    if let Some(samples) = samples {
+        let samples = i64::try_from(samples).unwrap_or(i64::MAX);
+        let samples = mech::sweep::check_count("samples", None, samples).map_err(error)?;
+        loaded = loaded.with_samples(samples).map_err(error)?;
+    }
+    if let Some(seed) = seed {
+        loaded.seed = seed;
+    }
+    Ok(loaded)
+}
+
+/// The number of samples of the study at `study` (its grid's points, or `samples` draws).
+#[pyfunction]
+#[pyo3(signature = (study, samples=None, seed=None, cwd=None))]
+fn sweep_size(
+    study: PathBuf,
+    samples: Option<u64>,
+    seed: Option<u64>,
+    cwd: Option<PathBuf>,
+) -> PyResult<usize> {
+    Ok(sweep_study(&study, samples, seed, cwd)?.samples)
+}
+
+/// Runs the samples `indices` (default: all) of the study at `study` on all cores: a dict
+/// with `columns` (name → array: `sample`, the parameters, the outputs, `failed`),
+/// `parameters` and `outputs` (column names), `units` (name → SI unit), `failures`
+/// (`(sample, robot, message)`). Rows in the order of `indices`; a sample's values depend on
+/// the seed and its index only.
+#[pyfunction]
+#[pyo3(signature = (study, samples=None, seed=None, indices=None, cwd=None))]
+fn sweep_run<'py>(
+    py: Python<'py>,
+    study: PathBuf,
+    samples: Option<u64>,
+    seed: Option<u64>,
+    indices: Option<Vec<usize>>,
+    cwd: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let loaded = sweep_study(&study, samples, seed, cwd)?;
+    let indices = indices.unwrap_or_else(|| (0..loaded.samples).collect());
+    let table = py
+        .detach(|| loaded.run(&indices, mech::parallel::threads(), &|| {}))
+        .map_err(error)?;
+    let columns = PyDict::new(py);
+    let rows = &table.rows;
+    let index: Vec<f64> = rows.iter().map(|r| r.index as f64).collect();
+    columns.set_item("sample", PyArray1::from_vec(py, index))?;
+    for (k, name) in table.parameters.iter().enumerate() {
+        columns.set_item(name, PyArray1::from_vec(py, table.parameter_column(k)))?;
+    }
+    for (k, name) in table.outputs.iter().enumerate() {
+        columns.set_item(name, PyArray1::from_vec(py, table.output_column(k)))?;
+    }
+    let failed: Vec<bool> = rows.iter().map(|r| !r.failures.is_empty()).collect();
+    columns.set_item("failed", PyArray1::from_vec(py, failed))?;
+    let units = PyDict::new(py);
+    let names = table.parameters.iter().chain(&table.outputs);
+    for (name, unit) in names.zip(table.parameter_units.iter().chain(&table.output_units)) {
+        units.set_item(name, unit)?;
+    }
+    let failures: Vec<(usize, Option<String>, String)> = rows
+        .iter()
+        .flat_map(|r| {
+            r.failures
+                .iter()
+                .map(|f| (r.index, f.robot.clone(), f.error.to_string()))
+        })
+        .collect();
+    let result = PyDict::new(py);
+    result.set_item("columns", columns)?;
+    result.set_item("parameters", table.parameters.clone())?;
+    result.set_item("outputs", table.outputs.clone())?;
+    result.set_item("units", units)?;
+    result.set_item("failures", failures)?;
+    Ok(result)
+}
+
+/// Per output (in order), `(output, parameter, rho)` for every parameter by |Spearman ρ|,
+/// largest first, over the rows where both are finite (`mech sweep`'s ranking).
+#[pyfunction]
+fn sweep_ranking(
+    parameters: Vec<(String, Vec<f64>)>,
+    outputs: Vec<(String, Vec<f64>)>,
+) -> Vec<(String, String, f64)> {
+    let xs: Vec<Vec<f64>> = parameters.iter().map(|(_, c)| c.clone()).collect();
+    let ys: Vec<Vec<f64>> = outputs.iter().map(|(_, c)| c.clone()).collect();
+    mech::sweep::stats::ranking(&xs, &ys)
+        .into_iter()
+        .flatten()
+        .map(|c| {
+            let (output, parameter) = (&outputs[c.output].0, &parameters[c.parameter].0);
+            (output.clone(), parameter.clone(), c.rho)
+        })
+        .collect()
+}
+
 #[pymodule]
 fn _mech(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Model>()?;
     m.add_function(wrap_pyfunction!(experiment, m)?)?;
     m.add_function(wrap_pyfunction!(diagnose, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep_size, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep_run, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep_ranking, m)?)?;
     m.add("MechError", m.py().get_type::<MechError>())?;
     Ok(())
 }

@@ -34,6 +34,10 @@ pub enum Error {
     #[error(transparent)]
     Experiments(#[from] experiments::Error),
     #[error(transparent)]
+    Sweep(#[from] crate::sweep::Error),
+    #[error(transparent)]
+    SweepRender(#[from] render::sweep::Error),
+    #[error(transparent)]
     FlexureFit(#[from] flexure_fit::Error),
     #[error(transparent)]
     Physics(#[from] physics::Invalid),

@@ -40,6 +40,7 @@ pub mod linearize;
 pub mod report;
 pub mod simulate;
 pub mod statics;
+pub mod sweep;
 
 use std::f64::consts::TAU;
 use std::path::{Path, PathBuf};
@@ -95,6 +96,9 @@ enum Command {
     Experiment(experiment::ExperimentArgs),
     /// Run every experiment in `experiments/` and write an HTML and Markdown report.
     Report(report::ReportArgs),
+    /// Parameter grids and Monte-Carlo tolerance studies (a TOML study): CSV of the samples,
+    /// summaries, histograms, scatter plots and a Spearman sensitivity ranking.
+    Sweep(sweep::SweepArgs),
     /// Fit model parameters to measured data (Levenberg–Marquardt, standard errors), with the
     /// residual before and after; see docs/diagnose.md.
     Fit(fit::FitArgs),
@@ -150,6 +154,7 @@ pub fn main() -> ExitCode {
         Command::Actuator(args) => actuator::run(&args),
         Command::Experiment(args) => experiment::run(&args),
         Command::Report(args) => report::run(&args),
+        Command::Sweep(args) => sweep::run(&args),
         Command::Fit(args) => fit::run(&args),
         Command::Diagnose(args) => diagnose::run(&args),
         Command::Import { command } => import::run(&command),

@@ -120,10 +120,7 @@ pub fn compute(spec: &Spec) -> Result<Responses, Error> {
     let to = positive("to", &spec.to, Dimension::FREQUENCY)?;
     let leg = Leg::open(&spec.model)?;
     let model = leg.model();
-    let rest_inputs = leg.inputs(0.0, 0.0);
-    let rest_q = leg.equilibrium(&leg.q0, &rest_inputs, &[])?.q;
-    let linear = mech_runtime::linearize(model, 0.0, &rest_q, &rest_inputs, &leg.independent)
-        .map_err(Error::Linearization)?;
+    let (rest_q, linear) = leg.rest_linearization()?;
     let modes = linear.modes().ok_or(Error::NoModes)?;
     let frequencies = frequency::log_space(from, to, spec.points);
     let indices = spec

@@ -100,6 +100,10 @@ pub enum Error {
         message: String,
     },
     Plot(PlotError),
+    /// A tolerance study (`tolerance`) that cannot be read or run.
+    Sweep(Box<crate::sweep::Error>),
+    /// Its outcome could not be rendered.
+    SweepRender(Box<crate::render::sweep::Error>),
 }
 
 impl Error {
@@ -140,7 +144,7 @@ impl fmt::Display for Error {
             Error::MistypedKey { key, line, message } => mistyped_text(f, key, *line, message),
             Error::MissingKind => f.write_str(
                 "missing key `kind`: expected one of \"trajectory\", \"force_deflection\", \
-                 \"ratio_sweep\", \"compare\", \"bode\"",
+                 \"ratio_sweep\", \"compare\", \"bode\", \"table_diagnosis\", \"tolerance\"",
             ),
             Error::Key { message } => f.write_str(message),
             Error::Quantity(error) => write!(f, "{error}"),
@@ -178,6 +182,8 @@ impl fmt::Display for Error {
                 write!(f, "cannot write {}: {message}", path.display())
             }
             Error::Plot(error) => write!(f, "{error}"),
+            Error::Sweep(error) => write!(f, "{error}"),
+            Error::SweepRender(error) => write!(f, "{error}"),
         }
     }
 }

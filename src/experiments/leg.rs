@@ -9,8 +9,8 @@
 
 use mech_codegen::ir::transform::AXES;
 use mech_runtime::{
-    assemble, solve_statics_with_loads, AssemblyOptions, Equilibrium, Fixture, Model, SideLoad,
-    StaticsOptions,
+    assemble, solve_statics_with_loads, AssemblyOptions, Equilibrium, Fixture, Linearization,
+    Model, SideLoad, StaticsOptions,
 };
 use serde::Deserialize;
 
@@ -225,7 +225,7 @@ impl Leg {
     /// The model's inputs at their defaults with the drive voltages set (HAMR legs only).
     pub fn inputs(&self, lift: f64, swing: f64) -> Vec<f64> {
         let ports = self.ports();
-        let mut inputs: Vec<f64> = self.session.signals.iter().map(|s| s.value(0.0)).collect();
+        let mut inputs = self.default_inputs();
         inputs[ports.v_lift] = lift;
         inputs[ports.v_swing] = swing;
         inputs
@@ -321,6 +321,22 @@ impl Leg {
                     self.warm_equilibrium(warm, slot, &self.rest_start, inputs, &[], &[])
                 }
             })
+    }
+
+    /// The model's inputs at their default signals' values at t = 0 (any model).
+    pub fn default_inputs(&self) -> Vec<f64> {
+        self.session.signals.iter().map(|s| s.value(0.0)).collect()
+    }
+
+    /// The rest equilibrium under the default inputs (from `q0`) and the linearization
+    /// about it in the leg's independent coordinates.
+    pub fn rest_linearization(&self) -> Result<(Vec<f64>, Linearization), Error> {
+        let inputs = self.default_inputs();
+        let rest_q = self.equilibrium(&self.q0, &inputs, &[])?.q;
+        let linear =
+            mech_runtime::linearize(self.model(), 0.0, &rest_q, &inputs, &self.independent)
+                .map_err(Error::Linearization)?;
+        Ok((rest_q, linear))
     }
 
     /// A fixture holding the listed foot components at `target`.

@@ -3,7 +3,7 @@
 //! and run by `mech experiment FILE` or all together by `mech report`.
 //!
 //! Consumes: an experiment file (`kind = "trajectory" | "force_deflection" | "ratio_sweep" |
-//! "compare" | "bode" | "table_diagnosis"`, see `docs/experiments.md`) naming a `.mech` model and its settings.
+//! "compare" | "bode" | "table_diagnosis" | "tolerance"`, see `docs/experiments.md`) naming a `.mech` model and its settings.
 //! Produces: each kind's `compute` returns its results as plain data (equilibria, forces,
 //! sweeps, responses); [`crate::render::experiments`] turns them into an `Outcome` (tables
 //! of the model beside the paper's measured values, notes, CSV files and plots, named key
@@ -19,6 +19,7 @@ pub mod force;
 pub mod leg;
 pub mod sweep;
 pub mod table_diagnosis;
+pub mod tolerance;
 pub mod trajectory;
 
 use std::path::{Path, PathBuf};
@@ -48,6 +49,7 @@ pub enum Kind {
     Compare(compare::Spec),
     Bode(bode::Spec),
     TableDiagnosis(table_diagnosis::Spec),
+    Tolerance(tolerance::Spec),
 }
 
 /// Reads and checks an experiment file. Errors name the file and the key.
@@ -94,6 +96,7 @@ impl Experiment {
             Kind::Compare(s) => s.check(),
             Kind::Bode(s) => s.check(),
             Kind::TableDiagnosis(s) => s.check(),
+            Kind::Tolerance(s) => s.check(),
         }
     }
 

@@ -1066,7 +1066,7 @@ fn linear_tick(value: f64, range: &Range<f64>) -> String {
 
 /// `value` with at most `digits` significant digits, trailing zeros removed; scientific
 /// notation outside `1e-3 ≤ |value| < 1e5`.
-fn significant(value: f64, digits: usize) -> String {
+pub(crate) fn significant(value: f64, digits: usize) -> String {
     if value == 0.0 || !value.is_finite() {
         return format!("{value}");
     }

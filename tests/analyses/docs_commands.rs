@@ -25,7 +25,7 @@ struct Documented {
     slow: bool,
 }
 
-const PAGES: [&str; 8] = [
+const PAGES: [&str; 9] = [
     "README.md",
     "docs/analysis.md",
     "docs/benchmarks.md",
@@ -34,6 +34,7 @@ const PAGES: [&str; 8] = [
     "docs/flexure-and-actuator.md",
     "docs/import.md",
     "docs/mech-language.md",
+    "docs/sweep.md",
 ];
 
 fn documented_commands() -> Vec<Documented> {
@@ -257,6 +258,7 @@ fn every_page_with_commands_is_read() {
         "docs/diagnose.md",
         "docs/flexure-and-actuator.md",
         "docs/import.md",
+        "docs/sweep.md",
     ] {
         assert!(commands.iter().any(|c| c.page == page), "{page}");
     }

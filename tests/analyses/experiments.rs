@@ -32,11 +32,20 @@ fn close(a: f64, b: f64, tolerance: f64) -> bool {
     (a / b - 1.0).abs() < tolerance
 }
 
+/// Every experiment file parses, and every `mech sweep` study of `experiments/studies/`
+/// (experiment 7's) is ready to run against its models.
 #[test]
 fn every_bundled_experiment_file_parses() {
     for entry in std::fs::read_dir(root().join("experiments")).unwrap() {
         let path = entry.unwrap().path();
-        experiments::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        if !path.is_dir() {
+            experiments::load(&path).unwrap_or_else(|e| panic!("{e}"));
+            continue;
+        }
+        for study in std::fs::read_dir(&path).unwrap() {
+            let study = study.unwrap().path();
+            mech::sweep::load_in(&study, Some(&root())).unwrap_or_else(|e| panic!("{e}"));
+        }
     }
 }
 

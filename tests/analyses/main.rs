@@ -15,3 +15,4 @@ mod flexure;
 mod flexure_effects;
 mod flexure_screening;
 mod readme;
+mod sweep;

@@ -43,7 +43,14 @@ fn data_files() -> &'static [Vec<u8>] {
 
 fn experiment_files() -> &'static [Vec<u8>] {
     static SEEDS: OnceLock<Vec<Vec<u8>>> = OnceLock::new();
-    SEEDS.get_or_init(|| files(&["experiments", "docs/examples/diagnose"], "toml"))
+    SEEDS.get_or_init(|| {
+        let folders = [
+            "experiments",
+            "experiments/studies",
+            "docs/examples/diagnose",
+        ];
+        files(&folders, "toml")
+    })
 }
 
 /// Signal specs and assignments as the README and docs write them.
@@ -260,6 +267,10 @@ fn the_seeds_parse() {
         let text = std::str::from_utf8(seed).unwrap();
         let paper = mech::experiments::parse(text);
         let diagnosis = mech::diagnose::experiment::parse(Path::new("seed.toml"), text);
-        assert!(paper.is_ok() || diagnosis.is_ok(), "{text}");
+        let study = mech::sweep::study::parse(text);
+        assert!(
+            paper.is_ok() || diagnosis.is_ok() || study.is_ok(),
+            "{text}"
+        );
     }
 }

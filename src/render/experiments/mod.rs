@@ -9,6 +9,7 @@ pub mod compare;
 pub mod force;
 pub mod sweep;
 pub mod table_diagnosis;
+pub mod tolerance;
 pub mod trajectory;
 
 use std::path::{Path, PathBuf};
@@ -27,6 +28,7 @@ pub fn run(experiment: &Experiment, name: &str, out_dir: &Path) -> Result<Outcom
         Kind::Compare(s) => compare::run(s, out_dir)?,
         Kind::Bode(s) => bode::run(s, out_dir)?,
         Kind::TableDiagnosis(s) => table_diagnosis::run(s, out_dir)?,
+        Kind::Tolerance(s) => tolerance::run(s, out_dir)?,
     };
     let observed = std::mem::replace(&mut outcome.notes, experiment.notes.clone());
     outcome.notes.extend(observed);
