@@ -14,6 +14,7 @@
 //! `F_r = F_r + F_r*|_{u̇=0}` (SymPy's `forcing`). `M` is never inverted symbolically.
 
 pub mod constraints;
+mod contact;
 mod kinematics;
 pub mod vector;
 
@@ -370,23 +371,37 @@ fn spring_length(
     (d, pool.sqrt(square))
 }
 
-/// `∂(v_B − v_A)/∂u_r` of two points `ends = [A, B]`, in N's basis: the partial velocities of
-/// each end (B with `+`, A with `−`, each from [`Kinematics::point_partials`] re-expressed in N).
+/// `∂(v_B − v_A)/∂u_r` of two points `ends = [A, B]`, in N's basis ([`relative_partials_at`]).
 fn relative_partials(
     pool: &mut ExprPool,
     kinematics: &mut Kinematics,
     model: &Model,
     ends: [ir::Handle<ir::Point>; 2],
 ) -> kinematics::Partials {
+    relative_partials_at(pool, kinematics, |pool, end| {
+        let point = &model.points[ends[end]];
+        (point.frame, kinematics::lower_vec(pool, &point.position))
+    })
+}
+
+/// `∂(v_B − v_A)/∂u_r` of two points A (`end(pool, 0)`) and B (`end(pool, 1)`), each given by
+/// the frame it is fixed in and its offset in that frame's basis, in N's basis: the partial
+/// velocities of each end (B with `+`, A with `−`, each from [`Kinematics::point_partials`]
+/// re-expressed in N). Each end is built when its turn comes (B first), the order the pool
+/// numbers them in.
+fn relative_partials_at(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    mut end: impl FnMut(&mut ExprPool, usize) -> (ir::Handle<ir::Frame>, Vec3),
+) -> kinematics::Partials {
     let mut relative: kinematics::Partials = Vec::new();
-    for (end, sign) in [(ends[1], Number::ONE), (ends[0], Number::MINUS_ONE)] {
-        let point = &model.points[end];
-        let offset = kinematics::lower_vec(pool, &point.position);
+    for (index, sign) in [(1, Number::ONE), (0, Number::MINUS_ONE)] {
+        let (frame, offset) = end(pool, index);
         let partials: kinematics::Partials = kinematics
-            .point_partials(pool, point.frame, offset)
+            .point_partials(pool, frame, offset)
             .into_iter()
             .map(|(r, v)| {
-                let v = kinematics.express(pool, v, point.frame, Model::NEWTONIAN);
+                let v = kinematics.express(pool, v, frame, Model::NEWTONIAN);
                 (r, vector::scale_number(pool, v, sign))
             })
             .collect();
@@ -612,6 +627,11 @@ fn add_load(
                 forcing[r].push(pool.neg(force));
             }
         }
+        Load::Contact { .. } => {
+            if let Some(contact) = contact::ContactState::new(pool, kinematics, model, load) {
+                contact.add_forces(pool, forcing);
+            }
+        }
         Load::LoopSpring {
             closure,
             stiffness,
@@ -694,6 +714,16 @@ fn lower_output(
         OutputKind::KineticEnergy => vec![("", kinetic_energy(pool, kinematics, model))],
         OutputKind::PotentialEnergy => vec![("", potential_energy(pool, kinematics, model))],
         OutputKind::Expr(e) => vec![("", lower_state_expr(pool, kinematics, model, e))],
+        OutputKind::Contact(index) => model
+            .loads
+            .get(*index)
+            .and_then(|load| contact::ContactState::new(pool, kinematics, model, load))
+            .map_or_else(Vec::new, |contact| {
+                ir::CONTACT_OUTPUTS
+                    .into_iter()
+                    .zip(contact.outputs())
+                    .collect()
+            }),
     }
 }
 
@@ -736,7 +766,8 @@ fn kinetic_energy(pool: &mut ExprPool, kinematics: &Kinematics, model: &Model) -
 }
 
 /// `−Σ_bodies m g·r_G + Σ_springs ½ k (x − rest)²`, x a joint coordinate, a closure or
-/// flexure angle, or a point-to-point spring's length.
+/// flexure angle, or a point-to-point spring's length, plus each contact's
+/// `k δ^(e+1)/(e+1)`.
 fn potential_energy(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Model) -> ExprId {
     let mut terms = Vec::new();
     let gravity = kinematics.frames[ir::Model::NEWTONIAN.index()].gravity;
@@ -801,6 +832,12 @@ fn potential_energy(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Mo
                 rest_length,
                 spring_length(pool, kinematics, model, *ends).1,
             ),
+            Load::Contact { .. } => {
+                if let Some(contact) = contact::ContactState::new(pool, kinematics, model, load) {
+                    terms.push(contact.energy);
+                }
+                continue;
+            }
             _ => continue,
         };
         let k = lower_expr(pool, stiffness);

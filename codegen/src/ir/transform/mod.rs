@@ -444,6 +444,7 @@ fn remap_handles(model: &mut Model, remap: &dyn Fn(Handle<Frame>) -> Handle<Fram
             | Load::AngleSpring { .. }
             | Load::AngleDamper { .. }
             | Load::PointSpring { .. }
+            | Load::Contact { .. }
             | Load::GeneralizedForce { .. } => {}
         }
     }
