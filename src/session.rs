@@ -475,12 +475,11 @@ impl Session {
             OutputKind::Expr(_) => return None,
             OutputKind::Contact(_) => {
                 let suffix = name.strip_prefix(output.name.as_str())?;
-                let unit = if suffix == ".penetration" {
-                    "m"
-                } else if suffix == ".power" {
-                    "W"
-                } else {
-                    "N"
+                let unit = match suffix {
+                    ".penetration" => "m",
+                    ".power" => "W",
+                    ".dissipated" => "J",
+                    _ => "N",
                 };
                 unit.into()
             }

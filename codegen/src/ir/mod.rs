@@ -783,14 +783,17 @@ pub enum OutputKind {
 
 /// The scalar outputs of a contact (`output NAME = contact(C);`), as name suffixes: the
 /// penetration δ (m), the normal force `f_n` (N), the friction force in the Newtonian basis (N),
-/// the power the contact dissipates (W: damping and friction, ≥ 0).
-pub const CONTACT_OUTPUTS: [&str; 6] = [
+/// the power the contact dissipates (W: damping and friction, ≥ 0), and the energy it has
+/// dissipated since the start of a simulation (J), the integral of the power that the
+/// simulation integrates with the motion (`Equations::integrated_outputs`).
+pub const CONTACT_OUTPUTS: [&str; 7] = [
     ".penetration",
     ".normal_force",
     ".friction.x",
     ".friction.y",
     ".friction.z",
     ".power",
+    ".dissipated",
 ];
 
 #[derive(Clone, Debug, PartialEq)]

@@ -165,9 +165,11 @@ impl ContactState {
         }
     }
 
-    /// The outputs in [`ir::CONTACT_OUTPUTS`] order.
-    pub fn outputs(&self) -> [ExprId; 6] {
+    /// The outputs in [`ir::CONTACT_OUTPUTS`] order; the last, the dissipated energy, is 0
+    /// here: a simulation integrates it from the power (`Equations::integrated_outputs`).
+    pub fn outputs(&self, pool: &mut ExprPool) -> [ExprId; 7] {
         let [fx, fy, fz] = self.friction;
-        [self.penetration, self.normal_force, fx, fy, fz, self.power]
+        let (penetration, normal_force, power) = (self.penetration, self.normal_force, self.power);
+        [penetration, normal_force, fx, fy, fz, power, pool.zero()]
     }
 }

@@ -45,6 +45,10 @@ pub struct Equations {
     /// Scalar outputs in declaration order (vector outputs expanded to `.x`, `.y`, `.z`).
     pub outputs: Vec<ExprId>,
     pub output_names: Vec<String>,
+    /// Outputs that a simulation integrates, as `(target, rate)` indices into `outputs`: the
+    /// target (0 in `outputs`) is sampled as `∫ rate dt` from the start of the run (a
+    /// contact's dissipated energy; `Model::integrated_outputs` in the runtime).
+    pub integrated_outputs: Vec<(usize, usize)>,
     /// Loop-closure rows: `φ(q)`, `J = ∂φ/∂q` (`nc × nq`, column-major) and `J̇u`.
     pub constraints: constraints::Constraints,
     /// Flexures: their angles `θ(q)`, stiffness `k`, time-domain damping `b` and loss factor
@@ -169,8 +173,13 @@ pub fn derive(model: &Model) -> Equations {
 
     let mut outputs = Vec::new();
     let mut output_names = Vec::new();
+    let mut integrated_outputs = Vec::new();
     for output in &model.outputs {
         for (suffix, id) in lower_output(&mut pool, &mut kinematics, model, &output.kind) {
+            if matches!(output.kind, OutputKind::Contact(_)) && suffix == ".dissipated" {
+                // The contact's `.power` is the output before it.
+                integrated_outputs.push((outputs.len(), outputs.len() - 1));
+            }
             output_names.push(format!("{}{suffix}", output.name));
             outputs.push(id);
         }
@@ -186,6 +195,7 @@ pub fn derive(model: &Model) -> Equations {
         static_forcing,
         outputs,
         output_names,
+        integrated_outputs,
         constraints,
         flexures,
     }
@@ -721,7 +731,7 @@ fn lower_output(
             .map_or_else(Vec::new, |contact| {
                 ir::CONTACT_OUTPUTS
                     .into_iter()
-                    .zip(contact.outputs())
+                    .zip(contact.outputs(pool))
                     .collect()
             }),
     }
