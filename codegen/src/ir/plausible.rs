@@ -185,7 +185,7 @@ impl Violation {
             Violation::NotPositive { field, unit, value }
             | Violation::ContactOutOfRange {
                 field, unit, value, ..
-            } => format!("{field} = {value} {unit}"),
+            } => format!("{field} = {value} {unit}").trim_end().to_string(),
         }
     }
 
@@ -203,7 +203,7 @@ impl Violation {
             }
             Violation::NotPositive { .. } => "lengths, thicknesses and frequencies are greater than zero",
             Violation::ContactOutOfRange { .. } => {
-                "a contact's `stiffness` and `transition_speed` are greater than zero; its `radius`, `damping` and `friction` are zero or greater"
+                "a contact's `stiffness`, `reference_depth`, `transition_speed` and `exponent` are greater than zero; its `radius`, `damping` and `friction` are zero or greater"
             }
         }
     }
