@@ -123,7 +123,13 @@ fn block_on_an_incline_stops_at_the_coulomb_distance() {
              Coulomb {coulomb:.9e} m; excess {:.3e} (first-order {first_order:.3e})",
             simulated - coulomb
         );
-        common::assert_close("distance against the regularized law", simulated, regularized, 1e-8, 0.0);
+        common::assert_close(
+            "distance against the regularized law",
+            simulated,
+            regularized,
+            1e-8,
+            0.0,
+        );
         // The regularization's error is the first-order formula to within its next term,
         // O((v_s/v_end)²) = 1% of it.
         let excess = simulated - coulomb;
@@ -189,11 +195,17 @@ fn restitution_of_a_ball_matches_the_hunt_crossley_relation() {
         // 1 mm of flight, the impact (≈ 1 ms) and flight again.
         let t_end = 2e-3 / v_in + 5e-3;
         let trajectory = run(&model, &q0, &u0, t_end, t_end / 100.0, 1e-12);
-        let (y, v_out) = (trajectory.q.last().unwrap()[0], trajectory.u.last().unwrap()[0]);
+        let (y, v_out) = (
+            trajectory.q.last().unwrap()[0],
+            trajectory.u.last().unwrap()[0],
+        );
         assert!(y > 0.010, "the ball has left the floor ({y} m)");
         let e = v_out / v_in;
         let expected = hunt_crossley_rebound(c, v_in) / v_in;
-        eprintln!("v_in = {v_in}: e = {e:.10} (exact relation {expected:.10}, first order {:.4})", 1.0 - alpha * v_in);
+        eprintln!(
+            "v_in = {v_in}: e = {e:.10} (exact relation {expected:.10}, first order {:.4})",
+            1.0 - alpha * v_in
+        );
         common::assert_close("coefficient of restitution", e, expected, 1e-9, 0.0);
     }
 }
@@ -220,7 +232,8 @@ fn a_dropped_ball_bounces_as_the_contact_ode_integrated_here() {
     let mut worst = 0.0_f64;
     let mut touched = 0;
     for (k_sample, t) in trajectory.times.iter().enumerate() {
-        let steps = (t / h).round() as usize - (trajectory.times[k_sample.saturating_sub(1)] / h).round() as usize;
+        let steps = (t / h).round() as usize
+            - (trajectory.times[k_sample.saturating_sub(1)] / h).round() as usize;
         for _ in 0..steps {
             state = common::rk4_step(state, h, accel);
         }
@@ -243,15 +256,23 @@ fn an_elastic_bouncing_ball_keeps_its_energy() {
     let generated = mech::models::compiled("contact_ball").unwrap();
     for mut model in [Box::new(tape) as Box<dyn Model>, generated] {
         for name in ["alpha", "mu"] {
-            let i = (0..model.nparams()).find(|&i| model.param_name(i) == name).unwrap();
+            let i = (0..model.nparams())
+                .find(|&i| model.param_name(i) == name)
+                .unwrap();
             model.set_param(i, 0.0);
         }
         let (q0, u0) = start(model.as_ref());
         let trajectory = run(model.as_ref(), &q0, &u0, 0.3, 1e-4, 1e-12);
         let (scale, drift) = common::energy_drift(model.as_ref(), &trajectory);
         let penetration = column(model.as_ref(), &trajectory, "ground.penetration");
-        let bounces = penetration.windows(2).filter(|w| w[0] == 0.0 && w[1] > 0.0).count();
-        eprintln!("{}: {bounces} impacts, energy drift {drift:e} of {scale:e} J", model.name());
+        let bounces = penetration
+            .windows(2)
+            .filter(|w| w[0] == 0.0 && w[1] > 0.0)
+            .count();
+        eprintln!(
+            "{}: {bounces} impacts, energy drift {drift:e} of {scale:e} J",
+            model.name()
+        );
         assert!(bounces >= 2, "the ball bounced ({bounces})");
         assert!(drift < 1e-9, "energy drifts by {drift:e}");
     }
@@ -261,7 +282,8 @@ fn an_elastic_bouncing_ball_keeps_its_energy() {
 fn simpson(values: &[f64], dt: f64) -> Vec<f64> {
     let mut integral = vec![0.0; values.len()];
     for k in (2..values.len()).step_by(2) {
-        integral[k] = integral[k - 2] + dt / 3.0 * (values[k - 2] + 4.0 * values[k - 1] + values[k]);
+        integral[k] =
+            integral[k - 2] + dt / 3.0 * (values[k - 2] + 4.0 * values[k - 1] + values[k]);
     }
     integral
 }
@@ -281,9 +303,11 @@ fn a_damped_sliding_ball_loses_what_its_contact_dissipates_and_ends_rolling() {
         let (q0, u0) = start(model);
         let dt = 2.5e-6;
         let trajectory = run(model, &q0, &u0, 0.4, dt, 1e-12);
-        let energy: Vec<f64> = trajectory.outputs.iter().map(|y| {
-            y[model.output_index("ke").unwrap()] + y[model.output_index("pe").unwrap()]
-        }).collect();
+        let energy: Vec<f64> = trajectory
+            .outputs
+            .iter()
+            .map(|y| y[model.output_index("ke").unwrap()] + y[model.output_index("pe").unwrap()])
+            .collect();
         let summed = simpson(&column(model, &trajectory, "ground.power"), dt);
         let integrated = column(model, &trajectory, "ground.dissipated");
         let (mut worst_summed, mut worst_integrated) = (0.0_f64, 0.0_f64);
@@ -301,11 +325,21 @@ fn a_damped_sliding_ball_loses_what_its_contact_dissipates_and_ends_rolling() {
             model.name()
         );
         assert!(loss > 1e-4, "the contact dissipates ({loss:e} J)");
-        assert!(worst_summed < 1e-6 * loss, "loss and summed power differ by {worst_summed:e} J");
-        assert!(worst_integrated < 1e-8 * loss, "loss and `dissipated` differ by {worst_integrated:e} J");
+        assert!(
+            worst_summed < 1e-6 * loss,
+            "loss and summed power differ by {worst_summed:e} J"
+        );
+        assert!(
+            worst_integrated < 1e-8 * loss,
+            "loss and `dissipated` differ by {worst_integrated:e} J"
+        );
         let (v0, v_end) = (u0[0], trajectory.u.last().unwrap()[0]);
         let (omega, r) = (trajectory.u.last().unwrap()[2], 0.010);
-        eprintln!("  final speed {v_end} m/s = {} v0, ω r = {}", v_end / v0, -omega * r);
+        eprintln!(
+            "  final speed {v_end} m/s = {} v0, ω r = {}",
+            v_end / v0,
+            -omega * r
+        );
         common::assert_close("rolling speed", v_end, 5.0 / 7.0 * v0, 1e-9, 0.0);
     }
 }
@@ -339,6 +373,9 @@ contact hit between ball and cart.face {
     eprintln!("momentum {first:?} → {last:?}; cart speed {cart}");
     assert!(cart < -1e-3, "the cart was pushed ({cart} m/s)");
     for i in 0..2 {
-        assert!((first[i] - last[i]).abs() < 1e-12, "momentum {i}: {first:?} → {last:?}");
+        assert!(
+            (first[i] - last[i]).abs() < 1e-12,
+            "momentum {i}: {first:?} → {last:?}"
+        );
     }
 }

@@ -110,14 +110,12 @@ impl Requirement {
                 value: ref e,
                 positive,
             } => match value(e) {
-                Some(v) if v < 0.0 || (positive && v == 0.0) => {
-                    Err(Violation::ContactOutOfRange {
-                        field,
-                        unit,
-                        value: v,
-                        positive,
-                    })
-                }
+                Some(v) if v < 0.0 || (positive && v == 0.0) => Err(Violation::ContactOutOfRange {
+                    field,
+                    unit,
+                    value: v,
+                    positive,
+                }),
                 _ => Ok(()),
             },
             Rule::Inertia(inertia) => {

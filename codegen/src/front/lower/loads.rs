@@ -39,7 +39,7 @@ pub enum PendingLoad {
         name: String,
         point: PointRef,
         plane: PointRef,
-        law: ContactLaw,
+        law: Box<ContactLaw>,
         span: Span,
     },
 }
@@ -376,8 +376,16 @@ impl Lowerer<'_> {
             Some(f) => self.contact_exponent(&decl.name.name, &f.value),
         };
         for (name, present, help) in [
-            ("normal", field("normal").is_some(), "give the plane's outward normal in the frame of its point, e.g. `normal = y;`"),
-            ("stiffness", field("stiffness").is_some(), "give the contact's stiffness, e.g. `stiffness = 1e4 N/m;`"),
+            (
+                "normal",
+                field("normal").is_some(),
+                "give the plane's outward normal in the frame of its point, e.g. `normal = y;`",
+            ),
+            (
+                "stiffness",
+                field("stiffness").is_some(),
+                "give the contact's stiffness, e.g. `stiffness = 1e4 N/m;`",
+            ),
         ] {
             if !present {
                 self.error(missing_field("contact", &decl.name, name, help));
@@ -388,12 +396,22 @@ impl Lowerer<'_> {
             let help = "with an exponent e other than 1 the elastic force is `k δ₀ (δ/δ₀)^e`: \
                         give the depth δ₀ at which it is `k δ₀`, e.g. `reference_depth = 0.1 mm;` \
                         (or write `exponent = 1;`)";
-            self.error(missing_field("contact", &decl.name, "reference_depth", help));
+            self.error(missing_field(
+                "contact",
+                &decl.name,
+                "reference_depth",
+                help,
+            ));
         }
         if field("friction").is_some() && field("transition_speed").is_none() {
             let help = "friction is regularized below a slip speed v_s: give it, e.g. \
                         `transition_speed = 1 mm/s;`";
-            self.error(missing_field("contact", &decl.name, "transition_speed", help));
+            self.error(missing_field(
+                "contact",
+                &decl.name,
+                "transition_speed",
+                help,
+            ));
         }
         if let [Some(a), Some(b)] = ends {
             let help = "a contact acts between a point of one body and a plane fixed in \
@@ -419,13 +437,13 @@ impl Lowerer<'_> {
             exponent,
             damping: damping.unwrap_or_else(Expr::zero),
             friction: friction.unwrap_or_else(Expr::zero),
-            transition_speed: transition_speed.unwrap_or_else(|| Expr::Number(crate::sym::Number::ONE)),
+            transition_speed: transition_speed.unwrap_or(Expr::Number(crate::sym::Number::ONE)),
         };
         self.loads.push(PendingLoad::Contact {
             name: decl.name.name.clone(),
             point,
             plane,
-            law,
+            law: Box::new(law),
             span: decl.span,
         });
     }
