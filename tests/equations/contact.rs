@@ -37,12 +37,6 @@ fn run(model: &dyn Model, q0: &[f64], u0: &[f64], t_end: f64, dt: f64, rtol: f64
     common::simulate_at_default_inputs(model, q0, u0, &options)
 }
 
-fn start(model: &dyn Model) -> (Vec<f64>, Vec<f64>) {
-    let (mut q, mut u) = (vec![0.0; model.nq()], vec![0.0; model.nu()]);
-    model.initial_state(&mut q, &mut u);
-    (q, u)
-}
-
 fn column(model: &dyn Model, run: &Trajectory, name: &str) -> Vec<f64> {
     let index = model
         .output_index(name)
@@ -111,7 +105,7 @@ fn block_on_an_incline_stops_at_the_coulomb_distance() {
     for v_s in [1e-2, 1e-4] {
         let v_end = 10.0 * v_s;
         let model = common::tape_from_text("incline", &incline(theta, mu, v0, v_s));
-        let (q0, u0) = start(&model);
+        let (q0, u0) = common::initial_state(&model);
         let t_stop = v0 / a;
         let trajectory = run(&model, &q0, &u0, 1.1 * t_stop, 1e-5, 1e-11);
         let simulated = distance_at_speed(&trajectory, v_end);
@@ -191,7 +185,7 @@ fn restitution_of_a_ball_matches_the_hunt_crossley_relation() {
     let c = 1.5 * alpha;
     for v_in in [0.1, 0.5, 1.0] {
         let model = common::tape_from_text("drop", &dropped_ball(alpha, 0.0, 0.011, -v_in));
-        let (q0, u0) = start(&model);
+        let (q0, u0) = common::initial_state(&model);
         // 1 mm of flight, the impact (≈ 1 ms) and flight again.
         let t_end = 2e-3 / v_in + 5e-3;
         let trajectory = run(&model, &q0, &u0, t_end, t_end / 100.0, 1e-12);
@@ -217,7 +211,7 @@ fn restitution_of_a_ball_matches_the_hunt_crossley_relation() {
 fn a_dropped_ball_bounces_as_the_contact_ode_integrated_here() {
     let alpha = 0.3;
     let model = common::tape_from_text("drop", &dropped_ball(alpha, G, 0.012, 0.0));
-    let (q0, u0) = start(&model);
+    let (q0, u0) = common::initial_state(&model);
     let t_end = 0.15;
     let trajectory = run(&model, &q0, &u0, t_end, 1e-3, 1e-12);
     // k δ₀ (δ/δ₀)^{3/2} = k δ₀^{-1/2} δ^{3/2}.
@@ -261,7 +255,7 @@ fn an_elastic_bouncing_ball_keeps_its_energy() {
                 .unwrap();
             model.set_param(i, 0.0);
         }
-        let (q0, u0) = start(model.as_ref());
+        let (q0, u0) = common::initial_state(model.as_ref());
         let trajectory = run(model.as_ref(), &q0, &u0, 0.3, 1e-4, 1e-12);
         let (scale, drift) = common::energy_drift(model.as_ref(), &trajectory);
         let penetration = column(model.as_ref(), &trajectory, "ground.penetration");
@@ -300,7 +294,7 @@ fn a_damped_sliding_ball_loses_what_its_contact_dissipates_and_ends_rolling() {
     let tape = common::tape("contact_ball");
     let generated = mech::models::compiled("contact_ball").unwrap();
     for model in [&tape as &dyn Model, generated.as_ref()] {
-        let (q0, u0) = start(model);
+        let (q0, u0) = common::initial_state(model);
         let dt = 2.5e-6;
         let trajectory = run(model, &q0, &u0, 0.4, dt, 1e-12);
         let energy: Vec<f64> = trajectory
@@ -364,7 +358,7 @@ contact hit between ball and cart.face {
 }
 ";
     let model = common::tape_from_text("cart", text);
-    let (q0, u0) = start(&model);
+    let (q0, u0) = common::initial_state(&model);
     let trajectory = run(&model, &q0, &u0, 0.02, 1e-4, 1e-12);
     let momentum = |u: &[f64]| [0.030 * u[0] + 0.010 * u[2], 0.030 * u[1] + 0.010 * u[3]];
     let first = momentum(&trajectory.u[0]);
