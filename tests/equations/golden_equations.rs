@@ -66,6 +66,7 @@ tests_per_file! {
     chain4,
     compliant_four_bar,
     contact_ball,
+    contact_plate,
     double_pendulum_3d,
     flexure_rig,
     floating_chain,
