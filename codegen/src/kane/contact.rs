@@ -17,8 +17,10 @@
 //!
 //! acting as `f = f_n n + f_t` on the body at C and `−f` on the plane's body at C:
 //! `F_r = f·∂v/∂u_r`. The clamp never lets the contact pull (a fast separation would make
-//! the damping term exceed the elastic one). `max(0, x)` is written `(x + |x|)/2`, exact in
-//! floating point (both are `x` or `0`), so every back end evaluates it as it evaluates `abs`.
+//! the damping term exceed the elastic one). `max(0, x)` is the pool's [`Func::Ramp`] (its
+//! derivative Heaviside's [`Func::Step`]), exactly 0 below the kink in every back end: not
+//! `(x + |x|)/2`, whose two halves the pool expands apart, so that rounding leaves a tiny
+//! negative penetration whose power `δ^e` is NaN.
 //! The elastic part `k δ^e` is conservative, with the potential `V = k δ^(e+1)/(e+1)`; the
 //! contact's dissipated power is what its force takes from the motion beyond `−V̇`:
 //! `D = −f·v − V̇ = (f_n − k δ^e) δ̇ − f_t·v_t ≥ 0`.
@@ -44,11 +46,9 @@ pub struct ContactState {
     pub partials: Partials,
 }
 
-/// `max(0, x) = (x + |x|)/2`.
+/// `max(0, x)`.
 fn ramp(pool: &mut ExprPool, x: ExprId) -> ExprId {
-    let magnitude = pool.call(Func::Abs, x);
-    let twice = pool.add(x, magnitude);
-    pool.scale(twice, Number::rational(1, 2))
+    pool.call(Func::Ramp, x)
 }
 
 impl ContactState {
