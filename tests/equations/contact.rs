@@ -425,3 +425,34 @@ fn the_dissipated_energy_is_integrated_in_reduced_coordinates() {
         0.0,
     );
 }
+
+/// The contact never pulls: at a penetration with the damping term larger than the elastic
+/// one (separating at `u_y > 1/(3/2 α)`) the normal force is exactly 0 and `F` is gravity
+/// alone; just below that speed it pushes; out of contact it is exactly 0 whatever the speed.
+/// On both back ends.
+#[test]
+fn the_contact_never_pulls() {
+    let tape = common::tape("contact_ball");
+    let generated = mech::models::compiled("contact_ball").unwrap();
+    let alpha = 0.3;
+    let limit = 1.0 / (1.5 * alpha);
+    for model in [&tape as &dyn Model, generated.as_ref()] {
+        let (q_in, q_out) = ([0.0, 0.0099, 0.0], [0.0, 0.0101, 0.0]);
+        let fast = [0.0, 1.01 * limit, 0.0];
+        let slow = [0.0, 0.99 * limit, 0.0];
+        assert_eq!(
+            common::output(model, "ground.normal_force", &q_in, &fast),
+            0.0
+        );
+        assert_eq!(common::forcing(model, &q_in, &fast)[1], -0.010 * G);
+        assert!(common::output(model, "ground.normal_force", &q_in, &slow) > 0.0);
+        for u in [fast, slow, [0.0, -limit, 0.0]] {
+            assert_eq!(
+                common::output(model, "ground.normal_force", &q_out, &u),
+                0.0
+            );
+            assert_eq!(common::output(model, "ground.penetration", &q_out, &u), 0.0);
+        }
+        assert!((common::output(model, "ground.penetration", &q_in, &fast) - 1e-4).abs() < 1e-15);
+    }
+}
