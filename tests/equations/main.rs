@@ -12,6 +12,7 @@ mod markdown;
 
 mod actuator_extensions;
 mod backends;
+mod bushing;
 mod compliant_loops;
 mod contact;
 mod degenerate_loops;

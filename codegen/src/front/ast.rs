@@ -50,6 +50,8 @@ pub enum Item {
     Spring(SpringDecl),
     /// `contact NAME between POINT and PLANE_POINT { fields }`: same shape as a spring.
     Contact(SpringDecl),
+    /// `bushing NAME between FRAME and FRAME { fields }`: same shape as a spring.
+    Bushing(SpringDecl),
     Force(ForceDecl),
     Torque(TorqueDecl),
     Output(OutputDecl),

@@ -129,6 +129,7 @@ fn build_item(pair: Pair<Rule>) -> Result<ast::Item> {
             Rule::actuator_decl => Ok(ast::Item::Actuator(element_decl(inner, docs, true)?)),
             Rule::spring_decl => Ok(ast::Item::Spring(two_point_decl(inner, docs)?)),
             Rule::contact_decl => Ok(ast::Item::Contact(two_point_decl(inner, docs)?)),
+            Rule::bushing_decl => Ok(ast::Item::Bushing(two_point_decl(inner, docs)?)),
             Rule::force_decl => force_decl(inner, docs),
             Rule::torque_decl => torque_decl(inner, docs),
             Rule::output_decl => output_decl(inner, docs),
@@ -231,6 +232,7 @@ fn is_punctuation(rule: Rule) -> bool {
             | kw_actuator
             | kw_spring
             | kw_contact
+            | kw_bushing
             | kw_between
             | kw_and
             | kw_force
@@ -374,7 +376,7 @@ fn joint_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::JointDecl> {
     })
 }
 
-/// `spring` or `contact`: `KEYWORD NAME between POINT and POINT { fields }`.
+/// `spring`, `contact` or `bushing`: `KEYWORD NAME between A and B { fields }`.
 fn two_point_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::SpringDecl> {
     let mut parts = Parts::of(pair);
     Ok(ast::SpringDecl {
@@ -897,7 +899,7 @@ fn found_token(text: &str, position: usize) -> String {
 }
 
 /// The keywords that start a top-level declaration (besides `model`).
-pub(crate) const DECLARATION_KEYWORDS: [&str; 16] = [
+pub(crate) const DECLARATION_KEYWORDS: [&str; 17] = [
     "param",
     "let",
     "input",
@@ -911,6 +913,7 @@ pub(crate) const DECLARATION_KEYWORDS: [&str; 16] = [
     "actuator",
     "spring",
     "contact",
+    "bushing",
     "force",
     "torque",
     "output",

@@ -719,6 +719,18 @@ pub enum Load {
         transition_speed: Expr,
         span: Span,
     },
+    /// A bushing (`bushing NAME between A and B`): six springs and dampers on the offsets
+    /// `s(q)` of frame B from frame A, components in A's basis: the position of B's origin
+    /// `d = C_Aᵀ (o_B − o_A)` and the small-angle rotation `θ = vee(R − Rᵀ)/2` of
+    /// `R = C_Aᵀ C_B` (`sin φ` times the axis, φ for small angles). Potential
+    /// `½ Σ kᵢ sᵢ²`; generalized forces `−Σ (kᵢ sᵢ + cᵢ ṡᵢ) ∂sᵢ/∂q_r` (`q̇ = u`: the front end
+    /// refuses it with quaternions). `[translational, rotational]` stiffness and damping.
+    Bushing {
+        frames: [Handle<Frame>; 2],
+        stiffness: [Vec3; 2],
+        damping: [Vec3; 2],
+        span: Span,
+    },
     /// A generalized force acting directly on one coordinate (an actuator's force source).
     GeneralizedForce {
         coordinate: Handle<Coordinate>,

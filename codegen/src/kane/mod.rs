@@ -122,6 +122,44 @@ fn flexure_angle(
     }
 }
 
+/// The six offsets `s(q)` of a bushing's frame B from its frame A ([`Load::Bushing`]), in
+/// A's basis: `d = C_Aᵀ (o_B − o_A)`, then `θ = vee(R − Rᵀ)/2` of `R = C_Aᵀ C_B`
+/// (`R_ij = (column i of C_A)·(column j of C_B)`).
+fn bushing_offsets(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    frames: [ir::Handle<ir::Frame>; 2],
+) -> [ExprId; 6] {
+    let (dcm_a, origin_a) = kinematics.to_newtonian(pool, frames[0]);
+    let (dcm_b, origin_b) = kinematics.to_newtonian(pool, frames[1]);
+    let apart = vector::sub(pool, origin_b, origin_a);
+    let [dx, dy, dz] = vector::mat_t_vec(pool, &dcm_a, apart);
+    let column = |c: &vector::Mat3, i: usize| [c[0][i], c[1][i], c[2][i]];
+    let mut r = |i: usize, j: usize| vector::dot(pool, column(&dcm_a, i), column(&dcm_b, j));
+    let pairs = [((2, 1), (1, 2)), ((0, 2), (2, 0)), ((1, 0), (0, 1))];
+    let [tx, ty, tz] = pairs.map(|((i, j), (k, l))| (r(i, j), r(k, l)));
+    let half = |pool: &mut ExprPool, (a, b): (ExprId, ExprId)| {
+        let difference = pool.sub(a, b);
+        pool.scale(difference, Number::rational(1, 2))
+    };
+    let (tx, ty, tz) = (half(pool, tx), half(pool, ty), half(pool, tz));
+    [dx, dy, dz, tx, ty, tz]
+}
+
+/// The bushing's `[k…, c…]` per offset, in [`bushing_offsets`] order.
+fn bushing_laws(
+    pool: &mut ExprPool,
+    stiffness: &[ir::Vec3; 2],
+    damping: &[ir::Vec3; 2],
+) -> [[ExprId; 6]; 2] {
+    let six = |pool: &mut ExprPool, v: &[ir::Vec3; 2]| {
+        let [a, b, c] = kinematics::lower_vec(pool, &v[0]);
+        let [d, e, f] = kinematics::lower_vec(pool, &v[1]);
+        [a, b, c, d, e, f]
+    };
+    [six(pool, stiffness), six(pool, damping)]
+}
+
 /// `∂θ/∂q_r` for every coordinate.
 fn angle_gradient(pool: &mut ExprPool, angle: ExprId, nq: usize) -> Vec<ExprId> {
     (0..nq)
@@ -642,6 +680,23 @@ fn add_load(
                 contact.add_forces(pool, forcing);
             }
         }
+        Load::Bushing {
+            frames,
+            stiffness,
+            damping,
+            ..
+        } => {
+            // Q_r = −(k s + c ṡ) ∂s/∂q_r for each offset s (q̇ = u), as an angle spring's.
+            let [k, c] = bushing_laws(pool, stiffness, damping);
+            let offsets = bushing_offsets(pool, kinematics, *frames);
+            for ((s, k), c) in offsets.into_iter().zip(k).zip(c) {
+                let rate = pool.time_derivative(s);
+                let spring = pool.mul(k, s);
+                let damper = pool.mul(c, rate);
+                let moment = pool.add(spring, damper);
+                push_angle_forces(pool, forcing, s, moment);
+            }
+        }
         Load::LoopSpring {
             closure,
             stiffness,
@@ -777,7 +832,7 @@ fn kinetic_energy(pool: &mut ExprPool, kinematics: &Kinematics, model: &Model) -
 
 /// `−Σ_bodies m g·r_G + Σ_springs ½ k (x − rest)²`, x a joint coordinate, a closure or
 /// flexure angle, or a point-to-point spring's length, plus each contact's
-/// `k δ^(e+1)/(e+1)`.
+/// `k δ^(e+1)/(e+1)` and each bushing's `½ Σ k s²`.
 fn potential_energy(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Model) -> ExprId {
     let mut terms = Vec::new();
     let gravity = kinematics.frames[ir::Model::NEWTONIAN.index()].gravity;
@@ -845,6 +900,22 @@ fn potential_energy(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Mo
             Load::Contact { .. } => {
                 if let Some(contact) = contact::ContactState::new(pool, kinematics, model, load) {
                     terms.push(contact.energy);
+                }
+                continue;
+            }
+            Load::Bushing {
+                frames,
+                stiffness,
+                damping,
+                ..
+            } => {
+                // ½ Σ k s².
+                let [k, _] = bushing_laws(pool, stiffness, damping);
+                let offsets = bushing_offsets(pool, kinematics, *frames);
+                for (s, k) in offsets.into_iter().zip(k) {
+                    let square = pool.pow(s, Number::int(2));
+                    let energy = pool.mul(k, square);
+                    terms.push(pool.scale(energy, Number::rational(1, 2)));
                 }
                 continue;
             }

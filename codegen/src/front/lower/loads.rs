@@ -35,6 +35,12 @@ pub enum PendingLoad {
         tension: Option<Expr>,
         span: Span,
     },
+    Bushing {
+        frames: [FrameRef; 2],
+        stiffness: [Vec3; 2],
+        damping: [Vec3; 2],
+        span: Span,
+    },
     Contact {
         name: String,
         point: PointRef,
@@ -42,6 +48,32 @@ pub enum PendingLoad {
         law: Box<ContactLaw>,
         span: Span,
     },
+}
+
+/// The fields of a `bushing` block.
+const BUSHING_FIELDS: [&str; 4] = [
+    "stiffness",
+    "damping",
+    "rotational_stiffness",
+    "rotational_damping",
+];
+
+/// The dimension of a bushing field: N/m, N·s/m, N·m/rad, N·m·s/rad (vectors in A's axes).
+fn bushing_expect(field: &str) -> Expect<'static> {
+    match field {
+        "stiffness" => Expect::mechanical("`stiffness`", "[10, 10, 20] * 1 N/m", [1, 0, -2]),
+        "damping" => Expect::mechanical("`damping`", "[1, 1, 1] * 0.01 N*s/m", [1, 0, -1]),
+        "rotational_stiffness" => Expect::mechanical(
+            "`rotational_stiffness`",
+            "[1, 1, 2] * 1 uN*m/rad",
+            [1, 2, -2],
+        ),
+        _ => Expect::mechanical(
+            "`rotational_damping`",
+            "[1, 1, 1] * 1 nN*m*s/rad",
+            [1, 2, -1],
+        ),
+    }
 }
 
 /// The fields of a `contact` block.
@@ -154,6 +186,10 @@ impl Lowerer<'_> {
                 ast::Item::Contact(decl) => {
                     self.declare_in(&mut load_names, &decl.name, "the load");
                     self.lower_contact(decl);
+                }
+                ast::Item::Bushing(decl) => {
+                    self.declare_in(&mut load_names, &decl.name, "the load");
+                    self.lower_bushing(decl);
                 }
                 ast::Item::Output(decl)
                     if self.declare_in(&mut output_names, &decl.name, "the output") =>
@@ -444,6 +480,86 @@ impl Lowerer<'_> {
             point,
             plane,
             law: Box::new(law),
+            span: decl.span,
+        });
+    }
+
+    /// `bushing NAME between A and B { stiffness; damping; rotational_stiffness;
+    /// rotational_damping; }` (see [`ir::Load::Bushing`]): A and B are body or Newtonian
+    /// frames of two different bodies (E0408); each field is a vector in A's axes, default
+    /// zero, of params; a model with a `ball` or `free` joint is refused (E0419: the forces
+    /// are gradients in `q` with `q̇ = u`).
+    fn lower_bushing(&mut self, decl: &ast::SpringDecl) {
+        let frames = decl
+            .ends
+            .each_ref()
+            .map(|path| self.resolve_frame(path, false));
+        let fields = self.known_fields(
+            &decl.fields,
+            &BUSHING_FIELDS,
+            "fields of a bushing",
+            "not a field of a bushing",
+        );
+        let ctx = Ctx::Static("a bushing property");
+        let mut values: Vec<Option<Vec3>> = Vec::new();
+        for name in BUSHING_FIELDS {
+            let value = match fields.iter().find(|f| f.name.name == name) {
+                Some(field) => self.lower_vector_as(&field.value, ctx, &bushing_expect(name)),
+                None => Some([Expr::zero(), Expr::zero(), Expr::zero()]),
+            };
+            values.push(value);
+        }
+        let quaternion = self.model.quaternions.iter().next();
+        if let Some((joint, joint_span)) = quaternion.map(|(_, q)| (q.name.clone(), q.span)) {
+            self.error(
+                Diagnostic::error(
+                    "E0419",
+                    format!(
+                        "bushing `{}` in a model with a ball or free joint is not supported yet",
+                        decl.name.name
+                    ),
+                )
+                .with_label(decl.name.span, "a bushing")
+                .with_label(joint_span, format!("`{joint}` turns by a quaternion"))
+                .with_help(
+                    "a bushing's forces are derivatives in the coordinates with q̇ = u; \
+                     write the joint as three `pin` joints on massless frames",
+                ),
+            );
+            return;
+        }
+        let owner = |frame: FrameRef| match frame {
+            FrameRef::Owner(owner) | FrameRef::Named(owner, _) => Some(owner),
+            FrameRef::Joint(_) => None,
+        };
+        if let [Some(a), Some(b)] = frames {
+            if owner(a).is_some() && owner(a) == owner(b) {
+                let name = self.owners[owner(a).unwrap_or(0)].name.clone();
+                self.error(
+                    Diagnostic::error(
+                        "E0408",
+                        format!("bushing `{}` connects `{name}` to itself", decl.name.name),
+                    )
+                    .with_label(decl.ends[1].span, "this frame")
+                    .with_label(decl.ends[0].span, format!("is on `{name}` too"))
+                    .with_help(
+                        "a bushing couples frames of two different bodies (or a body and \
+                         `newtonian`)",
+                    ),
+                );
+                return;
+            }
+        }
+        let ([Some(a), Some(b)], [Some(k), Some(c), Some(k_r), Some(c_r)]) = (
+            frames,
+            <[Option<Vec3>; 4]>::try_from(values).unwrap_or_default(),
+        ) else {
+            return;
+        };
+        self.loads.push(PendingLoad::Bushing {
+            frames: [a, b],
+            stiffness: [k, k_r],
+            damping: [c, c_r],
             span: decl.span,
         });
     }
@@ -795,6 +911,22 @@ impl Lowerer<'_> {
                         span: *span,
                     })
                 }
+                PendingLoad::Bushing {
+                    frames,
+                    stiffness,
+                    damping,
+                    span,
+                } => {
+                    let handles = self
+                        .frame_handle(frames[0])
+                        .zip(self.frame_handle(frames[1]));
+                    handles.map(|(a, b)| ir::Load::Bushing {
+                        frames: [a, b],
+                        stiffness: stiffness.clone(),
+                        damping: damping.clone(),
+                        span: *span,
+                    })
+                }
                 PendingLoad::Contact {
                     name,
                     point,
@@ -877,6 +1009,7 @@ fn load_span(load: &PendingLoad) -> Span {
         PendingLoad::Force { span, .. }
         | PendingLoad::Torque { span, .. }
         | PendingLoad::Spring { span, .. }
+        | PendingLoad::Bushing { span, .. }
         | PendingLoad::Contact { span, .. } => *span,
     }
 }

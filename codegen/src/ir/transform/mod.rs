@@ -437,6 +437,7 @@ fn remap_handles(model: &mut Model, remap: &dyn Fn(Handle<Frame>) -> Handle<Fram
                 *frame = remap(*frame);
                 remap_vector(torque);
             }
+            Load::Bushing { frames, .. } => *frames = frames.map(remap),
             Load::Spring { .. }
             | Load::Damper { .. }
             | Load::LoopSpring { .. }
