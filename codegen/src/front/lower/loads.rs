@@ -37,8 +37,8 @@ pub enum PendingLoad {
     },
     Bushing {
         frames: [FrameRef; 2],
-        stiffness: [Vec3; 2],
-        damping: [Vec3; 2],
+        /// `([translational, rotational] stiffness, [translational, rotational] damping)`.
+        law: Box<([Vec3; 2], [Vec3; 2])>,
         span: Span,
     },
     Contact {
@@ -558,8 +558,7 @@ impl Lowerer<'_> {
         };
         self.loads.push(PendingLoad::Bushing {
             frames: [a, b],
-            stiffness: [k, k_r],
-            damping: [c, c_r],
+            law: Box::new(([k, k_r], [c, c_r])),
             span: decl.span,
         });
     }
@@ -911,19 +910,14 @@ impl Lowerer<'_> {
                         span: *span,
                     })
                 }
-                PendingLoad::Bushing {
-                    frames,
-                    stiffness,
-                    damping,
-                    span,
-                } => {
+                PendingLoad::Bushing { frames, law, span } => {
                     let handles = self
                         .frame_handle(frames[0])
                         .zip(self.frame_handle(frames[1]));
                     handles.map(|(a, b)| ir::Load::Bushing {
                         frames: [a, b],
-                        stiffness: stiffness.clone(),
-                        damping: damping.clone(),
+                        stiffness: law.0.clone(),
+                        damping: law.1.clone(),
                         span: *span,
                     })
                 }
