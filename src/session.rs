@@ -467,7 +467,8 @@ impl Session {
             o.name == name
                 || [".x", ".y", ".z"]
                     .iter()
-                    .any(|axis| name.strip_suffix(axis) == Some(o.name.as_str()))
+                    .chain(&mech_codegen::ir::CONTACT_OUTPUTS)
+                    .any(|suffix| name.strip_suffix(suffix) == Some(o.name.as_str()))
         })?;
         let coordinate = |c: &mech_codegen::ir::Handle<mech_codegen::ir::Coordinate>| {
             dimension_units(model.coordinates[*c].dimension)
@@ -479,6 +480,16 @@ impl Session {
             OutputKind::Speed(c) => coordinate(c).1,
             OutputKind::KineticEnergy | OutputKind::PotentialEnergy => "J".into(),
             OutputKind::Expr(_) => return None,
+            OutputKind::Contact(_) => {
+                let suffix = name.strip_prefix(output.name.as_str())?;
+                let unit = match suffix {
+                    ".penetration" => "m",
+                    ".power" => "W",
+                    ".dissipated" => "J",
+                    _ => "N",
+                };
+                unit.into()
+            }
         })
     }
 

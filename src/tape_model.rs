@@ -112,6 +112,8 @@ pub struct TapeModel {
     unit_quaternions: Vec<usize>,
     input_names: Vec<String>,
     output_names: Vec<String>,
+    /// `(target, rate)` outputs a simulation integrates (`Equations::integrated_outputs`).
+    integrated_outputs: Vec<(usize, usize)>,
     constraint_names: Vec<String>,
     flexure_names: Vec<String>,
     param_names: Vec<String>,
@@ -194,6 +196,7 @@ impl TapeModel {
                 .collect(),
             input_names: model.inputs.iter().map(|(_, i)| i.name.clone()).collect(),
             output_names: compiled.equations.output_names.clone(),
+            integrated_outputs: compiled.equations.integrated_outputs.clone(),
             constraint_names: compiled.equations.constraints.names.clone(),
             flexure_names: compiled.equations.flexures.names.clone(),
             param_names: model.params.iter().map(|(_, p)| p.name.clone()).collect(),
@@ -397,6 +400,9 @@ impl mech_runtime::Model for TapeModel {
     }
     fn output_name(&self, i: usize) -> &str {
         name_at(&self.output_names, i)
+    }
+    fn integrated_outputs(&self) -> &[(usize, usize)] {
+        &self.integrated_outputs
     }
     fn param_name(&self, i: usize) -> &str {
         name_at(&self.param_names, i)

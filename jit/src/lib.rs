@@ -487,6 +487,8 @@ fn emit_chunk(
                     Func::Tan => shim_tan as *const () as usize,
                     Func::Exp => shim_exp as *const () as usize,
                     Func::Ln => shim_ln as *const () as usize,
+                    Func::Ramp => shim_ramp as *const () as usize,
+                    Func::Step => shim_step as *const () as usize,
                     Func::Abs => unreachable!("native above"),
                 };
                 call(&mut b, unary, shim, &[x])
@@ -568,6 +570,12 @@ extern "C" fn shim_exp(x: f64) -> f64 {
 }
 extern "C" fn shim_ln(x: f64) -> f64 {
     Func::Ln.apply(x)
+}
+extern "C" fn shim_ramp(x: f64) -> f64 {
+    Func::Ramp.apply(x)
+}
+extern "C" fn shim_step(x: f64) -> f64 {
+    Func::Step.apply(x)
 }
 extern "C" fn shim_atan2(y: f64, x: f64) -> f64 {
     y.atan2(x)
@@ -670,6 +678,8 @@ mod tests {
                 Func::Exp,
                 Func::Ln,
                 Func::Abs,
+                Func::Ramp,
+                Func::Step,
             ] {
                 ops.push(Op::Call(f, a));
             }

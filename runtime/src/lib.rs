@@ -112,6 +112,27 @@ pub mod __codegen {
     pub fn abs(x: f64) -> f64 {
         x.abs()
     }
+    /// `max(0, x)`; NaN stays NaN (as `mech_codegen::sym::Func::Ramp`).
+    #[inline(always)]
+    pub fn ramp(x: f64) -> f64 {
+        if x > 0.0 || x.is_nan() {
+            x
+        } else {
+            0.0
+        }
+    }
+    /// Heaviside's step: 1 for `x > 0`, 0 for `x ≤ 0`; NaN stays NaN (as
+    /// `mech_codegen::sym::Func::Step`).
+    #[inline(always)]
+    pub fn step(x: f64) -> f64 {
+        if x > 0.0 {
+            1.0
+        } else if x.is_nan() {
+            x
+        } else {
+            0.0
+        }
+    }
     /// Four-quadrant arctangent of `y/x`, in `(-π, π]`.
     #[inline(always)]
     pub fn atan2(y: f64, x: f64) -> f64 {

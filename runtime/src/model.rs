@@ -102,6 +102,14 @@ pub trait Model {
     }
     /// Outputs `y(t, q, u, inputs)`.
     fn outputs(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]);
+    /// Outputs that are integrals over a simulation, as `(target, rate)` output indices: a
+    /// simulation samples output `target` as `∫ y_rate dt` from its start, integrated with the
+    /// motion (a state of its own under the integrator's error test); [`Model::outputs`]
+    /// writes 0 there (no run, nothing integrated). A contact's `.dissipated` energy, the
+    /// integral of its `.power`. Default: none.
+    fn integrated_outputs(&self) -> &[(usize, usize)] {
+        &[]
+    }
     /// The outputs listed in `which` alone, `out[k] = y[which[k]]`, for callers that need a
     /// few outputs many times (the fixtures of the statics). False, with `out` untouched,
     /// where the model evaluates its outputs only together (the default); the caller then

@@ -357,6 +357,88 @@ impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
     }
 }
 
+/// An [`Ode`] of a model's motion whose state gives the model's `(q, u)`.
+trait MotionOde: Ode {
+    /// `q` and `u` at the state `x` of the last [`Ode::rhs`] call.
+    fn motion<'s>(&'s self, x: &'s [f64]) -> (&'s [f64], &'s [f64]);
+}
+
+impl<M: Model + ?Sized> MotionOde for ModelOde<'_, M> {
+    fn motion<'s>(&'s self, x: &'s [f64]) -> (&'s [f64], &'s [f64]) {
+        x[..self.nq + self.nu].split_at(self.nq)
+    }
+}
+
+impl<M: Model + ?Sized> MotionOde for Reduced<'_, M> {
+    fn motion<'s>(&'s self, _x: &'s [f64]) -> (&'s [f64], &'s [f64]) {
+        (self.q(), self.u())
+    }
+}
+
+/// The motion `x` extended by the integrals `w` of the model's integrated outputs
+/// ([`Model::integrated_outputs`]): `[x; w]` with `ẇ_j = y_rate_j(t, q, u, inputs)`. So an
+/// integral such as a contact's dissipated energy is integrated by the same method, under
+/// the same error test and step-size control as the motion, rather than summed afterwards
+/// from samples (which would miss what happens between them).
+struct Integrating<'a, O, M: Model + ?Sized> {
+    inner: O,
+    model: &'a M,
+    signals: &'a [Signal],
+    /// `dim` of the motion.
+    motion: usize,
+    rates: Vec<usize>,
+    inputs: Vec<f64>,
+    outputs: Vec<f64>,
+}
+
+impl<'a, O: MotionOde, M: Model + ?Sized> Integrating<'a, O, M> {
+    fn new(inner: O, model: &'a M, signals: &'a [Signal]) -> Self {
+        let rates = model.integrated_outputs().iter().map(|&(_, r)| r).collect();
+        Integrating {
+            motion: inner.dim(),
+            inner,
+            model,
+            signals,
+            rates,
+            inputs: vec![0.0; signals.len()],
+            outputs: vec![0.0; model.noutputs()],
+        }
+    }
+}
+
+impl<O: MotionOde, M: Model + ?Sized> Ode for Integrating<'_, O, M> {
+    fn dim(&self) -> usize {
+        self.motion + self.rates.len()
+    }
+
+    fn rhs(&mut self, t: f64, x: &[f64], dxdt: &mut [f64]) -> Result<(), RuntimeError> {
+        let (motion, rates) = dxdt.split_at_mut(self.motion);
+        self.inner.rhs(t, &x[..self.motion], motion)?;
+        if self.rates.is_empty() {
+            return Ok(());
+        }
+        values_at(self.signals, t, &mut self.inputs);
+        let (q, u) = self.inner.motion(&x[..self.motion]);
+        let selected = self.model.selected_outputs(
+            t,
+            q,
+            u,
+            &self.inputs,
+            &self.rates,
+            &mut self.outputs[..self.rates.len()],
+        );
+        if selected {
+            rates.copy_from_slice(&self.outputs[..self.rates.len()]);
+        } else {
+            self.model.outputs(t, q, u, &self.inputs, &mut self.outputs);
+            for (rate, &index) in rates.iter_mut().zip(&self.rates) {
+                *rate = self.outputs[index];
+            }
+        }
+        Ok(())
+    }
+}
+
 impl<M: Model + ?Sized> Ode for ModelOde<'_, M> {
     fn dim(&self) -> usize {
         self.nq + self.nu
@@ -589,14 +671,19 @@ fn checked_grid(options: &SimOptions) -> Result<Vec<f64>, RuntimeError> {
     Ok(output_grid(t_start, t_end, output_interval))
 }
 
-/// Integrates `ode` from `x0` with `options.method` and samples it through `map`.
-fn integrate<O: Ode, M: Model + ?Sized>(
+/// Integrates `ode` from `x0` with `options.method`, with the model's integrated outputs
+/// from zero ([`Integrating`]), and samples it through `map`.
+fn integrate<O: MotionOde, M: Model + ?Sized>(
     ode: O,
     x0: &[f64],
     options: &SimOptions,
     sampling: Sampling<'_, M>,
     map: &mut dyn StateMap,
 ) -> Result<Trajectory, RuntimeError> {
+    let ode = Integrating::new(ode, sampling.model, sampling.signals);
+    let mut x0 = x0.to_vec();
+    x0.resize(ode.dim(), 0.0);
+    let x0 = &x0[..];
     let (t0, t1) = (options.t_start, options.t_end);
     let opts = adaptive_options(options);
     match options.method {
@@ -742,16 +829,22 @@ fn run<M: Model + ?Sized, S: Stepper>(
     // The corrected state after a step, written back (which makes the stepper re-evaluate its
     // derivative there) only when the correction moved it.
     let mut corrected = x.clone();
+    // The integrated outputs' states follow the motion's (`Integrating`).
+    let integrated = model.integrated_outputs();
+    let motion = x.len() - integrated.len();
     let record = |map: &mut dyn StateMap,
                   t: f64,
                   x: &[f64],
                   traj: &mut Trajectory|
      -> Result<(), RuntimeError> {
-        let (q, u) = map.full_state(t, x)?;
+        let (q, u) = map.full_state(t, &x[..motion])?;
         let mut inputs = vec![0.0; signals.len()];
         values_at(signals, t, &mut inputs);
         let mut outputs = vec![0.0; model.noutputs()];
         model.outputs(t, &q, &u, &inputs, &mut outputs);
+        for (&(target, _), &value) in integrated.iter().zip(&x[motion..]) {
+            outputs[target] = value;
+        }
         traj.q.push(q);
         traj.u.push(u);
         traj.inputs.push(inputs);
@@ -771,7 +864,7 @@ fn run<M: Model + ?Sized, S: Stepper>(
         }
         stepper.step()?;
         corrected.copy_from_slice(stepper.state());
-        if map.after_step(stepper.t(), &mut corrected)? {
+        if map.after_step(stepper.t(), &mut corrected[..motion])? {
             stepper.state_mut().copy_from_slice(&corrected);
             stepper.reset()?;
         }

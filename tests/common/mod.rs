@@ -57,6 +57,13 @@ pub fn tape_from_text(name: &str, text: &str) -> TapeModel {
     TapeModel::new(&compile_text(name, text))
 }
 
+/// The model's own `q0`, `u0`.
+pub fn initial_state(model: &dyn Model) -> (Vec<f64>, Vec<f64>) {
+    let (mut q, mut u) = (vec![0.0; model.nq()], vec![0.0; model.nu()]);
+    model.initial_state(&mut q, &mut u);
+    (q, u)
+}
+
 /// Every input of `model` at its default value.
 pub fn default_inputs(model: &dyn Model) -> Vec<f64> {
     (0..model.ninputs())

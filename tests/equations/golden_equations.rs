@@ -65,6 +65,8 @@ tests_per_file! {
     chain2,
     chain4,
     compliant_four_bar,
+    contact_ball,
+    contact_plate,
     double_pendulum_3d,
     flexure_rig,
     floating_chain,

@@ -56,15 +56,18 @@ fn a_distance_loop_starting_at_zero_length_is_a_clear_error() {
     );
 }
 
-/// `docs/examples/rail.mech`, whose `mech derive` output the page shows (checked by
-/// `tests/analyses/docs_commands.rs`), is the example printed above that output.
+/// `docs/examples/rail.mech` and `docs/examples/contact.mech`, whose `mech derive` and
+/// `mech simulate` outputs the page shows (checked by `tests/analyses/docs_commands.rs`), are
+/// the examples printed above those outputs.
 #[test]
 fn the_forces_example_file_is_the_one_on_the_page() {
     let root = env!("CARGO_MANIFEST_DIR");
     let markdown = std::fs::read_to_string(format!("{root}/docs/mech-language.md")).unwrap();
-    let file = std::fs::read_to_string(format!("{root}/docs/examples/rail.mech")).unwrap();
-    assert!(
-        examples(&markdown).iter().any(|e| e.text == file),
-        "docs/examples/rail.mech differs from its example in docs/mech-language.md"
-    );
+    for example in ["rail", "contact"] {
+        let file = std::fs::read_to_string(format!("{root}/docs/examples/{example}.mech")).unwrap();
+        assert!(
+            examples(&markdown).iter().any(|e| e.text == file),
+            "docs/examples/{example}.mech differs from its example in docs/mech-language.md"
+        );
+    }
 }

@@ -12,7 +12,9 @@ mod markdown;
 
 mod actuator_extensions;
 mod backends;
+mod bushing;
 mod compliant_loops;
+mod contact;
 mod degenerate_loops;
 mod golden_equations;
 mod hamr;

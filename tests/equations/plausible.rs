@@ -69,3 +69,27 @@ fn settings_are_checked_together_and_a_refused_one_is_not_kept() {
     );
     assert_eq!(session.model.param(h), 30e-6);
 }
+
+/// A contact's ranges (E0506) at run time: a negative friction coefficient or a zero
+/// stiffness set on the bundled ball is refused; zero damping and friction are kept.
+#[test]
+fn a_contact_property_out_of_range_is_refused() {
+    let violation = broken(open("contact_ball", &["mu=-0.1"]));
+    assert!(
+        matches!(violation, Violation::ContactOutOfRange { field: "friction", positive: false, value, .. } if value == -0.1),
+        "{violation:?}"
+    );
+    let violation = broken(open("contact_ball", &["k=0 N/m"]));
+    assert!(
+        matches!(
+            violation,
+            Violation::ContactOutOfRange {
+                field: "stiffness",
+                positive: true,
+                ..
+            }
+        ),
+        "{violation:?}"
+    );
+    open("contact_ball", &["mu=0", "alpha=0 s/m"]).expect("an elastic frictionless contact");
+}

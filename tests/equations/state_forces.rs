@@ -48,13 +48,6 @@ fn dop853(t_end: f64, output_interval: f64, rtol: f64) -> SimOptions {
     }
 }
 
-/// The model's own `q0`, `u0`.
-fn start(model: &dyn Model) -> (Vec<f64>, Vec<f64>) {
-    let (mut q, mut u) = (vec![0.0; model.nq()], vec![0.0; model.nu()]);
-    model.initial_state(&mut q, &mut u);
-    (q, u)
-}
-
 fn coordinate(model: &dyn Model, name: &str) -> usize {
     (0..model.nq())
         .find(|&i| model.coordinate_name(i) == name)
@@ -72,7 +65,7 @@ fn andrews_with_a_native_spring_matches_the_test_set() {
     let tape = common::tape("andrews");
     let generated = mech::models::compiled("andrews").unwrap();
     for model in [&tape as &dyn Model, generated.as_ref()] {
-        let (q0, u0) = start(model);
+        let (q0, u0) = common::initial_state(model);
         let run = common::simulate_at_default_inputs(model, &q0, &u0, &dop853(0.03, 0.03, 1e-12));
         let last = run.q.last().unwrap();
         let worst = ANDREWS_REFERENCE
@@ -129,7 +122,7 @@ output stretch_rate = distance_rate(left_arm.tip, right_arm.tip);
 #[test]
 fn an_undamped_spring_system_keeps_its_energy() {
     let model = common::tape_from_text("coupled", &coupled_pendulums(""));
-    let (q0, u0) = start(&model);
+    let (q0, u0) = common::initial_state(&model);
     let run = common::simulate_at_default_inputs(&model, &q0, &u0, &dop853(2.0, 1e-3, 1e-12));
     let (scale, drift) = common::energy_drift(&model, &run);
     assert!(scale > 1e-4, "the pendulums move ({scale} J)");
@@ -156,7 +149,7 @@ fn a_damped_spring_loses_exactly_the_dampers_dissipation() {
         "coupled_damped",
         &coupled_pendulums(&format!("damping = {c} N*s/m;")),
     );
-    let (q0, u0) = start(&model);
+    let (q0, u0) = common::initial_state(&model);
     let run = common::simulate_at_default_inputs(&model, &q0, &u0, &dop853(1.0, 1e-4, 1e-12));
     let energy = model.output_index("energy").unwrap();
     let rate = model.output_index("stretch_rate").unwrap();

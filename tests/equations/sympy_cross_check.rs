@@ -141,3 +141,11 @@ fn floating_chain() {
 fn state_forces() {
     check_model("state_forces");
 }
+
+/// A contact between a sphere on a spinning ball and a plane on a turning plate (the reaction
+/// on the plate): Hunt–Crossley normal force and regularized friction, at states in and out of
+/// contact (two of the three penetrate), and its elastic energy in `potential_energy`.
+#[test]
+fn contact_plate() {
+    check_model("contact_plate");
+}

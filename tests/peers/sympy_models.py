@@ -150,6 +150,37 @@ class Model:
         self.nc_loads += [(b, -damper * e), (a, damper * e)]
         return length, rate
 
+    def contact(self, centre, body, anchor, plane, normal, radius, k, exponent, depth, alpha,
+                mu, v_s):
+        """Hunt-Crossley contact of a sphere (radius, centre fixed in `body`) with the plane
+        through `anchor` (fixed in `plane`) of unit normal `normal` (a vector fixed in `plane`):
+        gap h = n.(centre - anchor) - radius, penetration d = max(0, -h), C = centre - radius n
+        as a material point of each frame (v2pt_theory), v = v_C(body) - v_C(plane),
+        d' = -n.v; f_n = max(0, kk d^e (1 + 3/2 alpha d')) with kk = k depth^(1-e),
+        f_t = -mu f_n v_t / sqrt(|v_t|^2 + v_s^2), v_t = v - (n.v) n; f = f_n n + f_t on the
+        body at C, -f on the plane at C; kk d^(e+1)/(e+1) of potential energy, the rest of
+        f non-conservative."""
+        n, e = normal, R(exponent)
+        h = n.dot(centre.pos_from(anchor)) - R(radius)
+        on_body = centre.locatenew('C_body', -R(radius) * n)
+        on_body.v2pt_theory(centre, self.N, body)
+        on_plane = anchor.locatenew('C_plane', on_body.pos_from(anchor))
+        on_plane.v2pt_theory(anchor, self.N, plane)
+        v = on_body.vel(self.N) - on_plane.vel(self.N)
+        rate = -n.dot(v)
+        depth_now = sm.Piecewise((-h, h < 0), (0, True))
+        kk = R(k) * R(depth) ** (1 - e)
+        elastic = kk * depth_now ** e
+        raw = elastic * (1 + sm.Rational(3, 2) * R(alpha) * rate)
+        normal_force = sm.Piecewise((raw, raw > 0), (0, True))
+        slip = v - n.dot(v) * n
+        friction = -R(mu) * normal_force / sm.sqrt(slip.dot(slip) + R(v_s) ** 2) * slip
+        f = normal_force * n + friction
+        self.loads += [(on_body, f), (on_plane, -f)]
+        dissipative = f - elastic * n
+        self.nc_loads += [(on_body, dissipative), (on_plane, -dissipative)]
+        self.pe += kk * depth_now ** (e + 1) / (e + 1)
+
     def external(self, key, target, vector, value):
         self.loads.append((target, vector)), self.nc_loads.append((target, vector))
         self.params[key] = value
@@ -433,10 +464,33 @@ def state_forces():
     return M
 
 
+def contact_plate():
+    """models/contact_plate.mech: a ball (x, y sliders and a spin) whose sphere, off its
+    origin, touches a plate turning about a Newtonian anchor: Hunt-Crossley contact with
+    regularized friction, the reaction on the plate."""
+    M = Model('contact_plate')
+    C, Co = M.slider('x', M.N, M.O, me.Vector(0), M.N.x, 'C')
+    L, Lo = M.slider('y', C, Co, me.Vector(0), C.y, 'L')
+    B = M.pin('spin', L, Lo, L.z, 'B')
+    M.body('ball', B, Lo, 0.2, (0, 0, 0), (0.001, 0.002, 0.003, 0, 0, 0))
+    anchor = M.point('anchor', M.O, M.vec(M.N, (0.1, -0.2, 0)))
+    P = M.pin('tilt', M.N, anchor, M.N.z, 'P')
+    M.body('plate', P, anchor, 0.5, (0.2, 0, 0), (0.001, 0.004, 0.005, 0, 0, 0))
+    centre = M.point('centre', Lo, M.vec(B, (0.05, 0.02, 0)))
+    surface = M.point('surface', anchor, M.vec(P, (0.3, 0.1, 0)))
+    M.contact(centre, B, surface, P, P.y, 0.04, 50, 1.5, 0.1, 0.2, 0.3, 0.1)
+    M.params.update({'contact touch': {'centre': [0.05, 0.02, 0], 'surface': [0.3, 0.1, 0],
+                                       'normal': 'plate y', 'radius': 0.04, 'stiffness': 50,
+                                       'exponent': 1.5, 'reference_depth': 0.1, 'damping': 0.2,
+                                       'friction': 0.3, 'transition_speed': 0.1},
+                     'anchor': [0.1, -0.2, 0]})
+    return M
+
+
 MODELS = [lambda: chain(1), lambda: chain(2), lambda: chain(4),
           lambda: pendulum_3d(2, 'double_pendulum_3d'), lambda: pendulum_3d(3, 'triple_pendulum_3d'),
           cart_pendulum, mixed_chain, four_bar, slider_crank, compliant_four_bar, ball_double_pendulum,
-          floating_chain, state_forces]
+          floating_chain, state_forces, contact_plate]
 
 
 # ---------------------------------------------------------------- evaluation

@@ -324,6 +324,7 @@ impl<'a> Emitter<'a> {
         let mass_matrix_in_trait = self.trait_method(Function::MassMatrix, "m");
         let forcing_in_trait = self.trait_method(Function::Forcing, "f");
         let outputs_in_trait = self.trait_method(Function::Outputs, "y");
+        let integrated_in_trait = self.integrated_outputs();
 
         let parts = [mass_parts, forcing_parts, output_parts]
             .into_iter()
@@ -443,6 +444,7 @@ impl<'a> Emitter<'a> {
                 #mass_matrix_in_trait
                 #forcing_in_trait
                 #outputs_in_trait
+                #integrated_in_trait
                 #constraint_trait
                 #flexure_trait
                 #rates_trait
@@ -479,6 +481,24 @@ impl<'a> Emitter<'a> {
             #flexures_in_trait
         };
         (inherent, in_trait)
+    }
+
+    /// For models with integrated outputs (a contact's dissipated energy): the trait's
+    /// `integrated_outputs`; other models keep its default (none).
+    fn integrated_outputs(&self) -> TokenStream {
+        let pairs = &self.equations.integrated_outputs;
+        if pairs.is_empty() {
+            return TokenStream::new();
+        }
+        let count = usize_literal(pairs.len());
+        let targets = pairs.iter().map(|&(target, _)| usize_literal(target));
+        let rates = pairs.iter().map(|&(_, rate)| usize_literal(rate));
+        quote! {
+            fn integrated_outputs(&self) -> &[(usize, usize)] {
+                const PAIRS: [(usize, usize); #count] = [#((#targets, #rates)),*];
+                &PAIRS
+            }
+        }
     }
 
     /// For models with quaternions (`q̇ ≠ u`): `SPEED_NAMES`, `UNIT_QUATERNIONS` (the index in

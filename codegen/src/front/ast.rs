@@ -48,6 +48,10 @@ pub enum Item {
     /// `actuator NAME on TARGET { fields }`.
     Actuator(ElementDecl),
     Spring(SpringDecl),
+    /// `contact NAME between POINT and PLANE_POINT { fields }`: same shape as a spring.
+    Contact(SpringDecl),
+    /// `bushing NAME between FRAME and FRAME { fields }`: same shape as a spring.
+    Bushing(SpringDecl),
     Force(ForceDecl),
     Torque(TorqueDecl),
     Output(OutputDecl),
@@ -145,7 +149,7 @@ pub struct ElementDecl {
     pub span: Span,
 }
 
-/// `spring NAME between POINT and POINT { fields }`
+/// `spring NAME between POINT and POINT { fields }` (and `contact`, of the same shape)
 #[derive(Clone, Debug, PartialEq)]
 pub struct SpringDecl {
     pub docs: Vec<String>,

@@ -127,7 +127,9 @@ fn build_item(pair: Pair<Rule>) -> Result<ast::Item> {
             Rule::material_decl => Ok(ast::Item::Material(element_decl(inner, docs, false)?)),
             Rule::flexure_decl => Ok(ast::Item::Flexure(element_decl(inner, docs, true)?)),
             Rule::actuator_decl => Ok(ast::Item::Actuator(element_decl(inner, docs, true)?)),
-            Rule::spring_decl => spring_decl(inner, docs),
+            Rule::spring_decl => Ok(ast::Item::Spring(two_point_decl(inner, docs)?)),
+            Rule::contact_decl => Ok(ast::Item::Contact(two_point_decl(inner, docs)?)),
+            Rule::bushing_decl => Ok(ast::Item::Bushing(two_point_decl(inner, docs)?)),
             Rule::force_decl => force_decl(inner, docs),
             Rule::torque_decl => torque_decl(inner, docs),
             Rule::output_decl => output_decl(inner, docs),
@@ -229,6 +231,8 @@ fn is_punctuation(rule: Rule) -> bool {
             | kw_flexure
             | kw_actuator
             | kw_spring
+            | kw_contact
+            | kw_bushing
             | kw_between
             | kw_and
             | kw_force
@@ -372,15 +376,16 @@ fn joint_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::JointDecl> {
     })
 }
 
-fn spring_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
+/// `spring`, `contact` or `bushing`: `KEYWORD NAME between A and B { fields }`.
+fn two_point_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::SpringDecl> {
     let mut parts = Parts::of(pair);
-    Ok(ast::Item::Spring(ast::SpringDecl {
+    Ok(ast::SpringDecl {
         docs,
         name: parts.ident()?,
         ends: [parts.path()?, parts.path()?],
         fields: parts.block_fields()?,
         span: parts.span,
-    }))
+    })
 }
 
 fn force_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
@@ -894,7 +899,7 @@ fn found_token(text: &str, position: usize) -> String {
 }
 
 /// The keywords that start a top-level declaration (besides `model`).
-pub(crate) const DECLARATION_KEYWORDS: [&str; 15] = [
+pub(crate) const DECLARATION_KEYWORDS: [&str; 17] = [
     "param",
     "let",
     "input",
@@ -907,6 +912,8 @@ pub(crate) const DECLARATION_KEYWORDS: [&str; 15] = [
     "flexure",
     "actuator",
     "spring",
+    "contact",
+    "bushing",
     "force",
     "torque",
     "output",

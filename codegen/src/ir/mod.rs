@@ -695,6 +695,42 @@ pub enum Load {
         tension: Option<Expr>,
         span: Span,
     },
+    /// Compliant unilateral contact (`contact NAME between P and Q`) of a sphere of `radius`
+    /// centred at `point` (a point when the radius is 0) with the plane through `plane` whose
+    /// unit `normal` (components in the frame `plane` is fixed in) points out of the solid.
+    /// Penetration `δ = max(0, −h)`, `h = n·(r_P − r_Q) − radius`; Hunt–Crossley normal force
+    /// `f_n = max(0, k δ^exponent (1 + 3/2 α δ̇))` and regularized Coulomb friction
+    /// `f_t = −μ f_n v_t / √(|v_t|² + v_s²)` on the slip velocity `v_t` at the contact point
+    /// `C = r_P − radius·n`, acting on `P`'s body at `C` (and the reaction on `Q`'s). Stores
+    /// `k δ^(exponent+1)/(exponent+1)` of potential energy (`kane::contact`).
+    Contact {
+        point: Handle<Point>,
+        plane: Handle<Point>,
+        normal: Vec3,
+        radius: Expr,
+        stiffness: Expr,
+        /// A positive constant (Hunt–Crossley's `n`; 3/2 for a Hertzian sphere).
+        exponent: Number,
+        /// α, in s/m.
+        damping: Expr,
+        /// μ.
+        friction: Expr,
+        /// `v_s` in m/s (positive).
+        transition_speed: Expr,
+        span: Span,
+    },
+    /// A bushing (`bushing NAME between A and B`): six springs and dampers on the offsets
+    /// `s(q)` of frame B from frame A, components in A's basis: the position of B's origin
+    /// `d = C_Aᵀ (o_B − o_A)` and the small-angle rotation `θ = vee(R − Rᵀ)/2` of
+    /// `R = C_Aᵀ C_B` (`sin φ` times the axis, φ for small angles). Potential
+    /// `½ Σ kᵢ sᵢ²`; generalized forces `−Σ (kᵢ sᵢ + cᵢ ṡᵢ) ∂sᵢ/∂q_r` (`q̇ = u`: the front end
+    /// refuses it with quaternions). `[translational, rotational]` stiffness and damping.
+    Bushing {
+        frames: [Handle<Frame>; 2],
+        stiffness: [Vec3; 2],
+        damping: [Vec3; 2],
+        span: Span,
+    },
     /// A generalized force acting directly on one coordinate (an actuator's force source).
     GeneralizedForce {
         coordinate: Handle<Coordinate>,
@@ -752,7 +788,25 @@ pub enum OutputKind {
     PotentialEnergy,
     /// Any scalar expression of parameters, inputs and time.
     Expr(Expr),
+    /// The state of the contact `model.loads[index]` ([`Load::Contact`]): its outputs
+    /// [`CONTACT_OUTPUTS`].
+    Contact(usize),
 }
+
+/// The scalar outputs of a contact (`output NAME = contact(C);`), as name suffixes: the
+/// penetration δ (m), the normal force `f_n` (N), the friction force in the Newtonian basis (N),
+/// the power the contact dissipates (W: damping and friction, ≥ 0), and the energy it has
+/// dissipated since the start of a simulation (J), the integral of the power that the
+/// simulation integrates with the motion (`Equations::integrated_outputs`).
+pub const CONTACT_OUTPUTS: [&str; 7] = [
+    ".penetration",
+    ".normal_force",
+    ".friction.x",
+    ".friction.y",
+    ".friction.z",
+    ".power",
+    ".dissipated",
+];
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Output {

@@ -42,6 +42,15 @@ pub enum Rule {
         unit: &'static str,
         value: Expr,
     },
+    /// A contact's property (`kind` is `contact`): greater than zero where `positive` (its
+    /// stiffness and transition speed: the friction law divides by `√(|v_t|² + v_s²)`), zero
+    /// or greater otherwise (its radius, damping and friction coefficient).
+    ContactProperty {
+        field: &'static str,
+        unit: &'static str,
+        value: Expr,
+        positive: bool,
+    },
 }
 
 /// How a requirement is violated, with the values found.
@@ -56,6 +65,13 @@ pub enum Violation {
         field: &'static str,
         unit: &'static str,
         value: f64,
+    },
+    /// A contact's property below its range (see [`Rule::ContactProperty`]).
+    ContactOutOfRange {
+        field: &'static str,
+        unit: &'static str,
+        value: f64,
+        positive: bool,
     },
 }
 
@@ -85,6 +101,20 @@ impl Requirement {
                     field,
                     unit,
                     value: v,
+                }),
+                _ => Ok(()),
+            },
+            &Rule::ContactProperty {
+                field,
+                unit,
+                value: ref e,
+                positive,
+            } => match value(e) {
+                Some(v) if v < 0.0 || (positive && v == 0.0) => Err(Violation::ContactOutOfRange {
+                    field,
+                    unit,
+                    value: v,
+                    positive,
                 }),
                 _ => Ok(()),
             },
@@ -119,6 +149,7 @@ impl Violation {
             Violation::NegativeMoment(_) => "E0502",
             Violation::Triangle(_) => "E0503",
             Violation::NotPositive { .. } => "E0504",
+            Violation::ContactOutOfRange { .. } => "E0506",
         }
     }
 
@@ -132,7 +163,13 @@ impl Violation {
             Violation::Triangle(_) => {
                 "has principal moments of inertia that break the triangle inequality".to_string()
             }
-            Violation::NotPositive { field, .. } => format!("has a `{field}` that is not positive"),
+            Violation::NotPositive { field, .. }
+            | Violation::ContactOutOfRange {
+                field,
+                positive: true,
+                ..
+            } => format!("has a `{field}` that is not positive"),
+            Violation::ContactOutOfRange { field, .. } => format!("has a negative `{field}`"),
         }
     }
 
@@ -143,7 +180,10 @@ impl Violation {
             Violation::NegativeMoment([a, b, c]) | Violation::Triangle([a, b, c]) => {
                 format!("principal moments {a:.3e}, {b:.3e}, {c:.3e} kg*m^2")
             }
-            Violation::NotPositive { field, unit, value } => format!("{field} = {value} {unit}"),
+            Violation::NotPositive { field, unit, value }
+            | Violation::ContactOutOfRange {
+                field, unit, value, ..
+            } => format!("{field} = {value} {unit}").trim_end().to_string(),
         }
     }
 
@@ -160,6 +200,9 @@ impl Violation {
                 "every mass distribution has I1 + I2 ≥ I3 for its principal moments; a thin rod along x has [0, I, I], a planar plate in x-y [Ixx, Iyy, Ixx + Iyy]"
             }
             Violation::NotPositive { .. } => "lengths, thicknesses and frequencies are greater than zero",
+            Violation::ContactOutOfRange { .. } => {
+                "a contact's `stiffness`, `reference_depth`, `transition_speed` and `exponent` are greater than zero; its `radius`, `damping` and `friction` are zero or greater"
+            }
         }
     }
 }

@@ -14,6 +14,7 @@
 //! `F_r = F_r + F_r*|_{u̇=0}` (SymPy's `forcing`). `M` is never inverted symbolically.
 
 pub mod constraints;
+mod contact;
 mod kinematics;
 mod rates;
 pub mod vector;
@@ -46,6 +47,10 @@ pub struct Equations {
     /// Scalar outputs in declaration order (vector outputs expanded to `.x`, `.y`, `.z`).
     pub outputs: Vec<ExprId>,
     pub output_names: Vec<String>,
+    /// Outputs that a simulation integrates, as `(target, rate)` indices into `outputs`: the
+    /// target (0 in `outputs`) is sampled as `∫ rate dt` from the start of the run (a
+    /// contact's dissipated energy; `Model::integrated_outputs` in the runtime).
+    pub integrated_outputs: Vec<(usize, usize)>,
     /// Loop-closure rows: `φ(q)`, `J = ∂φ/∂q` (`nc × nq`, column-major) and `J̇u`.
     pub constraints: constraints::Constraints,
     /// Flexures: their angles `θ(q)`, stiffness `k`, time-domain damping `b` and loss factor
@@ -119,6 +124,44 @@ fn flexure_angle(
     }
 }
 
+/// The six offsets `s(q)` of a bushing's frame B from its frame A ([`Load::Bushing`]), in
+/// A's basis: `d = C_Aᵀ (o_B − o_A)`, then `θ = vee(R − Rᵀ)/2` of `R = C_Aᵀ C_B`
+/// (`R_ij = (column i of C_A)·(column j of C_B)`).
+fn bushing_offsets(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    frames: [ir::Handle<ir::Frame>; 2],
+) -> [ExprId; 6] {
+    let (dcm_a, origin_a) = kinematics.to_newtonian(pool, frames[0]);
+    let (dcm_b, origin_b) = kinematics.to_newtonian(pool, frames[1]);
+    let apart = vector::sub(pool, origin_b, origin_a);
+    let [dx, dy, dz] = vector::mat_t_vec(pool, &dcm_a, apart);
+    let column = |c: &vector::Mat3, i: usize| [c[0][i], c[1][i], c[2][i]];
+    let mut r = |i: usize, j: usize| vector::dot(pool, column(&dcm_a, i), column(&dcm_b, j));
+    let pairs = [((2, 1), (1, 2)), ((0, 2), (2, 0)), ((1, 0), (0, 1))];
+    let [tx, ty, tz] = pairs.map(|((i, j), (k, l))| (r(i, j), r(k, l)));
+    let half = |pool: &mut ExprPool, (a, b): (ExprId, ExprId)| {
+        let difference = pool.sub(a, b);
+        pool.scale(difference, Number::rational(1, 2))
+    };
+    let (tx, ty, tz) = (half(pool, tx), half(pool, ty), half(pool, tz));
+    [dx, dy, dz, tx, ty, tz]
+}
+
+/// The bushing's `[k…, c…]` per offset, in [`bushing_offsets`] order.
+fn bushing_laws(
+    pool: &mut ExprPool,
+    stiffness: &[ir::Vec3; 2],
+    damping: &[ir::Vec3; 2],
+) -> [[ExprId; 6]; 2] {
+    let six = |pool: &mut ExprPool, v: &[ir::Vec3; 2]| {
+        let [a, b, c] = kinematics::lower_vec(pool, &v[0]);
+        let [d, e, f] = kinematics::lower_vec(pool, &v[1]);
+        [a, b, c, d, e, f]
+    };
+    [six(pool, stiffness), six(pool, damping)]
+}
+
 impl Equations {
     /// Number of constraint rows `NC` (redundant rows included).
     pub fn nc(&self) -> usize {
@@ -171,8 +214,13 @@ pub fn derive(model: &Model) -> Equations {
 
     let mut outputs = Vec::new();
     let mut output_names = Vec::new();
+    let mut integrated_outputs = Vec::new();
     for output in &model.outputs {
         for (suffix, id) in lower_output(&mut pool, &mut kinematics, model, &output.kind) {
+            if matches!(output.kind, OutputKind::Contact(_)) && suffix == ".dissipated" {
+                // The contact's `.power` is the output before it.
+                integrated_outputs.push((outputs.len(), outputs.len() - 1));
+            }
             output_names.push(format!("{}{suffix}", output.name));
             outputs.push(id);
         }
@@ -188,6 +236,7 @@ pub fn derive(model: &Model) -> Equations {
         static_forcing,
         outputs,
         output_names,
+        integrated_outputs,
         constraints,
         flexures,
     }
@@ -358,23 +407,37 @@ fn spring_length(
     (d, pool.sqrt(square))
 }
 
-/// `∂(v_B − v_A)/∂u_r` of two points `ends = [A, B]`, in N's basis: the partial velocities of
-/// each end (B with `+`, A with `−`, each from [`Kinematics::point_partials`] re-expressed in N).
+/// `∂(v_B − v_A)/∂u_r` of two points `ends = [A, B]`, in N's basis ([`relative_partials_at`]).
 fn relative_partials(
     pool: &mut ExprPool,
     kinematics: &mut Kinematics,
     model: &Model,
     ends: [ir::Handle<ir::Point>; 2],
 ) -> kinematics::Partials {
+    relative_partials_at(pool, kinematics, |pool, end| {
+        let point = &model.points[ends[end]];
+        (point.frame, kinematics::lower_vec(pool, &point.position))
+    })
+}
+
+/// `∂(v_B − v_A)/∂u_r` of two points A (`end(pool, 0)`) and B (`end(pool, 1)`), each given by
+/// the frame it is fixed in and its offset in that frame's basis, in N's basis: the partial
+/// velocities of each end (B with `+`, A with `−`, each from [`Kinematics::point_partials`]
+/// re-expressed in N). Each end is built when its turn comes (B first), the order the pool
+/// numbers them in.
+fn relative_partials_at(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    mut end: impl FnMut(&mut ExprPool, usize) -> (ir::Handle<ir::Frame>, Vec3),
+) -> kinematics::Partials {
     let mut relative: kinematics::Partials = Vec::new();
-    for (end, sign) in [(ends[1], Number::ONE), (ends[0], Number::MINUS_ONE)] {
-        let point = &model.points[end];
-        let offset = kinematics::lower_vec(pool, &point.position);
+    for (index, sign) in [(1, Number::ONE), (0, Number::MINUS_ONE)] {
+        let (frame, offset) = end(pool, index);
         let partials: kinematics::Partials = kinematics
-            .point_partials(pool, point.frame, offset)
+            .point_partials(pool, frame, offset)
             .into_iter()
             .map(|(r, v)| {
-                let v = kinematics.express(pool, v, point.frame, Model::NEWTONIAN);
+                let v = kinematics.express(pool, v, frame, Model::NEWTONIAN);
                 (r, vector::scale_number(pool, v, sign))
             })
             .collect();
@@ -601,6 +664,28 @@ fn add_load(
                 forcing[r].push(pool.neg(force));
             }
         }
+        Load::Contact { .. } => {
+            if let Some(contact) = contact::ContactState::new(pool, kinematics, model, load) {
+                contact.add_forces(pool, forcing);
+            }
+        }
+        Load::Bushing {
+            frames,
+            stiffness,
+            damping,
+            ..
+        } => {
+            // Q_r = −(k s + c ṡ) ∂ṡ/∂u_r for each offset s, as an angle spring's.
+            let [k, c] = bushing_laws(pool, stiffness, damping);
+            let offsets = bushing_offsets(pool, kinematics, *frames);
+            for ((s, k), c) in offsets.into_iter().zip(k).zip(c) {
+                let rate = rates.rate(pool, s);
+                let spring = pool.mul(k, s);
+                let damper = pool.mul(c, rate);
+                let moment = pool.add(spring, damper);
+                push_angle_forces(pool, rates, forcing, s, moment);
+            }
+        }
         Load::LoopSpring {
             closure,
             stiffness,
@@ -683,6 +768,16 @@ fn lower_output(
         OutputKind::KineticEnergy => vec![("", kinetic_energy(pool, kinematics, model))],
         OutputKind::PotentialEnergy => vec![("", potential_energy(pool, kinematics, model))],
         OutputKind::Expr(e) => vec![("", lower_state_expr(pool, kinematics, model, e))],
+        OutputKind::Contact(index) => model
+            .loads
+            .get(*index)
+            .and_then(|load| contact::ContactState::new(pool, kinematics, model, load))
+            .map_or_else(Vec::new, |contact| {
+                ir::CONTACT_OUTPUTS
+                    .into_iter()
+                    .zip(contact.outputs(pool))
+                    .collect()
+            }),
     }
 }
 
@@ -725,7 +820,8 @@ fn kinetic_energy(pool: &mut ExprPool, kinematics: &Kinematics, model: &Model) -
 }
 
 /// `−Σ_bodies m g·r_G + Σ_springs ½ k (x − rest)²`, x a joint coordinate, a closure or
-/// flexure angle, or a point-to-point spring's length.
+/// flexure angle, or a point-to-point spring's length, plus each contact's
+/// `k δ^(e+1)/(e+1)` and each bushing's `½ Σ k s²`.
 fn potential_energy(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Model) -> ExprId {
     let mut terms = Vec::new();
     let gravity = kinematics.frames[ir::Model::NEWTONIAN.index()].gravity;
@@ -790,6 +886,28 @@ fn potential_energy(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Mo
                 rest_length,
                 spring_length(pool, kinematics, model, *ends).1,
             ),
+            Load::Contact { .. } => {
+                if let Some(contact) = contact::ContactState::new(pool, kinematics, model, load) {
+                    terms.push(contact.energy);
+                }
+                continue;
+            }
+            Load::Bushing {
+                frames,
+                stiffness,
+                damping,
+                ..
+            } => {
+                // ½ Σ k s².
+                let [k, _] = bushing_laws(pool, stiffness, damping);
+                let offsets = bushing_offsets(pool, kinematics, *frames);
+                for (s, k) in offsets.into_iter().zip(k) {
+                    let square = pool.pow(s, Number::int(2));
+                    let energy = pool.mul(k, square);
+                    terms.push(pool.scale(energy, Number::rational(1, 2)));
+                }
+                continue;
+            }
             _ => continue,
         };
         let k = lower_expr(pool, stiffness);

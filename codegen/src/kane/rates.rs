@@ -28,12 +28,17 @@ pub struct KinematicRates {
 impl KinematicRates {
     /// `q̇ = u` for a model without quaternions, else `q̇ᵢ = uᵢ` for the coordinates and
     /// `ė = ½ e ⊗ (0, ω)` for each quaternion (as [`rates`] builds them). The chain is built
-    /// only for a model with loops, the one place a function of a quaternion's coordinates
-    /// meets it (loop rows, loop flexure angles): a pin or slider coordinate's partial rates
-    /// are `∂q_c/∂q_r` either way, and a model without loops keeps its pool numbering.
+    /// only for a model with loops or bushings, the places a function of a quaternion's
+    /// coordinates meets it (loop rows, loop flexure angles, a bushing's offsets): a pin or
+    /// slider coordinate's partial rates are `∂q_c/∂q_r` either way, and other models keep
+    /// their pool numbering.
     pub fn new(pool: &mut ExprPool, model: &Model) -> KinematicRates {
         let nu = model.nu();
-        let needed = !model.loops.is_empty();
+        let bushing = model
+            .loads
+            .iter()
+            .any(|load| matches!(load, crate::ir::Load::Bushing { .. }));
+        let needed = !model.loops.is_empty() || bushing;
         let chain = needed.then(|| rates(pool, model)).flatten().map(|rates| {
             let mut columns = vec![Vec::new(); nu];
             for (i, &rate) in rates.iter().enumerate() {

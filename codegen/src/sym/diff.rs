@@ -119,6 +119,8 @@ impl ExprPool {
             Func::Exp => call,
             Func::Ln => self.pow(x, Number::MINUS_ONE),
             Func::Abs => self.div(x, call),
+            Func::Ramp => self.call(Func::Step, x),
+            Func::Step => self.zero(),
         }
     }
 }

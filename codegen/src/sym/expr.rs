@@ -54,6 +54,11 @@ pub enum Func {
     Exp,
     Ln,
     Abs,
+    /// `max(0, x)` (the positive part; NaN stays NaN).
+    Ramp,
+    /// Heaviside's step `H(x)`: 1 for `x > 0`, 0 for `x ≤ 0` (NaN stays NaN), the
+    /// derivative of [`Func::Ramp`] (taken as 0 at the kink).
+    Step,
 }
 
 impl Func {
@@ -65,6 +70,8 @@ impl Func {
             Func::Exp => "exp",
             Func::Ln => "ln",
             Func::Abs => "abs",
+            Func::Ramp => "ramp",
+            Func::Step => "step",
         }
     }
     pub fn apply(self, x: f64) -> f64 {
@@ -75,6 +82,10 @@ impl Func {
             Func::Exp => x.exp(),
             Func::Ln => x.ln(),
             Func::Abs => x.abs(),
+            Func::Ramp if x > 0.0 => x,
+            Func::Step if x > 0.0 => 1.0,
+            Func::Ramp | Func::Step if x.is_nan() => x,
+            Func::Ramp | Func::Step => 0.0,
         }
     }
 }
@@ -438,7 +449,12 @@ impl ExprPool {
     /// `f(x)`, folding constants and the odd/even symmetries of sin, cos, tan.
     pub fn call(&mut self, func: Func, x: ExprId) -> ExprId {
         if let Some(n) = self.as_number(x) {
-            if n.is_zero() && matches!(func, Func::Sin | Func::Tan | Func::Abs) {
+            if n.is_zero()
+                && matches!(
+                    func,
+                    Func::Sin | Func::Tan | Func::Abs | Func::Ramp | Func::Step
+                )
+            {
                 return self.zero();
             }
             if n.is_zero() && matches!(func, Func::Cos | Func::Exp) {
@@ -453,7 +469,7 @@ impl ExprPool {
                     return self.neg(f);
                 }
                 Func::Cos | Func::Abs => return self.call(func, positive),
-                Func::Exp | Func::Ln => {}
+                Func::Exp | Func::Ln | Func::Ramp | Func::Step => {}
             }
         }
         self.intern(Node::Call(func, x))

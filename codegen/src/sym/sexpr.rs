@@ -212,6 +212,8 @@ impl ExprPool {
                     Func::Exp,
                     Func::Ln,
                     Func::Abs,
+                    Func::Ramp,
+                    Func::Step,
                 ]
                 .into_iter()
                 .find(|f| f.name() == name)

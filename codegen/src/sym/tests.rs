@@ -209,3 +209,22 @@ fn printed_size_counts_the_printout_without_making_it() {
     assert_eq!(&sizes[..3], [5, 13, 29]);
     assert_eq!(sizes[63], u64::MAX, "saturates instead of overflowing");
 }
+
+/// `ramp = max(0, x)` and its derivative `step` (Heaviside, 0 at the kink): values at and on
+/// both sides of the kink, NaN kept, exact zeros folded, the chain rule, and the s-expression
+/// round trip.
+#[test]
+fn ramp_and_step() {
+    for (x, ramp, step) in [(-2.0, 0.0, 0.0), (0.0, 0.0, 0.0), (3.5, 3.5, 1.0)] {
+        assert_eq!(Func::Ramp.apply(x), ramp);
+        assert_eq!(Func::Step.apply(x), step);
+    }
+    assert!(Func::Ramp.apply(f64::NAN).is_nan() && Func::Step.apply(f64::NAN).is_nan());
+    let mut pool = ExprPool::new();
+    let zero = pool.zero();
+    assert_eq!(pool.call(Func::Ramp, zero), zero);
+    assert_eq!(pool.call(Func::Step, zero), zero);
+    check_diff("(ramp (* 2 x))", "x", "(* 2 (step (* 2 x)))");
+    check_diff("(step x)", "x", "0");
+    check("(ramp (+ 1 x))", "(ramp (+ 1 x))");
+}

@@ -35,6 +35,80 @@ pub enum PendingLoad {
         tension: Option<Expr>,
         span: Span,
     },
+    Bushing {
+        frames: [FrameRef; 2],
+        /// `([translational, rotational] stiffness, [translational, rotational] damping)`.
+        law: Box<([Vec3; 2], [Vec3; 2])>,
+        span: Span,
+    },
+    Contact {
+        name: String,
+        point: PointRef,
+        plane: PointRef,
+        law: Box<ContactLaw>,
+        span: Span,
+    },
+}
+
+/// The fields of a `bushing` block.
+const BUSHING_FIELDS: [&str; 4] = [
+    "stiffness",
+    "damping",
+    "rotational_stiffness",
+    "rotational_damping",
+];
+
+/// The dimension of a bushing field: N/m, N·s/m, N·m/rad, N·m·s/rad (vectors in A's axes).
+fn bushing_expect(field: &str) -> Expect<'static> {
+    match field {
+        "stiffness" => Expect::mechanical("`stiffness`", "[10, 10, 20] * 1 N/m", [1, 0, -2]),
+        "damping" => Expect::mechanical("`damping`", "[1, 1, 1] * 0.01 N*s/m", [1, 0, -1]),
+        "rotational_stiffness" => Expect::mechanical(
+            "`rotational_stiffness`",
+            "[1, 1, 2] * 1 uN*m/rad",
+            [1, 2, -2],
+        ),
+        _ => Expect::mechanical(
+            "`rotational_damping`",
+            "[1, 1, 1] * 1 nN*m*s/rad",
+            [1, 2, -1],
+        ),
+    }
+}
+
+/// The fields of a `contact` block.
+const CONTACT_FIELDS: [&str; 8] = [
+    "normal",
+    "radius",
+    "stiffness",
+    "exponent",
+    "reference_depth",
+    "damping",
+    "friction",
+    "transition_speed",
+];
+
+/// A contact's law as [`ir::Load::Contact`] holds it.
+pub struct ContactLaw {
+    normal: Vec3,
+    radius: Expr,
+    stiffness: Expr,
+    exponent: crate::sym::Number,
+    damping: Expr,
+    friction: Expr,
+    transition_speed: Expr,
+}
+
+/// The dimension of a contact field: N/m, m, s/m, m/s or none.
+fn contact_expect(field: &str) -> Expect<'static> {
+    match field {
+        "stiffness" => Expect::mechanical("`stiffness`", "1e4 N/m", [1, 0, -2]),
+        "damping" => Expect::mechanical("`damping`", "0.5 s/m", [0, -1, 1]),
+        "transition_speed" => Expect::mechanical("`transition_speed`", "1 mm/s", [0, 1, -1]),
+        "friction" => Expect::mechanical("`friction`", "0.5", [0, 0, 0]),
+        "reference_depth" => Expect::mechanical("`reference_depth`", "0.1 mm", [0, 1, 0]),
+        _ => Expect::mechanical("`radius`", "2 mm", [0, 1, 0]),
+    }
 }
 
 /// The fields of a `spring` block.
@@ -65,6 +139,8 @@ enum PendingKind {
     KineticEnergy,
     PotentialEnergy,
     Expr(Expr),
+    /// `contact(NAME)`.
+    Contact(String),
 }
 
 impl Lowerer<'_> {
@@ -72,6 +148,11 @@ impl Lowerer<'_> {
         let mut load_names = Namespace::default();
         let mut output_names = Namespace::default();
         let mut gravity: Option<Span> = None;
+        for item in items {
+            if let ast::Item::Contact(decl) = item {
+                self.contacts.entry(decl.name.name.clone()).or_insert(None);
+            }
+        }
         for item in items {
             match item {
                 ast::Item::Gravity(decl) => {
@@ -101,6 +182,14 @@ impl Lowerer<'_> {
                 ast::Item::Spring(decl) => {
                     self.declare_in(&mut load_names, &decl.name, "the load");
                     self.lower_spring(decl);
+                }
+                ast::Item::Contact(decl) => {
+                    self.declare_in(&mut load_names, &decl.name, "the load");
+                    self.lower_contact(decl);
+                }
+                ast::Item::Bushing(decl) => {
+                    self.declare_in(&mut load_names, &decl.name, "the load");
+                    self.lower_bushing(decl);
                 }
                 ast::Item::Output(decl)
                     if self.declare_in(&mut output_names, &decl.name, "the output") =>
@@ -247,6 +336,20 @@ impl Lowerer<'_> {
     /// E0408 if both ends of a spring are on one body (or both fixed in `newtonian`): its
     /// length could not change, so it would do nothing (its forces on the body cancel).
     fn check_spring_ends(&mut self, decl: &ast::SpringDecl, a: PointRef, b: PointRef) {
+        let help = "a spring acts between points of two different bodies (or a body and \
+                    `newtonian`); between two points of one rigid body its length never changes";
+        self.check_two_bodies("spring", decl, [a, b], help);
+    }
+
+    /// E0408 if both points of a two-point declaration (`what`: spring, contact) are on one
+    /// body (or both fixed in `newtonian`).
+    fn check_two_bodies(
+        &mut self,
+        what: &str,
+        decl: &ast::SpringDecl,
+        [a, b]: [PointRef; 2],
+        help: &str,
+    ) {
         if a.owner() != b.owner() {
             return;
         }
@@ -254,15 +357,212 @@ impl Lowerer<'_> {
         self.error(
             Diagnostic::error(
                 "E0408",
-                format!("spring `{}` connects `{owner}` to itself", decl.name.name),
+                format!("{what} `{}` connects `{owner}` to itself", decl.name.name),
             )
             .with_label(decl.ends[1].span, "this point")
             .with_label(decl.ends[0].span, format!("is on `{owner}` too"))
-            .with_help(
-                "a spring acts between points of two different bodies (or a body and `newtonian`); \
-                 between two points of one rigid body its length never changes",
-            ),
+            .with_help(help.to_string()),
         );
+    }
+
+    /// `contact NAME between P and Q { normal; stiffness; … }` (see [`ir::Load::Contact`]):
+    /// `normal` (an axis in the frame Q is fixed in) and `stiffness` are required; `radius`,
+    /// `damping` and `friction` default to 0; `exponent` to 3/2 with a radius and 1 without;
+    /// an exponent other than 1 needs `reference_depth` δ₀, with which the elastic force is
+    /// `k δ₀ (δ/δ₀)^e` (N for `k` in N/m at any exponent); `friction` needs
+    /// `transition_speed`. The properties may use params (checked by E0506 at run time too).
+    fn lower_contact(&mut self, decl: &ast::SpringDecl) {
+        let ends = decl.ends.each_ref().map(|path| self.resolve_point(path));
+        let fields = self.known_fields(
+            &decl.fields,
+            &CONTACT_FIELDS,
+            "fields of a contact",
+            "not a field of a contact",
+        );
+        let field = |name: &str| fields.iter().find(|f| f.name.name == name).copied();
+        let ctx = Ctx::Static("a contact property");
+        let mut failed = false;
+        let mut property = |this: &mut Self, name: &'static str, positive: bool| {
+            let field = field(name)?;
+            let value = this.lower_scalar_as(&field.value, ctx, &contact_expect(name));
+            if let Some(value) = &value {
+                let (unit, rule_value) = (contact_expect(name).example, value.clone());
+                let unit = unit.split_once(' ').map_or("", |(_, unit)| unit);
+                let rule = ir::plausible::Rule::ContactProperty {
+                    field: name,
+                    unit,
+                    value: rule_value,
+                    positive,
+                };
+                this.require("contact", &decl.name.name, rule, field.value.span);
+            }
+            failed |= value.is_none();
+            value
+        };
+        let radius = property(self, "radius", false);
+        let stiffness = property(self, "stiffness", true);
+        let depth = property(self, "reference_depth", true);
+        let damping = property(self, "damping", false);
+        let friction = property(self, "friction", false);
+        let transition_speed = property(self, "transition_speed", true);
+        let normal = field("normal").and_then(|f| self.axis(&f.value, "a contact's normal"));
+        let exponent = match field("exponent") {
+            None if radius.is_some() => Some(crate::sym::Number::rational(3, 2)),
+            None => Some(crate::sym::Number::ONE),
+            Some(f) => self.contact_exponent(&decl.name.name, &f.value),
+        };
+        for (name, present, help) in [
+            (
+                "normal",
+                field("normal").is_some(),
+                "give the plane's outward normal in the frame of its point, e.g. `normal = y;`",
+            ),
+            (
+                "stiffness",
+                field("stiffness").is_some(),
+                "give the contact's stiffness, e.g. `stiffness = 1e4 N/m;`",
+            ),
+        ] {
+            if !present {
+                self.error(missing_field("contact", &decl.name, name, help));
+            }
+        }
+        let nonlinear = exponent.is_some_and(|e| !e.is_one());
+        if nonlinear && field("reference_depth").is_none() {
+            let help = "with an exponent e other than 1 the elastic force is `k δ₀ (δ/δ₀)^e`: \
+                        give the depth δ₀ at which it is `k δ₀`, e.g. `reference_depth = 0.1 mm;` \
+                        (or write `exponent = 1;`)";
+            self.error(missing_field(
+                "contact",
+                &decl.name,
+                "reference_depth",
+                help,
+            ));
+        }
+        if field("friction").is_some() && field("transition_speed").is_none() {
+            let help = "friction is regularized below a slip speed v_s: give it, e.g. \
+                        `transition_speed = 1 mm/s;`";
+            self.error(missing_field(
+                "contact",
+                &decl.name,
+                "transition_speed",
+                help,
+            ));
+        }
+        if let [Some(a), Some(b)] = ends {
+            let help = "a contact acts between a point of one body and a plane fixed in \
+                        another body (or in `newtonian`)";
+            self.check_two_bodies("contact", decl, [a, b], help);
+        }
+        let (Some(stiffness), Some(normal), Some(exponent), [Some(point), Some(plane)], false) =
+            (stiffness, normal, exponent, ends, failed)
+        else {
+            return;
+        };
+        // k δ₀ (δ/δ₀)^e = k δ₀^(1−e) δ^e.
+        let stiffness = match depth {
+            Some(depth) if nonlinear => {
+                stiffness * Expr::Pow(Box::new(depth), crate::sym::Number::ONE.sub(exponent))
+            }
+            _ => stiffness,
+        };
+        let law = ContactLaw {
+            normal,
+            radius: radius.unwrap_or_else(Expr::zero),
+            stiffness,
+            exponent,
+            damping: damping.unwrap_or_else(Expr::zero),
+            friction: friction.unwrap_or_else(Expr::zero),
+            transition_speed: transition_speed.unwrap_or(Expr::Number(crate::sym::Number::ONE)),
+        };
+        self.loads.push(PendingLoad::Contact {
+            name: decl.name.name.clone(),
+            point,
+            plane,
+            law: Box::new(law),
+            span: decl.span,
+        });
+    }
+
+    /// `bushing NAME between A and B { stiffness; damping; rotational_stiffness;
+    /// rotational_damping; }` (see [`ir::Load::Bushing`]): A and B are body or Newtonian
+    /// frames of two different bodies (E0408); each field is a vector in A's axes, default
+    /// zero, of params.
+    fn lower_bushing(&mut self, decl: &ast::SpringDecl) {
+        let frames = decl
+            .ends
+            .each_ref()
+            .map(|path| self.resolve_frame(path, false));
+        let fields = self.known_fields(
+            &decl.fields,
+            &BUSHING_FIELDS,
+            "fields of a bushing",
+            "not a field of a bushing",
+        );
+        let ctx = Ctx::Static("a bushing property");
+        let mut values: Vec<Option<Vec3>> = Vec::new();
+        for name in BUSHING_FIELDS {
+            let value = match fields.iter().find(|f| f.name.name == name) {
+                Some(field) => self.lower_vector_as(&field.value, ctx, &bushing_expect(name)),
+                None => Some([Expr::zero(), Expr::zero(), Expr::zero()]),
+            };
+            values.push(value);
+        }
+        let owner = |frame: FrameRef| match frame {
+            FrameRef::Owner(owner) | FrameRef::Named(owner, _) => Some(owner),
+            FrameRef::Joint(_) => None,
+        };
+        if let [Some(a), Some(b)] = frames {
+            if owner(a).is_some() && owner(a) == owner(b) {
+                let name = self.owners[owner(a).unwrap_or(0)].name.clone();
+                self.error(
+                    Diagnostic::error(
+                        "E0408",
+                        format!("bushing `{}` connects `{name}` to itself", decl.name.name),
+                    )
+                    .with_label(decl.ends[1].span, "this frame")
+                    .with_label(decl.ends[0].span, format!("is on `{name}` too"))
+                    .with_help(
+                        "a bushing couples frames of two different bodies (or a body and \
+                         `newtonian`)",
+                    ),
+                );
+                return;
+            }
+        }
+        let ([Some(a), Some(b)], [Some(k), Some(c), Some(k_r), Some(c_r)]) = (
+            frames,
+            <[Option<Vec3>; 4]>::try_from(values).unwrap_or_default(),
+        ) else {
+            return;
+        };
+        self.loads.push(PendingLoad::Bushing {
+            frames: [a, b],
+            law: Box::new(([k, k_r], [c, c_r])),
+            span: decl.span,
+        });
+    }
+
+    /// A contact's `exponent`: a positive dimensionless constant.
+    fn contact_exponent(&mut self, name: &str, e: &ast::Expr) -> Option<crate::sym::Number> {
+        let (number, dim) = self.lower_constant(e, Ctx::Constant("a contact's exponent"))?;
+        if dim != Dimension::NONE {
+            self.error(
+                Diagnostic::error("E0302", "a contact's `exponent` must be dimensionless")
+                    .with_label(e.span, "has a unit")
+                    .with_help("write a plain number, e.g. `exponent = 1.5;`"),
+            );
+            return None;
+        }
+        let rule = ir::plausible::Rule::ContactProperty {
+            field: "exponent",
+            unit: "",
+            value: Expr::Number(number),
+            positive: true,
+        };
+        let before = self.diagnostics.len();
+        self.require("contact", name, rule, e.span);
+        (self.diagnostics.len() == before).then_some(number)
     }
 
     /// The components of a force or torque and the frame they are given in.
@@ -292,6 +592,9 @@ impl Lowerer<'_> {
                 if function.name == "position" || function.name == "velocity" =>
             {
                 self.vector_output(function, args, value.span, decl.frame.as_ref())
+            }
+            ExprKind::Call { function, args } if function.name == "contact" => {
+                self.contact_output(args, value.span, decl)
             }
             ExprKind::Path(path) => self.path_output(path, decl),
             _ => self.expr_output(decl),
@@ -331,6 +634,47 @@ impl Lowerer<'_> {
             "position" => PendingKind::Position(point, frame),
             _ => PendingKind::Velocity(point, frame),
         })
+    }
+
+    /// `contact(NAME)`: the outputs of a declared contact ([`ir::CONTACT_OUTPUTS`]).
+    fn contact_output(
+        &mut self,
+        args: &[ast::Expr],
+        span: Span,
+        decl: &ast::OutputDecl,
+    ) -> Option<PendingKind> {
+        let name = match args {
+            [arg] => match &unparen(arg).kind {
+                ExprKind::Path(path) => match path.segments.as_slice() {
+                    [name] => Some(name),
+                    _ => None,
+                },
+                _ => None,
+            },
+            _ => None,
+        };
+        let Some(name) = name else {
+            self.error(
+                Diagnostic::error("E0404", "`contact` takes the name of one contact")
+                    .with_label(span, "expected `contact(NAME)`"),
+            );
+            return None;
+        };
+        self.reject_frame_clause(decl)?;
+        if !self.contacts.contains_key(&name.name) {
+            let known: Vec<&str> = self.contacts.keys().map(String::as_str).collect();
+            self.error(super::names::unknown(
+                "E0418",
+                "contact",
+                "contacts",
+                &name.name,
+                name.span,
+                &known,
+                "not a contact",
+            ));
+            return None;
+        }
+        Some(PendingKind::Contact(name.name.clone()))
     }
 
     fn path_output(&mut self, path: &ast::Path, decl: &ast::OutputDecl) -> Option<PendingKind> {
@@ -546,6 +890,42 @@ impl Lowerer<'_> {
                         span: *span,
                     })
                 }
+                PendingLoad::Bushing { frames, law, span } => {
+                    let handles = self
+                        .frame_handle(frames[0])
+                        .zip(self.frame_handle(frames[1]));
+                    handles.map(|(a, b)| ir::Load::Bushing {
+                        frames: [a, b],
+                        stiffness: law.0.clone(),
+                        damping: law.1.clone(),
+                        span: *span,
+                    })
+                }
+                PendingLoad::Contact {
+                    name,
+                    point,
+                    plane,
+                    law,
+                    span,
+                } => {
+                    let handles = self.point_handle(*point).zip(self.point_handle(*plane));
+                    if handles.is_some() {
+                        self.contacts
+                            .insert(name.clone(), Some(self.model.loads.len()));
+                    }
+                    handles.map(|(point, plane)| ir::Load::Contact {
+                        point,
+                        plane,
+                        normal: law.normal.clone(),
+                        radius: law.radius.clone(),
+                        stiffness: law.stiffness.clone(),
+                        exponent: law.exponent,
+                        damping: law.damping.clone(),
+                        friction: law.friction.clone(),
+                        transition_speed: law.transition_speed.clone(),
+                        span: *span,
+                    })
+                }
             };
             match built {
                 Some(load) => self.model.loads.push(load),
@@ -578,6 +958,12 @@ impl Lowerer<'_> {
                 PendingKind::KineticEnergy => Some(ir::OutputKind::KineticEnergy),
                 PendingKind::PotentialEnergy => Some(ir::OutputKind::PotentialEnergy),
                 PendingKind::Expr(expr) => Some(ir::OutputKind::Expr(expr)),
+                // A contact with errors has none here (already reported).
+                PendingKind::Contact(name) => match self.contacts.get(&name) {
+                    Some(Some(index)) => Some(ir::OutputKind::Contact(*index)),
+                    _ if !self.diagnostics.is_empty() => continue,
+                    _ => None,
+                },
             };
             match kind {
                 Some(kind) => self.model.outputs.push(ir::Output {
@@ -596,6 +982,8 @@ fn load_span(load: &PendingLoad) -> Span {
     match load {
         PendingLoad::Force { span, .. }
         | PendingLoad::Torque { span, .. }
-        | PendingLoad::Spring { span, .. } => *span,
+        | PendingLoad::Spring { span, .. }
+        | PendingLoad::Bushing { span, .. }
+        | PendingLoad::Contact { span, .. } => *span,
     }
 }

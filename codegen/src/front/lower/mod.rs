@@ -109,6 +109,8 @@ struct Lowerer<'a> {
     outputs: Vec<PendingOutput>,
     /// The scalar outputs lowered so far, as expressions later outputs may use.
     scalar_outputs: BTreeMap<String, Typed>,
+    /// Declared contacts by name, with their index in `model.loads` once built.
+    contacts: BTreeMap<String, Option<usize>>,
     /// Twist degrees of freedom of flexures, inserted into the tree once everything else
     /// refers to frames (the insertion renumbers them).
     twists: Vec<PendingTwist>,
@@ -144,6 +146,7 @@ impl<'a> Lowerer<'a> {
             loads: Vec::new(),
             outputs: Vec::new(),
             scalar_outputs: BTreeMap::new(),
+            contacts: BTreeMap::new(),
             twists: Vec::new(),
         }
     }

@@ -438,6 +438,7 @@ fn remap_handles(model: &mut Model, remap: &dyn Fn(Handle<Frame>) -> Handle<Fram
                 *frame = remap(*frame);
                 remap_vector(torque);
             }
+            Load::Bushing { frames, .. } => *frames = frames.map(remap),
             Load::Spring { .. }
             | Load::Damper { .. }
             | Load::LoopSpring { .. }
@@ -445,6 +446,7 @@ fn remap_handles(model: &mut Model, remap: &dyn Fn(Handle<Frame>) -> Handle<Fram
             | Load::AngleSpring { .. }
             | Load::AngleDamper { .. }
             | Load::PointSpring { .. }
+            | Load::Contact { .. }
             | Load::GeneralizedForce { .. } => {}
         }
     }
