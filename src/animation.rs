@@ -49,8 +49,7 @@ pub enum Error {
 pub fn animate(compiled: &Compiled, values: &[f64], run: &CsvTable) -> Result<Animation, Error> {
     let mut ir = compiled.model.clone();
     let shape = skeleton::add_skeleton_outputs(&mut ir);
-    let model = TapeModel::new(&Compiled::from_model(ir));
-    let mut model = model;
+    let mut model = TapeModel::new(&Compiled::from_model(ir));
     for (i, &value) in values.iter().enumerate().take(model.nparams()) {
         model.set_param(i, value);
     }
@@ -75,7 +74,12 @@ pub fn animate(compiled: &Compiled, values: &[f64], run: &CsvTable) -> Result<An
         .map(|body| {
             body.points
                 .iter()
-                .map(|(_, output)| model.output_index(&format!("{output}.x")).unwrap_or(0))
+                .map(|(_, output)| {
+                    let x = format!("{output}.x");
+                    model
+                        .output_index(&x)
+                        .expect("the skeleton's outputs are in the model")
+                })
                 .collect()
         })
         .collect();

@@ -503,8 +503,8 @@ pub struct ConstrainedSolver {
     /// Speeds (the size of `M`) and constraint rows.
     nu: usize,
     nc: usize,
-    /// `W(q) δ`, the coordinates' step of a speed-space correction `δ` (models with
-    /// quaternions; empty where `q̇ = u`).
+    /// `q ⊕ δ` of a speed-space correction `δ` ([`retract`]; models with quaternions, empty
+    /// where `q̇ = u`).
     rates: Vec<f64>,
     /// `M`, then its Cholesky factor `L` (lower triangle).
     mass: DMatrix<f64>,
@@ -700,11 +700,8 @@ impl ConstrainedSolver {
                 for (c, value) in delta.iter_mut().enumerate() {
                     *value = -step(c, &self.multipliers, self.jacobian.as_slice());
                 }
-                model.kinematic_rates(t, q, self.force.as_slice(), &mut self.rates);
-                for (value, rate) in q.iter_mut().zip(&self.rates) {
-                    *value += rate;
-                }
-                crate::simulate::normalize_quaternions(model.unit_quaternions(), q);
+                retract(model, t, q, self.force.as_slice(), &mut self.rates);
+                q.copy_from_slice(&self.rates);
             }
             changed = true;
         }

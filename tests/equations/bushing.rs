@@ -112,8 +112,8 @@ fn an_undamped_bushing_keeps_the_energy_and_a_damped_one_loses_it() {
 /// The tumbler on a `free` joint (a unit quaternion, speeds the angular velocity in the block's
 /// axes) against the same block on three sliders and three pins, both from the block's
 /// unturned start with the same motion: the bushing's offsets go through `q̇ = W(q) u` in the
-/// first and through `q̇ = u` in the second. Measured: the tip's path agrees to ~1e-10 of its
-/// size over 0.5 s, and the free version keeps its energy.
+/// first and through `q̇ = u` in the second. Measured: the corner's paths 2e-13 of their size
+/// apart over 0.5 s, the free version's energy drift 2.6e-12.
 #[test]
 fn a_bushing_on_a_free_body_moves_as_on_six_scalar_joints() {
     let euler = tumbler("")

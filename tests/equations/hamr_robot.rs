@@ -68,8 +68,9 @@ const HEADER: &str = "\
 //! `hamr_vi.mech`'s choices for every leg: the URDF's joint springs and dampers dropped for
 //! the flexures (loss factor 0.08 at 40 Hz) and the actuators (F_b = 320 mN, delta_f =
 //! 300 um at 225 V) appended at the end; the products of inertia of each leg link L4
-//! negated (hamr_vi.mech caveat 2; the file's FR and RR legs are not exact mirror images of
-//! FL and RL: their Ixy does not change sign with y, left as published).
+//! negated (hamr_vi.mech caveat 2; the file's FR leg link is not an exact mirror image of
+//! FL's: its Ixy keeps its sign and its Izz is 0.3445 against 0.3426 g*mm^2, left as
+//! published; RR mirrors RL exactly).
 //! Not in `models/` itself: its generated Rust would be about 6 MB, so it is loaded at run
 //! time (tape, compiled to native code by the JIT) rather than by build.rs.
 //!
