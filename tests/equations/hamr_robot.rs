@@ -242,6 +242,21 @@ fn ground() -> String {
              output {leg}_contact = contact({leg}_ground);\n"
         ));
     }
+    let terms: Vec<String> = LEGS
+        .iter()
+        .flat_map(|leg| {
+            [
+                format!("{leg}_v_swing * {leg}qsact.u"),
+                format!("{leg}_v_lift * {leg}qlact.u"),
+            ]
+        })
+        .collect();
+    text.push_str(&format!(
+        "/// Mechanical power of the eight actuators' force sources, F_b V / V_rated times the\n\
+         /// slider's speed: what the drives put into the robot (the cost of transport's input).\n\
+         output drive_power = F_b / V_rated * (\n    {}\n);\n",
+        terms.join("\n    + ")
+    ));
     text
 }
 
