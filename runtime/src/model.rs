@@ -17,6 +17,42 @@ pub fn rates_equal_speeds(u: &[f64], out: &mut [f64]) {
     }
 }
 
+/// [`Model::constrained_terms`] one part at a time (`M`, `F`, `J`, `J̇u` each by its own
+/// method): the default, and what a model with a fused pass falls back to without it.
+#[allow(clippy::too_many_arguments)]
+pub fn constrained_terms_by_part<M: Model + ?Sized>(
+    model: &M,
+    t: f64,
+    q: &[f64],
+    u: &[f64],
+    inputs: &[f64],
+    mass: &mut [f64],
+    forcing: &mut [f64],
+    jacobian: &mut [f64],
+    bias: &mut [f64],
+) {
+    dynamics_terms_by_part(model, t, q, u, inputs, mass, forcing, bias);
+    model.constraint_jacobian(t, q, jacobian);
+}
+
+/// [`Model::dynamics_terms`] one part at a time (`M`, `F`, `J̇u`), as
+/// [`constrained_terms_by_part`].
+#[allow(clippy::too_many_arguments)]
+pub fn dynamics_terms_by_part<M: Model + ?Sized>(
+    model: &M,
+    t: f64,
+    q: &[f64],
+    u: &[f64],
+    inputs: &[f64],
+    mass: &mut [f64],
+    forcing: &mut [f64],
+    bias: &mut [f64],
+) {
+    model.mass_matrix(t, q, inputs, mass);
+    model.forcing(t, q, u, inputs, forcing);
+    model.constraint_bias(t, q, u, bias);
+}
+
 /// A multibody model in Kane's form `M(q) u̇ = F(t, q, u, inputs)`, `q̇ = W(q) u`
 /// ([`Model::kinematic_rates`]; `W = I` and `nq == nu` unless the model has unit quaternions).
 ///
@@ -158,10 +194,7 @@ pub trait Model {
         jacobian: &mut [f64],
         bias: &mut [f64],
     ) {
-        self.mass_matrix(t, q, inputs, mass);
-        self.forcing(t, q, u, inputs, forcing);
-        self.constraint_jacobian(t, q, jacobian);
-        self.constraint_bias(t, q, u, bias);
+        constrained_terms_by_part(self, t, q, u, inputs, mass, forcing, jacobian, bias);
     }
 
     /// `M`, `F` and `J̇u` in one call (`M` column-major): [`Model::constrained_terms`] without
@@ -179,9 +212,7 @@ pub trait Model {
         forcing: &mut [f64],
         bias: &mut [f64],
     ) {
-        self.mass_matrix(t, q, inputs, mass);
-        self.forcing(t, q, u, inputs, forcing);
-        self.constraint_bias(t, q, u, bias);
+        dynamics_terms_by_part(self, t, q, u, inputs, mass, forcing, bias);
     }
 
     /// Number of flexures (compliant hinges with a loss factor).

@@ -165,6 +165,11 @@ pub struct DataErrors {
 }
 
 impl MeasuredData {
+    /// The 1-based file line of data row `row` (0 if there is no such row).
+    pub fn line(&self, row: usize) -> usize {
+        self.lines.get(row).copied().unwrap_or(0)
+    }
+
     /// Reads and checks the CSV file at `path`.
     pub fn load(path: &Path) -> Result<MeasuredData, DataErrors> {
         match std::fs::read(path) {
@@ -237,8 +242,8 @@ impl MeasuredData {
             if !increasing {
                 return Err(DataError::NotIncreasing {
                     path: self.path.clone(),
-                    line: self.lines.get(k + 1).copied().unwrap_or(0),
-                    previous_line: self.lines.get(k).copied().unwrap_or(0),
+                    line: self.line(k + 1),
+                    previous_line: self.line(k),
                     index: index + 1,
                     column: column.name.clone(),
                     previous: pair[0],

@@ -940,22 +940,18 @@ where
                 };
                 EmptyElement::at(at) + PathElement::new(tick, style)
             };
-            if y_hi > y_lo {
-                let (low, high) = ((point.x, y_lo), (point.x, y_hi));
+            let vertical = (y_hi > y_lo).then_some(((point.x, y_lo), (point.x, y_hi), true));
+            let horizontal = (x_hi > x_lo && in_range(x_lo)).then_some((
+                (x_lo, point.y),
+                (x_hi, point.y),
+                false,
+            ));
+            for (low, high, vertical) in vertical.into_iter().chain(horizontal) {
                 chart
                     .draw_series([PathElement::new(vec![low, high], style)])
                     .map_err(e)?;
                 chart
-                    .draw_series([cap(low, true), cap(high, true)])
-                    .map_err(e)?;
-            }
-            if x_hi > x_lo && in_range(x_lo) {
-                let (low, high) = ((x_lo, point.y), (x_hi, point.y));
-                chart
-                    .draw_series([PathElement::new(vec![low, high], style)])
-                    .map_err(e)?;
-                chart
-                    .draw_series([cap(low, false), cap(high, false)])
+                    .draw_series([cap(low, vertical), cap(high, vertical)])
                     .map_err(e)?;
             }
         }

@@ -19,16 +19,13 @@ use std::path::Path;
 pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     let voltage = positive("voltage", &spec.voltage, Dimension::VOLTAGE)?;
     let robots = compute(spec, voltage)?;
-    let mut outcome = Outcome {
-        method: format!(
-            "For each robot and degree of freedom, at {voltage} V: the free deflection d of the \
+    let mut outcome = Outcome::with_method(format!(
+        "For each robot and degree of freedom, at {voltage} V: the free deflection d of the \
              foot along the test axis (lift: z, swing: x; one way from rest) and the blocked \
              force F (foot held at its rest position along that axis, frictionless), as in \
              experiment 2 without off-axis load; F·d and F·d/(F_b δ_f) with the model's \
              actuator F_b and δ_f, as in Table IV."
-        ),
-        ..Outcome::default()
-    };
+    ));
     let mut table = Table::new(
         "Model against the paper's Table IV (measured mean ± s.d., n = 2)",
         &[

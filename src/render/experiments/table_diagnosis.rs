@@ -17,9 +17,8 @@ use crate::render::table::Table;
 
 pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     let robots = compute(spec)?;
-    let mut outcome = Outcome {
-        method: format!(
-            "The paper's Table IV (from `{}`) as measured data: per robot, the free deflection \
+    let mut outcome = Outcome::with_method(format!(
+        "The paper's Table IV (from `{}`) as measured data: per robot, the free deflection \
              d and blocked force F of the lift and swing tests (mean ± s.d., n = 2; the s.d. is \
              the σ of each value) at the compare experiment's voltage, the foot driven the way \
              the paper's test moved it, the sensor pushing back along y with {:.0} % of the \
@@ -32,11 +31,9 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
              more than 10 and brings χ² per value within the noise band (explained) or not \
              (partly explained); causes within 2 of each other's AICc are a tie, and the \
              standard test that would separate them is named.",
-            spec.table.display(),
-            spec.off_axis_fraction * 100.0
-        ),
-        ..Outcome::default()
-    };
+        spec.table.display(),
+        spec.off_axis_fraction * 100.0
+    ));
     let mut causes = Table::new(
         "What the diagnosis names, per robot",
         &[
