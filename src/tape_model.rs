@@ -18,7 +18,7 @@ use std::sync::{Arc, OnceLock};
 use mech_codegen::back::tape::{Env, Program, Tape};
 use mech_codegen::Compiled;
 use mech_jit::{JitProgram, Scratch};
-use mech_runtime::model::{constrained_terms_by_part, dynamics_terms_by_part, rates_equal_speeds};
+use mech_runtime::model::{rates_equal_speeds, terms_by_part};
 
 /// How a [`TapeModel`] evaluates its programs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -485,7 +485,8 @@ impl mech_runtime::Model for TapeModel {
         bias: &mut [f64],
     ) {
         if !self.fused() {
-            return constrained_terms_by_part(self, t, q, u, inputs, mass, forcing, jacobian, bias);
+            let parts = [mass, forcing, bias];
+            return terms_by_part(self, t, q, u, inputs, parts, Some(jacobian));
         }
         let env = self.env(t, q, u, inputs);
         self.run_fused(
@@ -506,7 +507,7 @@ impl mech_runtime::Model for TapeModel {
         bias: &mut [f64],
     ) {
         if !self.fused() {
-            return dynamics_terms_by_part(self, t, q, u, inputs, mass, forcing, bias);
+            return terms_by_part(self, t, q, u, inputs, [mass, forcing, bias], None);
         }
         let env = self.env(t, q, u, inputs);
         self.run_fused(Slot::DynamicsTerms, &env, &mut [mass, forcing, bias]);

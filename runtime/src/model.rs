@@ -17,40 +17,24 @@ pub fn rates_equal_speeds(u: &[f64], out: &mut [f64]) {
     }
 }
 
-/// [`Model::constrained_terms`] one part at a time (`M`, `F`, `J`, `J̇u` each by its own
-/// method): the default, and what a model with a fused pass falls back to without it.
-#[allow(clippy::too_many_arguments)]
-pub fn constrained_terms_by_part<M: Model + ?Sized>(
+/// `M`, `F`, `J̇u` and, if asked for, `J`, each by its own method: the default of
+/// [`Model::constrained_terms`] (with `J`) and [`Model::dynamics_terms`] (without), and what
+/// a model with a fused pass of them falls back to where it has none.
+pub fn terms_by_part<M: Model + ?Sized>(
     model: &M,
     t: f64,
     q: &[f64],
     u: &[f64],
     inputs: &[f64],
-    mass: &mut [f64],
-    forcing: &mut [f64],
-    jacobian: &mut [f64],
-    bias: &mut [f64],
-) {
-    dynamics_terms_by_part(model, t, q, u, inputs, mass, forcing, bias);
-    model.constraint_jacobian(t, q, jacobian);
-}
-
-/// [`Model::dynamics_terms`] one part at a time (`M`, `F`, `J̇u`), as
-/// [`constrained_terms_by_part`].
-#[allow(clippy::too_many_arguments)]
-pub fn dynamics_terms_by_part<M: Model + ?Sized>(
-    model: &M,
-    t: f64,
-    q: &[f64],
-    u: &[f64],
-    inputs: &[f64],
-    mass: &mut [f64],
-    forcing: &mut [f64],
-    bias: &mut [f64],
+    [mass, forcing, bias]: [&mut [f64]; 3],
+    jacobian: Option<&mut [f64]>,
 ) {
     model.mass_matrix(t, q, inputs, mass);
     model.forcing(t, q, u, inputs, forcing);
     model.constraint_bias(t, q, u, bias);
+    if let Some(jacobian) = jacobian {
+        model.constraint_jacobian(t, q, jacobian);
+    }
 }
 
 /// A multibody model in Kane's form `M(q) u̇ = F(t, q, u, inputs)`, `q̇ = W(q) u`
@@ -194,7 +178,7 @@ pub trait Model {
         jacobian: &mut [f64],
         bias: &mut [f64],
     ) {
-        constrained_terms_by_part(self, t, q, u, inputs, mass, forcing, jacobian, bias);
+        terms_by_part(self, t, q, u, inputs, [mass, forcing, bias], Some(jacobian));
     }
 
     /// `M`, `F` and `J̇u` in one call (`M` column-major): [`Model::constrained_terms`] without
@@ -212,7 +196,7 @@ pub trait Model {
         forcing: &mut [f64],
         bias: &mut [f64],
     ) {
-        dynamics_terms_by_part(self, t, q, u, inputs, mass, forcing, bias);
+        terms_by_part(self, t, q, u, inputs, [mass, forcing, bias], None);
     }
 
     /// Number of flexures (compliant hinges with a loss factor).
