@@ -383,19 +383,7 @@ fn parse_bytes(path: &Path, bytes: &[u8], errors: &mut Collector) -> Option<Meas
         });
         return None;
     }
-    for (index, (column, values)) in fields.iter().zip(&columns).enumerate() {
-        for (row, median) in outliers(values) {
-            let scale = column.conversion.scale();
-            errors.push(DataError::Outlier {
-                path: path.to_path_buf(),
-                line: lines[row],
-                index: index + 1,
-                column: column.name.clone(),
-                text: format!("{:e}", values[row] / scale),
-                median: median / scale,
-            });
-        }
-    }
+    check_outliers(path, &fields, &columns, &lines, errors);
     let rows = lines.len();
     let columns = fields
         .into_iter()
@@ -414,6 +402,30 @@ fn parse_bytes(path: &Path, bytes: &[u8], errors: &mut Collector) -> Option<Meas
         rows,
         lines,
     })
+}
+
+/// An error for each value far beyond its column's median magnitude ([`outliers`]), at its
+/// file `lines` (one per row).
+fn check_outliers(
+    path: &Path,
+    fields: &[Header],
+    columns: &[Vec<f64>],
+    lines: &[usize],
+    errors: &mut Collector,
+) {
+    for (index, (column, values)) in fields.iter().zip(columns).enumerate() {
+        for (row, median) in outliers(values) {
+            let scale = column.conversion.scale();
+            errors.push(DataError::Outlier {
+                path: path.to_path_buf(),
+                line: lines[row],
+                index: index + 1,
+                column: column.name.clone(),
+                text: format!("{:e}", values[row] / scale),
+                median: median / scale,
+            });
+        }
+    }
 }
 
 /// How far beyond its column's median magnitude a value may lie. Measured series span a
