@@ -21,6 +21,7 @@ pub mod session;
 pub mod signal_spec;
 pub mod sweep;
 pub mod tape_model;
+pub mod toml_file;
 
 /// The models of `models/`, compiled to Rust by `build.rs` through the public build API.
 pub mod models {

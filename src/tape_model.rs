@@ -18,6 +18,7 @@ use std::sync::{Arc, OnceLock};
 use mech_codegen::back::tape::{Env, Program, Tape};
 use mech_codegen::Compiled;
 use mech_jit::{JitProgram, Scratch};
+use mech_runtime::model::{rates_equal_speeds, terms_by_part};
 
 /// How a [`TapeModel`] evaluates its programs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -389,7 +390,7 @@ impl mech_runtime::Model for TapeModel {
     fn kinematic_rates(&self, t: f64, q: &[f64], u: &[f64], out: &mut [f64]) {
         match self.tape.kinematic_rates {
             Some(_) => self.eval(Slot::KinematicRates, t, q, u, &[], out),
-            None => mech_runtime::model::rates_equal_speeds(u, out),
+            None => rates_equal_speeds(u, out),
         }
     }
     fn unit_quaternions(&self) -> &[usize] {
@@ -484,10 +485,8 @@ impl mech_runtime::Model for TapeModel {
         bias: &mut [f64],
     ) {
         if !self.fused() {
-            self.mass_matrix(t, q, inputs, mass);
-            self.forcing(t, q, u, inputs, forcing);
-            self.constraint_jacobian(t, q, jacobian);
-            return self.constraint_bias(t, q, u, bias);
+            let parts = [mass, forcing, bias];
+            return terms_by_part(self, t, q, u, inputs, parts, Some(jacobian));
         }
         let env = self.env(t, q, u, inputs);
         self.run_fused(
@@ -508,9 +507,7 @@ impl mech_runtime::Model for TapeModel {
         bias: &mut [f64],
     ) {
         if !self.fused() {
-            self.mass_matrix(t, q, inputs, mass);
-            self.forcing(t, q, u, inputs, forcing);
-            return self.constraint_bias(t, q, u, bias);
+            return terms_by_part(self, t, q, u, inputs, [mass, forcing, bias], None);
         }
         let env = self.env(t, q, u, inputs);
         self.run_fused(Slot::DynamicsTerms, &env, &mut [mass, forcing, bias]);

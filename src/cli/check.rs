@@ -7,6 +7,7 @@ use super::Error;
 use std::path::PathBuf;
 
 use clap::Args;
+use mech_codegen::ir::{Dimension, Model};
 
 use crate::session::{self, Session};
 
@@ -48,6 +49,35 @@ pub fn run(args: &CheckArgs) -> Result<(), Error> {
             println!("  {line}");
         }
     }
+    print_coordinates(model);
+    print_bodies(model);
+    let list = |title: &str, items: Vec<String>| {
+        if !items.is_empty() {
+            println!("\n{title}: {}", items.join(", "));
+        }
+    };
+    list(
+        "parameters",
+        model
+            .params
+            .iter()
+            .map(|(_, p)| format!("{} = {} {}", p.name, p.value, p.dimension))
+            .collect(),
+    );
+    list(
+        "inputs",
+        model
+            .inputs
+            .iter()
+            .map(|(_, i)| format!("{} [{}]", i.name, i.dimension))
+            .collect(),
+    );
+    list("outputs", compiled.equations.output_names.clone());
+    Ok(())
+}
+
+/// Each joint's coordinates (and quaternion) with their initial values.
+fn print_coordinates(model: &Model) {
     match model.quaternions.is_empty() {
         true => println!("\ncoordinates (q, with u = q̇):"),
         false => println!("\ncoordinates (q, with u = q̇ except for quaternions: q̇ = W(q) u):"),
@@ -55,7 +85,7 @@ pub fn run(args: &CheckArgs) -> Result<(), Error> {
     for (_, joint) in model.joints.iter() {
         for &c in &joint.coordinates {
             let coordinate = &model.coordinates[c];
-            let unit = if coordinate.dimension == mech_codegen::ir::Dimension::NONE {
+            let unit = if coordinate.dimension == Dimension::NONE {
                 "rad"
             } else {
                 "m"
@@ -82,6 +112,10 @@ pub fn run(args: &CheckArgs) -> Result<(), Error> {
             );
         }
     }
+}
+
+/// Each body and the joint that attaches it to its parent.
+fn print_bodies(model: &Model) {
     println!("\nbodies:");
     for (_, body) in model.bodies.iter() {
         let parent = model
@@ -99,27 +133,4 @@ pub fn run(args: &CheckArgs) -> Result<(), Error> {
         });
         println!("  {:<16} {attached}", body.name);
     }
-    let list = |title: &str, items: Vec<String>| {
-        if !items.is_empty() {
-            println!("\n{title}: {}", items.join(", "));
-        }
-    };
-    list(
-        "parameters",
-        model
-            .params
-            .iter()
-            .map(|(_, p)| format!("{} = {} {}", p.name, p.value, p.dimension))
-            .collect(),
-    );
-    list(
-        "inputs",
-        model
-            .inputs
-            .iter()
-            .map(|(_, i)| format!("{} [{}]", i.name, i.dimension))
-            .collect(),
-    );
-    list("outputs", compiled.equations.output_names.clone());
-    Ok(())
 }

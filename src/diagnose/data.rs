@@ -165,6 +165,11 @@ pub struct DataErrors {
 }
 
 impl MeasuredData {
+    /// The 1-based file line of data row `row` (0 if there is no such row).
+    pub fn line(&self, row: usize) -> usize {
+        self.lines.get(row).copied().unwrap_or(0)
+    }
+
     /// Reads and checks the CSV file at `path`.
     pub fn load(path: &Path) -> Result<MeasuredData, DataErrors> {
         match std::fs::read(path) {
@@ -237,8 +242,8 @@ impl MeasuredData {
             if !increasing {
                 return Err(DataError::NotIncreasing {
                     path: self.path.clone(),
-                    line: self.lines.get(k + 1).copied().unwrap_or(0),
-                    previous_line: self.lines.get(k).copied().unwrap_or(0),
+                    line: self.line(k + 1),
+                    previous_line: self.line(k),
                     index: index + 1,
                     column: column.name.clone(),
                     previous: pair[0],
@@ -378,19 +383,7 @@ fn parse_bytes(path: &Path, bytes: &[u8], errors: &mut Collector) -> Option<Meas
         });
         return None;
     }
-    for (index, (column, values)) in fields.iter().zip(&columns).enumerate() {
-        for (row, median) in outliers(values) {
-            let scale = column.conversion.scale();
-            errors.push(DataError::Outlier {
-                path: path.to_path_buf(),
-                line: lines[row],
-                index: index + 1,
-                column: column.name.clone(),
-                text: format!("{:e}", values[row] / scale),
-                median: median / scale,
-            });
-        }
-    }
+    check_outliers(path, &fields, &columns, &lines, errors);
     let rows = lines.len();
     let columns = fields
         .into_iter()
@@ -409,6 +402,30 @@ fn parse_bytes(path: &Path, bytes: &[u8], errors: &mut Collector) -> Option<Meas
         rows,
         lines,
     })
+}
+
+/// An error for each value far beyond its column's median magnitude ([`outliers`]), at its
+/// file `lines` (one per row).
+fn check_outliers(
+    path: &Path,
+    fields: &[Header],
+    columns: &[Vec<f64>],
+    lines: &[usize],
+    errors: &mut Collector,
+) {
+    for (index, (column, values)) in fields.iter().zip(columns).enumerate() {
+        for (row, median) in outliers(values) {
+            let scale = column.conversion.scale();
+            errors.push(DataError::Outlier {
+                path: path.to_path_buf(),
+                line: lines[row],
+                index: index + 1,
+                column: column.name.clone(),
+                text: format!("{:e}", values[row] / scale),
+                median: median / scale,
+            });
+        }
+    }
 }
 
 /// How far beyond its column's median magnitude a value may lie. Measured series span a

@@ -24,6 +24,7 @@ use super::data::DataError;
 use super::lm::LmError;
 use crate::experiments;
 use crate::session;
+use crate::toml_file::TomlError;
 
 /// Why `mech fit` or `mech diagnose` cannot go on.
 #[derive(Debug)]
@@ -35,16 +36,7 @@ pub enum Error {
     },
     /// The experiment file is not valid TOML, or a key is unknown, missing or of the wrong
     /// type.
-    ExperimentToml {
-        path: PathBuf,
-        error: toml::de::Error,
-    },
-    /// A key no kind has, at `line` (1-based) of the experiment file.
-    UnknownKey {
-        path: PathBuf,
-        key: String,
-        line: usize,
-    },
+    ExperimentToml { path: PathBuf, error: TomlError },
     /// A key of the experiment file has a value that cannot be used.
     Experiment { path: PathBuf, error: KeyError },
     /// A key of the experiment does not match the model it names (found once the model is
@@ -160,13 +152,6 @@ pub enum KeyError {
     NotPercentage { key: &'static str, text: String },
     /// A noise that is zero, negative or not finite.
     NoiseNotPositive { key: &'static str, text: String },
-    /// A key whose value has the wrong type (found by value: flattened keys lose their span).
-    Mistyped {
-        key: String,
-        line: usize,
-        /// The parser's message.
-        message: String,
-    },
     /// A noise whose unit is not that of what it is the noise of (`0.05 mm` for an angle).
     NoiseUnit {
         key: &'static str,
@@ -231,18 +216,14 @@ impl fmt::Display for Error {
             Error::ReadExperiment { path, error } => {
                 write!(f, "cannot read experiment `{}`: {error}", path.display())
             }
-            Error::ExperimentToml { path, error } => write!(
-                f,
-                "experiment `{}`: {}",
-                path.display(),
-                error.to_string().trim_end()
-            ),
-            Error::UnknownKey { path, key, line } => write!(
-                f,
-                "experiment `{}`, line {line}: unknown key `{key}`\n  hint: docs/diagnose.md \
-                 lists the keys of each kind",
-                path.display()
-            ),
+            // `experiment `…`, line 4: unknown key …`: the line belongs to the file.
+            Error::ExperimentToml {
+                path,
+                error: error @ TomlError::UnknownKey { .. },
+            } => write!(f, "experiment `{}`, {error}", path.display()),
+            Error::ExperimentToml { path, error } => {
+                write!(f, "experiment `{}`: {error}", path.display())
+            }
             Error::Experiment { path, error } => {
                 write!(f, "experiment `{}`: {error}", path.display())
             }
@@ -382,9 +363,6 @@ impl fmt::Display for KeyError {
             }
             KeyError::NoiseNotPositive { key, text } => {
                 write!(f, "key `{key}`: expected a positive noise, got `{text}`")
-            }
-            KeyError::Mistyped { key, line, message } => {
-                crate::experiments::error::mistyped_text(f, key, *line, message)
             }
             KeyError::NoiseUnit {
                 key,

@@ -44,6 +44,7 @@ use super::pendulum::{self, Pendulum, Screening};
 use crate::experiments::leg::{Dof, ForceTest, Leg, Sensor, WarmStarts};
 use crate::frequency::Channel;
 use crate::session::ModelSpec;
+use crate::toml_file;
 
 /// One diagnosis experiment file: the keys every kind has (a title, the model), then the
 /// kind's own keys.
@@ -174,6 +175,13 @@ pub struct Extensions {
     pub off_axis_fraction: Option<f64>,
 }
 
+impl Extensions {
+    /// The sensor's off-axis load fraction: the extension's, in place of the file's `written`.
+    fn off_axis(&self, written: f64) -> f64 {
+        self.off_axis_fraction.unwrap_or(written)
+    }
+}
+
 /// Reads and checks a diagnosis experiment file.
 pub fn load(path: &Path) -> Result<Experiment, Error> {
     let text = std::fs::read_to_string(path).map_err(|error| Error::ReadExperiment {
@@ -187,26 +195,12 @@ pub fn load(path: &Path) -> Result<Experiment, Error> {
 /// messages (the model path in the text stays as written).
 pub fn parse(path: &Path, text: &str) -> Result<Experiment, Error> {
     let path_buf = || path.to_path_buf();
-    let experiment: Experiment = toml::from_str(text).map_err(|error| {
-        let message = error.to_string();
-        if let Some((key, line)) = crate::experiments::error::unknown_key(text, &message) {
-            return Error::UnknownKey {
-                path: path_buf(),
-                key,
-                line,
-            };
-        }
-        match crate::experiments::error::mistyped_key(text, &message) {
-            Some((key, line)) => Error::Experiment {
-                path: path_buf(),
-                error: KeyError::Mistyped { key, line, message },
-            },
-            None => Error::ExperimentToml {
-                path: path_buf(),
-                error,
-            },
-        }
-    })?;
+    let hint = "docs/diagnose.md lists the keys of each kind";
+    let experiment: Experiment =
+        toml_file::parse(text, hint).map_err(|error| Error::ExperimentToml {
+            path: path_buf(),
+            error,
+        })?;
     experiment.check().map_err(|error| Error::Experiment {
         path: path_buf(),
         error,
@@ -343,15 +337,13 @@ impl QuasiStatic {
                 .output_index(name)
                 .ok_or_else(|| KeyError::UnknownOutput { name: name.clone() })?;
             let values = data.require(name, Dimension::LENGTH)?;
-            let noise = match self.noise.get(k) {
-                Some(text) => Some(noise_value("noise", text, Dimension::LENGTH)?),
-                None => None,
-            };
+            let noise = self
+                .noise
+                .get(k)
+                .map(|text| noise_value("noise", text, Dimension::LENGTH))
+                .transpose()?;
             for (row, &v) in values.iter().enumerate() {
-                obs.values.push(v);
-                obs.series.push(name.clone());
-                obs.abscissa.push(row as f64);
-                obs.row.push(row);
+                obs.push(v, name, row as f64, row);
                 sigma.push(noise.unwrap_or(f64::NAN));
             }
         }
@@ -389,7 +381,7 @@ impl QuasiStatic {
             q = leg
                 .warm_equilibrium(warm, row, &q, &inputs, &[], &[])
                 .map_err(|error| Error::Equilibrium {
-                    line: data.lines.get(row).copied().unwrap_or(0),
+                    line: data.line(row),
                     error: Box::new(error),
                 })?
                 .q;
@@ -409,14 +401,16 @@ impl FrequencyResponse {
         let mut obs = Observations::default();
         leg.require_hamr().map_err(Error::leg)?;
         let frequency = data.require("frequency", Dimension::FREQUENCY)?;
-        let gain_sigma = match &self.gain_noise {
-            Some(t) => Some(noise_value("gain_noise", t, Dimension::NONE)?),
-            None => None,
-        };
-        let phase_sigma = match &self.phase_noise {
-            Some(t) => Some(noise_value("phase_noise", t, Dimension::NONE)?),
-            None => None,
-        };
+        let gain_sigma = self
+            .gain_noise
+            .as_ref()
+            .map(|t| noise_value("gain_noise", t, Dimension::NONE))
+            .transpose()?;
+        let phase_sigma = self
+            .phase_noise
+            .as_ref()
+            .map(|t| noise_value("phase_noise", t, Dimension::NONE))
+            .transpose()?;
         let mut sigma = Vec::new();
         for (suffix, input, output) in self.channels() {
             let unknown = |port: &'static str, name: &str| KeyError::UnknownChannelPort {
@@ -435,22 +429,16 @@ impl FrequencyResponse {
             if let Some(bad) = gain.iter().position(|&g| g <= 0.0) {
                 return Err(Error::GainNotPositive {
                     path: data.path.clone(),
-                    line: data.lines.get(bad).copied().unwrap_or(0),
+                    line: data.line(bad),
                 });
             }
             for (row, (&f, &g)) in frequency.iter().zip(gain).enumerate() {
-                obs.values.push(g.ln());
-                obs.series.push(format!("ln|H|{suffix}"));
-                obs.abscissa.push(f);
-                obs.row.push(row);
+                obs.push(g.ln(), format!("ln|H|{suffix}"), f, row);
                 // A relative gain noise σ_g is σ_g on ln|H| to first order.
                 sigma.push(gain_sigma.unwrap_or(f64::NAN));
             }
             for (row, (&f, &p)) in frequency.iter().zip(phase).enumerate() {
-                obs.values.push(p);
-                obs.series.push(format!("phase{suffix}"));
-                obs.abscissa.push(f);
-                obs.row.push(row);
+                obs.push(p, format!("phase{suffix}"), f, row);
                 sigma.push(phase_sigma.unwrap_or(f64::NAN));
             }
         }
@@ -517,18 +505,16 @@ impl ForceDeflectionTest {
         if let Some(bad) = distance.iter().position(|&d| d < 0.0) {
             return Err(Error::NegativeDistance {
                 path: data.path.clone(),
-                line: data.lines.get(bad).copied().unwrap_or(0),
+                line: data.line(bad),
             });
         }
-        let noise = match &self.noise {
-            Some(text) => Some(noise_value("noise", text, Dimension::FORCE)?),
-            None => None,
-        };
+        let noise = self
+            .noise
+            .as_ref()
+            .map(|text| noise_value("noise", text, Dimension::FORCE))
+            .transpose()?;
         for (row, (&d, &f)) in distance.iter().zip(force).enumerate() {
-            obs.values.push(f);
-            obs.series.push("force".into());
-            obs.abscissa.push(d);
-            obs.row.push(row);
+            obs.push(f, "force", d, row);
         }
         obs.sigma = noise.map(|sigma| vec![sigma; obs.values.len()]);
         Ok(obs)
@@ -543,9 +529,7 @@ impl ForceDeflectionTest {
         warm: &mut WarmStarts,
     ) -> Result<Vec<f64>, Error> {
         leg.require_hamr().map_err(Error::leg)?;
-        let fraction = extensions
-            .off_axis_fraction
-            .unwrap_or(self.off_axis_fraction);
+        let fraction = extensions.off_axis(self.off_axis_fraction);
         let distances = measured.abscissa.clone();
         let test = ForceTest::new(self.dof, volts(&self.voltage)?, Sensor::At(distances))
             .off_axis(fraction)
@@ -622,15 +606,16 @@ impl ForceDeflectionTable {
                 if sd <= 0.0 {
                     return Err(Error::SpreadNotPositive {
                         path: data.path.clone(),
-                        line: data.lines.get(row).copied().unwrap_or(0),
+                        line: data.line(row),
                         column: sd_column,
                     });
                 }
-                obs.values.push(value);
-                obs.series
-                    .push(format!("{column}.{}", self.test[row].dof.name()));
-                obs.abscissa.push(row as f64);
-                obs.row.push(row);
+                obs.push(
+                    value,
+                    format!("{column}.{}", self.test[row].dof.name()),
+                    row as f64,
+                    row,
+                );
                 sigma.push(sd);
             }
         }
@@ -647,9 +632,7 @@ impl ForceDeflectionTable {
         warm: &mut WarmStarts,
     ) -> Result<Vec<f64>, Error> {
         leg.require_hamr().map_err(Error::leg)?;
-        let fraction = extensions
-            .off_axis_fraction
-            .unwrap_or(self.off_axis_fraction);
+        let fraction = extensions.off_axis(self.off_axis_fraction);
         let voltage = volts(&self.voltage)?;
         let mut deflections = Vec::with_capacity(self.test.len());
         let mut forces = Vec::with_capacity(self.test.len());

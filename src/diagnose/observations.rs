@@ -24,6 +24,14 @@ pub struct Observations {
 }
 
 impl Observations {
+    /// Appends one value of `series` at `abscissa`, from data row `row`.
+    pub fn push(&mut self, value: f64, series: impl Into<String>, abscissa: f64, row: usize) {
+        self.values.push(value);
+        self.series.push(series.into());
+        self.abscissa.push(abscissa);
+        self.row.push(row);
+    }
+
     /// The series in order of first appearance.
     pub fn series_names(&self) -> Vec<&str> {
         let mut names: Vec<&str> = Vec::new();

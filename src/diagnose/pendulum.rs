@@ -162,10 +162,11 @@ impl Pendulum {
                 path: data.path.clone(),
             });
         }
-        let noise = match &self.noise {
-            Some(text) => Some(noise_value("noise", text, Dimension::NONE)?),
-            None => None,
-        };
+        let noise = self
+            .noise
+            .as_ref()
+            .map(|text| noise_value("noise", text, Dimension::NONE))
+            .transpose()?;
         Ok(Observations {
             values: angles.to_vec(),
             sigma: noise.map(|s| vec![s; angles.len()]),

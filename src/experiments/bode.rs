@@ -113,18 +113,9 @@ pub struct Source {
     pub resonances: Vec<Resonance>,
 }
 
-/// Linearizes the leg at rest and computes every channel's responses (chirps in parallel,
-/// one per channel).
-pub fn compute(spec: &Spec) -> Result<Responses, Error> {
-    let from = positive("from", &spec.from, Dimension::FREQUENCY)?;
-    let to = positive("to", &spec.to, Dimension::FREQUENCY)?;
-    let leg = Leg::open(&spec.model)?;
-    let model = leg.model();
-    let (rest_q, linear) = leg.rest_linearization()?;
-    let modes = linear.modes().ok_or(Error::NoModes)?;
-    let frequencies = frequency::log_space(from, to, spec.points);
-    let indices = spec
-        .channel
+/// Each channel's `(input, output)` indices in the leg's model.
+fn channel_ports(spec: &Spec, leg: &Leg) -> Result<Vec<(usize, usize)>, Error> {
+    spec.channel
         .iter()
         .map(|channel| {
             let input = leg.session.input_index(&channel.input);
@@ -136,7 +127,20 @@ pub fn compute(spec: &Spec) -> Result<Responses, Error> {
                 }
             }
         })
-        .collect::<Result<Vec<_>, Error>>()?;
+        .collect()
+}
+
+/// Linearizes the leg at rest and computes every channel's responses (chirps in parallel,
+/// one per channel).
+pub fn compute(spec: &Spec) -> Result<Responses, Error> {
+    let from = positive("from", &spec.from, Dimension::FREQUENCY)?;
+    let to = positive("to", &spec.to, Dimension::FREQUENCY)?;
+    let leg = Leg::open(&spec.model)?;
+    let model = leg.model();
+    let (rest_q, linear) = leg.rest_linearization()?;
+    let modes = linear.modes().ok_or(Error::NoModes)?;
+    let frequencies = frequency::log_space(from, to, spec.points);
+    let indices = channel_ports(spec, &leg)?;
     let estimates = match &spec.chirp {
         Some(chirp) => {
             let (amplitude, duration, analysis_from) = chirp.settings()?;

@@ -2,7 +2,7 @@
 //! drive, each naming the file, key, model or part of the experiment it concerns.
 //!
 //! Consumes: the typed errors of the layers below ([`session::Error`], [`RuntimeError`],
-//! [`PlotError`], [`RefineError`]). Produces: [`Error`], whose `Display` is the message users read.
+//! [`PlotError`], [`RefineError`], [`TomlError`]). Produces: [`Error`], whose `Display` is the message users read.
 
 use std::fmt;
 use std::path::PathBuf;
@@ -11,6 +11,7 @@ use mech_runtime::RuntimeError;
 
 use crate::frequency::RefineError;
 use crate::render::plot::PlotError;
+use crate::toml_file::TomlError;
 use crate::{quantity, session};
 
 #[derive(Debug)]
@@ -24,23 +25,9 @@ pub enum Error {
     NoExperimentFiles {
         folder: PathBuf,
     },
-    /// The file is not TOML of any experiment kind (the parser's message, with its line).
-    Toml {
-        message: String,
-    },
+    /// The file is not TOML of any experiment kind: a key no kind has, a mistyped value, …
+    Toml(TomlError),
     MissingKind,
-    /// A key no kind has (`line` of the file, 1-based, where it is set).
-    UnknownKey {
-        key: String,
-        line: usize,
-    },
-    /// A key whose value has the wrong type (a number where a quantity string is expected).
-    MistypedKey {
-        key: String,
-        line: usize,
-        /// The parser's message.
-        message: String,
-    },
     /// A key's value is unreadable or out of range (the message names the key).
     Key {
         message: String,
@@ -137,13 +124,7 @@ impl fmt::Display for Error {
             Error::NoExperimentFiles { folder } => {
                 write!(f, "no `*.toml` experiment files in `{}`", folder.display())
             }
-            Error::Toml { message } => f.write_str(message),
-            Error::UnknownKey { key, line } => write!(
-                f,
-                "line {line}: unknown key `{key}`\n  hint: docs/experiments.md lists the keys of \
-                 each kind"
-            ),
-            Error::MistypedKey { key, line, message } => mistyped_text(f, key, *line, message),
+            Error::Toml(error) => write!(f, "{error}"),
             Error::MissingKind => f.write_str(
                 "missing key `kind`: expected one of \"trajectory\", \"force_deflection\", \
                  \"ratio_sweep\", \"compare\", \"bode\", \"table_diagnosis\", \"tolerance\", \
@@ -216,55 +197,4 @@ impl From<PlotError> for Error {
     fn from(error: PlotError) -> Error {
         Error::Plot(error)
     }
-}
-
-/// The key and line of the parser's "unknown field" `message` on `text`. The keys every kind
-/// shares are flattened into the kind's (serde's `flatten`), which loses the parser's span
-/// of the offending key, so its line is found by name: the first `key = …` line.
-pub(crate) fn unknown_key(text: &str, message: &str) -> Option<(String, usize)> {
-    let key = message.split("unknown field `").nth(1)?.split('`').next()?;
-    let line = text.lines().position(|line| {
-        line.trim_start()
-            .strip_prefix(key)
-            .is_some_and(|rest| rest.trim_start().starts_with('='))
-    })?;
-    Some((key.to_string(), line + 1))
-}
-
-/// The message of [`mistyped_key`]'s finding: line, key, the parser's reason and a hint.
-pub(crate) fn mistyped_text(
-    f: &mut fmt::Formatter<'_>,
-    key: &str,
-    line: usize,
-    message: &str,
-) -> fmt::Result {
-    let message = message.lines().last().unwrap_or_default();
-    write!(f, "line {line}: key `{key}`: {message}")?;
-    if message.contains("expected a string") {
-        write!(
-            f,
-            "\n  hint: quantities are strings with a unit, e.g. `{key} = \"0.5 mN\"`"
-        )?;
-    }
-    Ok(())
-}
-
-/// The key and line of the value the parser's "invalid type" `message` is about, on `text`
-/// (e.g. "invalid type: floating point `0.05`, expected a string"): flattened keys lose
-/// their span, so the parser points at the file's start. Found as the only `key = VALUE`
-/// line with that value; `None` if there is no such line or more than one.
-pub(crate) fn mistyped_key(text: &str, message: &str) -> Option<(String, usize)> {
-    let found = message.split("invalid type: ").nth(1)?;
-    let value = match found.split_once('`') {
-        Some((_, rest)) => rest.split('`').next()?.to_string(),
-        // Strings are quoted: `string "abc"`.
-        None => format!("\"{}\"", found.split('"').nth(1)?),
-    };
-    let mut matches = text.lines().enumerate().filter_map(|(k, line)| {
-        let (key, rest) = line.split_once('=')?;
-        let rest = rest.split('#').next().unwrap_or_default().trim();
-        (rest == value).then(|| (key.trim().to_string(), k + 1))
-    });
-    let first = matches.next()?;
-    matches.next().is_none().then_some(first)
 }

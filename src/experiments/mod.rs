@@ -27,6 +27,8 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
+use crate::toml_file::{self, TomlError};
+
 pub use error::Error;
 
 /// One experiment file: what every kind has (a title, notes on the comparison with the
@@ -66,19 +68,12 @@ pub fn load(path: &Path) -> Result<Experiment, Error> {
 
 /// Parses an experiment from TOML text.
 pub fn parse(text: &str) -> Result<Experiment, Error> {
-    let experiment: Experiment = toml::from_str(text).map_err(|e| {
-        let message = e.to_string();
-        if message.contains("missing field `kind`") {
+    let hint = "docs/experiments.md lists the keys of each kind";
+    let experiment: Experiment = toml_file::parse(text, hint).map_err(|error| match error {
+        TomlError::Other { message } if message.contains("missing field `kind`") => {
             Error::MissingKind
-        } else if let Some((key, line)) = error::unknown_key(text, &message) {
-            Error::UnknownKey { key, line }
-        } else if let Some((key, line)) = error::mistyped_key(text, &message) {
-            Error::MistypedKey { key, line, message }
-        } else {
-            Error::Toml {
-                message: message.trim_end().to_string(),
-            }
         }
+        error => Error::Toml(error),
     })?;
     experiment.check()?;
     Ok(experiment)

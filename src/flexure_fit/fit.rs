@@ -615,20 +615,12 @@ pub fn fit_results(specimens: Vec<SpecimenResult>, options: &FitOptions) -> FitR
     let loss_frequency = fit_loss_frequency(&specimens);
     findings.extend(loss_frequency.as_ref().and_then(loss_frequency_finding));
     let uncastellated = (unc.len() >= 2).then(|| {
-        let widths: Vec<f64> = unc
-            .iter()
-            .map(|&i| specimens[i].specimen.flexure.width)
-            .collect();
-        let ys: Vec<f64> = unc
-            .iter()
-            .map(|&i| specimens[i].normalized_stiffness())
-            .collect();
-        let zs: Vec<f64> = unc
-            .iter()
-            .map(|&i| specimens[i].normalized_damping())
-            .collect();
-        let stiffness_line = fit_through_origin(&widths, &ys);
-        let damping_line = fit_through_origin(&widths, &zs);
+        let (stiffness_line, damping_line) = width_lines(
+            &specimens,
+            &unc,
+            SpecimenResult::normalized_stiffness,
+            SpecimenResult::normalized_damping,
+        );
         ModulusFit {
             youngs_modulus: stiffness_line.slope,
             loss_factor: damping_line.slope / stiffness_line.slope,
@@ -667,46 +659,7 @@ pub fn fit_results(specimens: Vec<SpecimenResult>, options: &FitOptions) -> FitR
         .or(uncastellated.as_ref().map(|f| f.youngs_modulus))
         .unwrap_or(crate::physics::Material::KAPTON_HN.youngs_modulus);
 
-    // Group castellated hinges by (thickness, length), to 1 nm.
-    let mut groups: BTreeMap<(i64, i64), Vec<usize>> = BTreeMap::new();
-    for (i, s) in specimens.iter().enumerate() {
-        let f = &s.specimen.flexure;
-        if f.kind == Kind::Castellated {
-            let key = (
-                (f.thickness * 1e9).round() as i64,
-                (f.length * 1e9).round() as i64,
-            );
-            groups.entry(key).or_default().push(i);
-        }
-    }
-    let castellated: Vec<CastellatedFit> = groups
-        .into_values()
-        .filter(|members| members.len() >= 2)
-        .map(|members| {
-            let f = specimens[members[0]].specimen.flexure;
-            let widths: Vec<f64> = members
-                .iter()
-                .map(|&i| specimens[i].specimen.flexure.width)
-                .collect();
-            let ks: Vec<f64> = members.iter().map(|&i| specimens[i].stiffness).collect();
-            let bws: Vec<f64> = members
-                .iter()
-                .map(|&i| specimens[i].damping_times_omega)
-                .collect();
-            let stiffness_line = fit_through_origin(&widths, &ks);
-            let damping_line = fit_through_origin(&widths, &bws);
-            CastellatedFit {
-                thickness: f.thickness,
-                length: f.length,
-                youngs_modulus: modulus,
-                effective_length: modulus * f.thickness.powi(3) / (12.0 * stiffness_line.slope),
-                loss_factor: damping_line.slope / stiffness_line.slope,
-                stiffness_line,
-                damping_line,
-                specimens: members,
-            }
-        })
-        .collect();
+    let castellated = castellated_fits(&specimens, modulus);
     for fit in &castellated {
         for (what, line) in [("k_m", &fit.stiffness_line), ("b_m·ω_d", &fit.damping_line)] {
             if line.r_squared < POOR_LINE_R2 {
@@ -729,6 +682,65 @@ pub fn fit_results(specimens: Vec<SpecimenResult>, options: &FitOptions) -> FitR
         findings,
         traces,
     }
+}
+
+/// Eq. 2's effective length and the loss factor of each group of castellated hinges of one
+/// thickness and length (two specimens or more), under Young's modulus `modulus`.
+fn castellated_fits(specimens: &[SpecimenResult], modulus: f64) -> Vec<CastellatedFit> {
+    // Group castellated hinges by (thickness, length), to 1 nm.
+    let mut groups: BTreeMap<(i64, i64), Vec<usize>> = BTreeMap::new();
+    for (i, s) in specimens.iter().enumerate() {
+        let f = &s.specimen.flexure;
+        if f.kind == Kind::Castellated {
+            let key = (
+                (f.thickness * 1e9).round() as i64,
+                (f.length * 1e9).round() as i64,
+            );
+            groups.entry(key).or_default().push(i);
+        }
+    }
+    groups
+        .into_values()
+        .filter(|members| members.len() >= 2)
+        .map(|members| {
+            let f = specimens[members[0]].specimen.flexure;
+            let (stiffness_line, damping_line) = width_lines(
+                specimens,
+                &members,
+                |s| s.stiffness,
+                |s| s.damping_times_omega,
+            );
+            CastellatedFit {
+                thickness: f.thickness,
+                length: f.length,
+                youngs_modulus: modulus,
+                effective_length: modulus * f.thickness.powi(3) / (12.0 * stiffness_line.slope),
+                loss_factor: damping_line.slope / stiffness_line.slope,
+                stiffness_line,
+                damping_line,
+                specimens: members,
+            }
+        })
+        .collect()
+}
+
+/// The stiffness and the damping of the specimens `members`, each fitted by a line through
+/// the origin against their widths.
+fn width_lines(
+    specimens: &[SpecimenResult],
+    members: &[usize],
+    stiffness: impl Fn(&SpecimenResult) -> f64,
+    damping: impl Fn(&SpecimenResult) -> f64,
+) -> (LineFit, LineFit) {
+    let widths: Vec<f64> = members
+        .iter()
+        .map(|&i| specimens[i].specimen.flexure.width)
+        .collect();
+    let line = |value: &dyn Fn(&SpecimenResult) -> f64| {
+        let values: Vec<f64> = members.iter().map(|&i| value(&specimens[i])).collect();
+        fit_through_origin(&widths, &values)
+    };
+    (line(&stiffness), line(&damping))
 }
 
 fn line_finding(what: &str, line: &LineFit) -> Flag {

@@ -272,29 +272,7 @@ fn screening_fit(
     let t_first = peaks[0].0;
     let span = peaks[n - 1].0 - t_first;
     let middle = 0.5 * span;
-    // Per half-cycle: τ, ∫A dt up to it, sign, ln A and its weight.
-    let mut half_cycles = Vec::with_capacity(n);
-    let mut integral = 0.0;
-    for (j, &(t, amplitude)) in peaks.iter().enumerate() {
-        if j > 0 {
-            let (t_prev, a_prev) = peaks[j - 1];
-            integral += 0.5 * (a_prev + amplitude) * (t - t_prev);
-        }
-        // The half-cycle's sign: the sample nearest its middle.
-        let k = times.partition_point(|&s| s < t).min(times.len() - 1);
-        let sign = if angles[k] < 0.0 { -1.0 } else { 1.0 };
-        // The least-squares half-sine amplitude over m samples has σ_A = noise·√(2/m).
-        let (c0, c1) = (analysis.crossings[j], analysis.crossings[j + 1]);
-        let inside = times.partition_point(|&s| s < c1) - times.partition_point(|&s| s <= c0);
-        let sigma_a = noise * (2.0 / inside.max(1) as f64).sqrt();
-        half_cycles.push(HalfCycle {
-            tau: t - t_first,
-            integral,
-            sign,
-            log_amplitude: amplitude.ln(),
-            root_weight: amplitude / sigma_a,
-        });
-    }
+    let half_cycles = half_cycles(times, angles, analysis, noise);
     // ln A_j(measured) = ln(A_j · g(s_j c(τ_j)/A_j)), ln A_j = a − σ₀τ_j − σ₁∫A dt.
     let residuals = |p: &[f64]| -> Result<Vec<f64>, &'static str> {
         let [a, sigma0, sigma1, c0, c1] = [p[0], p[1], p[2], p[3], p[4]];
@@ -361,6 +339,41 @@ fn screening_fit(
         fit.stiffening_sigma = fit.excess_frequency_trend() / gamma_se;
     }
     Some(fit)
+}
+
+/// Per half-cycle of `analysis`: τ, ∫A dt up to it, sign, ln A and its weight (for the
+/// amplitude noise `noise`).
+fn half_cycles(
+    times: &[f64],
+    angles: &[f64],
+    analysis: &TraceAnalysis,
+    noise: f64,
+) -> Vec<HalfCycle> {
+    let peaks = &analysis.peaks;
+    let t_first = peaks[0].0;
+    let mut half_cycles = Vec::with_capacity(peaks.len());
+    let mut integral = 0.0;
+    for (j, &(t, amplitude)) in peaks.iter().enumerate() {
+        if j > 0 {
+            let (t_prev, a_prev) = peaks[j - 1];
+            integral += 0.5 * (a_prev + amplitude) * (t - t_prev);
+        }
+        // The half-cycle's sign: the sample nearest its middle.
+        let k = times.partition_point(|&s| s < t).min(times.len() - 1);
+        let sign = if angles[k] < 0.0 { -1.0 } else { 1.0 };
+        // The least-squares half-sine amplitude over m samples has σ_A = noise·√(2/m).
+        let (c0, c1) = (analysis.crossings[j], analysis.crossings[j + 1]);
+        let inside = times.partition_point(|&s| s < c1) - times.partition_point(|&s| s <= c0);
+        let sigma_a = noise * (2.0 / inside.max(1) as f64).sqrt();
+        half_cycles.push(HalfCycle {
+            tau: t - t_first,
+            integral,
+            sign,
+            log_amplitude: amplitude.ln(),
+            root_weight: amplitude / sigma_a,
+        });
+    }
+    half_cycles
 }
 
 /// The crossing-time fit of the module documentation: `γ` and its (inflated) standard

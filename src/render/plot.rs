@@ -895,17 +895,8 @@ where
         }
         .map_err(e)?;
     }
-    // A five-pointed star in pixels around each marked point, outlined in black.
-    let star_shape: Vec<(i32, i32)> = (0..10)
-        .map(|k| {
-            let radius = if k % 2 == 0 { 9.0 } else { 4.0 };
-            let angle = std::f64::consts::PI * (k as f64 / 5.0 - 0.5);
-            (
-                (radius * angle.cos()).round() as i32,
-                (radius * angle.sin()).round() as i32,
-            )
-        })
-        .collect();
+    // A five-pointed star around each marked point, outlined in black.
+    let star_shape = star_shape();
     let outline: Vec<(i32, i32)> = star_shape.iter().chain(&star_shape[..1]).copied().collect();
     chart
         .draw_series(
@@ -940,22 +931,18 @@ where
                 };
                 EmptyElement::at(at) + PathElement::new(tick, style)
             };
-            if y_hi > y_lo {
-                let (low, high) = ((point.x, y_lo), (point.x, y_hi));
+            let vertical = (y_hi > y_lo).then_some(((point.x, y_lo), (point.x, y_hi), true));
+            let horizontal = (x_hi > x_lo && in_range(x_lo)).then_some((
+                (x_lo, point.y),
+                (x_hi, point.y),
+                false,
+            ));
+            for (low, high, vertical) in vertical.into_iter().chain(horizontal) {
                 chart
                     .draw_series([PathElement::new(vec![low, high], style)])
                     .map_err(e)?;
                 chart
-                    .draw_series([cap(low, true), cap(high, true)])
-                    .map_err(e)?;
-            }
-            if x_hi > x_lo && in_range(x_lo) {
-                let (low, high) = ((x_lo, point.y), (x_hi, point.y));
-                chart
-                    .draw_series([PathElement::new(vec![low, high], style)])
-                    .map_err(e)?;
-                chart
-                    .draw_series([cap(low, false), cap(high, false)])
+                    .draw_series([cap(low, vertical), cap(high, vertical)])
                     .map_err(e)?;
             }
         }
@@ -967,6 +954,20 @@ where
         }
     }
     Ok(())
+}
+
+/// The corners of a five-pointed star in pixels around its centre, the top point first.
+fn star_shape() -> Vec<(i32, i32)> {
+    (0..10)
+        .map(|k| {
+            let radius = if k % 2 == 0 { 9.0 } else { 4.0 };
+            let angle = std::f64::consts::PI * (k as f64 / 5.0 - 0.5);
+            (
+                (radius * angle.cos()).round() as i32,
+                (radius * angle.sin()).round() as i32,
+            )
+        })
+        .collect()
 }
 
 /// Splits the points `(xs[i], ys[i])` into runs of consecutive finite points accepted by `keep`.

@@ -38,6 +38,15 @@ pub struct Outcome {
 }
 
 impl Outcome {
+    /// An outcome with its method paragraph and nothing else yet (an experiment's renderer
+    /// adds tables, plots and values as it goes).
+    pub fn with_method(method: String) -> Outcome {
+        Outcome {
+            method,
+            ..Outcome::default()
+        }
+    }
+
     /// Adds a rendered plot.
     pub fn add_plot(&mut self, plot: File) {
         self.plots.push(plot.path.clone());
@@ -154,27 +163,24 @@ fn inline_markdown(text: &str) -> String {
 /// (GitHub-flavoured Markdown renders `<details>`; the blank line after the summary lets the
 /// table inside be read as Markdown).
 fn table_markdown(table: &super::table::Table) -> String {
-    if table.rows.len() <= FOLDED_ROWS {
-        return table.markdown();
-    }
-    format!(
-        "<details>\n<summary>{} ({} rows)</summary>\n\n{}\n</details>\n",
-        escape_html(&table.title),
-        table.rows.len(),
-        table.markdown()
-    )
+    folded(table, table.markdown(), "\n", "\n")
 }
 
 /// A table as HTML, folded under a summary line if it is longer than [`FOLDED_ROWS`].
 fn table_html(table: &super::table::Table) -> String {
+    folded(table, table.html(), "", "")
+}
+
+/// `body`, the rendered `table`, inside `<details>` under a summary line naming the table if
+/// it is longer than [`FOLDED_ROWS`]; `before` and `after` go around the body in the fold.
+fn folded(table: &super::table::Table, body: String, before: &str, after: &str) -> String {
     if table.rows.len() <= FOLDED_ROWS {
-        return table.html();
+        return body;
     }
     format!(
-        "<details>\n<summary>{} ({} rows)</summary>\n{}</details>\n",
+        "<details>\n<summary>{} ({} rows)</summary>\n{before}{body}{after}</details>\n",
         escape_html(&table.title),
         table.rows.len(),
-        table.html()
     )
 }
 

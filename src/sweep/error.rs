@@ -11,6 +11,7 @@ use mech_codegen::front::units::parse_quantity;
 use mech_codegen::ir::Dimension;
 
 use super::sample::DrawError;
+use crate::toml_file::TomlError;
 use crate::{experiments, quantity, session};
 
 #[derive(Debug)]
@@ -19,19 +20,8 @@ pub enum Error {
         path: PathBuf,
         message: String,
     },
-    /// Not TOML of a study (the parser's message, with its line).
-    Toml {
-        message: String,
-    },
-    UnknownKey {
-        key: String,
-        line: usize,
-    },
-    MistypedKey {
-        key: String,
-        line: usize,
-        message: String,
-    },
+    /// Not TOML of a study: an unknown key, a mistyped value, …
+    Toml(TomlError),
     /// A key's value that cannot be used; `line` 0: a command-line option.
     Key {
         key: String,
@@ -133,14 +123,7 @@ impl fmt::Display for Error {
             Error::Read { path, message } => {
                 write!(f, "cannot read study `{}`: {message}", path.display())
             }
-            Error::Toml { message } => f.write_str(message),
-            Error::UnknownKey { key, line } => write!(
-                f,
-                "line {line}: unknown key `{key}`\n  hint: docs/sweep.md lists a study's keys"
-            ),
-            Error::MistypedKey { key, line, message } => {
-                experiments::error::mistyped_text(f, key, *line, message)
-            }
+            Error::Toml(error) => write!(f, "{error}"),
             Error::Key { key, line, message } => {
                 at(f, *line)?;
                 match key.starts_with("--") {

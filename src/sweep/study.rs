@@ -11,8 +11,8 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use super::Error;
-use crate::experiments::error::{mistyped_key, unknown_key};
 use crate::session::ModelSpec;
+use crate::toml_file;
 
 /// The whole file.
 #[derive(Debug, Clone, Deserialize)]
@@ -97,16 +97,5 @@ pub fn line_of(text: &str, offset: usize) -> usize {
 
 /// Parses a study's TOML text; unknown and mistyped keys are named with their line.
 pub fn parse(text: &str) -> Result<StudyFile, Error> {
-    toml::from_str(text).map_err(|e| {
-        let message = e.to_string();
-        if let Some((key, line)) = unknown_key(text, &message) {
-            Error::UnknownKey { key, line }
-        } else if let Some((key, line)) = mistyped_key(text, &message) {
-            Error::MistypedKey { key, line, message }
-        } else {
-            Error::Toml {
-                message: message.trim_end().to_string(),
-            }
-        }
-    })
+    toml_file::parse(text, "docs/sweep.md lists a study's keys").map_err(Error::Toml)
 }

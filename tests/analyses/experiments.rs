@@ -6,6 +6,7 @@ use std::path::PathBuf;
 
 use mech::experiments::{self, force, leg, trajectory, Experiment, Kind};
 use mech::render;
+use mech::toml_file::TomlError;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -59,7 +60,7 @@ fn bad_experiment_files_give_clear_errors() {
     );
     let unknown = experiments::parse("kind = \"trajectory\"\ntitle = \"t\"\nmodel = \"m.mech\"\namplitude = \"225 V\"\nfrequency = \"1 Hz\"\nvolts = 3").unwrap_err();
     assert!(
-        matches!(&unknown, experiments::Error::UnknownKey { key, line: 6 } if key == "volts")
+        matches!(&unknown, experiments::Error::Toml(TomlError::UnknownKey { key, line: 6, .. }) if key == "volts")
             && unknown.to_string().contains("docs/experiments.md"),
         "{unknown}"
     );

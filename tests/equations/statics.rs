@@ -139,6 +139,7 @@ impl<'a> Energy<'a> {
     }
 }
 
+/// The leg's equilibrium from `start`, as the analyses solve it.
 fn statics(
     leg: &Leg,
     start: &[f64],
@@ -146,19 +147,8 @@ fn statics(
     fixtures: &[Fixture],
     loads: &[SideLoad],
 ) -> Equilibrium {
-    let mut q = start.to_vec();
-    let equilibrium = solve_statics_with_loads(
-        leg.model(),
-        0.0,
-        &mut q,
-        inputs,
-        fixtures,
-        loads,
-        &StaticsOptions::default(),
-    )
-    .unwrap();
-    assert_eq!(q, equilibrium.q);
-    equilibrium
+    leg.loaded_equilibrium(start, inputs, fixtures, loads)
+        .unwrap()
 }
 
 /// Both actuators driven, foot free: the equilibrium satisfies `F + Jᵀλ = 0` and `φ = 0` to
@@ -343,6 +333,8 @@ fn side_load_on_a_held_pendulum_matches_the_closed_form() {
             &StaticsOptions::default(),
         )
         .unwrap();
+        // The solver leaves the equilibrium in `q` too.
+        assert_eq!(q, equilibrium.q);
         let lambda = m * g * angle.sin() / (angle.cos() + c * angle.sin());
         let force = equilibrium.fixture_forces[0];
         assert!((q[0] - angle).abs() < 1e-14, "{} vs {angle}", q[0]);

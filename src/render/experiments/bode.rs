@@ -17,10 +17,7 @@ use std::path::Path;
 pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     let responses = compute(spec)?;
     let (from, to, name) = (responses.from, responses.to, &responses.model_name);
-    let mut outcome = Outcome {
-        method: method_text(spec, from, to),
-        ..Outcome::default()
-    };
+    let mut outcome = Outcome::with_method(method_text(spec, from, to));
     for (k, mode) in responses.modes.iter().enumerate() {
         outcome
             .values

@@ -9,8 +9,9 @@ use super::force::table_iv_points;
 use crate::experiments::compare::{compute, Spec};
 use crate::experiments::leg::Dof;
 use crate::experiments::Error;
+use crate::output::File;
 use crate::quantity::positive;
-use crate::render::plot;
+use crate::render::plot::{self, PlotError};
 use crate::render::report::Outcome;
 use crate::render::table::Table;
 use mech_codegen::ir::Dimension;
@@ -19,16 +20,13 @@ use std::path::Path;
 pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     let voltage = positive("voltage", &spec.voltage, Dimension::VOLTAGE)?;
     let robots = compute(spec, voltage)?;
-    let mut outcome = Outcome {
-        method: format!(
-            "For each robot and degree of freedom, at {voltage} V: the free deflection d of the \
-             foot along the test axis (lift: z, swing: x; one way from rest) and the blocked \
-             force F (foot held at its rest position along that axis, frictionless), as in \
-             experiment 2 without off-axis load; F·d and F·d/(F_b δ_f) with the model's \
-             actuator F_b and δ_f, as in Table IV."
-        ),
-        ..Outcome::default()
-    };
+    let mut outcome = Outcome::with_method(format!(
+        "For each robot and degree of freedom, at {voltage} V: the free deflection d of the \
+         foot along the test axis (lift: z, swing: x; one way from rest) and the blocked \
+         force F (foot held at its rest position along that axis, frictionless), as in \
+         experiment 2 without off-axis load; F·d and F·d/(F_b δ_f) with the model's \
+         actuator F_b and δ_f, as in Table IV."
+    ));
     let mut table = Table::new(
         "Model against the paper's Table IV (measured mean ± s.d., n = 2)",
         &[
@@ -108,23 +106,35 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
         &rows,
     )?;
     outcome.tables.push(table);
-    let path = dir.join("compare.svg");
     let title = format!("Blocked force and free deflection at {voltage} V: model against Table IV");
-    let plot = plot::XyPlot {
-        measured: &measured,
-        ..plot::XyPlot::new(
-            &title,
-            "foot distance from rest along the test axis [mm]",
-            "force [mN]",
-            &lines,
-        )
-    }
-    .render(&path)?;
-    outcome.add_plot(plot);
+    let path = dir.join("compare.svg");
+    outcome.add_plot(table_iv_plot(&path, &title, &lines, &measured, None)?);
     let (increase, model_ratio) = increase_table(spec, work, paper_work);
     outcome.values.insert("work_ratio".into(), model_ratio);
     outcome.tables.push(increase);
     Ok(outcome)
+}
+
+/// Model lines of force against the foot's distance from rest along the test axis (mm, mN)
+/// under Table IV's points (± s.d.), written to `path`; `styles` as [`plot::XyPlot::styles`].
+pub(crate) fn table_iv_plot(
+    path: &Path,
+    title: &str,
+    lines: &[(String, Vec<f64>, Vec<f64>)],
+    measured: &[plot::Measured],
+    styles: Option<&[plot::CurveStyle]>,
+) -> Result<File, PlotError> {
+    plot::XyPlot {
+        measured,
+        styles,
+        ..plot::XyPlot::new(
+            title,
+            "foot distance from rest along the test axis [mm]",
+            "force [mN]",
+            lines,
+        )
+    }
+    .render(path)
 }
 
 /// `mean ± s.d.` of a paper value in display units, or `–`.

@@ -18,10 +18,7 @@ use std::path::Path;
 pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     let results = compute(spec)?;
     let (voltage, fbdf, model_name) = (results.voltage, results.actuator_work, &results.model_name);
-    let mut outcome = Outcome {
-        method: method_text(spec, voltage, results.step),
-        ..Outcome::default()
-    };
+    let mut outcome = Outcome::with_method(method_text(spec, voltage, results.step));
     let mut summary = Table::new(
         &format!("{model_name}: blocked force, free deflection and work at the foot"),
         &[

@@ -18,10 +18,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     let sweep = compute(spec)?;
     let voltage = sweep.voltage;
     let keys = keys(&spec.series);
-    let mut outcome = Outcome {
-        method: method_text(spec, voltage),
-        ..Outcome::default()
-    };
+    let mut outcome = Outcome::with_method(method_text(spec, voltage));
     let mut chosen_table = Table::new(
         "Chosen designs (the stars of Fig. 8): the models at their own crank arms",
         &[

@@ -7,6 +7,7 @@
 
 use std::path::Path;
 
+use super::compare::table_iv_plot;
 use crate::diagnose::candidates::{Diagnosis, Trial, Verdict};
 use crate::experiments::table_diagnosis::{compute, RobotDiagnosis, Spec};
 use crate::experiments::Error;
@@ -15,28 +16,13 @@ use crate::render::plot;
 use crate::render::report::Outcome;
 use crate::render::table::Table;
 
+/// Work done by the foot, Σ F·d over a robot's tests: from the paper's values, from the model
+/// as written, from the model as extended (if a cause is named).
+type FootWork = (f64, f64, Option<f64>);
+
 pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     let robots = compute(spec)?;
-    let mut outcome = Outcome {
-        method: format!(
-            "The paper's Table IV (from `{}`) as measured data: per robot, the free deflection \
-             d and blocked force F of the lift and swing tests (mean ± s.d., n = 2; the s.d. is \
-             the σ of each value) at the compare experiment's voltage, the foot driven the way \
-             the paper's test moved it, the sensor pushing back along y with {:.0} % of the \
-             on-axis force as the paper applied to its model (Sec. V-A). `mech diagnose` \
-             (kind `force_deflection_table`, `--holdout none`: four values per robot, none to \
-             spare, ranked by AICc on all of them) fits every cause of its catalog: flexure \
-             stiffnesses, twist of a hinge or of a loop's hinges together (Eq. 8), axis \
-             misalignments, the actuators' stiffness, force and base compliance, the \
-             preload, the off-axis load itself. A cause is named when it lowers the AICc by \
-             more than 10 and brings χ² per value within the noise band (explained) or not \
-             (partly explained); causes within 2 of each other's AICc are a tie, and the \
-             standard test that would separate them is named.",
-            spec.table.display(),
-            spec.off_axis_fraction * 100.0
-        ),
-        ..Outcome::default()
-    };
+    let mut outcome = Outcome::with_method(method_text(spec));
     let mut causes = Table::new(
         "What the diagnosis names, per robot",
         &[
@@ -75,32 +61,7 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
                 format!("{}: {}", cause_at(t), fitted.join(", "))
             }),
         ]);
-        let obs = &d.observations;
-        let sigma = obs.sigma.as_deref().unwrap_or(&[]);
-        for k in 0..obs.values.len() {
-            let (scale, unit) = if obs.series[k].starts_with("free_deflection") {
-                (1e3, "mm")
-            } else {
-                (1e3, "mN")
-            };
-            let model = |predicted: &[f64]| match (predicted.get(k), sigma.get(k)) {
-                (Some(p), Some(s)) => {
-                    format!("{:.2} ({:+.1})", p * scale, (p - obs.values[k]) / s)
-                }
-                _ => "–".into(),
-            };
-            values.row(vec![
-                robot.robot.clone(),
-                format!("{} [{unit}]", obs.series[k].replace('_', " ")),
-                format!(
-                    "{:.2} ± {:.2}",
-                    obs.values[k] * scale,
-                    sigma.get(k).copied().unwrap_or(f64::NAN) * scale
-                ),
-                model(&d.base.predicted),
-                extended.map_or("–".into(), |t| model(&t.predicted)),
-            ]);
-        }
+        value_rows(&mut values, robot, extended);
         let key = if r == 0 { "old" } else { "new" };
         outcome
             .values
@@ -127,54 +88,112 @@ pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     let dynamics = dynamics_table(&robots, &mut outcome);
     outcome.tables.push(dynamics);
     if let [old, new] = work[..] {
-        let mut table = Table::new(
-            "Work done by the foot, second robot against the first (lift + swing F·d)",
-            &["", "first [µJ]", "second [µJ]", "increase"],
-        );
-        let rows = [
-            ("paper, Table IV's d·F", Some(old.0), Some(new.0)),
-            ("model as written", Some(old.1), Some(new.1)),
-            ("model as extended", old.2, new.2),
-        ];
-        for (label, first, second) in rows {
-            let cell = |w: Option<f64>| w.map_or("–".into(), |w| format!("{:.1}", w * 1e6));
-            let increase = match (first, second) {
-                (Some(a), Some(b)) => format!("{:.0} %", 100.0 * (b / a - 1.0)),
-                _ => "–".into(),
-            };
-            table.row(vec![label.into(), cell(first), cell(second), increase]);
-        }
-        outcome
-            .values
-            .insert("work_increase_base".into(), new.1 / old.1 - 1.0);
-        if let (Some(a), Some(b)) = (old.2, new.2) {
-            outcome
-                .values
-                .insert("work_increase_extended".into(), b / a - 1.0);
-        }
+        let table = work_table(old, new, &mut outcome);
         outcome.tables.push(table);
     }
-    let title = "Table IV (points, ± s.d.) against the model as written (dashed) and as extended";
+    // Each robot's test: the model as written (dashed), then as extended, in one colour.
     let styles: Vec<plot::CurveStyle> = (0..curves.len())
         .map(|k| plot::CurveStyle {
             color: k / 2,
             dashed: k % 2 == 0,
         })
         .collect();
+    let title = "Table IV (points, ± s.d.) against the model as written (dashed) and as extended";
     let path = dir.join("table_diagnosis.svg");
-    let svg = plot::XyPlot {
-        measured: &measured,
-        styles: Some(&styles),
-        ..plot::XyPlot::new(
-            title,
-            "foot distance from rest along the test axis [mm]",
-            "force [mN]",
-            &curves,
-        )
-    }
-    .render(&path)?;
-    outcome.add_plot(svg);
+    outcome.add_plot(table_iv_plot(
+        &path,
+        title,
+        &curves,
+        &measured,
+        Some(&styles),
+    )?);
     Ok(outcome)
+}
+
+/// How the paper's Table IV is diagnosed: the data, the sensor's off-axis load, the catalog
+/// and the rules that name a cause.
+fn method_text(spec: &Spec) -> String {
+    format!(
+        "The paper's Table IV (from `{}`) as measured data: per robot, the free deflection \
+         d and blocked force F of the lift and swing tests (mean ± s.d., n = 2; the s.d. is \
+         the σ of each value) at the compare experiment's voltage, the foot driven the way \
+         the paper's test moved it, the sensor pushing back along y with {:.0} % of the \
+         on-axis force as the paper applied to its model (Sec. V-A). `mech diagnose` \
+         (kind `force_deflection_table`, `--holdout none`: four values per robot, none to \
+         spare, ranked by AICc on all of them) fits every cause of its catalog: flexure \
+         stiffnesses, twist of a hinge or of a loop's hinges together (Eq. 8), axis \
+         misalignments, the actuators' stiffness, force and base compliance, the \
+         preload, the off-axis load itself. A cause is named when it lowers the AICc by \
+         more than 10 and brings χ² per value within the noise band (explained) or not \
+         (partly explained); causes within 2 of each other's AICc are a tie, and the \
+         standard test that would separate them is named.",
+        spec.table.display(),
+        spec.off_axis_fraction * 100.0
+    )
+}
+
+/// The work done by the foot (lift + swing `F·d`) of the second robot against the first's:
+/// the paper's, the model's as written and as extended; the increases go into `outcome`'s
+/// values.
+fn work_table(old: FootWork, new: FootWork, outcome: &mut Outcome) -> Table {
+    let mut table = Table::new(
+        "Work done by the foot, second robot against the first (lift + swing F·d)",
+        &["", "first [µJ]", "second [µJ]", "increase"],
+    );
+    let rows = [
+        ("paper, Table IV's d·F", Some(old.0), Some(new.0)),
+        ("model as written", Some(old.1), Some(new.1)),
+        ("model as extended", old.2, new.2),
+    ];
+    for (label, first, second) in rows {
+        let cell = |w: Option<f64>| w.map_or("–".into(), |w| format!("{:.1}", w * 1e6));
+        let increase = match (first, second) {
+            (Some(a), Some(b)) => format!("{:.0} %", 100.0 * (b / a - 1.0)),
+            _ => "–".into(),
+        };
+        table.row(vec![label.into(), cell(first), cell(second), increase]);
+    }
+    outcome
+        .values
+        .insert("work_increase_base".into(), new.1 / old.1 - 1.0);
+    if let (Some(a), Some(b)) = (old.2, new.2) {
+        outcome
+            .values
+            .insert("work_increase_extended".into(), b / a - 1.0);
+    }
+    table
+}
+
+/// One row of `values` per value of Table IV of `robot`: the paper's (± s.d.), the model's as
+/// written and as extended, with their deviations in s.d.
+fn value_rows(values: &mut Table, robot: &RobotDiagnosis, extended: Option<&Trial>) {
+    let d = &robot.diagnosis;
+    let obs = &d.observations;
+    let sigma = obs.sigma.as_deref().unwrap_or(&[]);
+    for k in 0..obs.values.len() {
+        let (scale, unit) = if obs.series[k].starts_with("free_deflection") {
+            (1e3, "mm")
+        } else {
+            (1e3, "mN")
+        };
+        let model = |predicted: &[f64]| match (predicted.get(k), sigma.get(k)) {
+            (Some(p), Some(s)) => {
+                format!("{:.2} ({:+.1})", p * scale, (p - obs.values[k]) / s)
+            }
+            _ => "–".into(),
+        };
+        values.row(vec![
+            robot.robot.clone(),
+            format!("{} [{unit}]", obs.series[k].replace('_', " ")),
+            format!(
+                "{:.2} ± {:.2}",
+                obs.values[k] * scale,
+                sigma.get(k).copied().unwrap_or(f64::NAN) * scale
+            ),
+            model(&d.base.predicted),
+            extended.map_or("–".into(), |t| model(&t.predicted)),
+        ]);
+    }
 }
 
 /// Per robot and cause the paper gives, the best fit (lowest χ²) of the catalog's

@@ -16,10 +16,7 @@ use std::path::Path;
 pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     let trajectories = compute(spec)?;
     let (amplitude, frequency) = (trajectories.amplitude, trajectories.frequency);
-    let mut outcome = Outcome {
-        method: method_text(spec, amplitude, frequency),
-        ..Outcome::default()
-    };
+    let mut outcome = Outcome::with_method(method_text(spec, amplitude, frequency));
     let mut table = Table::new(
         "Foot trajectory: peak-to-peak range and the foot at the peak drive (mm)",
         &[
