@@ -9,7 +9,9 @@
 //! text error shows its file, line, column and hint, as `mech check` prints it).
 //!
 //! Long computations (simulate, statics, linearize) run with the Python thread detached, on a
-//! copy of the session, so other Python threads go on meanwhile.
+//! copy of the session, so other Python threads go on meanwhile. One evaluation (`rhs`) is
+//! too short for that (detaching costs more than it saves): it runs under the GIL on scratch
+//! kept between calls, so it allocates only the array it returns.
 
 use std::f64::consts::TAU;
 use std::path::PathBuf;
@@ -18,7 +20,7 @@ use std::sync::{Mutex, MutexGuard};
 use mech::session::{Assembled, Session};
 use mech::tape_model::TapeModel;
 use mech_runtime::nalgebra::DMatrix;
-use mech_runtime::{FlexureDamping, Method, Model as _, SimOptions};
+use mech_runtime::{ConstrainedSolver, FlexureDamping, Method, Model as _, SimOptions};
 use numpy::{Complex64, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1};
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;
@@ -42,6 +44,49 @@ fn error(message: impl std::fmt::Display) -> PyErr {
 #[pyclass(module = "mech._mech")]
 struct Model {
     session: Mutex<Session>,
+    /// Scratch of `rhs`; locked after `session` when both are.
+    evaluation: Mutex<Evaluation>,
+}
+
+/// What one `u̇` evaluation reuses from call to call: the constrained solver's storage (`M`,
+/// `F`, `J`, `J̇u` and their factors), the inputs' values and `u̇` itself.
+struct Evaluation {
+    solver: ConstrainedSolver,
+    inputs: Vec<f64>,
+    udot: Vec<f64>,
+}
+
+impl Evaluation {
+    fn for_session(session: &Session) -> Evaluation {
+        let model = &session.model;
+        Evaluation {
+            solver: ConstrainedSolver::for_model(model),
+            inputs: vec![0.0; model.ninputs()],
+            udot: vec![0.0; model.nu()],
+        }
+    }
+
+    /// `u̇` of `M u̇ = F + Jᵀλ`, `J u̇ = −J̇u` at `(t, q, u)` into `self.udot`, with `inputs`
+    /// (else the input signals at `t`). Lengths are the caller's to check.
+    fn accelerations(
+        &mut self,
+        session: &Session,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        inputs: Option<&[f64]>,
+    ) -> Result<(), mech_runtime::RuntimeError> {
+        match inputs {
+            Some(values) => self.inputs.copy_from_slice(values),
+            None => {
+                for (value, signal) in self.inputs.iter_mut().zip(&session.signals) {
+                    *value = signal.value(t);
+                }
+            }
+        }
+        self.solver
+            .accelerations(&session.model, t, q, u, &self.inputs, &mut self.udot)
+    }
 }
 
 /// A matrix as a 2-D array.
@@ -114,6 +159,42 @@ impl Model {
         self.session
             .lock()
             .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    /// The `rhs` scratch, locked (as `session`, a panic leaves nothing to repair).
+    fn evaluation(&self) -> MutexGuard<'_, Evaluation> {
+        self.evaluation
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    /// Checks the lengths of an `rhs` call's `q`, `u` and `inputs` against `session`'s model.
+    fn check_lengths(
+        session: &Session,
+        q: &[f64],
+        u: &[f64],
+        inputs: Option<&[f64]>,
+    ) -> PyResult<()> {
+        let model = &session.model;
+        let given = [
+            ("q", q.len(), model.nq(), "coordinates"),
+            ("u", u.len(), model.nu(), "speeds"),
+            (
+                "inputs",
+                inputs.map_or(model.ninputs(), <[f64]>::len),
+                model.ninputs(),
+                "inputs",
+            ),
+        ];
+        for (what, len, n, entries) in given {
+            if len != n {
+                return Err(error(format!(
+                    "`{what}` has {len} values; `{}` has {n} {entries}",
+                    model.name()
+                )));
+            }
+        }
+        Ok(())
     }
 
     /// The model's inputs as given (`None`: their current signals at t = 0), checked.
@@ -194,6 +275,7 @@ impl Model {
     fn new(path: PathBuf, set: Vec<String>, inputs: Vec<String>) -> PyResult<Self> {
         let session = Session::open(&path, &set, &inputs).map_err(error)?;
         Ok(Model {
+            evaluation: Mutex::new(Evaluation::for_session(&session)),
             session: Mutex::new(session),
         })
     }
@@ -480,6 +562,30 @@ impl Model {
         Ok(PyArray1::from_vec(py, out))
     }
 
+    /// The accelerations `u̇` at `(t, q, u)`: `M(q) u̇ = F(t, q, u, inputs)`, with the loops'
+    /// reactions `Jᵀλ` where the model has loops (`J u̇ = −J̇u`), as the integrators see them.
+    /// `inputs` default to the input signals at `t`. One call costs the Rust evaluation plus
+    /// about a microsecond (`bench/python_overhead.py`); no allocation but the result.
+    #[pyo3(signature = (t, q, u, inputs=None))]
+    fn rhs<'py>(
+        &self,
+        py: Python<'py>,
+        t: f64,
+        q: PyReadonlyArray1<'py, f64>,
+        u: PyReadonlyArray1<'py, f64>,
+        inputs: Option<PyReadonlyArray1<'py, f64>>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let (q, u) = (q.as_slice()?, u.as_slice()?);
+        let inputs = inputs.as_ref().map(|i| i.as_slice()).transpose()?;
+        let session = self.session();
+        Self::check_lengths(&session, q, u, inputs)?;
+        let mut evaluation = self.evaluation();
+        evaluation
+            .accelerations(&session, t, q, u, inputs)
+            .map_err(error)?;
+        Ok(PyArray1::from_slice(py, &evaluation.udot))
+    }
+
     /// The model's outputs (names in `outputs`) at `(t, q, u)`.
     #[pyo3(signature = (q, u, inputs=None, t=0.0))]
     fn evaluate_outputs<'py>(
@@ -537,6 +643,35 @@ impl Model {
         }
         Ok(dict)
     }
+}
+
+/// Seconds per call of `model.rhs(t, q, u, inputs)`'s Rust part (the same evaluation on the
+/// same scratch, without the Python call: argument conversion, locking, the result array),
+/// the mean of `calls` calls in one loop. For `bench/python_overhead.py`, which times the
+/// Python call beside it.
+#[pyfunction]
+#[pyo3(signature = (model, t, q, u, inputs=None, calls=1000))]
+fn rhs_seconds(
+    model: &Model,
+    t: f64,
+    q: PyReadonlyArray1<'_, f64>,
+    u: PyReadonlyArray1<'_, f64>,
+    inputs: Option<PyReadonlyArray1<'_, f64>>,
+    calls: usize,
+) -> PyResult<f64> {
+    let (q, u) = (q.as_slice()?, u.as_slice()?);
+    let inputs = inputs.as_ref().map(|i| i.as_slice()).transpose()?;
+    let session = model.session();
+    Model::check_lengths(&session, q, u, inputs)?;
+    let mut evaluation = model.evaluation();
+    let started = std::time::Instant::now();
+    for _ in 0..calls.max(1) {
+        evaluation
+            .accelerations(&session, t, std::hint::black_box(q), u, inputs)
+            .map_err(error)?;
+        std::hint::black_box(&evaluation.udot);
+    }
+    Ok(started.elapsed().as_secs_f64() / calls.max(1) as f64)
 }
 
 /// A JSON value as the Python object `json.loads` gives.
@@ -756,6 +891,7 @@ fn _mech(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sweep_size, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_run, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_ranking, m)?)?;
+    m.add_function(wrap_pyfunction!(rhs_seconds, m)?)?;
     m.add("MechError", m.py().get_type::<MechError>())?;
     Ok(())
 }
