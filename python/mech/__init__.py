@@ -15,6 +15,9 @@ dimension) or plain numbers in SI units. Every value returned is in SI units. Er
 and column).
 
 The model is compiled once when loaded; changing a parameter does not recompile it.
+
+Results that are tables come as pandas DataFrames with ``as_frame=True`` (``simulate``,
+``bode``, :func:`sweep`, :func:`experiment`); pandas is needed only then.
 """
 
 from __future__ import annotations
@@ -24,7 +27,8 @@ from typing import Mapping, Union
 
 import os
 
-from ._mech import MechError, Model, diagnose, experiment, sweep_ranking, sweep_run, sweep_size
+from . import _frames, _mech
+from ._mech import MechError, Model, diagnose, sweep_ranking, sweep_run, sweep_size
 
 __all__ = ["load", "experiment", "diagnose", "sweep", "Model", "MechError"]
 
@@ -53,12 +57,26 @@ def load(
     return model
 
 
+def experiment(path: str | PathLike, out_dir: str | PathLike | None = None, as_frame: bool = False) -> dict:
+    """Runs the experiment file at `path` as ``mech experiment`` does: a dict of its ``name``,
+    ``title``, ``method``, ``tables`` (each ``title``, ``header``, ``rows`` of text cells as
+    printed), ``notes``, key ``values`` (SI units) and the ``files`` written (only with
+    `out_dir`, where its CSV files and plots are written, all or none).
+
+    With `as_frame` each table also has a ``frame``: a pandas DataFrame of its rows, columns
+    numeric where every cell is a number.
+    """
+    result = _mech.experiment(path, out_dir)
+    return _frames.experiment(result) if as_frame else result
+
+
 def sweep(
     study_path: str | PathLike,
     samples: int | None = None,
     seed: int | None = None,
     client=None,
     chunk: int | None = None,
+    as_frame: bool = False,
 ) -> dict:
     """Runs a parameter grid or Monte-Carlo tolerance study (``mech sweep``).
 
@@ -73,6 +91,9 @@ def sweep(
     Rust function; a sample's values depend only on the seed and its index, so the result is
     the local run's. Each worker needs this package installed and the study and its models at
     the same paths (relative model paths are taken from the client's current directory).
+
+    With `as_frame`, ``columns`` is a pandas DataFrame indexed by ``sample`` (units in its
+    ``attrs["units"]``), and ``ranking`` and ``failures`` are DataFrames too.
     """
     import numpy as np
 
@@ -106,4 +127,4 @@ def sweep(
         [(name, columns[name]) for name in result["parameters"]],
         [(name, columns[name]) for name in result["outputs"]],
     )
-    return result
+    return _frames.sweep(result) if as_frame else result

@@ -290,6 +290,12 @@ impl Model {
         self.names(|m| m.nq(), |m, i| m.coordinate_name(i))
     }
 
+    /// The speeds' names: the coordinates' where `q̇ = u`, fewer with quaternions.
+    #[getter]
+    fn speeds(&self) -> Vec<String> {
+        self.names(|m| m.nu(), |m, i| m.speed_name(i))
+    }
+
     #[getter]
     fn inputs(&self) -> Vec<String> {
         self.names(|m| m.ninputs(), |m, i| m.input_name(i))
@@ -364,7 +370,9 @@ impl Model {
     /// Integrates from the assembled initial state to `t_end` (seconds), sampled every
     /// `dt_out` (default `t_end / 1000`). A dict of arrays: `t` (n), `q` and `u` (n × nq),
     /// `outputs` (n × outputs), `inputs` (n × inputs), and the integrator's `steps`.
-    #[pyo3(signature = (t_end, dt_out=None, method="dopri5", rtol=1e-9, atol=1e-12, step=None, independent=None, max_steps=1_000_000))]
+    /// With `as_frame=True`, a pandas DataFrame instead: one row per sample indexed by `t`,
+    /// columns `q_NAME`, `u_NAME`, the outputs and the inputs, `attrs["steps"]`.
+    #[pyo3(signature = (t_end, dt_out=None, method="dopri5", rtol=1e-9, atol=1e-12, step=None, independent=None, max_steps=1_000_000, as_frame=false))]
     #[allow(clippy::too_many_arguments)]
     fn simulate<'py>(
         &self,
@@ -377,7 +385,8 @@ impl Model {
         step: Option<f64>,
         independent: Option<Bound<'py, PyAny>>,
         max_steps: usize,
-    ) -> PyResult<Bound<'py, PyDict>> {
+        as_frame: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
         if !(t_end.is_finite() && t_end > 0.0) {
             return Err(error(format!(
                 "`t_end` must be a positive number of seconds, got {t_end}"
@@ -405,7 +414,16 @@ impl Model {
         dict.set_item("outputs", rows_array(py, &trajectory.outputs, no))?;
         dict.set_item("inputs", rows_array(py, &trajectory.inputs, ni))?;
         dict.set_item("steps", trajectory.stats.accepted_steps)?;
-        Ok(dict)
+        if !as_frame {
+            return Ok(dict.into_any());
+        }
+        let names = (
+            self.coordinates(),
+            self.speeds(),
+            self.outputs(),
+            self.inputs(),
+        );
+        frames(py)?.call_method1("simulation", (dict, names.0, names.1, names.2, names.3))
     }
 
     /// A static equilibrium near the assembled initial state under constant `inputs` (default:
@@ -480,17 +498,20 @@ impl Model {
     /// the static equilibrium, at `frequencies_hz`: complex gains (SI units). `damping` is
     /// `hysteretic` (flexures as complex stiffness k(1 + iη), exact at every frequency;
     /// default) or `viscous` (their time-domain dampers b = kη/ω_ref, as a simulation sees
-    /// them).
-    #[pyo3(signature = (input, output, frequencies_hz, damping="hysteretic", independent=None))]
+    /// them). With `as_frame=True`, a pandas DataFrame indexed by `frequency_hz`: `gain`,
+    /// `magnitude`, `phase_deg` (unwrapped).
+    #[pyo3(signature = (input, output, frequencies_hz, damping="hysteretic", independent=None, as_frame=false))]
+    #[allow(clippy::too_many_arguments)]
     fn bode<'py>(
         &self,
         py: Python<'py>,
         input: &str,
         output: &str,
-        frequencies_hz: PyReadonlyArray1<f64>,
+        frequencies_hz: PyReadonlyArray1<'py, f64>,
         damping: &str,
         independent: Option<Bound<'py, PyAny>>,
-    ) -> PyResult<Bound<'py, PyArray1<Complex64>>> {
+        as_frame: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
         let damping = match damping {
             "hysteretic" => FlexureDamping::Hysteretic,
             "viscous" => FlexureDamping::Viscous,
@@ -523,7 +544,11 @@ impl Model {
                 gain.ok_or_else(|| error(format!("the linear model is singular at {f} Hz")))
             })
             .collect::<PyResult<Vec<_>>>()?;
-        Ok(PyArray1::from_vec(py, gains))
+        let gains = PyArray1::from_vec(py, gains).into_any();
+        if !as_frame {
+            return Ok(gains);
+        }
+        frames(py)?.call_method1("bode", ((*frequencies_hz).clone(), gains))
     }
 
     /// The mass matrix `M(q)` (nq × nq) at time `t`.
@@ -672,6 +697,12 @@ fn rhs_seconds(
         std::hint::black_box(&evaluation.udot);
     }
     Ok(started.elapsed().as_secs_f64() / calls.max(1) as f64)
+}
+
+/// The Python module that turns results into pandas frames (`as_frame=True`; it imports
+/// pandas, and says how to install it when it is missing).
+fn frames(py: Python<'_>) -> PyResult<Bound<'_, PyModule>> {
+    py.import("mech._frames")
 }
 
 /// A JSON value as the Python object `json.loads` gives.
