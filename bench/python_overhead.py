@@ -6,7 +6,9 @@ Consumes: the bundled N = 4 chain (`models/chain4.mech`) and HAMR-VI leg
 Produces: a Markdown table on stdout, per model: the Rust evaluation (`mech._mech.rhs_seconds`:
 the same solver call on the same scratch, in a Rust loop), the Python call (a Python loop of
 `model.rhs`), their difference (the overhead: argument conversion, locking, the result array,
-the interpreter's loop) and ratio.
+the interpreter's loop) and ratio; then where the overhead goes on the chain: the same call
+without `inputs`, and pieces of it alone (a loop iteration, a method call that returns a
+string, a 4-element NumPy array).
 
     target/py-venv/bin/python bench/python_overhead.py      # from the repository root
 
@@ -88,8 +90,34 @@ def main():
             f"| {name} | {format_time(rust)} | {format_time(python)} | "
             f"**{format_time(python - rust)}** | {python / rust:.2f}× |"
         )
+    print()
+    breakdown()
     # The issue's target: under 5 µs of overhead per evaluation.
     return 0 if worst < 5e-6 else 1
+
+
+def breakdown():
+    """Per-call times of the chain's `rhs` call and of pieces of any Python call, each the
+    median of ROUNDS batches of `timeit` (which loops in C: no Python loop included)."""
+    import timeit
+
+    model = mech.load(ROOT / "models" / "chain4.mech")
+    q, u, inputs = chain_state(model)
+    cases = [
+        ("`model.rhs(t, q, u, inputs)`", lambda: model.rhs(0.0, q, u, inputs)),
+        ("`model.rhs(t, q, u)` (inputs from the signals)", lambda: model.rhs(0.0, q, u)),
+        ("`rhs_seconds(model, t, q, u, inputs, 1)` (one Rust call from Python)", lambda: rhs_seconds(model, 0.0, q, u, inputs, 1)),
+        ("`model.name` (a method returning a string)", lambda: model.name),
+        ("`numpy.empty(4)` (a result array)", lambda: np.empty(4)),
+        ("`(lambda: None)()` (the timing's own call)", lambda: None),
+    ]
+    for _, call in cases:
+        call()
+    print("| chain4, one call of | time |")
+    print("|---|---|")
+    for label, call in cases:
+        times = [timeit.timeit(call, number=20000) / 20000 for _ in range(ROUNDS)]
+        print(f"| {label} | {format_time(statistics.median(times))} |")
 
 
 if __name__ == "__main__":

@@ -107,6 +107,15 @@ fn rows_array<'py>(
         .expect("rows of equal length")
 }
 
+/// A 1-D float array's values, copied (strided views too). Cheaper for a state vector than
+/// `PyReadonlyArray`, whose borrow registration cost `rhs` about 0.1 µs per array
+/// (`docs/benchmarks.md` §15).
+fn values(array: &Bound<'_, PyArray1<f64>>) -> Vec<f64> {
+    array
+        .to_vec()
+        .unwrap_or_else(|_| array.to_owned_array().to_vec())
+}
+
 /// `independent=` as Python gives it: `None`, a list of names (held at their `q0`), or a
 /// dict of names to values (a string with a unit, or a number in SI units).
 fn independent_list(given: Option<Bound<'_, PyAny>>) -> PyResult<Vec<String>> {
@@ -596,17 +605,16 @@ impl Model {
         &self,
         py: Python<'py>,
         t: f64,
-        q: PyReadonlyArray1<'py, f64>,
-        u: PyReadonlyArray1<'py, f64>,
-        inputs: Option<PyReadonlyArray1<'py, f64>>,
+        q: &Bound<'py, PyArray1<f64>>,
+        u: &Bound<'py, PyArray1<f64>>,
+        inputs: Option<&Bound<'py, PyArray1<f64>>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let (q, u) = (q.as_slice()?, u.as_slice()?);
-        let inputs = inputs.as_ref().map(|i| i.as_slice()).transpose()?;
+        let (q, u, inputs) = (values(q), values(u), inputs.map(values));
         let session = self.session();
-        Self::check_lengths(&session, q, u, inputs)?;
+        Self::check_lengths(&session, &q, &u, inputs.as_deref())?;
         let mut evaluation = self.evaluation();
         evaluation
-            .accelerations(&session, t, q, u, inputs)
+            .accelerations(&session, t, &q, &u, inputs.as_deref())
             .map_err(error)?;
         Ok(PyArray1::from_slice(py, &evaluation.udot))
     }
@@ -679,20 +687,19 @@ impl Model {
 fn rhs_seconds(
     model: &Model,
     t: f64,
-    q: PyReadonlyArray1<'_, f64>,
-    u: PyReadonlyArray1<'_, f64>,
-    inputs: Option<PyReadonlyArray1<'_, f64>>,
+    q: &Bound<'_, PyArray1<f64>>,
+    u: &Bound<'_, PyArray1<f64>>,
+    inputs: Option<&Bound<'_, PyArray1<f64>>>,
     calls: usize,
 ) -> PyResult<f64> {
-    let (q, u) = (q.as_slice()?, u.as_slice()?);
-    let inputs = inputs.as_ref().map(|i| i.as_slice()).transpose()?;
+    let (q, u, inputs) = (values(q), values(u), inputs.map(values));
     let session = model.session();
-    Model::check_lengths(&session, q, u, inputs)?;
+    Model::check_lengths(&session, &q, &u, inputs.as_deref())?;
     let mut evaluation = model.evaluation();
     let started = std::time::Instant::now();
     for _ in 0..calls.max(1) {
         evaluation
-            .accelerations(&session, t, std::hint::black_box(q), u, inputs)
+            .accelerations(&session, t, std::hint::black_box(&q), &u, inputs.as_deref())
             .map_err(error)?;
         std::hint::black_box(&evaluation.udot);
     }

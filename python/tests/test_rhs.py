@@ -34,6 +34,9 @@ def test_two_mass_chain_rhs_is_the_hand_written_solve():
     assert udot.shape == (2,) and udot.dtype == np.float64
     np.testing.assert_allclose(udot, expected(2.0 * math.sin(2 * math.pi * 1.5 * t)), rtol=1e-13)
     np.testing.assert_allclose(chain.rhs(t, q, u, np.array([-0.7])), expected(-0.7), rtol=1e-13)
+    # A strided view (every other element) reads as its values.
+    strided = np.array([q[0], 9.0, q[1], 9.0])[::2]
+    np.testing.assert_array_equal(chain.rhs(t, strided, u), udot)
 
 
 def test_four_bar_rhs_is_the_simulated_acceleration():
