@@ -497,6 +497,7 @@ def main():
     L.extend(resources_section())
     L.extend(jit_section(R))
     L.extend(sweep_section())
+    L.extend(python_section(R))
     with open(a.out, 'w') as f:
         f.write('\n'.join(L).rstrip('\n') + '\n')
     print(f'wrote {a.out}')
@@ -915,6 +916,27 @@ def sweep_section():
     by hand with the commands it shows: bench/analysis_sweep.md)."""
     L = ['', '## 14. `mech sweep`: 10,000 Monte-Carlo samples of the HAMR-VI leg', '']
     path = analysis_path('analysis_sweep')
+    if os.path.exists(path):
+        L.append(analysis_text(path).rstrip('\n'))
+    return L
+
+
+def python_section(R):
+    """Section 15: the Python call overhead (`bench/python_overhead.py`, its table as printed
+    in bench/results/python.md) and the hand-written interpretation in bench/analysis_python.md."""
+    L = ['', '## 15. Python call overhead (issue 19): `model.rhs(t, q, u)` against Rust', '']
+    table = os.path.join(R, 'python.md')
+    if not os.path.exists(table):
+        L.append('Not measured in this run (`bench/results/python.md` missing).')
+    else:
+        L.append('`python bench/python_overhead.py` (run by `bench/run.sh` after the JIT tables, '
+                 'in `bench/.venv` with the package installed by `pip install ./python`), its '
+                 'table as printed.')
+        L.append('')
+        with open(table) as f:
+            L.extend(line.rstrip('\n') for line in f)
+        L.append('')
+    path = analysis_path('analysis_python')
     if os.path.exists(path):
         L.append(analysis_text(path).rstrip('\n'))
     return L
