@@ -11,7 +11,7 @@
 //! Long computations (simulate, statics, linearize) run with the Python thread detached, on a
 //! copy of the session, so other Python threads go on meanwhile. One evaluation (`rhs`) is
 //! too short for that (detaching costs more than it saves): it runs under the GIL on scratch
-//! kept between calls, so it allocates only the array it returns.
+//! kept between calls, so it allocates only copies of its arguments and the array it returns.
 
 use std::f64::consts::TAU;
 use std::path::PathBuf;
@@ -599,7 +599,7 @@ impl Model {
     /// The accelerations `u̇` at `(t, q, u)`: `M(q) u̇ = F(t, q, u, inputs)`, with the loops'
     /// reactions `Jᵀλ` where the model has loops (`J u̇ = −J̇u`), as the integrators see them.
     /// `inputs` default to the input signals at `t`. One call costs the Rust evaluation plus
-    /// about a microsecond (`bench/python_overhead.py`); no allocation but the result.
+    /// about half a microsecond (`docs/benchmarks.md` §15).
     #[pyo3(signature = (t, q, u, inputs=None))]
     fn rhs<'py>(
         &self,
