@@ -497,7 +497,15 @@ def main():
     L.extend(resources_section())
     L.extend(jit_section(R))
     L.extend(sweep_section())
-    L.extend(python_section(R))
+    # Section 15: the Python call overhead (bench/python_overhead.py).
+    L.extend(printed_section(
+        R,
+        '## 15. Python call overhead (issue 19): `model.rhs(t, q, u)` against Rust',
+        'python.md',
+        '`python bench/python_overhead.py` (run by `bench/run.sh` after the JIT tables, in '
+        '`bench/.venv` with the package installed by `pip install ./python`), its table as printed.',
+        'analysis_python',
+    ))
     with open(a.out, 'w') as f:
         f.write('\n'.join(L).rstrip('\n') + '\n')
     print(f'wrote {a.out}')
@@ -894,18 +902,31 @@ def resources_section():
 def jit_section(R):
     """Section 13: native code for tapes (`examples/jit_performance.rs`, its tables as printed
     in bench/results/jit.md) and the hand-written interpretation in bench/analysis_jit.md."""
-    L = ['', '## 13. Compiled speed without cargo (issue 19): tapes as native code', '']
-    table = os.path.join(R, 'jit.md')
+    return printed_section(
+        R,
+        '## 13. Compiled speed without cargo (issue 19): tapes as native code',
+        'jit.md',
+        '`cargo run --release --example jit_performance` (run by `bench/run.sh` after the '
+        'statics), its tables as printed.',
+        'analysis_jit',
+    )
+
+
+def printed_section(R, heading, table_name, command, analysis):
+    """A section of tables a benchmark printed as Markdown (bench/results/TABLE_NAME, its
+    `###` headings one level down), the sentence saying which `command` printed them, then the
+    hand-written interpretation bench/ANALYSIS.md."""
+    L = ['', heading, '']
+    table = os.path.join(R, table_name)
     if not os.path.exists(table):
-        L.append('Not measured in this run (`bench/results/jit.md` missing).')
+        L.append(f'Not measured in this run (`bench/results/{table_name}` missing).')
     else:
-        L.append('`cargo run --release --example jit_performance` (run by `bench/run.sh` after the '
-                 'statics), its tables as printed.')
+        L.append(command)
         L.append('')
         with open(table) as f:
             L.extend(line.rstrip('\n').replace('### ', '#### ') for line in f)
         L.append('')
-    path = analysis_path('analysis_jit')
+    path = analysis_path(analysis)
     if os.path.exists(path):
         L.append(analysis_text(path).rstrip('\n'))
     return L
@@ -916,27 +937,6 @@ def sweep_section():
     by hand with the commands it shows: bench/analysis_sweep.md)."""
     L = ['', '## 14. `mech sweep`: 10,000 Monte-Carlo samples of the HAMR-VI leg', '']
     path = analysis_path('analysis_sweep')
-    if os.path.exists(path):
-        L.append(analysis_text(path).rstrip('\n'))
-    return L
-
-
-def python_section(R):
-    """Section 15: the Python call overhead (`bench/python_overhead.py`, its table as printed
-    in bench/results/python.md) and the hand-written interpretation in bench/analysis_python.md."""
-    L = ['', '## 15. Python call overhead (issue 19): `model.rhs(t, q, u)` against Rust', '']
-    table = os.path.join(R, 'python.md')
-    if not os.path.exists(table):
-        L.append('Not measured in this run (`bench/results/python.md` missing).')
-    else:
-        L.append('`python bench/python_overhead.py` (run by `bench/run.sh` after the JIT tables, '
-                 'in `bench/.venv` with the package installed by `pip install ./python`), its '
-                 'table as printed.')
-        L.append('')
-        with open(table) as f:
-            L.extend(line.rstrip('\n') for line in f)
-        L.append('')
-    path = analysis_path('analysis_python')
     if os.path.exists(path):
         L.append(analysis_text(path).rstrip('\n'))
     return L

@@ -10,7 +10,7 @@
 //!
 //! Long computations (simulate, statics, linearize) run with the Python thread detached, on a
 //! copy of the session, so other Python threads go on meanwhile. One evaluation (`rhs`) is
-//! too short for that (detaching costs more than it saves): it runs under the GIL on scratch
+//! too short to gain from that: it runs under the GIL on scratch
 //! kept between calls, so it allocates only copies of its arguments and the array it returns.
 
 use std::f64::consts::TAU;
