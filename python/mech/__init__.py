@@ -1,7 +1,8 @@
 """mech from Python: load a `.mech` model, then assemble, simulate, solve statics and
-linearize it, with NumPy arrays in and out; run an experiment file (:func:`experiment`), a
-diagnosis of measured data (:func:`diagnose`) or a tolerance study (:func:`sweep`, locally or
-on a Dask cluster) and get their results as dicts.
+linearize it, with NumPy arrays in and out; run an experiment file (:func:`experiment`), a fit
+(:func:`fit`) or a diagnosis (:func:`diagnose`) of measured data, a tolerance study
+(:func:`sweep`, locally or on a Dask cluster) or the paper's whole report (:func:`report`) and
+get their results as dicts.
 
     >>> import mech
     >>> pendulum = mech.load("models/pendulum.mech", set={"l": "30 mm"})
@@ -17,20 +18,20 @@ and column).
 The model is compiled once when loaded; changing a parameter does not recompile it.
 
 Results that are tables come as pandas DataFrames with ``as_frame=True`` (``simulate``,
-``bode``, :func:`sweep`, :func:`experiment`); pandas is needed only then.
+``bode``, :func:`sweep`, :func:`experiment`, :func:`fit`); pandas is needed only then.
 """
 
 from __future__ import annotations
 
 from os import PathLike
-from typing import Mapping, Union
+from typing import Mapping, Sequence, Union
 
 import os
 
 from . import _frames, _mech
 from ._mech import MechError, Model, diagnose, sweep_ranking, sweep_run, sweep_size
 
-__all__ = ["load", "experiment", "diagnose", "sweep", "Model", "MechError"]
+__all__ = ["load", "experiment", "fit", "diagnose", "sweep", "Model", "MechError"]
 
 Value = Union[str, float, int]
 
@@ -68,6 +69,31 @@ def experiment(path: str | PathLike, out_dir: str | PathLike | None = None, as_f
     """
     result = _mech.experiment(path, out_dir)
     return _frames.experiment(result) if as_frame else result
+
+
+def fit(
+    experiment: str | PathLike,
+    data: str | PathLike,
+    fit: Sequence[str],
+    model: str | PathLike | None = None,
+    as_frame: bool = False,
+) -> dict:
+    """Fits model parameters to measured data as ``mech fit`` does (Levenberg–Marquardt).
+
+    `experiment` is a diagnosis experiment file (TOML, ``docs/diagnose.md``), `data` its
+    measured CSV, `fit` the parameters: ``"NAME"`` (bounds a factor of ten either side of a
+    positive value) or ``"NAME=LO..HI UNIT"`` (``"eta=0.01..0.5"``, ``"k_s3=10..100
+    uN*m/rad"``). `model` replaces the experiment's model. Returns what ``fit.json`` holds:
+    ``parameters`` (``name``, ``value``, ``standard_error``, ``status``), ``converged``,
+    ``reason``, ``cost``, ``degrees_of_freedom``, ``residual_rms`` per series (``before``,
+    ``after``), ``flags`` and ``screening``; and ``points``: per measured value its
+    ``series``, ``abscissa``, data ``row``, ``measured`` value and the model ``before`` and
+    ``after`` the fit (NumPy arrays). Writes nothing.
+
+    With `as_frame`, ``parameters``, ``residual_rms`` and ``points`` are pandas DataFrames.
+    """
+    result = _mech.fit(experiment, data, list(fit), model)
+    return _frames.fit(result) if as_frame else result
 
 
 def sweep(

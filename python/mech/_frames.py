@@ -1,7 +1,7 @@
 """pandas DataFrames of the results that are tables (``as_frame=True``).
 
 Consumes: the dicts and arrays the native module returns (a simulation, a frequency
-response, a sweep, an experiment's tables) and the model's names. Produces: DataFrames with
+response, a sweep, an experiment's tables, a fit) and the model's names. Produces: DataFrames with
 named columns in SI units, what does not fit a column (integrator steps, units) in
 ``DataFrame.attrs``. pandas is optional: it is imported here, on the first call that asks
 for a frame, and its absence raises an ImportError saying how to install it.
@@ -99,3 +99,17 @@ def experiment(result: dict) -> dict:
     framed["tables"] = [dict(t, frame=table(t["header"], t["rows"])) for t in result["tables"]]
     return framed
 
+
+
+def fit(result: dict) -> dict:
+    """A fit's result with its tables as frames: ``parameters`` (``name``, ``value``,
+    ``standard_error``, ``status``), ``residual_rms`` (``series``, ``before``, ``after``) and
+    ``points`` (one row per measured value)."""
+    pd = pandas()
+    framed = dict(result)
+    framed["parameters"] = pd.DataFrame(
+        result["parameters"], columns=["name", "value", "standard_error", "status"]
+    )
+    framed["residual_rms"] = pd.DataFrame(result["residual_rms"], columns=["series", "before", "after"])
+    framed["points"] = pd.DataFrame(result["points"])
+    return framed

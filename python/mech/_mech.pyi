@@ -88,6 +88,17 @@ def diagnose(
     """Diagnoses measured data as `mech diagnose` does and returns what `diagnosis.json` holds
     (`verdict`, `summary`, `base`, `ranked`, `combined`, `features`, ...); writes nothing."""
 
+def fit(
+    experiment: Union[str, PathLike[str]],
+    data: Union[str, PathLike[str]],
+    fit: list[str],
+    model: Optional[Union[str, PathLike[str]]] = None,
+) -> dict[str, Any]:
+    """Fits parameters to measured data as `mech fit` does: what `fit.json` holds
+    (`parameters`, `converged`, `reason`, `cost`, `degrees_of_freedom`, `residual_rms`,
+    `flags`, `screening`) and `points` (`series`, `abscissa`, `row`, `measured`, `before`,
+    `after`); writes nothing."""
+
 def sweep_size(
     study: Union[str, PathLike[str]],
     samples: Optional[int] = None,

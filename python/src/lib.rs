@@ -773,6 +773,27 @@ fn experiment<'py>(
     )
 }
 
+/// A diagnosis experiment file (its model replaced by `model`) and its measured data, read;
+/// errors as their messages.
+fn experiment_and_data(
+    experiment: &std::path::Path,
+    data: &std::path::Path,
+    model: Option<PathBuf>,
+) -> Result<
+    (
+        mech::diagnose::experiment::Experiment,
+        mech::diagnose::data::MeasuredData,
+    ),
+    String,
+> {
+    let mut spec = mech::diagnose::experiment::load(experiment).map_err(|e| e.to_string())?;
+    if let Some(model) = model {
+        spec.set_model(model);
+    }
+    let measured = mech::diagnose::data::MeasuredData::load(data).map_err(|e| e.to_string())?;
+    Ok((spec, measured))
+}
+
 /// Diagnoses measured data against a model (`mech diagnose`): every catalog cause fitted,
 /// ranked on the held-out rows, the verdict. Returns what `diagnosis.json` holds (verdict,
 /// summary sentence, every trial with its fitted values and standard errors, features, held-out
@@ -793,11 +814,7 @@ fn diagnose<'py>(
     let summary = py
         .detach(|| {
             let text = |e: &dyn std::fmt::Display| e.to_string();
-            let mut spec = mech::diagnose::experiment::load(&experiment).map_err(|e| text(&e))?;
-            if let Some(model) = model {
-                spec.set_model(model);
-            }
-            let measured = mech::diagnose::data::MeasuredData::load(&data).map_err(|e| text(&e))?;
+            let (spec, measured) = experiment_and_data(&experiment, &data, model)?;
             let holdout_rows = Holdout::parse(holdout).map_err(|e| text(&e))?;
             let d = diagnose_causes(&spec, &measured, &fit, holdout_rows, &causes)
                 .map_err(|e| text(&e))?;
@@ -814,6 +831,61 @@ fn diagnose<'py>(
         })
         .map_err(error)?;
     json_object(py, &summary)
+}
+
+/// Fits the parameters `fit` (`NAME`, or `NAME=LO..HI UNIT`) of the experiment's model (or
+/// `model`) to measured data (`mech fit`): what `fit.json` holds (parameters with standard
+/// errors and status, stop reason, cost, residual RMS per series, screening flags) and
+/// `points`, one entry per measured value: `series`, `abscissa`, `row`, `measured`, the model
+/// `before` and `after` the fit. Writes nothing.
+#[pyfunction]
+#[pyo3(signature = (experiment, data, fit, model=None))]
+fn fit<'py>(
+    py: Python<'py>,
+    experiment: PathBuf,
+    data: PathBuf,
+    fit: Vec<String>,
+    model: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyAny>> {
+    use mech::diagnose::fit::{fit as fit_leg, parameters, FitRequest};
+    if fit.is_empty() {
+        return Err(error(
+            "`fit` names no parameter: give at least one `NAME` or `NAME=LO..HI UNIT`",
+        ));
+    }
+    let (summary, report) = py
+        .detach(|| {
+            let text = |e: &dyn std::fmt::Display| e.to_string();
+            let (spec, measured) = experiment_and_data(&experiment, &data, model)?;
+            let mut leg =
+                mech::experiments::leg::Leg::open_any(&spec.model, &[]).map_err(|e| text(&e))?;
+            let requests = fit
+                .iter()
+                .map(|request| FitRequest::parse(request))
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|e| text(&e))?;
+            let fitted = parameters(&leg, &requests).map_err(|e| text(&e))?;
+            // Checked before the screening, which reads the same columns (as `mech fit`).
+            spec.observations(&leg, &measured).map_err(|e| text(&e))?;
+            let screening = spec.screen(&measured).map_err(|e| text(&e))?;
+            let report = fit_leg(&spec, &measured, &mut leg, &fitted).map_err(|e| text(&e))?;
+            let summary =
+                mech::render::diagnosis::fit_json(&spec, &data, &report, screening.as_ref());
+            Ok::<_, String>((summary, report))
+        })
+        .map_err(error)?;
+    let result = json_object(py, &summary)?;
+    let observations = report.observations;
+    let points = PyDict::new(py);
+    points.set_item("series", observations.series)?;
+    points.set_item("abscissa", PyArray1::from_vec(py, observations.abscissa))?;
+    let rows: Vec<i64> = observations.row.iter().map(|&r| r as i64).collect();
+    points.set_item("row", PyArray1::from_vec(py, rows))?;
+    points.set_item("measured", PyArray1::from_vec(py, observations.values))?;
+    points.set_item("before", PyArray1::from_vec(py, report.before))?;
+    points.set_item("after", PyArray1::from_vec(py, report.after))?;
+    result.set_item("points", points)?;
+    Ok(result)
 }
 
 /// A study (`mech sweep`) with `samples` and `seed` in place of its own, model paths relative
@@ -926,6 +998,7 @@ fn _mech(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Model>()?;
     m.add_function(wrap_pyfunction!(experiment, m)?)?;
     m.add_function(wrap_pyfunction!(diagnose, m)?)?;
+    m.add_function(wrap_pyfunction!(fit, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_size, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_run, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_ranking, m)?)?;
