@@ -99,6 +99,13 @@ def fit(
     `flags`, `screening`) and `points` (`series`, `abscissa`, `row`, `measured`, `before`,
     `after`); writes nothing."""
 
+def report(
+    out_dir: Optional[Union[str, PathLike[str]]] = None,
+    experiments: Optional[Union[str, PathLike[str]]] = None,
+) -> dict[str, Any]:
+    """Runs every experiment file in `experiments` and writes the report (`mech report`) into
+    `out_dir`: `html`, `markdown`, `seconds` and each experiment's result (`experiments`)."""
+
 def sweep_size(
     study: Union[str, PathLike[str]],
     samples: Optional[int] = None,

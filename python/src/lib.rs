@@ -746,31 +746,72 @@ fn experiment<'py>(
             Ok::<_, String>(outcome)
         })
         .map_err(error)?;
+    json_object(py, &outcome_json(&outcome, out_dir.is_some()))
+}
+
+/// An experiment's outcome as `experiment` returns it: name, title, method, tables (title,
+/// header, rows of text cells), notes, key values (SI units), and the `files` it rendered when
+/// they are `written` (else none).
+fn outcome_json(outcome: &mech::render::report::Outcome, written: bool) -> serde_json::Value {
     let tables: Vec<serde_json::Value> = outcome
         .tables
         .iter()
         .map(|t| serde_json::json!({"title": t.title, "header": t.header, "rows": t.rows}))
         .collect();
-    let written: Vec<String> = match out_dir {
-        Some(_) => outcome
+    let files: Vec<String> = match written {
+        true => outcome
             .rendered
             .iter()
             .map(|f| f.path.display().to_string())
             .collect(),
-        None => Vec::new(),
+        false => Vec::new(),
     };
-    json_object(
-        py,
-        &serde_json::json!({
-            "name": outcome.name,
-            "title": outcome.title,
-            "method": outcome.method,
-            "tables": tables,
-            "notes": outcome.notes,
-            "values": outcome.values,
-            "files": written,
-        }),
-    )
+    serde_json::json!({
+        "name": outcome.name,
+        "title": outcome.title,
+        "method": outcome.method,
+        "tables": tables,
+        "notes": outcome.notes,
+        "values": outcome.values,
+        "files": files,
+    })
+}
+
+/// Runs every experiment file in `experiments` on all cores (`mech report`) and writes the
+/// report into `out_dir`: `report.html`, `report.md` and each experiment's files, all or none.
+/// Returns the pages' paths (`html`, `markdown`), the run's `seconds` and each experiment's
+/// result as `experiment` returns it (`experiments`, in the report's order).
+#[pyfunction]
+#[pyo3(signature = (out_dir=None, experiments=None))]
+fn report<'py>(
+    py: Python<'py>,
+    out_dir: Option<PathBuf>,
+    experiments: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyAny>> {
+    use mech::render::report::{experiment_reads, Report};
+    let out_dir = out_dir.unwrap_or_else(|| PathBuf::from("out/report"));
+    let experiments = experiments.unwrap_or_else(|| PathBuf::from("experiments"));
+    let summary = py
+        .detach(|| {
+            let text = |e: &dyn std::fmt::Display| e.to_string();
+            let started = std::time::Instant::now();
+            let files = mech::experiments::experiment_files(&experiments).map_err(|e| text(&e))?;
+            let outcomes = mech::render::experiments::run_all(&files, &out_dir, &|_| {})
+                .map_err(|e| text(&e))?;
+            let seconds = started.elapsed().as_secs_f64();
+            let report = Report::new(outcomes, &out_dir, seconds).map_err(|e| text(&e))?;
+            let summary = serde_json::json!({
+                "html": report.html.path.display().to_string(),
+                "markdown": report.markdown.path.display().to_string(),
+                "seconds": seconds,
+                "experiments": report.outcomes.iter().map(|o| outcome_json(o, true)).collect::<Vec<_>>(),
+            });
+            mech::output::write_all(&report.into_files(), &experiment_reads(&files))
+                .map_err(|e| text(&e))?;
+            Ok::<_, String>(summary)
+        })
+        .map_err(error)?;
+    json_object(py, &summary)
 }
 
 /// A diagnosis experiment file (its model replaced by `model`) and its measured data, read;
@@ -999,6 +1040,7 @@ fn _mech(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(experiment, m)?)?;
     m.add_function(wrap_pyfunction!(diagnose, m)?)?;
     m.add_function(wrap_pyfunction!(fit, m)?)?;
+    m.add_function(wrap_pyfunction!(report, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_size, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_run, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_ranking, m)?)?;
