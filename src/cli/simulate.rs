@@ -12,6 +12,7 @@ use mech_runtime::{Method, Model, SimOptions, Trajectory};
 use super::{parse_time, Error, ModelArgs};
 use crate::output;
 use crate::render::plot;
+use crate::render::run::{coordinate_names, output_names, speed_names, trajectory_table};
 use crate::session::Session;
 
 #[derive(Args, Clone, Debug)]
@@ -161,42 +162,6 @@ fn method(request: &SimulateArgs) -> Result<Method, Error> {
         Integrator::Rosenbrock => Method::Rosenbrock { rtol, atol, h_max },
         Integrator::ExpRosenbrock => Method::ExpRosenbrock { rtol, atol, h_max },
     })
-}
-
-fn coordinate_names(model: &dyn Model) -> Vec<String> {
-    (0..model.nq())
-        .map(|i| model.coordinate_name(i).to_string())
-        .collect()
-}
-
-fn speed_names(model: &dyn Model) -> Vec<String> {
-    (0..model.nu())
-        .map(|i| model.speed_name(i).to_string())
-        .collect()
-}
-
-fn output_names(model: &dyn Model) -> Vec<String> {
-    (0..model.noutputs())
-        .map(|i| model.output_name(i).to_string())
-        .collect()
-}
-
-/// The CSV of a run: `t`, `q_NAME`…, `u_NAME`…, the outputs; one row per sample.
-fn trajectory_table(model: &dyn Model, trajectory: &Trajectory) -> (Vec<String>, Vec<Vec<f64>>) {
-    let mut header = vec!["t".to_string()];
-    header.extend(coordinate_names(model).iter().map(|n| format!("q_{n}")));
-    header.extend(speed_names(model).iter().map(|n| format!("u_{n}")));
-    header.extend(output_names(model));
-    let rows = (0..trajectory.times.len())
-        .map(|k| {
-            let mut row = vec![trajectory.times[k]];
-            row.extend(&trajectory.q[k]);
-            row.extend(&trajectory.u[k]);
-            row.extend(&trajectory.outputs[k]);
-            row
-        })
-        .collect();
-    (header, rows)
 }
 
 /// A panel of `mech simulate --plot`: its title, the y axis symbol and the unit (`None`: not

@@ -104,6 +104,8 @@ pub enum Error {
     Sweep(Box<crate::sweep::Error>),
     /// Its outcome could not be rendered.
     SweepRender(Box<crate::render::sweep::Error>),
+    /// A walk could not be animated (`locomotion`).
+    Animation(crate::animation::Error),
 }
 
 impl Error {
@@ -144,7 +146,8 @@ impl fmt::Display for Error {
             Error::MistypedKey { key, line, message } => mistyped_text(f, key, *line, message),
             Error::MissingKind => f.write_str(
                 "missing key `kind`: expected one of \"trajectory\", \"force_deflection\", \
-                 \"ratio_sweep\", \"compare\", \"bode\", \"table_diagnosis\", \"tolerance\"",
+                 \"ratio_sweep\", \"compare\", \"bode\", \"table_diagnosis\", \"tolerance\", \
+                 \"locomotion\"",
             ),
             Error::Key { message } => f.write_str(message),
             Error::Quantity(error) => write!(f, "{error}"),
@@ -184,6 +187,7 @@ impl fmt::Display for Error {
             Error::Plot(error) => write!(f, "{error}"),
             Error::Sweep(error) => write!(f, "{error}"),
             Error::SweepRender(error) => write!(f, "{error}"),
+            Error::Animation(error) => write!(f, "animation of the walk: {error}"),
         }
     }
 }

@@ -3,7 +3,7 @@
 //! and run by `mech experiment FILE` or all together by `mech report`.
 //!
 //! Consumes: an experiment file (`kind = "trajectory" | "force_deflection" | "ratio_sweep" |
-//! "compare" | "bode" | "table_diagnosis" | "tolerance"`, see `docs/experiments.md`) naming a `.mech` model and its settings.
+//! "compare" | "bode" | "table_diagnosis" | "tolerance" | "locomotion"`, see `docs/experiments.md`) naming a `.mech` model and its settings.
 //! Produces: each kind's `compute` returns its results as plain data (equilibria, forces,
 //! sweeps, responses); [`crate::render::experiments`] turns them into an `Outcome` (tables
 //! of the model beside the paper's measured values, notes, CSV files and plots, named key
@@ -17,6 +17,7 @@ pub mod compare;
 pub mod error;
 pub mod force;
 pub mod leg;
+pub mod locomotion;
 pub mod sweep;
 pub mod table_diagnosis;
 pub mod tolerance;
@@ -50,6 +51,7 @@ pub enum Kind {
     Bode(bode::Spec),
     TableDiagnosis(table_diagnosis::Spec),
     Tolerance(tolerance::Spec),
+    Locomotion(locomotion::Spec),
 }
 
 /// Reads and checks an experiment file. Errors name the file and the key.
@@ -97,6 +99,7 @@ impl Experiment {
             Kind::Bode(s) => s.check(),
             Kind::TableDiagnosis(s) => s.check(),
             Kind::Tolerance(s) => s.check(),
+            Kind::Locomotion(s) => s.check(),
         }
     }
 
@@ -107,6 +110,7 @@ impl Experiment {
             Kind::RatioSweep(_) => 4.0,
             // Two diagnoses over the whole catalog, ~1 min each.
             Kind::TableDiagnosis(_) => 8.0,
+            Kind::Locomotion(s) => s.cost(),
             _ => 1.0,
         }
     }

@@ -11,6 +11,7 @@ pub mod experiments;
 pub mod flexure_fit;
 pub mod plot;
 pub mod report;
+pub mod run;
 pub mod sweep;
 pub mod table;
 pub mod terminal;

@@ -14,5 +14,6 @@ mod experiments;
 mod flexure;
 mod flexure_effects;
 mod flexure_screening;
+mod locomotion;
 mod readme;
 mod sweep;

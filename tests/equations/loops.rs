@@ -334,3 +334,69 @@ fn spherical_five_bar_mobility_and_motion() {
         assert!(max_abs(&phi) < 1e-9, "|φ| = {:e}", max_abs(&phi));
     }
 }
+
+/// The constrained accelerations keep only the independent rows once a solve has found some
+/// redundant (`ConstrainedSolver`'s row choice): at closed random states of every bundled
+/// model with loops, a solver reused from state to state gives the `u̇` of a fresh one (which
+/// solves with every row) to round-off, and `u̇` meets every row, `J u̇ = −J̇u`, also the rows
+/// left out.
+#[test]
+fn accelerations_on_the_chosen_rows_meet_every_row() {
+    let mut rng = Rng::new(23);
+    let mut redundant = 0;
+    for name in mech::models::NAMES {
+        let model = common::tape(name);
+        let (nu, nc) = (model.nu(), model.nc());
+        if nc == 0 {
+            continue;
+        }
+        let (q0, _) = assembled(&model, &[]);
+        let mut reused = mech_runtime::ConstrainedSolver::for_model(&model);
+        for _ in 0..4 {
+            // A closed state near the assembly with consistent speeds.
+            let mut q = q0.clone();
+            let nudge = rng.vector(nu, -1e-3, 1e-3);
+            q = step_along(&model, &q, &nudge, 1.0);
+            mech_runtime::normalize_quaternions(model.unit_quaternions(), &mut q);
+            assemble(&model, 0.0, &mut q, &[], &AssemblyOptions::default()).unwrap();
+            let mut u = rng.vector(nu, -1.0, 1.0);
+            let free = mech_runtime::constraints::choose_independent(
+                &mech_runtime::constraints::jacobian(&model, 0.0, &q),
+            );
+            assemble_speeds(&model, 0.0, &q, &mut u, &free).unwrap();
+            let inputs = rng.vector(model.ninputs(), -1.0, 1.0);
+            let mut fresh_udot = vec![0.0; nu];
+            mech_runtime::ConstrainedSolver::for_model(&model)
+                .accelerations(&model, 0.0, &q, &u, &inputs, &mut fresh_udot)
+                .unwrap();
+            let mut udot = vec![0.0; nu];
+            reused
+                .accelerations(&model, 0.0, &q, &u, &inputs, &mut udot)
+                .unwrap();
+            let scale = max_abs(&fresh_udot).max(1.0);
+            for (a, b) in udot.iter().zip(&fresh_udot) {
+                assert!((a - b).abs() <= 1e-10 * scale, "{name}: u̇ {a} vs {b}");
+            }
+            let mut j = vec![0.0; nc * nu];
+            model.constraint_jacobian(0.0, &q, &mut j);
+            let mut bias = vec![0.0; nc];
+            model.constraint_bias(0.0, &q, &u, &mut bias);
+            for r in 0..nc {
+                let row: f64 = (0..nu).map(|c| j[r + nc * c] * udot[c]).sum();
+                let size = (0..nu)
+                    .map(|c| (j[r + nc * c] * udot[c]).abs())
+                    .sum::<f64>();
+                assert!(
+                    (row + bias[r]).abs() <= 1e-9 * size.max(bias[r].abs()).max(1.0),
+                    "{name}: row {r}: J u̇ = {row:e}, −J̇u = {:e}",
+                    -bias[r]
+                );
+            }
+        }
+        redundant += usize::from(mobility(&model, 0.0, &q0).unwrap().rank < nc);
+    }
+    assert!(
+        redundant >= 2,
+        "only {redundant} models with redundant rows"
+    );
+}

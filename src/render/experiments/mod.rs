@@ -7,6 +7,7 @@
 pub mod bode;
 pub mod compare;
 pub mod force;
+pub mod locomotion;
 pub mod sweep;
 pub mod table_diagnosis;
 pub mod tolerance;
@@ -29,6 +30,7 @@ pub fn run(experiment: &Experiment, name: &str, out_dir: &Path) -> Result<Outcom
         Kind::Bode(s) => bode::run(s, out_dir)?,
         Kind::TableDiagnosis(s) => table_diagnosis::run(s, out_dir)?,
         Kind::Tolerance(s) => tolerance::run(s, out_dir)?,
+        Kind::Locomotion(s) => locomotion::run(s, out_dir)?,
     };
     let observed = std::mem::replace(&mut outcome.notes, experiment.notes.clone());
     outcome.notes.extend(observed);

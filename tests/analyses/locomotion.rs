@@ -1,0 +1,196 @@
+//! The locomotion experiment (`kind = "locomotion"`, experiment 8): gaits give the drive
+//! phases the robot's mirror test found, the body's attitude is read right from its
+//! quaternion, bad files are clear errors, and a short walk moves the robot forwards.
+
+use std::path::PathBuf;
+
+use mech::experiments::{self, locomotion, Kind};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn spec_text(replace: &[(&str, &str)]) -> String {
+    let file = root().join("experiments/hamr_vi_locomotion.toml");
+    let mut text = std::fs::read_to_string(file).unwrap();
+    text = text.replace("\"models/", &format!("\"{}/models/", root().display()));
+    for (from, to) in replace {
+        assert!(text.contains(from), "no `{from}`");
+        text = text.replace(from, to);
+    }
+    text
+}
+
+fn spec(replace: &[(&str, &str)]) -> locomotion::Spec {
+    match experiments::parse(&spec_text(replace)).unwrap().kind {
+        Kind::Locomotion(spec) => spec,
+        _ => panic!("not a locomotion experiment"),
+    }
+}
+
+/// The phase (deg) of each input in `drives`, by input name.
+fn phases(drives: &[String]) -> Vec<(String, f64)> {
+    drives
+        .iter()
+        .map(|d| {
+            let (name, signal) = d.split_once('=').unwrap();
+            let phase = signal.split("phase=").nth(1).unwrap();
+            let phase: f64 = phase.trim_end_matches(" deg)").parse().unwrap();
+            (name.to_string(), phase)
+        })
+        .collect()
+}
+
+/// The trot of `docs/import.md` (every swing drive in phase, the front lifts at 270°, the rear
+/// at 90°: the drive the robot's mirror test found to walk forwards) is what the bundled
+/// file's trot and wiring give; a pronk puts every foot in phase, so the legs wired the other
+/// way get half a cycle.
+#[test]
+fn gaits_give_the_mirror_tests_drive_phases() {
+    let trot = phases(&spec(&[]).drives(20.0).unwrap());
+    let expected = [
+        ("FL_v_swing", 0.0),
+        ("FL_v_lift", 270.0),
+        ("FR_v_swing", 0.0),
+        ("FR_v_lift", 270.0),
+        ("RL_v_swing", 0.0),
+        ("RL_v_lift", 90.0),
+        ("RR_v_swing", 0.0),
+        ("RR_v_lift", 90.0),
+    ];
+    for (name, phase) in expected {
+        let found = trot.iter().find(|(n, _)| n == name).unwrap().1;
+        assert!((found - phase).abs() < 1e-9, "{name}: {found} vs {phase}");
+    }
+    let pronk = phases(
+        &spec(&[("gait = \"trot\"", "gait = \"pronk\"")])
+            .drives(20.0)
+            .unwrap(),
+    );
+    let swing: Vec<f64> = pronk
+        .iter()
+        .filter(|(n, _)| n.ends_with("swing"))
+        .map(|p| p.1)
+        .collect();
+    assert_eq!(swing, [0.0, 180.0, 180.0, 0.0], "FL, FR, RL, RR");
+}
+
+fn quaternion_product(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
+    [
+        a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+        a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+        a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+        a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
+    ]
+}
+
+/// Rotations built as yaw about z, then pitch about the new y, then roll about the newest x
+/// (the quaternion product `qz ⊗ qy ⊗ qx`) come back as the same three angles, and the
+/// quaternion's direction cosines (`docs/mech-language.md`) equal `Rz Ry Rx`.
+#[test]
+fn attitude_angles_of_known_rotations() {
+    for (roll, pitch, yaw) in [(0.1, -0.2, 0.3), (-1.0, 0.7, 2.5), (0.0, 0.0, -3.0)] {
+        let half = |a: f64| (0.5 * a).sin_cos();
+        let (sx, cx) = half(roll);
+        let (sy, cy) = half(pitch);
+        let (sz, cz) = half(yaw);
+        let e = quaternion_product(
+            quaternion_product([cz, 0.0, 0.0, sz], [cy, 0.0, sy, 0.0]),
+            [cx, sx, 0.0, 0.0],
+        );
+        let (r, p, y) = locomotion::roll_pitch_yaw(&e);
+        for (found, angle) in [(r, roll), (p, pitch), (y, yaw)] {
+            assert!((found - angle).abs() < 1e-12, "{found} vs {angle}");
+        }
+        // C = (e0² − ε·ε) I + 2 ε εᵀ + 2 e0 [ε]×, against Rz(yaw) Ry(pitch) Rx(roll).
+        let eps = [e[1], e[2], e[3]];
+        let dot = eps.iter().map(|v| v * v).sum::<f64>();
+        let cross = [
+            [0.0, -eps[2], eps[1]],
+            [eps[2], 0.0, -eps[0]],
+            [-eps[1], eps[0], 0.0],
+        ];
+        let (s1, c1) = roll.sin_cos();
+        let (s2, c2) = pitch.sin_cos();
+        let (s3, c3) = yaw.sin_cos();
+        let rzyx = [
+            [c3 * c2, c3 * s2 * s1 - s3 * c1, c3 * s2 * c1 + s3 * s1],
+            [s3 * c2, s3 * s2 * s1 + c3 * c1, s3 * s2 * c1 - c3 * s1],
+            [-s2, c2 * s1, c2 * c1],
+        ];
+        for i in 0..3 {
+            for j in 0..3 {
+                let identity = if i == j { e[0] * e[0] - dot } else { 0.0 };
+                let c = identity + 2.0 * eps[i] * eps[j] + 2.0 * e[0] * cross[i][j];
+                assert!(
+                    (c - rzyx[i][j]).abs() < 1e-12,
+                    "C[{i}][{j}] {c} vs {}",
+                    rzyx[i][j]
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn bad_locomotion_files_give_clear_errors() {
+    let cases = [
+        (
+            ("gait = \"trot\"", "gait = \"gallop\""),
+            "unknown gait `gallop`",
+        ),
+        (
+            ("gait = \"trot\"", "gait = \"custom\""),
+            "needs each leg's `phase`",
+        ),
+        (
+            ("swing_sign = -1", "swing_sign = 2"),
+            "`swing_sign` must be 1 or -1",
+        ),
+        (
+            (
+                "payloads = [\"0 g\", \"1 g\", \"2 g\", \"3 g\", \"4 g\"]",
+                "payloads = [\"-1 g\"]",
+            ),
+            "payloads",
+        ),
+        (
+            (
+                "frequencies = [\"2 Hz\", \"5 Hz\", \"10 Hz\", \"20 Hz\"]",
+                "frequencies = [\"10 V\"]",
+            ),
+            "frequencies",
+        ),
+        (
+            ("amplitude = \"100 V\"", "amplitude = \"100 V\"\nspeed = 3"),
+            "speed",
+        ),
+    ];
+    for ((from, to), expected) in cases {
+        let error = experiments::parse(&spec_text(&[(from, to)]))
+            .err()
+            .unwrap_or_else(|| panic!("`{to}` accepted"))
+            .to_string();
+        assert!(error.contains(expected), "`{to}`: {error}");
+    }
+}
+
+/// A short trot (10 Hz, half a settle cycle, one measured cycle) moves the robot forwards,
+/// and the mass the cost of transport divides by is the robot's 1.475 g (the sum of its
+/// bodies' masses, `hamr_robot.rs`), read from `M` with a 1 g payload on.
+#[test]
+fn a_short_trot_moves_forwards() {
+    let spec = spec(&[
+        ("settle_cycles = 1", "settle_cycles = 0.5"),
+        ("cycles = 2", "cycles = 1"),
+    ]);
+    let (walk, trajectory) = locomotion::walk(&spec, 10.0, 1e-3).unwrap();
+    println!("{walk:?}");
+    assert!(
+        (walk.robot_mass - 1.475e-3).abs() < 1e-6,
+        "mass {}",
+        walk.robot_mass
+    );
+    assert!(walk.run.speed > 10e-3, "speed {} m/s", walk.run.speed);
+    assert!(trajectory.len() > 100);
+}
