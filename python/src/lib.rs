@@ -599,7 +599,7 @@ impl Model {
     /// The accelerations `u̇` at `(t, q, u)`: `M(q) u̇ = F(t, q, u, inputs)`, with the loops'
     /// reactions `Jᵀλ` where the model has loops (`J u̇ = −J̇u`), as the integrators see them.
     /// `inputs` default to the input signals at `t`. One call costs the Rust evaluation plus
-    /// about half a microsecond (`docs/benchmarks.md` §15).
+    /// about 0.3 µs (`docs/benchmarks.md` §15).
     #[pyo3(signature = (t, q, u, inputs=None))]
     fn rhs<'py>(
         &self,
