@@ -166,7 +166,11 @@ impl JitProgram {
         // Cranelift's IR verifier checks this crate's lowering: on in debug builds (the
         // tests, which also compare every model's JIT with the interpreter bit for bit), off
         // in release, where it took ~4 % of the compile time.
-        let verify = if cfg!(debug_assertions) { "true" } else { "false" };
+        let verify = if cfg!(debug_assertions) {
+            "true"
+        } else {
+            "false"
+        };
         for (name, value) in [
             ("opt_level", opt),
             ("use_colocated_libcalls", "false"),
