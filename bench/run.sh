@@ -21,6 +21,9 @@
 #   5d. the HAMR leg: `cargo run --release --example hamr_performance` (a Markdown table);
 #   5e. the HAMR leg's statics: `cargo run --release --example statics_timing` (Markdown tables);
 #   5f. tapes as native code: `cargo run --release --example jit_performance` (Markdown tables);
+#   5g. the Python call overhead: the package installed into bench/.venv (`pip install
+#      ./python`), then `bench/python_overhead.py` (`model.rhs` against the same evaluation in
+#      Rust, a Markdown table);
 #   6. bench/summarize.py: docs/benchmarks.md.
 # ../shared/peers is only read: every result goes to bench/results/ (JSON lines), and every
 # command run is logged in bench/results/commands.txt.
@@ -175,6 +178,12 @@ run cargo run --release -q --example statics_timing > $R/statics.md || failed st
 echo "== 5f. JIT" >&2
 load jit
 run cargo run --release -q --example jit_performance > $R/jit.md || failed jit_performance 0 $? >> $R/jit.md
+
+# The Python call overhead (issue 19): `model.rhs` against the same evaluation in Rust.
+echo "== 5g. Python call overhead" >&2
+load python
+run $PY -m pip install -q ./python
+run $PY bench/python_overhead.py > $R/python.md || failed python_overhead 0 $? >> $R/python.md
 load end
 
 if [ "${SKIP_SUMMARY:-0}" != 1 ]; then

@@ -496,7 +496,20 @@ def main():
     L.extend(diagnose_section())
     L.extend(resources_section())
     L.extend(jit_section(R))
-    L.extend(sweep_section())
+    L.extend(hand_section(
+        '## 14. `mech sweep`: 10,000 Monte-Carlo samples of the HAMR-VI leg', 'analysis_sweep'))
+    # Section 15: the Python call overhead (bench/python_overhead.py).
+    L.extend(printed_section(
+        R,
+        '## 15. Python call overhead (issue 19): `model.rhs(t, q, u)` against Rust',
+        'python.md',
+        '`python bench/python_overhead.py` (run by `bench/run.sh` after the JIT tables, in '
+        '`bench/.venv` with the package installed by `pip install ./python`), its table as printed.',
+        'analysis_python',
+    ))
+    L.extend(hand_section(
+        '## 16. The whole robot (issue 16): one second of trotting, and the Fig. 9 grid',
+        'analysis_robot'))
     with open(a.out, 'w') as f:
         f.write('\n'.join(L).rstrip('\n') + '\n')
     print(f'wrote {a.out}')
@@ -893,28 +906,41 @@ def resources_section():
 def jit_section(R):
     """Section 13: native code for tapes (`examples/jit_performance.rs`, its tables as printed
     in bench/results/jit.md) and the hand-written interpretation in bench/analysis_jit.md."""
-    L = ['', '## 13. Compiled speed without cargo (issue 19): tapes as native code', '']
-    table = os.path.join(R, 'jit.md')
+    return printed_section(
+        R,
+        '## 13. Compiled speed without cargo (issue 19): tapes as native code',
+        'jit.md',
+        '`cargo run --release --example jit_performance` (run by `bench/run.sh` after the '
+        'statics), its tables as printed.',
+        'analysis_jit',
+    )
+
+
+def printed_section(R, heading, table_name, command, analysis):
+    """A section of tables a benchmark printed as Markdown (bench/results/TABLE_NAME, its
+    `###` headings one level down), the sentence saying which `command` printed them, then the
+    hand-written interpretation bench/ANALYSIS.md."""
+    L = ['', heading, '']
+    table = os.path.join(R, table_name)
     if not os.path.exists(table):
-        L.append('Not measured in this run (`bench/results/jit.md` missing).')
+        L.append(f'Not measured in this run (`bench/results/{table_name}` missing).')
     else:
-        L.append('`cargo run --release --example jit_performance` (run by `bench/run.sh` after the '
-                 'statics), its tables as printed.')
+        L.append(command)
         L.append('')
         with open(table) as f:
             L.extend(line.rstrip('\n').replace('### ', '#### ') for line in f)
         L.append('')
-    path = analysis_path('analysis_jit')
+    path = analysis_path(analysis)
     if os.path.exists(path):
         L.append(analysis_text(path).rstrip('\n'))
     return L
 
 
-def sweep_section():
-    """Section 14: `mech sweep`'s 10,000-sample tolerance study of the HAMR-VI leg (measured
-    by hand with the commands it shows: bench/analysis_sweep.md)."""
-    L = ['', '## 14. `mech sweep`: 10,000 Monte-Carlo samples of the HAMR-VI leg', '']
-    path = analysis_path('analysis_sweep')
+def hand_section(heading, analysis):
+    """A section measured by hand with the commands it shows (bench/ANALYSIS.md): section 14,
+    `mech sweep`'s 10,000-sample tolerance study; section 16, the whole robot."""
+    L = ['', heading, '']
+    path = analysis_path(analysis)
     if os.path.exists(path):
         L.append(analysis_text(path).rstrip('\n'))
     return L

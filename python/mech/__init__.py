@@ -1,7 +1,8 @@
 """mech from Python: load a `.mech` model, then assemble, simulate, solve statics and
-linearize it, with NumPy arrays in and out; run an experiment file (:func:`experiment`), a
-diagnosis of measured data (:func:`diagnose`) or a tolerance study (:func:`sweep`, locally or
-on a Dask cluster) and get their results as dicts.
+linearize it, with NumPy arrays in and out; run an experiment file (:func:`experiment`), a fit
+(:func:`fit`) or a diagnosis (:func:`diagnose`) of measured data, a tolerance study
+(:func:`sweep`, locally or on a Dask cluster) or the paper's whole report (:func:`report`) and
+get their results as dicts.
 
     >>> import mech
     >>> pendulum = mech.load("models/pendulum.mech", set={"l": "30 mm"})
@@ -15,18 +16,22 @@ dimension) or plain numbers in SI units. Every value returned is in SI units. Er
 and column).
 
 The model is compiled once when loaded; changing a parameter does not recompile it.
+
+Results that are tables come as pandas DataFrames with ``as_frame=True`` (``simulate``,
+``bode``, :func:`sweep`, :func:`experiment`, :func:`fit`); pandas is needed only then.
 """
 
 from __future__ import annotations
 
 from os import PathLike
-from typing import Mapping, Union
+from typing import Mapping, Sequence, Union
 
 import os
 
-from ._mech import MechError, Model, diagnose, experiment, sweep_ranking, sweep_run, sweep_size
+from . import _frames, _mech
+from ._mech import MechError, Model, diagnose, sweep_ranking, sweep_run, sweep_size
 
-__all__ = ["load", "experiment", "diagnose", "sweep", "Model", "MechError"]
+__all__ = ["load", "experiment", "fit", "diagnose", "sweep", "report", "Model", "MechError"]
 
 Value = Union[str, float, int]
 
@@ -53,12 +58,63 @@ def load(
     return model
 
 
+def experiment(path: str | PathLike, out_dir: str | PathLike | None = None, as_frame: bool = False) -> dict:
+    """Runs the experiment file at `path` as ``mech experiment`` does: a dict of its ``name``,
+    ``title``, ``method``, ``tables`` (each ``title``, ``header``, ``rows`` of text cells as
+    printed), ``notes``, key ``values`` (SI units) and the ``files`` written (only with
+    `out_dir`, where its CSV files and plots are written, all or none).
+
+    With `as_frame` each table also has a ``frame``: a pandas DataFrame of its rows, columns
+    numeric where every cell is a number.
+    """
+    result = _mech.experiment(path, out_dir)
+    return _frames.experiment(result) if as_frame else result
+
+
+def report(out_dir: str | PathLike = "out/report", experiments: str | PathLike = "experiments") -> dict:
+    """Runs every experiment file (``*.toml``) in the folder `experiments` on all cores and
+    writes the report as ``mech report`` does: ``report.html`` (self-contained),
+    ``report.md`` and each experiment's CSV files and plots under `out_dir`, all or none
+    (about 2 min on two cores for the bundled ``experiments/``).
+
+    Returns ``html`` and ``markdown`` (the pages' paths), ``seconds`` and ``experiments``: each
+    experiment's result as :func:`experiment` returns it, in the report's order.
+    """
+    return _mech.report(out_dir, experiments)
+
+
+def fit(
+    experiment: str | PathLike,
+    data: str | PathLike,
+    fit: Sequence[str],
+    model: str | PathLike | None = None,
+    as_frame: bool = False,
+) -> dict:
+    """Fits model parameters to measured data as ``mech fit`` does (Levenberg–Marquardt).
+
+    `experiment` is a diagnosis experiment file (TOML, ``docs/diagnose.md``), `data` its
+    measured CSV, `fit` the parameters: ``"NAME"`` (bounds a factor of ten either side of a
+    positive value) or ``"NAME=LO..HI UNIT"`` (``"eta=0.01..0.5"``, ``"k_s3=10..100
+    uN*m/rad"``). `model` replaces the experiment's model. Returns what ``fit.json`` holds:
+    ``parameters`` (``name``, ``value``, ``standard_error``, ``status``), ``converged``,
+    ``reason``, ``cost``, ``degrees_of_freedom``, ``residual_rms`` per series (``before``,
+    ``after``), ``flags`` and ``screening``; and ``points``: per measured value its
+    ``series``, ``abscissa``, data ``row``, ``measured`` value and the model ``before`` and
+    ``after`` the fit (NumPy arrays). Writes nothing.
+
+    With `as_frame`, ``parameters``, ``residual_rms`` and ``points`` are pandas DataFrames.
+    """
+    result = _mech.fit(experiment, data, list(fit), model)
+    return _frames.fit(result) if as_frame else result
+
+
 def sweep(
     study_path: str | PathLike,
     samples: int | None = None,
     seed: int | None = None,
     client=None,
     chunk: int | None = None,
+    as_frame: bool = False,
 ) -> dict:
     """Runs a parameter grid or Monte-Carlo tolerance study (``mech sweep``).
 
@@ -73,6 +129,9 @@ def sweep(
     Rust function; a sample's values depend only on the seed and its index, so the result is
     the local run's. Each worker needs this package installed and the study and its models at
     the same paths (relative model paths are taken from the client's current directory).
+
+    With `as_frame`, ``columns`` is a pandas DataFrame indexed by ``sample`` (units in its
+    ``attrs["units"]``), and ``ranking`` and ``failures`` are DataFrames too.
     """
     import numpy as np
 
@@ -106,4 +165,4 @@ def sweep(
         [(name, columns[name]) for name in result["parameters"]],
         [(name, columns[name]) for name in result["outputs"]],
     )
-    return result
+    return _frames.sweep(result) if as_frame else result

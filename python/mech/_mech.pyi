@@ -18,6 +18,8 @@ class Model:
     @property
     def coordinates(self) -> list[str]: ...
     @property
+    def speeds(self) -> list[str]: ...
+    @property
     def inputs(self) -> list[str]: ...
     @property
     def outputs(self) -> list[str]: ...
@@ -40,7 +42,10 @@ class Model:
         step: Optional[float] = None,
         independent: Independent = None,
         max_steps: int = 1_000_000,
-    ) -> dict[str, Any]: ...
+        as_frame: bool = False,
+    ) -> Any:
+        """A dict of arrays `t`, `q`, `u`, `outputs`, `inputs` and `steps`; with `as_frame`, a
+        pandas DataFrame indexed by `t` (`q_NAME`, `u_NAME`, outputs, inputs)."""
     def statics(self, independent: Independent = None, inputs: Optional[Array] = None) -> dict[str, Any]: ...
     def linearize(self, independent: Independent = None, inputs: Optional[Array] = None) -> dict[str, Any]: ...
     def bode(
@@ -50,10 +55,22 @@ class Model:
         frequencies_hz: Array,
         damping: str = "hysteretic",
         independent: Independent = None,
-    ) -> npt.NDArray[np.complex128]: ...
+        as_frame: bool = False,
+    ) -> Any:
+        """Complex gains at `frequencies_hz`; with `as_frame`, a pandas DataFrame indexed by
+        `frequency_hz` with `gain`, `magnitude` and `phase_deg`."""
     def mass_matrix(self, q: Array, inputs: Optional[Array] = None, t: float = 0.0) -> Array: ...
     def forcing(self, q: Array, u: Array, inputs: Optional[Array] = None, t: float = 0.0) -> Array: ...
     def evaluate_outputs(self, q: Array, u: Array, inputs: Optional[Array] = None, t: float = 0.0) -> Array: ...
+    def rhs(self, t: float, q: Array, u: Array, inputs: Optional[Array] = None) -> Array:
+        """The accelerations u̇ at `(t, q, u)` (loop reactions included), `inputs` defaulting to
+        the input signals at `t`; about 0.3 µs above the Rust evaluation."""
+
+def rhs_seconds(
+    model: Model, t: float, q: Array, u: Array, inputs: Optional[Array] = None, calls: int = 1000
+) -> float:
+    """Seconds per call of `model.rhs`'s Rust part (no Python call), the mean of `calls` calls:
+    the reference of `bench/python_overhead.py`."""
 
 def experiment(path: Union[str, PathLike[str]], out_dir: Optional[Union[str, PathLike[str]]] = None) -> dict[str, Any]:
     """Runs an experiment file as `mech experiment` does: `name`, `title`, `method`, `tables`
@@ -70,6 +87,24 @@ def diagnose(
 ) -> dict[str, Any]:
     """Diagnoses measured data as `mech diagnose` does and returns what `diagnosis.json` holds
     (`verdict`, `summary`, `base`, `ranked`, `combined`, `features`, ...); writes nothing."""
+
+def fit(
+    experiment: Union[str, PathLike[str]],
+    data: Union[str, PathLike[str]],
+    fit: list[str],
+    model: Optional[Union[str, PathLike[str]]] = None,
+) -> dict[str, Any]:
+    """Fits parameters to measured data as `mech fit` does: what `fit.json` holds
+    (`parameters`, `converged`, `reason`, `cost`, `degrees_of_freedom`, `residual_rms`,
+    `flags`, `screening`) and `points` (`series`, `abscissa`, `row`, `measured`, `before`,
+    `after`); writes nothing."""
+
+def report(
+    out_dir: Optional[Union[str, PathLike[str]]] = None,
+    experiments: Optional[Union[str, PathLike[str]]] = None,
+) -> dict[str, Any]:
+    """Runs every experiment file in `experiments` and writes the report (`mech report`) into
+    `out_dir`: `html`, `markdown`, `seconds` and each experiment's result (`experiments`)."""
 
 def sweep_size(
     study: Union[str, PathLike[str]],

@@ -9,7 +9,9 @@
 //! text error shows its file, line, column and hint, as `mech check` prints it).
 //!
 //! Long computations (simulate, statics, linearize) run with the Python thread detached, on a
-//! copy of the session, so other Python threads go on meanwhile.
+//! copy of the session, so other Python threads go on meanwhile. One evaluation (`rhs`) is
+//! too short to gain from that: it runs under the GIL on scratch
+//! kept between calls, so it allocates only copies of its arguments and the array it returns.
 
 use std::f64::consts::TAU;
 use std::path::PathBuf;
@@ -18,7 +20,7 @@ use std::sync::{Mutex, MutexGuard};
 use mech::session::{Assembled, Session};
 use mech::tape_model::TapeModel;
 use mech_runtime::nalgebra::DMatrix;
-use mech_runtime::{FlexureDamping, Method, Model as _, SimOptions};
+use mech_runtime::{ConstrainedSolver, FlexureDamping, Method, Model as _, SimOptions};
 use numpy::{Complex64, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1};
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;
@@ -42,6 +44,49 @@ fn error(message: impl std::fmt::Display) -> PyErr {
 #[pyclass(module = "mech._mech")]
 struct Model {
     session: Mutex<Session>,
+    /// Scratch of `rhs`; locked after `session` when both are.
+    evaluation: Mutex<Evaluation>,
+}
+
+/// What one `u̇` evaluation reuses from call to call: the constrained solver's storage (`M`,
+/// `F`, `J`, `J̇u` and their factors), the inputs' values and `u̇` itself.
+struct Evaluation {
+    solver: ConstrainedSolver,
+    inputs: Vec<f64>,
+    udot: Vec<f64>,
+}
+
+impl Evaluation {
+    fn for_session(session: &Session) -> Evaluation {
+        let model = &session.model;
+        Evaluation {
+            solver: ConstrainedSolver::for_model(model),
+            inputs: vec![0.0; model.ninputs()],
+            udot: vec![0.0; model.nu()],
+        }
+    }
+
+    /// `u̇` of `M u̇ = F + Jᵀλ`, `J u̇ = −J̇u` at `(t, q, u)` into `self.udot`, with `inputs`
+    /// (else the input signals at `t`). Lengths are the caller's to check.
+    fn accelerations(
+        &mut self,
+        session: &Session,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        inputs: Option<&[f64]>,
+    ) -> Result<(), mech_runtime::RuntimeError> {
+        match inputs {
+            Some(values) => self.inputs.copy_from_slice(values),
+            None => {
+                for (value, signal) in self.inputs.iter_mut().zip(&session.signals) {
+                    *value = signal.value(t);
+                }
+            }
+        }
+        self.solver
+            .accelerations(&session.model, t, q, u, &self.inputs, &mut self.udot)
+    }
 }
 
 /// A matrix as a 2-D array.
@@ -60,6 +105,15 @@ fn rows_array<'py>(
     PyArray1::from_vec(py, flat)
         .reshape([rows.len(), columns])
         .expect("rows of equal length")
+}
+
+/// A 1-D float array's values, copied (strided views too). Cheaper for a state vector than
+/// `PyReadonlyArray`, whose borrow registration cost `rhs` about 0.1 µs per array
+/// (`docs/benchmarks.md` §15).
+fn values(array: &Bound<'_, PyArray1<f64>>) -> Vec<f64> {
+    array
+        .to_vec()
+        .unwrap_or_else(|_| array.to_owned_array().to_vec())
 }
 
 /// `independent=` as Python gives it: `None`, a list of names (held at their `q0`), or a
@@ -114,6 +168,42 @@ impl Model {
         self.session
             .lock()
             .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    /// The `rhs` scratch, locked (as `session`, a panic leaves nothing to repair).
+    fn evaluation(&self) -> MutexGuard<'_, Evaluation> {
+        self.evaluation
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    /// Checks the lengths of an `rhs` call's `q`, `u` and `inputs` against `session`'s model.
+    fn check_lengths(
+        session: &Session,
+        q: &[f64],
+        u: &[f64],
+        inputs: Option<&[f64]>,
+    ) -> PyResult<()> {
+        let model = &session.model;
+        let given = [
+            ("q", q.len(), model.nq(), "coordinates"),
+            ("u", u.len(), model.nu(), "speeds"),
+            (
+                "inputs",
+                inputs.map_or(model.ninputs(), <[f64]>::len),
+                model.ninputs(),
+                "inputs",
+            ),
+        ];
+        for (what, len, n, entries) in given {
+            if len != n {
+                return Err(error(format!(
+                    "`{what}` has {len} values; `{}` has {n} {entries}",
+                    model.name()
+                )));
+            }
+        }
+        Ok(())
     }
 
     /// The model's inputs as given (`None`: their current signals at t = 0), checked.
@@ -194,6 +284,7 @@ impl Model {
     fn new(path: PathBuf, set: Vec<String>, inputs: Vec<String>) -> PyResult<Self> {
         let session = Session::open(&path, &set, &inputs).map_err(error)?;
         Ok(Model {
+            evaluation: Mutex::new(Evaluation::for_session(&session)),
             session: Mutex::new(session),
         })
     }
@@ -206,6 +297,12 @@ impl Model {
     #[getter]
     fn coordinates(&self) -> Vec<String> {
         self.names(|m| m.nq(), |m, i| m.coordinate_name(i))
+    }
+
+    /// The speeds' names: the coordinates' where `q̇ = u`, fewer with quaternions.
+    #[getter]
+    fn speeds(&self) -> Vec<String> {
+        self.names(|m| m.nu(), |m, i| m.speed_name(i))
     }
 
     #[getter]
@@ -282,7 +379,9 @@ impl Model {
     /// Integrates from the assembled initial state to `t_end` (seconds), sampled every
     /// `dt_out` (default `t_end / 1000`). A dict of arrays: `t` (n), `q` and `u` (n × nq),
     /// `outputs` (n × outputs), `inputs` (n × inputs), and the integrator's `steps`.
-    #[pyo3(signature = (t_end, dt_out=None, method="dopri5", rtol=1e-9, atol=1e-12, step=None, independent=None, max_steps=1_000_000))]
+    /// With `as_frame=True`, a pandas DataFrame instead: one row per sample indexed by `t`,
+    /// columns `q_NAME`, `u_NAME`, the outputs and the inputs, `attrs["steps"]`.
+    #[pyo3(signature = (t_end, dt_out=None, method="dopri5", rtol=1e-9, atol=1e-12, step=None, independent=None, max_steps=1_000_000, as_frame=false))]
     #[allow(clippy::too_many_arguments)]
     fn simulate<'py>(
         &self,
@@ -295,7 +394,8 @@ impl Model {
         step: Option<f64>,
         independent: Option<Bound<'py, PyAny>>,
         max_steps: usize,
-    ) -> PyResult<Bound<'py, PyDict>> {
+        as_frame: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
         if !(t_end.is_finite() && t_end > 0.0) {
             return Err(error(format!(
                 "`t_end` must be a positive number of seconds, got {t_end}"
@@ -323,7 +423,16 @@ impl Model {
         dict.set_item("outputs", rows_array(py, &trajectory.outputs, no))?;
         dict.set_item("inputs", rows_array(py, &trajectory.inputs, ni))?;
         dict.set_item("steps", trajectory.stats.accepted_steps)?;
-        Ok(dict)
+        if !as_frame {
+            return Ok(dict.into_any());
+        }
+        let names = (
+            self.coordinates(),
+            self.speeds(),
+            self.outputs(),
+            self.inputs(),
+        );
+        frames(py)?.call_method1("simulation", (dict, names.0, names.1, names.2, names.3))
     }
 
     /// A static equilibrium near the assembled initial state under constant `inputs` (default:
@@ -398,17 +507,20 @@ impl Model {
     /// the static equilibrium, at `frequencies_hz`: complex gains (SI units). `damping` is
     /// `hysteretic` (flexures as complex stiffness k(1 + iη), exact at every frequency;
     /// default) or `viscous` (their time-domain dampers b = kη/ω_ref, as a simulation sees
-    /// them).
-    #[pyo3(signature = (input, output, frequencies_hz, damping="hysteretic", independent=None))]
+    /// them). With `as_frame=True`, a pandas DataFrame indexed by `frequency_hz`: `gain`,
+    /// `magnitude`, `phase_deg` (unwrapped).
+    #[pyo3(signature = (input, output, frequencies_hz, damping="hysteretic", independent=None, as_frame=false))]
+    #[allow(clippy::too_many_arguments)]
     fn bode<'py>(
         &self,
         py: Python<'py>,
         input: &str,
         output: &str,
-        frequencies_hz: PyReadonlyArray1<f64>,
+        frequencies_hz: PyReadonlyArray1<'py, f64>,
         damping: &str,
         independent: Option<Bound<'py, PyAny>>,
-    ) -> PyResult<Bound<'py, PyArray1<Complex64>>> {
+        as_frame: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
         let damping = match damping {
             "hysteretic" => FlexureDamping::Hysteretic,
             "viscous" => FlexureDamping::Viscous,
@@ -441,7 +553,11 @@ impl Model {
                 gain.ok_or_else(|| error(format!("the linear model is singular at {f} Hz")))
             })
             .collect::<PyResult<Vec<_>>>()?;
-        Ok(PyArray1::from_vec(py, gains))
+        let gains = PyArray1::from_vec(py, gains).into_any();
+        if !as_frame {
+            return Ok(gains);
+        }
+        frames(py)?.call_method1("bode", ((*frequencies_hz).clone(), gains))
     }
 
     /// The mass matrix `M(q)` (nq × nq) at time `t`.
@@ -478,6 +594,29 @@ impl Model {
         let mut out = vec![0.0; q.len()];
         self.session().model.forcing(t, &q, &u, &inputs, &mut out);
         Ok(PyArray1::from_vec(py, out))
+    }
+
+    /// The accelerations `u̇` at `(t, q, u)`: `M(q) u̇ = F(t, q, u, inputs)`, with the loops'
+    /// reactions `Jᵀλ` where the model has loops (`J u̇ = −J̇u`), as the integrators see them.
+    /// `inputs` default to the input signals at `t`. One call costs the Rust evaluation plus
+    /// about 0.3 µs (`docs/benchmarks.md` §15).
+    #[pyo3(signature = (t, q, u, inputs=None))]
+    fn rhs<'py>(
+        &self,
+        py: Python<'py>,
+        t: f64,
+        q: &Bound<'py, PyArray1<f64>>,
+        u: &Bound<'py, PyArray1<f64>>,
+        inputs: Option<&Bound<'py, PyArray1<f64>>>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let (q, u, inputs) = (values(q), values(u), inputs.map(values));
+        let session = self.session();
+        Self::check_lengths(&session, &q, &u, inputs.as_deref())?;
+        let mut evaluation = self.evaluation();
+        evaluation
+            .accelerations(&session, t, &q, &u, inputs.as_deref())
+            .map_err(error)?;
+        Ok(PyArray1::from_slice(py, &evaluation.udot))
     }
 
     /// The model's outputs (names in `outputs`) at `(t, q, u)`.
@@ -539,6 +678,40 @@ impl Model {
     }
 }
 
+/// Seconds per call of `model.rhs(t, q, u, inputs)`'s Rust part (the same evaluation on the
+/// same scratch, without the Python call: argument conversion, locking, the result array),
+/// the mean of `calls` calls in one loop. For `bench/python_overhead.py`, which times the
+/// Python call beside it.
+#[pyfunction]
+#[pyo3(signature = (model, t, q, u, inputs=None, calls=1000))]
+fn rhs_seconds(
+    model: &Model,
+    t: f64,
+    q: &Bound<'_, PyArray1<f64>>,
+    u: &Bound<'_, PyArray1<f64>>,
+    inputs: Option<&Bound<'_, PyArray1<f64>>>,
+    calls: usize,
+) -> PyResult<f64> {
+    let (q, u, inputs) = (values(q), values(u), inputs.map(values));
+    let session = model.session();
+    Model::check_lengths(&session, &q, &u, inputs.as_deref())?;
+    let mut evaluation = model.evaluation();
+    let started = std::time::Instant::now();
+    for _ in 0..calls.max(1) {
+        evaluation
+            .accelerations(&session, t, std::hint::black_box(&q), &u, inputs.as_deref())
+            .map_err(error)?;
+        std::hint::black_box(&evaluation.udot);
+    }
+    Ok(started.elapsed().as_secs_f64() / calls.max(1) as f64)
+}
+
+/// The Python module that turns results into pandas frames (`as_frame=True`; it imports
+/// pandas, and says how to install it when it is missing).
+fn frames(py: Python<'_>) -> PyResult<Bound<'_, PyModule>> {
+    py.import("mech._frames")
+}
+
 /// A JSON value as the Python object `json.loads` gives.
 fn json_object<'py>(py: Python<'py>, value: &serde_json::Value) -> PyResult<Bound<'py, PyAny>> {
     let text = serde_json::to_string(value).map_err(error)?;
@@ -573,31 +746,93 @@ fn experiment<'py>(
             Ok::<_, String>(outcome)
         })
         .map_err(error)?;
+    json_object(py, &outcome_json(&outcome, out_dir.is_some()))
+}
+
+/// An experiment's outcome as `experiment` returns it: name, title, method, tables (title,
+/// header, rows of text cells), notes, key values (SI units), and the `files` it rendered when
+/// they are `written` (else none).
+fn outcome_json(outcome: &mech::render::report::Outcome, written: bool) -> serde_json::Value {
     let tables: Vec<serde_json::Value> = outcome
         .tables
         .iter()
         .map(|t| serde_json::json!({"title": t.title, "header": t.header, "rows": t.rows}))
         .collect();
-    let written: Vec<String> = match out_dir {
-        Some(_) => outcome
+    let files: Vec<String> = match written {
+        true => outcome
             .rendered
             .iter()
             .map(|f| f.path.display().to_string())
             .collect(),
-        None => Vec::new(),
+        false => Vec::new(),
     };
-    json_object(
-        py,
-        &serde_json::json!({
-            "name": outcome.name,
-            "title": outcome.title,
-            "method": outcome.method,
-            "tables": tables,
-            "notes": outcome.notes,
-            "values": outcome.values,
-            "files": written,
-        }),
-    )
+    serde_json::json!({
+        "name": outcome.name,
+        "title": outcome.title,
+        "method": outcome.method,
+        "tables": tables,
+        "notes": outcome.notes,
+        "values": outcome.values,
+        "files": files,
+    })
+}
+
+/// Runs every experiment file in `experiments` on all cores (`mech report`) and writes the
+/// report into `out_dir`: `report.html`, `report.md` and each experiment's files, all or none.
+/// Returns the pages' paths (`html`, `markdown`), the run's `seconds` and each experiment's
+/// result as `experiment` returns it (`experiments`, in the report's order).
+#[pyfunction]
+#[pyo3(signature = (out_dir=None, experiments=None))]
+fn report<'py>(
+    py: Python<'py>,
+    out_dir: Option<PathBuf>,
+    experiments: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyAny>> {
+    use mech::render::report::{experiment_reads, Report};
+    let out_dir = out_dir.unwrap_or_else(|| PathBuf::from("out/report"));
+    let experiments = experiments.unwrap_or_else(|| PathBuf::from("experiments"));
+    let summary = py
+        .detach(|| {
+            let text = |e: &dyn std::fmt::Display| e.to_string();
+            let started = std::time::Instant::now();
+            let files = mech::experiments::experiment_files(&experiments).map_err(|e| text(&e))?;
+            let outcomes = mech::render::experiments::run_all(&files, &out_dir, &|_| {})
+                .map_err(|e| text(&e))?;
+            let seconds = started.elapsed().as_secs_f64();
+            let report = Report::new(outcomes, &out_dir, seconds).map_err(|e| text(&e))?;
+            let summary = serde_json::json!({
+                "html": report.html.path.display().to_string(),
+                "markdown": report.markdown.path.display().to_string(),
+                "seconds": seconds,
+                "experiments": report.outcomes.iter().map(|o| outcome_json(o, true)).collect::<Vec<_>>(),
+            });
+            mech::output::write_all(&report.into_files(), &experiment_reads(&files))
+                .map_err(|e| text(&e))?;
+            Ok::<_, String>(summary)
+        })
+        .map_err(error)?;
+    json_object(py, &summary)
+}
+
+/// A diagnosis experiment file (its model replaced by `model`) and its measured data, read;
+/// errors as their messages.
+fn experiment_and_data(
+    experiment: &std::path::Path,
+    data: &std::path::Path,
+    model: Option<PathBuf>,
+) -> Result<
+    (
+        mech::diagnose::experiment::Experiment,
+        mech::diagnose::data::MeasuredData,
+    ),
+    String,
+> {
+    let mut spec = mech::diagnose::experiment::load(experiment).map_err(|e| e.to_string())?;
+    if let Some(model) = model {
+        spec.set_model(model);
+    }
+    let measured = mech::diagnose::data::MeasuredData::load(data).map_err(|e| e.to_string())?;
+    Ok((spec, measured))
 }
 
 /// Diagnoses measured data against a model (`mech diagnose`): every catalog cause fitted,
@@ -620,11 +855,7 @@ fn diagnose<'py>(
     let summary = py
         .detach(|| {
             let text = |e: &dyn std::fmt::Display| e.to_string();
-            let mut spec = mech::diagnose::experiment::load(&experiment).map_err(|e| text(&e))?;
-            if let Some(model) = model {
-                spec.set_model(model);
-            }
-            let measured = mech::diagnose::data::MeasuredData::load(&data).map_err(|e| text(&e))?;
+            let (spec, measured) = experiment_and_data(&experiment, &data, model)?;
             let holdout_rows = Holdout::parse(holdout).map_err(|e| text(&e))?;
             let d = diagnose_causes(&spec, &measured, &fit, holdout_rows, &causes)
                 .map_err(|e| text(&e))?;
@@ -641,6 +872,61 @@ fn diagnose<'py>(
         })
         .map_err(error)?;
     json_object(py, &summary)
+}
+
+/// Fits the parameters `fit` (`NAME`, or `NAME=LO..HI UNIT`) of the experiment's model (or
+/// `model`) to measured data (`mech fit`): what `fit.json` holds (parameters with standard
+/// errors and status, stop reason, cost, residual RMS per series, screening flags) and
+/// `points`, one entry per measured value: `series`, `abscissa`, `row`, `measured`, the model
+/// `before` and `after` the fit. Writes nothing.
+#[pyfunction]
+#[pyo3(signature = (experiment, data, fit, model=None))]
+fn fit<'py>(
+    py: Python<'py>,
+    experiment: PathBuf,
+    data: PathBuf,
+    fit: Vec<String>,
+    model: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyAny>> {
+    use mech::diagnose::fit::{fit as fit_leg, parameters, FitRequest};
+    if fit.is_empty() {
+        return Err(error(
+            "`fit` names no parameter: give at least one `NAME` or `NAME=LO..HI UNIT`",
+        ));
+    }
+    let (summary, report) = py
+        .detach(|| {
+            let text = |e: &dyn std::fmt::Display| e.to_string();
+            let (spec, measured) = experiment_and_data(&experiment, &data, model)?;
+            let mut leg =
+                mech::experiments::leg::Leg::open_any(&spec.model, &[]).map_err(|e| text(&e))?;
+            let requests = fit
+                .iter()
+                .map(|request| FitRequest::parse(request))
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|e| text(&e))?;
+            let fitted = parameters(&leg, &requests).map_err(|e| text(&e))?;
+            // Checked before the screening, which reads the same columns (as `mech fit`).
+            spec.observations(&leg, &measured).map_err(|e| text(&e))?;
+            let screening = spec.screen(&measured).map_err(|e| text(&e))?;
+            let report = fit_leg(&spec, &measured, &mut leg, &fitted).map_err(|e| text(&e))?;
+            let summary =
+                mech::render::diagnosis::fit_json(&spec, &data, &report, screening.as_ref());
+            Ok::<_, String>((summary, report))
+        })
+        .map_err(error)?;
+    let result = json_object(py, &summary)?;
+    let observations = report.observations;
+    let points = PyDict::new(py);
+    points.set_item("series", observations.series)?;
+    points.set_item("abscissa", PyArray1::from_vec(py, observations.abscissa))?;
+    let rows: Vec<i64> = observations.row.iter().map(|&r| r as i64).collect();
+    points.set_item("row", PyArray1::from_vec(py, rows))?;
+    points.set_item("measured", PyArray1::from_vec(py, observations.values))?;
+    points.set_item("before", PyArray1::from_vec(py, report.before))?;
+    points.set_item("after", PyArray1::from_vec(py, report.after))?;
+    result.set_item("points", points)?;
+    Ok(result)
 }
 
 /// A study (`mech sweep`) with `samples` and `seed` in place of its own, model paths relative
@@ -753,9 +1039,12 @@ fn _mech(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Model>()?;
     m.add_function(wrap_pyfunction!(experiment, m)?)?;
     m.add_function(wrap_pyfunction!(diagnose, m)?)?;
+    m.add_function(wrap_pyfunction!(fit, m)?)?;
+    m.add_function(wrap_pyfunction!(report, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_size, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_run, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_ranking, m)?)?;
+    m.add_function(wrap_pyfunction!(rhs_seconds, m)?)?;
     m.add("MechError", m.py().get_type::<MechError>())?;
     Ok(())
 }

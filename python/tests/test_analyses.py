@@ -110,3 +110,32 @@ def test_diagnose_names_a_larger_loss_factor(tmp_path):
 def test_diagnose_errors_are_raised(tmp_path):
     with pytest.raises(mech.MechError, match="missing.csv"):
         mech.diagnose(ROOT / "docs/examples/diagnose/flexure_rig_ringdown.toml", tmp_path / "missing.csv")
+
+
+# ------------------------------------------------------------------------ the whole report
+
+
+def test_report_writes_the_pages_and_each_experiments_files(tmp_path, monkeypatch):
+    """Two experiments (the trajectory and force tests of HAMR-VI) copied into a folder of
+    their own: both pages written, in title order, each experiment's values those of
+    `mech.experiment` on the same file."""
+    monkeypatch.chdir(ROOT)
+    folder = tmp_path / "experiments"
+    folder.mkdir()
+    for name in ("hamr_vi_force", "hamr_vi_trajectory"):
+        (folder / f"{name}.toml").write_text((ROOT / "experiments" / f"{name}.toml").read_text())
+    out = tmp_path / "report"
+    result = mech.report(out, experiments=folder)
+    html, markdown = Path(result["html"]), Path(result["markdown"])
+    assert html == out / "report.html" and markdown == out / "report.md"
+    titles = [e["title"] for e in result["experiments"]]
+    assert titles == sorted(titles) and len(titles) == 2
+    page = html.read_text()
+    assert all(title in page for title in titles) and "<svg" in page
+    assert all(title in markdown.read_text() for title in titles)
+    for outcome in result["experiments"]:
+        assert outcome["files"] and all(Path(f).exists() for f in outcome["files"])
+        alone = mech.experiment(folder / f"{outcome['name']}.toml")
+        assert outcome["values"] == alone["values"]
+    with pytest.raises(mech.MechError, match="experiments folder"):
+        mech.report(out, experiments=tmp_path / "nothing")

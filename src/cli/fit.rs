@@ -9,7 +9,6 @@ use super::Error;
 use std::path::PathBuf;
 
 use clap::Args;
-use serde_json::json;
 
 use crate::diagnose::data::MeasuredData;
 use crate::diagnose::experiment::{self, Experiment};
@@ -17,9 +16,7 @@ use crate::diagnose::fit::{fit, parameters, FitReport, FitRequest};
 use crate::diagnose::pendulum::Screening;
 use crate::experiments::leg::Leg;
 use crate::output;
-use crate::render::diagnosis::{
-    finite_or_null, flag_kinds, overlay_plots, screening_json, screening_text,
-};
+use crate::render::diagnosis::{fit_json, flag_kinds, overlay_plots, screening_text};
 
 #[derive(Args, Clone, Debug)]
 pub struct FitArgs {
@@ -99,27 +96,7 @@ fn write_outputs(
     reads: &[output::Read],
 ) -> Result<(), Error> {
     let dir = &args.out_dir;
-    let r = &report.result;
-    let (flags, screened) = screening_json(screening);
-    let summary = json!({
-        "experiment": experiment.title,
-        "data": args.data.display().to_string(),
-        "flags": flags,
-        "screening": screened,
-        "converged": r.converged,
-        "reason": r.reason,
-        "parameters": r.names.iter().enumerate().map(|(k, name)| json!({
-            "name": name,
-            "value": r.params[k],
-            "standard_error": finite_or_null(r.standard_errors[k]),
-            "status": r.status[k],
-        })).collect::<Vec<_>>(),
-        "cost": r.cost,
-        "degrees_of_freedom": r.degrees_of_freedom,
-        "residual_rms": report.residuals.iter().map(|s| json!({
-            "series": s.series, "before": s.before, "after": s.after,
-        })).collect::<Vec<_>>(),
-    });
+    let summary = fit_json(experiment, &args.data, report, screening);
     let text = serde_json::to_string_pretty(&summary)?;
     let json_path = dir.join("fit.json");
     let mut files = vec![output::File::new(&json_path, text)];

@@ -13,7 +13,7 @@ use clap::Args;
 use crate::experiments::experiment_files;
 use crate::output;
 use crate::render::experiments::run_all;
-use crate::render::report::{outcome_text, render_html, render_markdown};
+use crate::render::report::{experiment_reads, outcome_text, Report};
 
 #[derive(Args, Clone, Debug)]
 pub struct ReportArgs {
@@ -38,39 +38,14 @@ pub fn run(args: &ReportArgs) -> Result<(), Error> {
         bar.set_message(format!("done: {name}"));
     });
     bar.finish_and_clear();
-    let mut outcomes = outcomes?;
-    // In the order of their titles ("1. …", "2. …").
-    outcomes.sort_by(|a, b| a.title.cmp(&b.title));
-    for outcome in &outcomes {
+    let elapsed = start.elapsed().as_secs_f64();
+    let report = Report::new(outcomes?, &args.out_dir, elapsed)?;
+    for outcome in &report.outcomes {
         println!("{}", outcome_text(outcome));
     }
-    let elapsed = start.elapsed().as_secs_f64();
-    let (html, markdown) = (
-        args.out_dir.join("report.html"),
-        args.out_dir.join("report.md"),
-    );
-    let pages = [
-        output::File::new(&html, render_html(&outcomes, &args.out_dir, elapsed)?),
-        output::File::new(
-            &markdown,
-            render_markdown(&outcomes, &args.out_dir, elapsed),
-        ),
-    ];
-    let count = outcomes.len();
-    // The outcomes' files move into the list: no copy of the plots' bytes.
-    let files: Vec<output::File> = outcomes
-        .into_iter()
-        .flat_map(|o| o.rendered)
-        .chain(pages)
-        .collect();
-    let reads: Vec<output::Read> = experiment_files
-        .iter()
-        .map(|path| output::Read {
-            path: path.clone(),
-            what: "an experiment file",
-        })
-        .collect();
-    output::write_all(&files, &reads)?;
+    let (html, markdown) = (report.html.path.clone(), report.markdown.path.clone());
+    let count = report.outcomes.len();
+    output::write_all(&report.into_files(), &experiment_reads(&experiment_files))?;
     println!(
         "{count} experiments in {elapsed:.1} s; report written to {} and {}",
         html.display(),

@@ -443,6 +443,38 @@ pub fn diagnosis_json(
     })
 }
 
+/// `fit.json` (and the Python package's `fit`): the fitted parameters with their standard
+/// errors and status, the stop reason, the cost and the residual RMS per series before and
+/// after, and the screening's flags.
+pub fn fit_json(
+    experiment: &Experiment,
+    data: &Path,
+    report: &crate::diagnose::fit::FitReport,
+    screening: Option<&Screening>,
+) -> serde_json::Value {
+    let r = &report.result;
+    let (flags, screened) = screening_json(screening);
+    json!({
+        "experiment": experiment.title,
+        "data": data.display().to_string(),
+        "flags": flags,
+        "screening": screened,
+        "converged": r.converged,
+        "reason": r.reason,
+        "parameters": r.names.iter().enumerate().map(|(k, name)| json!({
+            "name": name,
+            "value": r.params[k],
+            "standard_error": finite_or_null(r.standard_errors[k]),
+            "status": r.status[k],
+        })).collect::<Vec<_>>(),
+        "cost": r.cost,
+        "degrees_of_freedom": r.degrees_of_freedom,
+        "residual_rms": report.residuals.iter().map(|s| json!({
+            "series": s.series, "before": s.before, "after": s.after,
+        })).collect::<Vec<_>>(),
+    })
+}
+
 /// A JSON number, or `null` for NaN and infinities (which JSON cannot hold).
 pub fn finite_or_null(x: f64) -> serde_json::Value {
     if x.is_finite() {

@@ -2,7 +2,9 @@
 //! HTML page (SVG plots inlined), shared by `mech experiment`, `mech report` and
 //! `mech diagnose`.
 //!
-//! Consumes: [`Outcome`]s (tables, plots already written, notes, files). Produces: strings.
+//! Consumes: [`Outcome`]s (tables, plots already written, notes, files). Produces: strings,
+//! and for `mech report` (and the Python package's `report`) a [`Report`]: the outcomes in
+//! order with both pages, as files to write together.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -10,7 +12,7 @@ use std::path::{Path, PathBuf};
 
 use super::table::{escape_html, Table};
 use super::Error;
-use crate::output::File;
+use crate::output::{File, Read};
 
 /// What an experiment produced.
 #[derive(Debug, Clone, Default)]
@@ -127,6 +129,57 @@ pub fn render_markdown(outcomes: &[Outcome], base: &Path, seconds: f64) -> Strin
         let _ = writeln!(text, "Data: {}\n", files.join(", "));
     }
     text
+}
+
+/// `mech report`'s result in memory: the experiments' outcomes in the order of their titles
+/// ("1. …", "2. …") and the pages `report.html` and `report.md` in the output folder.
+pub struct Report {
+    pub outcomes: Vec<Outcome>,
+    pub html: File,
+    pub markdown: File,
+}
+
+impl Report {
+    /// Orders `outcomes` and renders both pages into `out_dir` (`seconds`: the run's time,
+    /// shown on them).
+    pub fn new(mut outcomes: Vec<Outcome>, out_dir: &Path, seconds: f64) -> Result<Report, Error> {
+        outcomes.sort_by(|a, b| a.title.cmp(&b.title));
+        let html = File::new(
+            out_dir.join("report.html"),
+            render_html(&outcomes, out_dir, seconds)?,
+        );
+        let markdown = File::new(
+            out_dir.join("report.md"),
+            render_markdown(&outcomes, out_dir, seconds),
+        );
+        Ok(Report {
+            outcomes,
+            html,
+            markdown,
+        })
+    }
+
+    /// Every file to write, the experiments' then the pages (moved: no copy of the plots'
+    /// bytes).
+    pub fn into_files(self) -> Vec<File> {
+        let pages = [self.html, self.markdown];
+        self.outcomes
+            .into_iter()
+            .flat_map(|o| o.rendered)
+            .chain(pages)
+            .collect()
+    }
+}
+
+/// The experiment files a report reads, which its outputs must not overwrite.
+pub fn experiment_reads(files: &[PathBuf]) -> Vec<Read> {
+    files
+        .iter()
+        .map(|path| Read {
+            path: path.clone(),
+            what: "an experiment file",
+        })
+        .collect()
 }
 
 /// The HTML report, self-contained: the SVG plots are inlined.
