@@ -48,6 +48,8 @@ tests_per_file! {
     ball_u0_not_a_vector,
     bushing_to_itself,
     bushing_unknown_field,
+    constraint_not_linear,
+    constraint_without_speed,
     contact_damping_unit,
     contact_missing_fields,
     contact_negative_friction,

@@ -15,6 +15,15 @@
 //! - distance: `(|r_C − r_P|² − length²) / (2 length)`, zero where `|r_C − r_P| = length`.
 //!
 //! `J` and `J̇u = Σᵢ ∂(J u)/∂qᵢ q̇ᵢ` are exact symbolic derivatives of `φ`.
+//!
+//! Velocity (nonholonomic) constraints `A(q) u = 0` (`model.velocity_constraints`) follow
+//! the loop rows: their `J` rows are `A` (the coefficients of the speeds, exact: a point
+//! velocity is `Σ_r ∂v/∂u_r u_r` from the partial velocities, a scalar row is differentiated
+//! by each speed), their bias is `Ȧu = Σᵢ ∂(A u)/∂qᵢ q̇ᵢ`, and their `φ` is 0 (there is no
+//! position form; [`Constraints::velocity_rows`] counts them so the run time leaves them out
+//! of every position-level step). The run time appends them to the multiplier equations
+//! `M u̇ = F + Jᵀλ`, `J u̇ = −J̇u`: for ideal constraints that is Kane's nonholonomic form
+//! (the multipliers' forces `Aᵀλ` do no work on any motion with `A u = 0`).
 
 use super::kinematics::{self, lower_vec, orientation, Kinematics};
 use super::rates::KinematicRates;
@@ -31,8 +40,11 @@ pub struct Constraints {
     pub jacobian: Vec<ExprId>,
     /// `J̇(q, u) u`.
     pub bias: Vec<ExprId>,
-    /// `<loop>.x`, `<loop>.align1`, `<loop>.distance`, ...
+    /// `<loop>.x`, `<loop>.align1`, `<loop>.distance`, ..., then `<constraint>.x` or
+    /// `<constraint>` of the velocity rows.
     pub names: Vec<String>,
+    /// The last `velocity_rows` rows are velocity constraints (`φ` is 0 there).
+    pub velocity_rows: usize,
 }
 
 /// Orientation (`C_{N←F}`) of a loop's interframe and position of its point, in N.
@@ -306,12 +318,110 @@ pub fn derive(
         let velocity = pool.add_all(&terms);
         bias.push(rates.rate_at_fixed_speeds(pool, velocity, nq));
     }
-    Constraints {
+    let mut constraints = Constraints {
         residual,
         jacobian,
         bias,
         names,
+        velocity_rows: 0,
+    };
+    if !model.velocity_constraints.is_empty() {
+        append_velocity_rows(pool, kinematics, rates, model, &mut constraints);
     }
+    constraints
+}
+
+/// The rows of `A(q)` (`nu` coefficients each) of one velocity constraint, with their names.
+fn velocity_rows(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    model: &Model,
+    constraint: &ir::VelocityConstraint,
+) -> Vec<(String, Vec<ExprId>)> {
+    let nu = model.nu();
+    match &constraint.kind {
+        ir::VelocityKind::PointVelocity {
+            point,
+            body,
+            frame,
+            components,
+        } => {
+            // The body's material point at P: offset d = C_Bᵀ (r_P − r_B), held fixed in B,
+            // so v = Σ_r (V_r + W_r × d) u_r (Kane & Levinson §2.7 and §2.14).
+            let position = super::point_position(pool, kinematics, &model.points[*point]);
+            let (dcm, origin) = kinematics.to_newtonian(pool, *body);
+            let apart = vector::sub(pool, position, origin);
+            let offset = vector::mat_t_vec(pool, &dcm, apart);
+            let zero = pool.zero();
+            let mut coefficients = vec![vec![zero; nu]; 3];
+            for (r, v) in kinematics.point_partials(pool, *body, offset) {
+                let v = kinematics.express(pool, v, *body, *frame);
+                for (c, row) in coefficients.iter_mut().enumerate() {
+                    row[r] = v[c];
+                }
+            }
+            components
+                .iter()
+                .map(|&c| {
+                    let name = format!("{}.{}", constraint.name, ["x", "y", "z"][c]);
+                    (name, coefficients[c].clone())
+                })
+                .collect()
+        }
+        ir::VelocityKind::Scalar(expr) => {
+            let row = super::lower_state_expr(pool, kinematics, model, expr);
+            let coefficients = (0..nu)
+                .map(|r| pool.diff(row, Symbol::Speed(r as u32)))
+                .collect();
+            vec![(constraint.name.clone(), coefficients)]
+        }
+    }
+}
+
+/// Appends the velocity constraints' rows: `φ = 0`, `J` rows `A`, bias `Ȧu`.
+fn append_velocity_rows(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    rates: &KinematicRates,
+    model: &Model,
+    constraints: &mut Constraints,
+) {
+    let (nq, nu) = (model.nq(), model.nu());
+    let mut rows = Vec::new();
+    for constraint in &model.velocity_constraints {
+        rows.extend(velocity_rows(pool, kinematics, model, constraint));
+    }
+    let (holonomic, added) = (constraints.residual.len(), rows.len());
+    let total = holonomic + added;
+    let zero = pool.zero();
+    let mut jacobian = vec![zero; total * nu];
+    for j in 0..nu {
+        for r in 0..holonomic {
+            jacobian[r + total * j] = constraints.jacobian[r + holonomic * j];
+        }
+        for (k, (_, coefficients)) in rows.iter().enumerate() {
+            jacobian[holonomic + k + total * j] = coefficients[j];
+        }
+    }
+    for (name, coefficients) in rows {
+        // Ȧu = Σᵢ ∂(A u)/∂qᵢ q̇ᵢ, u̇ held.
+        let terms: Vec<ExprId> = coefficients
+            .iter()
+            .enumerate()
+            .map(|(j, &a)| {
+                let u = pool.symbol(Symbol::Speed(j as u32));
+                pool.mul(a, u)
+            })
+            .collect();
+        let velocity = pool.add_all(&terms);
+        constraints
+            .bias
+            .push(rates.rate_at_fixed_speeds(pool, velocity, nq));
+        constraints.residual.push(zero);
+        constraints.names.push(name);
+    }
+    constraints.jacobian = jacobian;
+    constraints.velocity_rows = added;
 }
 
 /// `−k(θ − rest)` or `−c ω_rel` about a revolute closure's axis, as generalized forces:
