@@ -95,6 +95,7 @@ tests_per_file! {
     point_on_wrong_body,
     redefinition,
     reserved_name,
+    rolling_plane_on_a_body,
     scalar_output_in_frame,
     spherical_joint_kind,
     spring_ends_meet,

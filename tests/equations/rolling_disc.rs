@@ -216,3 +216,110 @@ fn rolling_disc_statics_and_linearization_are_refused() {
         "{error}"
     );
 }
+
+/// The disc again, with the built-in `rolling` element: its centre on three sliders (no
+/// height built in), the element's height row closing the contact with the floor, and its
+/// two no-slip rows. At SymPy's states (the centre placed over the contact, the angles'
+/// rates kept and the centre's velocity solved from the rows) the angles' accelerations are
+/// SymPy's to 1e-12.
+#[test]
+fn rolling_element_matches_sympy() {
+    let text = "param r = 0.5 m;\nparam m = 1.5 kg;\ngravity = [0, 0, -9.81 m/s^2];\n\
+        newtonian { point floor = [0, 0, 0]; }\n\
+        body carriage { mass = 0 kg; }\nbody slide { mass = 0 kg; }\nbody lift { mass = 0 kg; }\n\
+        body heading { mass = 0 kg; }\nbody tilt { mass = 0 kg; }\n\
+        body disc { mass = m; inertia = [m * r^2 / 4, m * r^2 / 2, m * r^2 / 4]; }\n\
+        joint x = slider(newtonian, carriage) { axis = x; }\n\
+        joint y = slider(carriage, slide) { axis = y; }\n\
+        joint z = slider(slide, lift) { axis = z; q0 = 0.5 m; }\n\
+        joint yaw = pin(lift, heading) { axis = z; }\n\
+        joint lean = pin(heading, tilt) { axis = x; }\n\
+        joint spin = pin(tilt, disc) { axis = y; }\n\
+        rolling wheel between disc and newtonian.floor { radius = r; axle = y; normal = z; }\n\
+        output ke = kinetic_energy;\noutput pe = potential_energy;\n";
+    let model = common::tape_from_text("rolling_wheel", text);
+    assert_eq!((model.nc(), model.velocity_rows()), (3, 2));
+    let fixture = sympy_fixture();
+    let reference = &fixture["models"]["rolling_disc"];
+    for (k, state) in reference["states"].as_array().unwrap().iter().enumerate() {
+        let (q5, u5) = (json_numbers(&state["q"]), json_numbers(&state["u"]));
+        let (yaw, lean) = (q5[2], q5[3]);
+        // The centre is r L.z above the contact, L.z = (sin ψ sin θ, −cos ψ sin θ, cos θ).
+        let q = [
+            q5[0] + R * yaw.sin() * lean.sin(),
+            q5[1] - R * yaw.cos() * lean.sin(),
+            R * lean.cos(),
+            yaw,
+            lean,
+            q5[4],
+        ];
+        let mut phi = [1.0; 3];
+        model.constraints(0.0, &q, &mut phi);
+        assert!(phi[0].abs() < 1e-15, "height {}", phi[0]);
+        let mut u = [0.0, 0.0, 0.0, u5[2], u5[3], u5[4]];
+        mech_runtime::assemble_speeds(&model, 0.0, &q, &mut u, &[3, 4, 5]).unwrap();
+        let ours = udot(&model, &q, &u);
+        let expected = json_numbers(&state["udot"]);
+        let floor = expected.iter().fold(0.0_f64, |a, b| a.max(b.abs()));
+        for i in 0..3 {
+            assert_close(
+                &format!("state {k} u̇ of angle {i}"),
+                ours[3 + i],
+                expected[2 + i],
+                1e-12,
+                floor,
+            );
+        }
+        let ke = state["kinetic_energy"].as_f64().unwrap();
+        assert_close("KE", common::output(&model, "ke", &q, &u), ke, 1e-12, 1.0);
+    }
+    let mobility = mech_runtime::mobility(&model, 0.0, &[0.0, 0.0, R, 0.0, 0.3, 0.0]).unwrap();
+    assert_eq!(
+        mobility.to_string(),
+        "6 coordinates, 1 constraint rows, rank 1; 2 velocity rows, rank 2: \
+         5 degrees of freedom in the configuration, 3 in the motion"
+    );
+}
+
+/// A disc on a `free` joint (a unit quaternion, `q̇ = W(q) u`) held to the floor by the
+/// `rolling` element alone, started leaning 0.1 rad with spin and a turn: assembled (the
+/// height closed along the joint's z, the centre's velocity solved from the rows), then 5 s
+/// of motion conserve energy and keep the height and no-slip rows.
+#[test]
+fn rolling_element_on_a_free_joint_conserves_energy() {
+    let text = "param r = 0.5 m;\nparam m = 1.5 kg;\ngravity = [0, 0, -9.81 m/s^2];\n\
+        newtonian { point floor = [0, 0, 0]; frame tilted = rotate(x, 0.1 rad); }\n\
+        body disc { mass = m; inertia = [m * r^2 / 4, m * r^2 / 2, m * r^2 / 4]; }\n\
+        joint throw = free(newtonian, disc) {\n\
+            parent_frame = newtonian.tilted; parent_point = [0, 0, 0.5 m];\n\
+            u0 = [0, 4 rad/s, 0.5 rad/s];\n\
+        }\n\
+        rolling wheel between disc and newtonian.floor { radius = r; axle = y; normal = z; }\n\
+        output ke = kinetic_energy;\noutput pe = potential_energy;\n";
+    let model = common::tape_from_text("free_wheel", text);
+    let (mut q, mut u) = common::initial_state(&model);
+    let options = mech_runtime::AssemblyOptions::default();
+    mech_runtime::assemble(&model, 0.0, &mut q, &[0, 1, 3, 4, 5], &options).unwrap();
+    mech_runtime::assemble_speeds(&model, 0.0, &q, &mut u, &[3, 4, 5]).unwrap();
+    let run = common::simulate_at_default_inputs(
+        &model,
+        &q,
+        &u,
+        &common::dopri5_options(5.0, 0.01, 1e-10, 1e-12),
+    );
+    let (scale, drift) = common::energy_drift(&model, &run);
+    let (mut height, mut slip): (f64, f64) = (0.0, 0.0);
+    for (q, u) in run.q.iter().zip(&run.u) {
+        let mut phi = vec![0.0; 3];
+        model.constraints(0.0, q, &mut phi);
+        height = height.max(phi[0].abs());
+        let rows = jacobian(&model, 0.0, q) * mech_runtime::nalgebra::DVector::from_vec(u.clone());
+        slip = slip.max(rows.amax());
+    }
+    println!(
+        "free disc on `rolling`, 5 s: energy drift {drift:.1e} of {scale:.3} J, \
+         max |height| = {height:.1e} m, max |J u| = {slip:.1e}"
+    );
+    assert!(drift < 1e-8, "energy drift {drift:e}");
+    assert!(height <= 1e-12 && slip <= 1e-12, "{height:e} {slip:e}");
+}

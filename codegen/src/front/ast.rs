@@ -56,6 +56,8 @@ pub enum Item {
     Torque(TorqueDecl),
     Output(OutputDecl),
     Constraint(ConstraintDecl),
+    /// `rolling NAME between CENTRE and PLANE_POINT { fields }`: same shape as a spring.
+    Rolling(SpringDecl),
 }
 
 /// `param`, `let` or `input`: a name bound to an expression.

@@ -134,6 +134,7 @@ fn build_item(pair: Pair<Rule>) -> Result<ast::Item> {
             Rule::torque_decl => torque_decl(inner, docs),
             Rule::output_decl => output_decl(inner, docs),
             Rule::constraint_decl => constraint_decl(inner, docs),
+            Rule::rolling_decl => Ok(ast::Item::Rolling(two_point_decl(inner, docs)?)),
             _ => Err(internal(span)),
         };
     }
@@ -239,6 +240,7 @@ fn is_punctuation(rule: Rule) -> bool {
             | kw_force
             | kw_torque
             | kw_constraint
+            | kw_rolling
             | kw_output
             | kw_point
             | kw_frame

@@ -644,6 +644,18 @@ pub enum VelocityKind {
     /// A scalar expression of the motion, linear and homogeneous in the speeds (checked by
     /// the front end): `a.u - 2 * b.u`.
     Scalar(Expr),
+    /// A thin wheel (a disc of `radius` about `centre`, its `axle` in the basis of the frame
+    /// the centre is fixed in) rolling without slip on the plane through `plane` (a Newtonian
+    /// point) with unit `normal` (Newtonian basis): one loop row, the contact point's height
+    /// above the plane, and two velocity rows, the wheel's material point at the contact
+    /// not slipping along the plane (`kane::constraints`).
+    Rolling {
+        centre: Handle<Point>,
+        axle: Box<Vec3>,
+        radius: Expr,
+        plane: Handle<Point>,
+        normal: Box<Vec3>,
+    },
 }
 
 /// Something that does work: contributes to the generalized active forces `F_r`.

@@ -298,6 +298,13 @@ pub fn derive(
         }
     }
 
+    for constraint in &model.velocity_constraints {
+        if let ir::VelocityKind::Rolling { .. } = &constraint.kind {
+            let wheel = Wheel::new(pool, kinematics, model, &constraint.kind);
+            residual.push(wheel.height);
+            names.push(format!("{}.height", constraint.name));
+        }
+    }
     let (nq, nu) = (model.nq(), model.nu());
     let rows = residual.len();
     let zero = pool.zero();
@@ -331,6 +338,82 @@ pub fn derive(
     constraints
 }
 
+/// A rolling wheel's contact ([`ir::VelocityKind::Rolling`]), in N: with `a` the axle and
+/// `n` the plane's normal (unit vectors), `d = n − (n·a) a` points from the contact to the
+/// centre P within the wheel's plane, `|d| = √(1 − (n·a)²)`, the contact point is
+/// `K = P − ρ d/|d|` and its height above the plane through Q is
+/// `n·(K − Q) = n·(P − Q) − ρ |d|` (a loop row). Undefined where the wheel lies flat
+/// (`a ∥ n`).
+struct Wheel {
+    height: ExprId,
+    contact: Vec3,
+    frame: ir::Handle<ir::Frame>,
+    normal: [f64; 3],
+}
+
+impl Wheel {
+    fn new(
+        pool: &mut ExprPool,
+        kinematics: &mut Kinematics,
+        model: &Model,
+        kind: &ir::VelocityKind,
+    ) -> Wheel {
+        let ir::VelocityKind::Rolling {
+            centre,
+            axle,
+            radius,
+            plane,
+            normal,
+        } = kind
+        else {
+            unreachable!("Wheel::new of a rolling constraint only")
+        };
+        let centre_point = &model.points[*centre];
+        let frame = centre_point.frame;
+        let centre = super::point_position(pool, kinematics, centre_point);
+        let plane = super::point_position(pool, kinematics, &model.points[*plane]);
+        let (dcm, _) = kinematics.to_newtonian(pool, frame);
+        let axle = lower_vec(pool, axle);
+        let axle = vector::mat_vec(pool, &dcm, axle);
+        let normal = lower_vec(pool, normal);
+        let normal_numbers = constant_vector(pool, normal);
+        let n = number_vector(pool, normal_numbers);
+        let along = vector::dot(pool, n, axle);
+        let tilt = vector::scale(pool, axle, along);
+        let d = vector::sub(pool, n, tilt);
+        let square = vector::dot(pool, d, d);
+        let length = pool.sqrt(square);
+        let radius = kinematics::lower_expr(pool, radius);
+        let inverse = pool.pow(length, Number::MINUS_ONE);
+        let reach = pool.mul(radius, inverse);
+        let down = vector::scale(pool, d, reach);
+        let contact = vector::sub(pool, centre, down);
+        let apart = vector::sub(pool, centre, plane);
+        let above = vector::dot(pool, n, apart);
+        let lowest = pool.mul(radius, length);
+        Wheel {
+            height: pool.sub(above, lowest),
+            contact,
+            frame,
+            normal: normal_numbers,
+        }
+    }
+}
+
+/// `∂v/∂u_r` (in `body`'s basis) of `body`'s material point at `position` (in N): the offset
+/// `d = C_Bᵀ (r − r_B)` held fixed in B, `V_r + W_r × d` (Kane & Levinson §2.7 and §2.14).
+fn material_partials(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    body: ir::Handle<ir::Frame>,
+    position: Vec3,
+) -> kinematics::Partials {
+    let (dcm, origin) = kinematics.to_newtonian(pool, body);
+    let apart = vector::sub(pool, position, origin);
+    let offset = vector::mat_t_vec(pool, &dcm, apart);
+    kinematics.point_partials(pool, body, offset)
+}
+
 /// The rows of `A(q)` (`nu` coefficients each) of one velocity constraint, with their names.
 fn velocity_rows(
     pool: &mut ExprPool,
@@ -346,15 +429,10 @@ fn velocity_rows(
             frame,
             components,
         } => {
-            // The body's material point at P: offset d = C_Bᵀ (r_P − r_B), held fixed in B,
-            // so v = Σ_r (V_r + W_r × d) u_r (Kane & Levinson §2.7 and §2.14).
             let position = super::point_position(pool, kinematics, &model.points[*point]);
-            let (dcm, origin) = kinematics.to_newtonian(pool, *body);
-            let apart = vector::sub(pool, position, origin);
-            let offset = vector::mat_t_vec(pool, &dcm, apart);
             let zero = pool.zero();
             let mut coefficients = vec![vec![zero; nu]; 3];
-            for (r, v) in kinematics.point_partials(pool, *body, offset) {
+            for (r, v) in material_partials(pool, kinematics, *body, position) {
                 let v = kinematics.express(pool, v, *body, *frame);
                 for (c, row) in coefficients.iter_mut().enumerate() {
                     row[r] = v[c];
@@ -367,6 +445,24 @@ fn velocity_rows(
                     (name, coefficients[c].clone())
                 })
                 .collect()
+        }
+        kind @ ir::VelocityKind::Rolling { .. } => {
+            // No slip along the plane: the wheel's material point at the contact has no
+            // velocity along t₁, t₂ ⊥ n (its normal velocity is the height row's rate).
+            let wheel = Wheel::new(pool, kinematics, model, kind);
+            let (t1, t2) = perpendiculars(wheel.normal);
+            let zero = pool.zero();
+            let mut coefficients = vec![vec![zero; nu]; 2];
+            for (r, v) in material_partials(pool, kinematics, wheel.frame, wheel.contact) {
+                let v = kinematics.express(pool, v, wheel.frame, Model::NEWTONIAN);
+                for (row, t) in coefficients.iter_mut().zip([t1, t2]) {
+                    let t = number_vector(pool, t);
+                    row[r] = vector::dot(pool, v, t);
+                }
+            }
+            let name = |suffix: &str| format!("{}.{suffix}", constraint.name);
+            let [first, second] = [coefficients[0].clone(), coefficients[1].clone()];
+            vec![(name("slip1"), first), (name("slip2"), second)]
         }
         ir::VelocityKind::Scalar(expr) => {
             let row = super::lower_state_expr(pool, kinematics, model, expr);

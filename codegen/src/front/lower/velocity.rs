@@ -1,5 +1,6 @@
-//! Velocity (nonholonomic) constraints: `constraint NAME = velocity(P, B) in F { components }`
-//! and `constraint NAME = EXPR;`.
+//! Velocity (nonholonomic) constraints: `constraint NAME = velocity(P, B) in F { components }`,
+//! `constraint NAME = EXPR;`, and the `rolling` wheel (`rolling NAME between CENTRE and
+//! PLANE_POINT { radius; axle; normal; }`).
 //!
 //! Consumes: `constraint` declarations, after the tree, its points and its frames are built.
 //! Produces: `model.velocity_constraints` and their errors: E0420 (not linear in the speeds),
@@ -68,6 +69,9 @@ impl Lowerer<'_> {
                             span: decl.head.span,
                         });
                 }
+            }
+            if let ast::Item::Rolling(decl) = item {
+                self.lower_rolling(decl);
             }
         }
     }
@@ -263,5 +267,84 @@ impl Lowerer<'_> {
                 }
             }
         }
+    }
+}
+
+/// The fields of a `rolling` block, all required.
+const ROLLING_FIELDS: [&str; 3] = ["radius", "axle", "normal"];
+
+impl Lowerer<'_> {
+    /// `rolling NAME between CENTRE and PLANE_POINT { radius; axle; normal; }`: the wheel is
+    /// the body `CENTRE` is fixed in, the plane is fixed in `newtonian`.
+    pub(super) fn lower_rolling(&mut self, decl: &ast::SpringDecl) {
+        if let Err(diagnostic) = self.structure_names.declare(&decl.name, "the name") {
+            self.error(diagnostic);
+        }
+        let [centre, plane] = decl.ends.each_ref().map(|path| self.resolve_point(path));
+        let list = "fields of a rolling wheel";
+        let known = self.known_fields(&decl.fields, &ROLLING_FIELDS, list, "not a field here");
+        let field = |name: &str| known.iter().copied().find(|f| f.name.name == name);
+        let expect = super::expr::Expect::mechanical("`radius`", "20 mm", [0, 1, 0]);
+        let radius = field("radius")
+            .and_then(|f| self.lower_scalar_as(&f.value, Ctx::Static("a wheel's radius"), &expect));
+        let axle = field("axle").and_then(|f| self.axis(&f.value, "a wheel's axle"));
+        let normal = field("normal").and_then(|f| self.axis(&f.value, "the plane's normal"));
+        let mut ok = true;
+        for (name, help) in [
+            ("radius", "give the wheel's radius, e.g. `radius = 20 mm;`"),
+            (
+                "axle",
+                "give the wheel's axle in its body's frame, e.g. `axle = y;`",
+            ),
+            (
+                "normal",
+                "give the plane's upward normal in newtonian, e.g. `normal = z;`",
+            ),
+        ] {
+            if field(name).is_none() {
+                self.error(super::body::missing_field(
+                    "rolling", &decl.name, name, help,
+                ));
+                ok = false;
+            }
+        }
+        if centre.is_some_and(|c| c.owner() == 0) {
+            self.error(
+                Diagnostic::error("E0408", "a rolling wheel's centre is fixed in `newtonian`")
+                    .with_label(decl.ends[0].span, "not on a moving body")
+                    .with_help("name the wheel's centre, a point of the wheel's body"),
+            );
+            ok = false;
+        }
+        if plane.is_some_and(|p| p.owner() != 0) {
+            self.error(
+                Diagnostic::error("E0414", "the rolling plane must be fixed in `newtonian`")
+                    .with_label(decl.ends[1].span, "a point of a moving body")
+                    .with_help("name a point of the ground, e.g. `newtonian.floor`"),
+            );
+            ok = false;
+        }
+        let (Some(centre), Some(plane), Some(radius), Some(axle), Some(normal), true) =
+            (centre, plane, radius, axle, normal, ok)
+        else {
+            return;
+        };
+        let (Some(centre), Some(plane)) = (self.point_handle(centre), self.point_handle(plane))
+        else {
+            return;
+        };
+        self.model
+            .velocity_constraints
+            .push(ir::VelocityConstraint {
+                name: decl.name.name.clone(),
+                kind: ir::VelocityKind::Rolling {
+                    centre,
+                    axle: Box::new(axle),
+                    radius,
+                    plane,
+                    normal: Box::new(normal),
+                },
+                span: decl.span,
+            });
     }
 }
