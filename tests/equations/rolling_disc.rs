@@ -323,3 +323,83 @@ fn rolling_element_on_a_free_joint_conserves_energy() {
     assert!(drift < 1e-8, "energy drift {drift:e}");
     assert!(height <= 1e-12 && slip <= 1e-12, "{height:e} {slip:e}");
 }
+
+/// Upright rolling (q = 0, spin ψ̇, rolling at r ψ̇): the eigenvalues of the linearized motion
+/// (central differences of `ẋ = [u; u̇(q, u)]`, all 10 states) against those of SymPy's
+/// `KanesMethod.linearize` of its rolling disc, at 1.1 and 0.9 times the critical spin
+/// `√(g / 3r)`: a pair on the imaginary axis above it, a real pair below (the disc falls),
+/// every other eigenvalue zero (the cyclic coordinates; the directions off `A u = 0`, which
+/// the multiplier form keeps constant). At the critical spin all are zero (SymPy's own test).
+#[test]
+fn upright_rolling_eigenvalues_match_sympy() {
+    use mech_runtime::nalgebra::DMatrix;
+    let tape = common::tape("rolling_disc");
+    let rhs = |x: &[f64]| {
+        let (q, u) = x.split_at(5);
+        let mut out = u.to_vec();
+        out.extend(udot(&tape, q, u));
+        out
+    };
+    let eigenvalues = |spin: f64| {
+        let x = [0.0, 0.0, 0.0, 0.0, 0.0, R * spin, 0.0, 0.0, 0.0, spin];
+        let h = 1e-6;
+        let mut jacobian = DMatrix::zeros(10, 10);
+        for c in 0..10 {
+            let (mut plus, mut minus) = (x, x);
+            plus[c] += h;
+            minus[c] -= h;
+            let (a, b) = (rhs(&plus), rhs(&minus));
+            for r in 0..10 {
+                jacobian[(r, c)] = (a[r] - b[r]) / (2.0 * h);
+            }
+        }
+        let mut values: Vec<[f64; 2]> = jacobian
+            .complex_eigenvalues()
+            .iter()
+            .map(|z| [z.re, z.im])
+            .collect();
+        values.sort_by(|a, b| a[1].total_cmp(&b[1]).then(a[0].total_cmp(&b[0])));
+        values
+    };
+    let fixture = sympy_fixture();
+    for case in fixture["models"]["rolling_disc"]["upright"]
+        .as_array()
+        .unwrap()
+    {
+        let spin = case["spin"].as_f64().unwrap();
+        let expected: Vec<Vec<f64>> = case["eigenvalues"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(json_numbers)
+            .collect();
+        let all = eigenvalues(spin);
+        let nonzero: Vec<[f64; 2]> = all
+            .iter()
+            .copied()
+            .filter(|z| z[0].hypot(z[1]) > 1e-3)
+            .collect();
+        assert_eq!(nonzero.len(), expected.len(), "ψ̇ = {spin}: {all:?}");
+        for (ours, theirs) in nonzero.iter().zip(&expected) {
+            for k in 0..2 {
+                assert!(
+                    (ours[k] - theirs[k]).abs() < 1e-7,
+                    "ψ̇ = {spin}: {ours:?} vs SymPy {theirs:?}"
+                );
+            }
+        }
+        let zeros = all.iter().map(|z| z[0].hypot(z[1])).filter(|&m| m <= 1e-3);
+        println!(
+            "upright rolling at ψ̇ = {spin:.6} rad/s: eigenvalues {nonzero:?} (SymPy \
+             {expected:?}), the other 8 within {:.1e} of 0",
+            zeros.fold(0.0, f64::max)
+        );
+    }
+    let critical = (G / (3.0 * R)).sqrt();
+    let largest = eigenvalues(critical)
+        .iter()
+        .map(|z| z[0].hypot(z[1]))
+        .fold(0.0, f64::max);
+    println!("at the critical spin {critical:.6} rad/s: max |λ| = {largest:.1e}");
+    assert!(largest < 1e-3, "{largest:e}");
+}

@@ -524,6 +524,7 @@ def rolling_disc():
     BodyD = me.RigidBody('BodyD', Dmc, R, m, (I, Dmc))
     KM = me.KanesMethod(N, q_ind=[q1, q2, q3], u_ind=[u1, u2, u3], kd_eqs=kd)
     KM.kanes_equations([BodyD], ForceList)
+    upright = rolling_disc_upright(KM, (q1, q2, q3, u1, u2, u3), (r, m, g))
     # mech's coordinates and speeds (u = q'): x, y, yaw, lean, spin.
     x, y, yaw, lean, spin = sm.symbols('x y yaw lean spin')
     vx, vy, vyaw, vlean, vspin = sm.symbols('u_x u_y u_yaw u_lean u_spin')
@@ -543,8 +544,32 @@ def rolling_disc():
     args = [x, y, yaw, lean, spin, vx, vy, vyaw, vlean, vspin]
     for e in (Mm, F, ke, pe, T, Td_qd):
         assert sm.sympify(e).free_symbols <= set(args), e
-    return sm.lambdify(args, [Mm, F, T.xreplace(values), Td_qd.xreplace(values), ke, pe],
-                       modules='mpmath')
+    f = sm.lambdify(args, [Mm, F, T.xreplace(values), Td_qd.xreplace(values), ke, pe],
+                    modules='mpmath')
+    return f, upright
+
+
+def rolling_disc_upright(KM, symbols, constants):
+    """The eigenvalues of SymPy's linearization (KM.linearize, as its test does) about
+    upright rolling (q = 0, u1 = u3 = 0) at 1.1 and 0.9 times the critical spin
+    u2 = sqrt(g / (3 r)), where they are all zero (SymPy's test asserts this at r = g = 1):
+    a pair on the imaginary axis above it (stable), a real pair below (the disc falls).
+    Only the nonzero eigenvalues, as [re, im], sorted."""
+    q1, q2, q3, u1, u2, u3 = symbols
+    r, m, g = constants
+    values = {s: sm.Rational(str(DISC[s.name])) for s in constants}
+    A, _, _ = KM.linearize(A_and_B=True)
+    critical = sm.sqrt(values[g] / (3 * values[r]))
+    out = []
+    for factor in ('1.1', '0.9'):
+        spin = sm.Rational(factor) * critical
+        Au = A.xreplace(values).subs({q1: 0, q2: 0, q3: 0, u1: 0, u3: 0, u2: spin})
+        eigenvalues = [complex(sm.N(e, 30)) for e in Au.eigenvals(multiple=True)]
+        nonzero = sorted([[z.real, z.imag] for z in eigenvalues if abs(z) > 1e-12],
+                         key=lambda z: (z[1], z[0]))
+        out.append({'speed_factor': float(factor), 'spin': f64(sm.N(spin, 30)),
+                    'eigenvalues': nonzero})
+    return out
 
 
 def rolling_disc_states():
@@ -565,8 +590,9 @@ def rolling_disc_fixture():
     """mech's u' at each state from SymPy's equations: the angles' accelerations from
     M u_sympy' = F through u_sympy = T q' (q'' = T^-1 (u_sympy' - T' q')), and x'', y''
     by differentiating u_x, u_y = r u_spin (cos yaw, sin yaw) along the motion.
-    Energy check: dE/dt = 0 (no work by the contact, no damping) at each state."""
-    f = rolling_disc()
+    Energy check: dE/dt = 0 (no work by the contact, no damping) at each state. And the
+    eigenvalues of the linearization about upright rolling (rolling_disc_upright)."""
+    f, upright = rolling_disc()
     r = mpmath.mpf(R(DISC['r']).p) / R(DISC['r']).q
     out = []
     for q, u in rolling_disc_states():
@@ -589,7 +615,8 @@ def rolling_disc_fixture():
         assert abs(rate) < mpmath.mpf(10) ** -25, f'rolling_disc: dE/dt = {rate}'
         out.append({'q': q, 'u': u, 'udot': [f64(a) for a in udot],
                     'kinetic_energy': f64(ke), 'potential_energy': f64(pe)})
-    return {'coordinates': ['x', 'y', 'yaw', 'lean', 'spin'], 'params': DISC, 'states': out}
+    return {'coordinates': ['x', 'y', 'yaw', 'lean', 'spin'], 'params': DISC, 'states': out,
+            'upright': upright}
 
 
 # ---------------------------------------------------------------- evaluation
