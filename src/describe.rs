@@ -89,6 +89,24 @@ pub fn equations_text(compiled: &Compiled) -> Result<String, TooLarge> {
     for (i, &rate) in rates.iter().enumerate() {
         text.push_str(&format!("qdot[{i}] = {}\n", eqs.pool.sexpr(rate)));
     }
+    // Velocity constraints `A(q) u = 0`: the nonzero entries of `A` (the last rows of `J`)
+    // and the bias `Ȧu`, by row name.
+    let rows = &eqs.constraints;
+    let nc = rows.residual.len();
+    let speeds = model.speed_names();
+    for k in nc - rows.velocity_rows..nc {
+        let name = &rows.names[k];
+        for (j, speed) in speeds.iter().enumerate() {
+            let entry = rows.jacobian[k + nc * j];
+            if !eqs.pool.is_zero(entry) {
+                text.push_str(&format!("A[{name},{speed}] = {}\n", eqs.pool.sexpr(entry)));
+            }
+        }
+        text.push_str(&format!(
+            "Adot_u[{name}] = {}\n",
+            eqs.pool.sexpr(rows.bias[k])
+        ));
+    }
     Ok(text)
 }
 

@@ -9,8 +9,10 @@ use std::path::{Path, PathBuf};
 
 use mech_codegen::ir::{Dimension, OutputKind, Quaternion};
 use mech_codegen::{Compiled, Diagnostic, Errors};
-use mech_runtime::constraints::{choose_independent, complete_independent, jacobian};
-use mech_runtime::nalgebra::DMatrix;
+use mech_runtime::constraints::{
+    choose_independent, complete_independent, holonomic_jacobian, independent_speeds, jacobian,
+};
+use mech_runtime::nalgebra::{DMatrix, DVector};
 use mech_runtime::{
     assemble, assemble_along, assemble_speeds, linearize, mobility, simulate, simulate_reduced,
     solve_statics, AssemblyOptions, Equilibrium, Fixture, Linearization, Mobility, Model,
@@ -653,12 +655,13 @@ impl Session {
             }
             fixed.push(index);
         }
+        let named = fixed.clone();
         if fixed.is_empty() {
             // J has its generic rank only on the constraint manifold: close the loops first
             // (minimum-norm), choose there, then hold the chosen coordinates at their q0.
             assemble(model, 0.0, &mut q, &[], &AssemblyOptions::default())
                 .map_err(|error| self.assembly_error(error))?;
-            fixed = choose_independent(&jacobian(model, 0.0, &q));
+            fixed = choose_independent(&holonomic_jacobian(model, 0.0, &q));
             // A chosen angular speed of a quaternion holds its rotation where the minimum-norm
             // closure left it; a pin or slider goes back to its `q0`.
             for &i in fixed.iter().filter(|&&i| i < model.plain_coordinates()) {
@@ -685,9 +688,14 @@ impl Session {
         if fixed.len() < mobility.dof() {
             // More freedom than named (e.g. a twist added by `mech diagnose`): complete the
             // list, keeping the named coordinates.
-            fixed = complete_independent(&jacobian(model, 0.0, &q), &fixed);
+            fixed = complete_independent(&holonomic_jacobian(model, 0.0, &q), &fixed);
         }
-        assemble_speeds(model, 0.0, &q, &mut u, &fixed)
+        // Velocity constraints free fewer speeds than coordinates: hold the independent ones.
+        let speeds = match model.velocity_rows() {
+            0 => fixed.clone(),
+            _ => independent_speeds(&jacobian(model, 0.0, &q), &fixed, &named),
+        };
+        assemble_speeds(model, 0.0, &q, &mut u, &speeds)
             .map_err(|error| self.assembly_error(error))?;
         let mobility = Some(mobility);
         Ok(Assembled {
@@ -812,11 +820,28 @@ fn list(names: &[&str]) -> String {
     }
 }
 
+/// For a model with velocity constraints, a line with the residual `max |A u|` of the
+/// assembled speeds.
+fn velocity_residual(model: &dyn Model, state: &Assembled, text: &mut String) {
+    if model.velocity_rows() == 0 {
+        return;
+    }
+    let rows = jacobian(model, 0.0, &state.q) * DVector::from_column_slice(&state.u);
+    let worst = rows
+        .rows(model.holonomic_rows(), model.velocity_rows())
+        .amax();
+    let _ = writeln!(text, "speeds made consistent: max |A u| = {worst:.1e}");
+}
+
 /// A readable report of an assembled state: mobility, the singular values that decided the
 /// rank (with a warning when some sit near the threshold), and the coordinates.
 pub fn assembly_report(model: &dyn Model, state: &Assembled) -> String {
     let mut text = String::new();
-    if let Some(mobility) = &state.mobility {
+    if let Some(mobility) = state.mobility.as_ref().filter(|m| m.rows == 0) {
+        // Velocity constraints alone: no loop to close, no singular values of `J` to show.
+        let _ = writeln!(text, "{mobility}");
+        velocity_residual(model, state, &mut text);
+    } else if let Some(mobility) = &state.mobility {
         let _ = writeln!(text, "{mobility}");
         let values: Vec<String> = mobility
             .singular_values
@@ -838,6 +863,7 @@ pub fn assembly_report(model: &dyn Model, state: &Assembled) -> String {
                 near.len()
             );
         }
+        velocity_residual(model, state, &mut text);
         let mut phi = vec![0.0; model.nc()];
         model.constraints(0.0, &state.q, &mut phi);
         let worst = phi.iter().fold(0.0_f64, |m, v| m.max(v.abs()));

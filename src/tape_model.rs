@@ -116,6 +116,8 @@ pub struct TapeModel {
     /// `(target, rate)` outputs a simulation integrates (`Equations::integrated_outputs`).
     integrated_outputs: Vec<(usize, usize)>,
     constraint_names: Vec<String>,
+    /// The last rows of the constraints that are velocity constraints (`φ` = 0 there).
+    velocity_rows: usize,
     flexure_names: Vec<String>,
     param_names: Vec<String>,
     params: Vec<f64>,
@@ -199,6 +201,7 @@ impl TapeModel {
             output_names: compiled.equations.output_names.clone(),
             integrated_outputs: compiled.equations.integrated_outputs.clone(),
             constraint_names: compiled.equations.constraints.names.clone(),
+            velocity_rows: compiled.equations.constraints.velocity_rows,
             flexure_names: compiled.equations.flexures.names.clone(),
             param_names: model.params.iter().map(|(_, p)| p.name.clone()).collect(),
             params: model.params.iter().map(|(_, p)| p.value).collect(),
@@ -459,6 +462,9 @@ impl mech_runtime::Model for TapeModel {
     }
     fn nc(&self) -> usize {
         self.tape.nc
+    }
+    fn velocity_rows(&self) -> usize {
+        self.velocity_rows
     }
     fn constraint_name(&self, i: usize) -> &str {
         name_at(&self.constraint_names, i)

@@ -18,24 +18,39 @@ use crate::{dense, Model, RuntimeError};
 pub const RANK_TOLERANCE: f64 = 1e-9;
 
 /// Mobility of a constrained model at one configuration: `dof = nq − quaternions − rank(J)`
-/// (each unit quaternion's norm is one more condition on `q`).
+/// (each unit quaternion's norm is one more condition on `q`) over the loop rows `φ(q) = 0`;
+/// with velocity constraints `A(q) u = 0` also the rank they add, and the speeds' freedom
+/// `nu − rank([J; A])`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Mobility {
     pub coordinates: usize,
     /// Unit quaternions among the coordinates (four coordinates, three degrees of freedom).
     pub unit_quaternions: usize,
+    /// Loop-closure rows and the rank of their `J`.
     pub rows: usize,
     pub rank: usize,
-    /// Singular values of `J`, descending.
+    /// Singular values of the loop rows' `J`, descending.
     pub singular_values: Vec<f64>,
     /// Values below this count as zero (`RANK_TOLERANCE · σ₁`).
     pub threshold: f64,
+    /// Velocity-constraint rows, and the rank they add to the loop rows' (`rank([J; A]) −
+    /// rank(J)`, the same relative threshold on `[J; A]`'s singular values).
+    pub velocity_rows: usize,
+    pub velocity_rank: usize,
+    /// Number of speeds.
+    pub speeds: usize,
 }
 
 impl Mobility {
-    /// Degrees of freedom.
+    /// Degrees of freedom of the configuration.
     pub fn dof(&self) -> usize {
         self.coordinates - self.unit_quaternions - self.rank
+    }
+
+    /// Degrees of freedom of the motion: the speeds that remain free, `nu − rank([J; A])`
+    /// (equal to [`Mobility::dof`] without velocity constraints).
+    pub fn speed_dof(&self) -> usize {
+        self.speeds - self.rank - self.velocity_rank
     }
 
     /// The singular values within three decades of the threshold, on either side: the rank
@@ -59,27 +74,49 @@ impl fmt::Display for Mobility {
         };
         write!(
             f,
-            "{} coordinates{quaternions}, {} constraint rows, rank {}: {} degree{plural} of freedom",
-            self.coordinates,
-            self.rows,
-            self.rank,
-            self.dof()
+            "{} coordinates{quaternions}, {} constraint rows, rank {}",
+            self.coordinates, self.rows, self.rank,
+        )?;
+        if self.velocity_rows == 0 {
+            return write!(f, ": {} degree{plural} of freedom", self.dof());
+        }
+        write!(
+            f,
+            "; {} velocity rows, rank {}: {} degree{plural} of freedom in the configuration, {} in the motion",
+            self.velocity_rows,
+            self.velocity_rank,
+            self.dof(),
+            self.speed_dof()
         )
     }
 }
 
-/// `J(q)` as a matrix (`nc × nu`: `φ̇ = J u`).
+/// `J(q)` as a matrix (`nc × nu`: `φ̇ = J u`), the velocity constraints' rows `A` included.
 pub fn jacobian<M: Model + ?Sized>(model: &M, t: f64, q: &[f64]) -> DMatrix<f64> {
     let mut j = DMatrix::zeros(model.nc(), model.nu());
     model.constraint_jacobian(t, q, j.as_mut_slice());
     j
 }
 
-/// `φ(q)` as a vector.
+/// The loop rows of `J(q)` (the first [`Model::holonomic_rows`]): what moves `φ(q)`.
+pub fn holonomic_jacobian<M: Model + ?Sized>(model: &M, t: f64, q: &[f64]) -> DMatrix<f64> {
+    jacobian(model, t, q)
+        .rows(0, model.holonomic_rows())
+        .into_owned()
+}
+
+/// `φ(q)` as a vector (0 on velocity-constraint rows).
 pub fn residual<M: Model + ?Sized>(model: &M, t: f64, q: &[f64]) -> DVector<f64> {
     let mut phi = DVector::zeros(model.nc());
     model.constraints(t, q, phi.as_mut_slice());
     phi
+}
+
+/// The loop rows of `φ(q)` (the first [`Model::holonomic_rows`]).
+pub fn holonomic_residual<M: Model + ?Sized>(model: &M, t: f64, q: &[f64]) -> DVector<f64> {
+    residual(model, t, q)
+        .rows(0, model.holonomic_rows())
+        .into_owned()
 }
 
 /// Iteration cap of every SVD here. nalgebra's default iterates until convergence, which a
@@ -110,10 +147,12 @@ fn row_names<M: Model + ?Sized>(model: &M, rows: &[usize]) -> Vec<String> {
         .collect()
 }
 
-/// Rank of `J` at `q` from its singular values; an error naming the rows if `J` is not
-/// finite there.
-pub fn mobility<M: Model + ?Sized>(model: &M, t: f64, q: &[f64]) -> Result<Mobility, RuntimeError> {
-    let j = jacobian(model, t, q);
+/// Singular values of `j`, descending, the threshold below which they count as zero and the
+/// rank; an error naming the rows of `model` if `j` is not finite.
+fn ranked<M: Model + ?Sized>(
+    model: &M,
+    j: DMatrix<f64>,
+) -> Result<(Vec<f64>, f64, usize), RuntimeError> {
     let mut singular_values: Vec<f64> = if j.is_empty() {
         Vec::new()
     } else {
@@ -128,13 +167,28 @@ pub fn mobility<M: Model + ?Sized>(model: &M, t: f64, q: &[f64]) -> Result<Mobil
     singular_values.sort_by(|a, b| b.total_cmp(a));
     let threshold = singular_values.first().copied().unwrap_or(0.0) * RANK_TOLERANCE;
     let rank = singular_values.iter().filter(|&&s| s > threshold).count();
+    Ok((singular_values, threshold, rank))
+}
+
+/// Rank of the loop rows' `J` at `q` from its singular values, and the rank the velocity
+/// constraints add (of `[J; A]`); an error naming the rows if `J` is not finite there.
+pub fn mobility<M: Model + ?Sized>(model: &M, t: f64, q: &[f64]) -> Result<Mobility, RuntimeError> {
+    let (singular_values, threshold, rank) = ranked(model, holonomic_jacobian(model, t, q))?;
+    let velocity_rows = model.velocity_rows();
+    let velocity_rank = match velocity_rows {
+        0 => 0,
+        _ => ranked(model, jacobian(model, t, q))?.2.saturating_sub(rank),
+    };
     Ok(Mobility {
         coordinates: model.nq(),
         unit_quaternions: model.unit_quaternions().len(),
-        rows: model.nc(),
+        rows: model.holonomic_rows(),
         rank,
         singular_values,
         threshold,
+        velocity_rows,
+        velocity_rank,
+        speeds: model.nu(),
     })
 }
 
@@ -195,6 +249,49 @@ pub fn complete_independent(j: &DMatrix<f64>, held: &[usize]) -> Vec<usize> {
     (0..j.ncols()).filter(|c| !dependent.contains(c)).collect()
 }
 
+/// Independent speeds of a model with velocity constraints, from `J` with all its rows
+/// (`[J_loops; A]`, `nc × nu`): the speeds not in `independent` (the coordinates chosen
+/// for the loops, [`complete_independent`]) are dependent on the loops; then, in declaration
+/// order, each further speed is dependent if its column adds a well-conditioned direction
+/// (Gram–Schmidt, relative threshold 1e-6) to those taken, skipping the `held` speeds (named
+/// by the user). Declaration order makes the tree's root speeds dependent first: a floating
+/// base's translation rather than a wheel's spin, so the rates of turning, leaning and
+/// rolling written as `u0` are kept and the base's velocity follows from them.
+pub fn independent_speeds(j: &DMatrix<f64>, independent: &[usize], held: &[usize]) -> Vec<usize> {
+    let scale = (0..j.ncols())
+        .map(|c| j.column(c).norm())
+        .fold(0.0, f64::max);
+    let mut basis: Vec<DVector<f64>> = Vec::new();
+    let mut dependent: Vec<usize> = (0..j.ncols())
+        .filter(|c| !independent.contains(c))
+        .collect();
+    let add = |c: usize, basis: &mut Vec<DVector<f64>>| {
+        let mut column = j.column(c).into_owned();
+        for direction in basis.iter() {
+            let along = column.dot(direction);
+            column -= direction * along;
+        }
+        let norm = column.norm();
+        let new = norm > scale * 1e-6;
+        if new {
+            basis.push(column / norm);
+        }
+        new
+    };
+    for &c in &dependent {
+        add(c, &mut basis);
+    }
+    for c in 0..j.ncols() {
+        if dependent.contains(&c) || held.contains(&c) {
+            continue;
+        }
+        if add(c, &mut basis) {
+            dependent.push(c);
+        }
+    }
+    (0..j.ncols()).filter(|c| !dependent.contains(c)).collect()
+}
+
 /// Settings of [`assemble`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AssemblyOptions {
@@ -231,8 +328,9 @@ pub fn assemble<M: Model + ?Sized>(
     fixed: &[usize],
     options: &AssemblyOptions,
 ) -> Result<usize, RuntimeError> {
-    let residual = |q: &[f64]| residual(model, t, q);
-    let jacobian = |q: &[f64]| jacobian(model, t, q);
+    // Velocity constraints have no position form: only the loop rows are closed.
+    let residual = |q: &[f64]| holonomic_residual(model, t, q);
+    let jacobian = |q: &[f64]| holonomic_jacobian(model, t, q);
     let closed = if model.rates_are_speeds() {
         close(residual, jacobian, q, fixed, options)
     } else {
@@ -707,9 +805,10 @@ impl ConstrainedSolver {
         Ok(())
     }
 
-    /// Moves `q` back onto `φ(q) = 0` (minimum-norm Gauss–Newton, `Δq = −Jᵀ(J Jᵀ)⁺φ`, until
-    /// `max |φ| ≤ tolerance`, at most 10 steps) and then, unless `max |J u|` is already within
-    /// `tolerance`, `u` onto `J u = 0` (the kinetic-energy-closest correction
+    /// Moves `q` back onto `φ(q) = 0` (minimum-norm Gauss–Newton over the loop rows,
+    /// `Δq = −Jᵀ(J Jᵀ)⁺φ`, until `max |φ| ≤ tolerance`, at most 10 steps) and then, unless
+    /// `max |J u|` is already within `tolerance`, `u` onto `J u = 0` over every row, the
+    /// velocity constraints' `A u = 0` included (the kinetic-energy-closest correction
     /// `Δu = −M⁻¹Jᵀ(J M⁻¹ Jᵀ)⁺ J u`). Returns whether `q` or `u` was changed (a state already
     /// within tolerance is left bit for bit as it was). Allocates nothing.
     pub fn project<M: Model + ?Sized>(
@@ -729,6 +828,12 @@ impl ConstrainedSolver {
                 break;
             }
             model.constraint_jacobian(t, q, self.jacobian.as_mut_slice());
+            // Velocity rows have no position form: zero rows here, so the pivoted factor
+            // drops them and the step moves `φ` of the loop rows alone.
+            let holonomic = model.holonomic_rows();
+            for mut column in self.jacobian.column_iter_mut() {
+                column.rows_mut(holonomic, nc - holonomic).fill(0.0);
+            }
             dense::outer_gram_lower(self.jacobian.as_slice(), nc, n, &mut self.coupling);
             self.mismatch.copy_from_slice(self.phi.as_slice());
             self.solve_coupling(nc);

@@ -81,6 +81,14 @@ pub enum RuntimeError {
         /// The model's name.
         model: String,
     },
+    /// `analysis` (statics, linearization, reduced coordinates) works with the configuration
+    /// alone and the model has velocity constraints `A(q) u = 0`, which have no position form.
+    VelocityConstraintsUnsupported {
+        /// What was asked, e.g. `"statics"`.
+        analysis: &'static str,
+        /// The model's name.
+        model: String,
+    },
     /// Dense output was requested outside the last step `[t_start, t_end]`.
     InterpolationOutOfRange {
         /// Requested time.
@@ -181,6 +189,13 @@ impl fmt::Display for RuntimeError {
                  joint, whose orientation is a unit quaternion (q̇ = W(q) u, not q̇ = u), and \
                  {analysis} is written for q̇ = u; simulate it in full coordinates (Dopri5, \
                  Dop853 or RK4), or write the joint as pins and sliders"
+            ),
+            RuntimeError::VelocityConstraintsUnsupported { analysis, model } => write!(
+                f,
+                "{analysis} of model `{model}` is not supported: it has velocity constraints \
+                 (`constraint`), conditions on the speeds with no form in the coordinates, and \
+                 {analysis} works with the coordinates alone; simulate it in full coordinates \
+                 (Dopri5, Dop853 or RK4)"
             ),
             RuntimeError::InterpolationOutOfRange { t, t_start, t_end } => write!(
                 f,

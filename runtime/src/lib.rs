@@ -26,8 +26,8 @@ pub mod simulate;
 pub mod statics;
 
 pub use constraints::{
-    assemble, assemble_along, assemble_speeds, mobility, AssemblyOptions, ConstrainedSolver,
-    Mobility,
+    assemble, assemble_along, assemble_speeds, independent_speeds, mobility, AssemblyOptions,
+    ConstrainedSolver, Mobility,
 };
 pub use error::RuntimeError;
 pub use integrate::{

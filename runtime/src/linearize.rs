@@ -123,6 +123,7 @@ pub fn linearize<M: Model + ?Sized>(
     independent: &[usize],
 ) -> Result<Linearization, RuntimeError> {
     model.require_rates_are_speeds("linearization")?;
+    model.require_holonomic("linearization")?;
     let n = independent.len();
     let (ni, ny) = (model.ninputs(), model.noutputs());
     let signals = default_signals(model);

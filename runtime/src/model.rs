@@ -120,6 +120,17 @@ pub trait Model {
             }),
         }
     }
+    /// `Ok` without velocity constraints; else
+    /// [`RuntimeError::VelocityConstraintsUnsupported`] for `analysis`.
+    fn require_holonomic(&self, analysis: &'static str) -> Result<(), RuntimeError> {
+        match self.velocity_rows() {
+            0 => Ok(()),
+            _ => Err(RuntimeError::VelocityConstraintsUnsupported {
+                analysis,
+                model: self.name().to_string(),
+            }),
+        }
+    }
     /// Outputs `y(t, q, u, inputs)`.
     fn outputs(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]);
     /// Outputs that are integrals over a simulation, as `(target, rate)` output indices: a
@@ -150,6 +161,17 @@ pub trait Model {
     /// redundant (rank-deficient `J`).
     fn nc(&self) -> usize {
         0
+    }
+    /// Number of velocity-constraint rows `A(q) u = 0` (nonholonomic): the last
+    /// `velocity_rows()` of the `nc` rows, whose `φ` is 0 (they have no position form). They
+    /// enter `J`, `J̇u` and so the multipliers like loop rows; position-level steps (assembly,
+    /// projection of `q`) leave them out. 0 by default.
+    fn velocity_rows(&self) -> usize {
+        0
+    }
+    /// Number of loop-closure rows `φ(q) = 0`: the first `nc − velocity_rows` rows.
+    fn holonomic_rows(&self) -> usize {
+        self.nc() - self.velocity_rows()
     }
     /// Name of constraint row `i`, e.g. `fb2.x` or `fb2.align1`.
     fn constraint_name(&self, _i: usize) -> &str {

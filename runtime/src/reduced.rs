@@ -91,6 +91,7 @@ impl<'a, M: Model + ?Sized> Reduced<'a, M> {
     ) -> Result<Self, RuntimeError> {
         let (nq, nc) = (model.nq(), model.nc());
         model.require_rates_are_speeds("the reduced dynamics")?;
+        model.require_holonomic("the reduced dynamics")?;
         check_len("q", nq, q.len())?;
         check_inputs(model, signals)?;
         if !(tolerance > 0.0 && tolerance.is_finite()) {

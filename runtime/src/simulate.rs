@@ -551,6 +551,7 @@ pub fn simulate<M: Model + ?Sized>(
     let nq = check_initial_state(model, q0, u0)?;
     if options.method.is_reduced() {
         model.require_rates_are_speeds("simulation in reduced coordinates (Rosenbrock)")?;
+        model.require_holonomic("simulation in reduced coordinates (Rosenbrock)")?;
         let independent = if model.nc() == 0 {
             (0..nq).collect()
         } else {
@@ -594,6 +595,7 @@ pub fn simulate_reduced<M: Model + ?Sized>(
 ) -> Result<Trajectory, RuntimeError> {
     check_initial_state(model, q0, u0)?;
     model.require_rates_are_speeds("simulation in reduced coordinates")?;
+    model.require_holonomic("simulation in reduced coordinates")?;
     let sampling = Sampling::new(model, signals, options, progress)?;
     let (t0, tolerance) = (options.t_start, options.constraint_tolerance);
     let ode = Reduced::new(model, signals, t0, q0, independent, tolerance)?;

@@ -588,6 +588,7 @@ pub fn solve_statics_with_loads<M: Model + ?Sized>(
     options: &StaticsOptions,
 ) -> Result<Equilibrium, RuntimeError> {
     model.require_rates_are_speeds("statics")?;
+    model.require_holonomic("statics")?;
     let start = q.to_vec();
     let first = newton(
         &Problem::new(model, t, inputs, fixtures, loads)?,
@@ -649,6 +650,7 @@ pub fn reduced_equilibrium<M: Model + ?Sized>(
     loads: &[SideLoad],
 ) -> Result<ReducedEquilibrium, RuntimeError> {
     model.require_rates_are_speeds("statics")?;
+    model.require_holonomic("statics")?;
     let problem = Problem::new(model, t, inputs, fixtures, loads)?;
     let point = problem.point(q.to_vec())?;
     Ok(ReducedEquilibrium {

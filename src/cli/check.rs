@@ -23,7 +23,7 @@ pub fn run(args: &CheckArgs) -> Result<(), Error> {
     let compiled = &session.compiled;
     let model = &compiled.model;
     println!("model `{}` ({})", model.name, path.display());
-    if model.loops.is_empty() {
+    if model.loops.is_empty() && model.velocity_constraints.is_empty() {
         println!(
             "  {} bodies, {} joints, {} degrees of freedom",
             model.bodies.len(),
@@ -37,8 +37,13 @@ pub fn run(args: &CheckArgs) -> Result<(), Error> {
             .as_ref()
             .map(ToString::to_string)
             .unwrap_or_default();
+        let velocity = match model.velocity_constraints.len() {
+            0 => String::new(),
+            1 => ", 1 velocity constraint".to_string(),
+            n => format!(", {n} velocity constraints"),
+        };
         println!(
-            "  {} bodies, {} joints, {} loops; at the assembled q0: {mobility}",
+            "  {} bodies, {} joints, {} loops{velocity}; at the assembled q0: {mobility}",
             model.bodies.len(),
             model.joints.len(),
             model.loops.len()

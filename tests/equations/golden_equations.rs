@@ -76,6 +76,7 @@ tests_per_file! {
     hamr_vi,
     mixed_chain,
     pendulum,
+    rolling_disc,
     slider_crank,
     spherical_five_bar,
     spring_pendulum,

@@ -29,6 +29,7 @@ mod quaternion_joints;
 mod quaternion_loops;
 mod reduced;
 mod resonances;
+mod rolling_disc;
 mod simulation_outputs;
 mod springs;
 mod state_forces;

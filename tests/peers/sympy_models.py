@@ -493,6 +493,132 @@ MODELS = [lambda: chain(1), lambda: chain(2), lambda: chain(4),
           floating_chain, state_forces, contact_plate]
 
 
+# ---------------------------------------------------------------- nonholonomic
+DISC = {'r': 0.5, 'm': 1.5, 'g': float(G_ACC)}
+
+
+def rolling_disc():
+    """SymPy's rolling disc, verbatim from sympy/physics/mechanics/tests/test_kane.py
+    (test_rolling_disc): yaw q1 about N.z, lean q2 about Y.x, spin q3 about L.y, speeds the
+    disc's angular velocity in the lean frame, u1 L.x + u2 L.y + u3 L.z, and the contact
+    point C at rest (Dmc.v2pt_theory(C, N, R)): no slip is built in, no constraint is
+    written. mech's models/rolling_disc.mech has the contact point's position x, y as two
+    more coordinates, u = q' for all five, and the no-slip rows as a velocity constraint.
+    Returns u' in mech's layout as a function of mech's (q, u), and the energies."""
+    q1, q2, q3, u1, u2, u3 = me.dynamicsymbols('q1 q2 q3 u1 u2 u3')
+    r, m, g = sm.symbols('r m g')
+    values = {s: sm.Rational(str(DISC[s.name])) for s in (r, m, g)}   # exact, as R() gives
+    N = me.ReferenceFrame('N')
+    Y = N.orientnew('Y', 'Axis', [q1, N.z])
+    L = Y.orientnew('L', 'Axis', [q2, Y.x])
+    R = L.orientnew('R', 'Axis', [q3, L.y])
+    w_R_N_qd = R.ang_vel_in(N)
+    R.set_ang_vel(N, u1 * L.x + u2 * L.y + u3 * L.z)
+    C = me.Point('C')
+    C.set_vel(N, 0)
+    Dmc = C.locatenew('Dmc', r * L.z)
+    Dmc.v2pt_theory(C, N, R)
+    I = me.inertia(L, m / 4 * r**2, m / 2 * r**2, m / 4 * r**2)
+    kd = [me.dot(R.ang_vel_in(N) - w_R_N_qd, uv) for uv in L]
+    ForceList = [(Dmc, - m * g * Y.z)]
+    BodyD = me.RigidBody('BodyD', Dmc, R, m, (I, Dmc))
+    KM = me.KanesMethod(N, q_ind=[q1, q2, q3], u_ind=[u1, u2, u3], kd_eqs=kd)
+    KM.kanes_equations([BodyD], ForceList)
+    upright = rolling_disc_upright(KM, (q1, q2, q3, u1, u2, u3), (r, m, g))
+    # mech's coordinates and speeds (u = q'): x, y, yaw, lean, spin.
+    x, y, yaw, lean, spin = sm.symbols('x y yaw lean spin')
+    vx, vy, vyaw, vlean, vspin = sm.symbols('u_x u_y u_yaw u_lean u_spin')
+    angles = {q1: yaw, q2: lean, q3: spin}
+    rates = [vyaw, vlean, vspin]
+    # SymPy's speeds from q': u_k = (R's angular velocity in N) . L_k, with q' = mech's u.
+    qd = dict(zip([q1.diff(t), q2.diff(t), q3.diff(t)], rates))
+    speeds = [me.dot(w_R_N_qd, uv).xreplace(qd).xreplace(angles) for uv in L]
+    T = sm.Matrix(speeds).jacobian(rates)       # u_sympy = T(lean) q'_angles
+    Td_qd = sm.Matrix([sum(sm.diff(e, a) * w for a, w in zip([yaw, lean, spin], rates))
+                       for e in T * sm.Matrix(rates)])
+    sub = dict(zip([u1, u2, u3], speeds))
+    Mm = KM.mass_matrix.xreplace(angles).xreplace(sub).xreplace(values)
+    F = KM.forcing.xreplace(qd).xreplace(angles).xreplace(sub).xreplace(values)
+    ke = BodyD.kinetic_energy(N).xreplace(angles).xreplace(sub).xreplace(values)
+    pe = (m * g * Dmc.pos_from(C).dot(N.z)).xreplace(angles).xreplace(values)
+    args = [x, y, yaw, lean, spin, vx, vy, vyaw, vlean, vspin]
+    for e in (Mm, F, ke, pe, T, Td_qd):
+        assert sm.sympify(e).free_symbols <= set(args), e
+    f = sm.lambdify(args, [Mm, F, T.xreplace(values), Td_qd.xreplace(values), ke, pe],
+                    modules='mpmath')
+    return f, upright
+
+
+def rolling_disc_upright(KM, symbols, constants):
+    """The eigenvalues of SymPy's linearization (KM.linearize, as its test does) about
+    upright rolling (q = 0, u1 = u3 = 0) at 1.1 and 0.9 times the critical spin
+    u2 = sqrt(g / (3 r)), where they are all zero (SymPy's test asserts this at r = g = 1):
+    a pair on the imaginary axis above it (stable), a real pair below (the disc falls).
+    Only the nonzero eigenvalues, as [re, im], sorted."""
+    q1, q2, q3, u1, u2, u3 = symbols
+    r, m, g = constants
+    values = {s: sm.Rational(str(DISC[s.name])) for s in constants}
+    A, _, _ = KM.linearize(A_and_B=True)
+    critical = sm.sqrt(values[g] / (3 * values[r]))
+    out = []
+    for factor in ('1.1', '0.9'):
+        spin = sm.Rational(factor) * critical
+        Au = A.xreplace(values).subs({q1: 0, q2: 0, q3: 0, u1: 0, u3: 0, u2: spin})
+        eigenvalues = [complex(sm.N(e, 30)) for e in Au.eigenvals(multiple=True)]
+        nonzero = sorted([[z.real, z.imag] for z in eigenvalues if abs(z) > 1e-12],
+                         key=lambda z: (z[1], z[0]))
+        out.append({'speed_factor': float(factor), 'spin': f64(sm.N(spin, 30)),
+                    'eigenvalues': nonzero})
+    return out
+
+
+def rolling_disc_states():
+    """Random (q, u) of mech's rolling disc that satisfy its no-slip rows: yaw, lean, spin
+    and their rates uniform in [-1, 1], x and y too, and u_x, u_y = r u_spin (cos yaw,
+    sin yaw) (the contact point moves along the heading at r times the spin rate)."""
+    rng = random.Random('mech-peer:rolling_disc')
+    out = []
+    for _ in range(N_STATES):
+        q = [rng.uniform(-1, 1) for _ in range(5)]
+        rates = [rng.uniform(-1, 1) for _ in range(3)]
+        u = [DISC['r'] * rates[2] * math.cos(q[2]), DISC['r'] * rates[2] * math.sin(q[2])] + rates
+        out.append((q, u))
+    return out
+
+
+def rolling_disc_fixture():
+    """mech's u' at each state from SymPy's equations: the angles' accelerations from
+    M u_sympy' = F through u_sympy = T q' (q'' = T^-1 (u_sympy' - T' q')), and x'', y''
+    by differentiating u_x, u_y = r u_spin (cos yaw, sin yaw) along the motion.
+    Energy check: dE/dt = 0 (no work by the contact, no damping) at each state. And the
+    eigenvalues of the linearization about upright rolling (rolling_disc_upright)."""
+    f, upright = rolling_disc()
+    r = mpmath.mpf(R(DISC['r']).p) / R(DISC['r']).q
+    out = []
+    for q, u in rolling_disc_states():
+        args = list(map(mpmath.mpf, q + u))
+        Ms, Fs, T, Td_qd, ke, pe = f(*args)
+        ud_sympy = mpmath.lu_solve(mat(Ms), mat(Fs))
+        qdd = mpmath.lu_solve(mat(T), ud_sympy - mat(Td_qd))
+        yaw, wyaw, wspin = args[2], args[7], args[9]
+        xdd = r * (qdd[2] * mpmath.cos(yaw) - wspin * wyaw * mpmath.sin(yaw))
+        ydd = r * (qdd[2] * mpmath.sin(yaw) + wspin * wyaw * mpmath.cos(yaw))
+        udot = [xdd, ydd, qdd[0], qdd[1], qdd[2]]
+        # dE/dt along the motion, by a central difference at 50 digits (h = 1e-15) of E(q + h q', u + h u').
+        h = mpmath.mpf(10) ** -15
+
+        def energy(s):
+            shifted = [a + s * h * d for a, d in zip(args, u + udot)]
+            _, _, _, _, k, p = f(*shifted)
+            return k + p
+        rate = (energy(1) - energy(-1)) / (2 * h)
+        assert abs(rate) < mpmath.mpf(10) ** -25, f'rolling_disc: dE/dt = {rate}'
+        out.append({'q': q, 'u': u, 'udot': [f64(a) for a in udot],
+                    'kinetic_energy': f64(ke), 'potential_energy': f64(pe)})
+    return {'coordinates': ['x', 'y', 'yaw', 'lean', 'spin'], 'params': DISC, 'states': out,
+            'upright': upright}
+
+
 # ---------------------------------------------------------------- evaluation
 def derive(M):
     qd = {qi.diff(t): ui for qi, ui in zip(M.q, M.u)}
@@ -652,6 +778,10 @@ def main():
             models[M.name]['constraint_names'] = M.loop_names
         print(f'{M.name:20s} n={len(u)}  derivation {t_derive:6.2f} s  '
               f'(M symmetric+PD, |dE/dt - P_nc| <= {mpmath.nstr(worst, 2)})')
+    t0 = time.perf_counter()
+    models['rolling_disc'] = rolling_disc_fixture()
+    print(f'{"rolling_disc":20s} n=3 (+2 dependent)  derivation {time.perf_counter() - t0:6.2f} s  '
+          f'(SymPy test_rolling_disc; dE/dt = 0 along the motion)')
     print('cross-check:')
     cross_check_shared(models)
     fixture = {'generated_by': 'tests/peers/sympy_models.py (sympy.physics.mechanics.KanesMethod)',

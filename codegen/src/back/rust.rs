@@ -568,9 +568,26 @@ impl<'a> Emitter<'a> {
             usize_literal(forcing.len()),
             usize_literal(rows.jacobian.len()),
         );
+        // Velocity constraints (their rows last, `φ` = 0 there): only models that have them
+        // say so, so the others' code is unchanged.
+        let (velocity_const, velocity_in_trait) = match rows.velocity_rows {
+            0 => (TokenStream::new(), TokenStream::new()),
+            n => {
+                let nv = usize_literal(n);
+                (
+                    quote! {
+                        /// Number of velocity-constraint rows `A(q) u = 0`: the last `NV` of the
+                        /// `NC` rows (no position form; `φ` is 0 there).
+                        pub const NV: usize = #nv;
+                    },
+                    quote!(fn velocity_rows(&self) -> usize { #nv }),
+                )
+            }
+        };
         let inherent = quote! {
             /// Number of loop-closure constraint rows (redundant rows included).
             pub const NC: usize = #nc;
+            #velocity_const
             pub const CONSTRAINT_NAMES: [&'static str; #nc] = [#(#names),*];
 
             /// Loop-closure residual `φ(q)`.
@@ -603,6 +620,7 @@ impl<'a> Emitter<'a> {
         let (arguments, vectors, call) = self.slice_call(Function::ConstrainedTerms);
         let in_trait = quote! {
             fn nc(&self) -> usize { #nc }
+            #velocity_in_trait
             fn constraint_name(&self, i: usize) -> &str { Self::CONSTRAINT_NAMES.get(i).copied().unwrap_or("") }
             #phi_in_trait
             #jacobian_in_trait

@@ -55,6 +55,9 @@ pub enum Item {
     Force(ForceDecl),
     Torque(TorqueDecl),
     Output(OutputDecl),
+    Constraint(ConstraintDecl),
+    /// `rolling NAME between CENTRE and PLANE_POINT { fields }`: same shape as a spring.
+    Rolling(SpringDecl),
 }
 
 /// `param`, `let` or `input`: a name bound to an expression.
@@ -190,6 +193,15 @@ pub struct OutputDecl {
     pub value: Expr,
     pub frame: Option<Path>,
     pub span: Span,
+}
+
+/// `constraint NAME = WHAT in FRAME { fields }` (the block and the frame only with a velocity).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConstraintDecl {
+    /// `NAME = WHAT in FRAME`, as an output's.
+    pub head: OutputDecl,
+    /// `None` without a block (`... ;`).
+    pub fields: Option<Vec<Field>>,
 }
 
 /// An expression with its span.

@@ -133,6 +133,8 @@ fn build_item(pair: Pair<Rule>) -> Result<ast::Item> {
             Rule::force_decl => force_decl(inner, docs),
             Rule::torque_decl => torque_decl(inner, docs),
             Rule::output_decl => output_decl(inner, docs),
+            Rule::constraint_decl => constraint_decl(inner, docs),
+            Rule::rolling_decl => Ok(ast::Item::Rolling(two_point_decl(inner, docs)?)),
             _ => Err(internal(span)),
         };
     }
@@ -237,6 +239,8 @@ fn is_punctuation(rule: Rule) -> bool {
             | kw_and
             | kw_force
             | kw_torque
+            | kw_constraint
+            | kw_rolling
             | kw_output
             | kw_point
             | kw_frame
@@ -423,6 +427,31 @@ fn output_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
         frame: parts.frame_clause()?,
         span: parts.span,
     }))
+}
+
+fn constraint_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
+    let mut parts = Parts::of(pair);
+    let name = parts.ident()?;
+    let value = parts.expr()?;
+    let frame = parts.frame_clause()?;
+    let has_block = parts
+        .pairs
+        .as_slice()
+        .first()
+        .is_some_and(|p| p.as_rule() == Rule::joint_block);
+    let fields = if has_block {
+        Some(parts.block_fields()?)
+    } else {
+        None
+    };
+    let head = ast::OutputDecl {
+        docs,
+        name,
+        value,
+        frame,
+        span: parts.span,
+    };
+    Ok(ast::Item::Constraint(ast::ConstraintDecl { head, fields }))
 }
 
 fn ident(pair: Pair<Rule>) -> Ident {

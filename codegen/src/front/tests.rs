@@ -476,3 +476,38 @@ fn huge_numbers_and_exponents_do_not_overflow() {
         "E0505",
     );
 }
+
+/// `constraint`: both forms lower (a velocity's components, a scalar row), and what is not
+/// `A(q) u = 0` is refused at its span.
+#[test]
+fn velocity_constraints() {
+    let base = "param r = 5 mm;\nbody cart { mass = 1 g; }\nbody wheel { mass = 1 g; }\n\
+                joint x = slider(newtonian, cart) { axis = x; }\n\
+                joint spin = pin(cart, wheel) { axis = z; }\n";
+    let with = |line: &str| format!("{base}{line}\n");
+    let lowered = model(&with(
+        "constraint a = velocity(cart, wheel) in cart { components = [x, y]; }\n\
+         constraint b = cos(spin.q) * x.u - r * spin.u;",
+    ));
+    assert_eq!(lowered.velocity_constraints.len(), 2);
+    assert!(matches!(
+        &lowered.velocity_constraints[0].kind,
+        crate::ir::VelocityKind::PointVelocity { components, .. } if components == &[0, 1]
+    ));
+    for (line, code) in [
+        ("constraint c = x.u * spin.u;", "E0420"),
+        ("constraint c = sin(spin.u * 1 s);", "E0420"),
+        ("constraint c = x.u / spin.u;", "E0420"),
+        ("constraint c = x.u^2;", "E0420"),
+        ("constraint c = x.u + x.q / 1 s;", "E0421"),
+        ("constraint c = x.q;", "E0421"),
+        ("constraint c = t * x.u;", "E0401"),
+        ("constraint c = x.u in cart;", "E0403"),
+        ("constraint c = x.u { components = [x]; }", "E0403"),
+        ("constraint c = velocity(cart) { axis = x; }", "E0209"),
+        ("constraint c = velocity(cart, nowhere);", "E0201"),
+        ("constraint x = velocity(cart);", "E0210"),
+    ] {
+        check_code(&with(line), code);
+    }
+}

@@ -620,6 +620,44 @@ pub struct LoopClosure {
     pub span: Span,
 }
 
+/// A velocity (nonholonomic) constraint: rows `A(q) u = 0`, linear and homogeneous in the
+/// speeds, with no position form (`kane::constraints` appends them to the loop rows).
+#[derive(Clone, Debug, PartialEq)]
+pub struct VelocityConstraint {
+    pub name: String,
+    pub kind: VelocityKind,
+    pub span: Span,
+}
+
+/// What a [`VelocityConstraint`] holds at zero.
+#[derive(Clone, Debug, PartialEq)]
+pub enum VelocityKind {
+    /// The listed components (0 = x) in `frame`'s basis of the velocity in N of the material
+    /// point of the body with frame `body` that is at `point` at this instant (the contact
+    /// point of a wheel moves over the wheel; its material point there does not slip).
+    PointVelocity {
+        point: Handle<Point>,
+        body: Handle<Frame>,
+        frame: Handle<Frame>,
+        components: Vec<usize>,
+    },
+    /// A scalar expression of the motion, linear and homogeneous in the speeds (checked by
+    /// the front end): `a.u - 2 * b.u`.
+    Scalar(Expr),
+    /// A thin wheel (a disc of `radius` about `centre`, its `axle` in the basis of the frame
+    /// the centre is fixed in) rolling without slip on the plane through `plane` (a Newtonian
+    /// point) with unit `normal` (Newtonian basis): one loop row, the contact point's height
+    /// above the plane, and two velocity rows, the wheel's material point at the contact
+    /// not slipping along the plane (`kane::constraints`).
+    Rolling {
+        centre: Handle<Point>,
+        axle: Box<Vec3>,
+        radius: Expr,
+        plane: Handle<Point>,
+        normal: Box<Vec3>,
+    },
+}
+
 /// Something that does work: contributes to the generalized active forces `F_r`.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Load {
@@ -837,6 +875,8 @@ pub struct Model {
     pub loads: Vec<Load>,
     /// Loop closures: the only connections that are not tree joints.
     pub loops: Vec<LoopClosure>,
+    /// Velocity constraints, rows appended after the loops' (no position form).
+    pub velocity_constraints: Vec<VelocityConstraint>,
     /// Flexures (their springs and dampers are also in `loads`).
     pub flexures: Vec<Flexure>,
     /// Gravitational acceleration, components in the Newtonian frame.

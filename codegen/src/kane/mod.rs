@@ -51,7 +51,8 @@ pub struct Equations {
     /// target (0 in `outputs`) is sampled as `∫ rate dt` from the start of the run (a
     /// contact's dissipated energy; `Model::integrated_outputs` in the runtime).
     pub integrated_outputs: Vec<(usize, usize)>,
-    /// Loop-closure rows: `φ(q)`, `J = ∂φ/∂q` (`nc × nq`, column-major) and `J̇u`.
+    /// Loop-closure rows: `φ(q)`, `J = ∂φ/∂q` (`nc × nq`, column-major) and `J̇u`; the
+    /// velocity constraints' rows `A(q) u = 0` last (`φ` = 0, `J` rows `A`, bias `Ȧu`).
     pub constraints: constraints::Constraints,
     /// Flexures: their angles `θ(q)`, stiffness `k`, time-domain damping `b` and loss factor
     /// `η`, for frequency-domain analyses (complex stiffness `k(1 + iη)`).
@@ -163,7 +164,7 @@ fn bushing_laws(
 }
 
 impl Equations {
-    /// Number of constraint rows `NC` (redundant rows included).
+    /// Number of constraint rows `NC` (redundant rows and velocity rows included).
     pub fn nc(&self) -> usize {
         self.constraints.residual.len()
     }

@@ -28,8 +28,9 @@ pub struct KinematicRates {
 impl KinematicRates {
     /// `q̇ = u` for a model without quaternions, else `q̇ᵢ = uᵢ` for the coordinates and
     /// `ė = ½ e ⊗ (0, ω)` for each quaternion (as [`rates`] builds them). The chain is built
-    /// only for a model with loops or bushings, the places a function of a quaternion's
-    /// coordinates meets it (loop rows, loop flexure angles, a bushing's offsets): a pin or
+    /// only for a model with loops, velocity constraints or bushings, the places a function
+    /// of a quaternion's coordinates meets it (loop rows, loop flexure angles, the rate `Ȧu`
+    /// of a velocity row, a bushing's offsets): a pin or
     /// slider coordinate's partial rates are `∂q_c/∂q_r` either way, and other models keep
     /// their pool numbering.
     pub fn new(pool: &mut ExprPool, model: &Model) -> KinematicRates {
@@ -38,7 +39,7 @@ impl KinematicRates {
             .loads
             .iter()
             .any(|load| matches!(load, crate::ir::Load::Bushing { .. }));
-        let needed = !model.loops.is_empty() || bushing;
+        let needed = !model.loops.is_empty() || !model.velocity_constraints.is_empty() || bushing;
         let chain = needed.then(|| rates(pool, model)).flatten().map(|rates| {
             let mut columns = vec![Vec::new(); nu];
             for (i, &rate) in rates.iter().enumerate() {

@@ -204,7 +204,7 @@ impl<'a> Lowerer<'a> {
     }
 
     /// `[x, z]` → `[0, 2]`: distinct axis names.
-    fn component_list(&mut self, value: &ast::Expr) -> Option<Vec<usize>> {
+    pub(super) fn component_list(&mut self, value: &ast::Expr) -> Option<Vec<usize>> {
         let value = unparen(value);
         let items = match &value.kind {
             ExprKind::Vector(items) if !items.is_empty() => items.clone(),

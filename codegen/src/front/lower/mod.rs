@@ -7,8 +7,8 @@
 //!
 //! The work is split by topic: `expr` (scalar expressions, units, dimensions), `body` (bodies,
 //! points, frames, axes, rotations), `tree` (joints, tree order, frame building), `loads`
-//! (gravity, forces, torques, point-to-point springs, outputs), `loops` (loop closures) and `names` (namespaces and
-//! suggestions).
+//! (gravity, forces, torques, point-to-point springs, outputs), `loops` (loop closures),
+//! `velocity` (velocity constraints) and `names` (namespaces and suggestions).
 
 mod body;
 mod elements;
@@ -18,6 +18,7 @@ mod loops;
 mod names;
 
 mod tree;
+mod velocity;
 
 pub(super) use expr::MAX_SIZE;
 
@@ -189,6 +190,7 @@ impl<'a> Lowerer<'a> {
         self.build_points();
         self.build_bodies();
         self.lower_loops(&file.items);
+        self.lower_velocity_constraints(&file.items);
         self.lower_elements(&file.items);
         self.lower_loads_and_outputs(&file.items);
         self.build_loads();

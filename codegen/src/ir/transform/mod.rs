@@ -462,6 +462,12 @@ fn remap_handles(model: &mut Model, remap: &dyn Fn(Handle<Frame>) -> Handle<Fram
             *frame = remap(*frame);
         }
     }
+    for constraint in &mut model.velocity_constraints {
+        if let crate::ir::VelocityKind::PointVelocity { body, frame, .. } = &mut constraint.kind {
+            *body = remap(*body);
+            *frame = remap(*frame);
+        }
+    }
 }
 
 #[cfg(test)]
