@@ -25,10 +25,7 @@ const ADVANCE_PER_CYCLE: f64 = 0.1e-3;
 
 pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
     let walks = compute(spec)?;
-    let mut outcome = Outcome {
-        method: method_text(spec, &walks),
-        ..Outcome::default()
-    };
+    let mut outcome = Outcome::with_method(method_text(spec, &walks));
     outcome.tables.push(walks_table(&walks));
     outcome.tables.push(facts_table(&walks));
     let rows: Vec<Vec<f64>> = walks
