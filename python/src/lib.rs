@@ -362,6 +362,41 @@ impl Model {
         mech::describe::equations_text(&self.session().compiled).map_err(error)
     }
 
+    /// What `mech check` reports, as data: the model's `name`, its `bodies` (names),
+    /// `joints`, `loops` and `velocity_constraints` (counts), and its degrees of freedom:
+    /// `dof` of the configuration and `speed_dof` of the motion (fewer with velocity
+    /// constraints). For a model with loops or velocity constraints these come from the
+    /// assembled `q0`, with the constraint `rows`, their `rank` and the `singular_values` of
+    /// `J`. Raises `MechError` where `mech check` fails (a loop that does not close).
+    fn check<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let session = self.session();
+        let model = &session.compiled.model;
+        let dict = PyDict::new(py);
+        dict.set_item("name", model.name.as_str())?;
+        let bodies: Vec<&str> = model.bodies.iter().map(|(_, b)| b.name.as_str()).collect();
+        dict.set_item("bodies", bodies)?;
+        dict.set_item("joints", model.joints.len())?;
+        dict.set_item("loops", model.loops.len())?;
+        dict.set_item("velocity_constraints", model.velocity_constraints.len())?;
+        let state = session.assemble(&[]).map_err(error)?;
+        match &state.mobility {
+            Some(mobility) => {
+                dict.set_item("dof", mobility.dof())?;
+                dict.set_item("speed_dof", mobility.speed_dof())?;
+                dict.set_item("rows", mobility.rows)?;
+                dict.set_item("rank", mobility.rank)?;
+                let values = PyArray1::from_vec(py, mobility.singular_values.clone());
+                dict.set_item("singular_values", values)?;
+            }
+            None => {
+                let free = session.model.nu();
+                dict.set_item("dof", free)?;
+                dict.set_item("speed_dof", free)?;
+            }
+        }
+        Ok(dict)
+    }
+
     /// The initial state with the loops closed: `independent` coordinates held
     /// (`NAME` or `NAME=VALUE`). A dict of `q`, `u`, the names held independent, and for a
     /// model with loops its mobility (`rank`, `dof`, `singular_values`).

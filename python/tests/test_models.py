@@ -271,3 +271,22 @@ def test_physically_impossible_values_are_refused():
         model("flexure_rig", set={"L_cm": "30 mm"})
     rig = model("flexure_rig", set={"L_cm": "30 mm", "I_p": "1e-6 kg*m^2"})
     assert rig.parameters["L_cm"] == pytest.approx(0.03, rel=1e-15)
+
+
+# ---------------------------------------------------------------- check: mobility by hand
+
+
+def test_check_counts_the_freedom_kutzbach_and_the_rolling_disc_give():
+    # A planar four-bar: Grübler–Kutzbach 3(n − 1) − 2j with n = 4 links, j = 4 pins: 1.
+    four_bar = model("four_bar").check()
+    assert (four_bar["loops"], four_bar["rows"], four_bar["rank"]) == (1, 2, 2)
+    assert four_bar["dof"] == four_bar["speed_dof"] == 1
+    assert len(four_bar["bodies"]) == 3 and len(four_bar["singular_values"]) == 2
+    # Two sliders in a chain, no loops: one freedom each.
+    chain = model("two_mass_chain").check()
+    assert (chain["dof"], chain["speed_dof"], chain["loops"]) == (2, 2, 0)
+    # A disc rolling without slip: five coordinates free in configuration (position on the
+    # plane and three angles), three in motion (the two no-slip rows remove two speeds).
+    disc = model("rolling_disc").check()
+    assert disc["velocity_constraints"] >= 1
+    assert (disc["dof"], disc["speed_dof"]) == (5, 3)
