@@ -600,7 +600,7 @@ pub fn assemble_speeds<M: Model + ?Sized>(
 /// Redundancy is mostly structural (a planar loop closed by a spatial revolute has three
 /// rows that follow from the other two everywhere): once a solve finds rows redundant, the
 /// accelerations use only the pivoted Cholesky's independent rows (`active`) — on the HAMR
-/// robot 24 of 60, a quarter of the work in `Z` and a sixth in `Zᵀ Z`. The choice is
+/// robot 24 of 60, two fifths of the work in `Z` and a sixth in `Zᵀ Z`. The choice is
 /// undone when those rows lose rank, or when [`project`](Self::project), which always uses
 /// every row, finds a speed violation (a row that was redundant no longer is).
 #[derive(Clone, Debug)]

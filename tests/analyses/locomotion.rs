@@ -152,14 +152,14 @@ fn bad_locomotion_files_give_clear_errors() {
                 "payloads = [\"0 g\", \"1 g\", \"2 g\", \"3 g\", \"4 g\"]",
                 "payloads = [\"-1 g\"]",
             ),
-            "payloads",
+            "key `payloads`: `-1 g` must be 0 or more",
         ),
         (
             (
                 "frequencies = [\"2 Hz\", \"5 Hz\", \"10 Hz\", \"20 Hz\"]",
                 "frequencies = [\"10 V\"]",
             ),
-            "frequencies",
+            "key `frequencies`: expected a frequency",
         ),
         (
             ("amplitude = \"100 V\"", "amplitude = \"100 V\"\nspeed = 3"),

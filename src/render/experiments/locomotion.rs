@@ -184,9 +184,7 @@ fn largest_advancing(walks: &Walks, frequency: f64) -> Option<f64> {
         .iter()
         .filter(|w| w.frequency == frequency && w.per_cycle() >= ADVANCE_PER_CYCLE)
         .map(|w| w.payload)
-        .fold(None, |best: Option<f64>, m| {
-            Some(best.map_or(m, |b| b.max(m)))
-        })
+        .reduce(f64::max)
 }
 
 fn facts_table(walks: &Walks) -> Table {
