@@ -12,6 +12,7 @@ mod markdown;
 
 mod actuator_extensions;
 mod backends;
+mod bicycle;
 mod bushing;
 mod compliant_loops;
 mod contact;
