@@ -184,8 +184,13 @@ pub fn run(args: &LinearizeArgs) -> Result<(), Error> {
         let text = serde_json::to_string_pretty(&json).map_err(|e| Error::write(path, e))?;
         files.push(output::File::new(path, text));
     }
-    output::write_all(&files, &reads)?;
-    for file in &files {
+    write_files(&files, &reads)
+}
+
+/// Writes `files` all or nothing (none replaces one of `reads`) and names each.
+fn write_files(files: &[output::File], reads: &[output::Read]) -> Result<(), Error> {
+    output::write_all(files, reads)?;
+    for file in files {
         println!("written to {}", file.path.display());
     }
     Ok(())
@@ -251,11 +256,7 @@ fn run_steady(args: &LinearizeArgs) -> Result<(), Error> {
                 .collect();
             files.push(output::File::csv(out, &header, &rows)?);
         }
-        output::write_all(&files, &reads)?;
-        for file in &files {
-            println!("written to {}", file.path.display());
-        }
-        return Ok(());
+        return write_files(&files, &reads);
     };
     let sweep = Sweep::parse(&session, text)?;
     let bar = super::progress_bar(
@@ -315,11 +316,7 @@ fn run_steady(args: &LinearizeArgs) -> Result<(), Error> {
     if let Some(path) = &args.motion.plot {
         files.push(eigenvalue_plot(path, &sweep, &rows, width)?);
     }
-    output::write_all(&files, &reads)?;
-    for file in &files {
-        println!("written to {}", file.path.display());
-    }
-    Ok(())
+    write_files(&files, &reads)
 }
 
 /// The report of one steady linearization.
