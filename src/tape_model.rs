@@ -124,6 +124,8 @@ pub struct TapeModel {
     input_defaults: Vec<f64>,
     q0: Vec<f64>,
     u0: Vec<f64>,
+    /// The `q0` and `u0` written as expressions of params, evaluated at the current values.
+    initial_values: Vec<mech_codegen::ir::InitialValue>,
     /// Registers reused across evaluations (the evaluator never allocates after warm-up).
     registers: RefCell<Vec<f64>>,
     /// Native code, `None` for [`Backend::Interpreter`].
@@ -208,6 +210,7 @@ impl TapeModel {
             input_defaults: model.inputs.iter().map(|(_, i)| i.default).collect(),
             q0: model.initial_coordinates(),
             u0: model.initial_speeds(),
+            initial_values: model.initial_values.clone(),
             registers: RefCell::new(Vec::new()),
             native,
             scratch: RefCell::new(Scratch::default()),
@@ -429,6 +432,7 @@ impl mech_runtime::Model for TapeModel {
         for (slot, value) in u.iter_mut().zip(&self.u0) {
             *slot = *value;
         }
+        mech_codegen::ir::InitialValue::apply(&self.initial_values, &self.params, q, u);
     }
     fn mass_matrix(&self, t: f64, q: &[f64], inputs: &[f64], out: &mut [f64]) {
         self.eval(Slot::MassMatrix, t, q, &[], inputs, out);

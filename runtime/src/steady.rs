@@ -179,7 +179,9 @@ impl<M: Model + ?Sized> Chart<'_, M> {
         let mut udot = vec![0.0; self.model.nu()];
         self.ode
             .accelerations(self.t, &q, &u, self.inputs, &mut udot)?;
-        let rates = self.coordinates.iter().map(|&i| u[i]);
+        let mut qdot = vec![0.0; self.model.nq()];
+        self.model.kinematic_rates(self.t, &q, &u, &mut qdot);
+        let rates = self.coordinates.iter().map(|&i| qdot[i]);
         let accelerations = self.speeds.iter().map(|&i| udot[i]);
         Ok(rates.chain(accelerations).collect())
     }

@@ -226,3 +226,24 @@ fn whipple_bicycle_eigenvalues_and_stable_speed_range() {
         "{capsize_speed}"
     );
 }
+
+/// The rear wheel's `u0 = v / rR` is an expression of params: it follows a changed `v` (and
+/// `rR`) in the tape model, so a sweep over `v` moves the operating point.
+#[test]
+fn initial_speeds_written_with_params_follow_them() {
+    use mech_runtime::Model as _;
+    let mut model = common::tape("whipple_bicycle");
+    let param = |model: &dyn Model, name: &str| {
+        (0..model.nparams())
+            .find(|&i| model.param_name(i) == name)
+            .unwrap()
+    };
+    let (v, radius) = (param(&model, "v"), param(&model, "rR"));
+    let rear = index(&model, "rear");
+    let (_, u) = common::initial_state(&model);
+    assert_eq!(u[rear], 5.0 / 0.3);
+    model.set_param(v, 2.0);
+    model.set_param(radius, 0.25);
+    let (_, u) = common::initial_state(&model);
+    assert_eq!(u[rear], 2.0 / 0.25);
+}

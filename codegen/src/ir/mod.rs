@@ -249,6 +249,19 @@ impl Expr {
         Expr::Number(Number::ONE)
     }
 
+    /// Whether a param appears in it.
+    pub fn has_params(&self) -> bool {
+        match self {
+            Expr::Param(_) => true,
+            Expr::Number(_) | Expr::Pi | Expr::Input(_) | Expr::Time | Expr::State(_) => false,
+            Expr::Neg(a) | Expr::Pow(a, _) => a.has_params(),
+            Expr::Add(a, b) | Expr::Sub(a, b) | Expr::Mul(a, b) | Expr::Div(a, b) => {
+                a.has_params() || b.has_params()
+            }
+            Expr::Call(_, args) => args.iter().any(Expr::has_params),
+        }
+    }
+
     /// The value with the params at `params` (SI, by index); `None` if it depends on an input,
     /// time or the state.
     pub fn evaluate(&self, params: &[f64]) -> Option<f64> {
@@ -885,6 +898,35 @@ pub struct Model {
     /// Physical rules on masses, inertias and element dimensions, checked again when a
     /// parameter changes at run time.
     pub requirements: Vec<Requirement>,
+    /// Initial values written as expressions of params (`u0 = v / r`), evaluated again when a
+    /// parameter changes at run time; the coordinates' `initial` and `initial_speed` hold
+    /// them at the params' defaults.
+    pub initial_values: Vec<InitialValue>,
+}
+
+/// A coordinate's `q0` or `u0` that depends on params.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InitialValue {
+    pub coordinate: Handle<Coordinate>,
+    /// `u0` rather than `q0`.
+    pub speed: bool,
+    pub expr: Expr,
+}
+
+impl InitialValue {
+    /// Writes each of `values` at the params `params` into `q` or `u` (NaN where one cannot
+    /// be evaluated).
+    pub fn apply(values: &[InitialValue], params: &[f64], q: &mut [f64], u: &mut [f64]) {
+        for value in values {
+            let slot = match value.speed {
+                true => u.get_mut(value.coordinate.index()),
+                false => q.get_mut(value.coordinate.index()),
+            };
+            if let Some(slot) = slot {
+                *slot = value.expr.evaluate(params).unwrap_or(f64::NAN);
+            }
+        }
+    }
 }
 
 impl Model {
