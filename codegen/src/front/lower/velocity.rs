@@ -21,13 +21,26 @@ use super::Lowerer;
 
 /// Degree of an expression in the speeds: constant in them, or linear and homogeneous.
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum Degree {
+pub(super) enum Degree {
     Zero,
     One,
 }
 
 const LINEAR_HELP: &str = "a velocity constraint is `A(q) u = 0`: a sum of terms, each one speed \
      (`joint.u`, `distance_rate(A, B)`) times a factor of the coordinates and params";
+
+#[derive(Clone, Copy)]
+/// The errors of [`Lowerer::speed_degree`]: what is not linear, and a term without a speed.
+pub(super) struct DegreeErrors {
+    pub not_linear: fn(Span, &str) -> Diagnostic,
+    pub speed_free: fn(Span) -> Diagnostic,
+}
+
+/// A velocity constraint's: E0420 and E0421.
+const CONSTRAINT_ERRORS: DegreeErrors = DegreeErrors {
+    not_linear,
+    speed_free,
+};
 
 /// E0420 at `span`, saying what is not linear.
 fn not_linear(span: Span, what: &str) -> Diagnostic {
@@ -163,7 +176,7 @@ impl Lowerer<'_> {
             );
             ok = false;
         }
-        let degree = self.speed_degree(&decl.head.value);
+        let degree = self.speed_degree(&decl.head.value, &CONSTRAINT_ERRORS);
         let typed = self.lower_scalar(&decl.head.value, Ctx::Load);
         match degree {
             Ok(Degree::One) => {}
@@ -191,7 +204,7 @@ impl Lowerer<'_> {
     }
 
     /// Where `e` first names time, an input, or a `let` that depends on them.
-    fn time_or_input(&self, e: &ast::Expr) -> Option<Span> {
+    pub(super) fn time_or_input(&self, e: &ast::Expr) -> Option<Span> {
         match &e.kind {
             ExprKind::Path(path) => match path.segments.as_slice() {
                 [name] if name.name == "t" => Some(e.span),
@@ -218,8 +231,16 @@ impl Lowerer<'_> {
     }
 
     /// The degree of `e` in the speeds, or the first place where it is not linear and
-    /// homogeneous.
-    fn speed_degree(&self, e: &ast::Expr) -> Result<Degree, Diagnostic> {
+    /// homogeneous (as `errors` word it).
+    pub(super) fn speed_degree(
+        &self,
+        e: &ast::Expr,
+        errors: &DegreeErrors,
+    ) -> Result<Degree, Diagnostic> {
+        let DegreeErrors {
+            not_linear,
+            speed_free,
+        } = *errors;
         match &e.kind {
             ExprKind::Quantity { .. } | ExprKind::Vector(_) => Ok(Degree::Zero),
             ExprKind::Path(path) => Ok(match path.segments.as_slice() {
@@ -233,7 +254,7 @@ impl Lowerer<'_> {
             ExprKind::Call { function, .. } if function.name == "distance_rate" => Ok(Degree::One),
             ExprKind::Call { function, args } => {
                 for arg in args {
-                    if self.speed_degree(arg)? == Degree::One {
+                    if self.speed_degree(arg, errors)? == Degree::One {
                         return Err(not_linear(
                             arg.span,
                             &format!("a speed inside `{}`", function.name),
@@ -242,9 +263,12 @@ impl Lowerer<'_> {
                 }
                 Ok(Degree::Zero)
             }
-            ExprKind::Neg(inner) | ExprKind::Paren(inner) => self.speed_degree(inner),
+            ExprKind::Neg(inner) | ExprKind::Paren(inner) => self.speed_degree(inner, errors),
             ExprKind::Binary { op, lhs, rhs } => {
-                let (a, b) = (self.speed_degree(lhs)?, self.speed_degree(rhs)?);
+                let (a, b) = (
+                    self.speed_degree(lhs, errors)?,
+                    self.speed_degree(rhs, errors)?,
+                );
                 match (op, a, b) {
                     (_, Degree::Zero, Degree::Zero) => Ok(Degree::Zero),
                     (BinaryOp::Add | BinaryOp::Sub, Degree::One, Degree::One) => Ok(Degree::One),

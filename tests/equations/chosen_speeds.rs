@@ -1,0 +1,167 @@
+//! Generalized speeds chosen by `speed` declarations (`u = Y(q) ū`, `q̇ = W(q) u`) against
+//! the same models in their default speeds `u = q̇`:
+//! - a planar double pendulum with absolute-angle speeds (`u₁ = ω₁`, `u₂ = ω₂` in N) moves
+//!   exactly as with the joint rates: the same `q(t)` to 1e-10, and `M̃ = Wᵀ M W`,
+//!   `F̃ = Wᵀ (F − M Ẇ u)` at random states, on the tape and in its native code alike;
+//! - a combination of joint speeds with a coefficient of `q` (`s = a.u + cos(a.q) b.u`) and a
+//!   point's velocity as a speed give the same motion too;
+//! - energy is conserved with chosen speeds (a conservative example, to 1e-10);
+//! - the errors: too many or too few speeds, speeds dependent at `q0`, a speed not linear.
+
+use crate::common;
+
+use mech_runtime::Model;
+
+/// A planar double pendulum; `SPEEDS` is replaced by the speed declarations under test.
+const DOUBLE_PENDULUM: &str = r#"
+model double_pendulum;
+param m1 = 1.3 kg;
+param m2 = 0.7 kg;
+param l1 = 0.9 m;
+param l2 = 0.6 m;
+gravity = [0, -9.81 m/s^2, 0];
+body upper { mass = m1; inertia = [0.05, 0.07, 0.11] * 1 kg*m^2; com = [0.1, -0.4, 0] * 1 m; point elbow = [0, -l1, 0]; }
+body lower { mass = m2; inertia = [0.02, 0.03, 0.04] * 1 kg*m^2; com = [0.05, -0.3, 0] * 1 m; point tip = [0, -l2, 0]; }
+joint shoulder = pin(newtonian, upper) { axis = z; q0 = 50 deg; u0 = 1.5 rad/s; }
+joint elbow = pin(upper, lower) { axis = z; parent_point = upper.elbow; q0 = -20 deg; u0 = -0.7 rad/s; }
+SPEEDS
+output ke = kinetic_energy;
+output pe = potential_energy;
+"#;
+
+/// `u₁ = ω of upper`, `u₂ = ω of lower`, both along N's z: `Y = [[1, 0], [1, 1]]`.
+const ABSOLUTE: &str = "speed w_upper = angular_velocity(upper) in newtonian { axis = z; }\n\
+                        speed w_lower = angular_velocity(lower) in newtonian { axis = z; }";
+
+fn pendulum(speeds: &str) -> mech::tape_model::TapeModel {
+    common::tape_from_text(
+        "double_pendulum",
+        &DOUBLE_PENDULUM.replace("SPEEDS", speeds),
+    )
+}
+
+/// Runs `model` from its own initial state for 3 s at tight tolerances.
+fn run(model: &dyn Model) -> mech_runtime::Trajectory {
+    let (q0, u0) = common::initial_state(model);
+    let options = common::dopri5_options(3.0, 0.05, 1e-13, 1e-13);
+    common::simulate_at_default_inputs(model, &q0, &u0, &options)
+}
+
+/// The largest difference in `q` between two runs sampled at the same times.
+fn largest_q_difference(a: &mech_runtime::Trajectory, b: &mech_runtime::Trajectory) -> f64 {
+    assert_eq!(a.times.len(), b.times.len());
+    a.q.iter()
+        .zip(&b.q)
+        .flat_map(|(x, y)| x.iter().zip(y).map(|(x, y)| (x - y).abs()))
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn absolute_angle_speeds_move_as_the_joint_rates() {
+    let default = pendulum("");
+    let absolute = pendulum(ABSOLUTE);
+    assert_eq!(absolute.speed_name(0), "w_upper");
+    assert!(!absolute.rates_are_speeds());
+    let (q0, u0) = common::initial_state(&absolute);
+    assert_eq!(u0, vec![1.5, 1.5 - 0.7], "u0 = Y(q0) q̇0");
+    let (q0_default, _) = common::initial_state(&default);
+    assert_eq!(q0, q0_default);
+    let difference = largest_q_difference(&run(&default), &run(&absolute));
+    println!("absolute-angle speeds: largest |Δq| over 3 s = {difference:.2e}");
+    assert!(difference < 1e-10, "|Δq| = {difference:e}");
+}
+
+#[test]
+fn mass_matrix_and_forcing_are_w_transpose_of_the_defaults() {
+    // W = Y⁻¹ = [[1, 0], [−1, 1]] is constant: Ẇ = 0, M̃ = Wᵀ M W, F̃ = Wᵀ F(q, W u).
+    let default = pendulum("");
+    let absolute = pendulum(ABSOLUTE);
+    let w = [[1.0, 0.0], [-1.0, 1.0]];
+    let mut rng = common::Rng::new(15);
+    let mut largest = 0.0_f64;
+    for _ in 0..20 {
+        let q = rng.vector(2, -3.0, 3.0);
+        let u = rng.vector(2, -4.0, 4.0);
+        let joint_rates: Vec<f64> = (0..2).map(|i| w[i][0] * u[0] + w[i][1] * u[1]).collect();
+        let mut qdot = vec![0.0; 2];
+        absolute.kinematic_rates(0.0, &q, &u, &mut qdot);
+        assert_eq!(qdot, joint_rates, "q̇ = W u");
+        let m = common::mass_matrix(&default, &q);
+        let f = common::forcing(&default, &q, &joint_rates);
+        let m_new = common::mass_matrix(&absolute, &q);
+        let f_new = common::forcing(&absolute, &q, &u);
+        for r in 0..2 {
+            let expected_f: f64 = (0..2).map(|i| w[i][r] * f[i]).sum();
+            largest = largest.max((f_new[r] - expected_f).abs());
+            for s in 0..2 {
+                let expected: f64 = (0..2)
+                    .flat_map(|i| (0..2).map(move |j| (i, j)))
+                    .map(|(i, j)| w[i][r] * m[i][j] * w[j][s])
+                    .sum();
+                largest = largest.max((m_new[r][s] - expected).abs());
+            }
+        }
+    }
+    assert!(largest < 1e-12, "largest difference {largest:e}");
+}
+
+#[test]
+fn speeds_with_a_coefficient_of_q_and_a_point_velocity_move_as_the_joint_rates() {
+    // Y depends on q: Ẇ u ≠ 0 enters F̃.
+    let combination = "speed s1 = shoulder.u;\n\
+                       speed s2 = cos(shoulder.q) * elbow.u + 2 * shoulder.u;";
+    let point = "speed vx = velocity(lower.tip) in newtonian { axis = x; }\n\
+                 speed w = angular_velocity(lower) in lower { axis = z; }";
+    let reference = run(&pendulum(""));
+    for speeds in [combination, point] {
+        let model = pendulum(speeds);
+        let difference = largest_q_difference(&reference, &run(&model));
+        println!("{speeds}: largest |Δq| over 3 s = {difference:.2e}");
+        assert!(difference < 1e-9, "{speeds}: |Δq| = {difference:e}");
+        let (scale, drift) = common::energy_drift(&model, &run(&model));
+        assert!(
+            scale > 0.1 && drift < 1e-10,
+            "{speeds}: energy drift {drift:e}"
+        );
+    }
+}
+
+#[test]
+fn energy_is_conserved_in_absolute_angle_speeds() {
+    let model = pendulum(ABSOLUTE);
+    let (scale, drift) = common::energy_drift(&model, &run(&model));
+    println!("absolute-angle speeds: energy drift {drift:.2e} of the largest KE {scale:.3} J");
+    assert!(scale > 0.1 && drift < 1e-10, "drift {drift:e}");
+}
+
+/// The diagnostics of a model with the speed declarations `speeds`.
+fn errors(speeds: &str) -> String {
+    let text = DOUBLE_PENDULUM.replace("SPEEDS", speeds);
+    let source = mech_codegen::SourceFile::new("double_pendulum.mech", text);
+    match mech_codegen::Compiled::from_source(source) {
+        Ok(_) => panic!("`{speeds}` compiled"),
+        Err(errors) => errors.to_string(),
+    }
+}
+
+#[test]
+fn wrong_speed_declarations_are_refused_with_their_reasons() {
+    let one = "speed w = angular_velocity(upper) in newtonian { axis = z; }";
+    assert!(errors(one).contains("E0440"), "{}", errors(one));
+    let three = format!("{ABSOLUTE}\nspeed extra = shoulder.u;");
+    assert!(errors(&three).contains("E0440"), "{}", errors(&three));
+    let dependent = "speed a = shoulder.u + elbow.u;\n\
+                     speed b = angular_velocity(lower) in newtonian { axis = z; }";
+    assert!(errors(dependent).contains("E0441"), "{}", errors(dependent));
+    let square = "speed a = shoulder.u * elbow.u;\nspeed b = elbow.u;";
+    assert!(errors(square).contains("E0442"), "{}", errors(square));
+    let affine = "speed a = shoulder.u + shoulder.q;\nspeed b = elbow.u;";
+    assert!(errors(affine).contains("E0443"), "{}", errors(affine));
+    let out_of_plane = "speed a = angular_velocity(upper) in newtonian { axis = x; }\n\
+                        speed b = elbow.u;";
+    assert!(
+        errors(out_of_plane).contains("E0441"),
+        "{}",
+        errors(out_of_plane)
+    );
+}
