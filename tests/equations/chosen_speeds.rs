@@ -155,7 +155,7 @@ fn wrong_speed_declarations_are_refused_with_their_reasons() {
     assert!(errors(dependent).contains("E0441"), "{}", errors(dependent));
     let square = "speed a = shoulder.u * elbow.u;\nspeed b = elbow.u;";
     assert!(errors(square).contains("E0442"), "{}", errors(square));
-    let affine = "speed a = shoulder.u + shoulder.q;\nspeed b = elbow.u;";
+    let affine = "speed a = shoulder.u + shoulder.q / 1 s;\nspeed b = elbow.u;";
     assert!(errors(affine).contains("E0443"), "{}", errors(affine));
     let out_of_plane = "speed a = angular_velocity(upper) in newtonian { axis = x; }\n\
                         speed b = elbow.u;";
@@ -164,4 +164,47 @@ fn wrong_speed_declarations_are_refused_with_their_reasons() {
         "{}",
         errors(out_of_plane)
     );
+}
+
+/// `models/double_pendulum_speeds.mech` (the tip's speed along the lower link: `W` depends on
+/// `q`) as generated Rust: `q̇ = W(q) u` as the tape's, and the same motion as the joint
+/// rates' to 1e-10.
+#[test]
+fn the_bundled_model_as_generated_rust_moves_as_the_joint_rates() {
+    let generated = mech::models::compiled("double_pendulum_speeds").unwrap();
+    let tape = common::tape("double_pendulum_speeds");
+    assert!(!generated.rates_are_speeds() && generated.plain_coordinates() == 0);
+    let mut rng = common::Rng::new(16);
+    for _ in 0..10 {
+        let (q, u) = (rng.vector(2, -3.0, 3.0), rng.vector(2, -4.0, 4.0));
+        let (mut from_rust, mut from_tape) = (vec![0.0; 2], vec![0.0; 2]);
+        generated.kinematic_rates(0.0, &q, &u, &mut from_rust);
+        tape.kinematic_rates(0.0, &q, &u, &mut from_tape);
+        for (a, b) in from_rust.iter().zip(&from_tape) {
+            assert!((a - b).abs() <= 1e-14 * (1.0 + b.abs()), "{a} vs {b}");
+        }
+    }
+    let reference = run(&pendulum(""));
+    let difference = largest_q_difference(&reference, &run(generated.as_ref()));
+    println!("bundled model, generated Rust: largest |Δq| over 3 s = {difference:.2e}");
+    assert!(difference < 1e-10, "|Δq| = {difference:e}");
+    let (scale, drift) = common::energy_drift(generated.as_ref(), &run(generated.as_ref()));
+    println!("bundled model, generated Rust: energy drift {drift:.2e} of {scale:.3} J");
+    assert!(drift < 1e-10, "drift {drift:e}");
+}
+
+/// The language reference's `speed` example simulates and keeps its energy.
+#[test]
+fn language_reference_speed_example_conserves_energy() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/mech-language.md");
+    let markdown = std::fs::read_to_string(path).unwrap();
+    let examples = crate::markdown::examples(&markdown);
+    let example = examples
+        .iter()
+        .find(|e| e.text.contains("speed w_upper"))
+        .expect("an example of `speed`");
+    let model = common::tape_from_text("speed_example", &example.text);
+    assert_eq!(model.speed_name(1), "w_lower");
+    let (scale, drift) = common::energy_drift(&model, &run(&model));
+    assert!(scale > 0.1 && drift < 1e-10, "drift {drift:e}");
 }

@@ -85,17 +85,14 @@ impl Lowerer<'_> {
             None => last.head.name.span,
         };
         let label = match decls.len() > expected {
-            true => format!("one speed too many: the model moves with {expected}"),
-            false => format!(
-                "{} speed(s) declared, the model moves with {expected}",
-                decls.len()
-            ),
+            true => format!("one speed too many: the model has {expected}"),
+            false => format!("the last of {}: the model has {expected}", decls.len()),
         };
         self.error(
             Diagnostic::error(
                 "E0440",
                 format!(
-                    "{} `speed` declarations for {expected} degrees of freedom",
+                    "{} `speed` declared for a model with {expected} speeds",
                     decls.len()
                 ),
             )
