@@ -114,7 +114,7 @@ fn independent_rows(rows: &[Vec<f64>]) -> Result<usize, usize> {
                     true => (i, x.abs()),
                     false => best,
                 });
-        if !(largest > 1e-9 * size) {
+        if largest.is_nan() || largest <= 1e-9 * size {
             return Err(index);
         }
         basis.push((pivot, rest));

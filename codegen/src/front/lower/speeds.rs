@@ -17,25 +17,40 @@ use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, ExprKind};
 use crate::ir;
 
-use super::expr::{unparen, Ctx};
-use super::velocity::{Degree, DegreeErrors};
+use super::expr::unparen;
+use super::velocity::{DegreeErrors, LinearScalar};
 use super::Lowerer;
 
 const SPEED_HELP: &str = "a speed is `u = Y(q) ū`: a sum of terms, each one joint speed \
      (`joint.u`) times a factor of the coordinates and params";
 
-/// The speeds' versions of E0420/E0421.
-const SPEED_ERRORS: DegreeErrors = DegreeErrors {
-    not_linear: |span, what| {
-        Diagnostic::error("E0442", "speed is not linear in the joint speeds")
-            .with_label(span, what.to_string())
-            .with_help(SPEED_HELP)
+/// A combination's errors: the speeds' versions of E0420/E0421 (E0442, E0443), …
+const SPEED_RULES: LinearScalar = LinearScalar {
+    degree: DegreeErrors {
+        not_linear: |span, what| {
+            Diagnostic::error("E0442", "speed is not linear in the joint speeds")
+                .with_label(span, what.to_string())
+                .with_help(SPEED_HELP)
+        },
+        speed_free: |span| {
+            Diagnostic::error("E0443", "speed has a term without a joint speed")
+                .with_label(span, "no joint speed in this term")
+                .with_help("a speed is `u = Y(q) ū` with no term of the coordinates alone")
+        },
     },
-    speed_free: |span| {
-        Diagnostic::error("E0443", "speed has a term without a joint speed")
-            .with_label(span, "no joint speed in this term")
-            .with_help("a speed is `u = Y(q) ū` with no term of the coordinates alone")
-    },
+    frame: [
+        "`in FRAME` is only allowed on a velocity",
+        "this speed is a combination of joint speeds",
+        "only `angular_velocity(body)` and `velocity(point)` have a frame",
+    ],
+    fields: [
+        "a combination of joint speeds takes no fields",
+        "write `speed NAME = EXPR;`",
+    ],
+    varying: [
+        "a speed may not depend on time or inputs",
+        "a speed is `u = Y(q) ū`, of the coordinates and params only",
+    ],
 };
 
 impl Lowerer<'_> {
@@ -184,46 +199,8 @@ impl Lowerer<'_> {
     /// `speed NAME = EXPR;`: linear and homogeneous in the joint speeds, of the coordinates
     /// and params (not of time or inputs).
     fn speed_combination(&mut self, decl: &ast::ConstraintDecl) -> Option<ir::SpeedKind> {
-        let mut ok = true;
-        if let Some(frame) = &decl.head.frame {
-            self.error(
-                Diagnostic::error("E0403", "`in FRAME` is only allowed on a velocity")
-                    .with_label(frame.span, "this speed is a combination of joint speeds")
-                    .with_help("only `angular_velocity(body)` and `velocity(point)` have a frame"),
-            );
-            ok = false;
-        }
-        if let Some(field) = decl.fields.as_ref().and_then(|f| f.first()) {
-            self.error(
-                Diagnostic::error("E0403", "a combination of joint speeds takes no fields")
-                    .with_label(field.name.span, "not allowed here")
-                    .with_help("write `speed NAME = EXPR;`"),
-            );
-            ok = false;
-        }
-        let degree = self.speed_degree(&decl.head.value, &SPEED_ERRORS);
-        let typed = self.lower_scalar(&decl.head.value, Ctx::Load);
-        match degree {
-            Ok(Degree::One) => {}
-            Ok(Degree::Zero) => {
-                self.error((SPEED_ERRORS.speed_free)(decl.head.value.span));
-                ok = false;
-            }
-            Err(diagnostic) => {
-                self.error(diagnostic);
-                ok = false;
-            }
-        }
-        let typed = typed?;
-        if let Some(span) = self.time_or_input(&decl.head.value) {
-            self.error(
-                Diagnostic::error("E0401", "a speed may not depend on time or inputs")
-                    .with_label(span, "time or an input")
-                    .with_help("a speed is `u = Y(q) ū`, of the coordinates and params only"),
-            );
-            ok = false;
-        }
-        ok.then_some(ir::SpeedKind::Scalar(typed.expr))
+        self.linear_scalar(decl, &SPEED_RULES)
+            .map(ir::SpeedKind::Scalar)
     }
 
     /// E0441 where the chosen speeds are not independent at the initial coordinates (`Y(q₀)`

@@ -36,10 +36,34 @@ pub(super) struct DegreeErrors {
     pub speed_free: fn(Span) -> Diagnostic,
 }
 
-/// A velocity constraint's: E0420 and E0421.
-const CONSTRAINT_ERRORS: DegreeErrors = DegreeErrors {
-    not_linear,
-    speed_free,
+/// How [`Lowerer::linear_scalar`] words its errors (E0403 on `in FRAME`: message, label,
+/// help; E0403 on a field: message, help; E0401 on time or an input: message, help).
+pub(super) struct LinearScalar {
+    pub degree: DegreeErrors,
+    pub frame: [&'static str; 3],
+    pub fields: [&'static str; 2],
+    pub varying: [&'static str; 2],
+}
+
+/// A scalar velocity constraint's errors (E0420, E0421, …).
+const CONSTRAINT_RULES: LinearScalar = LinearScalar {
+    degree: DegreeErrors {
+        not_linear,
+        speed_free,
+    },
+    frame: [
+        "`in FRAME` is only allowed on `velocity(..)`",
+        "this constraint is a scalar",
+        "only `velocity(point)` has components in a frame",
+    ],
+    fields: [
+        "a scalar constraint takes no fields",
+        "write `constraint NAME = EXPR;` (EXPR = 0)",
+    ],
+    varying: [
+        "a constraint may not depend on time or inputs",
+        "its rate `Ȧ u` is taken along the motion, which knows no input's rate",
+    ],
 };
 
 /// E0420 at `span`, saying what is not linear.
@@ -159,29 +183,43 @@ impl Lowerer<'_> {
     /// `constraint NAME = EXPR;`: EXPR = 0, linear and homogeneous in the speeds, of the
     /// motion and params (not of time or inputs: its rate would need theirs).
     fn scalar_constraint(&mut self, decl: &ast::ConstraintDecl) -> Option<ir::VelocityKind> {
+        self.linear_scalar(decl, &CONSTRAINT_RULES)
+            .map(ir::VelocityKind::Scalar)
+    }
+
+    /// `NAME = EXPR;` of a `constraint` or `speed`: EXPR lowered, if it is linear and
+    /// homogeneous in the speeds, not of time or inputs, with no `in FRAME` and no block
+    /// (each refused as `rules` word it).
+    pub(super) fn linear_scalar(
+        &mut self,
+        decl: &ast::ConstraintDecl,
+        rules: &LinearScalar,
+    ) -> Option<ir::Expr> {
         let mut ok = true;
         if let Some(frame) = &decl.head.frame {
+            let [message, label, help] = rules.frame;
             self.error(
-                Diagnostic::error("E0403", "`in FRAME` is only allowed on `velocity(..)`")
-                    .with_label(frame.span, "this constraint is a scalar")
-                    .with_help("only `velocity(point)` has components in a frame"),
+                Diagnostic::error("E0403", message)
+                    .with_label(frame.span, label)
+                    .with_help(help),
             );
             ok = false;
         }
         if let Some(field) = decl.fields.as_ref().and_then(|f| f.first()) {
+            let [message, help] = rules.fields;
             self.error(
-                Diagnostic::error("E0403", "a scalar constraint takes no fields")
+                Diagnostic::error("E0403", message)
                     .with_label(field.name.span, "not allowed here")
-                    .with_help("write `constraint NAME = EXPR;` (EXPR = 0)"),
+                    .with_help(help),
             );
             ok = false;
         }
-        let degree = self.speed_degree(&decl.head.value, &CONSTRAINT_ERRORS);
+        let degree = self.speed_degree(&decl.head.value, &rules.degree);
         let typed = self.lower_scalar(&decl.head.value, Ctx::Load);
         match degree {
             Ok(Degree::One) => {}
             Ok(Degree::Zero) => {
-                self.error(speed_free(decl.head.value.span));
+                self.error((rules.degree.speed_free)(decl.head.value.span));
                 ok = false;
             }
             Err(diagnostic) => {
@@ -191,16 +229,15 @@ impl Lowerer<'_> {
         }
         let typed = typed?;
         if let Some(span) = self.time_or_input(&decl.head.value) {
+            let [message, help] = rules.varying;
             self.error(
-                Diagnostic::error("E0401", "a constraint may not depend on time or inputs")
+                Diagnostic::error("E0401", message)
                     .with_label(span, "time or an input")
-                    .with_help(
-                        "its rate `Ȧ u` is taken along the motion, which knows no input's rate",
-                    ),
+                    .with_help(help),
             );
             ok = false;
         }
-        ok.then_some(ir::VelocityKind::Scalar(typed.expr))
+        ok.then_some(typed.expr)
     }
 
     /// Where `e` first names time, an input, or a `let` that depends on them.
