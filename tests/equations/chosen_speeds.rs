@@ -6,6 +6,9 @@
 //! - a combination of joint speeds with a coefficient of `q` (`s = a.u + cos(a.q) b.u`) and a
 //!   point's velocity as a speed give the same motion too;
 //! - energy is conserved with chosen speeds (a conservative example, to 1e-10);
+//! - the bundled `double_pendulum_speeds` as generated Rust: `q̇ = W(q) u` as the tape's, the
+//!   joint rates' motion (its `M`, `F` against SymPy are in `sympy_cross_check.rs`);
+//! - a four-bar's loop in chosen speeds: the same motion, energy kept;
 //! - the errors: too many or too few speeds, speeds dependent at `q0`, a speed not linear.
 
 use crate::common;
@@ -207,4 +210,36 @@ fn language_reference_speed_example_conserves_energy() {
     assert_eq!(model.speed_name(1), "w_lower");
     let (scale, drift) = common::energy_drift(&model, &run(&model));
     assert!(scale > 0.1 && drift < 1e-10, "drift {drift:e}");
+}
+
+/// A four-bar (a loop closure) in speeds with a coefficient of `q`: the constraint rows in the
+/// new speeds (`J W`, `b + J Ẇ u`) hold the loop closed and give the default speeds' motion.
+#[test]
+fn a_closed_loop_in_chosen_speeds_moves_as_in_the_joint_rates() {
+    use mech_runtime::{assemble, assemble_speeds, AssemblyOptions};
+    let text = common::bundled_source("four_bar");
+    let chosen = format!(
+        "{text}\nspeed crank_rate = crank_angle.u;\n\
+         speed coupler_rate = crank_angle.u + (2 + sin(coupler_angle.q)) * coupler_angle.u;\n\
+         speed rocker_rate = rocker_angle.u;\n"
+    );
+    let default = common::tape_from_text("four_bar", &text);
+    let model = common::tape_from_text("four_bar_speeds", &chosen);
+    let (mut q, mut qdot) = common::initial_state(&default);
+    assemble(&default, 0.0, &mut q, &[0], &AssemblyOptions::default()).unwrap();
+    assemble_speeds(&default, 0.0, &q, &mut qdot, &[0]).unwrap();
+    let u = [
+        qdot[0],
+        qdot[0] + (2.0 + q[1].sin()) * qdot[1],
+        qdot[2],
+    ];
+    let options = common::dopri5_options(2.0, 0.05, 1e-12, 1e-12);
+    let reference = common::simulate_at_default_inputs(&default, &q, &qdot, &options);
+    let run = common::simulate_at_default_inputs(&model, &q, &u, &options);
+    let difference = largest_q_difference(&reference, &run);
+    println!("four-bar in chosen speeds: largest |Δq| over 2 s = {difference:.2e}");
+    assert!(difference < 1e-8, "|Δq| = {difference:e}");
+    let (scale, drift) = common::energy_drift(&model, &run);
+    println!("four-bar in chosen speeds: energy drift {drift:.2e} of {scale:.3} J");
+    assert!(drift < 1e-8, "drift {drift:e}");
 }
