@@ -228,11 +228,7 @@ fn a_closed_loop_in_chosen_speeds_moves_as_in_the_joint_rates() {
     let (mut q, mut qdot) = common::initial_state(&default);
     assemble(&default, 0.0, &mut q, &[0], &AssemblyOptions::default()).unwrap();
     assemble_speeds(&default, 0.0, &q, &mut qdot, &[0]).unwrap();
-    let u = [
-        qdot[0],
-        qdot[0] + (2.0 + q[1].sin()) * qdot[1],
-        qdot[2],
-    ];
+    let u = [qdot[0], qdot[0] + (2.0 + q[1].sin()) * qdot[1], qdot[2]];
     let options = common::dopri5_options(2.0, 0.05, 1e-12, 1e-12);
     let reference = common::simulate_at_default_inputs(&default, &q, &qdot, &options);
     let run = common::simulate_at_default_inputs(&model, &q, &u, &options);
