@@ -988,6 +988,10 @@ impl Model {
         if !self.speeds.is_empty() {
             return self.speeds.iter().map(|s| s.name.clone()).collect();
         }
+        self.default_speed_names()
+    }
+    /// Names of the default speeds `ū`: the coordinates', then each quaternion's three.
+    pub fn default_speed_names(&self) -> Vec<String> {
         let coordinates = self.coordinates.iter().map(|(_, c)| c.name.clone());
         let quaternions = self.quaternions.iter().flat_map(|(_, e)| e.speed_names());
         coordinates.chain(quaternions).collect()

@@ -179,6 +179,12 @@ pub(super) fn change_speeds(
     equations: &mut Equations,
 ) {
     let (nq, nu) = (equations.nq, equations.nu);
+    assert_eq!(
+        model.speeds.len(),
+        nu,
+        "one `speed` per default speed (the front end checks it; an IR transform that adds a \
+         coordinate to a model with chosen speeds must add its speed)"
+    );
     let y = speed_matrix(pool, kinematics, model);
     let w = invert(pool, model, y);
     let speeds: Vec<ExprId> = (0..nu)

@@ -54,8 +54,7 @@ const SPEED_RULES: LinearScalar = LinearScalar {
 };
 
 impl Lowerer<'_> {
-    /// Lowers every `speed` declaration (after the tree, points and frames are built) and
-    /// checks there are as many as the model's default speeds.
+    /// Lowers every `speed` declaration (after the tree, points and frames are built).
     pub(super) fn lower_speeds(&mut self, items: &[ast::Item]) {
         let decls: Vec<&ast::ConstraintDecl> = items
             .iter()
@@ -64,7 +63,6 @@ impl Lowerer<'_> {
                 _ => None,
             })
             .collect();
-        let defaults = self.model.speed_names().join(", ");
         for decl in &decls {
             if let Err(diagnostic) = self.structure_names.declare(&decl.head.name, "the name") {
                 self.error(diagnostic);
@@ -86,29 +84,34 @@ impl Lowerer<'_> {
                 });
             }
         }
-        self.check_speed_count(&decls, &defaults);
     }
 
-    /// E0440 unless the model declares no speed or exactly one per default speed.
-    fn check_speed_count(&mut self, decls: &[&ast::ConstraintDecl], defaults: &str) {
+    /// E0440 unless the model declares no speed or exactly one per default speed (counted
+    /// on the complete model: a flexure's twist adds a coordinate). Whether an error was
+    /// reported.
+    fn check_speed_count(&mut self) -> bool {
         let expected = self.model.nu();
-        let (Some(last), true) = (decls.last(), decls.len() != expected) else {
-            return;
+        let speeds = &self.model.speeds;
+        let (Some(last), true) = (speeds.last(), speeds.len() != expected) else {
+            return false;
         };
-        let span = match decls.get(expected) {
-            Some(first_extra) => first_extra.head.name.span,
-            None => last.head.name.span,
+        let (span, label) = match speeds.get(expected) {
+            Some(first_extra) => (
+                first_extra.span,
+                format!("one speed too many: the model has {expected}"),
+            ),
+            None => (
+                last.span,
+                format!("the last of {}: the model has {expected}", speeds.len()),
+            ),
         };
-        let label = match decls.len() > expected {
-            true => format!("one speed too many: the model has {expected}"),
-            false => format!("the last of {}: the model has {expected}", decls.len()),
-        };
+        let defaults = self.model.default_speed_names().join(", ");
         self.error(
             Diagnostic::error(
                 "E0440",
                 format!(
                     "{} `speed` declared for a model with {expected} speeds",
-                    decls.len()
+                    speeds.len()
                 ),
             )
             .with_label(span, label)
@@ -116,6 +119,7 @@ impl Lowerer<'_> {
                 "declare no `speed` (the default speeds: {defaults}) or exactly one per default speed"
             )),
         );
+        true
     }
 
     /// `angular_velocity(BODY) in FRAME { axis }` or `velocity(POINT) in FRAME { axis }`.
@@ -203,10 +207,14 @@ impl Lowerer<'_> {
             .map(ir::SpeedKind::Scalar)
     }
 
-    /// E0441 where the chosen speeds are not independent at the initial coordinates (`Y(q₀)`
-    /// singular); else sets each speed's initial value `Y(q₀) ū₀`. On a complete model only.
+    /// E0440 (their count), else E0441 where the chosen speeds are not independent at the
+    /// initial coordinates (`Y(q₀)` singular); else sets each speed's initial value
+    /// `Y(q₀) ū₀`. On a complete model only.
     pub(super) fn check_speeds_independent(&mut self) {
-        if !self.diagnostics.is_empty() || self.model.speeds.is_empty() {
+        if !self.diagnostics.is_empty() || self.check_speed_count() {
+            return;
+        }
+        if self.model.speeds.is_empty() {
             return;
         }
         match crate::kane::chosen_speeds_at_start(&self.model, &self.param_values) {
