@@ -14,6 +14,7 @@ mod actuator_extensions;
 mod backends;
 mod bicycle;
 mod bushing;
+mod chosen_speeds;
 mod compliant_loops;
 mod contact;
 mod degenerate_loops;

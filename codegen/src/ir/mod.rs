@@ -642,6 +642,37 @@ pub struct VelocityConstraint {
     pub span: Span,
 }
 
+/// A generalized speed chosen by a `speed` declaration: a measure number of an angular or
+/// linear velocity, or a combination of the default speeds, linear and homogeneous in them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChosenSpeed {
+    pub name: String,
+    pub kind: SpeedKind,
+    /// Its value at the start, `Y(q₀) ū₀` with the parameters' defaults (set by the front end).
+    pub initial: f64,
+    pub span: Span,
+}
+
+/// What a [`ChosenSpeed`] measures; `axis` is a unit vector in `frame`'s basis.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SpeedKind {
+    /// `ω·axis`, ω the angular velocity in N of the body whose frame is `body`.
+    AngularVelocity {
+        body: Handle<Frame>,
+        frame: Handle<Frame>,
+        axis: Box<Vec3>,
+    },
+    /// `v·axis`, v the velocity in N of `point`.
+    PointVelocity {
+        point: Handle<Point>,
+        frame: Handle<Frame>,
+        axis: Box<Vec3>,
+    },
+    /// A combination of the default speeds with coefficients of the coordinates and params:
+    /// `a.u + 2 * b.u`.
+    Scalar(Expr),
+}
+
 /// What a [`VelocityConstraint`] holds at zero.
 #[derive(Clone, Debug, PartialEq)]
 pub enum VelocityKind {
@@ -890,6 +921,11 @@ pub struct Model {
     pub loops: Vec<LoopClosure>,
     /// Velocity constraints, rows appended after the loops' (no position form).
     pub velocity_constraints: Vec<VelocityConstraint>,
+    /// Generalized speeds chosen by `speed` declarations, `u = Y(q) ū` of the default speeds
+    /// `ū` (`q̇` of pins and sliders, a ball's ω); empty for the default `u = ū`. When not
+    /// empty there are exactly [`Model::nu`] of them and `Y(q₀)` is invertible (the front end
+    /// checks both); `kane::derive` writes the equations in them.
+    pub speeds: Vec<ChosenSpeed>,
     /// Flexures (their springs and dampers are also in `loads`).
     pub flexures: Vec<Flexure>,
     /// Gravitational acceleration, components in the Newtonian frame.
@@ -988,8 +1024,16 @@ impl Model {
             .flat_map(|(_, e)| e.coordinate_names());
         coordinates.chain(quaternions).collect()
     }
-    /// Names of `u` in order: the coordinates', then each quaternion's three angular speeds.
+    /// Names of `u` in order: the chosen speeds' if any, else the coordinates', then each
+    /// quaternion's three angular speeds.
     pub fn speed_names(&self) -> Vec<String> {
+        if !self.speeds.is_empty() {
+            return self.speeds.iter().map(|s| s.name.clone()).collect();
+        }
+        self.default_speed_names()
+    }
+    /// Names of the default speeds `ū`: the coordinates', then each quaternion's three.
+    pub fn default_speed_names(&self) -> Vec<String> {
         let coordinates = self.coordinates.iter().map(|(_, c)| c.name.clone());
         let quaternions = self.quaternions.iter().flat_map(|(_, e)| e.speed_names());
         coordinates.chain(quaternions).collect()
@@ -1000,8 +1044,16 @@ impl Model {
         let quaternions = self.quaternions.iter().flat_map(|_| [1.0, 0.0, 0.0, 0.0]);
         coordinates.chain(quaternions).collect()
     }
-    /// Initial `u`: the coordinates' `u0`, then the quaternions' angular velocities.
+    /// Initial `u`: the chosen speeds' initial values if any, else the coordinates' `u0`,
+    /// then the quaternions' angular velocities.
     pub fn initial_speeds(&self) -> Vec<f64> {
+        if !self.speeds.is_empty() {
+            return self.speeds.iter().map(|s| s.initial).collect();
+        }
+        self.default_initial_speeds()
+    }
+    /// Initial `ū` of the default speeds (`q̇` of pins and sliders, the balls' ω).
+    pub fn default_initial_speeds(&self) -> Vec<f64> {
         let coordinates = self.coordinates.iter().map(|(_, c)| c.initial_speed);
         let quaternions = self
             .quaternions
