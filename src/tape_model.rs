@@ -213,7 +213,12 @@ impl TapeModel {
             input_defaults: model.inputs.iter().map(|(_, i)| i.default).collect(),
             q0: model.initial_coordinates(),
             u0: model.initial_speeds(),
-            initial_values: model.initial_values.clone(),
+            // With chosen speeds `u0 = Y(q0) ū0` was formed at compile time from the joints'
+            // rates: a param-dependent `q0`/`u0` then keeps its default value.
+            initial_values: match model.speeds.is_empty() {
+                true => model.initial_values.clone(),
+                false => Vec::new(),
+            },
             registers: RefCell::new(Vec::new()),
             native,
             scratch: RefCell::new(Scratch::default()),

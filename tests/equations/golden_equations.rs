@@ -84,6 +84,7 @@ tests_per_file! {
     state_forces,
     triple_pendulum_3d,
     two_mass_chain,
+    whipple_bicycle,
 }
 
 #[test]
