@@ -403,6 +403,47 @@ def run_mech(args, hz):
     return out
 
 
+def table(records, spec):
+    """The measurements as a Markdown table (per simulated second: the walk's CPU and wall
+    time over its simulated time; mech's less its fixed cost, the model's load and compile)."""
+    cycles = spec.get('settle_cycles', 1) + spec.get('cycles', 2)
+    L = ['| simulator | contact | step | gait | forward speed (mm/s) | sideways (mm/s) '
+         '| CPU s per simulated s | wall s per simulated s | load average |',
+         '|---|---|---|---|---|---|---|---|---|']
+    groups = {}
+    for r in records:
+        if r['record'] == 'mujoco':
+            groups.setdefault((r['contact'], r['timestep_us'], r['hz']), []).append(r)
+    for r in records:
+        load = r['loadavg'].split()[0] if 'loadavg' in r else '-'
+        if r['record'] == 'mujoco' and r['member'] == 0:
+            runs = groups[(r['contact'], r['timestep_us'], r['hz'])]
+            law = 'MuJoCo soft contact' if r['contact'] == 'mujoco' else "mech's law, applied"
+            speeds = [x['speed_mm_s'] for x in runs]
+            speed = f'{speeds[0]:.1f}'
+            if len(runs) > 1:
+                speed += f' ({min(speeds):.1f} to {max(speeds):.1f} in {len(runs)} walks)'
+            side = f"{r['sideways_mm_s']:.1f}"
+            cpu = sum(x['cpu_s'] for x in runs) / sum(x['simulated_s'] for x in runs)
+            wall = sum(x['wall_s'] for x in runs) / sum(x['simulated_s'] for x in runs)
+            L.append(f"| MuJoCo {r['integrator']} | {law} | {r['timestep_us']:g} us "
+                     f"| {r['hz']:g} Hz | {speed} | {side} | {cpu:.2f} | {wall:.2f} | {load} |")
+        elif r['record'] == 'mech':
+            walk, fixed = r['walk'], r['fixed']
+            if 'row' not in walk or 'row' not in fixed:
+                L.append(f"| mech | - | - | {r['hz']:g} Hz | failed: {walk.get('stderr', '')[-200:]!r} "
+                         '| | | | |')
+                continue
+            simulated = cycles / r['hz']
+            row = walk['row']
+            L.append(f"| mech (DOPRI5, rtol 1e-6) | Hunt-Crossley, regularized Coulomb "
+                     f"| adaptive | {r['hz']:g} Hz | {float(row['speed_mm_s']):.1f} "
+                     f"| {float(row['sideways_mm_s']):.1f} "
+                     f"| {(walk['cpu_s'] - fixed['cpu_s']) / simulated:.2f} "
+                     f"| {(walk['wall_s'] - fixed['wall_s']) / simulated:.2f} | {load} |")
+    return '\n'.join(L) + '\n'
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     p.add_argument('--urdf', default=os.path.join(
@@ -413,6 +454,8 @@ def main():
     p.add_argument('--timestep-us', type=float, nargs='+', default=[10.0])
     p.add_argument('--mech-contact-timestep-us', type=float, nargs='*', default=[5.0],
                    help="timesteps of runs with mech's contact law in place of MuJoCo's")
+    p.add_argument('--ensemble', type=int, default=5,
+                   help="walks on MuJoCo's contact, its time constant changed by 1e-3 each")
     p.add_argument('--integrator', default='implicitfast')
     p.add_argument('--iterations', type=int, default=100)
     p.add_argument('--tolerance', type=float, default=1e-10)
@@ -420,22 +463,21 @@ def main():
                    help="the loop welds' solimp d (their solref time constant is 2 steps, "
                         "MuJoCo's stiffest)")
     p.add_argument('--contact-timeconst', type=float,
-                   help="ms; default: calibrated so each foot sinks as far as mech's does at rest")
+                   help="ms; default: calibrated at each timestep so that each foot at rest "
+                        "sinks as far as mech's")
     p.add_argument('--contact-dampratio', type=float, default=1.0)
     p.add_argument('--contact-solimp', default='0.9 0.95 0.001 0.5 2')
     p.add_argument('--foot-radius', type=float, default=0.05, help='mm')
     p.add_argument('--mech', help='a mech binary: run the same walks with `mech experiment`')
     p.add_argument('--json', help='append one JSON line per measurement')
     p.add_argument('--mjcf', help='write the generated MJCF here')
+    p.add_argument('--table', help='write the measurements as a Markdown table here')
     args = p.parse_args()
 
     params = mech_params(args.model)
     flexures, actuators = mech_elements(args.model, params)
     timesteps = args.timestep_us
-    args.timestep_us = timesteps[0]
-    args.contact = 'mujoco'
-    if args.contact_timeconst is None:
-        args.contact_timeconst = calibrate(args, params, flexures, actuators)
+    fixed_timeconst = args.contact_timeconst
     spec = tomllib.load(open(args.experiment, 'rb'))
     records = []
     header = None
@@ -443,12 +485,15 @@ def main():
     runs += [('mech', dt) for dt in args.mech_contact_timestep_us]
     for args.contact, dt in runs:
         args.timestep_us = dt
+        if fixed_timeconst is None and args.contact == 'mujoco':
+            # Calibrated at each timestep: MuJoCo's soft contact depends on it.
+            args.contact_timeconst = calibrate(args, params, flexures, actuators)
         model, xml, info = load_model(args, params, flexures, actuators)
         if args.mjcf:
             open(args.mjcf, 'w').write(xml)
-        if header is None:
+        if header is None or args.contact == 'mujoco':
             header = {
-                'record': 'model', 'mujoco': mujoco.__version__, 'numpy': np.__version__,
+                'record': 'model', 'contact': args.contact, 'timestep_us': dt, 'mujoco': mujoco.__version__, 'numpy': np.__version__,
                 'nq': model.nq, 'nv': model.nv, 'nbody': model.nbody, 'neq': model.neq,
                 'nu': model.nu, 'mass_g': info['mass'], 'floor_mm': info['floor'],
                 'contact_solref': [args.contact_timeconst, args.contact_dampratio],
@@ -460,19 +505,31 @@ def main():
             }
             records.append(header)
             print(json.dumps(header), flush=True)
-        for hz in args.frequencies:
-            law = MechContact(model, params, info['floor']) if args.contact == 'mech' else None
-            rec = {'record': 'mujoco', 'contact': args.contact, 'hz': hz, 'timestep_us': dt,
-                   'integrator': args.integrator, **walk(model, spec, actuators, params, hz, law),
-                   'loadavg': open('/proc/loadavg').read().strip()}
-            records.append(rec)
-            print(json.dumps(rec), flush=True)
+        law = MechContact(model, params, info['floor']) if args.contact == 'mech' else None
+        # The walk on MuJoCo's contact is sensitive to its parameters: --ensemble N walks,
+        # the contact's time constant changed by 1e-3 of itself each, show the spread.
+        timeconst = args.contact_timeconst
+        for member in range(args.ensemble if law is None else 1):
+            if member:
+                args.contact_timeconst = timeconst * (1 + 1e-3 * member)
+                model = load_model(args, params, flexures, actuators)[0]
+            for hz in args.frequencies:
+                rec = {'record': 'mujoco', 'contact': args.contact, 'hz': hz, 'timestep_us': dt,
+                       'member': member, 'integrator': args.integrator,
+                       **walk(model, spec, actuators, params, hz, law),
+                       'loadavg': open('/proc/loadavg').read().strip()}
+                records.append(rec)
+                print(json.dumps(rec), flush=True)
+        args.contact_timeconst = timeconst
     if args.mech:
         for hz in args.frequencies:
             rec = {'record': 'mech', 'hz': hz, **run_mech(args, hz),
                    'loadavg': open('/proc/loadavg').read().strip()}
             records.append(rec)
             print(json.dumps(rec), flush=True)
+    if args.table:
+        with open(args.table, 'w') as f:
+            f.write(table(records, spec))
     if args.json:
         with open(args.json, 'a') as f:
             for rec in records:
