@@ -339,7 +339,8 @@ def walk(model, spec, actuators, params, hz, contact=None):
         'speed_mm_s': float((x_end[0] - x_start[0]) / duration * 1e3),
         'sideways_mm_s': float((x_end[1] - x_start[1]) / duration * 1e3),
         'simulated_s': n_total * model.opt.timestep * 1e-3,
-        'steps': n_total, 'wall_s': wall, 'cpu_s': r1.ru_utime - r0.ru_utime,
+        'steps': n_total, 'wall_s': wall,
+        'cpu_s': r1.ru_utime - r0.ru_utime + r1.ru_stime - r0.ru_stime,
         'max_weld_violation': float(weld_err),
         'height_mm': float(x_end[2]),
     }
@@ -379,28 +380,33 @@ def run_mech(args, hz):
         if cycles is None:
             t = re.sub(r'^settle_cycles = .*$', 'settle_cycles = 0', t, flags=re.M)
             t = re.sub(r'^cycles = .*$', 'cycles = 0.01', t, flags=re.M)
-        d = tempfile.mkdtemp(prefix='mech_walk_')
-        path = os.path.join(d, 'walk.toml')
-        # The model path in the TOML is relative to the repository root, where this runs.
-        open(path, 'w').write(t)
-        cmd = [args.mech, 'experiment', path, '--out-dir', d]
-        r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-        w0 = time.perf_counter()
-        proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
-        wall = time.perf_counter() - w0
-        r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-        rec = {'cmd': ' '.join(cmd), 'rc': proc.returncode, 'wall_s': wall,
-               'cpu_s': r1.ru_utime - r0.ru_utime + r1.ru_stime - r0.ru_stime}
-        csv = [os.path.join(r, f) for r, _, fs in os.walk(d) for f in fs if f == 'locomotion.csv']
-        if proc.returncode != 0 or not csv:
-            rec['stderr'] = proc.stderr[-2000:]
-        else:
-            lines = open(csv[0]).read().splitlines()
-            header = lines[0].split(',')
-            row = dict(zip(header, lines[1].split(',')))
-            rec['row'] = row
-        out[label] = rec
+        with tempfile.TemporaryDirectory(prefix='mech_walk_') as d:
+            out[label] = mech_walk(args, d, t)
     return out
+
+
+def mech_walk(args, d, t):
+    """`mech experiment` on the TOML text `t` in the folder `d`: its times and its CSV row."""
+    path = os.path.join(d, 'walk.toml')
+    # The model path in the TOML is relative to the repository root, where this runs.
+    open(path, 'w').write(t)
+    cmd = [args.mech, 'experiment', path, '--out-dir', d]
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    w0 = time.perf_counter()
+    proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+    wall = time.perf_counter() - w0
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    rec = {'cmd': ' '.join(cmd), 'rc': proc.returncode, 'wall_s': wall,
+           'cpu_s': r1.ru_utime - r0.ru_utime + r1.ru_stime - r0.ru_stime}
+    csv = [os.path.join(r, f) for r, _, fs in os.walk(d) for f in fs if f == 'locomotion.csv']
+    if proc.returncode != 0 or not csv:
+        rec['stderr'] = proc.stderr[-2000:]
+    else:
+        lines = open(csv[0]).read().splitlines()
+        header = lines[0].split(',')
+        row = dict(zip(header, lines[1].split(',')))
+        rec['row'] = row
+    return rec
 
 
 def table(records, spec):
@@ -451,7 +457,7 @@ def main():
     p.add_argument('--model', default=os.path.join(ROOT, 'models', 'robots', 'hamr_vi_robot.mech'))
     p.add_argument('--experiment', default=os.path.join(ROOT, 'experiments', 'hamr_vi_locomotion.toml'))
     p.add_argument('--frequencies', type=float, nargs='+', default=[10.0])
-    p.add_argument('--timestep-us', type=float, nargs='+', default=[10.0])
+    p.add_argument('--timestep-us', type=float, nargs='+', default=[10.0, 20.0, 50.0])
     p.add_argument('--mech-contact-timestep-us', type=float, nargs='*', default=[5.0],
                    help="timesteps of runs with mech's contact law in place of MuJoCo's")
     p.add_argument('--ensemble', type=int, default=5,
