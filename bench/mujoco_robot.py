@@ -2,7 +2,14 @@
 """The whole HAMR-VI robot in MuJoCo beside mech (issue 16): the same URDF, the same trot.
 
     python bench/mujoco_robot.py [--mech target/release/mech] [--frequencies 10 5 2]
-                                 [--timestep-us 10] [--json OUT.jsonl] [--mjcf OUT.xml]
+        [--timestep-us 10 20 50] [--mech-contact-timestep-us 5] [--ensemble 5]
+        [--json OUT.jsonl] [--table OUT.md] [--mjcf OUT.xml]
+
+Each walk starts from rest at the zero pose, as mech's locomotion experiment does, and its
+forward speed is the chassis origin's over the measured cycles. MuJoCo's walks run in this
+process (CPU and wall time of the stepping loop only); with --mech, the same walks run as
+`mech experiment` on a one-walk copy of the TOML, and once more with 0.01 cycles for the
+fixed cost (load, JIT compile) that the table subtracts.
 
 Versions: mujoco==4.0.0 and numpy as pinned in ../shared/peers/requirements.txt.
 
@@ -27,10 +34,13 @@ The MuJoCo model (MJCF written here from the URDF):
 - each actuator: the slide's `stiffness` k_a = F_b / delta_f and a `<motor>` whose control is
   the force source F_b V(t) / V_rated;
 - each foot: a sphere of radius `--foot-radius` at the URDF's collision point (mech: a point),
-  the floor plane lowered by that radius so the gap is the same; friction mu (elliptic cone),
-  the normal contact MuJoCo's soft contact, `solref` = (time constant, damping ratio 1)
-  with the time constant calibrated so that each foot at rest sinks as far as mech's
-  (m g / (4 k_ground), about 36 um).
+  the floor plane lowered by that radius so the gap is the same; then either
+  - MuJoCo's soft contact: friction mu (elliptic cone), `solref` = (time constant, damping
+    ratio 1) with the time constant calibrated at each timestep so that each foot at rest
+    sinks as far as mech's (m g / (4 k_ground), about 36 um): MuJoCo's contact stiffness is
+    in the constraint's acceleration units, so mech's k_ground cannot be entered as such;
+  - or mech's contact law, computed here and applied as a force before each step
+    (`MechContact`; `--mech-contact-timestep-us`).
 """
 import argparse
 import json
