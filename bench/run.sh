@@ -24,6 +24,9 @@
 #   5g. the Python call overhead: the package installed into bench/.venv (`pip install
 #      ./python`), then `bench/python_overhead.py` (`model.rhs` against the same evaluation in
 #      Rust, a Markdown table);
+#   5h. the whole HAMR-VI robot in MuJoCo beside mech (`bench/mujoco_robot.py --mech ...`:
+#      the same URDF and trot; time per simulated second and forward speed; a Markdown
+#      table in bench/results/mujoco_robot.md for bench/analysis_robot_mujoco.md);
 #   6. bench/summarize.py: docs/benchmarks.md.
 # ../shared/peers is only read: every result goes to bench/results/ (JSON lines), and every
 # command run is logged in bench/results/commands.txt.
@@ -32,7 +35,8 @@
 # N = 12 once with a 180 s cap, the default; 0: skip), PIN_REPS (default 7), PAIRED_ROUNDS
 # (default 5), LOOP_REPS (SymPy loop-model processes, default 3), LOOP_ROUNDS (paired
 # four-bar rounds, default 5), SKIP_CHAIN_PEERS=1 (reuse the chain peers' results of an
-# earlier run: steps 3 and 4 skipped), SKIP_SUMMARY=1.
+# earlier run: steps 3 and 4 skipped), SKIP_MUJOCO_ROBOT=1 (step 5h skipped), MUJOCO_ROBOT_HZ
+# (its gait frequencies, default "10 5 2"), SKIP_SUMMARY=1.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 PEERS=${PEERS:-../shared/peers}
@@ -184,6 +188,21 @@ echo "== 5g. Python call overhead" >&2
 load python
 run $PY -m pip install -q ./python
 run $PY bench/python_overhead.py > $R/python.md || failed python_overhead 0 $? >> $R/python.md
+
+# The whole robot beside MuJoCo (issue 16): the same URDF, the same trot, in one run.
+if [ "${SKIP_MUJOCO_ROBOT:-0}" != 1 ]; then
+  echo "== 5h. the whole robot in MuJoCo and mech" >&2
+  load mujoco_robot
+  rm -f $R/mujoco_robot.jsonl
+  if ! $PY -c 'import mujoco, numpy' 2>/dev/null; then
+    run $VENV/bin/pip install -q -r $PEERS/requirements.txt
+  fi
+  run cargo build --release -q --bin mech \
+    && run timeout 1800 $PY bench/mujoco_robot.py --mech "${CARGO_TARGET_DIR:-target}/release/mech" \
+         --frequencies ${MUJOCO_ROBOT_HZ:-10 5 2} --json $R/mujoco_robot.jsonl --table $R/mujoco_robot.md \
+         > /dev/null \
+    || failed mujoco_robot 0 $? >> $R/mujoco_robot.jsonl
+fi
 load end
 
 if [ "${SKIP_SUMMARY:-0}" != 1 ]; then

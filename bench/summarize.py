@@ -510,6 +510,7 @@ def main():
     L.extend(hand_section(
         '## 16. The whole robot (issue 16): one second of trotting, and the Fig. 9 grid',
         'analysis_robot'))
+    L.extend(hand_section('### The same robot in MuJoCo', 'analysis_robot_mujoco'))
     with open(a.out, 'w') as f:
         f.write('\n'.join(L).rstrip('\n') + '\n')
     print(f'wrote {a.out}')
