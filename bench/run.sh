@@ -56,6 +56,8 @@ if [ "$SKIP_CHAIN_PEERS" != 1 ]; then
 fi
 rm -f $R/mech.jsonl $R/load.jsonl $R/commands.txt $R/sympy_fourbar.jsonl $R/sympy_fivebar.jsonl
 : > $R/commands.txt
+# The machine, commit and date of this run, for the header of docs/benchmarks.md.
+python3 bench/summarize.py --record-machine $R/machine.json
 
 # Logs and runs a command; a failure is recorded, not fatal.
 run() {

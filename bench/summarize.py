@@ -124,6 +124,17 @@ def machine():
     )
 
 
+def recorded_machine(results):
+    """The machine and date of the run that wrote `results` (`machine.json`, recorded by
+    `bench/run.sh` before it measures), else this machine now: the header then describes the
+    run the numbers come from even when summarize.py runs again later (a hand section added)."""
+    path = os.path.join(results, 'machine.json')
+    if os.path.exists(path):
+        with open(path) as f:
+            return json.load(f)
+    return dict(machine(), date=datetime.date.today().isoformat())
+
+
 def status_of(row):
     s = row.get('status', 'ok')
     return s
@@ -133,8 +144,15 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument('--results', default='bench/results')
     ap.add_argument('--out', default='docs/benchmarks.md')
+    ap.add_argument('--record-machine', metavar='FILE',
+                    help='write this machine, commit and date as JSON to FILE and stop')
     a = ap.parse_args()
     R = a.results
+    if a.record_machine:
+        with open(a.record_machine, 'w') as f:
+            json.dump(dict(machine(), date=datetime.date.today().isoformat()), f, indent=1)
+            f.write('\n')
+        return
 
     mech_rows = read_jsonl(os.path.join(R, 'mech.jsonl'))
     mech = {r['N']: r for r in mech_rows if r.get('record') == 'chain'}
@@ -194,8 +212,8 @@ def main():
     def ms(summary):
         return None if summary is None else summary['median'] * 1e3
 
-    m = machine()
-    today = datetime.date.today().isoformat()
+    m = recorded_machine(R)
+    today = m['date']
     L = []
     w = L.append
     w('# Benchmarks: mech vs SymPy and Pinocchio on the N-link 3D chain, and vs SymPy/PyDy + SciPy on two closed loops')
