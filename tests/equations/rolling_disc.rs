@@ -324,6 +324,12 @@ fn rolling_element_on_a_free_joint_conserves_energy() {
     assert!(height <= 1e-12 && slip <= 1e-12, "{height:e} {slip:e}");
 }
 
+/// The eigenvalues `[re, im]` SymPy gives for one case of the fixture's upright rolling.
+fn sympy_eigenvalues(case: &serde_json::Value) -> Vec<Vec<f64>> {
+    let values = case["eigenvalues"].as_array().unwrap();
+    values.iter().map(json_numbers).collect()
+}
+
 /// Upright rolling (q = 0, spin ψ̇, rolling at r ψ̇): the eigenvalues of the linearized motion
 /// (central differences of `ẋ = [u; u̇(q, u)]`, all 10 states) against those of SymPy's
 /// `KanesMethod.linearize` of its rolling disc, at 1.1 and 0.9 times the critical spin
@@ -367,12 +373,7 @@ fn upright_rolling_eigenvalues_match_sympy() {
         .unwrap()
     {
         let spin = case["spin"].as_f64().unwrap();
-        let expected: Vec<Vec<f64>> = case["eigenvalues"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(json_numbers)
-            .collect();
+        let expected = sympy_eigenvalues(case);
         let all = eigenvalues(spin);
         let nonzero: Vec<[f64; 2]> = all
             .iter()
@@ -441,12 +442,7 @@ fn steady_linearization_of_upright_rolling_matches_sympy() {
             .collect();
         assert_eq!(cyclic, ["x", "y", "yaw", "spin"]);
         assert_eq!(linear.states[0], SteadyState::Coordinate(index("lean")));
-        let expected: Vec<Vec<f64>> = case["eigenvalues"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(json_numbers)
-            .collect();
+        let expected = sympy_eigenvalues(case);
         let values = linear.eigenvalues();
         let scale = values.iter().fold(0.0_f64, |m, z| m.max(z.norm()));
         let (zeros, nonzero): (Vec<&Complex<f64>>, Vec<&Complex<f64>>) =
