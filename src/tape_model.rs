@@ -111,6 +111,8 @@ pub struct TapeModel {
     speed_names: Vec<String>,
     /// Index in `q` of each quaternion's scalar part.
     unit_quaternions: Vec<usize>,
+    /// Number of coordinates with `q̇ = u`, first in `q` (`Model::plain_coordinates`).
+    plain_coordinates: usize,
     input_names: Vec<String>,
     output_names: Vec<String>,
     /// `(target, rate)` outputs a simulation integrates (`Equations::integrated_outputs`).
@@ -197,6 +199,10 @@ impl TapeModel {
                 .iter()
                 .map(|(e, _)| model.quaternion_coordinate(e, 0))
                 .collect(),
+            plain_coordinates: match model.has_kinematic_rates() {
+                true => model.coordinates.len(),
+                false => model.nq(),
+            },
             input_names: model.inputs.iter().map(|(_, i)| i.name.clone()).collect(),
             output_names: compiled.equations.output_names.clone(),
             integrated_outputs: compiled.equations.integrated_outputs.clone(),
@@ -398,6 +404,9 @@ impl mech_runtime::Model for TapeModel {
     }
     fn unit_quaternions(&self) -> &[usize] {
         &self.unit_quaternions
+    }
+    fn plain_coordinates(&self) -> usize {
+        self.plain_coordinates
     }
     fn input_name(&self, i: usize) -> &str {
         name_at(&self.input_names, i)

@@ -186,7 +186,8 @@ impl fmt::Display for RuntimeError {
             RuntimeError::QuaternionsUnsupported { analysis, model } => write!(
                 f,
                 "{analysis} of model `{model}` is not supported yet: it has a ball or free \
-                 joint, whose orientation is a unit quaternion (q̇ = W(q) u, not q̇ = u), and \
+                 joint, whose orientation is a unit quaternion or Euler angles (q̇ = W(q) u, \
+                 not q̇ = u), and \
                  {analysis} is written for q̇ = u; simulate it in full coordinates (Dopri5, \
                  Dop853 or RK4), or write the joint as pins and sliders"
             ),

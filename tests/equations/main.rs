@@ -13,6 +13,7 @@ mod markdown;
 mod actuator_extensions;
 mod backends;
 mod bushing;
+mod compound_joints;
 mod compliant_loops;
 mod contact;
 mod degenerate_loops;

@@ -501,7 +501,7 @@ impl<'a> Emitter<'a> {
         }
     }
 
-    /// For models with quaternions (`q̇ ≠ u`): `SPEED_NAMES`, `UNIT_QUATERNIONS` (the index in
+    /// For models with quaternions or Euler angles (`q̇ ≠ u`): `SPEED_NAMES`, `UNIT_QUATERNIONS` (the index in
     /// `q` of each quaternion's scalar part) and `kinematic_rates` (`q̇ = W(q) u`), inherent
     /// and in the trait; other models keep the trait's defaults (`q̇ = u`).
     fn kinematic_functions(&self) -> (TokenStream, TokenStream) {
@@ -518,6 +518,14 @@ impl<'a> Emitter<'a> {
             .collect();
         let count = usize_literal(quaternions.len());
         let (parts, rates) = self.inherent_function(Function::KinematicRates, rates);
+        // Euler angles have `q̇ ≠ u` without a unit norm: the plain coordinates end before them.
+        let plain_coordinates = match self.model.euler_angles.is_empty() {
+            true => TokenStream::new(),
+            false => {
+                let count = usize_literal(self.model.coordinates.len());
+                quote! { fn plain_coordinates(&self) -> usize { #count } }
+            }
+        };
         let rates_in_trait = self.trait_method(Function::KinematicRates, "qdot");
         let inherent = quote! {
             pub const SPEED_NAMES: [&'static str; #nu] = [#(#speed_names),*];
@@ -532,6 +540,7 @@ impl<'a> Emitter<'a> {
         let in_trait = quote! {
             fn speed_name(&self, i: usize) -> &str { Self::SPEED_NAMES.get(i).copied().unwrap_or("") }
             fn unit_quaternions(&self) -> &[usize] { &Self::UNIT_QUATERNIONS }
+            #plain_coordinates
             #rates_in_trait
         };
         (inherent, in_trait)

@@ -12,7 +12,7 @@
 //! The recursion, for frame k with parent p, C = C_{p←k} and d = O_k − O_p (in p):
 //! ```text
 //! ω_k   = Cᵀ ω_p + a u_j                                  (revolute about a, speed u_j)
-//!       = Cᵀ ω_p + Σ_i n_i u_i                            (spherical: C = C₀ C(e), n_i = k's axes)
+//!       = Cᵀ ω_p + Σ_i n_i u_i                            (spherical: C = C₀ C(e) or C₀ C(q₁, q₂, q₃), n_i = k's axes)
 //! W_k,r = Cᵀ W_p,r  (+ a for r = j, revolute; + n_i for r = i, spherical)
 //! V_k,r = Cᵀ (V_p,r + W_p,r × d)  (+ a for r = j, prismatic)
 //! α_k   = Cᵀ α_p + (Cᵀ ω_p) × a u_j                       (u̇-free part; Σ n_i u_i if spherical)
@@ -300,6 +300,30 @@ pub fn angular_speed_symbols(
     })
 }
 
+/// The symbols `q₁ … q₃` of a set of Euler angles.
+pub fn euler_symbols(
+    pool: &mut ExprPool,
+    model: &Model,
+    angles: Handle<ir::EulerAngles>,
+) -> [ExprId; 3] {
+    [0, 1, 2].map(|part| {
+        let index = model.euler_coordinate(angles, part);
+        pool.symbol(Symbol::Coordinate(index as u32))
+    })
+}
+
+/// The speed symbols `u_i` of a set of Euler angles' angular velocity, with their indices.
+pub fn euler_speed_symbols(
+    pool: &mut ExprPool,
+    model: &Model,
+    angles: Handle<ir::EulerAngles>,
+) -> [(usize, ExprId); 3] {
+    [0, 1, 2].map(|axis| {
+        let index = model.euler_speed(angles, axis);
+        (index, pool.symbol(Symbol::Speed(index as u32)))
+    })
+}
+
 /// One step of the recursion in the module docs.
 fn child(
     pool: &mut ExprPool,
@@ -331,6 +355,19 @@ fn child(
             let dcm = vector::mat_mul(pool, &placement, &rotation);
             let axes = vector::identity(pool);
             let spins = angular_speed_symbols(pool, model, *quaternion)
+                .into_iter()
+                .zip(axes)
+                .map(|((r, u), axis)| (r, axis, u))
+                .collect();
+            (dcm, origin, spins, None)
+        }
+        Motion::Euler { angles } => {
+            let q = euler_symbols(pool, model, *angles);
+            let sequence = model.euler_angles[*angles].sequence;
+            let rotation = vector::euler_rotation(pool, sequence, q);
+            let dcm = vector::mat_mul(pool, &placement, &rotation);
+            let axes = vector::identity(pool);
+            let spins = euler_speed_symbols(pool, model, *angles)
                 .into_iter()
                 .zip(axes)
                 .map(|((r, u), axis)| (r, axis, u))
