@@ -50,7 +50,10 @@ fn assert_same_equations(compound: &dyn Model, chain: &dyn Model, count: usize) 
         compound.outputs(t, &q, &u, &inputs, &mut oc);
         chain.outputs(t, &q, &u, &inputs, &mut oe);
         for (x, y) in oc.iter().zip(&oe) {
-            assert!((x - y).abs() <= 1e-12 * (1.0 + y.abs()), "outputs {oc:?} vs {oe:?}");
+            assert!(
+                (x - y).abs() <= 1e-12 * (1.0 + y.abs()),
+                "outputs {oc:?} vs {oe:?}"
+            );
         }
     }
 }

@@ -462,7 +462,10 @@ impl EulerAngles {
     }
     /// The sequence as written: `zxy`.
     pub fn sequence_name(&self) -> String {
-        self.sequence.iter().map(|&axis| ["x", "y", "z"][axis]).collect()
+        self.sequence
+            .iter()
+            .map(|&axis| ["x", "y", "z"][axis])
+            .collect()
     }
     /// Whether the sequence repeats its first axis (`zxz`: proper Euler angles, singular where
     /// `sin q₂ = 0`) rather than using three different axes (`zxy`: Tait–Bryan angles,

@@ -776,9 +776,7 @@ impl Lowerer<'_> {
                 self.several_coordinates(joint, span, what, "its orientation is a unit quaternion");
                 None
             }
-            Some(
-                kind @ (JointKind::Universal | JointKind::Cylindrical | JointKind::Planar),
-            ) => {
+            Some(kind @ (JointKind::Universal | JointKind::Cylindrical | JointKind::Planar)) => {
                 let what = match kind {
                     JointKind::Universal => "universal",
                     JointKind::Cylindrical => "cylindrical",

@@ -80,7 +80,9 @@ fn field_not_allowed(kind: JointKind, field: &str) -> Option<&'static str> {
         (Ball, "u0" | "q0") | (Free, "u0" | "v0" | "q0") => None,
         (Ball, _) if dynamics => Some("a ball joint has no single axis or angle"),
         (Free, _) if dynamics => Some("a free joint has no single axis or angle"),
-        (Pin | Slider | Universal | Cylindrical | Planar, "v0") => Some("only a free joint has `v0`"),
+        (Pin | Slider | Universal | Cylindrical | Planar, "v0") => {
+            Some("only a free joint has `v0`")
+        }
         (Pin | Slider | Cylindrical | Planar, "axis2") => {
             Some("only a universal joint has `axis2`")
         }
@@ -220,7 +222,9 @@ impl<'a> Lowerer<'a> {
             }
         }
         if kind == Some(JointKind::Universal) {
-            let span = field("axis2").or(field("axis")).map_or(decl.span, |f| f.value.span);
+            let span = field("axis2")
+                .or(field("axis"))
+                .map_or(decl.span, |f| f.value.span);
             self.check_universal_axes(&info, span);
         }
         if let Some(f) = field("parent_point") {
@@ -276,7 +280,9 @@ impl<'a> Lowerer<'a> {
                 ),
             )
             .with_label(span, "parallel to `axis`")
-            .with_help("a universal joint turns about two different axes, e.g. `axis = x; axis2 = y;`"),
+            .with_help(
+                "a universal joint turns about two different axes, e.g. `axis = x; axis2 = y;`",
+            ),
         );
     }
 
@@ -329,27 +335,32 @@ impl<'a> Lowerer<'a> {
                 }
                 None
             }
-            ExprKind::Call { function, args } if function.name == "euler" => match args.as_slice() {
-                [arg] => match &unparen(arg).kind {
-                    ExprKind::Path(path) if path.segments.len() == 1 => {
-                        Some(path.segments[0].name.clone())
-                    }
+            ExprKind::Call { function, args } if function.name == "euler" => {
+                match args.as_slice() {
+                    [arg] => match &unparen(arg).kind {
+                        ExprKind::Path(path) if path.segments.len() == 1 => {
+                            Some(path.segments[0].name.clone())
+                        }
+                        _ => None,
+                    },
                     _ => None,
-                },
-                _ => None,
-            },
+                }
+            }
             _ => None,
         };
         let sequence = written.as_deref().and_then(parse_euler_sequence);
         if sequence.is_none() {
             self.error(
-                Diagnostic::error("E0412", "expected a rotation: `quaternion` or `euler(SEQUENCE)`")
-                    .with_label(f.value.span, "not a rotation")
-                    .with_help(format!(
-                        "write `rotation = euler(zxy);` with one of the body-fixed sequences {}, \
+                Diagnostic::error(
+                    "E0412",
+                    "expected a rotation: `quaternion` or `euler(SEQUENCE)`",
+                )
+                .with_label(f.value.span, "not a rotation")
+                .with_help(format!(
+                    "write `rotation = euler(zxy);` with one of the body-fixed sequences {}, \
                          or `rotation = quaternion;` (the default)",
-                        EULER_SEQUENCES.join(", ")
-                    )),
+                    EULER_SEQUENCES.join(", ")
+                )),
             );
         }
         sequence
@@ -361,12 +372,15 @@ impl<'a> Lowerer<'a> {
         let Some((sequence, _)) = info.euler else {
             let kind = &info.decl.kind.name;
             self.error(
-                Diagnostic::error("E0403", format!("`q0` is not allowed on a {kind} joint with a quaternion"))
-                    .with_label(f.name.span, "a unit quaternion starts at the identity")
-                    .with_help(
-                        "turn the start with `parent_frame`, or give the joint Euler angles: \
+                Diagnostic::error(
+                    "E0403",
+                    format!("`q0` is not allowed on a {kind} joint with a quaternion"),
+                )
+                .with_label(f.name.span, "a unit quaternion starts at the identity")
+                .with_help(
+                    "turn the start with `parent_frame`, or give the joint Euler angles: \
                          `rotation = euler(zxy); q0 = [10 deg, 0 deg, 0 deg];`",
-                    ),
+                ),
             );
             return;
         };
@@ -593,7 +607,9 @@ impl<'a> Lowerer<'a> {
         match (kind, field) {
             (_, Some(field)) => self.axis(&field.value, "a joint axis"),
             (
-                Some(JointKind::Pin | JointKind::Slider | JointKind::Cylindrical | JointKind::Planar),
+                Some(
+                    JointKind::Pin | JointKind::Slider | JointKind::Cylindrical | JointKind::Planar,
+                ),
                 None,
             ) => {
                 let what = format!("{} joint", decl.kind.name);
@@ -1052,8 +1068,10 @@ impl<'a> Lowerer<'a> {
                     u0: velocity0[axis],
                 })
                 .collect();
-            let (origin_now, orientation_now) =
-                (std::mem::replace(&mut origin, zeros()), std::mem::take(&mut orientation));
+            let (origin_now, orientation_now) = (
+                std::mem::replace(&mut origin, zeros()),
+                std::mem::take(&mut orientation),
+            );
             (parent, coordinates) =
                 self.append_moving_frames(decl, parent, origin_now, orientation_now, steps);
         }
