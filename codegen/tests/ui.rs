@@ -64,6 +64,7 @@ tests_per_file! {
     division_by_zero,
     duplicate_field,
     energy_in_force,
+    euler_starts_singular,
     euler_unknown_sequence,
     expected_rotation,
     expected_vector,

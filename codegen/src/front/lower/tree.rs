@@ -309,6 +309,9 @@ impl<'a> Lowerer<'a> {
         if let Some(f) = field("q0") {
             self.lower_initial_angles(info, f);
         }
+        if let Some(f) = field("q0").or(field("rotation")) {
+            self.check_euler_start(info, f.value.span);
+        }
         for (name, what, example, dimension) in rates {
             let Some(f) = field(name) else { continue };
             let expect = Expect::mechanical(what, example, dimension);
@@ -391,6 +394,45 @@ impl<'a> Lowerer<'a> {
         };
         let angles = angles.map(|e| self.evaluate(&e, f.value.span));
         info.euler = Some((sequence, angles));
+    }
+
+    /// E0419 when Euler angles start where `q̇ = W(q) u` has no value: `cos q₂ = 0` for a
+    /// sequence of three different axes, `sin q₂ = 0` for one that repeats its first (as
+    /// `zxz` does at the default `q0 = 0`).
+    fn check_euler_start(&mut self, info: &JointInfo, span: Span) {
+        let Some((sequence, angles)) = info.euler else {
+            return;
+        };
+        let proper = sequence[0] == sequence[2];
+        let distance = match proper {
+            true => angles[1].sin().abs(),
+            false => angles[1].cos().abs(),
+        };
+        if distance > 1e-6 {
+            return;
+        }
+        let condition = match proper {
+            true => "sin q₂ = 0",
+            false => "cos q₂ = 0",
+        };
+        self.error(
+            Diagnostic::error(
+                "E0419",
+                format!(
+                    "the Euler angles of joint `{}` start at their singularity",
+                    info.decl.name.name
+                ),
+            )
+            .with_label(
+                span,
+                format!("{condition} here: the angle rates have no value"),
+            )
+            .with_help(
+                "start the second angle away from it (`q0 = [0, 30 deg, 0];`), or choose a \
+                 sequence whose singularity the motion avoids (`euler(zxy)` is singular at \
+                 x = ±90°, `euler(zxz)` at x = 0 and 180°), or a quaternion (no `rotation`)",
+            ),
+        );
     }
 
     /// `q0`, `u0`, `stiffness`, `rest` and `damping` of a joint with coordinates: a scalar for
