@@ -44,7 +44,7 @@ fn scale(a: V3, s: f64) -> V3 {
 fn mat_vec(m: &M3, v: V3) -> V3 {
     [dot(m[0], v), dot(m[1], v), dot(m[2], v)]
 }
-fn mat_mul(a: &M3, b: &M3) -> M3 {
+pub(crate) fn mat_mul(a: &M3, b: &M3) -> M3 {
     let mut out = [[0.0; 3]; 3];
     for (i, row) in out.iter_mut().enumerate() {
         for (j, entry) in row.iter_mut().enumerate() {
@@ -97,7 +97,7 @@ fn random_unit_quaternion(rng: &mut Rng) -> [f64; 4] {
     e.map(|x| x / norm)
 }
 
-fn dop853(t_end: f64, output_interval: f64, rtol: f64, atol: f64) -> SimOptions {
+pub(crate) fn dop853(t_end: f64, output_interval: f64, rtol: f64, atol: f64) -> SimOptions {
     SimOptions {
         t_end,
         output_interval,
@@ -111,7 +111,7 @@ fn dop853(t_end: f64, output_interval: f64, rtol: f64, atol: f64) -> SimOptions 
     }
 }
 
-fn run(model: &dyn Model, q0: &[f64], u0: &[f64], options: &SimOptions) -> Trajectory {
+pub(crate) fn run(model: &dyn Model, q0: &[f64], u0: &[f64], options: &SimOptions) -> Trajectory {
     let signals = mech_runtime::default_signals(model);
     simulate(model, q0, u0, &signals, options, &mut |_| {}).unwrap()
 }
