@@ -14,7 +14,7 @@
 
 use crate::common;
 
-use crate::quaternion_joints::{dop853, mat_mul, run};
+use crate::quaternion_joints::{dop853, heavy_top, mat_mul, run};
 use common::Rng;
 use mech_runtime::Model;
 
@@ -219,18 +219,8 @@ fn torque_free_body_on_euler_angles_follows_the_quaternion_ball() {
 /// test, Goldstein Eq. 5.76): φ grows at the closed-form rate, θ stays at θ₀.
 #[test]
 fn heavy_symmetric_top_on_euler_angles_precesses_at_the_closed_form_rate() {
-    let (m, l, g, a_com, c) = (0.5, 0.04, 9.81, 2e-4, 3e-4);
-    let text = format!(
-        "gravity = [0, 0, -{g} m/s^2];
-         body top {{ mass = {m} kg; com = [0, 0, {l} m]; inertia = [{a_com}, {a_com}, {c}] * 1 kg*m^2; }}
-         joint tip = ball(newtonian, top) {{ rotation = euler(zxz); q0 = [0, 0.5 rad, 0]; }}
-         output ke = kinetic_energy; output pe = potential_energy;"
-    );
-    let model = common::tape_from_text("top_euler", &text);
-    let a = a_com + m * l * l;
-    let (theta, spin): (f64, f64) = (0.5, 200.0);
-    let discriminant = (c * spin).powi(2) - 4.0 * a * theta.cos() * m * g * l;
-    let rate = (c * spin - discriminant.sqrt()) / (2.0 * a * theta.cos());
+    let fields = "rotation = euler(zxz); q0 = [0, 0.5 rad, 0];";
+    let (model, theta, spin, rate) = heavy_top("top_euler", fields);
     let (q0, _) = common::initial_state(&model);
     assert_eq!(q0, [0.0, theta, 0.0]);
     let u0 = [0.0, rate * theta.sin(), spin];
