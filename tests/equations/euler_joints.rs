@@ -306,3 +306,66 @@ fn passing_near_the_singularity_keeps_the_motion() {
     );
     assert!(worst_r < 1e-6, "direction cosines differ by {worst_r:e}");
 }
+
+/// A `free` joint with `rotation = euler(zyx)` (slides, then Euler angles) against the same
+/// throw on a quaternion: over 2 s under gravity the mass centre and the rotation agree to
+/// 1e-9 (its tilt stays far from the singularity at y = ±90°).
+#[test]
+fn free_joint_on_euler_angles_follows_the_quaternion() {
+    let throw = |rotation: &str| {
+        format!(
+            "gravity = [0, 0, -9.81 m/s^2];
+             body b {{ mass = 0.2 kg; com = [0.1 m, 0, 0]; inertia = [1e-3, 2e-3, 3e-3] * 1 kg*m^2;
+                       point px = [1 m, 0, 0]; point py = [0, 1 m, 0]; point pz = [0, 0, 1 m]; }}
+             joint throw = free(newtonian, b) {{ {rotation} u0 = [0.2 rad/s, 0.1 rad/s, 2 rad/s]; v0 = [1 m/s, 0, 3 m/s]; }}
+             output ex = position(b.px); output ey = position(b.py); output ez = position(b.pz);
+             output centre = position(b.com);"
+        )
+    };
+    let euler = common::tape_from_text("free_euler", &throw("rotation = euler(zyx);"));
+    let quaternion = common::tape_from_text("free_quaternion", &throw(""));
+    assert_eq!((euler.nq(), euler.nu()), (6, 6));
+    assert_eq!(euler.plain_coordinates(), 3);
+    assert_eq!(euler.coordinate_name(3), "throw.angle1");
+    let options = dop853(2.0, 0.01, 1e-12, 1e-14);
+    let (qe, ue) = common::initial_state(&euler);
+    let (qq, uq) = common::initial_state(&quaternion);
+    let on_euler = run(&euler, &qe, &ue, &options);
+    let on_quaternion = run(&quaternion, &qq, &uq, &options);
+    let centre = euler.output_index("centre.x").unwrap();
+    let (mut worst_r, mut worst_centre) = (0.0_f64, 0.0_f64);
+    for k in 0..on_euler.len() {
+        let (ye, yq) = (&on_euler.outputs[k], &on_quaternion.outputs[k]);
+        let r_euler = rotation_from_outputs(&euler, ye);
+        let r_quaternion = rotation_from_outputs(&quaternion, yq);
+        worst_r = worst_r.max(largest_difference(&r_euler, &r_quaternion));
+        for i in centre..centre + 3 {
+            worst_centre = worst_centre.max((ye[i] - yq[i]).abs());
+        }
+    }
+    eprintln!(
+        "free joint, euler(zyx) vs quaternion, 2 s: max |ΔR| = {worst_r:.1e}, \
+         max |Δr_G| = {worst_centre:.1e} m"
+    );
+    assert!(worst_r < 1e-9 && worst_centre < 1e-9);
+}
+
+/// A session sets an Euler angle by name with its unit (`--q0 tip.angle2=40deg`) and knows
+/// the units of the angles and their angular speeds.
+#[test]
+fn a_session_sets_euler_angles_by_name() {
+    use mech::session::Session;
+    let text = body_on_ball("rotation = euler(zxy);", [1.0, 2.0, 3.0], "");
+    let compiled = common::compile_text("session_euler", &text);
+    let session = Session::from_compiled(compiled, &[], &[]).unwrap();
+    let (q, _) = session
+        .initial_state(
+            &["tip.angle2=40deg".to_string()],
+            &["tip.wy=2rad/s".to_string()],
+        )
+        .unwrap();
+    common::assert_close("angle2", q[1], 40f64.to_radians(), 1e-15, 0.0);
+    let (angle, rate) = session.coordinate_units("tip.angle1").unwrap();
+    assert_eq!((angle.as_str(), rate.as_str()), ("rad", ""));
+    assert_eq!(session.speed_unit("tip.wz"), "rad/s");
+}
