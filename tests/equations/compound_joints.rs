@@ -9,10 +9,13 @@
 //! Each pair has the same coordinates in the same order, so `M(q)`, `F(q, u)` and the
 //! energies agree at random states to 1e-12 (springs and dampers given per coordinate on the
 //! compound joint, per joint on the chain), and the initial state written as vectors on the
-//! compound joint is the chain's.
+//! compound joint is the chain's. The language reference's examples of these kinds simulate,
+//! conserving energy where they have no damper.
 
 use crate::common;
 
+use crate::markdown::examples;
+use crate::quaternion_joints::{dop853, run};
 use common::Rng;
 use mech_runtime::Model;
 
@@ -193,4 +196,30 @@ fn planar_about_a_slanted_normal() {
          joint c = pin(second_carriage, arm) { axis = [0, 3, 4]; q0 = 45 deg; }",
     );
     assert_same_equations(&compound, &chain, 20);
+}
+
+/// The `universal`, `cylindrical` and `planar` examples of `docs/mech-language.md` run for
+/// 1 s; those without a damper keep their energy to 1e-9.
+#[test]
+fn language_reference_examples_of_compound_joints_simulate() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/mech-language.md");
+    let markdown = std::fs::read_to_string(path).unwrap();
+    let mut checked = 0;
+    for example in examples(&markdown).iter().filter(|e| !e.must_fail) {
+        let kinds = ["= universal(", "= cylindrical(", "= planar("];
+        if !kinds.iter().any(|kind| example.text.contains(kind)) {
+            continue;
+        }
+        checked += 1;
+        let name = format!("docs/mech-language.md:{}", example.line);
+        let model = common::tape_from_text(&name, &example.text);
+        let (q0, u0) = common::initial_state(&model);
+        let trajectory = run(&model, &q0, &u0, &dop853(1.0, 0.01, 1e-11, 1e-13));
+        let (_, drift) = common::energy_drift(&model, &trajectory);
+        eprintln!("{name}: energy drift {drift:.1e} over 1 s");
+        if !example.text.contains("damping") {
+            assert!(drift < 1e-9, "{name}: energy drift {drift:e}");
+        }
+    }
+    assert!(checked >= 3, "only {checked} examples of compound joints");
 }
