@@ -634,7 +634,8 @@ pub struct Joint {
     pub parent: Option<Handle<Body>>,
     pub child: Handle<Body>,
     pub coordinates: Vec<Handle<Coordinate>>,
-    /// The orientation of a `ball` or `free` joint.
+    /// The orientation of a `ball` or `free` joint as a quaternion (`None` with Euler
+    /// angles: the [`EulerAngles`] of the joint's name).
     pub quaternion: Option<Handle<Quaternion>>,
     pub span: Span,
 }

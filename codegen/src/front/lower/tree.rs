@@ -3,9 +3,11 @@
 //!
 //! Consumes: `joint` declarations and the [`Owner`](super::body::Owner)s.
 //! Produces: `model.frames` (newtonian, its frames, then per joint in depth-first order:
-//! `j` (for a `free` joint `j.x`, `j.y`, `j.z` first), optionally `j.child`, the child body's
-//! frame and its named frames), coordinates, quaternions (`ball`, `free`), joints, springs
-//! and dampers, points and bodies; `E04xx` tree errors.
+//! `j` (first, for a `free` joint `j.x`, `j.y`, `j.z`; for a joint of several coordinates
+//! one frame per coordinate but the last, `j.angle1`, `j.slide`, `j.slide1`, `j.slide2`),
+//! optionally `j.child`, the child body's frame and its named frames), coordinates,
+//! quaternions or Euler angles (`ball`, `free`), joints, springs and dampers (one per
+//! coordinate given one), points and bodies; `E04xx` tree errors.
 
 use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, ExprKind};
