@@ -7,7 +7,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use mech_codegen::ir::{Dimension, OutputKind, Quaternion};
+use mech_codegen::ir::{Dimension, EulerAngles, OutputKind, Quaternion};
 use mech_codegen::{Compiled, Diagnostic, Errors};
 use mech_runtime::constraints::{
     choose_independent, complete_independent, holonomic_jacobian, independent_speeds, jacobian,
@@ -439,10 +439,14 @@ impl Session {
 
     /// The units of the coordinate named `name` and of its speed: `rad` and `rad/s` for an
     /// angle, `m` and `m/s` for a slide (`None` if there is no such coordinate).
-    /// A quaternion's part (`ball.e0`) is a plain number: `1` (its rate has no speed).
+    /// A quaternion's part (`ball.e0`) is a plain number: `1` (its rate has no speed); an
+    /// Euler angle (`ball.angle1`) is an angle whose rate is not one speed.
     pub fn coordinate_units(&self, name: &str) -> Option<(String, String)> {
         if self.is_quaternion_name(name, Quaternion::coordinate_names) {
             return Some(("1".into(), String::new()));
+        }
+        if self.is_euler_name(name, EulerAngles::coordinate_names) {
+            return Some((dimension_units(Dimension::NONE).0, String::new()));
         }
         let coordinates = &self.compiled.model.coordinates;
         let (_, coordinate) = coordinates.iter().find(|(_, c)| c.name == name)?;
@@ -461,13 +465,23 @@ impl Session {
             .any(|(_, e)| names(e).iter().any(|n| n == name))
     }
 
+    /// Whether `name` is one of the `names` (coordinates or speeds) of a set of Euler angles.
+    fn is_euler_name(&self, name: &str, names: fn(&EulerAngles) -> [String; 3]) -> bool {
+        let angles = &self.compiled.model.euler_angles;
+        angles
+            .iter()
+            .any(|(_, a)| names(a).iter().any(|n| n == name))
+    }
+
     /// The unit of the speed named `name`: its coordinate's rate (`rad/s`, `m/s`), `rad/s` for
-    /// a quaternion's angular speed (`ball.wx`), empty for an unknown name.
+    /// a quaternion's or Euler angles' angular speed (`ball.wx`), empty for an unknown name.
     pub fn speed_unit(&self, name: &str) -> String {
         if let Some((_, speed)) = self.coordinate_units(name) {
             return speed;
         }
-        match self.is_quaternion_name(name, Quaternion::speed_names) {
+        let angular = self.is_quaternion_name(name, Quaternion::speed_names)
+            || self.is_euler_name(name, EulerAngles::speed_names);
+        match angular {
             true => dimension_units(Dimension::NONE).1,
             false => String::new(),
         }
@@ -598,7 +612,7 @@ impl Session {
     /// The model's `q0` and `u0` with `--q0 NAME=VALUE` and `--u0 NAME=VALUE` in place of some:
     /// each value checked for the unit of its coordinate (rad, m) or speed (rad/s, m/s). A
     /// quaternion's parts cannot be set one by one (they must stay a unit quaternion); its
-    /// angular speeds can.
+    /// angular speeds can, and so can Euler angles.
     pub fn initial_state(
         &self,
         q0: &[String],
@@ -612,7 +626,8 @@ impl Session {
         let dimension = |index: usize| coordinates.iter().nth(index).map(|(_, c)| c.dimension);
         for text in q0 {
             let (name, value, index) = self.assignment("--q0", NameKind::Coordinate, text)?;
-            let Some(expected) = dimension(index) else {
+            let euler_angle = self.is_euler_name(&name, EulerAngles::coordinate_names);
+            let Some(expected) = dimension(index).or(euler_angle.then_some(Dimension::NONE)) else {
                 return Err(Error::QuaternionPart {
                     option: "--q0",
                     name,

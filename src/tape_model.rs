@@ -111,8 +111,9 @@ pub struct TapeModel {
     speed_names: Vec<String>,
     /// Index in `q` of each quaternion's scalar part.
     unit_quaternions: Vec<usize>,
-    /// Whether `speed` declarations chose the speeds (`q̇ = W(q) u` for every coordinate).
-    chosen_speeds: bool,
+    /// Number of coordinates with `q̇ = u`, first in `q` (`Model::plain_coordinates`): none
+    /// when `speed` declarations chose the speeds (`q̇ = W(q) u` for every coordinate).
+    plain_coordinates: usize,
     input_names: Vec<String>,
     output_names: Vec<String>,
     /// `(target, rate)` outputs a simulation integrates (`Equations::integrated_outputs`).
@@ -201,7 +202,11 @@ impl TapeModel {
                 .iter()
                 .map(|(e, _)| model.quaternion_coordinate(e, 0))
                 .collect(),
-            chosen_speeds: !model.speeds.is_empty(),
+            plain_coordinates: match (model.speeds.is_empty(), model.has_kinematic_rates()) {
+                (false, _) => 0,
+                (true, true) => model.coordinates.len(),
+                (true, false) => model.nq(),
+            },
             input_names: model.inputs.iter().map(|(_, i)| i.name.clone()).collect(),
             output_names: compiled.equations.output_names.clone(),
             integrated_outputs: compiled.equations.integrated_outputs.clone(),
@@ -411,18 +416,7 @@ impl mech_runtime::Model for TapeModel {
         &self.unit_quaternions
     }
     fn plain_coordinates(&self) -> usize {
-        match self.chosen_speeds {
-            true => 0,
-            false => self
-                .unit_quaternions
-                .iter()
-                .copied()
-                .min()
-                .unwrap_or(self.nq()),
-        }
-    }
-    fn rates_are_speeds(&self) -> bool {
-        !self.chosen_speeds && self.nq() == self.nu() && self.unit_quaternions.is_empty()
+        self.plain_coordinates
     }
     fn input_name(&self, i: usize) -> &str {
         name_at(&self.input_names, i)

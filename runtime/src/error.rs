@@ -73,8 +73,9 @@ pub enum RuntimeError {
         t: f64,
     },
     /// `analysis` (statics, linearization, assembly, reduced coordinates) is written for
-    /// `q̇ = u` and the model has unit quaternions (`ball` or `free` joints: `q̇ = W(q) u`,
-    /// four coordinates and three speeds each).
+    /// `q̇ = u` and the model's rates are not its speeds: unit quaternions (`ball` or `free`
+    /// joints: `q̇ = W(q) u`, four coordinates and three speeds each), Euler angles, or speeds
+    /// chosen by `speed` declarations.
     QuaternionsUnsupported {
         /// What was asked, e.g. `"statics"`.
         analysis: &'static str,
@@ -185,10 +186,11 @@ impl fmt::Display for RuntimeError {
             ),
             RuntimeError::QuaternionsUnsupported { analysis, model } => write!(
                 f,
-                "{analysis} of model `{model}` is not supported yet: it has a ball or free \
-                 joint, whose orientation is a unit quaternion (q̇ = W(q) u, not q̇ = u), and \
-                 {analysis} is written for q̇ = u; simulate it in full coordinates (Dopri5, \
-                 Dop853 or RK4), or write the joint as pins and sliders"
+                "{analysis} of model `{model}` is not supported yet: its coordinates' rates are \
+                 not its speeds (q̇ = W(q) u: a ball or free joint's unit quaternion or Euler \
+                 angles, or `speed` declarations), and {analysis} is written for q̇ = u; \
+                 simulate it in full coordinates (Dopri5, Dop853 or RK4), or write the joint \
+                 as pins and sliders with their rates as speeds"
             ),
             RuntimeError::VelocityConstraintsUnsupported { analysis, model } => write!(
                 f,

@@ -97,7 +97,8 @@ pub trait Model {
         &[]
     }
     /// Number of coordinates with `q̇ᵢ = uᵢ` (pins, sliders): they come first in `q`, and
-    /// the same index addresses their speed. The first quaternion's index, or `nq`.
+    /// the same index addresses their speed. The first quaternion's index, or `nq`; a model
+    /// with Euler angles (three coordinates, `q̇ ≠ u`, no unit norm to keep) overrides it.
     fn plain_coordinates(&self) -> usize {
         self.unit_quaternions()
             .iter()
@@ -106,9 +107,10 @@ pub trait Model {
             .unwrap_or(self.nq())
     }
     /// Whether `q̇ = u` ([`Model::kinematic_rates`] is the identity): as many speeds as
-    /// coordinates and no quaternion. Analyses written for `q̇ = u` refuse other models.
+    /// coordinates, every one plain (no quaternion, no Euler angles). Analyses written for
+    /// `q̇ = u` refuse other models.
     fn rates_are_speeds(&self) -> bool {
-        self.nq() == self.nu() && self.unit_quaternions().is_empty()
+        self.nq() == self.nu() && self.plain_coordinates() == self.nq()
     }
     /// `Ok` where `q̇ = u`; else [`RuntimeError::QuaternionsUnsupported`] for `analysis`.
     fn require_rates_are_speeds(&self, analysis: &'static str) -> Result<(), RuntimeError> {

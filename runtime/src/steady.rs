@@ -2,8 +2,8 @@
 //! spinning top, a disc rolling upright) but whose shape and speeds stay constant, so that
 //! only cyclic coordinates — those the motion does not depend on — change.
 //!
-//! Consumes: a [`Model`] (loops and velocity constraints allowed; coordinates whose rates are
-//! the speeds), a consistent operating point `(q, u)`, the coordinates kept independent by the
+//! Consumes: a [`Model`] (loops and velocity constraints allowed; no unit quaternions), a
+//! consistent operating point `(q, u)`, the coordinates kept independent by the
 //! loops and the speeds kept independent by all constraint rows.
 //! Produces: a [`SteadyLinearization`], `δẋ = A δx` on `x = [z; w]`: the independent
 //! coordinates `z` that are not cyclic and the independent speeds `w`, with the reduced mass
@@ -18,6 +18,12 @@
 //! coordinates that no state outside the set feels (their columns are zero there) is cyclic
 //! and is dropped with its rows, which leaves the block on which the steady motion is an
 //! equilibrium (the dropped rows may depend on anything: a wheel's position on its heading).
+//! That the dropped coordinates are cyclic beyond first order (a symmetry) is checked by
+//! moving them on and taking `A` again ([`SteadyLinearization::cyclic_change`]).
+//!
+//! Coordinates whose rates are not the speeds (Euler angles, chosen speeds) are moved in the
+//! chart by adding to them, with `ẋ`'s rows from `q̇ = W(q) u`; unit quaternions are not (the
+//! chart would need a retraction), nor, with such coordinates, loops.
 
 use nalgebra::{Complex, DMatrix};
 
@@ -31,6 +37,9 @@ use crate::{Model, RuntimeError};
 /// not feel that coordinate). Central differences leave ~1e-10
 /// relative of noise on a zero entry (loops closed to 1e-13, steps of 1e-5 relative).
 const CYCLIC_TOLERANCE: f64 = 1e-7;
+
+/// How far the cyclic coordinates are moved to check that nothing depends on them (SI).
+const CYCLIC_SHIFT: f64 = 0.37;
 
 /// One state of a [`SteadyLinearization`]: a coordinate or a speed, by its index in `q`/`u`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -59,6 +68,13 @@ pub struct SteadyLinearization {
     pub a: DMatrix<f64>,
     /// `ẋ` at the operating point: zero, up to round-off, for a steady motion.
     pub drift: Vec<f64>,
+    /// How much `A` changes, relative to its largest entry, when the cyclic coordinates move
+    /// on by 0.37 (SI units): round-off for a true symmetry; otherwise the dropped coordinates
+    /// are cyclic only to first order here and `A` holds at this instant only (a periodic
+    /// motion, which needs Floquet analysis, or a poor choice of coordinates).
+    pub cyclic_change: f64,
+    /// Whether the model's coordinate rates are its speeds (the second-order form needs it).
+    pub rates_are_speeds: bool,
     /// `M̃ = Tᵀ M T` with `T = ∂u/∂w` (the independent speeds' partial velocities): the mass
     /// matrix of Kane's reduced equations, rows and columns in the order of `speeds`.
     pub mass: DMatrix<f64>,
@@ -94,6 +110,9 @@ impl SteadyLinearization {
     /// setting the forward speed) are held at the operating point; they must not be coupled
     /// to `z` through `M̃` (`None` otherwise, and when a coordinate's speed is dependent).
     pub fn second_order(&self) -> Option<SecondOrder> {
+        if !self.rates_are_speeds {
+            return None;
+        }
         let coordinates: Vec<usize> = self
             .states
             .iter()
@@ -146,6 +165,33 @@ struct Chart<'a, M: Model + ?Sized> {
 }
 
 impl<M: Model + ?Sized> Chart<'_, M> {
+    /// `∂ẋ/∂(z, w)` at `(z, w)`, each column by central differences.
+    fn jacobian(&mut self, z0: &[f64], w0: &[f64]) -> Result<DMatrix<f64>, RuntimeError> {
+        let (nz, nw) = (z0.len(), w0.len());
+        let mut jacobian = DMatrix::zeros(nz + nw, nz + nw);
+        for k in 0..nz + nw {
+            let base = if k < nz { z0[k] } else { w0[k - nz] };
+            let column = derivative(
+                |h| {
+                    let (mut z, mut w) = (z0.to_vec(), w0.to_vec());
+                    match k < nz {
+                        true => z[k] += h,
+                        false => w[k - nz] += h,
+                    }
+                    self.rates(&z, &w)
+                },
+                step_for(base),
+            )?;
+            jacobian.column_mut(k).copy_from_slice(&column);
+        }
+        match jacobian.iter().all(|x| x.is_finite()) {
+            true => Ok(jacobian),
+            false => Err(RuntimeError::NonFinite {
+                what: "the steady-motion linearization",
+            }),
+        }
+    }
+
     /// `(q, u)` at `z` (every independent coordinate), `w`: the loops closed from the operating
     /// point, the dependent speeds solved from the constraint rows.
     fn state(&self, z: &[f64], w: &[f64]) -> Result<(Vec<f64>, Vec<f64>), RuntimeError> {
@@ -201,7 +247,13 @@ pub fn linearize_steady<M: Model + ?Sized>(
     coordinates: &[usize],
     speeds: &[usize],
 ) -> Result<SteadyLinearization, RuntimeError> {
-    model.require_rates_are_speeds("steady-motion linearization")?;
+    // The chart moves coordinates by adding to them: no unit quaternions; and it closes the
+    // loops in coordinates, so with loops their rates must be the speeds.
+    if !model.unit_quaternions().is_empty()
+        || (!model.rates_are_speeds() && model.holonomic_rows() > 0)
+    {
+        model.require_rates_are_speeds("steady-motion linearization")?;
+    }
     crate::integrate::check_len("q", model.nq(), q.len())?;
     crate::integrate::check_len("u", model.nu(), u.len())?;
     crate::integrate::check_len("inputs", model.ninputs(), inputs.len())?;
@@ -233,29 +285,7 @@ pub fn linearize_steady<M: Model + ?Sized>(
     let w0: Vec<f64> = speeds.iter().map(|&i| u[i]).collect();
     let (nz, nw) = (z0.len(), w0.len());
     let drift_all = chart.rates(&z0, &w0)?;
-    // Columns of ∂ẋ/∂(z, w), each by central differences.
-    let mut jacobian = DMatrix::zeros(nz + nw, nz + nw);
-    for k in 0..nz + nw {
-        let base = if k < nz { z0[k] } else { w0[k - nz] };
-        let column = derivative(
-            |h| {
-                let (mut z, mut w) = (z0.clone(), w0.clone());
-                if k < nz {
-                    z[k] += h;
-                } else {
-                    w[k - nz] += h;
-                }
-                chart.rates(&z, &w)
-            },
-            step_for(base),
-        )?;
-        jacobian.column_mut(k).copy_from_slice(&column);
-    }
-    if jacobian.iter().any(|x| !x.is_finite()) {
-        return Err(RuntimeError::NonFinite {
-            what: "the steady-motion linearization",
-        });
-    }
+    let jacobian = chart.jacobian(&z0, &w0)?;
     let largest = jacobian.amax();
     let felt =
         |row: usize, column: usize| jacobian[(row, column)].abs() > CYCLIC_TOLERANCE * largest;
@@ -281,6 +311,21 @@ pub fn linearize_steady<M: Model + ?Sized>(
         })
         .collect();
     let a = jacobian.select_rows(&kept).select_columns(&kept);
+    // Cyclic to first order is not enough: the kept equations must not depend on the dropped
+    // coordinates at all (a symmetry), or A changes as they run on. Moved by a finite step
+    // (0.37 in SI units), A must stay the same.
+    let mut shifted = z0.clone();
+    for &k in &cyclic_set {
+        shifted[k] += CYCLIC_SHIFT;
+    }
+    let cyclic_change = match cyclic_set.is_empty() {
+        true => 0.0,
+        false => {
+            let moved = chart.jacobian(&shifted, &w0)?;
+            let moved = moved.select_rows(&kept).select_columns(&kept);
+            (moved - &a).amax() / a.amax().max(f64::MIN_POSITIVE)
+        }
+    };
     let drift = kept.iter().map(|&k| drift_all[k]).collect();
     // T = ∂u/∂w: the speed map is linear in w, so its columns are exact.
     let mut transform = DMatrix::zeros(model.nu(), nw);
@@ -305,6 +350,8 @@ pub fn linearize_steady<M: Model + ?Sized>(
         states,
         a,
         drift,
+        cyclic_change,
+        rates_are_speeds: model.rates_are_speeds(),
         mass,
     })
 }

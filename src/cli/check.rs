@@ -82,15 +82,15 @@ pub fn run(args: &CheckArgs) -> Result<(), Error> {
     Ok(())
 }
 
-/// Each joint's coordinates (and quaternion) with their initial values, then the speeds
-/// chosen by `speed` declarations, if any.
+/// Each joint's coordinates (and quaternion or Euler angles) with their initial values, then
+/// the speeds chosen by `speed` declarations, if any.
 fn print_coordinates(model: &Model) {
-    match (model.speeds.is_empty(), model.quaternions.is_empty()) {
+    match (model.speeds.is_empty(), model.has_kinematic_rates()) {
         (false, _) => println!("\ncoordinates (q, with q̇ = W(q) u of the chosen speeds below):"),
-        (true, true) => println!("\ncoordinates (q, with u = q̇):"),
-        (true, false) => {
-            println!("\ncoordinates (q, with u = q̇ except for quaternions: q̇ = W(q) u):")
-        }
+        (true, false) => println!("\ncoordinates (q, with u = q̇):"),
+        (true, true) => println!(
+            "\ncoordinates (q, with u = q̇ except for quaternions and Euler angles: q̇ = W(q) u):"
+        ),
     }
     for (_, joint) in model.joints.iter() {
         for &c in &joint.coordinates {
@@ -119,6 +119,24 @@ fn print_coordinates(model: &Model) {
                 joint.name,
                 quaternion.coordinate_names().join(", "),
                 quaternion.speed_names().join(", "),
+            );
+        }
+        let euler = model
+            .euler_angles
+            .iter()
+            .find(|(_, a)| a.name == joint.name);
+        if let Some((_, angles)) = euler {
+            let [wx, wy, wz] = angles.initial_angular_velocity;
+            println!(
+                "  {:<16} {:?} joint `{}`: Euler angles {} ({}), q0 = {:?} rad; \
+                 speeds {} (angular velocity in the child frame), u0 = [{wx}, {wy}, {wz}] rad/s",
+                angles.name,
+                joint.kind,
+                joint.name,
+                angles.sequence_name(),
+                angles.coordinate_names().join(", "),
+                angles.initial_angles,
+                angles.speed_names().join(", "),
             );
         }
     }

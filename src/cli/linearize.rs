@@ -306,6 +306,24 @@ fn run_steady(args: &LinearizeArgs) -> Result<(), Error> {
         row.resize(1 + 2 * width, f64::NAN);
         rows.push(row);
     }
+    if let Some(worst) = results
+        .iter()
+        .max_by(|a, b| a.cyclic_change.total_cmp(&b.cyclic_change))
+    {
+        text += &cyclic_warning(model, worst);
+    }
+    if let Some(worst) = results
+        .iter()
+        .max_by(|a, b| a.unsteadiness().total_cmp(&b.unsteadiness()))
+    {
+        if worst.unsteadiness() > 1e-8 {
+            let _ = writeln!(
+                text,
+                "warning: max |ẋ| = {:.1e} at one operating point: not a steady motion there",
+                worst.unsteadiness()
+            );
+        }
+    }
     print!("{text}");
     let mut files = Vec::new();
     if let Some(out) = &args.out {
@@ -317,6 +335,26 @@ fn run_steady(args: &LinearizeArgs) -> Result<(), Error> {
         files.push(eigenvalue_plot(path, &sweep, &rows, width)?);
     }
     write_files(&files, &reads)
+}
+
+/// A line warning that the dropped coordinates are cyclic to first order only (empty if they
+/// are a symmetry: `A` the same, to 1e-6, when they move on).
+fn cyclic_warning(model: &dyn Model, linear: &SteadyLinearization) -> String {
+    if linear.cyclic_change <= 1e-6 {
+        return String::new();
+    }
+    let cyclic: Vec<&str> = linear
+        .cyclic
+        .iter()
+        .map(|&i| model.coordinate_name(i))
+        .collect();
+    format!(
+        "warning: A changes by {:.1e} of its largest entry when {} move on: they are cyclic \
+         to first order only here, and the eigenvalues hold at this instant (a periodic motion \
+         needs Floquet analysis, or coordinates in which it is steady)\n",
+        linear.cyclic_change,
+        cyclic.join(", ")
+    )
 }
 
 /// The report of one steady linearization.
@@ -337,7 +375,7 @@ fn steady_text(model: &dyn Model, linear: &SteadyLinearization) -> String {
          speeds: {} (the others zero)\n\
          cyclic coordinates (the motion does not depend on them; dropped): {}\n\
          state x = [{}]\n\
-         max |ẋ| at the operating point: {:.1e}{}\n\n",
+         max |ẋ| at the operating point: {:.1e}{}\n{}\n",
         model.name(),
         if moving.is_empty() {
             "all zero".to_string()
@@ -356,6 +394,7 @@ fn steady_text(model: &dyn Model, linear: &SteadyLinearization) -> String {
         } else {
             ""
         },
+        cyclic_warning(model, linear),
     );
     text += &matrix_text("A", &linear.a);
     if let Some(form) = linear.second_order() {

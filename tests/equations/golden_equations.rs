@@ -73,6 +73,7 @@ tests_per_file! {
     floating_chain,
     floating_four_bar,
     four_bar,
+    gimbal_rig,
     hamr_v2,
     hamr_vi,
     mixed_chain,

@@ -10,12 +10,14 @@
 //!   definite, `M`, `F` and `q̇ = W(q) u` against Newton–Euler written here from its own
 //!   kinematics (finite differences of velocities in N for the accelerations), generated Rust
 //!   and tape alike; energy and the vertical angular momentum conserved;
-//! - the language reference's `ball` and `free` examples simulate and conserve energy.
+//! - the language reference's `ball` and `free` examples (with a quaternion or Euler angles)
+//!   simulate and conserve energy.
 
 use crate::common;
 use crate::markdown::examples;
 
 use common::Rng;
+use mech::tape_model::TapeModel;
 use mech_runtime::{simulate, Method, Model, SimOptions, Trajectory};
 
 type V3 = [f64; 3];
@@ -43,7 +45,7 @@ fn scale(a: V3, s: f64) -> V3 {
 fn mat_vec(m: &M3, v: V3) -> V3 {
     [dot(m[0], v), dot(m[1], v), dot(m[2], v)]
 }
-fn mat_mul(a: &M3, b: &M3) -> M3 {
+pub(crate) fn mat_mul(a: &M3, b: &M3) -> M3 {
     let mut out = [[0.0; 3]; 3];
     for (i, row) in out.iter_mut().enumerate() {
         for (j, entry) in row.iter_mut().enumerate() {
@@ -96,7 +98,7 @@ fn random_unit_quaternion(rng: &mut Rng) -> [f64; 4] {
     e.map(|x| x / norm)
 }
 
-fn dop853(t_end: f64, output_interval: f64, rtol: f64, atol: f64) -> SimOptions {
+pub(crate) fn dop853(t_end: f64, output_interval: f64, rtol: f64, atol: f64) -> SimOptions {
     SimOptions {
         t_end,
         output_interval,
@@ -110,7 +112,7 @@ fn dop853(t_end: f64, output_interval: f64, rtol: f64, atol: f64) -> SimOptions 
     }
 }
 
-fn run(model: &dyn Model, q0: &[f64], u0: &[f64], options: &SimOptions) -> Trajectory {
+pub(crate) fn run(model: &dyn Model, q0: &[f64], u0: &[f64], options: &SimOptions) -> Trajectory {
     let signals = mech_runtime::default_signals(model);
     simulate(model, q0, u0, &signals, options, &mut |_| {}).unwrap()
 }
@@ -228,6 +230,24 @@ fn unprojected_norm_drift(model: &dyn Model, q0: &[f64], u0: &[f64], t_end: f64)
     worst
 }
 
+/// The heavy symmetric top of the tests here (`joint_fields` on its ball joint), its tilt θ,
+/// spin ω₃ and the slow steady-precession rate `φ̇` of `m g l = φ̇ (C ω₃ − A φ̇ cos θ)`.
+pub(crate) fn heavy_top(name: &str, joint_fields: &str) -> (TapeModel, f64, f64, f64) {
+    let (m, l, g, a_com, c) = (0.5, 0.04, 9.81, 2e-4, 3e-4);
+    let text = format!(
+        "gravity = [0, 0, -{g} m/s^2];
+         body top {{ mass = {m} kg; com = [0, 0, {l} m]; inertia = [{a_com}, {a_com}, {c}] * 1 kg*m^2; }}
+         joint tip = ball(newtonian, top) {{ {joint_fields} }}
+         output ke = kinetic_energy; output pe = potential_energy;"
+    );
+    let model = common::tape_from_text(name, &text);
+    let a = a_com + m * l * l;
+    let (theta, spin): (f64, f64) = (0.5, 200.0);
+    let discriminant = (c * spin).powi(2) - 4.0 * a * theta.cos() * m * g * l;
+    let rate = (c * spin - discriminant.sqrt()) / (2.0 * a * theta.cos());
+    (model, theta, spin, rate)
+}
+
 /// A heavy symmetric top on a ball joint at its tip, tilted by θ from the vertical and
 /// spinning at ω₃ about its axis, started with the angular velocity of steady precession:
 /// the precession rate `φ̇` solves `m g l = φ̇ (C ω₃ − A φ̇ cos θ)` (Goldstein, Poole & Safko,
@@ -236,18 +256,7 @@ fn unprojected_norm_drift(model: &dyn Model, q0: &[f64], u0: &[f64], t_end: f64)
 /// about the vertical at that rate.
 #[test]
 fn heavy_symmetric_top_precesses_at_the_closed_form_rate() {
-    let (m, l, g, a_com, c) = (0.5, 0.04, 9.81, 2e-4, 3e-4);
-    let text = format!(
-        "gravity = [0, 0, -{g} m/s^2];
-         body top {{ mass = {m} kg; com = [0, 0, {l} m]; inertia = [{a_com}, {a_com}, {c}] * 1 kg*m^2; }}
-         joint tip = ball(newtonian, top);
-         output ke = kinetic_energy; output pe = potential_energy;"
-    );
-    let model = common::tape_from_text("top", &text);
-    let a = a_com + m * l * l;
-    let (theta, spin): (f64, f64) = (0.5, 200.0);
-    let discriminant = (c * spin).powi(2) - 4.0 * a * theta.cos() * m * g * l;
-    let rate = (c * spin - discriminant.sqrt()) / (2.0 * a * theta.cos());
+    let (model, theta, spin, rate) = heavy_top("top", "");
     // Tilted by θ about x; ω = φ̇ ẑ_N + ψ̇ ẑ_body, in the body: (0, φ̇ sin θ, ω₃).
     let q0 = [(theta / 2.0).cos(), (theta / 2.0).sin(), 0.0, 0.0];
     let u0 = [0.0, rate * theta.sin(), spin];
@@ -561,7 +570,8 @@ fn language_reference_quaternion_examples_simulate() {
         checked += 1;
         let name = format!("docs/mech-language.md:{}", example.line);
         let model = common::tape_from_text(&name, &example.text);
-        assert!(!model.unit_quaternions().is_empty(), "{name}");
+        let euler = example.text.contains("rotation = euler(");
+        assert!(euler || !model.unit_quaternions().is_empty(), "{name}");
         let (q0, u0) = initial_state(&model);
         let trajectory = run(&model, &q0, &u0, &dop853(1.0, 0.01, 1e-11, 1e-13));
         let (_, drift) = common::energy_drift(&model, &trajectory);

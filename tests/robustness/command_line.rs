@@ -217,8 +217,9 @@ fn escape_sequences_in_an_input_file_are_shown_not_sent_to_the_terminal() {
 #[test]
 fn analyses_not_written_for_quaternions_refuse_a_ball_joint_model() {
     let dir = scratch("quaternion_analyses");
-    let refused = "is not supported yet: it has a ball or free joint, whose orientation is a \
-                   unit quaternion (q̇ = W(q) u, not q̇ = u)";
+    let refused = "is not supported yet: its coordinates' rates are not its speeds (q̇ = \
+                   W(q) u: a ball or free joint's unit quaternion or Euler angles, or `speed` \
+                   declarations)";
     let model = "{model:ball_double_pendulum}";
     expect_errors(
         &dir,

@@ -501,7 +501,7 @@ impl<'a> Emitter<'a> {
         }
     }
 
-    /// For models with quaternions or chosen speeds (`q̇ ≠ u`): `SPEED_NAMES`, `UNIT_QUATERNIONS` (the index in
+    /// For models with quaternions, Euler angles or chosen speeds (`q̇ ≠ u`): `SPEED_NAMES`, `UNIT_QUATERNIONS` (the index in
     /// `q` of each quaternion's scalar part) and `kinematic_rates` (`q̇ = W(q) u`), inherent
     /// and in the trait; other models keep the trait's defaults (`q̇ = u`).
     fn kinematic_functions(&self) -> (TokenStream, TokenStream) {
@@ -518,6 +518,20 @@ impl<'a> Emitter<'a> {
             .collect();
         let count = usize_literal(quaternions.len());
         let (parts, rates) = self.inherent_function(Function::KinematicRates, rates);
+        // Euler angles have `q̇ ≠ u` without a unit norm: the plain coordinates end before
+        // them. Chosen speeds: `q̇ = W(q) u` for every coordinate, so none has `q̇ᵢ = uᵢ` (and
+        // `rates_are_speeds` is false).
+        let plain_coordinates = match (
+            self.model.speeds.is_empty(),
+            self.model.euler_angles.is_empty(),
+        ) {
+            (false, _) => quote! { fn plain_coordinates(&self) -> usize { 0 } },
+            (true, true) => TokenStream::new(),
+            (true, false) => {
+                let count = usize_literal(self.model.coordinates.len());
+                quote! { fn plain_coordinates(&self) -> usize { #count } }
+            }
+        };
         let rates_in_trait = self.trait_method(Function::KinematicRates, "qdot");
         let inherent = quote! {
             pub const SPEED_NAMES: [&'static str; #nu] = [#(#speed_names),*];
@@ -529,19 +543,11 @@ impl<'a> Emitter<'a> {
 
             #(#parts)*
         };
-        // Chosen speeds: `q̇ = W(q) u` for every coordinate, so none has `q̇ᵢ = uᵢ`.
-        let chosen_speeds = match self.model.speeds.is_empty() {
-            true => TokenStream::new(),
-            false => quote! {
-                fn plain_coordinates(&self) -> usize { 0 }
-                fn rates_are_speeds(&self) -> bool { false }
-            },
-        };
         let in_trait = quote! {
             fn speed_name(&self, i: usize) -> &str { Self::SPEED_NAMES.get(i).copied().unwrap_or("") }
             fn unit_quaternions(&self) -> &[usize] { &Self::UNIT_QUATERNIONS }
+            #plain_coordinates
             #rates_in_trait
-            #chosen_speeds
         };
         (inherent, in_trait)
     }

@@ -12,7 +12,10 @@
 //! - Each quaternion (`Model::quaternions`) is driven by exactly one spherical motion. The
 //!   state is laid out as `q = [coordinates…; quaternions, 4 each, scalar first…]` and
 //!   `u = [coordinate speeds…; angular speeds, 3 each…]` ([`Model::quaternion_coordinate`],
-//!   [`Model::angular_speed`]), so a coordinate's index addresses both `q` and `u`.
+//!   [`Model::angular_speed`]), so a coordinate's index addresses both `q` and `u`. Euler
+//!   angles (`Model::euler_angles`, each driven by one [`Motion::Euler`]) follow, three
+//!   coordinates and three angular speeds each ([`Model::euler_coordinate`],
+//!   [`Model::euler_speed`]).
 //! - All expressions are dimensionally consistent and in SI units (kg, m, s, rad, A).
 //! - Joint axes have unit length.
 //! - Loop closures (`Model::loops`) are additional constraints between two points or
@@ -440,6 +443,51 @@ impl Quaternion {
     }
 }
 
+/// The orientation of a spherical motion relative to its parent as three body-fixed
+/// (intrinsic) angles, `rotation = euler(zxy)`: the frame is turned by `angle1` about the
+/// sequence's first axis, then by `angle2` about the second axis of the frame so turned, then by
+/// `angle3` about the third, `C = R(a₁, q₁) R(a₂, q₂) R(a₃, q₃)`. Its speeds are those of a
+/// [`Quaternion`] (the angular velocity relative to the parent, in the frame's own basis), so
+/// `q̇ = W(q) u` with `W` singular where the sequence is (`cos q₂ = 0` for the six sequences of
+/// three different axes, `sin q₂ = 0` for the six that repeat the first).
+#[derive(Clone, Debug, PartialEq)]
+pub struct EulerAngles {
+    /// The joint's name; its coordinates are `NAME.angle1` … `NAME.angle3`, its speeds
+    /// `NAME.wx` … `NAME.wz`.
+    pub name: String,
+    /// The axes (0 = x) of the three turns; consecutive axes differ.
+    pub sequence: [usize; 3],
+    /// Initial angles, rad.
+    pub initial_angles: [f64; 3],
+    /// Initial angular velocity relative to the parent, in rad/s, components in the frame.
+    pub initial_angular_velocity: [f64; 3],
+    pub span: Span,
+}
+
+impl EulerAngles {
+    /// Names of the three angles, in the order of the sequence.
+    pub fn coordinate_names(&self) -> [String; 3] {
+        ["angle1", "angle2", "angle3"].map(|part| format!("{}.{part}", self.name))
+    }
+    /// Names of the three angular speeds.
+    pub fn speed_names(&self) -> [String; 3] {
+        ["wx", "wy", "wz"].map(|part| format!("{}.{part}", self.name))
+    }
+    /// The sequence as written: `zxy`.
+    pub fn sequence_name(&self) -> String {
+        self.sequence
+            .iter()
+            .map(|&axis| ["x", "y", "z"][axis])
+            .collect()
+    }
+    /// Whether the sequence repeats its first axis (`zxz`: proper Euler angles, singular where
+    /// `sin q₂ = 0`) rather than using three different axes (`zxy`: Tait–Bryan angles,
+    /// singular where `cos q₂ = 0`).
+    pub fn is_proper(&self) -> bool {
+        self.sequence[0] == self.sequence[2]
+    }
+}
+
 /// Rotation by `angle` about the unit vector `axis` (components in the rotating frame).
 #[derive(Clone, Debug, PartialEq)]
 pub struct AxisAngle {
@@ -465,12 +513,15 @@ pub enum Motion {
     },
     /// Rotation by the unit quaternion `quaternion` about the frame's origin (a ball joint).
     Spherical { quaternion: Handle<Quaternion> },
+    /// Rotation by three Euler angles about the frame's origin (a ball joint with
+    /// `rotation = euler(…)`).
+    Euler { angles: Handle<EulerAngles> },
 }
 
 impl Motion {
     pub fn coordinate(&self) -> Option<Handle<Coordinate>> {
         match self {
-            Motion::Fixed | Motion::Spherical { .. } => None,
+            Motion::Fixed | Motion::Spherical { .. } | Motion::Euler { .. } => None,
             Motion::Revolute { coordinate, .. } | Motion::Prismatic { coordinate, .. } => {
                 Some(*coordinate)
             }
@@ -577,6 +628,14 @@ pub enum JointKind {
     /// Six degrees of freedom (a floating base): three slides along the joint frame's axes
     /// (`u = q̇`, the origin's velocity in the parent) and a ball.
     Free,
+    /// Two pins in series (a Cardan or Hooke joint): `angle1` about `axis`, then `angle2`
+    /// about `axis2` in the frame turned by the first; `u = q̇`.
+    Universal,
+    /// A slide along `axis` and a turn about it: `slide`, then `angle`; `u = q̇`.
+    Cylindrical,
+    /// Two slides in the plane normal to `axis` and a turn about it: `slide1`, `slide2`,
+    /// then `angle`; `u = q̇`.
+    Planar,
 }
 
 /// A joint as declared in the model; kept for reports and diagnostics.
@@ -588,7 +647,8 @@ pub struct Joint {
     pub parent: Option<Handle<Body>>,
     pub child: Handle<Body>,
     pub coordinates: Vec<Handle<Coordinate>>,
-    /// The orientation of a `ball` or `free` joint.
+    /// The orientation of a `ball` or `free` joint as a quaternion (`None` with Euler
+    /// angles: the [`EulerAngles`] of the joint's name).
     pub quaternion: Option<Handle<Quaternion>>,
     pub span: Span,
 }
@@ -911,6 +971,9 @@ pub struct Model {
     /// Orientations of spherical motions; their coordinates and speeds follow the
     /// coordinates' in `q` and `u`.
     pub quaternions: Arena<Quaternion>,
+    /// Orientations of spherical motions as Euler angles; their coordinates and speeds follow
+    /// the quaternions' in `q` and `u`.
+    pub euler_angles: Arena<EulerAngles>,
     /// The kinematic tree, parents first; `frames[NEWTONIAN]` is the root.
     pub frames: Arena<Frame>,
     pub bodies: Arena<Body>,
@@ -999,13 +1062,26 @@ impl Model {
             .collect()
     }
 
-    /// Number of generalized coordinates: one per coordinate, four per quaternion.
+    /// Number of generalized coordinates: one per coordinate, four per quaternion, three per
+    /// set of Euler angles.
     pub fn nq(&self) -> usize {
-        self.coordinates.len() + 4 * self.quaternions.len()
+        self.coordinates.len() + 4 * self.quaternions.len() + 3 * self.euler_angles.len()
     }
-    /// Number of generalized speeds: one per coordinate, three per quaternion.
+    /// Number of generalized speeds: one per coordinate, three per quaternion or Euler angles.
     pub fn nu(&self) -> usize {
-        self.coordinates.len() + 3 * self.quaternions.len()
+        self.coordinates.len() + 3 * self.quaternions.len() + 3 * self.euler_angles.len()
+    }
+    /// Whether `q̇ ≠ u` somewhere: the model has quaternions or Euler angles.
+    pub fn has_kinematic_rates(&self) -> bool {
+        !self.quaternions.is_empty() || !self.euler_angles.is_empty()
+    }
+    /// Index in `q` of angle `part` (0 = the first turn) of `angles`.
+    pub fn euler_coordinate(&self, angles: Handle<EulerAngles>, part: usize) -> usize {
+        self.coordinates.len() + 4 * self.quaternions.len() + 3 * angles.index() + part
+    }
+    /// Index in `u` of the angular speed about axis `axis` (0 = x) of `angles`.
+    pub fn euler_speed(&self, angles: Handle<EulerAngles>, axis: usize) -> usize {
+        self.coordinates.len() + 3 * self.quaternions.len() + 3 * angles.index() + axis
     }
     /// Index in `q` of part `part` (0 = scalar) of `quaternion`.
     pub fn quaternion_coordinate(&self, quaternion: Handle<Quaternion>, part: usize) -> usize {
@@ -1015,51 +1091,63 @@ impl Model {
     pub fn angular_speed(&self, quaternion: Handle<Quaternion>, axis: usize) -> usize {
         self.coordinates.len() + 3 * quaternion.index() + axis
     }
-    /// Names of `q` in order: the coordinates', then each quaternion's four.
+    /// Names of `q` in order: the coordinates', each quaternion's four, each set of Euler
+    /// angles' three.
     pub fn coordinate_names(&self) -> Vec<String> {
         let coordinates = self.coordinates.iter().map(|(_, c)| c.name.clone());
         let quaternions = self
             .quaternions
             .iter()
             .flat_map(|(_, e)| e.coordinate_names());
-        coordinates.chain(quaternions).collect()
+        let angles = self
+            .euler_angles
+            .iter()
+            .flat_map(|(_, a)| a.coordinate_names());
+        coordinates.chain(quaternions).chain(angles).collect()
     }
-    /// Names of `u` in order: the chosen speeds' if any, else the coordinates', then each
-    /// quaternion's three angular speeds.
+    /// Names of `u` in order: the chosen speeds' if any, else the default speeds'.
     pub fn speed_names(&self) -> Vec<String> {
         if !self.speeds.is_empty() {
             return self.speeds.iter().map(|s| s.name.clone()).collect();
         }
         self.default_speed_names()
     }
-    /// Names of the default speeds `ū`: the coordinates', then each quaternion's three.
+    /// Names of the default speeds `ū`: the coordinates', then each quaternion's and each set
+    /// of Euler angles' three angular speeds.
     pub fn default_speed_names(&self) -> Vec<String> {
         let coordinates = self.coordinates.iter().map(|(_, c)| c.name.clone());
         let quaternions = self.quaternions.iter().flat_map(|(_, e)| e.speed_names());
-        coordinates.chain(quaternions).collect()
+        let angles = self.euler_angles.iter().flat_map(|(_, a)| a.speed_names());
+        coordinates.chain(quaternions).chain(angles).collect()
     }
-    /// Initial `q`: the coordinates' `q0`, then identity rotations `(1, 0, 0, 0)`.
+    /// Initial `q`: the coordinates' `q0`, identity rotations `(1, 0, 0, 0)`, the Euler angles'
+    /// `q0`.
     pub fn initial_coordinates(&self) -> Vec<f64> {
         let coordinates = self.coordinates.iter().map(|(_, c)| c.initial);
         let quaternions = self.quaternions.iter().flat_map(|_| [1.0, 0.0, 0.0, 0.0]);
-        coordinates.chain(quaternions).collect()
+        let angles = self.euler_angles.iter().flat_map(|(_, a)| a.initial_angles);
+        coordinates.chain(quaternions).chain(angles).collect()
     }
-    /// Initial `u`: the chosen speeds' initial values if any, else the coordinates' `u0`,
-    /// then the quaternions' angular velocities.
+    /// Initial `u`: the chosen speeds' initial values if any, else the default speeds'.
     pub fn initial_speeds(&self) -> Vec<f64> {
         if !self.speeds.is_empty() {
             return self.speeds.iter().map(|s| s.initial).collect();
         }
         self.default_initial_speeds()
     }
-    /// Initial `ū` of the default speeds (`q̇` of pins and sliders, the balls' ω).
+    /// Initial `ū` of the default speeds (`q̇` of pins and sliders, then the angular
+    /// velocities of quaternions and Euler angles).
     pub fn default_initial_speeds(&self) -> Vec<f64> {
         let coordinates = self.coordinates.iter().map(|(_, c)| c.initial_speed);
         let quaternions = self
             .quaternions
             .iter()
             .flat_map(|(_, e)| e.initial_angular_velocity);
-        coordinates.chain(quaternions).collect()
+        let angles = self
+            .euler_angles
+            .iter()
+            .flat_map(|(_, a)| a.initial_angular_velocity);
+        coordinates.chain(quaternions).chain(angles).collect()
     }
 
     /// The chain of frames from the root to `frame`, root first.

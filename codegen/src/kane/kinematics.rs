@@ -12,7 +12,7 @@
 //! The recursion, for frame k with parent p, C = C_{p←k} and d = O_k − O_p (in p):
 //! ```text
 //! ω_k   = Cᵀ ω_p + a u_j                                  (revolute about a, speed u_j)
-//!       = Cᵀ ω_p + Σ_i n_i u_i                            (spherical: C = C₀ C(e), n_i = k's axes)
+//!       = Cᵀ ω_p + Σ_i n_i u_i                            (spherical: C = C₀ C(e) or C₀ C(q₁, q₂, q₃), n_i = k's axes)
 //! W_k,r = Cᵀ W_p,r  (+ a for r = j, revolute; + n_i for r = i, spherical)
 //! V_k,r = Cᵀ (V_p,r + W_p,r × d)  (+ a for r = j, prismatic)
 //! α_k   = Cᵀ α_p + (Cᵀ ω_p) × a u_j                       (u̇-free part; Σ n_i u_i if spherical)
@@ -276,16 +276,28 @@ fn root(model: &Model, pool: &mut ExprPool) -> FrameKinematics {
     }
 }
 
+/// The symbols of `N` consecutive coordinates from index `first`.
+fn coordinate_run<const N: usize>(pool: &mut ExprPool, first: usize) -> [ExprId; N] {
+    std::array::from_fn(|part| pool.symbol(Symbol::Coordinate((first + part) as u32)))
+}
+
+/// The symbols of the three angular speeds from index `first`, with their indices.
+fn angular_speed_run(pool: &mut ExprPool, first: usize) -> [(usize, ExprId); 3] {
+    [0, 1, 2].map(|axis| {
+        (
+            first + axis,
+            pool.symbol(Symbol::Speed((first + axis) as u32)),
+        )
+    })
+}
+
 /// The symbols `e₀ … e₃` of a quaternion.
 pub fn quaternion_symbols(
     pool: &mut ExprPool,
     model: &Model,
     quaternion: Handle<ir::Quaternion>,
 ) -> [ExprId; 4] {
-    [0, 1, 2, 3].map(|part| {
-        let index = model.quaternion_coordinate(quaternion, part);
-        pool.symbol(Symbol::Coordinate(index as u32))
-    })
+    coordinate_run(pool, model.quaternion_coordinate(quaternion, 0))
 }
 
 /// The speed symbols `u_i` of a quaternion's angular velocity, with their indices.
@@ -294,10 +306,39 @@ pub fn angular_speed_symbols(
     model: &Model,
     quaternion: Handle<ir::Quaternion>,
 ) -> [(usize, ExprId); 3] {
-    [0, 1, 2].map(|axis| {
-        let index = model.angular_speed(quaternion, axis);
-        (index, pool.symbol(Symbol::Speed(index as u32)))
-    })
+    angular_speed_run(pool, model.angular_speed(quaternion, 0))
+}
+
+/// The symbols `q₁ … q₃` of a set of Euler angles.
+pub fn euler_symbols(
+    pool: &mut ExprPool,
+    model: &Model,
+    angles: Handle<ir::EulerAngles>,
+) -> [ExprId; 3] {
+    coordinate_run(pool, model.euler_coordinate(angles, 0))
+}
+
+/// The speed symbols `u_i` of a set of Euler angles' angular velocity, with their indices.
+pub fn euler_speed_symbols(
+    pool: &mut ExprPool,
+    model: &Model,
+    angles: Handle<ir::EulerAngles>,
+) -> [(usize, ExprId); 3] {
+    angular_speed_run(pool, model.euler_speed(angles, 0))
+}
+
+/// The spins of a spherical motion: each angular speed (from `speeds`, built after the axes
+/// so that the pool numbers its symbols as it always has) about its own axis of the frame.
+fn spins_about_own_axes(
+    pool: &mut ExprPool,
+    speeds: impl FnOnce(&mut ExprPool) -> [(usize, ExprId); 3],
+) -> Vec<(usize, Vec3, ExprId)> {
+    let axes = vector::identity(pool);
+    speeds(pool)
+        .into_iter()
+        .zip(axes)
+        .map(|((r, u), axis)| (r, axis, u))
+        .collect()
 }
 
 /// One step of the recursion in the module docs.
@@ -329,13 +370,16 @@ fn child(
             let e = quaternion_symbols(pool, model, *quaternion);
             let rotation = vector::quaternion_rotation(pool, e);
             let dcm = vector::mat_mul(pool, &placement, &rotation);
-            let axes = vector::identity(pool);
-            let spins = angular_speed_symbols(pool, model, *quaternion)
-                .into_iter()
-                .zip(axes)
-                .map(|((r, u), axis)| (r, axis, u))
-                .collect();
-            (dcm, origin, spins, None)
+            let speeds = |pool: &mut ExprPool| angular_speed_symbols(pool, model, *quaternion);
+            (dcm, origin, spins_about_own_axes(pool, speeds), None)
+        }
+        Motion::Euler { angles } => {
+            let q = euler_symbols(pool, model, *angles);
+            let sequence = model.euler_angles[*angles].sequence;
+            let rotation = vector::euler_rotation(pool, sequence, q);
+            let dcm = vector::mat_mul(pool, &placement, &rotation);
+            let speeds = |pool: &mut ExprPool| euler_speed_symbols(pool, model, *angles);
+            (dcm, origin, spins_about_own_axes(pool, speeds), None)
         }
         Motion::Prismatic { axis, coordinate } => {
             let axis = lower_vec(pool, axis);

@@ -37,7 +37,7 @@ pub struct Equations {
     pub nq: usize,
     pub nu: usize,
     /// The kinematic differential equations `q̇ = W(q) u`, length `nq`, where they are not
-    /// `q̇ = u`: `None` for models without quaternions.
+    /// `q̇ = u`: `None` for models without quaternions or Euler angles.
     pub kinematic_rates: Option<Vec<ExprId>>,
     /// `M(q)`, `nu × nu`, column-major; symmetric (`M[r + nu*s] == M[s + nu*r]`, same id).
     pub mass_matrix: Vec<ExprId>,

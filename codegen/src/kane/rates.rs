@@ -113,10 +113,10 @@ impl KinematicRates {
     }
 }
 
-/// `q̇ = W(q) u`: `q̇ᵢ = uᵢ` for the coordinates, `ė = ½ e ⊗ (0, ω)` for each quaternion;
-/// `None` without quaternions (`q̇ = u`).
+/// `q̇ = W(q) u`: `q̇ᵢ = uᵢ` for the coordinates, `ė = ½ e ⊗ (0, ω)` for each quaternion,
+/// [`vector::euler_rates`] for each set of Euler angles; `None` without either (`q̇ = u`).
 pub fn rates(pool: &mut ExprPool, model: &Model) -> Option<Vec<ExprId>> {
-    if model.quaternions.is_empty() {
+    if !model.has_kinematic_rates() {
         return None;
     }
     let mut rates: Vec<ExprId> = (0..model.coordinates.len())
@@ -126,6 +126,11 @@ pub fn rates(pool: &mut ExprPool, model: &Model) -> Option<Vec<ExprId>> {
         let e = kinematics::quaternion_symbols(pool, model, quaternion);
         let omega = kinematics::angular_speed_symbols(pool, model, quaternion).map(|(_, u)| u);
         rates.extend(vector::quaternion_rates(pool, e, omega));
+    }
+    for (angles, rotation) in model.euler_angles.iter() {
+        let q = kinematics::euler_symbols(pool, model, angles);
+        let omega = kinematics::euler_speed_symbols(pool, model, angles).map(|(_, u)| u);
+        rates.extend(vector::euler_rates(pool, rotation.sequence, q, omega));
     }
     Some(rates)
 }

@@ -171,3 +171,60 @@ pub fn quaternion_rates(pool: &mut ExprPool, e: [ExprId; 4], omega: Vec3) -> [Ex
     let rate = scale_number(pool, rate, half);
     [scalar, rate[0], rate[1], rate[2]]
 }
+
+/// The unit vector along axis `index` (0 = x).
+fn unit(pool: &mut ExprPool, index: usize) -> Vec3 {
+    identity(pool)[index]
+}
+
+/// `C = R(a₁, q₁) R(a₂, q₂) R(a₃, q₃)` of body-fixed Euler angles `q` about the axes
+/// `sequence` (0 = x).
+pub fn euler_rotation(pool: &mut ExprPool, sequence: [usize; 3], q: [ExprId; 3]) -> Mat3 {
+    let mut dcm = identity(pool);
+    for (axis, angle) in sequence.into_iter().zip(q) {
+        let axis = unit(pool, axis);
+        let turn = rotation(pool, axis, angle);
+        dcm = mat_mul(pool, &dcm, &turn);
+    }
+    dcm
+}
+
+/// `q̇ = W(q) ω` of body-fixed Euler angles, `ω` the frame's angular velocity in its own basis.
+/// In the frame after the second turn `ω₂ = R(a₃, q₃) ω = R(a₂, q₂)ᵀ a₁ q̇₁ + a₂ q̇₂ + a₃ q̇₃`,
+/// and `R(a₂, q₂)ᵀ a₁ = cos q₂ a₁ + s sin q₂ k` with `a₁ × a₂ = s k` (k the axis that is
+/// neither, s = ±1). Three different axes (k = a₃): `q̇₁ = ω₂·a₁ / cos q₂`, `q̇₂ = ω₂·a₂`,
+/// `q̇₃ = ω₂·a₃ − s tan q₂ ω₂·a₁`. A repeated first axis (a₃ = a₁): `q̇₁ = s ω₂·k / sin q₂`,
+/// `q̇₂ = ω₂·a₂`, `q̇₃ = ω₂·a₁ − cos q₂ q̇₁`.
+pub fn euler_rates(
+    pool: &mut ExprPool,
+    sequence: [usize; 3],
+    q: [ExprId; 3],
+    omega: Vec3,
+) -> [ExprId; 3] {
+    let [first, second, third] = sequence;
+    let third_axis = unit(pool, third);
+    let last_turn = rotation(pool, third_axis, q[2]);
+    let omega2 = mat_vec(pool, &last_turn, omega);
+    let other = 3 - first - second;
+    // a₁ × a₂ = +k when (first, second, other) is a cyclic order of (x, y, z).
+    let sign = if (first + 1) % 3 == second { 1 } else { -1 };
+    let (cos2, sin2) = (pool.cos(q[1]), pool.sin(q[1]));
+    let signed = |pool: &mut ExprPool, x: ExprId| match sign {
+        1 => x,
+        _ => pool.neg(x),
+    };
+    let middle = omega2[second];
+    if first == third {
+        let numerator = signed(pool, omega2[other]);
+        let rate1 = pool.div(numerator, sin2);
+        let along = pool.mul(cos2, rate1);
+        let rate3 = pool.sub(omega2[first], along);
+        [rate1, middle, rate3]
+    } else {
+        let rate1 = pool.div(omega2[first], cos2);
+        let along = pool.mul(sin2, rate1);
+        let along = signed(pool, along);
+        let rate3 = pool.sub(omega2[third], along);
+        [rate1, middle, rate3]
+    }
+}

@@ -12,8 +12,9 @@
 //!   with `rpy` is turned into link axes); the root link → the Newtonian frame (default) or a
 //!   body on a `free` joint; collision origins → named points (and outputs);
 //! - joint → `joint`: revolute, continuous → `pin`, prismatic → `slider`, fixed → `weld`,
-//!   floating → `free`, Drake's ball → `ball`; planar (no `.mech` kind) → two sliders and a
-//!   pin through massless bodies; `<dynamics damping>` → `damping`; limits and friction → comments;
+//!   floating → `free`, Drake's ball → `ball`; planar → two sliders and a
+//!   pin through massless bodies (written before `.mech` had `planar`, whose slide directions
+//!   differ; it could now use it); `<dynamics damping>` → `damping`; limits and friction → comments;
 //! - Drake `loop_joint` → `loop` (`continuous`/`revolute` → `revolute`, `ball` → `coincident`),
 //!   Drake's `drake:ball_constraint` → `coincident`;
 //! - Drake force elements → parameters: `torsional_spring` → `stiffness`/`rest` of its pin

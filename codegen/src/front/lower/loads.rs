@@ -738,6 +738,22 @@ impl Lowerer<'_> {
 
     /// The index of `joint` if it has one coordinate (a pin or slider); E0213 for a weld (none)
     /// and for `ball` and `free` (a quaternion).
+    /// E0213 for `joint.q` or `joint.u` of a joint with several coordinates.
+    fn several_coordinates(&mut self, joint: &Ident, span: Span, what: &str, why: &str) {
+        self.error(
+            Diagnostic::error(
+                "E0213",
+                format!("{what} joint `{}` has no single coordinate", joint.name),
+            )
+            .with_label(span, why)
+            .with_help(
+                "use the motion of a point of the child body, \
+                 `position(body.point)` or `velocity(body.point)` as outputs, \
+                 `distance(A, B)` in a load",
+            ),
+        );
+    }
+
     pub(super) fn single_coordinate_joint(&mut self, joint: &Ident, span: Span) -> Option<usize> {
         let j = *self.joint_index.get(&joint.name)?;
         match self.joints.get(j).and_then(|info| info.kind) {
@@ -757,18 +773,16 @@ impl Lowerer<'_> {
                 } else {
                     "free"
                 };
-                self.error(
-                    Diagnostic::error(
-                        "E0213",
-                        format!("{what} joint `{}` has no single coordinate", joint.name),
-                    )
-                    .with_label(span, "its orientation is a unit quaternion")
-                    .with_help(
-                        "use the motion of a point of the child body, \
-                         `position(body.point)` or `velocity(body.point)` as outputs, \
-                         `distance(A, B)` in a load",
-                    ),
-                );
+                self.several_coordinates(joint, span, what, "its orientation is a unit quaternion");
+                None
+            }
+            Some(kind @ (JointKind::Universal | JointKind::Cylindrical | JointKind::Planar)) => {
+                let what = match kind {
+                    JointKind::Universal => "universal",
+                    JointKind::Cylindrical => "cylindrical",
+                    _ => "planar",
+                };
+                self.several_coordinates(joint, span, what, "it has a coordinate per freedom");
                 None
             }
             _ => Some(j),

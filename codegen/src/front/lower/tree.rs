@@ -3,15 +3,18 @@
 //!
 //! Consumes: `joint` declarations and the [`Owner`](super::body::Owner)s.
 //! Produces: `model.frames` (newtonian, its frames, then per joint in depth-first order:
-//! `j` (for a `free` joint `j.x`, `j.y`, `j.z` first), optionally `j.child`, the child body's
-//! frame and its named frames), coordinates, quaternions (`ball`, `free`), joints, springs
-//! and dampers, points and bodies; `E04xx` tree errors.
+//! `j` (first, for a `free` joint `j.x`, `j.y`, `j.z`; for a joint of several coordinates
+//! one frame per coordinate but the last, `j.angle1`, `j.slide`, `j.slide1`, `j.slide2`),
+//! optionally `j.child`, the child body's frame and its named frames), coordinates,
+//! quaternions or Euler angles (`ball`, `free`), joints, springs and dampers (one per
+//! coordinate given one), points and bodies; `E04xx` tree errors.
 
 use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, ExprKind};
 use crate::ir::{self, AxisAngle, Dimension, Expr, Handle, JointKind, Motion, Vec3};
+use crate::sym::Number;
 
-use super::body::{missing_field, zeros, FrameRef};
+use super::body::{missing_field, normalize, zeros, FrameRef};
 use super::expr::{is_vector, neg, unparen, Ctx, Expect};
 use super::{names, Lowerer};
 
@@ -22,30 +25,38 @@ pub struct JointInfo<'a> {
     pub parent: Option<usize>,
     pub child: Option<usize>,
     axis: Vec3,
+    /// `universal`: the second pin's axis, in the frame turned by the first.
+    axis2: Vec3,
     parent_point: Vec3,
     child_point: Vec3,
     /// Rotation of `parent_frame` relative to the parent's body frame.
     parent_frame: Vec<AxisAngle>,
     /// Rotation of `child_frame` relative to the child's body frame, if it is not that frame.
     child_frame: Option<Vec<AxisAngle>>,
-    q0: f64,
-    u0: f64,
-    /// `q0`, `u0` where they depend on params (`u0 = v / r`): evaluated again at run time.
-    q0_expr: Option<Expr>,
-    u0_expr: Option<Expr>,
+    /// Per coordinate of a pin, slider, universal, cylindrical or planar joint (in the order
+    /// of [`coordinate_parts`]): initial value and speed, spring and damper.
+    q0: Vec<f64>,
+    u0: Vec<f64>,
+    /// Those of `q0`, `u0` written with params (`u0 = v / r`): evaluated again at run time.
+    q0_expr: Vec<Option<Expr>>,
+    u0_expr: Vec<Option<Expr>>,
     /// `ball` and `free`: the initial angular velocity relative to the parent (child frame).
     angular_velocity0: [f64; 3],
+    /// `ball` and `free` with `rotation = euler(…)`: the sequence's axes (0 = x) and the
+    /// initial angles; `None` for a unit quaternion.
+    euler: Option<([usize; 3], [f64; 3])>,
     /// `free`: the initial velocity of the child's origin, components in the joint frame.
     velocity0: [f64; 3],
-    stiffness: Option<(Expr, Span)>,
-    rest: Expr,
-    damping: Option<(Expr, Span)>,
+    stiffness: Vec<Option<(Expr, Span)>>,
+    rest: Vec<Expr>,
+    damping: Vec<Option<(Expr, Span)>>,
     pub coordinate: Option<Handle<ir::Coordinate>>,
     pub frame: Option<Handle<ir::Frame>>,
 }
 
-const JOINT_FIELDS: [&str; 11] = [
+const JOINT_FIELDS: [&str; 13] = [
     "axis",
+    "axis2",
     "parent_point",
     "child_point",
     "parent_frame",
@@ -56,40 +67,86 @@ const JOINT_FIELDS: [&str; 11] = [
     "stiffness",
     "rest",
     "damping",
+    "rotation",
 ];
 
-/// The fields of `JOINT_FIELDS` a joint of `kind` does not take, and why (the label of E0403).
-fn fields_not_allowed(kind: JointKind) -> (&'static [&'static str], &'static str) {
-    match kind {
-        JointKind::Pin | JointKind::Slider => (&["v0"], "only a free joint has `v0`"),
-        JointKind::Weld => (
-            &["axis", "q0", "u0", "v0", "stiffness", "rest", "damping"],
-            "a weld has no degree of freedom",
-        ),
-        JointKind::Ball => (
-            &["axis", "q0", "v0", "stiffness", "rest", "damping"],
-            "a ball joint has no single axis or angle",
-        ),
-        JointKind::Free => (
-            &["axis", "q0", "stiffness", "rest", "damping"],
-            "a free joint has no single axis or angle",
-        ),
+/// Why a joint of `kind` does not take `field` of `JOINT_FIELDS` (the label of E0403), or
+/// `None` if it does.
+fn field_not_allowed(kind: JointKind, field: &str) -> Option<&'static str> {
+    use JointKind::*;
+    let dynamics = matches!(
+        field,
+        "axis" | "axis2" | "q0" | "u0" | "v0" | "stiffness" | "rest" | "damping"
+    );
+    match (kind, field) {
+        (Ball | Free, "rotation") => None,
+        (_, "rotation") => Some("only a ball or free joint has a `rotation`"),
+        (Weld, _) if dynamics => Some("a weld has no degree of freedom"),
+        (Ball, "u0" | "q0") | (Free, "u0" | "v0" | "q0") => None,
+        (Ball, _) if dynamics => Some("a ball joint has no single axis or angle"),
+        (Free, _) if dynamics => Some("a free joint has no single axis or angle"),
+        (Pin | Slider | Universal | Cylindrical | Planar, "v0") => {
+            Some("only a free joint has `v0`")
+        }
+        (Pin | Slider | Cylindrical | Planar, "axis2") => {
+            Some("only a universal joint has `axis2`")
+        }
+        _ => None,
     }
 }
 
 /// Every joint kind, as written.
-const JOINT_KINDS: [(&str, JointKind); 5] = [
+const JOINT_KINDS: [(&str, JointKind); 8] = [
     ("pin", JointKind::Pin),
     ("slider", JointKind::Slider),
     ("weld", JointKind::Weld),
     ("ball", JointKind::Ball),
     ("free", JointKind::Free),
+    ("universal", JointKind::Universal),
+    ("cylindrical", JointKind::Cylindrical),
+    ("planar", JointKind::Planar),
 ];
 
-/// The dimension a scalar joint field must have (pin: angles, slider: lengths).
-fn joint_expect(field: &'static str, kind: JointKind) -> Expect<'static> {
-    let slider = kind == JointKind::Slider;
-    let (mass, length, time, example) = match (field, slider) {
+/// The coordinates a joint of `kind` adds, in order, each with its name after the joint's
+/// (`JOINT.PART`; `""` for the joint's own name) and whether it is a slide (a length) rather
+/// than a turn (an angle). Empty for a weld, and for `ball` and `free`, whose coordinates are
+/// built with their quaternion.
+fn coordinate_parts(kind: JointKind) -> &'static [(&'static str, bool)] {
+    match kind {
+        JointKind::Pin => &[("", false)],
+        JointKind::Slider => &[("", true)],
+        JointKind::Universal => &[("angle1", false), ("angle2", false)],
+        JointKind::Cylindrical => &[("slide", true), ("angle", false)],
+        JointKind::Planar => &[("slide1", true), ("slide2", true), ("angle", false)],
+        JointKind::Weld | JointKind::Ball | JointKind::Free => &[],
+    }
+}
+
+/// The name a joint kind is written with.
+fn kind_name(kind: JointKind) -> &'static str {
+    JOINT_KINDS
+        .iter()
+        .find(|(_, known)| *known == kind)
+        .map_or("weld", |(name, _)| name)
+}
+
+/// One frame of a joint moved by one coordinate: a slide along `axis` or a turn about it.
+struct MovingFrame {
+    frame: String,
+    coordinate: String,
+    slide: bool,
+    axis: Vec3,
+    q0: f64,
+    u0: f64,
+    /// `q0`, `u0` as written, where they depend on params.
+    q0_expr: Option<Expr>,
+    u0_expr: Option<Expr>,
+}
+
+/// The dimension a joint field must have for one coordinate: a turn's (angles) or a slide's
+/// (lengths).
+fn joint_expect(field: &'static str, slide: bool) -> Expect<'static> {
+    let (mass, length, time, example) = match (field, slide) {
         ("q0" | "rest", false) => (0, 0, 0, "30 deg"),
         ("q0" | "rest", true) => (0, 1, 0, "1 mm"),
         ("u0", false) => (0, 0, -1, "1 rad/s"),
@@ -145,24 +202,40 @@ impl<'a> Lowerer<'a> {
             parent,
             child,
             axis: zeros(),
+            axis2: zeros(),
             parent_point: zeros(),
             child_point: zeros(),
             parent_frame: Vec::new(),
             child_frame: None,
-            q0: 0.0,
-            u0: 0.0,
-            q0_expr: None,
-            u0_expr: None,
+            q0: Vec::new(),
+            u0: Vec::new(),
+            q0_expr: Vec::new(),
+            u0_expr: Vec::new(),
             angular_velocity0: [0.0; 3],
+            euler: None,
             velocity0: [0.0; 3],
-            stiffness: None,
-            rest: Expr::zero(),
-            damping: None,
+            stiffness: Vec::new(),
+            rest: Vec::new(),
+            damping: Vec::new(),
             coordinate: None,
             frame: None,
         };
+        if kind == Some(JointKind::Universal) {
+            (info.axis, info.axis2) = (unit_axis(0), unit_axis(1));
+        }
         if let Some(axis) = self.joint_axis(decl, kind, field("axis")) {
             info.axis = axis;
+        }
+        if let Some(f) = field("axis2") {
+            if let Some(axis2) = self.axis(&f.value, "a joint's second axis") {
+                info.axis2 = axis2;
+            }
+        }
+        if kind == Some(JointKind::Universal) {
+            let span = field("axis2")
+                .or(field("axis"))
+                .map_or(decl.span, |f| f.value.span);
+            self.check_universal_axes(&info, span);
         }
         if let Some(f) = field("parent_point") {
             info.parent_point = self
@@ -184,13 +257,43 @@ impl<'a> Lowerer<'a> {
             info.child_frame = self.joint_frame(f, child, "child").flatten();
         }
         match kind {
-            Some(kind @ (JointKind::Pin | JointKind::Slider)) => {
-                self.lower_joint_dynamics(&mut info, kind, &field);
-            }
             Some(JointKind::Ball | JointKind::Free) => self.lower_initial_rates(&mut info, &field),
-            _ => {}
+            Some(kind) => self.lower_joint_dynamics(&mut info, kind, &field),
+            None => {}
         }
         info
+    }
+
+    /// E0416 when a universal joint's two axes are parallel (it would turn about one axis).
+    fn check_universal_axes(&mut self, info: &JointInfo, span: Span) {
+        let value = |axis: &Vec3| {
+            axis.clone().map(|c| match c {
+                Expr::Number(n) => n.to_f64(),
+                _ => f64::NAN,
+            })
+        };
+        let (a, b) = (value(&info.axis), value(&info.axis2));
+        let cross = [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ];
+        if cross.iter().map(|c| c * c).sum::<f64>() > 1e-12 {
+            return;
+        }
+        self.error(
+            Diagnostic::error(
+                "E0416",
+                format!(
+                    "the axes of universal joint `{}` are parallel",
+                    info.decl.name.name
+                ),
+            )
+            .with_label(span, "parallel to `axis`")
+            .with_help(
+                "a universal joint turns about two different axes, e.g. `axis = x; axis2 = y;`",
+            ),
+        );
     }
 
     /// `u0` (angular velocity, rad/s) and `v0` (velocity, m/s) of a `ball` or `free` joint:
@@ -209,6 +312,16 @@ impl<'a> Lowerer<'a> {
             ),
             ("v0", "`v0` (velocity)", "[0, 0, 1 m/s]", [0, 1, -1]),
         ];
+        if let Some(f) = field("rotation") {
+            let sequence = self.euler_sequence(f);
+            info.euler = sequence.map(|sequence| (sequence, [0.0; 3]));
+        }
+        if let Some(f) = field("q0") {
+            self.lower_initial_angles(info, f);
+        }
+        if let Some(f) = field("q0").or(field("rotation")) {
+            self.check_euler_start(info, f.value.span);
+        }
         for (name, what, example, dimension) in rates {
             let Some(f) = field(name) else { continue };
             let expect = Expect::mechanical(what, example, dimension);
@@ -224,31 +337,200 @@ impl<'a> Lowerer<'a> {
         }
     }
 
+    /// `rotation = euler(SEQ)` (`Some` axes) or `rotation = quaternion` (`None`, the default);
+    /// E0412 for anything else, with the twelve sequences.
+    fn euler_sequence(&mut self, f: &ast::Field) -> Option<[usize; 3]> {
+        let value = unparen(&f.value);
+        let written = match &value.kind {
+            ExprKind::Path(path) if path.segments.len() == 1 => {
+                if path.segments[0].name == "quaternion" {
+                    return None;
+                }
+                None
+            }
+            ExprKind::Call { function, args } if function.name == "euler" => {
+                match args.as_slice() {
+                    [arg] => match &unparen(arg).kind {
+                        ExprKind::Path(path) if path.segments.len() == 1 => {
+                            Some(path.segments[0].name.clone())
+                        }
+                        _ => None,
+                    },
+                    _ => None,
+                }
+            }
+            _ => None,
+        };
+        let sequence = written.as_deref().and_then(parse_euler_sequence);
+        if sequence.is_none() {
+            self.error(
+                Diagnostic::error(
+                    "E0412",
+                    "expected a rotation: `quaternion` or `euler(SEQUENCE)`",
+                )
+                .with_label(f.value.span, "not a rotation")
+                .with_help(format!(
+                    "write `rotation = euler(zxy);` with one of the body-fixed sequences {}, \
+                         or `rotation = quaternion;` (the default)",
+                    EULER_SEQUENCES.join(", ")
+                )),
+            );
+        }
+        sequence
+    }
+
+    /// `q0` of a ball or free joint with Euler angles: its three angles; E0403 with a
+    /// quaternion, which starts at the identity.
+    fn lower_initial_angles(&mut self, info: &mut JointInfo, f: &ast::Field) {
+        let Some((sequence, _)) = info.euler else {
+            let kind = &info.decl.kind.name;
+            self.error(
+                Diagnostic::error(
+                    "E0403",
+                    format!("`q0` is not allowed on a {kind} joint with a quaternion"),
+                )
+                .with_label(f.name.span, "a unit quaternion starts at the identity")
+                .with_help(
+                    "turn the start with `parent_frame`, or give the joint Euler angles: \
+                         `rotation = euler(zxy); q0 = [10 deg, 0 deg, 0 deg];`",
+                ),
+            );
+            return;
+        };
+        let expect = Expect::mechanical("`q0` (Euler angles)", "[10 deg, 0 deg, 0 deg]", [0, 0, 0]);
+        let Some(angles) = self.lower_vector_as(&f.value, Ctx::Static("a joint property"), &expect)
+        else {
+            return;
+        };
+        let angles = angles.map(|e| self.evaluate(&e, f.value.span));
+        info.euler = Some((sequence, angles));
+    }
+
+    /// E0419 when Euler angles start where `q̇ = W(q) u` has no value: `cos q₂ = 0` for a
+    /// sequence of three different axes, `sin q₂ = 0` for one that repeats its first (as
+    /// `zxz` does at the default `q0 = 0`).
+    fn check_euler_start(&mut self, info: &JointInfo, span: Span) {
+        let Some((sequence, angles)) = info.euler else {
+            return;
+        };
+        let proper = sequence[0] == sequence[2];
+        let distance = match proper {
+            true => angles[1].sin().abs(),
+            false => angles[1].cos().abs(),
+        };
+        if distance > 1e-6 {
+            return;
+        }
+        let condition = match proper {
+            true => "sin q₂ = 0",
+            false => "cos q₂ = 0",
+        };
+        self.error(
+            Diagnostic::error(
+                "E0419",
+                format!(
+                    "the Euler angles of joint `{}` start at their singularity",
+                    info.decl.name.name
+                ),
+            )
+            .with_label(
+                span,
+                format!("{condition} here: the angle rates have no value"),
+            )
+            .with_help(
+                "start the second angle away from it (`q0 = [0, 30 deg, 0];`), or choose a \
+                 sequence whose singularity the motion avoids (`euler(zxy)` is singular at \
+                 x = ±90°, `euler(zxz)` at x = 0 and 180°), or a quaternion (no `rotation`)",
+            ),
+        );
+    }
+
+    /// `q0`, `u0`, `stiffness`, `rest` and `damping` of a joint with coordinates: a scalar for
+    /// a pin or slider, a vector with one entry per coordinate (each of its coordinate's
+    /// dimension) for a universal, cylindrical or planar joint.
     fn lower_joint_dynamics<'f>(
         &mut self,
         info: &mut JointInfo,
         kind: JointKind,
         field: &dyn Fn(&str) -> Option<&'f ast::Field>,
     ) {
+        let count = coordinate_parts(kind).len();
+        info.q0 = vec![0.0; count];
+        info.u0 = vec![0.0; count];
+        info.q0_expr = vec![None; count];
+        info.u0_expr = vec![None; count];
+        info.stiffness = vec![None; count];
+        info.rest = vec![Expr::zero(); count];
+        info.damping = vec![None; count];
+        for name in ["q0", "u0", "stiffness", "rest", "damping"] {
+            let Some(f) = field(name) else { continue };
+            let Some(values) = self.joint_field_values(f, name, kind) else {
+                continue;
+            };
+            for (i, (expr, span)) in values.into_iter().enumerate() {
+                match name {
+                    "q0" => {
+                        info.q0[i] = self.evaluate(&expr, span);
+                        info.q0_expr[i] = Some(expr).filter(Expr::has_params);
+                    }
+                    "u0" => {
+                        info.u0[i] = self.evaluate(&expr, span);
+                        info.u0_expr[i] = Some(expr).filter(Expr::has_params);
+                    }
+                    "stiffness" => info.stiffness[i] = Some((expr, span)),
+                    "rest" => info.rest[i] = expr,
+                    _ => info.damping[i] = Some((expr, span)),
+                }
+            }
+        }
+    }
+
+    /// The values of joint field `name`, one per coordinate with its span; `None` after an
+    /// error (E0411 when a joint with several coordinates is given a scalar).
+    fn joint_field_values(
+        &mut self,
+        f: &ast::Field,
+        name: &'static str,
+        kind: JointKind,
+    ) -> Option<Vec<(Expr, Span)>> {
         let ctx = Ctx::Static("a joint property");
-        let scalar = |this: &mut Self, name: &'static str| -> Option<(Expr, Span)> {
-            let f = field(name)?;
-            let expr = this.lower_scalar_as(&f.value, ctx, &joint_expect(name, kind))?;
-            Some((expr, f.value.span))
-        };
-        if let Some((expr, span)) = scalar(self, "q0") {
-            info.q0 = self.evaluate(&expr, span);
-            info.q0_expr = Some(expr).filter(Expr::has_params);
+        let parts = coordinate_parts(kind);
+        if let [(_, slide)] = parts {
+            let expr = self.lower_scalar_as(&f.value, ctx, &joint_expect(name, *slide))?;
+            return Some(vec![(expr, f.value.span)]);
         }
-        if let Some((expr, span)) = scalar(self, "u0") {
-            info.u0 = self.evaluate(&expr, span);
-            info.u0_expr = Some(expr).filter(Expr::has_params);
+        if !is_vector(unparen(&f.value)) {
+            let coordinates: Vec<String> = parts.iter().map(|(p, _)| format!("`{p}`")).collect();
+            let examples: Vec<&str> = parts
+                .iter()
+                .map(|&(_, slide)| joint_expect(name, slide).example)
+                .collect();
+            let kind = kind_name(kind);
+            self.error(
+                Diagnostic::error(
+                    "E0411",
+                    format!("`{name}` of a {kind} joint needs one value per coordinate"),
+                )
+                .with_label(f.value.span, "a single value")
+                .with_help(format!(
+                    "a {kind} joint has coordinates {}: write `{name} = [{}];`",
+                    coordinates.join(", "),
+                    examples.join(", ")
+                )),
+            );
+            return None;
         }
-        info.stiffness = scalar(self, "stiffness");
-        info.damping = scalar(self, "damping");
-        if let Some((rest, _)) = scalar(self, "rest") {
-            info.rest = rest;
-        }
+        let what = joint_expect(name, false).what;
+        let items = self.vector_items(&f.value, what, parts.len())?;
+        let values: Vec<Option<(Expr, Span)>> = items
+            .iter()
+            .zip(parts)
+            .map(|(item, &(_, slide))| {
+                let expr = self.lower_scalar_as(item, ctx, &joint_expect(name, slide))?;
+                Some((expr, item.span))
+            })
+            .collect();
+        values.into_iter().collect()
     }
 
     /// E0408 when a joint or loop connects a body to itself.
@@ -298,6 +580,9 @@ impl<'a> Lowerer<'a> {
             "fixed" | "rigid" => Some("weld"),
             "spherical" | "socket" => Some("ball"),
             "floating" | "free_flyer" | "freejoint" | "six_dof" => Some("free"),
+            "cardan" | "hooke" | "u_joint" | "gimbal" => Some("universal"),
+            "cylinder" | "cylindric" => Some("cylindrical"),
+            "plane" | "planar_joint" => Some("planar"),
             _ => None,
         };
         if let Some(synonym) = synonym {
@@ -343,12 +628,11 @@ impl<'a> Lowerer<'a> {
                 fields.push(field);
                 continue;
             };
-            let (not_allowed, why) = fields_not_allowed(kind);
-            if not_allowed.contains(&name) {
+            if let Some(why) = field_not_allowed(kind, name) {
                 let takes: Vec<&str> = JOINT_FIELDS
                     .iter()
                     .copied()
-                    .filter(|f| !not_allowed.contains(f))
+                    .filter(|f| field_not_allowed(kind, f).is_none())
                     .collect();
                 let kind_name = &decl.kind.name;
                 self.error(
@@ -382,7 +666,12 @@ impl<'a> Lowerer<'a> {
     ) -> Option<Vec3> {
         match (kind, field) {
             (_, Some(field)) => self.axis(&field.value, "a joint axis"),
-            (Some(JointKind::Pin | JointKind::Slider), None) => {
+            (
+                Some(
+                    JointKind::Pin | JointKind::Slider | JointKind::Cylindrical | JointKind::Planar,
+                ),
+                None,
+            ) => {
                 let what = format!("{} joint", decl.kind.name);
                 let help =
                     "add `axis = z;` (or `x`, `y`, `-z`, `[ax, ay, az]`), in the joint frame";
@@ -685,7 +974,7 @@ impl<'a> Lowerer<'a> {
         let kind = info.kind.unwrap_or(JointKind::Weld);
         let joint_frame = match kind {
             JointKind::Ball | JointKind::Free => self.build_spherical(j, parent_frame),
-            _ => self.build_single(j, parent_frame),
+            _ => self.build_moving(j, parent_frame),
         };
         let info = &self.joints[j];
         let mut previous = joint_frame;
@@ -712,28 +1001,92 @@ impl<'a> Lowerer<'a> {
         self.append_named_frames(c);
     }
 
-    /// The frame of a `pin`, `slider` or `weld` joint: at `parent_point`, oriented by
-    /// `parent_frame`, moved by the joint's one coordinate (none for a weld).
-    fn build_single(&mut self, j: usize, parent_frame: Handle<ir::Frame>) -> Handle<ir::Frame> {
+    /// The frames of a joint whose coordinates have `u = q̇`, at `parent_point`, oriented by
+    /// `parent_frame`: one per coordinate, each moved by it (a weld's one frame is fixed). The
+    /// last is the joint's frame `j`; the ones before it are named after their coordinates:
+    /// `j.angle1` (universal), `j.slide` (cylindrical), `j.slide1`, `j.slide2` (planar).
+    fn build_moving(&mut self, j: usize, parent_frame: Handle<ir::Frame>) -> Handle<ir::Frame> {
         let info = &self.joints[j];
         let (decl, kind) = (info.decl, info.kind.unwrap_or(JointKind::Weld));
-        let coordinate = match kind {
-            JointKind::Weld => None,
-            _ => Some(self.model.coordinates.append(ir::Coordinate {
-                name: decl.name.name.clone(),
-                dimension: if kind == JointKind::Slider {
-                    Dimension::LENGTH
-                } else {
-                    Dimension::NONE
-                },
-                initial: info.q0,
-                initial_speed: info.u0,
-                span: decl.name.span,
-            })),
+        let name = &decl.name.name;
+        let axes: Vec<Vec3> = match kind {
+            JointKind::Universal => vec![info.axis.clone(), info.axis2.clone()],
+            JointKind::Cylindrical => vec![info.axis.clone(), info.axis.clone()],
+            JointKind::Planar => {
+                let [first, second] = plane_axes(&info.axis);
+                vec![first, second, info.axis.clone()]
+            }
+            _ => vec![info.axis.clone()],
         };
-        if let Some(coordinate) = coordinate {
-            let written = [(info.q0_expr.clone(), false), (info.u0_expr.clone(), true)];
-            for (expr, speed) in written {
+        let parts = coordinate_parts(kind);
+        let steps: Vec<MovingFrame> = parts
+            .iter()
+            .zip(axes)
+            .enumerate()
+            .map(|(i, (&(part, slide), axis))| {
+                let coordinate = match part {
+                    "" => name.clone(),
+                    _ => format!("{name}.{part}"),
+                };
+                MovingFrame {
+                    frame: if i + 1 == parts.len() {
+                        name.clone()
+                    } else {
+                        coordinate.clone()
+                    },
+                    coordinate,
+                    slide,
+                    axis,
+                    q0: info.q0[i],
+                    u0: info.u0[i],
+                    q0_expr: info.q0_expr[i].clone(),
+                    u0_expr: info.u0_expr[i].clone(),
+                }
+            })
+            .collect();
+        let (origin, orientation) = (info.parent_point.clone(), info.parent_frame.clone());
+        let (joint_frame, coordinates) = match steps.is_empty() {
+            true => (
+                self.model.frames.append(ir::Frame {
+                    name: name.clone(),
+                    parent: Some(parent_frame),
+                    origin,
+                    orientation,
+                    motion: Motion::Fixed,
+                    span: decl.span,
+                }),
+                Vec::new(),
+            ),
+            false => self.append_moving_frames(decl, parent_frame, origin, orientation, steps),
+        };
+        self.record_joint(j, coordinates, None, joint_frame);
+        joint_frame
+    }
+
+    /// Appends a chain of frames, each moved by a new coordinate of `u = q̇`, the first placed
+    /// at `origin` with `orientation` in `parent`; returns the last frame and the coordinates.
+    fn append_moving_frames(
+        &mut self,
+        decl: &ast::JointDecl,
+        mut parent: Handle<ir::Frame>,
+        mut origin: Vec3,
+        mut orientation: Vec<AxisAngle>,
+        steps: Vec<MovingFrame>,
+    ) -> (Handle<ir::Frame>, Vec<Handle<ir::Coordinate>>) {
+        let mut coordinates = Vec::with_capacity(steps.len());
+        for step in steps {
+            let coordinate = self.model.coordinates.append(ir::Coordinate {
+                name: step.coordinate,
+                dimension: match step.slide {
+                    true => Dimension::LENGTH,
+                    false => Dimension::NONE,
+                },
+                initial: step.q0,
+                initial_speed: step.u0,
+                span: decl.name.span,
+            });
+            coordinates.push(coordinate);
+            for (expr, speed) in [(step.q0_expr, false), (step.u0_expr, true)] {
                 if let Some(expr) = expr {
                     let value = ir::InitialValue {
                         coordinate,
@@ -743,29 +1096,20 @@ impl<'a> Lowerer<'a> {
                     self.model.initial_values.push(value);
                 }
             }
+            let axis = step.axis;
+            parent = self.model.frames.append(ir::Frame {
+                name: step.frame,
+                parent: Some(parent),
+                origin: std::mem::replace(&mut origin, zeros()),
+                orientation: std::mem::take(&mut orientation),
+                motion: match step.slide {
+                    true => Motion::Prismatic { axis, coordinate },
+                    false => Motion::Revolute { axis, coordinate },
+                },
+                span: decl.span,
+            });
         }
-        let info = &self.joints[j];
-        let motion = match (kind, coordinate) {
-            (JointKind::Pin, Some(coordinate)) => Motion::Revolute {
-                axis: info.axis.clone(),
-                coordinate,
-            },
-            (JointKind::Slider, Some(coordinate)) => Motion::Prismatic {
-                axis: info.axis.clone(),
-                coordinate,
-            },
-            _ => Motion::Fixed,
-        };
-        let joint_frame = self.model.frames.append(ir::Frame {
-            name: decl.name.name.clone(),
-            parent: Some(parent_frame),
-            origin: info.parent_point.clone(),
-            orientation: info.parent_frame.clone(),
-            motion,
-            span: decl.span,
-        });
-        self.record_joint(j, coordinate.into_iter().collect(), None, joint_frame);
-        joint_frame
+        (parent, coordinates)
     }
 
     /// The frames of a `ball` joint (one, turned by a quaternion) or a `free` joint (slides
@@ -784,49 +1128,61 @@ impl<'a> Lowerer<'a> {
         );
         if info.kind == Some(JointKind::Free) {
             let velocity0 = info.velocity0;
-            for (axis, part) in ["x", "y", "z"].into_iter().enumerate() {
-                let coordinate = self.model.coordinates.append(ir::Coordinate {
-                    name: format!("{name}.{part}"),
-                    dimension: Dimension::LENGTH,
-                    initial: 0.0,
-                    initial_speed: velocity0[axis],
-                    span: decl.name.span,
-                });
-                coordinates.push(coordinate);
-                let mut unit = zeros();
-                unit[axis] = Expr::one();
-                parent = self.model.frames.append(ir::Frame {
-                    name: format!("{name}.{part}"),
-                    parent: Some(parent),
-                    origin: std::mem::replace(&mut origin, zeros()),
-                    orientation: std::mem::take(&mut orientation),
-                    motion: Motion::Prismatic {
-                        axis: unit,
-                        coordinate,
-                    },
-                    span: decl.span,
-                });
-            }
+            let steps = ["x", "y", "z"]
+                .into_iter()
+                .enumerate()
+                .map(|(axis, part)| MovingFrame {
+                    frame: format!("{name}.{part}"),
+                    coordinate: format!("{name}.{part}"),
+                    slide: true,
+                    axis: unit_axis(axis),
+                    q0: 0.0,
+                    u0: velocity0[axis],
+                    q0_expr: None,
+                    u0_expr: None,
+                })
+                .collect();
+            let (origin_now, orientation_now) = (
+                std::mem::replace(&mut origin, zeros()),
+                std::mem::take(&mut orientation),
+            );
+            (parent, coordinates) =
+                self.append_moving_frames(decl, parent, origin_now, orientation_now, steps);
         }
         let info = &self.joints[j];
-        let quaternion = self.model.quaternions.append(ir::Quaternion {
-            name: name.clone(),
-            initial_angular_velocity: info.angular_velocity0,
-            span: decl.name.span,
-        });
+        let (motion, quaternion) = match info.euler {
+            Some((sequence, initial_angles)) => {
+                let angles = self.model.euler_angles.append(ir::EulerAngles {
+                    name: name.clone(),
+                    sequence,
+                    initial_angles,
+                    initial_angular_velocity: info.angular_velocity0,
+                    span: decl.name.span,
+                });
+                (Motion::Euler { angles }, None)
+            }
+            None => {
+                let quaternion = self.model.quaternions.append(ir::Quaternion {
+                    name: name.clone(),
+                    initial_angular_velocity: info.angular_velocity0,
+                    span: decl.name.span,
+                });
+                (Motion::Spherical { quaternion }, Some(quaternion))
+            }
+        };
         let joint_frame = self.model.frames.append(ir::Frame {
             name,
             parent: Some(parent),
             origin,
             orientation,
-            motion: Motion::Spherical { quaternion },
+            motion,
             span: decl.span,
         });
-        self.record_joint(j, coordinates, Some(quaternion), joint_frame);
+        self.record_joint(j, coordinates, quaternion, joint_frame);
         joint_frame
     }
 
-    /// The IR joint, and the spring and damper of a joint with one coordinate.
+    /// The IR joint, and the springs and dampers of its coordinates.
     fn record_joint(
         &mut self,
         j: usize,
@@ -849,26 +1205,27 @@ impl<'a> Lowerer<'a> {
             kind: info.kind.unwrap_or(JointKind::Weld),
             parent: (p != 0).then(|| Handle::new(p - 1)),
             child: Handle::new(c - 1),
-            coordinates,
+            coordinates: coordinates.clone(),
             quaternion,
             span: info.decl.span,
         });
-        let Some(coordinate) = coordinate else { return };
-        if let Some((stiffness, span)) = info.stiffness.clone() {
-            let rest = info.rest.clone();
-            self.model.loads.push(ir::Load::Spring {
-                coordinate,
-                stiffness,
-                rest,
-                span,
-            });
-        }
-        if let Some((damping, span)) = info.damping.clone() {
-            self.model.loads.push(ir::Load::Damper {
-                coordinate,
-                damping,
-                span,
-            });
+        for (i, &coordinate) in coordinates.iter().enumerate() {
+            if let Some((stiffness, span)) = info.stiffness.get(i).cloned().flatten() {
+                let rest = info.rest[i].clone();
+                self.model.loads.push(ir::Load::Spring {
+                    coordinate,
+                    stiffness,
+                    rest,
+                    span,
+                });
+            }
+            if let Some((damping, span)) = info.damping.get(i).cloned().flatten() {
+                self.model.loads.push(ir::Load::Damper {
+                    coordinate,
+                    damping,
+                    span,
+                });
+            }
         }
     }
 
@@ -946,4 +1303,60 @@ fn inverse(rotation: &[AxisAngle]) -> Vec<AxisAngle> {
             angle: neg(r.angle.clone()),
         })
         .collect()
+}
+
+/// The unit vector along axis `index` (0 = x) of a frame.
+fn unit_axis(index: usize) -> Vec3 {
+    let mut unit = zeros();
+    unit[index] = Expr::one();
+    unit
+}
+
+/// The two slide directions of a planar joint with unit normal `normal`, so that they and
+/// `normal` are right-handed: the axis after `normal`'s largest component in the cycle
+/// x → y → z → x, made normal to it (`first`), then `normal × first`. For `normal` = z they
+/// are x and y; for x, y and z; for y, z and x.
+fn plane_axes(normal: &Vec3) -> [Vec3; 2] {
+    let n = normal.clone().map(|c| match c {
+        Expr::Number(n) => n,
+        _ => Number::int(0),
+    });
+    let largest = (0..3)
+        .max_by(|&a, &b| n[a].to_f64().abs().total_cmp(&n[b].to_f64().abs()))
+        .unwrap_or(2);
+    let next = (largest + 1) % 3;
+    // e − (e·n) n with e the unit vector `next`.
+    let along = n[next];
+    let projected: Vec<Number> = (0..3)
+        .map(|i| {
+            let e = Number::int(i64::from(i == next));
+            e.sub(along.mul(n[i]))
+        })
+        .collect();
+    let first = normalize(&projected).unwrap_or_else(|| unit_axis(next));
+    let f = first.clone().map(|c| match c {
+        Expr::Number(n) => n,
+        _ => Number::int(0),
+    });
+    let second = [
+        n[1].mul(f[2]).sub(n[2].mul(f[1])),
+        n[2].mul(f[0]).sub(n[0].mul(f[2])),
+        n[0].mul(f[1]).sub(n[1].mul(f[0])),
+    ];
+    let second = normalize(&second).unwrap_or_else(|| unit_axis((next + 1) % 3));
+    [first, second]
+}
+
+/// The twelve body-fixed Euler sequences, as written in `rotation = euler(…)`.
+const EULER_SEQUENCES: [&str; 12] = [
+    "xyz", "xzy", "yxz", "yzx", "zxy", "zyx", "xyx", "xzx", "yxy", "yzy", "zxz", "zyz",
+];
+
+/// The axes (0 = x) of a sequence of [`EULER_SEQUENCES`].
+fn parse_euler_sequence(written: &str) -> Option<[usize; 3]> {
+    if !EULER_SEQUENCES.contains(&written) {
+        return None;
+    }
+    let mut axes = written.bytes().map(|b| usize::from(b - b'x'));
+    Some([axes.next()?, axes.next()?, axes.next()?])
 }
