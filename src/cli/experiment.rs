@@ -22,7 +22,19 @@ pub struct ExperimentArgs {
 }
 
 pub fn run(args: &ExperimentArgs) -> Result<(), Error> {
-    let outcome = crate::render::experiments::run_file(&args.file, &args.out_dir)?;
+    // Drawn once an experiment reports parts (a locomotion grid's walks).
+    let bar = std::sync::OnceLock::new();
+    let progress = |done: usize, total: usize| {
+        let bar =
+            bar.get_or_init(|| super::progress_bar(total as u64, "runs {bar:30} {pos}/{len}"));
+        bar.set_position(done as u64);
+    };
+    let outcome =
+        crate::render::experiments::run_file_with_progress(&args.file, &args.out_dir, &progress);
+    if let Some(bar) = bar.get() {
+        bar.finish_and_clear();
+    }
+    let outcome = outcome?;
     let experiment = output::Read {
         path: args.file.clone(),
         what: "the experiment file",

@@ -327,8 +327,9 @@ pub struct Walks {
     pub shown: Option<(Walk, Trajectory)>,
 }
 
-/// Simulates every (frequency, payload) of the grid on all cores.
-pub fn compute(spec: &Spec) -> Result<Walks, Error> {
+/// Simulates every (frequency, payload) of the grid on all cores, telling `progress`
+/// `(walks done, walks)` as each finishes.
+pub fn compute(spec: &Spec, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<Walks, Error> {
     let settings = spec.settings()?;
     // Check the names once before the runs.
     let probe = open(spec, settings.frequencies[0], 0.0)?;
@@ -340,8 +341,12 @@ pub fn compute(spec: &Spec) -> Result<Walks, Error> {
         .enumerate()
         .map(|(k, (f, m))| (k, f, m))
         .collect();
+    let total = jobs.len();
+    let done = std::sync::atomic::AtomicUsize::new(0);
     let results = parallel(jobs, threads(), |(k, frequency, payload)| {
         let walk = walk(spec, frequency, payload);
+        let finished = done.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
+        progress(finished, total);
         (k, frequency, payload, walk)
     });
     let mut walks = Vec::new();

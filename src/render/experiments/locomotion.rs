@@ -23,8 +23,8 @@ const PAPER_PAYLOAD: f64 = 2.9e-3;
 /// well above what the body's sway leaves over whole cycles.
 const ADVANCE_PER_CYCLE: f64 = 0.1e-3;
 
-pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
-    let walks = compute(spec)?;
+pub fn run(spec: &Spec, dir: &Path, progress: super::Progress<'_>) -> Result<Outcome, Error> {
+    let walks = compute(spec, progress)?;
     let mut outcome = Outcome::with_method(method_text(spec, &walks));
     outcome.tables.push(walks_table(&walks));
     outcome.tables.push(facts_table(&walks));

@@ -19,9 +19,23 @@ use crate::experiments::{load, stem, Error, Experiment, Kind};
 use crate::parallel::{parallel, threads};
 use crate::render::report::Outcome;
 
+/// Told `(done, total)` as the parts of one experiment finish (the walks of a locomotion
+/// grid); kinds that run as one piece do not call it.
+pub type Progress<'a> = &'a (dyn Fn(usize, usize) + Sync);
+
 /// Runs the experiment, writing its files under `out_dir` (named by `name`): the file's
 /// notes first, then what the kind observes.
 pub fn run(experiment: &Experiment, name: &str, out_dir: &Path) -> Result<Outcome, Error> {
+    run_with_progress(experiment, name, out_dir, &|_, _| {})
+}
+
+/// [`run`], telling `progress` as the experiment's parts finish.
+pub fn run_with_progress(
+    experiment: &Experiment,
+    name: &str,
+    out_dir: &Path,
+    progress: Progress<'_>,
+) -> Result<Outcome, Error> {
     let mut outcome = match &experiment.kind {
         Kind::Trajectory(s) => trajectory::run(s, out_dir)?,
         Kind::ForceDeflection(s) => force::run(s, out_dir)?,
@@ -30,7 +44,7 @@ pub fn run(experiment: &Experiment, name: &str, out_dir: &Path) -> Result<Outcom
         Kind::Bode(s) => bode::run(s, out_dir)?,
         Kind::TableDiagnosis(s) => table_diagnosis::run(s, out_dir)?,
         Kind::Tolerance(s) => tolerance::run(s, out_dir)?,
-        Kind::Locomotion(s) => locomotion::run(s, out_dir)?,
+        Kind::Locomotion(s) => locomotion::run(s, out_dir, progress)?,
     };
     let observed = std::mem::replace(&mut outcome.notes, experiment.notes.clone());
     outcome.notes.extend(observed);
@@ -66,9 +80,19 @@ pub fn run_all(
 
 /// Runs one experiment file, its outputs in `out_dir/<stem>/`.
 pub fn run_file(path: &Path, out_dir: &Path) -> Result<Outcome, Error> {
+    run_file_with_progress(path, out_dir, &|_, _| {})
+}
+
+/// [`run_file`], telling `progress` as the experiment's parts finish.
+pub fn run_file_with_progress(
+    path: &Path,
+    out_dir: &Path,
+    progress: Progress<'_>,
+) -> Result<Outcome, Error> {
     let experiment = load(path)?;
     let name = stem(path);
-    run(&experiment, &name, &out_dir.join(&name)).map_err(|e| e.in_file(path))
+    run_with_progress(&experiment, &name, &out_dir.join(&name), progress)
+        .map_err(|e| e.in_file(path))
 }
 
 /// Renders a CSV under `dir` into the outcome.
