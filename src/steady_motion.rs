@@ -7,7 +7,7 @@
 //! printing, no files (`cli::linearize` renders them).
 
 use mech_codegen::ir::Dimension;
-use mech_runtime::{linearize_steady, Model, SteadyLinearization};
+use mech_runtime::{linearize_steady, Model, SteadyLinearization, SteadyState};
 
 use crate::session::{quantity, Error, NameKind, Session};
 
@@ -103,6 +103,16 @@ impl Sweep {
             },
         })
     }
+}
+
+/// The names of a steady linearization's states: `q_NAME` for a coordinate, `u_NAME` for a
+/// speed.
+pub fn state_names(model: &dyn Model, linear: &SteadyLinearization) -> Vec<String> {
+    let name = |state: &SteadyState| match *state {
+        SteadyState::Coordinate(i) => format!("q_{}", model.coordinate_name(i)),
+        SteadyState::Speed(i) => format!("u_{}", model.speed_name(i)),
+    };
+    linear.states.iter().map(name).collect()
 }
 
 /// Where a steady motion starts: the held coordinates and the `--q0`/`--u0` settings.

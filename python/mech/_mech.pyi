@@ -49,6 +49,12 @@ class Model:
         pandas DataFrame indexed by `t` (`q_NAME`, `u_NAME`, outputs, inputs)."""
     def statics(self, independent: Independent = None, inputs: Optional[Array] = None) -> dict[str, Any]: ...
     def linearize(self, independent: Independent = None, inputs: Optional[Array] = None) -> dict[str, Any]: ...
+    def linearize_steady(
+        self, independent: Independent = None, inputs: Optional[Array] = None
+    ) -> dict[str, Any]:
+        """`δẋ = A δx` about the steady motion through the initial state: `states`, `cyclic`,
+        `A`, complex `eigenvalues`, `unsteadiness`, `cyclic_change`, and `coordinates`, `M`,
+        `C`, `K` when the second-order form exists."""
     def bode(
         self,
         input: str,

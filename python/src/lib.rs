@@ -538,6 +538,62 @@ impl Model {
         Ok(dict)
     }
 
+    /// The linear model about the steady motion through the assembled initial state (its
+    /// `u0` at the current parameters: `set("v=3 m/s")` moves a `u0 = v / r`), `δẋ = A δx`:
+    /// `states` (`q_NAME`, `u_NAME`: the independent coordinates that are not cyclic, then the
+    /// independent speeds), `cyclic` (the coordinates dropped), `A`, `eigenvalues` (complex,
+    /// sorted by real part), `unsteadiness` (max |ẋ| at the point), `cyclic_change` (how much
+    /// `A` changes when the cyclic coordinates move on: round-off for a symmetry) and, when
+    /// every kept coordinate's speed is independent, `coordinates`, `M`, `C`, `K` of
+    /// `M δz̈ + C δż + K δz = 0`.
+    #[pyo3(signature = (independent=None, inputs=None))]
+    fn linearize_steady<'py>(
+        &self,
+        py: Python<'py>,
+        independent: Option<Bound<'py, PyAny>>,
+        inputs: Option<PyReadonlyArray1<f64>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let inputs = self.input_values(inputs)?;
+        let linear = self.detached(py, independent, move |session, independent| {
+            let point = mech::steady_motion::OperatingPoint {
+                independent: independent.to_vec(),
+                ..Default::default()
+            };
+            mech::steady_motion::linearize(session, &point, &inputs)
+        })?;
+        let session = self.session();
+        let model = &session.model;
+        let dict = PyDict::new(py);
+        dict.set_item("states", mech::steady_motion::state_names(model, &linear))?;
+        let cyclic: Vec<&str> = linear
+            .cyclic
+            .iter()
+            .map(|&i| model.coordinate_name(i))
+            .collect();
+        dict.set_item("cyclic", cyclic)?;
+        dict.set_item("A", matrix(py, &linear.a))?;
+        let eigenvalues: Vec<Complex64> = linear
+            .eigenvalues()
+            .iter()
+            .map(|z| Complex64::new(z.re, z.im))
+            .collect();
+        dict.set_item("eigenvalues", PyArray1::from_vec(py, eigenvalues))?;
+        dict.set_item("unsteadiness", linear.unsteadiness())?;
+        dict.set_item("cyclic_change", linear.cyclic_change)?;
+        if let Some(form) = linear.second_order() {
+            let names: Vec<&str> = form
+                .coordinates
+                .iter()
+                .map(|&i| model.coordinate_name(i))
+                .collect();
+            dict.set_item("coordinates", names)?;
+            dict.set_item("M", matrix(py, &form.mass))?;
+            dict.set_item("C", matrix(py, &form.damping))?;
+            dict.set_item("K", matrix(py, &form.stiffness))?;
+        }
+        Ok(dict)
+    }
+
     /// The frequency response from input `input` to output `output` of the linear model about
     /// the static equilibrium, at `frequencies_hz`: complex gains (SI units). `damping` is
     /// `hysteretic` (flexures as complex stiffness k(1 + iη), exact at every frequency;

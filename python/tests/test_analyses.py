@@ -139,3 +139,51 @@ def test_report_writes_the_pages_and_each_experiments_files(tmp_path, monkeypatc
         assert outcome["values"] == alone["values"]
     with pytest.raises(mech.MechError, match="experiments folder"):
         mech.report(out, experiments=tmp_path / "nothing")
+
+
+# ---------------------------------------------------------------- steady motion
+
+# Meijaard, Papadopoulos, Ruina & Schwab (2007), eq. (A 24): the benchmark bicycle's
+# M q̈ + v C1 q̇ + (g K0 + v² K2) q = 0 in q = (roll, steer).
+BICYCLE_M = np.array([[80.81722, 2.31941332208709], [2.31941332208709, 0.29784188199686]])
+BICYCLE_C1 = np.array([[0.0, 33.86641391492494], [-0.85035641456978, 1.68540397397560]])
+BICYCLE_K0 = np.array([[-80.95, -2.59951685249872], [-2.59951685249872, -0.80329488458618]])
+BICYCLE_K2 = np.array([[0.0, 76.59734589573222], [0.0, 2.65431523794604]])
+
+
+def test_linearize_steady_gives_the_benchmark_bicycle():
+    """`models/whipple_bicycle.mech` at 3 and 5 m/s (`set("v=…")` moves the rear wheel's
+    `u0 = v / rR`): the second-order matrices are the paper's, and the eigenvalues but the
+    forward speed's zero are those of the paper's equations, solved here in NumPy."""
+    bicycle = mech.load(ROOT / "models" / "whipple_bicycle.mech")
+    for v in (3.0, 5.0):
+        bicycle.set(f"v={v} m/s")
+        steady = bicycle.linearize_steady(independent=["roll", "steer", "rear"])
+        assert steady["cyclic"] == ["x", "y", "yaw", "rear", "front"]
+        assert steady["states"] == ["q_roll", "q_steer", "u_roll", "u_rear", "u_steer"]
+        assert steady["coordinates"] == ["roll", "steer"]
+        assert steady["unsteadiness"] < 1e-12
+        np.testing.assert_allclose(steady["M"], BICYCLE_M, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(steady["C"], v * BICYCLE_C1, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(
+            steady["K"], 9.81 * BICYCLE_K0 + v * v * BICYCLE_K2, rtol=1e-9, atol=1e-9
+        )
+        a = np.block(
+            [
+                [np.zeros((2, 2)), np.eye(2)],
+                [
+                    -np.linalg.solve(BICYCLE_M, 9.81 * BICYCLE_K0 + v * v * BICYCLE_K2),
+                    -np.linalg.solve(BICYCLE_M, v * BICYCLE_C1),
+                ],
+            ]
+        )
+        expected = np.sort_complex(np.linalg.eigvals(a))
+        ours = steady["eigenvalues"]
+        ours = np.sort_complex(ours[np.abs(ours) > 1e-9])
+        np.testing.assert_allclose(ours, expected, rtol=1e-9)
+
+
+def test_linearize_steady_refuses_a_quaternion_model():
+    pendulum = mech.load(ROOT / "models" / "ball_double_pendulum.mech")
+    with pytest.raises(mech.MechError, match="steady-motion linearization"):
+        pendulum.linearize_steady()

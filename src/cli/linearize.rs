@@ -13,7 +13,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 use mech_runtime::nalgebra::{Complex, DMatrix};
-use mech_runtime::{Linearization, Model, SteadyLinearization, SteadyState};
+use mech_runtime::{Linearization, Model, SteadyLinearization};
 
 use super::ModelArgs;
 use crate::output;
@@ -196,14 +196,6 @@ fn write_files(files: &[output::File], reads: &[output::Read]) -> Result<(), Err
     Ok(())
 }
 
-/// The name of a state of a steady linearization: `q_NAME` or `u_NAME`.
-fn state_name(model: &dyn Model, state: &SteadyState) -> String {
-    match *state {
-        SteadyState::Coordinate(i) => format!("q_{}", model.coordinate_name(i)),
-        SteadyState::Speed(i) => format!("u_{}", model.speed_name(i)),
-    }
-}
-
 /// The eigenvalues of `linear` with parts below 1e-10 of the largest eigenvalue shown as
 /// zero (the central differences' round-off on a zero eigenvalue has no sign worth showing).
 fn shown_eigenvalues(linear: &SteadyLinearization) -> Vec<Complex<f64>> {
@@ -269,7 +261,7 @@ fn run_steady(args: &LinearizeArgs) -> Result<(), Error> {
     bar.finish_and_clear();
     let model = &session.model;
     let first = &results[0];
-    let names: Vec<String> = first.states.iter().map(|s| state_name(model, s)).collect();
+    let names = steady_motion::state_names(model, first);
     let cyclic: Vec<&str> = first
         .cyclic
         .iter()
@@ -359,7 +351,7 @@ fn cyclic_warning(model: &dyn Model, linear: &SteadyLinearization) -> String {
 
 /// The report of one steady linearization.
 fn steady_text(model: &dyn Model, linear: &SteadyLinearization) -> String {
-    let names: Vec<String> = linear.states.iter().map(|s| state_name(model, s)).collect();
+    let names = steady_motion::state_names(model, linear);
     let cyclic: Vec<&str> = linear
         .cyclic
         .iter()
