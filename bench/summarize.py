@@ -966,7 +966,9 @@ def floating_section(R):
     mj = by_n(read_jsonl(os.path.join(R, 'free_chain_mujoco.jsonl')))
     mech = by_n([r for r in rows if r.get('record') == 'free_chain'])
     rounds = len(mech.get(FLOATING_SIZES[0], []))
-    values = dict(rounds=rounds)
+    loads = [r['loadavg'].split()[0] for r in read_jsonl(os.path.join(R, 'load.jsonl'))
+             if r.get('section') == 'floating']
+    values = dict(rounds=rounds, load=loads[-1] if loads else '-')
     L.append(f'`bench/run.sh` step 5h, {rounds} round(s), each round: '
              '`free_chain_pinocchio N 5` (Pinocchio C++, `aba`, built from '
              '`bench/native/free_chain_pinocchio.cpp` at -O3 -march=native), '
@@ -998,6 +1000,11 @@ def floating_section(R):
         L.append(f'| {n} | {n + 6} | {fmt(m_ns)} | {fmt(p_ns)} | {fmt(j_ns)} | '
                  f'{fmt(ratio(p_ns, m_ns))}× | {fmt(ratio(j_ns, m_ns))}× | '
                  f'{"-" if dp is None else f"{dp:.1e}"} | {"-" if dj is None else f"{dj:.1e}"} |')
+    # how each time grows from the second largest N to the largest
+    for who, rows_of, key in (('mech', mech, None), ('pin', pin, 'aba_ns'), ('mujoco', mj, 'forward_ns')):
+        times = [med([r['udot_ns']['median'] if key is None else r.get(key)
+                      for r in rows_of.get(n, [])]) for n in FLOATING_SIZES[-2:]]
+        values[f'{who}_growth'] = fmt(ratio(times[1], times[0]))
     L.append('')
     quad = [r for r in rows if r.get('record') == 'quadruped']
     if quad:
