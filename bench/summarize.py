@@ -975,18 +975,26 @@ def floating_section(R):
              '`free_chain_mujoco free_chainN.xml N 5` (MuJoCo C API, `mj_forward`, '
              '`bench/native/free_chain_mujoco.c`), N = 4, 8, 16, 32, then '
              '`target/release/floating` (mech: the generated Rust of `floating_chain_source(N)`, '
-             '`M`, `F` and the Cholesky solve). Medians of the rounds\' medians, ns per u̇; the '
+             '`M`, `F` and the Cholesky solve). Medians of the rounds\' medians, ns per u̇, in the '
+             'CPU time of the timing thread (`CLOCK_THREAD_CPUTIME_ID`, `/proc/thread-self/schedstat`: '
+             'the machine is shared, and wall time counts the time other processes hold the core; '
+             'wall times beside); the '
              'state is the same for all three (base at the origin, unrotated and at rest, joints at '
              '0.5 rad, joint rates 0.3((i mod 3) − 1) + 0.1 i); "max |Δu̇|" compares the u̇ each '
              'printed there.')
     L.append('')
-    L.append('| N | speeds | mech ns | Pinocchio ABA ns | MuJoCo mj_forward ns | Pinocchio / mech | '
-             'MuJoCo / mech | max \\|Δu̇\\| mech − Pinocchio | mech − MuJoCo |')
-    L.append('|---|---|---|---|---|---|---|---|---|')
+    L.append('| N | speeds | mech CPU ns | Pinocchio ABA CPU ns | MuJoCo mj_forward CPU ns | '
+             'Pinocchio / mech | MuJoCo / mech | wall: mech, Pinocchio, MuJoCo ns | wall ratios | '
+             'max \\|Δu̇\\| mech − Pinocchio | mech − MuJoCo |')
+    L.append('|---|---|---|---|---|---|---|---|---|---|---|')
+    crossover = {}
     for n in FLOATING_SIZES:
-        m_ns = med([r['udot_ns']['median'] for r in mech.get(n, [])])
-        p_ns = med([r.get('aba_ns') for r in pin.get(n, [])])
-        j_ns = med([r.get('forward_ns') for r in mj.get(n, [])])
+        def cpu(rows, key):
+            return med([(r.get(key) or {}).get('median') if key == 'udot_cpu_ns' else r.get(key)
+                        for r in rows.get(n, [])])
+        m_ns, p_ns, j_ns = cpu(mech, 'udot_cpu_ns'), cpu(pin, 'aba_cpu_ns'), cpu(mj, 'forward_cpu_ns')
+        m_wall = med([r['udot_ns']['median'] for r in mech.get(n, [])])
+        p_wall, j_wall = cpu(pin, 'aba_ns'), cpu(mj, 'forward_ns')
 
         def gap(peer):
             if not mech.get(n) or not peer.get(n):
@@ -994,15 +1002,24 @@ def floating_section(R):
             a, b = mech[n][-1]['udot'], peer[n][-1].get('udot', [])
             return max(abs(x - y) for x, y in zip(a, b)) if len(a) == len(b) else None
         dp, dj = gap(pin), gap(mj)
+        rp, rj = ratio(p_ns, m_ns), ratio(j_ns, m_ns)
+        for who, r in (('pin', rp), ('mujoco', rj)):
+            if r is not None and r < 1 and who not in crossover:
+                crossover[who] = n
         values.update({f'mech_{n}': fmt(m_ns), f'pin_{n}': fmt(p_ns), f'mujoco_{n}': fmt(j_ns),
-                       f'pin_ratio_{n}': fmt(ratio(p_ns, m_ns)),
-                       f'mujoco_ratio_{n}': fmt(ratio(j_ns, m_ns))})
+                       f'pin_ratio_{n}': fmt(rp), f'mujoco_ratio_{n}': fmt(rj),
+                       f'verdict_{n}': ('**met**' if rp and rj and rp > 1 and rj > 1
+                                        else '**missed**')})
         L.append(f'| {n} | {n + 6} | {fmt(m_ns)} | {fmt(p_ns)} | {fmt(j_ns)} | '
-                 f'{fmt(ratio(p_ns, m_ns))}× | {fmt(ratio(j_ns, m_ns))}× | '
+                 f'{fmt(rp)}× | {fmt(rj)}× | {fmt(m_wall)}, {fmt(p_wall)}, {fmt(j_wall)} | '
+                 f'{fmt(ratio(p_wall, m_wall))}×, {fmt(ratio(j_wall, m_wall))}× | '
                  f'{"-" if dp is None else f"{dp:.1e}"} | {"-" if dj is None else f"{dj:.1e}"} |')
+    for who in ('pin', 'mujoco'):
+        values[f'{who}_crossover'] = crossover.get(who, 'none up to 32')
     # how each time grows from the second largest N to the largest
-    for who, rows_of, key in (('mech', mech, None), ('pin', pin, 'aba_ns'), ('mujoco', mj, 'forward_ns')):
-        times = [med([r['udot_ns']['median'] if key is None else r.get(key)
+    for who, rows_of, key in (('mech', mech, None), ('pin', pin, 'aba_cpu_ns'),
+                              ('mujoco', mj, 'forward_cpu_ns')):
+        times = [med([(r.get('udot_cpu_ns') or {}).get('median') if key is None else r.get(key)
                       for r in rows_of.get(n, [])]) for n in FLOATING_SIZES[-2:]]
         values[f'{who}_growth'] = fmt(ratio(times[1], times[0]))
     L.append('')
