@@ -21,7 +21,7 @@
 #   5d. the HAMR leg: `cargo run --release --example hamr_performance` (a Markdown table);
 #   5e. the HAMR leg's statics: `cargo run --release --example statics_timing` (Markdown tables);
 #   5f. tapes as native code: `cargo run --release --example jit_performance` (Markdown tables);
-#   5h. the floating base (issue 15): `bench/native/free_chain_pinocchio.cpp` and
+#   5i. the floating base (issue 15): `bench/native/free_chain_pinocchio.cpp` and
 #      `free_chain_mujoco.c` built against the wheels (the MJCF from
 #      `tests/peers/pinocchio_free_chain.py --xml N`), then FLOAT_ROUNDS rounds of Pinocchio C++
 #      and MuJoCo C at N = 4, 8, 16, 32, `target/release/floating` (mech's u̇, the quadruped's
@@ -29,6 +29,9 @@
 #   5g. the Python call overhead: the package installed into bench/.venv (`pip install
 #      ./python`), then `bench/python_overhead.py` (`model.rhs` against the same evaluation in
 #      Rust, a Markdown table);
+#   5h. the whole HAMR-VI robot in MuJoCo beside mech (`bench/mujoco_robot.py --mech ...`:
+#      the same URDF and trot; time per simulated second and forward speed; a Markdown
+#      table in bench/results/mujoco_robot.md for bench/analysis_robot_mujoco.md);
 #   6. bench/summarize.py: docs/benchmarks.md.
 # ../shared/peers is only read: every result goes to bench/results/ (JSON lines), and every
 # command run is logged in bench/results/commands.txt.
@@ -37,9 +40,10 @@
 # N = 12 once with a 180 s cap, the default; 0: skip), PIN_REPS (default 7), PAIRED_ROUNDS
 # (default 5), LOOP_REPS (SymPy loop-model processes, default 3), LOOP_ROUNDS (paired
 # four-bar rounds, default 5), SKIP_CHAIN_PEERS=1 (reuse the chain peers' results of an
-# earlier run: steps 3 and 4 skipped), SKIP_SUMMARY=1, FLOAT_ROUNDS (step 5h's rounds,
-# default 3), SKIP_FLOATING=1 (step 5h skipped, its earlier results kept), ONLY_FLOATING=1
-# (steps 3 to 5g skipped: step 5h and the summary only).
+# earlier run: steps 3 and 4 skipped), SKIP_MUJOCO_ROBOT=1 (step 5h skipped), MUJOCO_ROBOT_HZ
+# (its gait frequencies, default "10 5 2"), SKIP_SUMMARY=1, FLOAT_ROUNDS (step 5i's rounds,
+# default 3), SKIP_FLOATING=1 (step 5i skipped, its earlier results kept), ONLY_FLOATING=1
+# (steps 3 to 5h skipped: step 5i and the summary only).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 PEERS=${PEERS:-../shared/peers}
@@ -64,11 +68,18 @@ LOOP_REPS=${LOOP_REPS:-3}
 if [ "$SKIP_CHAIN_PEERS" != 1 ]; then
   rm -f $R/sympy_chain.jsonl $R/pinocchio_py.jsonl $R/pinocchio_cpp.jsonl
 fi
+LOAD_PREFIX=
 if [ "$ONLY_FLOATING" = 1 ]; then
-  echo "# ONLY_FLOATING=1: steps 3 to 5g skipped, their earlier results kept" >> $R/commands.txt
+  # drop what an earlier ONLY_FLOATING run appended, keep the full run's lines
+  sed -i '/^# ONLY_FLOATING=1/,$d' $R/commands.txt
+  sed -i '/"section":"floating/d' $R/load.jsonl
+  LOAD_PREFIX=floating_
+  echo "# ONLY_FLOATING=1: steps 3 to 5h skipped, their earlier results kept" >> $R/commands.txt
 else
   rm -f $R/mech.jsonl $R/load.jsonl $R/commands.txt $R/sympy_fourbar.jsonl $R/sympy_fivebar.jsonl
   : > $R/commands.txt
+  # The machine, commit and date of this run, for the header of docs/benchmarks.md.
+  python3 bench/summarize.py --record-machine $R/machine.json
 fi
 
 # Logs and runs a command; a failure is recorded, not fatal.
@@ -77,7 +88,7 @@ run() {
   "$@"
 }
 load() { # section name
-  printf '{"section":"%s","date":"%s","loadavg":"%s"}\n' "$1" "$(date -u +%FT%TZ)" "$(cat /proc/loadavg)" >> $R/load.jsonl
+  printf '{"section":"%s%s","date":"%s","loadavg":"%s"}\n' "$LOAD_PREFIX" "$1" "$(date -u +%FT%TZ)" "$(cat /proc/loadavg)" >> $R/load.jsonl
 }
 failed() { # script N rc
   printf '{"script":"%s","N":%s,"status":"process-failed rc=%s"}\n' "$1" "$2" "$3"
@@ -109,8 +120,8 @@ run cargo build --release -p mech-bench || exit 1
 # wheels' libraries) and mech's generated u̇ on the floating chain, side by side in each round;
 # the quadruped's derivation; the rolling disc's 10 s in mech and in SymPy + SciPy.
 floating_step() {
-  echo "== 5h. floating base: Pinocchio, MuJoCo, mech; quadruped; rolling disc" >&2
-  load floating
+  echo "== 5i. floating base: Pinocchio, MuJoCo, mech; quadruped; rolling disc" >&2
+  LOAD_PREFIX= load floating
   local SP CP PDEF N r
   SP=$($PY -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
   CP=$SP/cmeel.prefix
@@ -250,6 +261,21 @@ echo "== 5g. Python call overhead" >&2
 load python
 run $PY -m pip install -q ./python
 run $PY bench/python_overhead.py > $R/python.md || failed python_overhead 0 $? >> $R/python.md
+
+# The whole robot beside MuJoCo (issue 16): the same URDF, the same trot, in one run.
+if [ "${SKIP_MUJOCO_ROBOT:-0}" != 1 ]; then
+  echo "== 5h. the whole robot in MuJoCo and mech" >&2
+  load mujoco_robot
+  rm -f $R/mujoco_robot.jsonl
+  if ! $PY -c 'import mujoco, numpy' 2>/dev/null; then
+    run $VENV/bin/pip install -q -r $PEERS/requirements.txt
+  fi
+  run cargo build --release -q --bin mech \
+    && run timeout 1800 $PY bench/mujoco_robot.py --mech "${CARGO_TARGET_DIR:-target}/release/mech" \
+         --frequencies ${MUJOCO_ROBOT_HZ:-10 5 2} --json $R/mujoco_robot.jsonl --table $R/mujoco_robot.md \
+         > /dev/null \
+    || failed mujoco_robot 0 $? >> $R/mujoco_robot.jsonl
+fi
 if [ "${SKIP_FLOATING:-0}" != 1 ]; then
   floating_step
 fi

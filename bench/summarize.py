@@ -124,6 +124,17 @@ def machine():
     )
 
 
+def recorded_machine(results):
+    """The machine and date of the run that wrote `results` (`machine.json`, recorded by
+    `bench/run.sh` before it measures), else this machine now: the header then describes the
+    run the numbers come from even when summarize.py runs again later (a hand section added)."""
+    path = os.path.join(results, 'machine.json')
+    if os.path.exists(path):
+        with open(path) as f:
+            return json.load(f)
+    return dict(machine(), date=datetime.date.today().isoformat())
+
+
 def status_of(row):
     s = row.get('status', 'ok')
     return s
@@ -133,8 +144,15 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument('--results', default='bench/results')
     ap.add_argument('--out', default='docs/benchmarks.md')
+    ap.add_argument('--record-machine', metavar='FILE',
+                    help='write this machine, commit and date as JSON to FILE and stop')
     a = ap.parse_args()
     R = a.results
+    if a.record_machine:
+        with open(a.record_machine, 'w') as f:
+            json.dump(dict(machine(), date=datetime.date.today().isoformat()), f, indent=1)
+            f.write('\n')
+        return
 
     mech_rows = read_jsonl(os.path.join(R, 'mech.jsonl'))
     mech = {r['N']: r for r in mech_rows if r.get('record') == 'chain'}
@@ -194,21 +212,22 @@ def main():
     def ms(summary):
         return None if summary is None else summary['median'] * 1e3
 
-    m = machine()
-    today = datetime.date.today().isoformat()
+    m = recorded_machine(R)
+    today = m['date']
     L = []
     w = L.append
     w('# Benchmarks: mech vs SymPy and Pinocchio on the N-link 3D chain, and vs SymPy/PyDy + SciPy on two closed loops')
     w('')
     load_rows = read_jsonl(os.path.join(R, 'load.jsonl'))
-    floating_only = [r['date'][:10] for r in load_rows if r.get('section') == 'floating']
-    if floating_only and load_rows and load_rows[0].get('date', '')[:10] != floating_only[-1]:
+    floating_only = [r['date'][:10] for r in load_rows
+                     if r.get('section', '').startswith('floating_')]
+    if floating_only:
         # `ONLY_FLOATING=1 bench/run.sh` appended section 17 to an earlier full run.
-        origin = (f'on {today} (commit `{m["commit"]}`'
-                  f'{", with uncommitted changes" if m["dirty"] else ""}) from the last full '
-                  f'run of `bench/run.sh` (started {load_rows[0]["date"][:10]}; sections 1 to 16) '
-                  f'and `ONLY_FLOATING=1 bench/run.sh` on {floating_only[-1]} (section 17; the '
-                  'machine table below is the one of this last run)')
+        fm = machine()
+        origin = (f'from one run of `bench/run.sh` on {today} (commit `{m["commit"]}`'
+                  f'{", with uncommitted changes" if m["dirty"] else ""}; sections 1 to 16, and '
+                  'the machine table) and `ONLY_FLOATING=1 bench/run.sh` on '
+                  f'{floating_only[-1]} (section 17, on `{fm["cpu"]}`, {fm["nproc"]} cores)')
     else:
         origin = (f'from one run of `bench/run.sh` on {today} (commit `{m["commit"]}`'
                   f'{", with uncommitted changes" if m["dirty"] else ""})')
@@ -521,6 +540,7 @@ def main():
     L.extend(hand_section(
         '## 16. The whole robot (issue 16): one second of trotting, and the Fig. 9 grid',
         'analysis_robot'))
+    L.extend(hand_section('### The same robot in MuJoCo', 'analysis_robot_mujoco'))
     L.extend(floating_section(R))
     with open(a.out, 'w') as f:
         f.write('\n'.join(L).rstrip('\n') + '\n')
@@ -969,7 +989,7 @@ def floating_section(R):
     loads = [r['loadavg'].split()[0] for r in read_jsonl(os.path.join(R, 'load.jsonl'))
              if r.get('section') == 'floating']
     values = dict(rounds=rounds, load=loads[-1] if loads else '-')
-    L.append(f'`bench/run.sh` step 5h, {rounds} round(s), each round: '
+    L.append(f'`bench/run.sh` step 5i, {rounds} round(s), each round: '
              '`free_chain_pinocchio N 5` (Pinocchio C++, `aba`, built from '
              '`bench/native/free_chain_pinocchio.cpp` at -O3 -march=native), '
              '`free_chain_mujoco free_chainN.xml N 5` (MuJoCo C API, `mj_forward`, '

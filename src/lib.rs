@@ -19,6 +19,7 @@ pub mod quantity;
 pub mod render;
 pub mod session;
 pub mod signal_spec;
+pub mod steady_motion;
 pub mod sweep;
 pub mod tape_model;
 pub mod toml_file;

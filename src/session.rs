@@ -96,6 +96,12 @@ pub enum Error {
         /// Boxed: the parsers' errors are large, and sessions return errors often.
         error: Box<SettingError>,
     },
+    /// An option's text that does not have the form it needs (`hint` says which).
+    Syntax {
+        option: &'static str,
+        text: String,
+        hint: String,
+    },
     /// A quantity of the wrong dimension for what it sets.
     WrongUnit {
         option: &'static str,
@@ -168,6 +174,7 @@ impl std::fmt::Display for Error {
                 Some(name) => write!(f, "{option} {name}: {error}"),
                 None => write!(f, "{option}: {error}"),
             },
+            Error::Syntax { option, text, hint } => write!(f, "{option} `{text}`: {hint}"),
             Error::WrongUnit {
                 option,
                 name,
@@ -175,17 +182,19 @@ impl std::fmt::Display for Error {
                 found,
                 expected,
             } => {
+                // Speeds of pins are rad/s, which is 1/s (shown as Hz) to the units.
+                let speed = matches!(*option, "--u0" | "--sweep");
                 write!(f, "{option} {name}: `{value}` ")?;
                 if *found == Dimension::NONE {
                     write!(f, "has no unit, but `{name}` needs ")?;
-                } else if *option == "--u0" && *found == Dimension::FREQUENCY {
+                } else if speed && *found == Dimension::FREQUENCY {
                     write!(f, "is an angular speed, but `{name}` needs ")?;
                 } else {
                     write!(f, "has unit {found}, but `{name}` needs ")?;
                 }
                 if *expected == Dimension::NONE {
                     write!(f, "no unit (a plain number, or an angle such as `30 deg`)")
-                } else if *option == "--u0" && *expected == Dimension::FREQUENCY {
+                } else if speed && *expected == Dimension::FREQUENCY {
                     write!(f, "an angular speed (e.g. `{name}=2 rad/s`)")
                 } else {
                     write!(f, "{expected} (e.g. `{name}=2 {expected}`)")
@@ -303,6 +312,9 @@ pub struct Assembled {
     pub u: Vec<f64>,
     /// Coordinates held at their given values while the others were solved for.
     pub independent: Vec<usize>,
+    /// Speeds held at their given values while the others were solved for from the
+    /// constraint rows: `independent` unless the model has velocity constraints.
+    pub speeds: Vec<usize>,
     /// `None` for tree models.
     pub mobility: Option<Mobility>,
     /// Newton iterations used.
@@ -542,8 +554,16 @@ impl Session {
         self.index_of(NameKind::Output, name, None)
     }
 
+    /// The dimension of speed `index`: its coordinate's over time (a quaternion's angular
+    /// speeds: 1/s, as an angle's rate).
+    pub fn speed_dimension(&self, index: usize) -> Dimension {
+        let coordinates = &self.compiled.model.coordinates;
+        let dimension = coordinates.iter().nth(index).map(|(_, c)| c.dimension);
+        dimension.unwrap_or(Dimension::NONE).div(Dimension::TIME)
+    }
+
     /// The index of the `kind` called `name` (given by `option`, for the message).
-    fn index_of(
+    pub(crate) fn index_of(
         &self,
         kind: NameKind,
         name: &str,
@@ -603,8 +623,7 @@ impl Session {
         for text in u0 {
             let (name, value, index) = self.assignment("--u0", NameKind::Speed, text)?;
             // A pin's or slider's speed, or an angular speed of a quaternion (rad/s).
-            let expected = dimension(index).unwrap_or(Dimension::NONE);
-            u[index] = quantity("--u0", &name, &value, expected.div(Dimension::TIME))?;
+            u[index] = quantity("--u0", &name, &value, self.speed_dimension(index))?;
         }
         Ok((q, u))
     }
@@ -630,6 +649,7 @@ impl Session {
                 q,
                 u,
                 independent: (0..model.nu()).collect(),
+                speeds: (0..model.nu()).collect(),
                 mobility: None,
                 iterations: 0,
             });
@@ -702,6 +722,7 @@ impl Session {
             q,
             u,
             independent: fixed,
+            speeds,
             mobility,
             iterations,
         })

@@ -111,6 +111,8 @@ pub struct TapeModel {
     speed_names: Vec<String>,
     /// Index in `q` of each quaternion's scalar part.
     unit_quaternions: Vec<usize>,
+    /// Whether `speed` declarations chose the speeds (`q̇ = W(q) u` for every coordinate).
+    chosen_speeds: bool,
     input_names: Vec<String>,
     output_names: Vec<String>,
     /// `(target, rate)` outputs a simulation integrates (`Equations::integrated_outputs`).
@@ -124,6 +126,8 @@ pub struct TapeModel {
     input_defaults: Vec<f64>,
     q0: Vec<f64>,
     u0: Vec<f64>,
+    /// The `q0` and `u0` written as expressions of params, evaluated at the current values.
+    initial_values: Vec<mech_codegen::ir::InitialValue>,
     /// Registers reused across evaluations (the evaluator never allocates after warm-up).
     registers: RefCell<Vec<f64>>,
     /// Native code, `None` for [`Backend::Interpreter`].
@@ -197,6 +201,7 @@ impl TapeModel {
                 .iter()
                 .map(|(e, _)| model.quaternion_coordinate(e, 0))
                 .collect(),
+            chosen_speeds: !model.speeds.is_empty(),
             input_names: model.inputs.iter().map(|(_, i)| i.name.clone()).collect(),
             output_names: compiled.equations.output_names.clone(),
             integrated_outputs: compiled.equations.integrated_outputs.clone(),
@@ -208,6 +213,12 @@ impl TapeModel {
             input_defaults: model.inputs.iter().map(|(_, i)| i.default).collect(),
             q0: model.initial_coordinates(),
             u0: model.initial_speeds(),
+            // With chosen speeds `u0 = Y(q0) ū0` was formed at compile time from the joints'
+            // rates: a param-dependent `q0`/`u0` then keeps its default value.
+            initial_values: match model.speeds.is_empty() {
+                true => model.initial_values.clone(),
+                false => Vec::new(),
+            },
             registers: RefCell::new(Vec::new()),
             native,
             scratch: RefCell::new(Scratch::default()),
@@ -399,6 +410,20 @@ impl mech_runtime::Model for TapeModel {
     fn unit_quaternions(&self) -> &[usize] {
         &self.unit_quaternions
     }
+    fn plain_coordinates(&self) -> usize {
+        match self.chosen_speeds {
+            true => 0,
+            false => self
+                .unit_quaternions
+                .iter()
+                .copied()
+                .min()
+                .unwrap_or(self.nq()),
+        }
+    }
+    fn rates_are_speeds(&self) -> bool {
+        !self.chosen_speeds && self.nq() == self.nu() && self.unit_quaternions.is_empty()
+    }
     fn input_name(&self, i: usize) -> &str {
         name_at(&self.input_names, i)
     }
@@ -429,6 +454,7 @@ impl mech_runtime::Model for TapeModel {
         for (slot, value) in u.iter_mut().zip(&self.u0) {
             *slot = *value;
         }
+        mech_codegen::ir::InitialValue::apply(&self.initial_values, &self.params, q, u);
     }
     fn mass_matrix(&self, t: f64, q: &[f64], inputs: &[f64], out: &mut [f64]) {
         self.eval(Slot::MassMatrix, t, q, &[], inputs, out);

@@ -24,6 +24,7 @@ pub mod reduced;
 pub mod signal;
 pub mod simulate;
 pub mod statics;
+pub mod steady;
 
 pub use constraints::{
     assemble, assemble_along, assemble_speeds, independent_speeds, mobility, AssemblyOptions,
@@ -49,6 +50,7 @@ pub use statics::{
     reduced_equilibrium, solve_statics, solve_statics_with_loads, Equilibrium, Fixture,
     ReducedEquilibrium, SideLoad, StaticsOptions,
 };
+pub use steady::{linearize_steady, SecondOrder, SteadyLinearization, SteadyState};
 
 /// Includes the Rust code generated for a model by the build script: expands to
 /// `include!(concat!(env!("OUT_DIR"), "/", $name, ".rs"));`.

@@ -89,7 +89,7 @@ impl Mode {
 }
 
 /// Central difference of `f` along one argument, with one Richardson refinement.
-fn derivative(
+pub(crate) fn derivative(
     mut f: impl FnMut(f64) -> Result<Vec<f64>, RuntimeError>,
     h: f64,
 ) -> Result<Vec<f64>, RuntimeError> {
@@ -109,7 +109,7 @@ fn derivative(
         .collect())
 }
 
-fn step_for(value: f64) -> f64 {
+pub(crate) fn step_for(value: f64) -> f64 {
     1e-5 * value.abs().max(1e-3)
 }
 

@@ -55,6 +55,7 @@ pub fn run(args: &CheckArgs) -> Result<(), Error> {
         }
     }
     print_coordinates(model);
+    print_chosen_speeds(model);
     print_bodies(model);
     let list = |title: &str, items: Vec<String>| {
         if !items.is_empty() {
@@ -81,11 +82,15 @@ pub fn run(args: &CheckArgs) -> Result<(), Error> {
     Ok(())
 }
 
-/// Each joint's coordinates (and quaternion) with their initial values.
+/// Each joint's coordinates (and quaternion) with their initial values, then the speeds
+/// chosen by `speed` declarations, if any.
 fn print_coordinates(model: &Model) {
-    match model.quaternions.is_empty() {
-        true => println!("\ncoordinates (q, with u = q̇):"),
-        false => println!("\ncoordinates (q, with u = q̇ except for quaternions: q̇ = W(q) u):"),
+    match (model.speeds.is_empty(), model.quaternions.is_empty()) {
+        (false, _) => println!("\ncoordinates (q, with q̇ = W(q) u of the chosen speeds below):"),
+        (true, true) => println!("\ncoordinates (q, with u = q̇):"),
+        (true, false) => {
+            println!("\ncoordinates (q, with u = q̇ except for quaternions: q̇ = W(q) u):")
+        }
     }
     for (_, joint) in model.joints.iter() {
         for &c in &joint.coordinates {
@@ -116,6 +121,18 @@ fn print_coordinates(model: &Model) {
                 quaternion.speed_names().join(", "),
             );
         }
+    }
+}
+
+/// The speeds chosen by `speed` declarations (`u = Y(q) q̇`), with their initial values.
+fn print_chosen_speeds(model: &Model) {
+    if model.speeds.is_empty() {
+        return;
+    }
+    println!("\nspeeds (chosen by `speed`: u = Y(q) q̇, mech derives q̇ = W(q) u with W = Y⁻¹):");
+    let described = mech_codegen::kane::describe_speeds(model);
+    for (speed, description) in model.speeds.iter().zip(described) {
+        println!("  {description}, u0 = {}", speed.initial);
     }
 }
 

@@ -68,6 +68,7 @@ tests_per_file! {
     contact_ball,
     contact_plate,
     double_pendulum_3d,
+    double_pendulum_speeds,
     flexure_rig,
     floating_chain,
     floating_four_bar,
@@ -83,6 +84,7 @@ tests_per_file! {
     state_forces,
     triple_pendulum_3d,
     two_mass_chain,
+    whipple_bicycle,
 }
 
 #[test]

@@ -555,6 +555,7 @@ fn linearize_matrices_are_the_chains_written_by_hand() {
         },
         out: None,
         matrices: Some(path.clone()),
+        motion: Default::default(),
     };
     mech::cli::linearize::run(&args).unwrap();
     let json: serde_json::Value =

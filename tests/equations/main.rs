@@ -12,7 +12,9 @@ mod markdown;
 
 mod actuator_extensions;
 mod backends;
+mod bicycle;
 mod bushing;
+mod chosen_speeds;
 mod compliant_loops;
 mod contact;
 mod degenerate_loops;

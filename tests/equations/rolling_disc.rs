@@ -324,6 +324,12 @@ fn rolling_element_on_a_free_joint_conserves_energy() {
     assert!(height <= 1e-12 && slip <= 1e-12, "{height:e} {slip:e}");
 }
 
+/// The eigenvalues `[re, im]` SymPy gives for one case of the fixture's upright rolling.
+fn sympy_eigenvalues(case: &serde_json::Value) -> Vec<Vec<f64>> {
+    let values = case["eigenvalues"].as_array().unwrap();
+    values.iter().map(json_numbers).collect()
+}
+
 /// Upright rolling (q = 0, spin ψ̇, rolling at r ψ̇): the eigenvalues of the linearized motion
 /// (central differences of `ẋ = [u; u̇(q, u)]`, all 10 states) against those of SymPy's
 /// `KanesMethod.linearize` of its rolling disc, at 1.1 and 0.9 times the critical spin
@@ -367,12 +373,7 @@ fn upright_rolling_eigenvalues_match_sympy() {
         .unwrap()
     {
         let spin = case["spin"].as_f64().unwrap();
-        let expected: Vec<Vec<f64>> = case["eigenvalues"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(json_numbers)
-            .collect();
+        let expected = sympy_eigenvalues(case);
         let all = eigenvalues(spin);
         let nonzero: Vec<[f64; 2]> = all
             .iter()
@@ -402,4 +403,62 @@ fn upright_rolling_eigenvalues_match_sympy() {
         .fold(0.0, f64::max);
     println!("at the critical spin {critical:.6} rad/s: max |λ| = {largest:.1e}");
     assert!(largest < 1e-3, "{largest:e}");
+}
+
+/// The same upright rolling through `linearize_steady`, which finds the cyclic coordinates
+/// itself (the place, the heading and the spin angle) and keeps the lean and the independent
+/// speeds (turning, leaning, spinning): four states, whose eigenvalues are SymPy's pair and
+/// two zeros (the turning and spinning rates that the linear motion leaves unchanged), to
+/// 1e-10 (measured 1e-14).
+#[test]
+fn steady_linearization_of_upright_rolling_matches_sympy() {
+    use mech_runtime::nalgebra::Complex;
+    use mech_runtime::{assemble_speeds, linearize_steady, SteadyState};
+    let tape = common::tape("rolling_disc");
+    let index = |name: &str| {
+        (0..tape.nq())
+            .find(|&i| tape.coordinate_name(i) == name)
+            .unwrap()
+    };
+    let speeds: Vec<usize> = ["yaw", "lean", "spin"].iter().map(|n| index(n)).collect();
+    let fixture = sympy_fixture();
+    for case in fixture["models"]["rolling_disc"]["upright"]
+        .as_array()
+        .unwrap()
+    {
+        let spin = case["spin"].as_f64().unwrap();
+        let q = vec![0.0; 5];
+        let mut u = vec![0.0; 5];
+        u[index("spin")] = spin;
+        assemble_speeds(&tape, 0.0, &q, &mut u, &speeds).unwrap();
+        let inputs = common::default_inputs(&tape);
+        let coordinates: Vec<usize> = (0..5).collect();
+        let linear =
+            linearize_steady(&tape, 0.0, (&q, &u), &inputs, &coordinates, &speeds).unwrap();
+        let cyclic: Vec<&str> = linear
+            .cyclic
+            .iter()
+            .map(|&i| tape.coordinate_name(i))
+            .collect();
+        assert_eq!(cyclic, ["x", "y", "yaw", "spin"]);
+        assert_eq!(linear.states[0], SteadyState::Coordinate(index("lean")));
+        let expected = sympy_eigenvalues(case);
+        let values = linear.eigenvalues();
+        let scale = values.iter().fold(0.0_f64, |m, z| m.max(z.norm()));
+        let (zeros, nonzero): (Vec<&Complex<f64>>, Vec<&Complex<f64>>) =
+            values.iter().partition(|z| z.norm() <= 1e-9 * scale);
+        assert_eq!(zeros.len(), 2, "{values:?}");
+        let mut ours: Vec<[f64; 2]> = nonzero.iter().map(|z| [z.re, z.im]).collect();
+        ours.sort_by(|a, b| a[1].total_cmp(&b[1]).then(a[0].total_cmp(&b[0])));
+        assert_eq!(ours.len(), expected.len(), "{values:?}");
+        for (a, b) in ours.iter().zip(&expected) {
+            for k in 0..2 {
+                assert!(
+                    (a[k] - b[k]).abs() < 1e-10,
+                    "ψ̇ = {spin}: {a:?} vs SymPy {b:?}"
+                );
+            }
+        }
+        println!("steady upright rolling at ψ̇ = {spin}: {ours:?} (SymPy {expected:?})");
+    }
 }

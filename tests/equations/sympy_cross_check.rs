@@ -21,7 +21,7 @@ fn check_model(name: &str) {
     for model in [&tape as &dyn Model, compiled.as_ref()] {
         let ours: Vec<&str> = (0..model.nq()).map(|i| model.coordinate_name(i)).collect();
         assert_eq!(ours, coordinates, "{name}: coordinate order");
-        // Models with quaternions name their speeds apart (`shoulder.wx`).
+        // Models with quaternions or chosen speeds name their speeds apart (`shoulder.wx`).
         if let Some(speeds) = reference.get("speeds") {
             let ours: Vec<&str> = (0..model.nu()).map(|i| model.speed_name(i)).collect();
             assert_eq!(ours, json_strings(speeds), "{name}: speed order");
@@ -126,6 +126,13 @@ fn mixed_chain() {
 #[test]
 fn ball_double_pendulum() {
     check_model("ball_double_pendulum");
+}
+
+/// Speeds chosen by `speed` (an absolute angular velocity, a tip's velocity along a link):
+/// SymPy's `KanesMethod` with `kd_eqs` `u − Y(q) q̇ = 0`; `q̇ = W(q) u` checked too.
+#[test]
+fn double_pendulum_speeds() {
+    check_model("double_pendulum_speeds");
 }
 
 /// A free joint (slides and a quaternion), a sprung pin and a ball joint in one chain: the

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Independent SymPy reference for mech: derives each model below with
 sympy.physics.mechanics.KanesMethod and writes M(q), forcing F(q, u) (with
-M u' = F, q' = u; q' = W(q) u for the unit quaternions of ball joints), kinetic and potential energy at fixed pseudo-random states
+M u' = F, q' = u; q' = W(q) u for the unit quaternions of ball joints and for speeds chosen
+by `speed`), kinetic and potential energy at fixed pseudo-random states
 to tests/peers/fixture.json.  For the loop models (four_bar, slider_crank: open tree plus
 coincident closures; compliant_four_bar: a flexure at every pin, one of them on a revolute
 closure) also phi(q), J = dphi/dq and J'u.  Model definitions and conventions:
@@ -53,6 +54,7 @@ class Model:
         self.joints, self.pe, self.params = {}, sm.S(0), {'g': float(G_ACC)}
         self.up = self.N.z             # gravity acts along -up
         self.loops, self.loop_names = [], []   # closure rows phi_k(q) (vectors . N axes)
+        self.chosen_speeds = []        # (name, u_r as an expression of q, q'), or [] for u = q'
 
     def point(self, name, base, offset):
         p = base.locatenew(name, offset)
@@ -305,6 +307,24 @@ def mixed_chain():
 FOUR_BAR = dict(ground=3.0, crank_length=1.0, coupler_length=2.5, rocker_length=2.0, m=1.0)
 
 
+def double_pendulum_speeds():
+    """models/double_pendulum_speeds.mech: a planar double pendulum in speeds chosen by
+    `speed`, written here from SymPy's own vector kinematics as KanesMethod's kd_eqs
+    (u_r - Y_r(q) q' = 0, not q' = u): the upper link's angular velocity in N along z and
+    the tip's velocity in N along the lower link's x."""
+    M = Model('double_pendulum_speeds')
+    M.up = M.N.y
+    A = M.pin('shoulder', M.N, M.O, M.N.z, 'A')
+    M.body('upper', A, M.O, 1.3, (0.1, -0.4, 0), (0.05, 0.07, 0.11, 0, 0, 0))
+    E = M.point('E', M.O, -R(0.9) * A.y)
+    B = M.pin('elbow', A, E, A.z, 'B')
+    M.body('lower', B, E, 0.7, (0.05, -0.3, 0), (0.02, 0.03, 0.04, 0, 0, 0))
+    tip = M.point('T', E, -R(0.6) * B.y)
+    M.chosen_speeds = [('w_upper', A.ang_vel_in(M.N).dot(M.N.z)),
+                       ('tip_speed', tip.vel(M.N).dot(B.x))]
+    return M
+
+
 def rod_inertia(m, l, axes):
     """Uniform slender rod along x about its centre: m l^2 / 12 on `axes` (exact)."""
     i = R(m) * R(l) ** 2 / 12
@@ -490,7 +510,7 @@ def contact_plate():
 MODELS = [lambda: chain(1), lambda: chain(2), lambda: chain(4),
           lambda: pendulum_3d(2, 'double_pendulum_3d'), lambda: pendulum_3d(3, 'triple_pendulum_3d'),
           cart_pendulum, mixed_chain, four_bar, slider_crank, compliant_four_bar, ball_double_pendulum,
-          floating_chain, state_forces, contact_plate]
+          floating_chain, state_forces, contact_plate, double_pendulum_speeds]
 
 
 # ---------------------------------------------------------------- nonholonomic
@@ -632,8 +652,13 @@ def rolling_disc_fixture():
 def derive(M):
     qd = {qi.diff(t): ui for qi, ui in zip(M.q, M.u)}
     qd.update({e.diff(t): rate for e, rate in zip(M.quaternions, M.quaternion_rates)})
+    kd_eqs = [a - b for a, b in qd.items()]
+    if M.chosen_speeds:   # u = Y(q) q': KanesMethod solves kd_eqs for q' itself
+        M.u = list(me.dynamicsymbols(' '.join(f'u_{name}' for name, _ in M.chosen_speeds)))
+        kd_eqs = [u - y for u, (_, y) in zip(M.u, M.chosen_speeds)]
+        qd = sm.solve(kd_eqs, [qi.diff(t) for qi in M.q], dict=True)[0]
     q_all, u_all = M.q + M.quaternions, M.u + M.angular_speeds
-    kane = me.KanesMethod(M.N, q_ind=q_all, u_ind=u_all, kd_eqs=[a - b for a, b in qd.items()])
+    kane = me.KanesMethod(M.N, q_ind=q_all, u_ind=u_all, kd_eqs=kd_eqs)
     kane.kanes_equations(M.bodies, M.loads)
     ke = sum(b.kinetic_energy(M.N) for b in M.bodies).xreplace(qd)
     power = sum(v.dot(x.vel(M.N) if isinstance(x, me.Point) else x.ang_vel_in(M.N))
@@ -770,7 +795,7 @@ def main():
             out.append({'q': q, 'u': u, 'mass_matrix': [[f64(Mm[i, j]) for j in range(n)] for i in range(n)],
                         'forcing': [f64(F[i]) for i in range(n)],
                         'kinetic_energy': f64(ke), 'potential_energy': f64(pe)})
-            if M.quaternions:
+            if M.quaternions or M.chosen_speeds:
                 out[-1]['kinematic_rates'] = [f64(x) for x in qdot]
             if loop:
                 phi, J, Jdu, acc_err, vel_err = map(mat, loop)
@@ -783,6 +808,8 @@ def main():
         models[M.name] = {'coordinates': M.coords + M.quaternion_names, 'params': M.params, 'states': out}
         if M.quaternions:
             models[M.name]['speeds'] = M.coords + M.speed_names
+        if M.chosen_speeds:
+            models[M.name]['speeds'] = [name for name, _ in M.chosen_speeds]
         if M.loops:
             models[M.name]['constraint_names'] = M.loop_names
         print(f'{M.name:20s} n={len(u)}  derivation {t_derive:6.2f} s  '

@@ -175,6 +175,30 @@ fn settings_given_twice_or_signals_where_a_constant_is_held_are_refused() {
     );
 }
 
+/// `mech linearize --steady --sweep`: the form, the name, the unit and the count are checked
+/// before any work, and the options that need `--steady` or `--sweep` say so.
+#[test]
+fn steady_sweeps_are_checked() {
+    let dir = scratch("steady_sweeps");
+    let bicycle = "{model:whipple_bicycle}";
+    let steady = |sweep: &'static str| -> Vec<&'static str> {
+        vec!["linearize", bicycle, "--steady", "--sweep", sweep]
+    };
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (steady("rear=0..3 rad/s"), "--sweep `rear=0..3 rad/s`: expected `NAME=FROM..TO:N`, e.g. `v=0..10 m/s:41`; no `:N`"),
+        (steady("rear 0..3:4"), "no `=`"),
+        (steady("rear=0..3 rad/s:1"), "N is a whole number from 2 to 10000"),
+        (steady("rear=0..3 rad/s:100000"), "N is a whole number from 2 to 10000"),
+        (steady("speed=0..3 m/s:4"), "`speed` is neither a parameter nor a speed of `whipple_bicycle` (w, c, lambda, rR, rF, v, x, y, yaw, roll, pitch, rear, steer, front)"),
+        (steady("rear=0..3 m/s:4"), "--sweep rear: `0 m/s` has unit m/s, but `rear` needs an angular speed (e.g. `rear=2 rad/s`)"),
+        (vec!["linearize", bicycle, "--sweep", "rear=0..3 rad/s:4"], "--steady"),
+        (vec!["linearize", bicycle, "--steady", "--plot", "e.svg"], "--sweep"),
+        (vec!["linearize", "{model:ball_double_pendulum}", "--steady"], "steady-motion linearization of model `ball_double_pendulum` is not supported yet"),
+    ];
+    let cases: Vec<(&[&str], &str)> = cases.iter().map(|(a, e)| (&a[..], *e)).collect();
+    expect_errors(&dir, &cases);
+}
+
 #[test]
 fn escape_sequences_in_an_input_file_are_shown_not_sent_to_the_terminal() {
     let dir = scratch("escapes");

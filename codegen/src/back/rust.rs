@@ -501,7 +501,7 @@ impl<'a> Emitter<'a> {
         }
     }
 
-    /// For models with quaternions (`q̇ ≠ u`): `SPEED_NAMES`, `UNIT_QUATERNIONS` (the index in
+    /// For models with quaternions or chosen speeds (`q̇ ≠ u`): `SPEED_NAMES`, `UNIT_QUATERNIONS` (the index in
     /// `q` of each quaternion's scalar part) and `kinematic_rates` (`q̇ = W(q) u`), inherent
     /// and in the trait; other models keep the trait's defaults (`q̇ = u`).
     fn kinematic_functions(&self) -> (TokenStream, TokenStream) {
@@ -529,10 +529,19 @@ impl<'a> Emitter<'a> {
 
             #(#parts)*
         };
+        // Chosen speeds: `q̇ = W(q) u` for every coordinate, so none has `q̇ᵢ = uᵢ`.
+        let chosen_speeds = match self.model.speeds.is_empty() {
+            true => TokenStream::new(),
+            false => quote! {
+                fn plain_coordinates(&self) -> usize { 0 }
+                fn rates_are_speeds(&self) -> bool { false }
+            },
+        };
         let in_trait = quote! {
             fn speed_name(&self, i: usize) -> &str { Self::SPEED_NAMES.get(i).copied().unwrap_or("") }
             fn unit_quaternions(&self) -> &[usize] { &Self::UNIT_QUATERNIONS }
             #rates_in_trait
+            #chosen_speeds
         };
         (inherent, in_trait)
     }

@@ -58,6 +58,9 @@ pub enum Item {
     Constraint(ConstraintDecl),
     /// `rolling NAME between CENTRE and PLANE_POINT { fields }`: same shape as a spring.
     Rolling(SpringDecl),
+    /// `speed NAME = WHAT in FRAME { axis }` or `speed NAME = EXPR;`: same shape as a
+    /// constraint.
+    Speed(ConstraintDecl),
 }
 
 /// `param`, `let` or `input`: a name bound to an expression.

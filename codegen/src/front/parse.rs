@@ -133,7 +133,8 @@ fn build_item(pair: Pair<Rule>) -> Result<ast::Item> {
             Rule::force_decl => force_decl(inner, docs),
             Rule::torque_decl => torque_decl(inner, docs),
             Rule::output_decl => output_decl(inner, docs),
-            Rule::constraint_decl => constraint_decl(inner, docs),
+            Rule::constraint_decl => constraint_decl(inner, docs).map(ast::Item::Constraint),
+            Rule::speed_decl => constraint_decl(inner, docs).map(ast::Item::Speed),
             Rule::rolling_decl => Ok(ast::Item::Rolling(two_point_decl(inner, docs)?)),
             _ => Err(internal(span)),
         };
@@ -241,6 +242,7 @@ fn is_punctuation(rule: Rule) -> bool {
             | kw_torque
             | kw_constraint
             | kw_rolling
+            | kw_speed
             | kw_output
             | kw_point
             | kw_frame
@@ -429,7 +431,8 @@ fn output_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
     }))
 }
 
-fn constraint_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
+/// `constraint` and `speed` declarations, which share their shape.
+fn constraint_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::ConstraintDecl> {
     let mut parts = Parts::of(pair);
     let name = parts.ident()?;
     let value = parts.expr()?;
@@ -451,7 +454,7 @@ fn constraint_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
         frame,
         span: parts.span,
     };
-    Ok(ast::Item::Constraint(ast::ConstraintDecl { head, fields }))
+    Ok(ast::ConstraintDecl { head, fields })
 }
 
 fn ident(pair: Pair<Rule>) -> Ident {

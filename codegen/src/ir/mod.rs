@@ -249,6 +249,19 @@ impl Expr {
         Expr::Number(Number::ONE)
     }
 
+    /// Whether a param appears in it.
+    pub fn has_params(&self) -> bool {
+        match self {
+            Expr::Param(_) => true,
+            Expr::Number(_) | Expr::Pi | Expr::Input(_) | Expr::Time | Expr::State(_) => false,
+            Expr::Neg(a) | Expr::Pow(a, _) => a.has_params(),
+            Expr::Add(a, b) | Expr::Sub(a, b) | Expr::Mul(a, b) | Expr::Div(a, b) => {
+                a.has_params() || b.has_params()
+            }
+            Expr::Call(_, args) => args.iter().any(Expr::has_params),
+        }
+    }
+
     /// The value with the params at `params` (SI, by index); `None` if it depends on an input,
     /// time or the state.
     pub fn evaluate(&self, params: &[f64]) -> Option<f64> {
@@ -629,6 +642,37 @@ pub struct VelocityConstraint {
     pub span: Span,
 }
 
+/// A generalized speed chosen by a `speed` declaration: a measure number of an angular or
+/// linear velocity, or a combination of the default speeds, linear and homogeneous in them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChosenSpeed {
+    pub name: String,
+    pub kind: SpeedKind,
+    /// Its value at the start, `Y(q₀) ū₀` with the parameters' defaults (set by the front end).
+    pub initial: f64,
+    pub span: Span,
+}
+
+/// What a [`ChosenSpeed`] measures; `axis` is a unit vector in `frame`'s basis.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SpeedKind {
+    /// `ω·axis`, ω the angular velocity in N of the body whose frame is `body`.
+    AngularVelocity {
+        body: Handle<Frame>,
+        frame: Handle<Frame>,
+        axis: Box<Vec3>,
+    },
+    /// `v·axis`, v the velocity in N of `point`.
+    PointVelocity {
+        point: Handle<Point>,
+        frame: Handle<Frame>,
+        axis: Box<Vec3>,
+    },
+    /// A combination of the default speeds with coefficients of the coordinates and params:
+    /// `a.u + 2 * b.u`.
+    Scalar(Expr),
+}
+
 /// What a [`VelocityConstraint`] holds at zero.
 #[derive(Clone, Debug, PartialEq)]
 pub enum VelocityKind {
@@ -877,6 +921,11 @@ pub struct Model {
     pub loops: Vec<LoopClosure>,
     /// Velocity constraints, rows appended after the loops' (no position form).
     pub velocity_constraints: Vec<VelocityConstraint>,
+    /// Generalized speeds chosen by `speed` declarations, `u = Y(q) ū` of the default speeds
+    /// `ū` (`q̇` of pins and sliders, a ball's ω); empty for the default `u = ū`. When not
+    /// empty there are exactly [`Model::nu`] of them and `Y(q₀)` is invertible (the front end
+    /// checks both); `kane::derive` writes the equations in them.
+    pub speeds: Vec<ChosenSpeed>,
     /// Flexures (their springs and dampers are also in `loads`).
     pub flexures: Vec<Flexure>,
     /// Gravitational acceleration, components in the Newtonian frame.
@@ -885,6 +934,35 @@ pub struct Model {
     /// Physical rules on masses, inertias and element dimensions, checked again when a
     /// parameter changes at run time.
     pub requirements: Vec<Requirement>,
+    /// Initial values written as expressions of params (`u0 = v / r`), evaluated again when a
+    /// parameter changes at run time; the coordinates' `initial` and `initial_speed` hold
+    /// them at the params' defaults.
+    pub initial_values: Vec<InitialValue>,
+}
+
+/// A coordinate's `q0` or `u0` that depends on params.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InitialValue {
+    pub coordinate: Handle<Coordinate>,
+    /// `u0` rather than `q0`.
+    pub speed: bool,
+    pub expr: Expr,
+}
+
+impl InitialValue {
+    /// Writes each of `values` at the params `params` into `q` or `u` (NaN where one cannot
+    /// be evaluated).
+    pub fn apply(values: &[InitialValue], params: &[f64], q: &mut [f64], u: &mut [f64]) {
+        for value in values {
+            let slot = match value.speed {
+                true => u.get_mut(value.coordinate.index()),
+                false => q.get_mut(value.coordinate.index()),
+            };
+            if let Some(slot) = slot {
+                *slot = value.expr.evaluate(params).unwrap_or(f64::NAN);
+            }
+        }
+    }
 }
 
 impl Model {
@@ -946,8 +1024,16 @@ impl Model {
             .flat_map(|(_, e)| e.coordinate_names());
         coordinates.chain(quaternions).collect()
     }
-    /// Names of `u` in order: the coordinates', then each quaternion's three angular speeds.
+    /// Names of `u` in order: the chosen speeds' if any, else the coordinates', then each
+    /// quaternion's three angular speeds.
     pub fn speed_names(&self) -> Vec<String> {
+        if !self.speeds.is_empty() {
+            return self.speeds.iter().map(|s| s.name.clone()).collect();
+        }
+        self.default_speed_names()
+    }
+    /// Names of the default speeds `ū`: the coordinates', then each quaternion's three.
+    pub fn default_speed_names(&self) -> Vec<String> {
         let coordinates = self.coordinates.iter().map(|(_, c)| c.name.clone());
         let quaternions = self.quaternions.iter().flat_map(|(_, e)| e.speed_names());
         coordinates.chain(quaternions).collect()
@@ -958,8 +1044,16 @@ impl Model {
         let quaternions = self.quaternions.iter().flat_map(|_| [1.0, 0.0, 0.0, 0.0]);
         coordinates.chain(quaternions).collect()
     }
-    /// Initial `u`: the coordinates' `u0`, then the quaternions' angular velocities.
+    /// Initial `u`: the chosen speeds' initial values if any, else the coordinates' `u0`,
+    /// then the quaternions' angular velocities.
     pub fn initial_speeds(&self) -> Vec<f64> {
+        if !self.speeds.is_empty() {
+            return self.speeds.iter().map(|s| s.initial).collect();
+        }
+        self.default_initial_speeds()
+    }
+    /// Initial `ū` of the default speeds (`q̇` of pins and sliders, the balls' ω).
+    pub fn default_initial_speeds(&self) -> Vec<f64> {
         let coordinates = self.coordinates.iter().map(|(_, c)| c.initial_speed);
         let quaternions = self
             .quaternions

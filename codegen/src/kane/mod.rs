@@ -17,6 +17,7 @@ pub mod constraints;
 mod contact;
 mod kinematics;
 mod rates;
+mod speeds;
 pub mod vector;
 
 use std::collections::BTreeMap;
@@ -25,6 +26,7 @@ use crate::ir::{self, Load, Model, OutputKind};
 use crate::sym::{ExprId, ExprPool, Number, Symbol};
 pub use kinematics::{lower_expr, lower_expr_with, Kinematics};
 use rates::KinematicRates;
+pub use speeds::{chosen_speeds_at_start, describe as describe_speeds};
 use vector::Vec3;
 
 /// The equations of motion of a model, ready for the back ends.
@@ -227,8 +229,8 @@ pub fn derive(model: &Model) -> Equations {
         }
     }
     let kinematic_rates = rates::rates(&mut pool, model);
-    Equations {
-        pool,
+    let mut equations = Equations {
+        pool: ExprPool::new(),
         nq: model.nq(),
         nu,
         kinematic_rates,
@@ -240,7 +242,12 @@ pub fn derive(model: &Model) -> Equations {
         integrated_outputs,
         constraints,
         flexures,
+    };
+    if !model.speeds.is_empty() {
+        speeds::change_speeds(&mut pool, &mut kinematics, model, &mut equations);
     }
+    equations.pool = pool;
+    equations
 }
 
 /// Display names: `q_<coordinate>`, `u_<speed>` (as [`Model::coordinate_names`] and

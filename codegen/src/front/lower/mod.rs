@@ -8,7 +8,8 @@
 //! The work is split by topic: `expr` (scalar expressions, units, dimensions), `body` (bodies,
 //! points, frames, axes, rotations), `tree` (joints, tree order, frame building), `loads`
 //! (gravity, forces, torques, point-to-point springs, outputs), `loops` (loop closures),
-//! `velocity` (velocity constraints) and `names` (namespaces and suggestions).
+//! `velocity` (velocity constraints), `speeds` (generalized speeds chosen by `speed`) and
+//! `names` (namespaces and suggestions).
 
 mod body;
 mod elements;
@@ -16,6 +17,7 @@ mod expr;
 mod loads;
 mod loops;
 mod names;
+mod speeds;
 
 mod tree;
 mod velocity;
@@ -191,12 +193,14 @@ impl<'a> Lowerer<'a> {
         self.build_bodies();
         self.lower_loops(&file.items);
         self.lower_velocity_constraints(&file.items);
+        self.lower_speeds(&file.items);
         self.lower_elements(&file.items);
         self.lower_loads_and_outputs(&file.items);
         self.build_loads();
         self.build_outputs();
         self.apply_twists();
         self.check_springs_apart();
+        self.check_speeds_independent();
     }
 
     /// E0417: a point-to-point spring whose ends meet at the initial coordinates, where its

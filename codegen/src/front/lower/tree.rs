@@ -30,6 +30,9 @@ pub struct JointInfo<'a> {
     child_frame: Option<Vec<AxisAngle>>,
     q0: f64,
     u0: f64,
+    /// `q0`, `u0` where they depend on params (`u0 = v / r`): evaluated again at run time.
+    q0_expr: Option<Expr>,
+    u0_expr: Option<Expr>,
     /// `ball` and `free`: the initial angular velocity relative to the parent (child frame).
     angular_velocity0: [f64; 3],
     /// `free`: the initial velocity of the child's origin, components in the joint frame.
@@ -148,6 +151,8 @@ impl<'a> Lowerer<'a> {
             child_frame: None,
             q0: 0.0,
             u0: 0.0,
+            q0_expr: None,
+            u0_expr: None,
             angular_velocity0: [0.0; 3],
             velocity0: [0.0; 3],
             stiffness: None,
@@ -233,9 +238,11 @@ impl<'a> Lowerer<'a> {
         };
         if let Some((expr, span)) = scalar(self, "q0") {
             info.q0 = self.evaluate(&expr, span);
+            info.q0_expr = Some(expr).filter(Expr::has_params);
         }
         if let Some((expr, span)) = scalar(self, "u0") {
             info.u0 = self.evaluate(&expr, span);
+            info.u0_expr = Some(expr).filter(Expr::has_params);
         }
         info.stiffness = scalar(self, "stiffness");
         info.damping = scalar(self, "damping");
@@ -724,6 +731,20 @@ impl<'a> Lowerer<'a> {
                 span: decl.name.span,
             })),
         };
+        if let Some(coordinate) = coordinate {
+            let written = [(info.q0_expr.clone(), false), (info.u0_expr.clone(), true)];
+            for (expr, speed) in written {
+                if let Some(expr) = expr {
+                    let value = ir::InitialValue {
+                        coordinate,
+                        speed,
+                        expr,
+                    };
+                    self.model.initial_values.push(value);
+                }
+            }
+        }
+        let info = &self.joints[j];
         let motion = match (kind, coordinate) {
             (JointKind::Pin, Some(coordinate)) => Motion::Revolute {
                 axis: info.axis.clone(),

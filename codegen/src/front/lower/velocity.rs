@@ -21,13 +21,50 @@ use super::Lowerer;
 
 /// Degree of an expression in the speeds: constant in them, or linear and homogeneous.
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum Degree {
+pub(super) enum Degree {
     Zero,
     One,
 }
 
 const LINEAR_HELP: &str = "a velocity constraint is `A(q) u = 0`: a sum of terms, each one speed \
      (`joint.u`, `distance_rate(A, B)`) times a factor of the coordinates and params";
+
+#[derive(Clone, Copy)]
+/// The errors of [`Lowerer::speed_degree`]: what is not linear, and a term without a speed.
+pub(super) struct DegreeErrors {
+    pub not_linear: fn(Span, &str) -> Diagnostic,
+    pub speed_free: fn(Span) -> Diagnostic,
+}
+
+/// How [`Lowerer::linear_scalar`] words its errors (E0403 on `in FRAME`: message, label,
+/// help; E0403 on a field: message, help; E0401 on time or an input: message, help).
+pub(super) struct LinearScalar {
+    pub degree: DegreeErrors,
+    pub frame: [&'static str; 3],
+    pub fields: [&'static str; 2],
+    pub varying: [&'static str; 2],
+}
+
+/// A scalar velocity constraint's errors (E0420, E0421, …).
+const CONSTRAINT_RULES: LinearScalar = LinearScalar {
+    degree: DegreeErrors {
+        not_linear,
+        speed_free,
+    },
+    frame: [
+        "`in FRAME` is only allowed on `velocity(..)`",
+        "this constraint is a scalar",
+        "only `velocity(point)` has components in a frame",
+    ],
+    fields: [
+        "a scalar constraint takes no fields",
+        "write `constraint NAME = EXPR;` (EXPR = 0)",
+    ],
+    varying: [
+        "a constraint may not depend on time or inputs",
+        "its rate `Ȧ u` is taken along the motion, which knows no input's rate",
+    ],
+};
 
 /// E0420 at `span`, saying what is not linear.
 fn not_linear(span: Span, what: &str) -> Diagnostic {
@@ -146,29 +183,43 @@ impl Lowerer<'_> {
     /// `constraint NAME = EXPR;`: EXPR = 0, linear and homogeneous in the speeds, of the
     /// motion and params (not of time or inputs: its rate would need theirs).
     fn scalar_constraint(&mut self, decl: &ast::ConstraintDecl) -> Option<ir::VelocityKind> {
+        self.linear_scalar(decl, &CONSTRAINT_RULES)
+            .map(ir::VelocityKind::Scalar)
+    }
+
+    /// `NAME = EXPR;` of a `constraint` or `speed`: EXPR lowered, if it is linear and
+    /// homogeneous in the speeds, not of time or inputs, with no `in FRAME` and no block
+    /// (each refused as `rules` word it).
+    pub(super) fn linear_scalar(
+        &mut self,
+        decl: &ast::ConstraintDecl,
+        rules: &LinearScalar,
+    ) -> Option<ir::Expr> {
         let mut ok = true;
         if let Some(frame) = &decl.head.frame {
+            let [message, label, help] = rules.frame;
             self.error(
-                Diagnostic::error("E0403", "`in FRAME` is only allowed on `velocity(..)`")
-                    .with_label(frame.span, "this constraint is a scalar")
-                    .with_help("only `velocity(point)` has components in a frame"),
+                Diagnostic::error("E0403", message)
+                    .with_label(frame.span, label)
+                    .with_help(help),
             );
             ok = false;
         }
         if let Some(field) = decl.fields.as_ref().and_then(|f| f.first()) {
+            let [message, help] = rules.fields;
             self.error(
-                Diagnostic::error("E0403", "a scalar constraint takes no fields")
+                Diagnostic::error("E0403", message)
                     .with_label(field.name.span, "not allowed here")
-                    .with_help("write `constraint NAME = EXPR;` (EXPR = 0)"),
+                    .with_help(help),
             );
             ok = false;
         }
-        let degree = self.speed_degree(&decl.head.value);
+        let degree = self.speed_degree(&decl.head.value, &rules.degree);
         let typed = self.lower_scalar(&decl.head.value, Ctx::Load);
         match degree {
             Ok(Degree::One) => {}
             Ok(Degree::Zero) => {
-                self.error(speed_free(decl.head.value.span));
+                self.error((rules.degree.speed_free)(decl.head.value.span));
                 ok = false;
             }
             Err(diagnostic) => {
@@ -178,20 +229,19 @@ impl Lowerer<'_> {
         }
         let typed = typed?;
         if let Some(span) = self.time_or_input(&decl.head.value) {
+            let [message, help] = rules.varying;
             self.error(
-                Diagnostic::error("E0401", "a constraint may not depend on time or inputs")
+                Diagnostic::error("E0401", message)
                     .with_label(span, "time or an input")
-                    .with_help(
-                        "its rate `Ȧ u` is taken along the motion, which knows no input's rate",
-                    ),
+                    .with_help(help),
             );
             ok = false;
         }
-        ok.then_some(ir::VelocityKind::Scalar(typed.expr))
+        ok.then_some(typed.expr)
     }
 
     /// Where `e` first names time, an input, or a `let` that depends on them.
-    fn time_or_input(&self, e: &ast::Expr) -> Option<Span> {
+    pub(super) fn time_or_input(&self, e: &ast::Expr) -> Option<Span> {
         match &e.kind {
             ExprKind::Path(path) => match path.segments.as_slice() {
                 [name] if name.name == "t" => Some(e.span),
@@ -218,8 +268,16 @@ impl Lowerer<'_> {
     }
 
     /// The degree of `e` in the speeds, or the first place where it is not linear and
-    /// homogeneous.
-    fn speed_degree(&self, e: &ast::Expr) -> Result<Degree, Diagnostic> {
+    /// homogeneous (as `errors` word it).
+    pub(super) fn speed_degree(
+        &self,
+        e: &ast::Expr,
+        errors: &DegreeErrors,
+    ) -> Result<Degree, Diagnostic> {
+        let DegreeErrors {
+            not_linear,
+            speed_free,
+        } = *errors;
         match &e.kind {
             ExprKind::Quantity { .. } | ExprKind::Vector(_) => Ok(Degree::Zero),
             ExprKind::Path(path) => Ok(match path.segments.as_slice() {
@@ -233,7 +291,7 @@ impl Lowerer<'_> {
             ExprKind::Call { function, .. } if function.name == "distance_rate" => Ok(Degree::One),
             ExprKind::Call { function, args } => {
                 for arg in args {
-                    if self.speed_degree(arg)? == Degree::One {
+                    if self.speed_degree(arg, errors)? == Degree::One {
                         return Err(not_linear(
                             arg.span,
                             &format!("a speed inside `{}`", function.name),
@@ -242,9 +300,12 @@ impl Lowerer<'_> {
                 }
                 Ok(Degree::Zero)
             }
-            ExprKind::Neg(inner) | ExprKind::Paren(inner) => self.speed_degree(inner),
+            ExprKind::Neg(inner) | ExprKind::Paren(inner) => self.speed_degree(inner, errors),
             ExprKind::Binary { op, lhs, rhs } => {
-                let (a, b) = (self.speed_degree(lhs)?, self.speed_degree(rhs)?);
+                let (a, b) = (
+                    self.speed_degree(lhs, errors)?,
+                    self.speed_degree(rhs, errors)?,
+                );
                 match (op, a, b) {
                     (_, Degree::Zero, Degree::Zero) => Ok(Degree::Zero),
                     (BinaryOp::Add | BinaryOp::Sub, Degree::One, Degree::One) => Ok(Degree::One),

@@ -468,6 +468,16 @@ fn remap_handles(model: &mut Model, remap: &dyn Fn(Handle<Frame>) -> Handle<Fram
             *frame = remap(*frame);
         }
     }
+    for speed in &mut model.speeds {
+        match &mut speed.kind {
+            crate::ir::SpeedKind::AngularVelocity { body, frame, .. } => {
+                *body = remap(*body);
+                *frame = remap(*frame);
+            }
+            crate::ir::SpeedKind::PointVelocity { frame, .. } => *frame = remap(*frame),
+            crate::ir::SpeedKind::Scalar(_) => {}
+        }
+    }
 }
 
 #[cfg(test)]
