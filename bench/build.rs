@@ -6,7 +6,10 @@
 //! `mech` crate's `mech::models`).
 //!
 //! `MECH_BENCH_GENERATED_MAX` (default 32) caps the sizes compiled to Rust; larger chains
-//! are then evaluated through the tape only.
+//! are then evaluated through the tape only. The floating chains (issue 15) have their own
+//! cap, `MECH_BENCH_FLOATING_MAX` (default 8: their generated Rust is 0.1, 0.4, 1.6 and 7.6 MB
+//! at N = 4, 8, 16, 32, so a plain build or CI compiles the two small ones; `bench/run.sh`
+//! sets 32).
 
 #[allow(dead_code)] // chain_source_per_link is for the benchmark binary only
 #[path = "src/source.rs"]
@@ -14,10 +17,12 @@ mod source;
 
 use std::path::PathBuf;
 
-/// The bundled loop models measured beside SymPy (`four_bar.rs`, `spherical_five_bar.rs`).
-const LOOP_MODELS: [&str; 2] = [
+/// The bundled models measured beside SymPy: the loop models (`four_bar.rs`,
+/// `spherical_five_bar.rs`) and the rolling disc (`rolling_disc.rs`, issue 15).
+const LOOP_MODELS: [&str; 3] = [
     "../models/four_bar.mech",
     "../models/spherical_five_bar.mech",
+    "../models/rolling_disc.mech",
 ];
 
 fn main() -> Result<(), mech_codegen::Errors> {
@@ -26,6 +31,7 @@ fn main() -> Result<(), mech_codegen::Errors> {
         println!("cargo:rerun-if-changed={model}");
     }
     println!("cargo:rerun-if-env-changed=MECH_BENCH_GENERATED_MAX");
+    println!("cargo:rerun-if-env-changed=MECH_BENCH_FLOATING_MAX");
     let max: usize = std::env::var("MECH_BENCH_GENERATED_MAX")
         .ok()
         .and_then(|v| v.parse().ok())
@@ -38,10 +44,27 @@ fn main() -> Result<(), mech_codegen::Errors> {
         .copied()
         .filter(|&n| n <= max)
         .collect();
+    let floating_max: usize = std::env::var("MECH_BENCH_FLOATING_MAX")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(8);
+    let floating: Vec<usize> = source::FLOATING_SIZES
+        .iter()
+        .copied()
+        .filter(|&n| n <= max.min(floating_max))
+        .collect();
     let mut paths = Vec::new();
-    for &n in &sizes {
-        let path = out_dir.join(format!("chain{n}.mech"));
-        mech_codegen::write_if_changed(&path, source::chain_source(n).as_bytes())
+    let texts = sizes
+        .iter()
+        .map(|&n| (format!("chain{n}"), source::chain_source(n)))
+        .chain(
+            floating
+                .iter()
+                .map(|&n| (format!("free_chain{n}"), source::floating_chain_source(n))),
+        );
+    for (name, text) in texts {
+        let path = out_dir.join(format!("{name}.mech"));
+        mech_codegen::write_if_changed(&path, text.as_bytes())
             .map_err(|error| mech_codegen::Errors::io(&path.display().to_string(), &error))?;
         paths.push(path);
     }
@@ -68,6 +91,23 @@ fn main() -> Result<(), mech_codegen::Errors> {
     for &n in &sizes {
         listing.push_str(&format!(
             "        $m!($crate::chains::chain{n}::Chain{n}, {n});\n"
+        ));
+    }
+    listing.push_str("    };\n}\n");
+    for &n in &floating {
+        listing.push_str(&format!(
+            "#[allow(non_snake_case)]\npub mod free_chain{n} {{\n    include!(concat!(env!(\"OUT_DIR\"), \"/free_chain{n}.rs\"));\n}}\n"
+        ));
+    }
+    listing.push_str(
+        "\n/// Calls `$m!(module::Struct, N, NQ, NU)` for every floating chain compiled to Rust.\n\
+         #[macro_export]\nmacro_rules! for_each_generated_free_chain {\n    ($m:ident) => {\n",
+    );
+    for &n in &floating {
+        listing.push_str(&format!(
+            "        $m!($crate::chains::free_chain{n}::FreeChain{n}, {n}, {}, {});\n",
+            n + 7,
+            n + 6
         ));
     }
     listing.push_str("    };\n}\n");

@@ -21,6 +21,11 @@
 #   5d. the HAMR leg: `cargo run --release --example hamr_performance` (a Markdown table);
 #   5e. the HAMR leg's statics: `cargo run --release --example statics_timing` (Markdown tables);
 #   5f. tapes as native code: `cargo run --release --example jit_performance` (Markdown tables);
+#   5i. the floating base (issue 15): `bench/native/free_chain_pinocchio.cpp` and
+#      `free_chain_mujoco.c` built against the wheels (the MJCF from
+#      `tests/peers/pinocchio_free_chain.py --xml N`), then FLOAT_ROUNDS rounds of Pinocchio C++
+#      and MuJoCo C at N = 4, 8, 16, 32, `target/release/floating` (mech's u̇, the quadruped's
+#      derivation, 10 s of the rolling disc) and `bench/sympy_rolling_disc.py` (SymPy + SciPy);
 #   5g. the Python call overhead: the package installed into bench/.venv (`pip install
 #      ./python`), then `bench/python_overhead.py` (`model.rhs` against the same evaluation in
 #      Rust, a Markdown table);
@@ -36,7 +41,9 @@
 # (default 5), LOOP_REPS (SymPy loop-model processes, default 3), LOOP_ROUNDS (paired
 # four-bar rounds, default 5), SKIP_CHAIN_PEERS=1 (reuse the chain peers' results of an
 # earlier run: steps 3 and 4 skipped), SKIP_MUJOCO_ROBOT=1 (step 5h skipped), MUJOCO_ROBOT_HZ
-# (its gait frequencies, default "10 5 2"), SKIP_SUMMARY=1.
+# (its gait frequencies, default "10 5 2"), SKIP_SUMMARY=1, FLOAT_ROUNDS (step 5i's rounds,
+# default 3), SKIP_FLOATING=1 (step 5i skipped, its earlier results kept), ONLY_FLOATING=1
+# (steps 3 to 5h skipped: step 5i and the summary only).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 PEERS=${PEERS:-../shared/peers}
@@ -44,20 +51,36 @@ SYMPY_REPS=${SYMPY_REPS:-3}
 SYMPY_N12=${SYMPY_N12:-1}
 PIN_REPS=${PIN_REPS:-7}
 R=bench/results
+# the floating chains compiled to Rust up to N = 32 (bench/build.rs compiles 4 and 8 by default)
+export MECH_BENCH_FLOATING_MAX=${MECH_BENCH_FLOATING_MAX:-32}
+TARGET=${CARGO_TARGET_DIR:-target}
 VENV=bench/.venv
 PY=$VENV/bin/python
 SIZES="1 2 4 8 16 32"
 
 mkdir -p $R/bin
 SKIP_CHAIN_PEERS=${SKIP_CHAIN_PEERS:-0}
+ONLY_FLOATING=${ONLY_FLOATING:-0}
+if [ "$ONLY_FLOATING" = 1 ]; then
+  SKIP_CHAIN_PEERS=1
+fi
 LOOP_REPS=${LOOP_REPS:-3}
 if [ "$SKIP_CHAIN_PEERS" != 1 ]; then
   rm -f $R/sympy_chain.jsonl $R/pinocchio_py.jsonl $R/pinocchio_cpp.jsonl
 fi
-rm -f $R/mech.jsonl $R/load.jsonl $R/commands.txt $R/sympy_fourbar.jsonl $R/sympy_fivebar.jsonl
-: > $R/commands.txt
-# The machine, commit and date of this run, for the header of docs/benchmarks.md.
-python3 bench/summarize.py --record-machine $R/machine.json
+LOAD_PREFIX=
+if [ "$ONLY_FLOATING" = 1 ]; then
+  # drop what an earlier ONLY_FLOATING run appended, keep the full run's lines
+  sed -i '/^# ONLY_FLOATING=1/,$d' $R/commands.txt
+  sed -i '/"section":"floating/d' $R/load.jsonl
+  LOAD_PREFIX=floating_
+  echo "# ONLY_FLOATING=1: steps 3 to 5h skipped, their earlier results kept" >> $R/commands.txt
+else
+  rm -f $R/mech.jsonl $R/load.jsonl $R/commands.txt $R/sympy_fourbar.jsonl $R/sympy_fivebar.jsonl
+  : > $R/commands.txt
+  # The machine, commit and date of this run, for the header of docs/benchmarks.md.
+  python3 bench/summarize.py --record-machine $R/machine.json
+fi
 
 # Logs and runs a command; a failure is recorded, not fatal.
 run() {
@@ -65,7 +88,7 @@ run() {
   "$@"
 }
 load() { # section name
-  printf '{"section":"%s","date":"%s","loadavg":"%s"}\n' "$1" "$(date -u +%FT%TZ)" "$(cat /proc/loadavg)" >> $R/load.jsonl
+  printf '{"section":"%s%s","date":"%s","loadavg":"%s"}\n' "$LOAD_PREFIX" "$1" "$(date -u +%FT%TZ)" "$(cat /proc/loadavg)" >> $R/load.jsonl
 }
 failed() { # script N rc
   printf '{"script":"%s","N":%s,"status":"process-failed rc=%s"}\n' "$1" "$2" "$3"
@@ -78,7 +101,7 @@ if [ ! -x $PY ] || ! $PY -c 'import sympy, pinocchio' 2>/dev/null; then
   run $VENV/bin/pip install -q -r $PEERS/requirements.txt
 fi
 NATIVE=$R/bin/pinocchio_bench_native
-if [ ! -x $NATIVE ] || [ $PEERS/native/pinocchio_bench.cpp -nt $NATIVE ]; then
+if [ "$ONLY_FLOATING" != 1 ] && { [ ! -x $NATIVE ] || [ $PEERS/native/pinocchio_bench.cpp -nt $NATIVE ]; }; then
   # The "native" build of peers/native/build.sh (templates instantiated here, -O3 -march=native),
   # written to bench/results/bin instead of peers/native/bin.
   SP=$($PY -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
@@ -92,6 +115,54 @@ fi
 echo "== 2. cargo build --release -p mech-bench" >&2
 load build
 run cargo build --release -p mech-bench || exit 1
+
+# The floating base (issue 15): Pinocchio's ABA and MuJoCo's mj_forward (C and C++ against the
+# wheels' libraries) and mech's generated u̇ on the floating chain, side by side in each round;
+# the quadruped's derivation; the rolling disc's 10 s in mech and in SymPy + SciPy.
+floating_step() {
+  echo "== 5i. floating base: Pinocchio, MuJoCo, mech; quadruped; rolling disc" >&2
+  LOAD_PREFIX= load floating
+  local SP CP PDEF N r
+  SP=$($PY -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
+  CP=$SP/cmeel.prefix
+  PDEF="-DBOOST_MPL_LIMIT_LIST_SIZE=30 -DBOOST_MPL_LIMIT_VECTOR_SIZE=30 -DBOOST_MPL_CFG_NO_PREPROCESSED_HEADERS -DBOOST_FUSION_INVOKE_MAX_ARITY=12"
+  if [ ! -x $R/bin/free_chain_pinocchio ] || [ bench/native/free_chain_pinocchio.cpp -nt $R/bin/free_chain_pinocchio ]; then
+    run g++ -O3 -march=native -DNDEBUG -std=c++17 $PDEF -o $R/bin/free_chain_pinocchio \
+      bench/native/free_chain_pinocchio.cpp -I"$CP/include" -I"$CP/include/eigen3" \
+      -L"$CP/lib" -lpinocchio_default -Wl,-rpath,"$CP/lib" > $R/native_build.log 2>&1 \
+      || echo "free_chain_pinocchio build failed: see $R/native_build.log" >&2
+  fi
+  run gcc -O2 -o $R/bin/free_chain_mujoco bench/native/free_chain_mujoco.c \
+    -I"$SP/mujoco/include" "$SP/mujoco/libmujoco.so.4.0.0" -Wl,-rpath,"$SP/mujoco" \
+    || echo "free_chain_mujoco build failed" >&2
+  rm -f $R/free_chain_pinocchio.jsonl $R/free_chain_mujoco.jsonl $R/floating.jsonl \
+    $R/sympy_rolling_disc.jsonl
+  for N in 4 8 16 32; do
+    $PY tests/peers/pinocchio_free_chain.py --xml $N > $R/bin/free_chain$N.xml
+  done
+  for r in $(seq 1 "${FLOAT_ROUNDS:-3}"); do
+    echo "   round $r" >&2
+    for N in 4 8 16 32; do
+      run $R/bin/free_chain_pinocchio $N 5 >> $R/free_chain_pinocchio.jsonl \
+        || failed free_chain_pinocchio $N $? >> $R/free_chain_pinocchio.jsonl
+      run $R/bin/free_chain_mujoco $R/bin/free_chain$N.xml $N 5 >> $R/free_chain_mujoco.jsonl \
+        || failed free_chain_mujoco $N $? >> $R/free_chain_mujoco.jsonl
+    done
+    run $TARGET/release/floating --out $R/floating_round.jsonl > /dev/null \
+      && cat $R/floating_round.jsonl >> $R/floating.jsonl
+    run timeout 600 $PY bench/sympy_rolling_disc.py --reps 3 >> $R/sympy_rolling_disc.jsonl \
+      || failed sympy_rolling_disc 0 $? >> $R/sympy_rolling_disc.jsonl
+  done
+  rm -f $R/floating_round.jsonl
+}
+
+if [ "$ONLY_FLOATING" = 1 ]; then
+  floating_step
+  if [ "${SKIP_SUMMARY:-0}" != 1 ]; then
+    run $PY bench/summarize.py --results $R --out docs/benchmarks.md
+  fi
+  exit 0
+fi
 
 if [ "$SKIP_CHAIN_PEERS" = 1 ]; then
   echo "== 3, 4. chain peers skipped (SKIP_CHAIN_PEERS=1): earlier results kept" >&2
@@ -151,7 +222,7 @@ rm -f $R/paired_pinocchio_cpp.jsonl $R/paired_mech.jsonl
 if [ -x $NATIVE ]; then
   for r in $(seq 1 "${PAIRED_ROUNDS:-5}"); do
     run $NATIVE 4 "$PIN_REPS" >> $R/paired_pinocchio_cpp.jsonl || failed pinocchio_bench_cpp 4 $? >> $R/paired_pinocchio_cpp.jsonl
-    run target/release/mech-bench --eval-only --sizes 4 --out $R/paired_mech_round.jsonl > /dev/null \
+    run $TARGET/release/mech-bench --eval-only --sizes 4 --out $R/paired_mech_round.jsonl > /dev/null \
       && grep '"record":"eval"' $R/paired_mech_round.jsonl >> $R/paired_mech.jsonl
   done
   rm -f $R/paired_mech_round.jsonl
@@ -165,7 +236,7 @@ rm -f $R/paired_sympy_fourbar.jsonl $R/paired_mech_loops.jsonl
 for r in $(seq 1 "${LOOP_ROUNDS:-5}"); do
   run timeout 600 $PY $PEERS/sympy_fourbar.py --reps 5 --no-pydy >> $R/paired_sympy_fourbar.jsonl \
     || failed sympy_fourbar 0 $? >> $R/paired_sympy_fourbar.jsonl
-  run target/release/mech-bench --loops-only --out $R/paired_mech_round.jsonl > /dev/null \
+  run $TARGET/release/mech-bench --loops-only --out $R/paired_mech_round.jsonl > /dev/null \
     && grep '"record":"loop"' $R/paired_mech_round.jsonl >> $R/paired_mech_loops.jsonl
 done
 rm -f $R/paired_mech_round.jsonl
@@ -204,6 +275,9 @@ if [ "${SKIP_MUJOCO_ROBOT:-0}" != 1 ]; then
          --frequencies ${MUJOCO_ROBOT_HZ:-10 5 2} --json $R/mujoco_robot.jsonl --table $R/mujoco_robot.md \
          > /dev/null \
     || failed mujoco_robot 0 $? >> $R/mujoco_robot.jsonl
+fi
+if [ "${SKIP_FLOATING:-0}" != 1 ]; then
+  floating_step
 fi
 load end
 

@@ -13,7 +13,9 @@ pub mod loops;
 pub mod source;
 pub mod timing;
 
-pub use source::{chain_source, chain_source_per_link, SIZES};
+pub use source::{
+    chain_source, chain_source_per_link, floating_chain_source, FLOATING_SIZES, SIZES,
+};
 
 use mech_codegen::Compiled;
 

@@ -113,7 +113,7 @@ pub fn assembled<M: Model>(model: &M, fixed: &[usize]) -> (Vec<f64>, Vec<f64>, u
 }
 
 /// DOP853, as the SymPy peers' `solve_ivp(method="DOP853")`: the headline comparison.
-const DOP853: Method = Method::Dop853 {
+pub const DOP853: Method = Method::Dop853 {
     rtol: TOLERANCE,
     atol: TOLERANCE,
     h_max: f64::INFINITY,

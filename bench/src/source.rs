@@ -6,27 +6,40 @@
 /// Chain sizes of the benchmark.
 pub const SIZES: [usize; 6] = [1, 2, 4, 8, 16, 32];
 
+/// Sizes of the floating chain (a `free` joint carrying N links) of the benchmark.
+pub const FLOATING_SIZES: [usize; 4] = [4, 8, 16, 32];
+
 /// Names of the nine inertial parameters of a link, in the order of `chain_model.py`.
 const LINK_PARAMS: [&str; 9] = ["m", "l", "d", "Ixx", "Iyy", "Izz", "Ixy", "Iyz", "Izx"];
 
 /// The N-link chain written exactly like `models/chain4.mech` (same parameters, axes
 /// alternating x/y, `q0 = 0.5 rad`); `chain_source(4)` is that file byte for byte.
 pub fn chain_source(n: usize) -> String {
-    chain_text(n, false)
+    chain_text(n, false, false)
+}
+
+/// The same chain on a floating base (issue 15): a body like the links, `base`, on a `free`
+/// joint `float` (its origin at the world's origin at rest), with link 1 pinned `l` below
+/// the base's origin about the base's x, the axes alternating x/y as before. Coordinates
+/// `float.x/y/z`, `q1 … qN`, `float.e0 … e3`; speeds `float.x/y/z` (world), `q1 … qN`,
+/// `float.wx/wy/wz` (base frame). `tests/peers/pinocchio_free_chain.py` builds the same
+/// model in Pinocchio and MuJoCo.
+pub fn floating_chain_source(n: usize) -> String {
+    chain_text(n, false, true)
 }
 
 /// The same chain with its own nine parameters per link (`m1`, `l1`, ..., `Izx{n}`) and
 /// `g`, as the SymPy peer keeps them: the like-for-like model for operation counts, where
 /// shared parameters would let identical terms of different links merge.
 pub fn chain_source_per_link(n: usize) -> String {
-    chain_text(n, true)
+    chain_text(n, true, false)
 }
 
-fn chain_text(n: usize, per_link: bool) -> String {
-    let name = if per_link {
-        format!("chain{n}_per_link")
-    } else {
-        format!("chain{n}")
+fn chain_text(n: usize, per_link: bool, floating: bool) -> String {
+    let name = match (per_link, floating) {
+        (true, _) => format!("chain{n}_per_link"),
+        (false, true) => format!("free_chain{n}"),
+        (false, false) => format!("chain{n}"),
     };
     let mut s = String::new();
     s.push_str(&format!(
@@ -35,6 +48,9 @@ fn chain_text(n: usize, per_link: bool) -> String {
     ));
     if per_link {
         s.push_str("/// Every link has its own parameters, as in the SymPy peer.\n");
+    }
+    if floating {
+        s.push_str("/// On a floating base: a body like the links on a `free` joint, link 1 pinned to it.\n");
     }
     s.push_str(&format!("model {name};\n\n"));
     let units = [
@@ -61,24 +77,36 @@ fn chain_text(n: usize, per_link: bool) -> String {
             String::new()
         }
     };
-    for k in 1..=n {
+    let body_name = |k: usize| {
+        if k == 0 {
+            "base".to_string()
+        } else {
+            format!("link{k}")
+        }
+    };
+    let first = if floating { 0 } else { 1 };
+    for k in first..=n {
         let p = suffix(k);
         s.push_str(&format!(
-            "\nbody link{k} {{\n    mass = m{p};\n    com = [0, 0, -d{p}];\n    \
-             inertia = [Ixx{p}, Iyy{p}, Izz{p}, Ixy{p}, Iyz{p}, Izx{p}];\n}}\n"
+            "\nbody {} {{\n    mass = m{p};\n    com = [0, 0, -d{p}];\n    \
+             inertia = [Ixx{p}, Iyy{p}, Izz{p}, Ixy{p}, Iyz{p}, Izx{p}];\n}}\n",
+            body_name(k)
         ));
     }
+    if floating {
+        s.push_str("\njoint float = free(newtonian, base);\n");
+    }
     for k in 1..=n {
-        let parent = if k == 1 {
+        let parent = if k == 1 && !floating {
             "newtonian".to_string()
         } else {
-            format!("link{}", k - 1)
+            body_name(k - 1)
         };
         let axis = if k % 2 == 1 { "x" } else { "y" };
         s.push_str(&format!(
             "\njoint q{k} = pin({parent}, link{k}) {{\n    axis = {axis};\n"
         ));
-        if k > 1 {
+        if k > 1 || floating {
             s.push_str(&format!(
                 "    parent_point = [0, 0, -l{}];\n",
                 suffix(k - 1)

@@ -38,7 +38,37 @@ impl Summary {
 
 /// Nanoseconds per call of `f`: warm up, pick a batch size so that one batch takes about
 /// `batch_time`, then time `batches` batches. `f` should `black_box` its inputs and result.
-pub fn per_call_ns(mut f: impl FnMut(), batches: usize, batch_time: Duration) -> Summary {
+pub fn per_call_ns(f: impl FnMut(), batches: usize, batch_time: Duration) -> Summary {
+    per_call_by(f, batches, batch_time, || {
+        let start = Instant::now();
+        move || start.elapsed().as_secs_f64() * 1e9
+    })
+}
+
+/// The CPU time of the calling thread in ns (`/proc/thread-self/schedstat`, its first field),
+/// or `None` where that file cannot be read.
+pub fn thread_cpu_ns() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    text.split_whitespace().next()?.parse().ok()
+}
+
+/// As [`per_call_ns`], in the CPU time of this thread: what the calls cost on a shared
+/// machine, without the time other processes hold the core. `None` without
+/// [`thread_cpu_ns`].
+pub fn per_call_cpu_ns(f: impl FnMut(), batches: usize, batch_time: Duration) -> Option<Summary> {
+    thread_cpu_ns()?;
+    Some(per_call_by(f, batches, batch_time, || {
+        let start = thread_cpu_ns().unwrap_or(f64::NAN);
+        move || thread_cpu_ns().unwrap_or(f64::NAN) - start
+    }))
+}
+
+/// [`per_call_ns`] with its clock: `start()` returns a function giving the ns elapsed since.
+fn per_call_by<S, E>(mut f: impl FnMut(), batches: usize, batch_time: Duration, start: S) -> Summary
+where
+    S: Fn() -> E,
+    E: Fn() -> f64,
+{
     // Warm-up and calibration: double the count until a batch takes a tenth of the target.
     let mut calls: u64 = 1;
     loop {
@@ -56,11 +86,11 @@ pub fn per_call_ns(mut f: impl FnMut(), batches: usize, batch_time: Duration) ->
     }
     let values = (0..batches)
         .map(|_| {
-            let start = Instant::now();
+            let elapsed = start();
             for _ in 0..calls {
                 f();
             }
-            start.elapsed().as_secs_f64() * 1e9 / calls as f64
+            elapsed() / calls as f64
         })
         .collect();
     Summary::of(values, calls)

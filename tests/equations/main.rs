@@ -28,6 +28,7 @@ mod language_doc;
 mod linear;
 mod loops;
 mod pendulum;
+mod pinocchio_free_chain;
 mod plausible;
 mod quaternion_joints;
 mod quaternion_loops;

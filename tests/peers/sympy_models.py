@@ -517,17 +517,12 @@ MODELS = [lambda: chain(1), lambda: chain(2), lambda: chain(4),
 DISC = {'r': 0.5, 'm': 1.5, 'g': float(G_ACC)}
 
 
-def rolling_disc():
-    """SymPy's rolling disc, verbatim from sympy/physics/mechanics/tests/test_kane.py
-    (test_rolling_disc): yaw q1 about N.z, lean q2 about Y.x, spin q3 about L.y, speeds the
-    disc's angular velocity in the lean frame, u1 L.x + u2 L.y + u3 L.z, and the contact
-    point C at rest (Dmc.v2pt_theory(C, N, R)): no slip is built in, no constraint is
-    written. mech's models/rolling_disc.mech has the contact point's position x, y as two
-    more coordinates, u = q' for all five, and the no-slip rows as a velocity constraint.
-    Returns u' in mech's layout as a function of mech's (q, u), and the energies."""
+def rolling_disc_kane():
+    """SymPy's test_rolling_disc up to kanes_equations, as written there (also used by
+    bench/sympy_rolling_disc.py): KanesMethod, (q1, q2, q3, u1, u2, u3), (r, m, g), and the
+    frames, points and body that rolling_disc() reads."""
     q1, q2, q3, u1, u2, u3 = me.dynamicsymbols('q1 q2 q3 u1 u2 u3')
     r, m, g = sm.symbols('r m g')
-    values = {s: sm.Rational(str(DISC[s.name])) for s in (r, m, g)}   # exact, as R() gives
     N = me.ReferenceFrame('N')
     Y = N.orientnew('Y', 'Axis', [q1, N.z])
     L = Y.orientnew('L', 'Axis', [q2, Y.x])
@@ -544,6 +539,20 @@ def rolling_disc():
     BodyD = me.RigidBody('BodyD', Dmc, R, m, (I, Dmc))
     KM = me.KanesMethod(N, q_ind=[q1, q2, q3], u_ind=[u1, u2, u3], kd_eqs=kd)
     KM.kanes_equations([BodyD], ForceList)
+    return KM, (q1, q2, q3, u1, u2, u3), (r, m, g), N, L, w_R_N_qd, C, Dmc, BodyD
+
+
+def rolling_disc():
+    """SymPy's rolling disc, verbatim from sympy/physics/mechanics/tests/test_kane.py
+    (test_rolling_disc): yaw q1 about N.z, lean q2 about Y.x, spin q3 about L.y, speeds the
+    disc's angular velocity in the lean frame, u1 L.x + u2 L.y + u3 L.z, and the contact
+    point C at rest (Dmc.v2pt_theory(C, N, R)): no slip is built in, no constraint is
+    written. mech's models/rolling_disc.mech has the contact point's position x, y as two
+    more coordinates, u = q' for all five, and the no-slip rows as a velocity constraint.
+    Returns u' in mech's layout as a function of mech's (q, u), and the energies."""
+    (KM, (q1, q2, q3, u1, u2, u3), (r, m, g), N, L, w_R_N_qd, C, Dmc,
+     BodyD) = rolling_disc_kane()
+    values = {s: sm.Rational(str(DISC[s.name])) for s in (r, m, g)}   # exact, as R() gives
     upright = rolling_disc_upright(KM, (q1, q2, q3, u1, u2, u3), (r, m, g))
     # mech's coordinates and speeds (u = q'): x, y, yaw, lean, spin.
     x, y, yaw, lean, spin = sm.symbols('x y yaw lean spin')
