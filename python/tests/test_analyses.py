@@ -152,10 +152,10 @@ BICYCLE_K2 = np.array([[0.0, 76.59734589573222], [0.0, 2.65431523794604]])
 
 
 def test_linearize_steady_gives_the_benchmark_bicycle():
-    """`models/whipple_bicycle.mech` at 3 and 5 m/s (`set("v=…")` moves the rear wheel's
+    """`models/benchmarks/whipple_bicycle.mech` at 3 and 5 m/s (`set("v=…")` moves the rear wheel's
     `u0 = v / rR`): the second-order matrices are the paper's, and the eigenvalues but the
     forward speed's zero are those of the paper's equations, solved here in NumPy."""
-    bicycle = mech.load(ROOT / "models" / "whipple_bicycle.mech")
+    bicycle = mech.load(ROOT / "models" / "benchmarks" / "whipple_bicycle.mech")
     for v in (3.0, 5.0):
         bicycle.set(f"v={v} m/s")
         steady = bicycle.linearize_steady(independent=["roll", "steer", "rear"])

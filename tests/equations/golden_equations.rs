@@ -78,6 +78,7 @@ tests_per_file! {
     hamr_vi,
     mixed_chain,
     pendulum,
+    quadruped,
     rolling_disc,
     slider_crank,
     spherical_five_bar,
@@ -85,7 +86,6 @@ tests_per_file! {
     state_forces,
     triple_pendulum_3d,
     two_mass_chain,
-    whipple_bicycle,
 }
 
 #[test]

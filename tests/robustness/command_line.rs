@@ -180,7 +180,7 @@ fn settings_given_twice_or_signals_where_a_constant_is_held_are_refused() {
 #[test]
 fn steady_sweeps_are_checked() {
     let dir = scratch("steady_sweeps");
-    let bicycle = "{model:whipple_bicycle}";
+    let bicycle = "{model:benchmarks/whipple_bicycle}";
     let steady = |sweep: &'static str| -> Vec<&'static str> {
         vec!["linearize", bicycle, "--steady", "--sweep", sweep]
     };
