@@ -135,6 +135,9 @@ pub enum Error {
         error: RuntimeError,
         site: Option<Box<Errors>>,
     },
+    /// An analysis the model cannot have, pointing at the declaration that rules it out (a
+    /// velocity constraint in statics: it has no form in the coordinates).
+    Unsupported(Box<Errors>),
     /// No static equilibrium was found.
     Statics { model: String, error: RuntimeError },
     /// The linearization about the equilibrium failed.
@@ -229,6 +232,7 @@ impl std::fmt::Display for Error {
                 site: Some(site), ..
             } => write!(f, "{site}"),
             Error::Assembly { error, site: None } => write!(f, "{error}"),
+            Error::Unsupported(site) => write!(f, "{site}"),
             Error::Statics { model, error } => write!(f, "statics of `{model}`: {error}"),
             Error::Linearization(error) => write!(f, "linearization failed: {error}"),
             Error::Simulation { model, error } => {
@@ -787,9 +791,11 @@ impl Session {
             fixtures,
             &StaticsOptions::default(),
         )
-        .map_err(|error| Error::Statics {
-            model: self.model.name().to_string(),
-            error,
+        .map_err(|error| {
+            self.unsupported(error, |error| Error::Statics {
+                model: self.model.name().to_string(),
+                error,
+            })
         })?;
         Ok((equilibrium, state.independent))
     }
@@ -811,10 +817,49 @@ impl Session {
         } else {
             simulate(model, q0, u0, signals, options, progress)
         }
-        .map_err(|error| Error::Simulation {
-            model: model.name().to_string(),
-            error,
+        .map_err(|error| {
+            self.unsupported(error, |error| Error::Simulation {
+                model: model.name().to_string(),
+                error,
+            })
         })
+    }
+
+    /// `error` as [`Error::Unsupported`] pointing at the model's first velocity constraint
+    /// when it says the analysis cannot take velocity constraints (and the text is at hand);
+    /// otherwise `otherwise(error)`.
+    fn unsupported(
+        &self,
+        error: RuntimeError,
+        otherwise: impl FnOnce(RuntimeError) -> Error,
+    ) -> Error {
+        let constraint = self.compiled.model.velocity_constraints.first();
+        match (&error, constraint, &self.compiled.source) {
+            (
+                RuntimeError::VelocityConstraintsUnsupported { analysis, model },
+                Some(constraint),
+                Some(file),
+            ) => {
+                let message = format!(
+                    "{analysis} of model `{model}` is not possible: it has velocity constraints, \
+                     and {analysis} works with the coordinates alone"
+                );
+                let diagnostic = Diagnostic::error("E0602", message)
+                    .with_label(
+                        constraint.span,
+                        format!(
+                            "`{}` is a condition on the speeds, with no form in the coordinates",
+                            constraint.name
+                        ),
+                    )
+                    .with_help(
+                        "simulate the model in full coordinates (dopri5, dop853, rk4), or \
+                         linearize it about a steady motion (`mech linearize --steady`)",
+                    );
+                Error::Unsupported(Box::new(Errors::new(file.clone(), vec![diagnostic])))
+            }
+            _ => otherwise(error),
+        }
     }
 
     /// The linear model about the static equilibrium under constant `inputs`, in the
@@ -826,7 +871,7 @@ impl Session {
     ) -> Result<Linearization, Error> {
         let (equilibrium, independent) = self.equilibrium(independent, inputs, &[])?;
         linearize(&self.model, 0.0, &equilibrium.q, inputs, &independent)
-            .map_err(Error::Linearization)
+            .map_err(|error| self.unsupported(error, Error::Linearization))
     }
 }
 

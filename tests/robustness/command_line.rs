@@ -194,6 +194,10 @@ fn steady_sweeps_are_checked() {
         (vec!["linearize", bicycle, "--sweep", "rear=0..3 rad/s:4"], "--steady"),
         (vec!["linearize", bicycle, "--steady", "--plot", "e.svg"], "--sweep"),
         (vec!["linearize", "{model:ball_double_pendulum}", "--steady"], "steady-motion linearization of model `ball_double_pendulum` is not supported yet"),
+        // Velocity constraints: the analyses on the coordinates point at the constraint.
+        (vec!["statics", "{model:rolling_disc}"], "error[E0602]: statics of model `rolling_disc` is not possible: it has velocity constraints"),
+        (vec!["linearize", "{model:rolling_disc}"], "rolling_disc.mech:25:1"),
+        (vec!["simulate", "{model:rolling_disc}", "--t-end", "0.1", "--out", "run.csv", "--method", "rosenbrock"], "`roll` is a condition on the speeds, with no form in the coordinates"),
     ];
     let cases: Vec<(&[&str], &str)> = cases.iter().map(|(a, e)| (&a[..], *e)).collect();
     expect_errors(&dir, &cases);
