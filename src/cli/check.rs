@@ -67,7 +67,11 @@ pub fn run(args: &CheckArgs) -> Result<(), Error> {
         model
             .params
             .iter()
-            .map(|(_, p)| format!("{} = {} {}", p.name, p.value, p.dimension))
+            .map(|(_, p)| match p.dimension == Dimension::NONE {
+                // A plain number, or an angle in rad.
+                true => format!("{} = {}", p.name, p.value),
+                false => format!("{} = {} {}", p.name, p.value, p.dimension),
+            })
             .collect(),
     );
     list(
