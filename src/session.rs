@@ -122,6 +122,9 @@ pub enum Error {
     /// `--q0` or `--independent` on a part of a quaternion (`tip.e0`): the parts must stay
     /// a unit quaternion.
     QuaternionPart { option: &'static str, name: String },
+    /// `--independent` on a coordinate the loop closure cannot hold: its rate is not a speed
+    /// (an Euler angle, or any coordinate of a model with `speed` declarations).
+    NotHeld { name: String, reason: &'static str },
     /// The same name set twice by one option.
     Repeated {
         option: &'static str,
@@ -207,6 +210,12 @@ impl std::fmt::Display for Error {
                 f,
                 "--q0 {name}: a quaternion's parts cannot be set one by one (they must stay a \
                  unit quaternion); turn the joint's start with its `parent_frame`"
+            ),
+            Error::NotHeld { name, reason } => write!(
+                f,
+                "--independent {name}: {reason}, and the loop closure holds coordinates whose \
+                 rate is a speed (pins and sliders of a model without `speed` declarations); \
+                 let the assembly choose"
             ),
             Error::QuaternionPart { option, name } => write!(
                 f,
@@ -681,9 +690,23 @@ impl Session {
             };
             let index = self.coordinate_index(name)?;
             if index >= model.plain_coordinates() {
-                return Err(Error::QuaternionPart {
-                    option: "--independent",
-                    name: name.to_string(),
+                let ir = &self.compiled.model;
+                let quaternion = index >= ir.coordinates.len()
+                    && index < ir.coordinates.len() + 4 * ir.quaternions.len();
+                return Err(match (quaternion, ir.speeds.is_empty()) {
+                    (true, _) => Error::QuaternionPart {
+                        option: "--independent",
+                        name: name.to_string(),
+                    },
+                    (false, false) => Error::NotHeld {
+                        name: name.to_string(),
+                        reason: "the model's speeds are chosen by `speed` declarations, so no \
+                                 coordinate's rate is a speed",
+                    },
+                    (false, true) => Error::NotHeld {
+                        name: name.to_string(),
+                        reason: "an Euler angle's rate is not its speed (q̇ = W(q) u)",
+                    },
                 });
             }
             if let Some(value) = value {

@@ -203,6 +203,33 @@ fn steady_sweeps_are_checked() {
     expect_errors(&dir, &cases);
 }
 
+/// `--independent` on a loop model whose coordinates' rates are not speeds (`speed`
+/// declarations) says why it cannot be held, not that it is a quaternion's part.
+#[test]
+fn holding_a_coordinate_of_a_model_with_chosen_speeds_says_why_not() {
+    let dir = scratch("chosen_speeds_independent");
+    let text = std::fs::read_to_string(model("four_bar")).unwrap();
+    let chosen = format!(
+        "{text}\nspeed crank_rate = crank_angle.u;\nspeed coupler_rate = coupler_angle.u;\n\
+         speed rocker_rate = rocker_angle.u;\n"
+    );
+    std::fs::write(dir.join("four_bar_speeds.mech"), chosen).unwrap();
+    expect_errors(
+        &dir,
+        &[(
+            &[
+                "assemble",
+                "four_bar_speeds.mech",
+                "--independent",
+                "crank_angle",
+            ],
+            "--independent crank_angle: the model's speeds are chosen by `speed` declarations, \
+             so no coordinate's rate is a speed, and the loop closure holds coordinates whose \
+             rate is a speed",
+        )],
+    );
+}
+
 #[test]
 fn escape_sequences_in_an_input_file_are_shown_not_sent_to_the_terminal() {
     let dir = scratch("escapes");
