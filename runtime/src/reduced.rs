@@ -21,7 +21,7 @@
 //! this is `M q̈ = F`. Nothing allocates after construction.
 
 use crate::constraints::{assembly_error, mobility};
-use crate::integrate::{check_len, Ode};
+use crate::integrate::{check_indices, check_len, Ode};
 use crate::signal::{check_inputs, values_at};
 use crate::{dense, Model, RuntimeError, Signal};
 
@@ -99,14 +99,7 @@ impl<'a, M: Model + ?Sized> Reduced<'a, M> {
                 "the constraint tolerance must be finite and > 0 (got {tolerance})"
             )));
         }
-        let mut sorted = independent.to_vec();
-        sorted.sort_unstable();
-        sorted.dedup();
-        if sorted.len() != independent.len() || sorted.last().is_some_and(|&i| i >= nq) {
-            return Err(RuntimeError::InvalidOptions(format!(
-                "independent coordinates {independent:?}: need distinct indices below {nq}"
-            )));
-        }
+        check_indices("independent coordinates", independent, nq)?;
         let dof = if nc == 0 {
             nq
         } else {

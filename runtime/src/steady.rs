@@ -28,6 +28,7 @@
 use nalgebra::{Complex, DMatrix};
 
 use crate::constraints::{assemble, assemble_speeds, AssemblyOptions};
+use crate::integrate::{check_indices, check_len};
 use crate::linearize::{derivative, step_for};
 use crate::signal::default_signals;
 use crate::simulate::ModelOde;
@@ -254,22 +255,11 @@ pub fn linearize_steady<M: Model + ?Sized>(
     {
         model.require_rates_are_speeds("steady-motion linearization")?;
     }
-    crate::integrate::check_len("q", model.nq(), q.len())?;
-    crate::integrate::check_len("u", model.nu(), u.len())?;
-    crate::integrate::check_len("inputs", model.ninputs(), inputs.len())?;
-    let distinct = |list: &[usize], bound: usize| {
-        let mut sorted = list.to_vec();
-        sorted.sort_unstable();
-        sorted.dedup();
-        sorted.len() == list.len() && list.iter().all(|&i| i < bound)
-    };
-    if !distinct(coordinates, model.nq()) || !distinct(speeds, model.nu()) {
-        return Err(RuntimeError::InvalidOptions(format!(
-            "independent coordinates {coordinates:?} and speeds {speeds:?}: need distinct \
-             indices below {}",
-            model.nq()
-        )));
-    }
+    check_len("q", model.nq(), q.len())?;
+    check_len("u", model.nu(), u.len())?;
+    check_len("inputs", model.ninputs(), inputs.len())?;
+    check_indices("independent coordinates", coordinates, model.nq())?;
+    check_indices("independent speeds", speeds, model.nu())?;
     let signals = default_signals(model);
     let mut chart = Chart {
         model,

@@ -256,6 +256,24 @@ pub(crate) fn check_len(
     }
 }
 
+/// `Ok` if `indices` (of `what`, e.g. `"independent coordinates"`) are distinct and below
+/// `bound`.
+pub(crate) fn check_indices(
+    what: &str,
+    indices: &[usize],
+    bound: usize,
+) -> Result<(), RuntimeError> {
+    let mut sorted = indices.to_vec();
+    sorted.sort_unstable();
+    sorted.dedup();
+    match sorted.len() == indices.len() && sorted.last().is_none_or(|&i| i < bound) {
+        true => Ok(()),
+        false => Err(RuntimeError::InvalidOptions(format!(
+            "{what} {indices:?}: need distinct indices below {bound}"
+        ))),
+    }
+}
+
 fn check_times(t0: f64, t_end: f64) -> Result<(), RuntimeError> {
     if !t0.is_finite() || !t_end.is_finite() {
         return Err(RuntimeError::InvalidOptions(format!(
