@@ -427,15 +427,7 @@ impl Session {
     fn assign(&mut self, assignment: &str) -> Result<(), Error> {
         let option = "--set";
         let (name, value, index) = self.assignment(option, NameKind::Parameter, assignment)?;
-        let expected = self
-            .compiled
-            .model
-            .params
-            .iter()
-            .nth(index)
-            .map(|(_, p)| p.dimension)
-            .unwrap_or_default();
-        let si = quantity(option, &name, &value, expected)?;
+        let si = quantity(option, &name, &value, self.param_dimension(index))?;
         self.model.set_param(index, si);
         Ok(())
     }
@@ -579,6 +571,13 @@ impl Session {
     /// Index of output `name`, or an error listing the outputs.
     pub fn output_index(&self, name: &str) -> Result<usize, Error> {
         self.index_of(NameKind::Output, name, None)
+    }
+
+    /// The dimension of parameter `index`'s values.
+    pub fn param_dimension(&self, index: usize) -> Dimension {
+        let params = &self.compiled.model.params;
+        let dimension = params.iter().nth(index).map(|(_, p)| p.dimension);
+        dimension.unwrap_or_default()
     }
 
     /// The dimension of speed `index`: its coordinate's over time (a quaternion's angular
@@ -916,7 +915,8 @@ pub fn named_matrices(linear: &Linearization) -> Option<[(&'static str, DMatrix<
     ])
 }
 
-fn list(names: &[&str]) -> String {
+/// `names` joined by commas, or `none`.
+pub(crate) fn list(names: &[&str]) -> String {
     if names.is_empty() {
         "none".to_string()
     } else {

@@ -54,27 +54,25 @@ impl Sweep {
             .filter(|n| (2..=MAX_POINTS).contains(n))
             .ok_or_else(|| syntax(&format!("N is a whole number from 2 to {MAX_POINTS}")))?;
         let model = &session.model;
-        let (swept, dimension) =
-            if let Some(index) = (0..model.nparams()).find(|&i| model.param_name(i) == name) {
-                let params = &session.compiled.model.params;
-                let dimension = params.iter().nth(index).map(|(_, p)| p.dimension);
-                (Swept::Parameter(index), dimension.unwrap_or_default())
-            } else {
-                let index = session
-                    .index_of(NameKind::Speed, name, Some(option))
-                    .map_err(|_| {
-                        let known: Vec<&str> = (0..model.nparams())
-                            .map(|i| model.param_name(i))
-                            .chain((0..model.nu()).map(|i| model.speed_name(i)))
-                            .collect();
-                        syntax(&format!(
-                            "`{name}` is neither a parameter nor a speed of `{}` ({})",
-                            model.name(),
-                            known.join(", ")
-                        ))
-                    })?;
-                (Swept::Speed(index), session.speed_dimension(index))
-            };
+        let parameter = session.index_of(NameKind::Parameter, name, Some(option));
+        let (swept, dimension) = if let Ok(index) = parameter {
+            (Swept::Parameter(index), session.param_dimension(index))
+        } else {
+            let index = session
+                .index_of(NameKind::Speed, name, Some(option))
+                .map_err(|_| {
+                    let known: Vec<&str> = (0..model.nparams())
+                        .map(|i| model.param_name(i))
+                        .chain((0..model.nu()).map(|i| model.speed_name(i)))
+                        .collect();
+                    syntax(&format!(
+                        "`{name}` is neither a parameter nor a speed of `{}` ({})",
+                        model.name(),
+                        known.join(", ")
+                    ))
+                })?;
+            (Swept::Speed(index), session.speed_dimension(index))
+        };
         let (low, high) = (low.trim(), high.trim());
         // `0..10 m/s`: a bare number at one end takes the unit of the other.
         let unit_of = |text: &str| {
@@ -103,6 +101,22 @@ impl Sweep {
             },
         })
     }
+}
+
+/// Above this `max |ẋ|` at the operating point, it is not a steady motion (reports warn).
+pub const UNSTEADY: f64 = 1e-8;
+
+/// Above this [`SteadyLinearization::cyclic_change`], the dropped coordinates are cyclic to
+/// first order only (reports warn).
+pub const NOT_CYCLIC: f64 = 1e-6;
+
+/// The names of the coordinates a steady linearization dropped as cyclic.
+pub fn cyclic_names<'a>(model: &'a dyn Model, linear: &SteadyLinearization) -> Vec<&'a str> {
+    linear
+        .cyclic
+        .iter()
+        .map(|&i| model.coordinate_name(i))
+        .collect()
 }
 
 /// The names of a steady linearization's states: `q_NAME` for a coordinate, `u_NAME` for a

@@ -565,12 +565,7 @@ impl Model {
         let model = &session.model;
         let dict = PyDict::new(py);
         dict.set_item("states", mech::steady_motion::state_names(model, &linear))?;
-        let cyclic: Vec<&str> = linear
-            .cyclic
-            .iter()
-            .map(|&i| model.coordinate_name(i))
-            .collect();
-        dict.set_item("cyclic", cyclic)?;
+        dict.set_item("cyclic", mech::steady_motion::cyclic_names(model, &linear))?;
         dict.set_item("A", matrix(py, &linear.a))?;
         let eigenvalues: Vec<Complex64> = linear
             .eigenvalues()

@@ -18,6 +18,7 @@ use mech_runtime::{Linearization, Model, SteadyLinearization};
 use super::ModelArgs;
 use crate::output;
 use crate::render::plot::{CurveStyle, XyPlot};
+use crate::session::list;
 use crate::steady_motion::{self, OperatingPoint, Sweep};
 
 #[derive(Args, Clone, Debug)]
@@ -262,13 +263,8 @@ fn run_steady(args: &LinearizeArgs) -> Result<(), Error> {
     let model = &session.model;
     let first = &results[0];
     let names = steady_motion::state_names(model, first);
-    let cyclic: Vec<&str> = first
-        .cyclic
-        .iter()
-        .map(|&i| model.coordinate_name(i))
-        .collect();
-    let mut text =
-        format!(
+    let cyclic = steady_motion::cyclic_names(model, first);
+    let mut text = format!(
         "`{}` linearized about its steady motion for {} = {} .. {} {} ({} values): state [{}], \
          cyclic coordinates dropped: {}\n\n{:>12}  eigenvalues (re ± im i, 1/s)\n",
         model.name(),
@@ -278,7 +274,7 @@ fn run_steady(args: &LinearizeArgs) -> Result<(), Error> {
         sweep.unit,
         sweep.values.len(),
         names.join(", "),
-        if cyclic.is_empty() { "none".to_string() } else { cyclic.join(", ") },
+        list(&cyclic),
         sweep.name,
     );
     let mut rows = Vec::new();
@@ -293,8 +289,9 @@ fn run_steady(args: &LinearizeArgs) -> Result<(), Error> {
             })
             .collect();
         let _ = writeln!(text, "{value:>12.6}  {}", shown.join("  "));
+        // The files get the values as computed; only the table rounds round-off to zero.
         let mut row = vec![*value];
-        row.extend(values.iter().flat_map(|z| [z.re, z.im]));
+        row.extend(linear.eigenvalues().iter().flat_map(|z| [z.re, z.im]));
         row.resize(1 + 2 * width, f64::NAN);
         rows.push(row);
     }
@@ -308,7 +305,7 @@ fn run_steady(args: &LinearizeArgs) -> Result<(), Error> {
         .iter()
         .max_by(|a, b| a.unsteadiness().total_cmp(&b.unsteadiness()))
     {
-        if worst.unsteadiness() > 1e-8 {
+        if worst.unsteadiness() > steady_motion::UNSTEADY {
             let _ = writeln!(
                 text,
                 "warning: max |ẋ| = {:.1e} at one operating point: not a steady motion there",
@@ -330,16 +327,12 @@ fn run_steady(args: &LinearizeArgs) -> Result<(), Error> {
 }
 
 /// A line warning that the dropped coordinates are cyclic to first order only (empty if they
-/// are a symmetry: `A` the same, to 1e-6, when they move on).
+/// are a symmetry: `A` the same, to `NOT_CYCLIC`, when they move on).
 fn cyclic_warning(model: &dyn Model, linear: &SteadyLinearization) -> String {
-    if linear.cyclic_change <= 1e-6 {
+    if linear.cyclic_change <= steady_motion::NOT_CYCLIC {
         return String::new();
     }
-    let cyclic: Vec<&str> = linear
-        .cyclic
-        .iter()
-        .map(|&i| model.coordinate_name(i))
-        .collect();
+    let cyclic = steady_motion::cyclic_names(model, linear);
     format!(
         "warning: A changes by {:.1e} of its largest entry when {} move on: they are cyclic \
          to first order only here, and the eigenvalues hold at this instant (a periodic motion \
@@ -352,11 +345,7 @@ fn cyclic_warning(model: &dyn Model, linear: &SteadyLinearization) -> String {
 /// The report of one steady linearization.
 fn steady_text(model: &dyn Model, linear: &SteadyLinearization) -> String {
     let names = steady_motion::state_names(model, linear);
-    let cyclic: Vec<&str> = linear
-        .cyclic
-        .iter()
-        .map(|&i| model.coordinate_name(i))
-        .collect();
+    let cyclic = steady_motion::cyclic_names(model, linear);
     let fastest = linear.u.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
     let moving: Vec<String> = (0..model.nu())
         .filter(|&i| linear.u[i].abs() > 1e-12 * fastest)
@@ -374,14 +363,10 @@ fn steady_text(model: &dyn Model, linear: &SteadyLinearization) -> String {
         } else {
             moving.join(", ")
         },
-        if cyclic.is_empty() {
-            "none".to_string()
-        } else {
-            cyclic.join(", ")
-        },
+        list(&cyclic),
         names.join(", "),
         linear.unsteadiness(),
-        if linear.unsteadiness() > 1e-8 {
+        if linear.unsteadiness() > steady_motion::UNSTEADY {
             "  (warning: not a steady motion; the linearization is about a passing state)"
         } else {
             ""
@@ -412,8 +397,9 @@ fn steady_text(model: &dyn Model, linear: &SteadyLinearization) -> String {
 }
 
 /// Real parts solid, imaginary parts' sizes (a conjugate pair's are one) dashed in the same
-/// colour, against the swept value;
-/// the eigenvalues in each row are sorted by real part, so each curve is continuous.
+/// colour, against the swept value. The eigenvalues of each row are sorted by real part, so
+/// each real-part curve is continuous; an imaginary part follows its eigenvalue's rank and
+/// may pass to another colour where real parts cross.
 fn eigenvalue_plot(
     path: &std::path::Path,
     sweep: &Sweep,
