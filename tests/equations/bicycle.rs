@@ -193,7 +193,8 @@ fn whipple_bicycle_eigenvalues_and_stable_speed_range() {
         }
     }
     println!("eigenvalues at 0, 0.5, …, 10 m/s: largest difference {worst:.1e}");
-    assert!(worst < 1e-9, "{worst:e}");
+    // Measured 2.9e-14; the central differences of the rates allow more, not five decades.
+    assert!(worst < 1e-11, "{worst:e}");
     let weave = |v: f64| {
         lateral_eigenvalues(&model, v)
             .iter()
@@ -223,12 +224,15 @@ fn whipple_bicycle_eigenvalues_and_stable_speed_range() {
     let weave_speed = crossing(&weave, 4.0, 4.5);
     let capsize_speed = crossing(&capsize, 5.5, 6.5);
     println!(
-        "weave speed {weave_speed:.12} m/s (published {WEAVE_SPEED}), capsize speed \
-         {capsize_speed:.12} m/s (published {CAPSIZE_SPEED})"
+        "weave speed {weave_speed:.12} m/s (published {WEAVE_SPEED}, {:.1e} off), capsize speed \
+         {capsize_speed:.12} m/s (published {CAPSIZE_SPEED}, {:.1e} off)",
+        weave_speed - WEAVE_SPEED,
+        capsize_speed - CAPSIZE_SPEED
     );
-    assert!((weave_speed - WEAVE_SPEED).abs() < 1e-9, "{weave_speed}");
+    // Bisection to 1e-12 on eigenvalues good to ~1e-14: the published 14 digits, to 1e-11.
+    assert!((weave_speed - WEAVE_SPEED).abs() < 1e-11, "{weave_speed}");
     assert!(
-        (capsize_speed - CAPSIZE_SPEED).abs() < 1e-9,
+        (capsize_speed - CAPSIZE_SPEED).abs() < 1e-11,
         "{capsize_speed}"
     );
 }

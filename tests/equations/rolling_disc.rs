@@ -324,6 +324,24 @@ fn rolling_element_on_a_free_joint_conserves_energy() {
     assert!(height <= 1e-12 && slip <= 1e-12, "{height:e} {slip:e}");
 }
 
+/// Our nonzero eigenvalues `[re, im]` at spin `spin` are SymPy's, in the same order, each
+/// part within `tolerance`.
+fn assert_matches_sympy(spin: f64, ours: &[[f64; 2]], expected: &[Vec<f64>], tolerance: f64) {
+    assert_eq!(
+        ours.len(),
+        expected.len(),
+        "ψ̇ = {spin}: {ours:?} vs SymPy {expected:?}"
+    );
+    for (a, b) in ours.iter().zip(expected) {
+        for k in 0..2 {
+            assert!(
+                (a[k] - b[k]).abs() < tolerance,
+                "ψ̇ = {spin}: {a:?} vs SymPy {b:?}"
+            );
+        }
+    }
+}
+
 /// The eigenvalues `[re, im]` SymPy gives for one case of the fixture's upright rolling.
 fn sympy_eigenvalues(case: &serde_json::Value) -> Vec<Vec<f64>> {
     let values = case["eigenvalues"].as_array().unwrap();
@@ -380,15 +398,7 @@ fn upright_rolling_eigenvalues_match_sympy() {
             .copied()
             .filter(|z| z[0].hypot(z[1]) > 1e-3)
             .collect();
-        assert_eq!(nonzero.len(), expected.len(), "ψ̇ = {spin}: {all:?}");
-        for (ours, theirs) in nonzero.iter().zip(&expected) {
-            for k in 0..2 {
-                assert!(
-                    (ours[k] - theirs[k]).abs() < 1e-7,
-                    "ψ̇ = {spin}: {ours:?} vs SymPy {theirs:?}"
-                );
-            }
-        }
+        assert_matches_sympy(spin, &nonzero, &expected, 1e-7);
         let zeros = all.iter().map(|z| z[0].hypot(z[1])).filter(|&m| m <= 1e-3);
         println!(
             "upright rolling at ψ̇ = {spin:.6} rad/s: eigenvalues {nonzero:?} (SymPy \
@@ -450,15 +460,7 @@ fn steady_linearization_of_upright_rolling_matches_sympy() {
         assert_eq!(zeros.len(), 2, "{values:?}");
         let mut ours: Vec<[f64; 2]> = nonzero.iter().map(|z| [z.re, z.im]).collect();
         ours.sort_by(|a, b| a[1].total_cmp(&b[1]).then(a[0].total_cmp(&b[0])));
-        assert_eq!(ours.len(), expected.len(), "{values:?}");
-        for (a, b) in ours.iter().zip(&expected) {
-            for k in 0..2 {
-                assert!(
-                    (a[k] - b[k]).abs() < 1e-10,
-                    "ψ̇ = {spin}: {a:?} vs SymPy {b:?}"
-                );
-            }
-        }
+        assert_matches_sympy(spin, &ours, &expected, 1e-10);
         println!("steady upright rolling at ψ̇ = {spin}: {ours:?} (SymPy {expected:?})");
     }
 }
