@@ -481,6 +481,10 @@ impl Session {
     /// The unit of the speed named `name`: its coordinate's rate (`rad/s`, `m/s`), `rad/s` for
     /// a quaternion's or Euler angles' angular speed (`ball.wx`), empty for an unknown name.
     pub fn speed_unit(&self, name: &str) -> String {
+        let chosen = self.compiled.model.speeds.iter().find(|s| s.name == name);
+        if let Some(speed) = chosen {
+            return dimension_units(speed.dimension.mul(Dimension::TIME)).1;
+        }
         if let Some((_, speed)) = self.coordinate_units(name) {
             return speed;
         }
@@ -580,9 +584,12 @@ impl Session {
         dimension.unwrap_or_default()
     }
 
-    /// The dimension of speed `index`: its coordinate's over time (a quaternion's angular
-    /// speeds: 1/s, as an angle's rate).
+    /// The dimension of speed `index`: a chosen speed's own, else its coordinate's over time
+    /// (a quaternion's or Euler angles' angular speeds: 1/s, as an angle's rate).
     pub fn speed_dimension(&self, index: usize) -> Dimension {
+        if let Some(speed) = self.compiled.model.speeds.get(index) {
+            return speed.dimension;
+        }
         let coordinates = &self.compiled.model.coordinates;
         let dimension = coordinates.iter().nth(index).map(|(_, c)| c.dimension);
         dimension.unwrap_or(Dimension::NONE).div(Dimension::TIME)

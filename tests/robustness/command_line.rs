@@ -203,10 +203,11 @@ fn steady_sweeps_are_checked() {
     expect_errors(&dir, &cases);
 }
 
-/// `--independent` on a loop model whose coordinates' rates are not speeds (`speed`
-/// declarations) says why it cannot be held, not that it is a quaternion's part.
+/// Options on a model with `speed` declarations: `--independent` on a loop model says why a
+/// coordinate cannot be held (not that it is a quaternion's part), and `--u0` takes each
+/// chosen speed in its own unit.
 #[test]
-fn holding_a_coordinate_of_a_model_with_chosen_speeds_says_why_not() {
+fn options_on_a_model_with_chosen_speeds() {
     let dir = scratch("chosen_speeds_independent");
     let text = std::fs::read_to_string(model("four_bar")).unwrap();
     let chosen = format!(
@@ -228,6 +229,39 @@ fn holding_a_coordinate_of_a_model_with_chosen_speeds_says_why_not() {
              rate is a speed",
         )],
     );
+    // A chosen speed's unit is its own (the tip's velocity, m/s), not that of the coordinate
+    // with its index (the elbow's angle).
+    let pendulum = "{model:double_pendulum_speeds}";
+    expect_errors(
+        &dir,
+        &[(
+            &[
+                "simulate",
+                pendulum,
+                "--t-end",
+                "0.01",
+                "--out",
+                "a.csv",
+                "--u0",
+                "tip_speed=1 rad/s",
+            ],
+            "--u0 tip_speed: `1 rad/s` is an angular speed, but `tip_speed` needs m/s",
+        )],
+    );
+    let run = mech(
+        &dir,
+        &[
+            "simulate",
+            pendulum,
+            "--t-end",
+            "0.01",
+            "--out",
+            "b.csv",
+            "--u0",
+            "tip_speed=1 m/s",
+        ],
+    );
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
 }
 
 #[test]

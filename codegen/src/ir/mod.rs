@@ -708,6 +708,8 @@ pub struct VelocityConstraint {
 pub struct ChosenSpeed {
     pub name: String,
     pub kind: SpeedKind,
+    /// Its dimension: an angular velocity's (1/s), a velocity's (m/s), or the combination's.
+    pub dimension: Dimension,
     /// Its value at the start, `Y(q₀) ū₀` with the parameters' defaults (set by the front end).
     pub initial: f64,
     pub span: Span,

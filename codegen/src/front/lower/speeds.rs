@@ -15,7 +15,7 @@
 
 use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, ExprKind};
-use crate::ir;
+use crate::ir::{self, Dimension};
 
 use super::expr::unparen;
 use super::velocity::{DegreeErrors, LinearScalar};
@@ -71,14 +71,21 @@ impl Lowerer<'_> {
                 ExprKind::Call { function, args }
                     if function.name == "angular_velocity" || function.name == "velocity" =>
                 {
-                    self.measure_number(decl, function, args)
+                    self.measure_number(decl, function, args).map(|kind| {
+                        let dimension = match kind {
+                            ir::SpeedKind::PointVelocity { .. } => Dimension::LENGTH,
+                            _ => Dimension::NONE,
+                        };
+                        (kind, dimension.div(Dimension::TIME))
+                    })
                 }
                 _ => self.speed_combination(decl),
             };
-            if let Some(kind) = kind {
+            if let Some((kind, dimension)) = kind {
                 self.model.speeds.push(ir::ChosenSpeed {
                     name: decl.head.name.name.clone(),
                     kind,
+                    dimension,
                     initial: 0.0,
                     span: decl.head.span,
                 });
@@ -202,9 +209,12 @@ impl Lowerer<'_> {
 
     /// `speed NAME = EXPR;`: linear and homogeneous in the joint speeds, of the coordinates
     /// and params (not of time or inputs).
-    fn speed_combination(&mut self, decl: &ast::ConstraintDecl) -> Option<ir::SpeedKind> {
+    fn speed_combination(
+        &mut self,
+        decl: &ast::ConstraintDecl,
+    ) -> Option<(ir::SpeedKind, Dimension)> {
         self.linear_scalar(decl, &SPEED_RULES)
-            .map(ir::SpeedKind::Scalar)
+            .map(|(expr, dimension)| (ir::SpeedKind::Scalar(expr), dimension))
     }
 
     /// E0440 (their count), else E0441 where the chosen speeds are not independent at the

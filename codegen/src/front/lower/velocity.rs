@@ -14,7 +14,7 @@
 
 use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, BinaryOp, ExprKind};
-use crate::ir;
+use crate::ir::{self, Dimension};
 
 use super::expr::{unparen, Ctx};
 use super::Lowerer;
@@ -184,7 +184,7 @@ impl Lowerer<'_> {
     /// motion and params (not of time or inputs: its rate would need theirs).
     fn scalar_constraint(&mut self, decl: &ast::ConstraintDecl) -> Option<ir::VelocityKind> {
         self.linear_scalar(decl, &CONSTRAINT_RULES)
-            .map(ir::VelocityKind::Scalar)
+            .map(|(expr, _)| ir::VelocityKind::Scalar(expr))
     }
 
     /// `NAME = EXPR;` of a `constraint` or `speed`: EXPR lowered, if it is linear and
@@ -194,7 +194,7 @@ impl Lowerer<'_> {
         &mut self,
         decl: &ast::ConstraintDecl,
         rules: &LinearScalar,
-    ) -> Option<ir::Expr> {
+    ) -> Option<(ir::Expr, Dimension)> {
         let mut ok = true;
         if let Some(frame) = &decl.head.frame {
             let [message, label, help] = rules.frame;
@@ -237,7 +237,7 @@ impl Lowerer<'_> {
             );
             ok = false;
         }
-        ok.then_some(typed.expr)
+        ok.then_some((typed.expr, typed.dim))
     }
 
     /// Where `e` first names time, an input, or a `let` that depends on them.
