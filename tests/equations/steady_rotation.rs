@@ -79,3 +79,55 @@ fn a_coordinate_cyclic_to_first_order_only_is_flagged() {
         linear.cyclic_change
     );
 }
+
+/// Chosen speeds (`models/double_pendulum_speeds.mech`: the upper link's angular velocity and
+/// the tip's velocity along the lower link) at rest in the equilibrium: the eigenvalues are
+/// ±i ω of the normal modes of the same pendulum in joint rates, from `linearize` about its
+/// statics (an independent path: reduced dynamics, `K v = ω² M v`).
+#[test]
+fn chosen_speeds_at_rest_give_the_normal_modes_of_the_joint_rates() {
+    use mech_runtime::{linearize, solve_statics, StaticsOptions};
+    let text = common::bundled_source("double_pendulum_speeds");
+    let plain: String = text
+        .lines()
+        .filter(|line| !line.trim_start().starts_with("speed "))
+        .map(|line| format!("{line}\n"))
+        .collect();
+    let joint_rates = common::tape_from_text("joint_rates", &plain);
+    let inputs = common::default_inputs(&joint_rates);
+    let (mut q, _) = common::initial_state(&joint_rates);
+    let options = StaticsOptions::default();
+    solve_statics(&joint_rates, 0.0, &mut q, &inputs, &[], &options).unwrap();
+    let modes = linearize(&joint_rates, 0.0, &q, &inputs, &[0, 1])
+        .unwrap()
+        .modes()
+        .unwrap();
+    let chosen = common::tape_from_text("chosen", &text);
+    assert!(!chosen.rates_are_speeds());
+    let u = vec![0.0; chosen.nu()];
+    let linear = linearize_steady(&chosen, 0.0, (&q, &u), &inputs, &[0, 1], &[0, 1]).unwrap();
+    assert!(linear.cyclic.is_empty() && linear.unsteadiness() < 1e-9);
+    let mut frequencies: Vec<f64> = linear
+        .eigenvalues()
+        .iter()
+        .inspect(|z| assert!(z.re.abs() < 1e-9, "{z}"))
+        .filter(|z| z.im > 0.0)
+        .map(|z| z.im)
+        .collect();
+    frequencies.sort_by(f64::total_cmp);
+    for (ours, mode) in frequencies.iter().zip(&modes) {
+        assert!(
+            (ours - mode.natural_frequency).abs() < 1e-8 * mode.natural_frequency,
+            "{ours} vs {}",
+            mode.natural_frequency
+        );
+    }
+    assert_eq!(frequencies.len(), modes.len());
+    println!(
+        "chosen speeds at rest: ω = {frequencies:?}; joint rates' modes: {:?}",
+        modes
+            .iter()
+            .map(|m| m.natural_frequency)
+            .collect::<Vec<_>>()
+    );
+}
