@@ -116,8 +116,9 @@ fn chosen_speeds_at_rest_give_the_normal_modes_of_the_joint_rates() {
         .collect();
     frequencies.sort_by(f64::total_cmp);
     for (ours, mode) in frequencies.iter().zip(&modes) {
+        // Measured 1e-15 relative; central differences of the rates allow 1e-10.
         assert!(
-            (ours - mode.natural_frequency).abs() < 1e-8 * mode.natural_frequency,
+            (ours - mode.natural_frequency).abs() < 1e-10 * mode.natural_frequency,
             "{ours} vs {}",
             mode.natural_frequency
         );
