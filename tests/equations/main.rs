@@ -27,6 +27,7 @@ mod jit;
 mod language_doc;
 mod linear;
 mod loops;
+mod mass_matrix;
 mod pendulum;
 mod pinocchio_free_chain;
 mod plausible;

@@ -36,6 +36,9 @@ pub struct FrameKinematics {
     pub omega: Vec3,
     pub partial_omega: Partials,
     pub partial_velocity: Partials,
+    /// The speeds that enter at this frame (its joint's): `(r, ∂ω/∂u_r, ∂v_O/∂u_r)` in k's
+    /// basis, sorted by r. Every frame below k moves with u_r as one rigid body with k.
+    pub joint_partials: Vec<(usize, Vec3, Vec3)>,
     pub alpha_rest: Vec3,
     pub accel_rest: Vec3,
     pub gravity: Vec3,
@@ -270,6 +273,7 @@ fn root(model: &Model, pool: &mut ExprPool) -> FrameKinematics {
         omega: zero,
         partial_omega: Vec::new(),
         partial_velocity: Vec::new(),
+        joint_partials: Vec::new(),
         alpha_rest: zero,
         accel_rest: zero,
         gravity,
@@ -408,8 +412,11 @@ fn child(
     let mut omega = parent_omega_here;
     let mut alpha_rest = to_child(pool, parent.alpha_rest);
     let mut spins = Vec::with_capacity(own_rotation.len());
+    let zero = vector::zero(pool);
+    let mut joint_partials = Vec::new();
     for (r, axis, u) in own_rotation {
         partial_omega.push((r, axis));
+        joint_partials.push((r, axis, zero));
         spins.push(vector::scale(pool, axis, u));
     }
     if let Some(spin) = spins.into_iter().reduce(|a, b| vector::add(pool, a, b)) {
@@ -439,6 +446,7 @@ fn child(
     );
     if let Some((r, axis, axis_in_parent, u)) = own_translation {
         partial_velocity.push((r, axis));
+        joint_partials.push((r, zero, axis));
         let slide_rate = vector::scale(pool, axis_in_parent, u);
         let coriolis = vector::cross(pool, parent.omega, slide_rate);
         let coriolis = vector::scale_number(pool, coriolis, Number::int(2));
@@ -446,6 +454,7 @@ fn child(
     }
     partial_velocity.sort_by_key(|&(r, _)| r);
     partial_omega.sort_by_key(|&(r, _)| r);
+    joint_partials.sort_by_key(|&(r, _, _)| r);
     let accel_rest = to_child(pool, accel);
     let gravity = to_child(pool, parent.gravity);
 
@@ -456,6 +465,7 @@ fn child(
         omega,
         partial_omega,
         partial_velocity,
+        joint_partials,
         alpha_rest,
         accel_rest,
         gravity,

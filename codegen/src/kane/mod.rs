@@ -13,6 +13,7 @@
 //! `M_rs = Σ_bodies m ∂v_G/∂u_r·∂v_G/∂u_s + ∂ω/∂u_r·I ∂ω/∂u_s` and
 //! `F_r = F_r + F_r*|_{u̇=0}` (SymPy's `forcing`). `M` is never inverted symbolically.
 
+mod composite;
 pub mod constraints;
 mod contact;
 mod kinematics;
@@ -184,10 +185,13 @@ pub fn derive(model: &Model) -> Equations {
     let mut mass_terms: BTreeMap<(usize, usize), Vec<ExprId>> = BTreeMap::new();
     let mut forcing_terms: Vec<Vec<ExprId>> = vec![Vec::new(); nu];
 
-    for (_, body) in model.bodies.iter() {
-        let body_terms = BodyTerms::new(&mut pool, &kinematics, body);
-        body_terms.add_to(&mut pool, &mut mass_terms, &mut forcing_terms);
-    }
+    composite::add_bodies(
+        &mut pool,
+        &kinematics,
+        model,
+        &mut mass_terms,
+        &mut forcing_terms,
+    );
     for load in &model.loads {
         add_load(
             &mut pool,
@@ -267,100 +271,10 @@ fn name_symbols(model: &Model, pool: &mut ExprPool) {
     }
 }
 
-/// What one rigid body contributes, in its own frame's basis.
-struct BodyTerms {
-    mass: ExprId,
-    inertia: [[ExprId; 3]; 3],
-    /// `(r, ∂v_G/∂u_r, ∂ω/∂u_r)` for every speed that moves the body.
-    partials: Vec<(usize, Vec3, Vec3)>,
-    /// `m (g − a_G|u̇=0)`: gravity minus the u̇-free inertia force of the mass centre.
-    translational_force: Vec3,
-    /// `I α|u̇=0 + ω × I ω`: the u̇-free inertia torque about the mass centre.
-    inertia_torque: Vec3,
-}
-
-impl BodyTerms {
-    fn new(pool: &mut ExprPool, kinematics: &Kinematics, body: &ir::Body) -> BodyTerms {
-        let frame = &kinematics.frames[body.frame.index()];
-        let mass = lower_expr(pool, &body.mass);
-        let com = kinematics::lower_vec(pool, &body.center_of_mass);
-        let inertia = inertia_matrix(pool, &body.inertia);
-
-        let velocity_partials = kinematics.point_partials(pool, body.frame, com);
-        let omega_partials = frame.partial_omega.clone();
-        let zero = vector::zero(pool);
-        let mut partials = Vec::new();
-        let all_speeds: std::collections::BTreeSet<usize> = velocity_partials
-            .iter()
-            .chain(&omega_partials)
-            .map(|&(r, _)| r)
-            .collect();
-        for r in all_speeds {
-            let v = velocity_partials
-                .iter()
-                .find(|p| p.0 == r)
-                .map_or(zero, |p| p.1);
-            let w = omega_partials
-                .iter()
-                .find(|p| p.0 == r)
-                .map_or(zero, |p| p.1);
-            partials.push((r, v, w));
-        }
-
-        let accel = kinematics.point_accel_rest(pool, body.frame, com);
-        let net = vector::sub(pool, frame.gravity, accel);
-        let translational_force = vector::scale(pool, net, mass);
-        let i_alpha = mat_vec3(pool, &inertia, frame.alpha_rest);
-        let i_omega = mat_vec3(pool, &inertia, frame.omega);
-        let gyroscopic = vector::cross(pool, frame.omega, i_omega);
-        let inertia_torque = vector::add(pool, i_alpha, gyroscopic);
-        BodyTerms {
-            mass,
-            inertia,
-            partials,
-            translational_force,
-            inertia_torque,
-        }
-    }
-
-    /// Adds `m v_r·v_s + ω_r·I ω_s` to `M_rs` and `v_r·m(g − a) − ω_r·(Iα + ω×Iω)` to `F_r`.
-    fn add_to(
-        &self,
-        pool: &mut ExprPool,
-        mass: &mut BTreeMap<(usize, usize), Vec<ExprId>>,
-        forcing: &mut [Vec<ExprId>],
-    ) {
-        let inertia_times: Vec<Vec3> = self
-            .partials
-            .iter()
-            .map(|&(_, _, w)| mat_vec3(pool, &self.inertia, w))
-            .collect();
-        for (i, &(r, v_r, w_r)) in self.partials.iter().enumerate() {
-            for (j, &(s, v_s, _)) in self.partials.iter().enumerate().skip(i) {
-                let translational = vector::dot(pool, v_r, v_s);
-                let translational = pool.mul(self.mass, translational);
-                let rotational = vector::dot(pool, w_r, inertia_times[j]);
-                let key = (r.min(s), r.max(s));
-                mass.entry(key)
-                    .or_default()
-                    .extend([translational, rotational]);
-            }
-            let active = vector::dot(pool, v_r, self.translational_force);
-            let inertial = vector::dot(pool, w_r, self.inertia_torque);
-            let inertial = pool.neg(inertial);
-            forcing[r].extend([active, inertial]);
-        }
-    }
-}
-
 /// The symmetric inertia matrix from tensor entries.
 fn inertia_matrix(pool: &mut ExprPool, inertia: &ir::Inertia) -> [[ExprId; 3]; 3] {
     let [xx, yy, zz, xy, yz, zx] = inertia.entries().map(|e| lower_expr(pool, e));
     [[xx, xy, zx], [xy, yy, yz], [zx, yz, zz]]
-}
-
-fn mat_vec3(pool: &mut ExprPool, m: &[[ExprId; 3]; 3], v: Vec3) -> Vec3 {
-    vector::mat_vec(pool, m, v)
 }
 
 /// `k (x − rest)`, a spring's restoring force or moment at `x`; `x` is built after `k` and
