@@ -838,19 +838,25 @@ fn verdict(
     }
 }
 
-/// How many of `ranked`, from the top, the data support about equally (training AICc within
-/// 2 of the best's, none at a bound); among those, on equal evidence, the simpler
-/// explanation (fewer fitted parameters) first.
+/// How many candidates the data support about equally with the top of `ranked` (training
+/// AICc within 2 of the best's or below it, none at a bound), moved to the front; among
+/// those, on equal evidence, the simpler explanation (fewer fitted parameters) first. They
+/// are gathered from the whole ranking, not only a run from the top: the held-out order of
+/// candidates within the noise of each other is chance, and a worse-fitting candidate that
+/// chance put second must not cut off a better one behind it.
 fn order_ties(ranked: &mut [(Candidate, Trial)]) -> usize {
-    let tied = match ranked.first() {
-        Some((_, best)) => ranked
-            .iter()
-            .take_while(|(_, t)| {
-                !t.at_bound() && ((t.aicc - best.aicc).abs() < 2.0 || t.aicc < best.aicc)
-            })
-            .count(),
-        None => 0,
+    let Some(best_aicc) = ranked
+        .first()
+        .filter(|(_, best)| !best.at_bound())
+        .map(|(_, best)| best.aicc)
+    else {
+        return 0;
     };
+    let supported =
+        |t: &Trial| !t.at_bound() && ((t.aicc - best_aicc).abs() < 2.0 || t.aicc < best_aicc);
+    // Stable: the tied keep their held-out order, and so do the others.
+    ranked.sort_by_key(|(_, t)| !supported(t));
+    let tied = ranked.iter().take_while(|(_, t)| supported(t)).count();
     // Held parameters (standard error 0) are not fitted: they do not count.
     ranked[..tied].sort_by_key(|(_, t)| t.parameters.iter().filter(|p| p.3 != 0.0).count());
     tied

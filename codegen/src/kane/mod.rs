@@ -11,7 +11,9 @@
 //!
 //! Splitting accelerations into their u̇ parts (`Σ_s ∂v/∂u_s u̇_s`) and the rest gives
 //! `M_rs = Σ_bodies m ∂v_G/∂u_r·∂v_G/∂u_s + ∂ω/∂u_r·I ∂ω/∂u_s` and
-//! `F_r = F_r + F_r*|_{u̇=0}` (SymPy's `forcing`). `M` is never inverted symbolically.
+//! `F_r = F_r + F_r*|_{u̇=0}` (SymPy's `forcing`). `M` is never inverted symbolically. The
+//! bodies' sums are taken subtree by subtree (`composite.rs`: composite bodies for `M`, one
+//! backward pass for their gravity and inertia forces), the other loads point by point.
 
 mod composite;
 pub mod constraints;
