@@ -7,9 +7,9 @@
 //!
 //! `MECH_BENCH_GENERATED_MAX` (default 32) caps the sizes compiled to Rust; larger chains
 //! are then evaluated through the tape only. The floating chains (issue 15) have their own
-//! cap, `MECH_BENCH_FLOATING_MAX` (default 8: their generated Rust is 0.1, 0.4, 1.6 and 7.6 MB
-//! at N = 4, 8, 16, 32, so a plain build or CI compiles the two small ones; `bench/run.sh`
-//! sets 32).
+//! cap, `MECH_BENCH_FLOATING_MAX` (default 8: their generated Rust is 0.06, 0.14, 0.42 and
+//! 1.3 MB at N = 4, 8, 16, 32, so a plain build or CI compiles the two small ones;
+//! `bench/run.sh` sets 32).
 
 #[allow(dead_code)] // chain_source_per_link is for the benchmark binary only
 #[path = "src/source.rs"]

@@ -1035,7 +1035,8 @@ def floating_section(R):
                  f'{fmt(ratio(p_wall, m_wall))}×, {fmt(ratio(j_wall, m_wall))}× | '
                  f'{"-" if dp is None else f"{dp:.1e}"} | {"-" if dj is None else f"{dj:.1e}"} |')
     for who in ('pin', 'mujoco'):
-        values[f'{who}_crossover'] = crossover.get(who, 'none up to 32')
+        values[f'{who}_crossover'] = (f'N = {crossover[who]}' if who in crossover
+                                      else 'no N up to 32')
     # how each time grows from the second largest N to the largest
     for who, rows_of, key in (('mech', mech, None), ('pin', pin, 'aba_cpu_ns'),
                               ('mujoco', mj, 'forward_cpu_ns')):
