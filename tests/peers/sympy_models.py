@@ -648,6 +648,54 @@ def rolling_disc_fixture():
             'upright': upright}
 
 
+# ---------------------------------------------------------------- spring pendulum
+# models/spring_pendulum.mech, written here independently of it: a bob on a spring-damper
+# hung from an anchor, in polar coordinates about the anchor (r the spring's length, theta
+# from straight down), Lagrange's equations d/dt dL/dq' - dL/dq = -dD/dq' with the Rayleigh
+# function D = c r'^2 / 2 (the damper acts along the spring, at the stretch rate r').
+SPRING_PENDULUM = {'m': '0.02', 'k': '40', 'L0': '0.05', 'c': '0.02', 'g': G_ACC,
+                   'anchor': ['0.005', '0.01']}
+SPRING_PENDULUM_START = {'q': [0.04, -0.06], 'u': [0.3, 0.2]}   # x, y of the bob; m, m/s
+SPRING_PENDULUM_TIMES = ['0.25', '0.5', '1', '1.5', '2']
+
+
+def spring_pendulum_lagrange():
+    """The bob's x, y and their rates at SPRING_PENDULUM_TIMES from the start state, by
+    mpmath's Taylor-series integrator (odefun) at 30 digits: an integration of the
+    Lagrangian independent of mech's Kane equations, its frame tree and its integrators."""
+    p = {k: R(v) for k, v in SPRING_PENDULUM.items() if k != 'anchor'}
+    r, th = me.dynamicsymbols('r theta')
+    rd, thd = r.diff(t), th.diff(t)
+    T = p['m'] * (rd ** 2 + r ** 2 * thd ** 2) / 2
+    V = p['k'] * (r - p['L0']) ** 2 / 2 - p['m'] * p['g'] * r * sm.cos(th)
+    D = p['c'] * rd ** 2 / 2
+    L = T - V
+    eqs = [L.diff(v).diff(t) - L.diff(q) + D.diff(v) for q, v in ((r, rd), (th, thd))]
+    acc = sm.solve(eqs, [r.diff(t, 2), th.diff(t, 2)], dict=True)[0]
+    R_, TH, RD, THD = sm.symbols('R TH RD THD')
+    plain = {rd: RD, thd: THD, r: R_, th: TH}
+    rdd = sm.lambdify((R_, TH, RD, THD), acc[r.diff(t, 2)].subs(plain), 'mpmath')
+    thdd = sm.lambdify((R_, TH, RD, THD), acc[th.diff(t, 2)].subs(plain), 'mpmath')
+    mpmath.mp.dps = 30
+    ax, ay = (mpmath.mpf(R(a).p) / R(a).q for a in SPRING_PENDULUM['anchor'])
+    (x, y), (vx, vy) = (list(map(mpmath.mpf, v)) for v in SPRING_PENDULUM_START.values())
+    dx, dy = x - ax, y - ay
+    r0 = mpmath.sqrt(dx * dx + dy * dy)
+    th0 = mpmath.atan2(dx, -dy)
+    start = [r0, th0, (dx * vx + dy * vy) / r0, (dx * vy - dy * vx) / r0 ** 2]
+    motion = mpmath.odefun(lambda _, s: [s[2], s[3], rdd(*s), thdd(*s)], 0, start)
+    samples = []
+    for text in SPRING_PENDULUM_TIMES:
+        rr, tt, rv, tv = motion(mpmath.mpf(text))
+        position = [ax + rr * mpmath.sin(tt), ay - rr * mpmath.cos(tt)]
+        velocity = [rv * mpmath.sin(tt) + rr * tv * mpmath.cos(tt),
+                    -rv * mpmath.cos(tt) + rr * tv * mpmath.sin(tt)]
+        samples.append({'t': float(text), 'q': [f64(v) for v in position],
+                        'u': [f64(v) for v in velocity]})
+    mpmath.mp.dps = DPS
+    return {'params': SPRING_PENDULUM, 'start': SPRING_PENDULUM_START, 'samples': samples}
+
+
 # ---------------------------------------------------------------- evaluation
 def derive(M):
     qd = {qi.diff(t): ui for qi, ui in zip(M.q, M.u)}
@@ -818,6 +866,10 @@ def main():
     models['rolling_disc'] = rolling_disc_fixture()
     print(f'{"rolling_disc":20s} n=3 (+2 dependent)  derivation {time.perf_counter() - t0:6.2f} s  '
           f'(SymPy test_rolling_disc; dE/dt = 0 along the motion)')
+    t0 = time.perf_counter()
+    models['spring_pendulum_lagrange'] = spring_pendulum_lagrange()
+    print(f'{"spring_pendulum":20s} polar Lagrangian, mpmath Taylor integration to t = 2 s '
+          f'{time.perf_counter() - t0:6.2f} s')
     print('cross-check:')
     cross_check_shared(models)
     fixture = {'generated_by': 'tests/peers/sympy_models.py (sympy.physics.mechanics.KanesMethod)',
