@@ -137,18 +137,46 @@ pub struct TapeModel {
     scratch: RefCell<Scratch>,
     /// The values of a fused program before they are split into its parts.
     fused_out: RefCell<Vec<f64>>,
+    /// `q` with its unit quaternions at unit norm, where the programs evaluate
+    /// ([`TapeModel::with_env`]).
+    unit_q: RefCell<Vec<f64>>,
 }
 
 impl TapeModel {
-    /// The tape's environment at `(t, q, u, inputs)` with the current parameter values.
-    fn env<'a>(&'a self, t: f64, q: &'a [f64], u: &'a [f64], inputs: &'a [f64]) -> Env<'a> {
-        Env {
-            t,
-            q,
-            u,
-            params: &self.params,
-            inputs,
+    /// Calls `f` with the tape's environment at `(t, q, u, inputs)` and the current
+    /// parameter values, the unit quaternions of `q` scaled to unit norm: between an
+    /// integrator's renormalizations a stage's quaternion is slightly off the unit sphere,
+    /// and `M`, `F`, `J` must still be those of the rotation it stands for (as the generated
+    /// Rust does, `mech_runtime::__codegen::unit_quaternions`).
+    fn with_env<R>(
+        &self,
+        (t, q, u, inputs): (f64, &[f64], &[f64], &[f64]),
+        f: impl FnOnce(&Env) -> R,
+    ) -> R {
+        let params = &self.params;
+        if self.unit_quaternions.is_empty() {
+            return f(&Env {
+                t,
+                q,
+                u,
+                params,
+                inputs,
+            });
         }
+        // Taken, not borrowed: a nested call (none today) would get its own buffer.
+        let mut unit = std::mem::take(&mut *self.unit_q.borrow_mut());
+        unit.clear();
+        unit.extend_from_slice(q);
+        mech_runtime::normalize_quaternions(&self.unit_quaternions, &mut unit);
+        let result = f(&Env {
+            t,
+            q: &unit,
+            u,
+            params,
+            inputs,
+        });
+        *self.unit_q.borrow_mut() = unit;
+        result
     }
 
     /// The model with the backend of [`Backend::from_env`].
@@ -228,6 +256,7 @@ impl TapeModel {
             native,
             scratch: RefCell::new(Scratch::default()),
             fused_out: RefCell::new(Vec::new()),
+            unit_q: RefCell::new(Vec::new()),
         }
     }
 
@@ -373,7 +402,7 @@ impl TapeModel {
 
     /// Runs the program of `slot` at `(t, q, u, inputs)` into `out`.
     fn eval(&self, slot: Slot, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]) {
-        self.run(slot, &self.env(t, q, u, inputs), out);
+        self.with_env((t, q, u, inputs), |env| self.run(slot, env, out));
     }
 }
 
@@ -474,10 +503,11 @@ impl mech_runtime::Model for TapeModel {
         which: &[usize],
         out: &mut [f64],
     ) -> bool {
-        let env = self.env(t, q, u, inputs);
-        for (&row, value) in which.iter().zip(out.iter_mut()) {
-            self.run(Slot::OutputRow(row), &env, std::slice::from_mut(value));
-        }
+        self.with_env((t, q, u, inputs), |env| {
+            for (&row, value) in which.iter().zip(out.iter_mut()) {
+                self.run(Slot::OutputRow(row), env, std::slice::from_mut(value));
+            }
+        });
         true
     }
     fn nc(&self) -> usize {
@@ -514,12 +544,13 @@ impl mech_runtime::Model for TapeModel {
             let parts = [mass, forcing, bias];
             return terms_by_part(self, t, q, u, inputs, parts, Some(jacobian));
         }
-        let env = self.env(t, q, u, inputs);
-        self.run_fused(
-            Slot::ConstrainedTerms,
-            &env,
-            &mut [mass, forcing, jacobian, bias],
-        );
+        self.with_env((t, q, u, inputs), |env| {
+            self.run_fused(
+                Slot::ConstrainedTerms,
+                env,
+                &mut [mass, forcing, jacobian, bias],
+            )
+        });
     }
     #[allow(clippy::too_many_arguments)]
     fn dynamics_terms(
@@ -535,8 +566,9 @@ impl mech_runtime::Model for TapeModel {
         if !self.fused() {
             return terms_by_part(self, t, q, u, inputs, [mass, forcing, bias], None);
         }
-        let env = self.env(t, q, u, inputs);
-        self.run_fused(Slot::DynamicsTerms, &env, &mut [mass, forcing, bias]);
+        self.with_env((t, q, u, inputs), |env| {
+            self.run_fused(Slot::DynamicsTerms, env, &mut [mass, forcing, bias])
+        });
     }
     fn nflexures(&self) -> usize {
         self.tape.nflexures

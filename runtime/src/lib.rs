@@ -79,6 +79,21 @@ pub mod __codegen {
     pub use crate::Model;
     pub use nalgebra::{SMatrix, SVector};
 
+    /// `q` with each unit quaternion (the four coordinates from each index of `firsts`)
+    /// scaled to unit norm. Generated functions evaluate there: between an integrator's
+    /// renormalizations a stage's quaternion is slightly off the unit sphere, and `M`, `F`,
+    /// `J` must still be those of the rotation it stands for (their expressions use the
+    /// rotation matrix of `e`, a rotation only where `|e| = 1`).
+    #[inline(always)]
+    pub fn unit_quaternions<const N: usize>(
+        q: &SVector<f64, N>,
+        firsts: &[usize],
+    ) -> SVector<f64, N> {
+        let mut unit = *q;
+        crate::simulate::normalize_quaternions(firsts, unit.as_mut_slice());
+        unit
+    }
+
     /// `sin(x)`.
     #[inline(always)]
     pub fn sin(x: f64) -> f64 {

@@ -154,13 +154,20 @@ fn spring_pendulum_follows_its_lagrangian_integrated_independently() {
         assert!(relative < 1e-15, "{name}: model and fixture differ");
     }
     let start = &reference["start"];
-    let (q0, u0) = (common::json_numbers(&start["q"]), common::json_numbers(&start["u"]));
+    let (q0, u0) = (
+        common::json_numbers(&start["q"]),
+        common::json_numbers(&start["u"]),
+    );
     let options = common::dopri5_options(2.0, 0.25, 1e-12, 1e-14);
     let run = common::simulate_at_default_inputs(&model, &q0, &u0, &options);
     let (mut worst_position, mut worst_speed) = (0.0_f64, 0.0_f64);
     for sample in reference["samples"].as_array().unwrap() {
         let t = sample["t"].as_f64().unwrap();
-        let k = run.times.iter().position(|&s| (s - t).abs() < 1e-12).unwrap();
+        let k = run
+            .times
+            .iter()
+            .position(|&s| (s - t).abs() < 1e-12)
+            .unwrap();
         for (axis, (q, u)) in common::json_numbers(&sample["q"])
             .into_iter()
             .zip(common::json_numbers(&sample["u"]))

@@ -851,8 +851,14 @@ impl<'a> Emitter<'a> {
                 let (ident, n) = (state.ident(), self.len(state));
                 quote!(let #ident = &#rt::__codegen::SVector::<f64, #n>::zeros();)
             });
+        // Every function of `q` sees its unit quaternions at unit norm (module docs).
+        let unit = (function.arguments().contains(&State::Q) && !self.model.quaternions.is_empty())
+            .then(
+                || quote!(let q = &#rt::__codegen::unit_quaternions(q, &Self::UNIT_QUATERNIONS);),
+            );
         let function = quote! {
             pub fn #name(&self, #parameters) -> #rt::__codegen::#kind<f64, #dimensions> {
+                #unit
                 #(#zeros)*
                 #body
             }
