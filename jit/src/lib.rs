@@ -680,16 +680,7 @@ mod tests {
         let leaves = ops.len() as u32;
         for a in 0..leaves {
             ops.extend([Op::Neg(a), Op::Sqrt(a)]);
-            for f in [
-                Func::Sin,
-                Func::Cos,
-                Func::Tan,
-                Func::Exp,
-                Func::Ln,
-                Func::Abs,
-                Func::Ramp,
-                Func::Step,
-            ] {
+            for f in Func::ALL {
                 ops.push(Op::Call(f, a));
             }
             for e in [0.5, -1.5, 3.0, 1e-3, f64::NAN] {
