@@ -56,6 +56,26 @@ fn format_time(s: f64) -> String {
     }
 }
 
+/// The Markdown cells of one row of the u̇ table from the rounds' times of the generated
+/// Rust, the JIT and the interpreter (`times[0..3]`): their medians, then the ratios JIT /
+/// generated (in bold if `bold`), interpreter / generated and interpreter / JIT.
+fn time_cells(times: &[Vec<f64>], bold: bool) -> String {
+    let [g, j, i] = [0, 1, 2].map(|k| median(times[k].clone()));
+    let jit_ratio = if bold {
+        format!("**{:.2}×**", j / g)
+    } else {
+        format!("{:.2}×", j / g)
+    };
+    format!(
+        "{} | {} | {} | {jit_ratio} | {:.1}× | {:.1}×",
+        format_time(g),
+        format_time(j),
+        format_time(i),
+        i / g,
+        i / j
+    )
+}
+
 /// The state of the u̇ measurement and the inputs there.
 fn state(name: &str, model: &dyn Model) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     if name == "chain4" {
@@ -120,16 +140,8 @@ fn udot_table() {
                 }));
             }
         }
-        let [g, j, i] = [0, 1, 2].map(|k| median(times[k].clone()));
-        println!(
-            "| {name} | {} | {} | {} | **{:.2}×** | {:.1}× | {:.1}× | {difference:.1e} |",
-            format_time(g),
-            format_time(j),
-            format_time(i),
-            j / g,
-            i / g,
-            i / j
-        );
+        let cells = time_cells(&times, true);
+        println!("| {name} | {cells} | {difference:.1e} |");
         // `M` then `F` as separate calls on every backend: the code of the same functions,
         // without the fused pass the tape model has for `u̇`.
         let (mut m, mut f) = (vec![0.0; native.nu() * native.nu()], vec![0.0; native.nu()]);
@@ -142,16 +154,7 @@ fn udot_table() {
                 }));
             }
         }
-        let [g, j, i] = [0, 1, 2].map(|k| median(times[k].clone()));
-        println!(
-            "| {name}, M then F | {} | {} | {} | {:.2}× | {:.1}× | {:.1}× | |",
-            format_time(g),
-            format_time(j),
-            format_time(i),
-            j / g,
-            i / g,
-            i / j
-        );
+        println!("| {name}, M then F | {} | |", time_cells(&times, false));
     }
 }
 

@@ -490,17 +490,9 @@ fn emit_chunk(
             }
             Op::Call(f, x) => {
                 let x = get(&mut b, x);
-                let shim = match f {
-                    Func::Sin => shim_sin as *const () as usize,
-                    Func::Cos => shim_cos as *const () as usize,
-                    Func::Tan => shim_tan as *const () as usize,
-                    Func::Exp => shim_exp as *const () as usize,
-                    Func::Ln => shim_ln as *const () as usize,
-                    Func::Ramp => shim_ramp as *const () as usize,
-                    Func::Step => shim_step as *const () as usize,
-                    Func::Abs => unreachable!("native above"),
-                };
-                call(&mut b, unary, shim, &[x])
+                let index = Func::ALL.iter().position(|&g| g == f);
+                let shim = FUNC_SHIMS[index.expect("Func::ALL lists every function")];
+                call(&mut b, unary, shim as *const () as usize, &[x])
             }
             Op::Powi(x, n) => {
                 let x = get(&mut b, x);
@@ -565,27 +557,21 @@ fn powi_inline(b: &mut FunctionBuilder, x: Value, n: i32) -> Value {
 
 // The shims: the interpreter's own functions (`Func::apply`, `sym::power`, `f64::atan2`,
 // `f64::powf`) behind the C calling convention.
-extern "C" fn shim_sin(x: f64) -> f64 {
-    Func::Sin.apply(x)
+/// `Func::ALL[INDEX].apply` behind the C calling convention.
+extern "C" fn shim_func<const INDEX: usize>(x: f64) -> f64 {
+    Func::ALL[INDEX].apply(x)
 }
-extern "C" fn shim_cos(x: f64) -> f64 {
-    Func::Cos.apply(x)
-}
-extern "C" fn shim_tan(x: f64) -> f64 {
-    Func::Tan.apply(x)
-}
-extern "C" fn shim_exp(x: f64) -> f64 {
-    Func::Exp.apply(x)
-}
-extern "C" fn shim_ln(x: f64) -> f64 {
-    Func::Ln.apply(x)
-}
-extern "C" fn shim_ramp(x: f64) -> f64 {
-    Func::Ramp.apply(x)
-}
-extern "C" fn shim_step(x: f64) -> f64 {
-    Func::Step.apply(x)
-}
+/// The shims of [`Func::ALL`], in its order.
+const FUNC_SHIMS: [extern "C" fn(f64) -> f64; Func::ALL.len()] = [
+    shim_func::<0>,
+    shim_func::<1>,
+    shim_func::<2>,
+    shim_func::<3>,
+    shim_func::<4>,
+    shim_func::<5>,
+    shim_func::<6>,
+    shim_func::<7>,
+];
 extern "C" fn shim_atan2(y: f64, x: f64) -> f64 {
     y.atan2(x)
 }
@@ -680,16 +666,7 @@ mod tests {
         let leaves = ops.len() as u32;
         for a in 0..leaves {
             ops.extend([Op::Neg(a), Op::Sqrt(a)]);
-            for f in [
-                Func::Sin,
-                Func::Cos,
-                Func::Tan,
-                Func::Exp,
-                Func::Ln,
-                Func::Abs,
-                Func::Ramp,
-                Func::Step,
-            ] {
+            for f in Func::ALL {
                 ops.push(Op::Call(f, a));
             }
             for e in [0.5, -1.5, 3.0, 1e-3, f64::NAN] {

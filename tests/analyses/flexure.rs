@@ -535,16 +535,8 @@ fn a_long_noisy_tail_does_not_bias_the_frequency() {
     let (omega_d, b) = damping_at_own_frequency(s.k_true, ETA_TRUE, &s.specimen.pendulum);
     let sigma = b / (2.0 * s.specimen.pendulum.inertia);
     for a in [&short, &long] {
-        assert!(
-            common::relative_error(a.omega_d, omega_d).abs() < 2e-4,
-            "ω_d {} vs {omega_d}",
-            a.omega_d
-        );
-        assert!(
-            common::relative_error(a.sigma, sigma).abs() < 0.01,
-            "σ {} vs {sigma}",
-            a.sigma
-        );
+        common::assert_close("ω_d", a.omega_d, omega_d, 2e-4, 0.0);
+        common::assert_close("σ", a.sigma, sigma, 0.01, 0.0);
     }
     assert!((long.omega_d - short.omega_d).abs() < 1e-4 * omega_d);
     // The noise estimate is right to 10 %.
@@ -798,16 +790,8 @@ fn example_data_fit_end_to_end() {
     assert!(report.rejected.is_empty(), "{:#?}", report.rejected);
     assert!(report.findings.is_empty(), "{:#?}", report.findings);
     let fit = report.uncastellated.as_ref().unwrap();
-    assert!(
-        common::relative_error(fit.youngs_modulus, E_TRUE).abs() < 0.01,
-        "{}",
-        fit.youngs_modulus
-    );
-    assert!(
-        common::relative_error(fit.loss_factor, ETA_TRUE).abs() < 0.05,
-        "{}",
-        fit.loss_factor
-    );
+    common::assert_close("E", fit.youngs_modulus, E_TRUE, 0.01, 0.0);
+    common::assert_close("η", fit.loss_factor, ETA_TRUE, 0.05, 0.0);
     let out = std::env::temp_dir().join(format!("mech_flexure_fit_{}", std::process::id()));
     let mut written = mech::render::flexure_fit::csv_files(&report, &out).unwrap();
     written.extend(mech::render::flexure_fit::plot_files(&report, &out, "svg").unwrap());

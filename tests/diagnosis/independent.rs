@@ -142,6 +142,17 @@ fn independent_case(name: &str, effects: &[Effect], dof: Dof, rng: &mut Rng) -> 
     diagnose_data(&dir, &experiment, &text)
 }
 
+/// Asserts that `d` found nothing to explain: no cause fits the data significantly better
+/// than the model as written.
+fn assert_nothing_to_explain(d: &Diagnosis) {
+    assert_eq!(
+        d.verdict,
+        Verdict::NoSignificantDiscrepancy,
+        "{}",
+        summary(d)
+    );
+}
+
 /// The named candidate's fitted `parameter` (value, standard error), the top cause or one of
 /// a tie the verdict states.
 fn named(d: &Diagnosis, cause: &str, location: &str, parameter: &str) -> (f64, f64) {
@@ -167,12 +178,7 @@ fn hidden_effect_independent_clean_data() {
     let mut rng = Rng::new(21);
     for dof in [Dof::Lift, Dof::Swing] {
         let d = independent_case(&format!("independent_clean_{dof:?}"), &[], dof, &mut rng);
-        assert_eq!(
-            d.verdict,
-            Verdict::NoSignificantDiscrepancy,
-            "{}",
-            summary(&d)
-        );
+        assert_nothing_to_explain(&d);
     }
 }
 
@@ -277,20 +283,20 @@ fn independent_frequency_response_agrees_with_mech() {
     }
 }
 
+/// Lift and swing Bode data (2 %, 1°) from the independent leg with `effects`, noise drawn
+/// from `seed`, diagnosed with the whole catalog against the model as written.
+fn independent_bode_case(name: &str, effects: &[Effect], seed: u64) -> Diagnosis {
+    let dir = common::scratch_dir(name);
+    let responses = independent_bode(&IndependentLeg::hamr_vi(effects));
+    let (experiment, text) = bode_data(&dir, &responses, &mut Rng::new(seed));
+    diagnose_data(&dir, &experiment, &text)
+}
+
 /// The leg as built, lift and swing Bode data (2 %, 1°): nothing to explain.
 #[test]
 #[ignore = "slow: a whole-catalog diagnosis, run by .ci/run's `hidden_effect` filter"]
 fn hidden_effect_independent_clean_bode() {
-    let dir = common::scratch_dir("independent_clean_bode");
-    let responses = independent_bode(&IndependentLeg::hamr_vi(&[]));
-    let (experiment, text) = bode_data(&dir, &responses, &mut Rng::new(24));
-    let d = diagnose_data(&dir, &experiment, &text);
-    assert_eq!(
-        d.verdict,
-        Verdict::NoSignificantDiscrepancy,
-        "{}",
-        summary(&d)
-    );
+    assert_nothing_to_explain(&independent_bode_case("independent_clean_bode", &[], 24));
 }
 
 /// Every flexure's loss factor 0.12 instead of 0.08 (the resonances' Q a third lower), lift
@@ -299,8 +305,9 @@ fn hidden_effect_independent_clean_bode() {
 #[test]
 #[ignore = "slow: a whole-catalog diagnosis, run by .ci/run's `hidden_effect` filter"]
 fn hidden_effect_independent_loss_factor() {
-    let dir = common::scratch_dir("independent_loss_factor");
-    let responses = independent_bode(&IndependentLeg::hamr_vi(&[Effect::LossFactor(0.12)]));
-    let (experiment, text) = bode_data(&dir, &responses, &mut Rng::new(25));
-    loss_factor_named(&diagnose_data(&dir, &experiment, &text), 0.12);
+    let effects = [Effect::LossFactor(0.12)];
+    loss_factor_named(
+        &independent_bode_case("independent_loss_factor", &effects, 25),
+        0.12,
+    );
 }

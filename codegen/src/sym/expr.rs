@@ -62,6 +62,18 @@ pub enum Func {
 }
 
 impl Func {
+    /// Every function, in declaration order.
+    pub const ALL: [Func; 8] = [
+        Func::Sin,
+        Func::Cos,
+        Func::Tan,
+        Func::Exp,
+        Func::Ln,
+        Func::Abs,
+        Func::Ramp,
+        Func::Step,
+    ];
+
     pub fn name(self) -> &'static str {
         match self {
             Func::Sin => "sin",

@@ -205,19 +205,10 @@ impl ExprPool {
             ("sqrt", [x]) => self.sqrt(*x),
             ("sqrt", _) => return Err(arity("one argument")),
             (name, _) => {
-                let func = [
-                    Func::Sin,
-                    Func::Cos,
-                    Func::Tan,
-                    Func::Exp,
-                    Func::Ln,
-                    Func::Abs,
-                    Func::Ramp,
-                    Func::Step,
-                ]
-                .into_iter()
-                .find(|f| f.name() == name)
-                .ok_or_else(|| SexprError::UnknownOperator(name.to_string()))?;
+                let func = Func::ALL
+                    .into_iter()
+                    .find(|f| f.name() == name)
+                    .ok_or_else(|| SexprError::UnknownOperator(name.to_string()))?;
                 let [x] = args else {
                     return Err(arity("one argument"));
                 };
