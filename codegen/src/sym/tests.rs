@@ -228,3 +228,22 @@ fn ramp_and_step() {
     check_diff("(step x)", "x", "0");
     check("(ramp (+ 1 x))", "(ramp (+ 1 x))");
 }
+
+/// `Func::ALL` holds every function once, in declaration order (the JIT indexes its shims by
+/// `f as usize`): the match fails to compile when a function is added, pointing here.
+#[test]
+fn func_all_lists_every_function_in_declaration_order() {
+    for (i, &f) in Func::ALL.iter().enumerate() {
+        let declared = match f {
+            Func::Sin => 0,
+            Func::Cos => 1,
+            Func::Tan => 2,
+            Func::Exp => 3,
+            Func::Ln => 4,
+            Func::Abs => 5,
+            Func::Ramp => 6,
+            Func::Step => 7,
+        };
+        assert_eq!((i, f as usize), (declared, declared), "{}", f.name());
+    }
+}
