@@ -56,11 +56,7 @@ pub(super) fn add_bodies(
     let mut composites: Vec<Option<Composite>> = vec![None; frames.len()];
     for (_, body) in model.bodies.iter() {
         let own = body_composite(pool, kinematics, body);
-        let slot = &mut composites[body.frame.index()];
-        *slot = Some(match *slot {
-            Some(other) => sum(pool, other, own),
-            None => own,
-        });
+        gather(pool, &mut composites[body.frame.index()], own);
     }
     // Children have larger indices than their parents (an IR invariant): one backward sweep.
     for k in (0..frames.len()).rev() {
@@ -68,11 +64,7 @@ pub(super) fn add_bodies(
             continue;
         };
         let moved = to_parent(pool, child, &frames[k].to_parent, frames[k].offset);
-        let slot = &mut composites[parent.index()];
-        *slot = Some(match *slot {
-            Some(other) => sum(pool, other, moved),
-            None => moved,
-        });
+        gather(pool, &mut composites[parent.index()], moved);
     }
 
     // Whether some frame above k (k excluded) has speeds of its own: how far to carry L, H.
@@ -102,10 +94,8 @@ pub(super) fn add_bodies(
             let mut j = i;
             while speeds_above[j] {
                 let step = &frames[j];
-                momentum = vector::mat_vec(pool, &step.to_parent, momentum);
-                let turned = vector::mat_vec(pool, &step.to_parent, moment);
-                let lever = vector::cross(pool, step.offset, momentum);
-                moment = vector::add(pool, turned, lever);
+                (momentum, moment) =
+                    carry_to_parent(pool, &step.to_parent, step.offset, momentum, moment);
                 j = step
                     .parent
                     .expect("a frame with speeds above has a parent")
@@ -183,24 +173,45 @@ fn body_composite(
 /// A child's composite in its parent's basis about the parent's origin; `c` = C_{p←k},
 /// `d` = O_k − O_p in p.
 fn to_parent(pool: &mut ExprPool, child: Composite, c: &Mat3, d: Vec3) -> Composite {
-    let turned_moment = vector::mat_vec(pool, c, child.first_moment);
+    let turned_first_moment = vector::mat_vec(pool, c, child.first_moment);
     let shift = vector::scale(pool, d, child.mass);
-    let first_moment = vector::add(pool, turned_moment, shift);
+    let first_moment = vector::add(pool, turned_first_moment, shift);
     // C J Cᵀ + the shift by d of a body with first moment h' = C h about O_k:
     // m (|d|² 1 − d dᵀ) + 2 (d·h') 1 − d h'ᵀ − h' dᵀ.
     let turned = rotate_symmetric(pool, c, &child.inertia);
-    let shifted = shifted_inertia(pool, child.mass, d, turned_moment);
+    let shifted = shifted_inertia(pool, child.mass, d, turned_first_moment);
     let inertia = add_mat(pool, &turned, &shifted);
-    let force = vector::mat_vec(pool, c, child.force);
-    let turned_torque = vector::mat_vec(pool, c, child.moment);
-    let lever = vector::cross(pool, d, force);
+    let (force, moment) = carry_to_parent(pool, c, d, child.force, child.moment);
     Composite {
         mass: child.mass,
         first_moment,
         inertia,
         force,
-        moment: vector::add(pool, turned_torque, lever),
+        moment,
     }
+}
+
+/// A vector and its moment about O_k (a force and its moment, or a momentum and its angular
+/// momentum) in the parent's basis about O_p: `(C f, C n + d × C f)`.
+fn carry_to_parent(
+    pool: &mut ExprPool,
+    c: &Mat3,
+    d: Vec3,
+    linear: Vec3,
+    moment: Vec3,
+) -> (Vec3, Vec3) {
+    let turned = vector::mat_vec(pool, c, linear);
+    let turned_moment = vector::mat_vec(pool, c, moment);
+    let lever = vector::cross(pool, d, turned);
+    (turned, vector::add(pool, turned_moment, lever))
+}
+
+/// Adds `composite` into the frame's `slot` (the first fills it).
+fn gather(pool: &mut ExprPool, slot: &mut Option<Composite>, composite: Composite) {
+    *slot = Some(match *slot {
+        Some(other) => sum(pool, other, composite),
+        None => composite,
+    });
 }
 
 /// The sum of two composites of the same frame.
