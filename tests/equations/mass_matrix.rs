@@ -27,6 +27,34 @@ fn models() -> Vec<(String, String)> {
         .collect()
 }
 
+/// A configuration near `q0`, every coordinate moved by up to ±`spread`, the unit quaternions
+/// put back on the unit sphere (loops need not close: `M` and `T` are tree quantities).
+fn near(model: &dyn Model, q0: &[f64], rng: &mut Rng, spread: f64) -> Vec<f64> {
+    let mut q: Vec<f64> = q0
+        .iter()
+        .map(|&x| x + rng.uniform(-spread, spread))
+        .collect();
+    mech_runtime::normalize_quaternions(model.unit_quaternions(), &mut q);
+    q
+}
+
+/// `|T − ½ uᵀ M u| / T` at `(q, u)`, `T` from the output `kinetic_energy_check`; asserts that
+/// `M` is exactly symmetric and positive definite there.
+fn kinetic_energy_mismatch(model: &dyn Model, name: &str, q: &[f64], u: &[f64]) -> f64 {
+    let n = model.nu();
+    let m = common::mass_matrix(model, q);
+    let matrix = DMatrix::from_fn(n, n, |r, c| m[r][c]);
+    assert_eq!(matrix, matrix.transpose(), "{name}: M not symmetric");
+    assert!(
+        matrix.clone().cholesky().is_some(),
+        "{name}: M not positive definite at q = {q:?}"
+    );
+    let speeds = DVector::from_column_slice(u);
+    let quadratic = 0.5 * (speeds.transpose() * &matrix * &speeds)[0];
+    let energy = common::output(model, "kinetic_energy_check", q, u);
+    (energy - quadratic).abs() / energy.abs().max(quadratic.abs()).max(f64::MIN_POSITIVE)
+}
+
 #[test]
 fn mass_matrix_is_twice_the_kinetic_energy_of_every_bundled_model() {
     let mut rng = Rng::new(2026);
@@ -38,28 +66,9 @@ fn mass_matrix_is_twice_the_kinetic_energy_of_every_bundled_model() {
         let mut worst: f64 = 0.0;
         for _ in 0..20 {
             // Near the model's own start (loops need not close: M and T are tree quantities).
-            let mut q: Vec<f64> = q0.iter().map(|&x| x + rng.uniform(-0.3, 0.3)).collect();
-            for &first in model.unit_quaternions() {
-                let norm = q[first..first + 4]
-                    .iter()
-                    .map(|x| x * x)
-                    .sum::<f64>()
-                    .sqrt();
-                q[first..first + 4].iter_mut().for_each(|x| *x /= norm);
-            }
+            let q = near(&model, &q0, &mut rng, 0.3);
             let u = rng.vector(n, -2.0, 2.0);
-            let m = common::mass_matrix(&model, &q);
-            let matrix = DMatrix::from_fn(n, n, |r, c| m[r][c]);
-            assert_eq!(matrix, matrix.transpose(), "{name}: M not symmetric");
-            assert!(
-                matrix.clone().cholesky().is_some(),
-                "{name}: M not positive definite at q = {q:?}"
-            );
-            let u = DVector::from_column_slice(&u);
-            let quadratic = 0.5 * (u.transpose() * &matrix * &u)[0];
-            let energy = common::output(&model, "kinetic_energy_check", &q, u.as_slice());
-            let scale = energy.abs().max(quadratic.abs()).max(f64::MIN_POSITIVE);
-            worst = worst.max((energy - quadratic).abs() / scale);
+            worst = worst.max(kinetic_energy_mismatch(&model, &name, &q, &u));
         }
         eprintln!("{name}: largest |T − ½uᵀMu| / T = {worst:.1e}");
         assert!(worst < 1e-12, "{name}: T and ½uᵀMu differ by {worst:e}");
@@ -107,26 +116,9 @@ joint wrist = ball(puck, top) { rotation = euler(zxy); q0 = [0, 10 deg, 0]; }
     let mut rng = Rng::new(17);
     let mut worst: f64 = 0.0;
     for _ in 0..50 {
-        let mut q: Vec<f64> = q0.iter().map(|&x| x + rng.uniform(-0.5, 0.5)).collect();
-        for &first in model.unit_quaternions() {
-            let norm = q[first..first + 4]
-                .iter()
-                .map(|x| x * x)
-                .sum::<f64>()
-                .sqrt();
-            q[first..first + 4].iter_mut().for_each(|x| *x /= norm);
-        }
-        let u = DVector::from_vec(rng.vector(n, -2.0, 2.0));
-        let m = common::mass_matrix(&model, &q);
-        let matrix = DMatrix::from_fn(n, n, |r, c| m[r][c]);
-        assert_eq!(matrix, matrix.transpose(), "M not symmetric");
-        assert!(
-            matrix.clone().cholesky().is_some(),
-            "M not positive definite at {q:?}"
-        );
-        let quadratic = 0.5 * (u.transpose() * &matrix * &u)[0];
-        let energy = common::output(&model, "kinetic_energy_check", &q, u.as_slice());
-        worst = worst.max((energy - quadratic).abs() / energy.abs().max(quadratic.abs()));
+        let q = near(&model, &q0, &mut rng, 0.5);
+        let u = rng.vector(n, -2.0, 2.0);
+        worst = worst.max(kinetic_energy_mismatch(&model, "every_joint", &q, &u));
     }
     eprintln!("every joint kind: {n} speeds, largest |T − ½uᵀMu| / T = {worst:.1e}");
     assert!(worst < 1e-12, "T and ½uᵀMu differ by {worst:e}");
@@ -140,15 +132,7 @@ joint wrist = ball(puck, top) { rotation = euler(zxy); q0 = [0, 10 deg, 0]; }
     };
     let mut worst_rate: f64 = 0.0;
     for _ in 0..20 {
-        let mut q: Vec<f64> = q0.iter().map(|&x| x + rng.uniform(-0.5, 0.5)).collect();
-        for &first in model.unit_quaternions() {
-            let norm = q[first..first + 4]
-                .iter()
-                .map(|x| x * x)
-                .sum::<f64>()
-                .sqrt();
-            q[first..first + 4].iter_mut().for_each(|x| *x /= norm);
-        }
+        let q = near(&model, &q0, &mut rng, 0.5);
         let u = rng.vector(n, -2.0, 2.0);
         let udot = common::accelerations(&model, &q, &u);
         let mut qdot = vec![0.0; model.nq()];
