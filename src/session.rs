@@ -904,6 +904,11 @@ impl Session {
     }
 }
 
+/// The names of the coordinates at `indices` (as [`Model::coordinate_name`] spells them).
+pub fn coordinate_names<'a>(model: &'a dyn Model, indices: &[usize]) -> Vec<&'a str> {
+    indices.iter().map(|&i| model.coordinate_name(i)).collect()
+}
+
 /// The matrices of a linearization under the names `mech linearize --matrices` and Python's
 /// `linearize()` give them: `M`, `C`, `K`, `B` of `M δz̈ + C δż + K δz = B δin`, then the
 /// first-order `A`, `B_s`, `C_s`, `D_s` (`ẋ = A x + B_s δin`, `y = C_s x + D_s δin`,

@@ -112,11 +112,7 @@ pub const NOT_CYCLIC: f64 = 1e-6;
 
 /// The names of the coordinates a steady linearization dropped as cyclic.
 pub fn cyclic_names<'a>(model: &'a dyn Model, linear: &SteadyLinearization) -> Vec<&'a str> {
-    linear
-        .cyclic
-        .iter()
-        .map(|&i| model.coordinate_name(i))
-        .collect()
+    crate::session::coordinate_names(model, &linear.cyclic)
 }
 
 /// The names of a steady linearization's states: `q_NAME` for a coordinate, `u_NAME` for a

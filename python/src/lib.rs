@@ -518,11 +518,7 @@ impl Model {
         let session = self.session();
         let model = &session.model;
         let dict = PyDict::new(py);
-        let names: Vec<&str> = linear
-            .independent
-            .iter()
-            .map(|&i| model.coordinate_name(i))
-            .collect();
+        let names = mech::session::coordinate_names(model, &linear.independent);
         dict.set_item("coordinates", names.clone())?;
         for (key, value) in &matrices {
             dict.set_item(*key, matrix(py, value))?;
@@ -576,11 +572,7 @@ impl Model {
         dict.set_item("unsteadiness", linear.unsteadiness())?;
         dict.set_item("cyclic_change", linear.cyclic_change)?;
         if let Some(form) = linear.second_order() {
-            let names: Vec<&str> = form
-                .coordinates
-                .iter()
-                .map(|&i| model.coordinate_name(i))
-                .collect();
+            let names = mech::session::coordinate_names(model, &form.coordinates);
             dict.set_item("coordinates", names)?;
             dict.set_item("M", matrix(py, &form.mass))?;
             dict.set_item("C", matrix(py, &form.damping))?;

@@ -120,11 +120,7 @@ pub fn run(args: &LinearizeArgs) -> Result<(), Error> {
     let (session, inputs) = args.common.open("linearize")?;
     let model = &session.model;
     let linear = session.linearization(&args.common.independent, &inputs)?;
-    let names: Vec<&str> = linear
-        .independent
-        .iter()
-        .map(|&i| model.coordinate_name(i))
-        .collect();
+    let names = crate::session::coordinate_names(model, &linear.independent);
     let mut text = format!(
         "`{}` linearized about its static equilibrium, in the minimal coordinates [{}]:\n\
          M δz̈ + C δż + K δz = B δin (SI units)\n\n",
@@ -375,11 +371,7 @@ fn steady_text(model: &dyn Model, linear: &SteadyLinearization) -> String {
     );
     text += &matrix_text("A", &linear.a);
     if let Some(form) = linear.second_order() {
-        let coordinates: Vec<&str> = form
-            .coordinates
-            .iter()
-            .map(|&i| model.coordinate_name(i))
-            .collect();
+        let coordinates = crate::session::coordinate_names(model, &form.coordinates);
         let _ = writeln!(
             text,
             "\nsecond-order form in [{}], the other speeds held: M δz̈ + C δż + K δz = 0",
