@@ -7,7 +7,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use mech_codegen::ir::{Dimension, EulerAngles, OutputKind, Quaternion};
+use mech_codegen::ir::{Dimension, EulerAngles, OutputKind, Quaternion, Translation};
 use mech_codegen::{Compiled, Diagnostic, Errors};
 use mech_runtime::constraints::{
     choose_independent, complete_independent, holonomic_jacobian, independent_speeds, jacobian,
@@ -445,41 +445,27 @@ impl Session {
     /// The units of the coordinate named `name` and of its speed: `rad` and `rad/s` for an
     /// angle, `m` and `m/s` for a slide (`None` if there is no such coordinate).
     /// A quaternion's part (`ball.e0`) is a plain number: `1` (its rate has no speed); an
-    /// Euler angle (`ball.angle1`) is an angle whose rate is not one speed.
+    /// Euler angle (`ball.angle1`) is an angle and a free joint's position (`free.x`) a length
+    /// whose rates are not one speed.
     pub fn coordinate_units(&self, name: &str) -> Option<(String, String)> {
-        if self.is_quaternion_name(name, Quaternion::coordinate_names) {
+        let model = &self.compiled.model;
+        let unit = |dimension| Some((dimension_units(dimension).0, String::new()));
+        if names_contain(&model.quaternions, name, Quaternion::coordinate_names) {
             return Some(("1".into(), String::new()));
         }
-        if self.is_euler_name(name, EulerAngles::coordinate_names) {
-            return Some((dimension_units(Dimension::NONE).0, String::new()));
+        if names_contain(&model.euler_angles, name, EulerAngles::coordinate_names) {
+            return unit(Dimension::NONE);
         }
-        let coordinates = &self.compiled.model.coordinates;
-        let (_, coordinate) = coordinates.iter().find(|(_, c)| c.name == name)?;
+        if names_contain(&model.translations, name, Translation::coordinate_names) {
+            return unit(Dimension::LENGTH);
+        }
+        let (_, coordinate) = model.coordinates.iter().find(|(_, c)| c.name == name)?;
         Some(dimension_units(coordinate.dimension))
     }
 
-    /// Whether `name` is one of the `names` (coordinates or speeds) of a quaternion.
-    fn is_quaternion_name<const N: usize>(
-        &self,
-        name: &str,
-        names: fn(&Quaternion) -> [String; N],
-    ) -> bool {
-        let quaternions = &self.compiled.model.quaternions;
-        quaternions
-            .iter()
-            .any(|(_, e)| names(e).iter().any(|n| n == name))
-    }
-
-    /// Whether `name` is one of the `names` (coordinates or speeds) of a set of Euler angles.
-    fn is_euler_name(&self, name: &str, names: fn(&EulerAngles) -> [String; 3]) -> bool {
-        let angles = &self.compiled.model.euler_angles;
-        angles
-            .iter()
-            .any(|(_, a)| names(a).iter().any(|n| n == name))
-    }
-
     /// The unit of the speed named `name`: its coordinate's rate (`rad/s`, `m/s`), `rad/s` for
-    /// a quaternion's or Euler angles' angular speed (`ball.wx`), empty for an unknown name.
+    /// a quaternion's or Euler angles' angular speed (`ball.wx`), `m/s` for a free joint's
+    /// velocity (`free.vx`), empty for an unknown name.
     pub fn speed_unit(&self, name: &str) -> String {
         let chosen = self.compiled.model.speeds.iter().find(|s| s.name == name);
         if let Some(speed) = chosen {
@@ -488,11 +474,14 @@ impl Session {
         if let Some((_, speed)) = self.coordinate_units(name) {
             return speed;
         }
-        let angular = self.is_quaternion_name(name, Quaternion::speed_names)
-            || self.is_euler_name(name, EulerAngles::speed_names);
-        match angular {
-            true => dimension_units(Dimension::NONE).1,
-            false => String::new(),
+        let model = &self.compiled.model;
+        let angular = names_contain(&model.quaternions, name, Quaternion::speed_names)
+            || names_contain(&model.euler_angles, name, EulerAngles::speed_names);
+        let linear = names_contain(&model.translations, name, Translation::speed_names);
+        match (angular, linear) {
+            (true, _) => dimension_units(Dimension::NONE).1,
+            (false, true) => dimension_units(Dimension::LENGTH).1,
+            (false, false) => String::new(),
         }
     }
 
@@ -585,14 +574,13 @@ impl Session {
     }
 
     /// The dimension of speed `index`: a chosen speed's own, else its coordinate's over time
-    /// (a quaternion's or Euler angles' angular speeds: 1/s, as an angle's rate).
+    /// (a quaternion's or Euler angles' angular speeds: 1/s, as an angle's rate; a free
+    /// joint's velocity: m/s).
     pub fn speed_dimension(&self, index: usize) -> Dimension {
         if let Some(speed) = self.compiled.model.speeds.get(index) {
             return speed.dimension;
         }
-        let coordinates = &self.compiled.model.coordinates;
-        let dimension = coordinates.iter().nth(index).map(|(_, c)| c.dimension);
-        dimension.unwrap_or(Dimension::NONE).div(Dimension::TIME)
+        self.compiled.model.default_speed_dimension(index)
     }
 
     /// The index of the `kind` called `name` (given by `option`, for the message).
@@ -641,12 +629,10 @@ impl Session {
         let mut q = vec![0.0; model.nq()];
         let mut u = vec![0.0; model.nu()];
         model.initial_state(&mut q, &mut u);
-        let coordinates = &self.compiled.model.coordinates;
-        let dimension = |index: usize| coordinates.iter().nth(index).map(|(_, c)| c.dimension);
         for text in q0 {
             let (name, value, index) = self.assignment("--q0", NameKind::Coordinate, text)?;
-            let euler_angle = self.is_euler_name(&name, EulerAngles::coordinate_names);
-            let Some(expected) = dimension(index).or(euler_angle.then_some(Dimension::NONE)) else {
+            let dimension = self.compiled.model.coordinate_dimension(index);
+            let Some(expected) = dimension else {
                 return Err(Error::QuaternionPart {
                     option: "--q0",
                     name,
@@ -709,6 +695,19 @@ impl Session {
                         reason: "the model's speeds are chosen by `speed` declarations, so no \
                                  coordinate's rate is a speed",
                     },
+                    (false, true)
+                        if names_contain(
+                            &self.compiled.model.translations,
+                            name,
+                            Translation::coordinate_names,
+                        ) =>
+                    {
+                        Error::NotHeld {
+                            name: name.to_string(),
+                            reason: "a free joint's position moves by its velocity speeds \
+                                     turned by its rotation ((ẋ, ẏ, ż) = R v), not by one speed",
+                        }
+                    }
                     (false, true) => Error::NotHeld {
                         name: name.to_string(),
                         reason: "an Euler angle's rate is not its speed (q̇ = W(q) u)",
@@ -1037,6 +1036,18 @@ pub fn assembly_report(model: &dyn Model, state: &Assembled) -> String {
         );
     }
     text
+}
+
+/// Whether `name` is one of the `names` (coordinates or speeds) of an item of `arena` (a
+/// quaternion, a set of Euler angles, a free joint's translation).
+fn names_contain<T, const N: usize>(
+    arena: &mech_codegen::ir::Arena<T>,
+    name: &str,
+    names: fn(&T) -> [String; N],
+) -> bool {
+    arena
+        .iter()
+        .any(|(_, item)| names(item).iter().any(|n| n == name))
 }
 
 #[cfg(test)]

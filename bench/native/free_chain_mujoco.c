@@ -55,10 +55,12 @@ int main(int argc, char** argv) {
          "\"forward_ns_min\": %.6g, \"forward_cpu_ns\": %.6g, \"reps\": %d, \"calls_per_rep\": %d, "
          "\"udot\": [",
          N, mj_versionString(), w[reps / 2] * 1e9, w[0] * 1e9, c[reps / 2] * 1e9, reps, K);
+  // mech's order: joints, base angular, base linear. The base is unrotated and at rest, so
+  // its world acceleration is also the rate of its velocity in its own frame (mech's speeds).
   int k = 0;
-  for (int i = 0; i < 3; i++) printf("%s%.17g", k++ ? ", " : "", d->qacc[i]);
   for (int i = 0; i < N; i++) printf("%s%.17g", k++ ? ", " : "", d->qacc[6 + i]);
   for (int i = 3; i < 6; i++) printf("%s%.17g", k++ ? ", " : "", d->qacc[i]);
+  for (int i = 0; i < 3; i++) printf("%s%.17g", k++ ? ", " : "", d->qacc[i]);
   printf("]}\n");
   mj_deleteData(d);
   mj_deleteModel(m);

@@ -67,11 +67,11 @@ int main(int argc, char** argv) {
   printf("{\"script\": \"free_chain_pinocchio\", \"N\": %d, \"aba_ns\": %.6g, \"aba_ns_min\": %.6g, "
          "\"aba_cpu_ns\": %.6g, \"reps\": %d, \"calls_per_rep\": %d, \"udot\": [",
          N, w[w.size() / 2] * 1e9, w[0] * 1e9, c[c.size() / 2] * 1e9, reps, K);
-  // mech's order: base linear, joints, base angular
+  // mech's order: joints, base angular, base linear (both in the base frame, as here)
   std::vector<double> out;
-  for (int i = 0; i < 3; i++) out.push_back(a[i]);
   for (int i = 0; i < N; i++) out.push_back(a[6 + i]);
   for (int i = 3; i < 6; i++) out.push_back(a[i]);
+  for (int i = 0; i < 3; i++) out.push_back(a[i]);
   for (size_t i = 0; i < out.size(); i++) printf("%s%.17g", i ? ", " : "", out[i]);
   printf("]}\n");
   return 0;

@@ -21,9 +21,9 @@ pub fn chain_source(n: usize) -> String {
 /// The same chain on a floating base (issue 15): a body like the links, `base`, on a `free`
 /// joint `float` (its origin at the world's origin at rest), with link 1 pinned `l` below
 /// the base's origin about the base's x, the axes alternating x/y as before. Coordinates
-/// `float.x/y/z`, `q1 … qN`, `float.e0 … e3`; speeds `float.x/y/z` (world), `q1 … qN`,
-/// `float.wx/wy/wz` (base frame). `tests/peers/pinocchio_free_chain.py` builds the same
-/// model in Pinocchio and MuJoCo.
+/// `q1 … qN`, `float.e0 … e3`, `float.x/y/z` (world); speeds `q1 … qN`, `float.wx/wy/wz`,
+/// `float.vx/vy/vz` (both in the base's frame). `tests/peers/pinocchio_free_chain.py`
+/// builds the same model in Pinocchio and MuJoCo.
 pub fn floating_chain_source(n: usize) -> String {
     chain_text(n, false, true)
 }

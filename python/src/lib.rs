@@ -638,7 +638,8 @@ impl Model {
         frames(py)?.call_method1("bode", ((*frequencies_hz).clone(), gains))
     }
 
-    /// The mass matrix `M(q)` (nq × nq) at time `t`.
+    /// The mass matrix `M(q)` (nu × nu: one row per speed, fewer than `q` with quaternions) at
+    /// time `t`.
     #[pyo3(signature = (q, inputs=None, t=0.0))]
     fn mass_matrix<'py>(
         &self,
@@ -648,9 +649,10 @@ impl Model {
         t: f64,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let (q, inputs) = (self.state("q", q)?, self.input_values(inputs)?);
-        let n = q.len();
+        let model = &self.session().model;
+        let n = model.nu();
         let mut out = vec![0.0; n * n];
-        self.session().model.mass_matrix(t, &q, &inputs, &mut out);
+        model.mass_matrix(t, &q, &inputs, &mut out);
         PyArray1::from_vec(py, out).reshape([n, n])
     }
 
@@ -669,7 +671,7 @@ impl Model {
             self.state("u", u)?,
             self.input_values(inputs)?,
         );
-        let mut out = vec![0.0; q.len()];
+        let mut out = vec![0.0; u.len()];
         self.session().model.forcing(t, &q, &u, &inputs, &mut out);
         Ok(PyArray1::from_vec(py, out))
     }

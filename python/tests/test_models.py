@@ -35,6 +35,25 @@ def test_pendulum_equations_are_the_closed_form():
         assert F[0] == pytest.approx(-m * g * l * math.sin(q) - c * u, rel=1e-13, abs=1e-18)
 
 
+def test_mass_matrix_has_a_row_per_speed():
+    """With quaternions there are fewer speeds than coordinates: M is nu × nu and F has nu
+    rows, and ½ uᵀ M u is the kinetic energy the model sums body by body (an output)."""
+    chain = model("floating_chain")
+    nq, nu = len(chain.coordinates), len(chain.speeds)
+    assert (nq, nu) == (12, 10)
+    rng = np.random.default_rng(7)
+    q = rng.uniform(-1, 1, nq)
+    for name in ("float", "wrist"):
+        part = [chain.coordinates.index(f"{name}.e{k}") for k in range(4)]
+        q[part] /= np.linalg.norm(q[part])
+    u = rng.uniform(-1, 1, nu)
+    M, F = chain.mass_matrix(q), chain.forcing(q, u)
+    assert M.shape == (nu, nu) and F.shape == (nu,)
+    assert np.array_equal(M, M.T)
+    ke = chain.evaluate_outputs(q, u)[chain.outputs.index("ke")]
+    assert 0.5 * u @ M @ u == pytest.approx(ke, rel=1e-13)
+
+
 def test_pendulum_frequency_and_energy():
     """The linearized frequency is √(g/l)/2π; undamped, the simulated energy stays constant and
     the small-amplitude period is the linear one."""

@@ -93,7 +93,8 @@ fn print_coordinates(model: &Model) {
         (false, _) => println!("\ncoordinates (q, with q̇ = W(q) u of the chosen speeds below):"),
         (true, false) => println!("\ncoordinates (q, with u = q̇):"),
         (true, true) => println!(
-            "\ncoordinates (q, with u = q̇ except for quaternions and Euler angles: q̇ = W(q) u):"
+            "\ncoordinates (q, with u = q̇ except for quaternions, Euler angles and free joints' \
+             positions: q̇ = W(q) u):"
         ),
     }
     for (_, joint) in model.joints.iter() {
@@ -123,6 +124,22 @@ fn print_coordinates(model: &Model) {
                 joint.name,
                 quaternion.coordinate_names().join(", "),
                 quaternion.speed_names().join(", "),
+            );
+        }
+        let translation = model
+            .translations
+            .iter()
+            .find(|(_, t)| t.name == joint.name);
+        if let Some((_, translation)) = translation {
+            let [vx, vy, vz] = translation.initial_velocity;
+            println!(
+                "  {:<16} {:?} joint `{}`: position ({}) in the joint frame, q0 = 0 m; \
+                 speeds {} (velocity in the child frame), u0 = [{vx}, {vy}, {vz}] m/s",
+                translation.name,
+                joint.kind,
+                joint.name,
+                translation.coordinate_names().join(", "),
+                translation.speed_names().join(", "),
             );
         }
         let euler = model

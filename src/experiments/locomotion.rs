@@ -20,7 +20,7 @@ use super::trajectory::peak_to_peak;
 use super::Error;
 use crate::parallel::{parallel, threads};
 use crate::quantity::{positive, quantity};
-use crate::session::{ModelSpec, Session};
+use crate::session::{ModelSpec, NameKind, Session};
 
 /// Standard gravity (m/s²), the weight in the cost of transport.
 const GRAVITY: f64 = 9.81;
@@ -378,7 +378,9 @@ pub fn compute(spec: &Spec, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<
 /// The session of one grid point and the indices the measurements read.
 struct Opened {
     session: Session,
-    base_x: usize,
+    /// The base's first velocity speed (`BASE.vx`): every body moves with it, so its diagonal
+    /// entry of `M` is the total mass.
+    base_velocity: usize,
     quaternion: usize,
     position: usize,
     power: usize,
@@ -390,7 +392,7 @@ fn open(spec: &Spec, frequency: f64, payload: f64) -> Result<Opened, Error> {
     let mut sets = spec.model.set.clone();
     sets.push(format!("{}={payload} kg", spec.payload));
     let session = Session::open(&spec.model.path, &sets, &spec.drives(frequency)?)?;
-    let base_x = session.coordinate_index(&format!("{}.x", spec.base))?;
+    let base_velocity = session.index_of(NameKind::Speed, &format!("{}.vx", spec.base), None)?;
     let quaternion = match session.model.unit_quaternions() {
         [index] => *index,
         found => {
@@ -415,7 +417,7 @@ fn open(spec: &Spec, frequency: f64, payload: f64) -> Result<Opened, Error> {
         .collect::<Result<Vec<_>, Error>>()?;
     Ok(Opened {
         session,
-        base_x,
+        base_velocity,
         quaternion,
         position,
         power,
@@ -432,7 +434,7 @@ pub fn walk(spec: &Spec, frequency: f64, payload: f64) -> Result<(Walk, Trajecto
     let nu = model.nu();
     let mut mass = vec![0.0; nu * nu];
     model.mass_matrix(0.0, &state.q, &vec![0.0; model.ninputs()], &mut mass);
-    let total_mass = mass[opened.base_x * (nu + 1)];
+    let total_mass = mass[opened.base_velocity * (nu + 1)];
     let period = 1.0 / frequency;
     let options = SimOptions {
         t_end: (spec.settle_cycles + spec.cycles) * period,

@@ -325,8 +325,9 @@ fn free_joint_on_euler_angles_follows_the_quaternion() {
     let euler = common::tape_from_text("free_euler", &throw("rotation = euler(zyx);"));
     let quaternion = common::tape_from_text("free_quaternion", &throw(""));
     assert_eq!((euler.nq(), euler.nu()), (6, 6));
-    assert_eq!(euler.plain_coordinates(), 3);
-    assert_eq!(euler.coordinate_name(3), "throw.angle1");
+    assert_eq!(euler.plain_coordinates(), 0);
+    assert_eq!(euler.coordinate_name(0), "throw.angle1");
+    assert_eq!(euler.coordinate_name(3), "throw.x");
     let options = dop853(2.0, 0.01, 1e-12, 1e-14);
     let (qe, ue) = common::initial_state(&euler);
     let (qq, uq) = common::initial_state(&quaternion);
@@ -368,4 +369,58 @@ fn a_session_sets_euler_angles_by_name() {
     let (angle, rate) = session.coordinate_units("tip.angle1").unwrap();
     assert_eq!((angle.as_str(), rate.as_str()), ("rad", ""));
     assert_eq!(session.speed_unit("tip.wz"), "rad/s");
+}
+
+/// A `free` joint's `v0` is written in the joint frame whatever the start orientation: on
+/// Euler angles that start turned, the speeds are `v0` seen from the child (`Rᵀ v0`), so the
+/// origin's velocity in N (an output, computed from the kinematics) is `v0` again. A session
+/// sets the position (m) and the velocity speeds (m/s) by name with their units.
+#[test]
+fn free_joint_v0_is_the_joint_frame_velocity_at_any_start_orientation() {
+    let text =
+        "body b { mass = 0.2 kg; inertia = [1e-3, 2e-3, 3e-3] * 1 kg*m^2; point o = [0, 0, 0]; }
+         joint throw = free(newtonian, b) {
+             rotation = euler(zyx); q0 = [0.3 rad, -0.4 rad, 0.5 rad];
+             u0 = [0.2 rad/s, 0.1 rad/s, 2 rad/s]; v0 = [1 m/s, -2 m/s, 0.5 m/s];
+         }
+         output origin_velocity = velocity(b.o);";
+    let model = common::tape_from_text("turned_throw", text);
+    let (q, u) = common::initial_state(&model);
+    let mut y = vec![0.0; model.noutputs()];
+    model.outputs(0.0, &q, &u, &vec![0.0; model.ninputs()], &mut y);
+    let at = model.output_index("origin_velocity.x").unwrap();
+    for (k, expected) in [1.0, -2.0, 0.5].into_iter().enumerate() {
+        common::assert_close(
+            "velocity of the origin in N",
+            y[at + k],
+            expected,
+            1e-15,
+            1.0,
+        );
+    }
+    let vx = (0..model.nu())
+        .find(|&i| model.speed_name(i) == "throw.vx")
+        .unwrap();
+    assert!(
+        (u[vx] - 1.0).abs() > 0.1,
+        "the speeds are the child's measure numbers: {u:?}"
+    );
+
+    use mech::session::Session;
+    let session =
+        Session::from_compiled(common::compile_text("turned_throw", text), &[], &[]).unwrap();
+    let (q, u) = session
+        .initial_state(&["throw.z=5mm".to_string()], &["throw.vy=3m/s".to_string()])
+        .unwrap();
+    common::assert_close(
+        "z",
+        q[model.coordinate_index("throw.z").unwrap()],
+        5e-3,
+        1e-15,
+        0.0,
+    );
+    common::assert_close("vy", u[vx + 1], 3.0, 1e-15, 0.0);
+    let (length, rate) = session.coordinate_units("throw.x").unwrap();
+    assert_eq!((length.as_str(), rate.as_str()), ("m", ""));
+    assert_eq!(session.speed_unit("throw.vz"), "m/s");
 }

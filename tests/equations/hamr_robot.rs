@@ -293,6 +293,20 @@ fn robot() -> mech::tape_model::TapeModel {
     common::tape_from_text("hamr_vi_robot", &robot_text())
 }
 
+/// The index of the chassis's first velocity speed, `Chassis_base.vx`.
+fn chassis_velocity(robot: &dyn Model) -> usize {
+    (0..robot.nu())
+        .find(|&i| robot.speed_name(i) == "Chassis_base.vx")
+        .unwrap()
+}
+
+/// The robot's mass: the entry of `M` on a velocity speed of the chassis (every body moves
+/// with it).
+fn total_mass(robot: &dyn Model, q: &[f64]) -> f64 {
+    let v = chassis_velocity(robot);
+    common::mass_matrix(robot, q)[v][v]
+}
+
 #[test]
 fn the_committed_robot_is_the_import_with_the_leg_model() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(ROBOT);
@@ -355,14 +369,15 @@ fn the_robot_has_fourteen_degrees_of_freedom_and_its_mass() {
         (60, 24, 14),
         "{mobility}"
     );
-    // Every body moves with the free joint's slides: the translational block of M is the
+    // Every body moves with the free joint's velocity: the translational block of M is the
     // total mass times the identity, at any state.
     let rng = std::cell::RefCell::new(common::Rng::new(3));
     let (q, _) = robot_state(&robot, &|_, _| (rng.borrow_mut().uniform(-0.05, 0.05), 0.0));
     let m = common::mass_matrix(&robot, &q);
-    let total = m[0][0];
-    for (r, row) in m.iter().take(3).enumerate() {
-        for (s, entry) in row.iter().take(3).enumerate() {
+    let v = chassis_velocity(&robot);
+    let total = m[v][v];
+    for (r, row) in m.iter().skip(v).take(3).enumerate() {
+        for (s, entry) in row.iter().skip(v).take(3).enumerate() {
             let expected = if r == s { total } else { 0.0 };
             assert!(
                 (entry - expected).abs() <= 1e-14 * total,
@@ -479,7 +494,7 @@ fn the_front_left_leg_of_the_robot_is_the_leg_model() {
 /// every leg's actuators at `drive(leg)` = (swing, lift) deflections.
 fn feet(robot: &dyn Model, drive: &dyn Fn(&str) -> (f64, f64)) -> Vec<[f64; 3]> {
     let (mut q, _) = robot_state(robot, &|_, _| (0.0, 0.0));
-    let mut held: Vec<usize> = ["x", "y", "z", "wx", "wy", "wz"]
+    let mut held: Vec<usize> = ["vx", "vy", "vz", "wx", "wy", "wz"]
         .iter()
         .map(|axis| {
             let name = format!("Chassis_base.{axis}");
@@ -574,7 +589,7 @@ fn the_robot_stands_on_its_feet() {
                     .unwrap()]
             })
             .sum();
-        let m = common::mass_matrix(&robot, run.q.last().unwrap())[0][0];
+        let m = total_mass(&robot, run.q.last().unwrap());
         let weight = m * 9.81;
         let sink = last[robot.output_index("chassis.z").unwrap()];
         let speed = run
@@ -622,7 +637,7 @@ fn dropped_robot_loses_what_its_contacts_dissipate() {
         let y = &run.outputs[k];
         y[index("ke")] + y[index("pe")] + dissipated.iter().map(|&i| y[i]).sum::<f64>()
     };
-    let m = common::mass_matrix(&robot, &q0)[0][0];
+    let m = total_mass(&robot, &q0);
     let drop_energy = m * 9.81 * height;
     let initial = balance(0);
     let worst = (0..run.len())

@@ -23,22 +23,18 @@ fn fixture() -> Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
-/// mech's names of the coordinates and speeds of the floating chain of `n` links.
+/// mech's names of the coordinates and speeds of the floating chain of `n` links: the pins',
+/// then the base's rotation, then its position (velocity, in the base's frame).
 fn names(n: usize) -> (Vec<String>, Vec<String>) {
-    let base = ["float.x", "float.y", "float.z"].map(String::from);
-    let pins = (1..=n).map(|k| format!("q{k}"));
-    let coordinates = base
-        .iter()
-        .cloned()
-        .chain(pins.clone())
-        .chain((0..4).map(|i| format!("float.e{i}")))
-        .collect();
-    let speeds = base
-        .iter()
-        .cloned()
-        .chain(pins)
-        .chain(["wx", "wy", "wz"].map(|w| format!("float.{w}")))
-        .collect();
+    let pins: Vec<String> = (1..=n).map(|k| format!("q{k}")).collect();
+    let base = |parts: &[&str]| {
+        parts
+            .iter()
+            .map(|p| format!("float.{p}"))
+            .collect::<Vec<_>>()
+    };
+    let coordinates = [pins.clone(), base(&["e0", "e1", "e2", "e3", "x", "y", "z"])].concat();
+    let speeds = [pins, base(&["wx", "wy", "wz", "vx", "vy", "vz"])].concat();
     (coordinates, speeds)
 }
 

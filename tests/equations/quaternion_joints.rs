@@ -137,11 +137,12 @@ const TORQUE_FREE: &str = "
 fn torque_free_body_conserves_energy_and_momentum_and_flips() {
     let model = common::tape_from_text("torque_free", TORQUE_FREE);
     assert_eq!((model.nq(), model.nu()), (7, 6));
-    assert_eq!(model.unit_quaternions(), &[3]);
+    // q = [e0…e3; x, y, z], u = [ω in the body; v in the body].
+    assert_eq!(model.unit_quaternions(), &[0]);
     let inertia = [1.0, 2.0, 3.0];
     let (q0, u0) = initial_state(&model);
     assert_eq!(
-        &q0[3..7],
+        &q0[0..4],
         &[1.0, 0.0, 0.0, 0.0],
         "identity rotation at start"
     );
@@ -149,12 +150,12 @@ fn torque_free_body_conserves_energy_and_momentum_and_flips() {
     let trajectory = run(&model, &q0, &u0, &options);
 
     let momentum = |q: &[f64], u: &[f64]| {
-        let w = [u[3], u[4], u[5]];
-        mat_vec(&rotation(&q[3..7]), [0, 1, 2].map(|i| inertia[i] * w[i]))
+        let w = [u[0], u[1], u[2]];
+        mat_vec(&rotation(&q[0..4]), [0, 1, 2].map(|i| inertia[i] * w[i]))
     };
     let energy = |u: &[f64]| {
-        let rotational: f64 = (0..3).map(|i| inertia[i] * u[3 + i] * u[3 + i]).sum();
-        0.5 * (2.0 * dot([u[0], u[1], u[2]], [u[0], u[1], u[2]]) + rotational)
+        let rotational: f64 = (0..3).map(|i| inertia[i] * u[i] * u[i]).sum();
+        0.5 * (2.0 * dot([u[3], u[4], u[5]], [u[3], u[4], u[5]]) + rotational)
     };
     let (h0, t0) = (momentum(&q0, &u0), energy(&u0));
     let h_scale = dot(h0, h0).sqrt();
@@ -165,7 +166,7 @@ fn torque_free_body_conserves_energy_and_momentum_and_flips() {
         let h = momentum(q, u);
         worst_h = worst_h.max(dot(sub(h, h0), sub(h, h0)).sqrt() / h_scale);
         worst_t = worst_t.max((energy(u) - t0).abs() / t0);
-        let norm = q[3..7].iter().map(|x| x * x).sum::<f64>().sqrt();
+        let norm = q[0..4].iter().map(|x| x * x).sum::<f64>().sqrt();
         worst_norm = worst_norm.max((norm - 1.0).abs());
         common::assert_close(
             "kinetic_energy output",
@@ -185,7 +186,7 @@ fn torque_free_body_conserves_energy_and_momentum_and_flips() {
     assert!(worst_norm < 1e-12, "quaternion norm off by {worst_norm:e}");
 
     // The intermediate axis (y) is unstable: ω_y goes from +1 rad/s to about −1 and back.
-    let wy: Vec<f64> = trajectory.u.iter().map(|u| u[4]).collect();
+    let wy: Vec<f64> = trajectory.u.iter().map(|u| u[1]).collect();
     let low = wy.iter().copied().fold(f64::INFINITY, f64::min);
     let sign_changes = wy
         .windows(2)
@@ -193,9 +194,10 @@ fn torque_free_body_conserves_energy_and_momentum_and_flips() {
         .count();
     assert!(low < -0.99, "no flip: min ω_y = {low}");
     assert!(sign_changes >= 2, "ω_y changes sign {sign_changes} times");
-    // The origin drifts at v0 (the mass centre is at the origin, no force).
+    // The origin drifts at v0 in N (the mass centre is at the origin, no force), while the
+    // body turns under the velocity speeds: |v| stays, its measure numbers do not.
     let last = trajectory.q.last().unwrap();
-    common::assert_close("x(100 s)", last[0], 30.0, 1e-12, 0.0);
+    common::assert_close("x(100 s)", last[4], 30.0, 1e-12, 0.0);
 
     // The ODE alone (no projection): the norm drifts by the integrator's error.
     let drift = unprojected_norm_drift(&model, &q0, &u0, 100.0);
@@ -303,8 +305,10 @@ fn free_body_under_gravity_falls_on_a_parabola() {
     ";
     let model = common::tape_from_text("throw", text);
     let (q0, u0) = initial_state(&model);
-    assert_eq!(model.speed_name(3), "throw.wx");
-    assert_eq!(model.coordinate_name(3), "throw.e0");
+    assert_eq!(model.speed_name(0), "throw.wx");
+    assert_eq!(model.speed_name(3), "throw.vx");
+    assert_eq!(model.coordinate_name(0), "throw.e0");
+    assert_eq!(model.coordinate_name(4), "throw.x");
     let trajectory = run(&model, &q0, &u0, &dop853(2.0, 0.01, 1e-12, 1e-14));
     let r0 = [0.1, 0.0, 0.0];
     let v0 = add([1.0, 0.0, 3.0], cross([0.0, 0.0, 2.0], r0));
@@ -321,7 +325,7 @@ fn free_body_under_gravity_falls_on_a_parabola() {
             .sqrt(),
         );
         for (i, &w) in [0.0, 0.0, 2.0].iter().enumerate() {
-            let found = trajectory.u[k][3 + i];
+            let found = trajectory.u[k][i];
             assert!((found - w).abs() < 1e-10, "ω[{i}] at t = {t}: {found}");
         }
     }

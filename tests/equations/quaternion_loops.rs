@@ -58,9 +58,9 @@ fn rotation(e: &[f64]) -> [[f64; 3]; 3] {
 
 /// Without gravity nothing acts on the floating four-bar from outside: its energy, its linear
 /// momentum `p` and its angular momentum about N's origin `H = r_b × p + R (∂T/∂ω)` stay
-/// constant. `p` and `∂T/∂ω` (the angular momentum about the chassis origin, in the chassis
-/// basis) are rows of `M u`: the free joint's speeds are the origin's velocity in N and the
-/// chassis's angular velocity in its own basis. The loop's reactions are internal: a wrong
+/// constant. `p` and `∂T/∂ω` (the angular momentum about the chassis origin), both in the
+/// chassis basis, are rows of `M u`: the free joint's speeds are the origin's velocity and the
+/// chassis's angular velocity, both in the chassis's own basis. The loop's reactions are internal: a wrong
 /// `J` or `J̇u` pushes on the chassis and breaks the balance.
 #[test]
 fn a_floating_four_bar_conserves_energy_and_momentum() {
@@ -70,16 +70,17 @@ fn a_floating_four_bar_conserves_energy_and_momentum() {
     let nu = model.nu();
     let base = ["base.x", "base.y", "base.z"].map(|name| model.coordinate_index(name).unwrap());
     let spin = model.unit_quaternions()[0];
-    let omega = (0..nu).find(|&i| model.speed_name(i) == "base.wx").unwrap();
+    let speed = |name: &str| (0..nu).find(|&i| model.speed_name(i) == name).unwrap();
+    let (omega, velocity) = (speed("base.wx"), speed("base.vx"));
     let momenta = |q: &[f64], u: &[f64]| {
         let m = common::mass_matrix(&model, q);
         let generalized: Vec<f64> = (0..nu)
             .map(|r| (0..nu).map(|s| m[r][s] * u[s]).sum())
             .collect();
-        let p = base.map(|i| generalized[i]);
-        let own = [0, 1, 2].map(|k| generalized[omega + k]);
         let r = rotation(&q[spin..spin + 4]);
-        let turned = [0, 1, 2].map(|i| (0..3).map(|j| r[i][j] * own[j]).sum::<f64>());
+        let in_n = |own: [f64; 3]| [0, 1, 2].map(|i| (0..3).map(|j| r[i][j] * own[j]).sum::<f64>());
+        let p = in_n([0, 1, 2].map(|k| generalized[velocity + k]));
+        let turned = in_n([0, 1, 2].map(|k| generalized[omega + k]));
         let origin = base.map(|i| q[i]);
         let moment = [
             origin[1] * p[2] - origin[2] * p[1],

@@ -9,18 +9,18 @@ body like the links on a free joint, with link 1 pinned 1 below the base's origi
 the base's x. Gravity 9.81 along -z.
 
 Each state is drawn from `random.Random('mech-peer:free_chain<N>')`, in mech's layout:
-  q = (x, y, z, q1 … qN, e0, e1, e2, e3)   base origin in the world, joint angles, the
-                                           base's unit quaternion (scalar first)
-  u = (vx, vy, vz, u1 … uN, wx, wy, wz)    base origin's velocity in the world, joint
-                                           rates, the base's angular velocity in its frame
+  q = (q1 … qN, e0, e1, e2, e3, x, y, z)   joint angles, the base's unit quaternion (scalar
+                                           first), base origin in the world
+  u = (u1 … uN, wx, wy, wz, vx, vy, vz)    joint rates, the base's angular velocity and its
+                                           origin's velocity, both in the base's frame
 (position, angles and speeds uniform in [-1, 1], the quaternion four normal deviates
 normalized). Conventions converted here:
-  * Pinocchio's free flyer: q = (x, y, z, qx, qy, qz, qw, q1 … qN), v = (Cᵀ v_world,
-    ω_body, u1 … uN), and its `aba` returns dv/dt, whose linear part is the spatial
-    acceleration in the body frame, Cᵀ a_world − ω × (Cᵀ v_world): mech's
-    u̇_lin = C (a_lin + ω × v_lin).
-  * MuJoCo's free joint: qpos = (x, y, z, w, x, y, z, q…), qvel = (v_world, ω_body, u…),
-    qacc in the same layout: mech's layout up to the order.
+  * Pinocchio's free flyer: q = (x, y, z, qx, qy, qz, qw, q1 … qN), v = (v_body, ω_body,
+    u1 … uN), and its `aba` returns dv/dt, the rates of those measure numbers: mech's
+    layout up to the order.
+  * MuJoCo's free joint: qpos = (x, y, z, w, x, y, z, q…), qvel = (C v_body, ω_body, u…),
+    qacc in the same layout, whose linear part is the world acceleration a: mech's
+    u̇_lin = d/dt (Cᵀ v_world) = Cᵀ a − ω × v_body.
 The script asserts that the two peers agree to 1e-12 (relative to the largest |u̇|).
 
 From the repository root (tests/peers/README.md, "Pinocchio and MuJoCo"):
@@ -92,24 +92,23 @@ def draw_state(n, rng):
 
 
 def pinocchio_udot(model, data, state):
-    position, angles, e, velocity, rates, omega = state
+    position, angles, e, v_body, rates, omega = state
     n = len(angles)
-    c = pin.Quaternion(e[0], e[1], e[2], e[3]).toRotationMatrix()  # (w, x, y, z) here
-    v_body = c.T @ velocity
     q = np.concatenate([position, e[1:], e[:1], angles])
     v = np.concatenate([v_body, omega, rates])
     a = pin.aba(model, data, q, v, np.zeros(6 + n))
-    linear = c @ (a[:3] + np.cross(omega, v_body))
-    return np.concatenate([linear, a[6:], a[3:6]])
+    return np.concatenate([a[6:], a[3:6], a[:3]])
 
 
 def mujoco_udot(model, data, state):
-    position, angles, e, velocity, rates, omega = state
+    position, angles, e, v_body, rates, omega = state
+    c = pin.Quaternion(e[0], e[1], e[2], e[3]).toRotationMatrix()  # (w, x, y, z) here
     data.qpos[:] = np.concatenate([position, e, angles])
-    data.qvel[:] = np.concatenate([velocity, omega, rates])
+    data.qvel[:] = np.concatenate([c @ v_body, omega, rates])
     mujoco.mj_forward(model, data)
     a = data.qacc
-    return np.concatenate([a[:3], a[6:], a[3:6]])
+    linear = c.T @ a[:3] - np.cross(omega, v_body)
+    return np.concatenate([a[6:], a[3:6], linear])
 
 
 def numbers(values):
@@ -136,9 +135,9 @@ def main():
             gap = np.max(np.abs(udot - udot_mujoco)) / np.max(np.abs(udot))
             assert gap < 1e-12, (n, gap, udot, udot_mujoco)
             worst = max(worst, gap)
-            position, angles, e, velocity, rates, omega = state
-            states.append(dict(q=np.concatenate([position, angles, e]),
-                               u=np.concatenate([velocity, rates, omega]),
+            position, angles, e, v_body, rates, omega = state
+            states.append(dict(q=np.concatenate([angles, e, position]),
+                               u=np.concatenate([rates, omega, v_body]),
                                udot_pinocchio=udot, udot_mujoco=udot_mujoco))
         models[f'free_chain{n}'] = states
     lines = ['{',

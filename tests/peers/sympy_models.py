@@ -50,6 +50,10 @@ class Model:
         # quaternion coordinates (scalar first), angular speeds and q' = W(q) u.
         self.quaternions, self.angular_speeds, self.quaternion_rates = [], [], []
         self.quaternion_names, self.speed_names = [], []
+        # Free joints' positions, after the quaternions: coordinates x, y, z along N's axes,
+        # speeds the origin's velocity in the child's basis, q' = R v.
+        self.translations, self.velocity_speeds, self.translation_rates = [], [], []
+        self.translation_names, self.velocity_names = [], []
         self.bodies, self.loads, self.nc_loads = [], [], []
         self.joints, self.pe, self.params = {}, sm.S(0), {'g': float(G_ACC)}
         self.up = self.N.z             # gravity acts along -up
@@ -96,6 +100,22 @@ class Model:
         self.quaternion_names += [f'{name}.e{k}' for k in range(4)]
         self.speed_names += [f'{name}.w{a}' for a in 'xyz']
         return B
+
+    def free(self, name, frame_name):
+        """A free joint in N: the ball `name` turning `frame_name`, and the child's origin P at
+        x N.x + y N.y + z N.z with speeds v = (vx, vy, vz), its velocity in N in the child's
+        basis (Kane's choice), so (x', y', z') = the N measure numbers of v."""
+        A = self.ball(name, self.N, frame_name)
+        x = me.dynamicsymbols(' '.join(f'{name}.{a}' for a in 'xyz'))
+        v = me.dynamicsymbols(' '.join(f'u_{name}.v{a}' for a in 'xyz'))
+        P = self.point('P', self.O, x[0] * self.N.x + x[1] * self.N.y + x[2] * self.N.z)
+        velocity = v[0] * A.x + v[1] * A.y + v[2] * A.z
+        self.translations += x
+        self.velocity_speeds += v
+        self.translation_rates += [velocity.dot(e) for e in (self.N.x, self.N.y, self.N.z)]
+        self.translation_names += [f'{name}.{a}' for a in 'xyz']
+        self.velocity_names += [f'{name}.v{a}' for a in 'xyz']
+        return A, P
 
     def slider(self, name, parent, parent_origin, offset, axis, frame_name):
         """Child frame parallel to parent; child origin = parent_origin + offset + q*axis."""
@@ -431,12 +451,11 @@ def ball_double_pendulum():
 
 
 def floating_chain():
-    """models/floating_chain.mech: a free joint (slides along N's axes with u = q', then a
-    ball), an arm on a sprung pin about the base's z, a hand on a ball joint."""
+    """models/floating_chain.mech: a free joint (a ball, and the origin's position in N with
+    its velocity in the base's frame as speeds), an arm on a sprung pin about the base's z, a
+    hand on a ball joint."""
     M = Model('floating_chain')
-    x, y, z = (M._coord(f'float.{a}') for a in 'xyz')
-    P = M.point('P', M.O, x * M.N.x + y * M.N.y + z * M.N.z)
-    A = M.ball('float', M.N, 'A')
+    A, P = M.free('float', 'A')
     M.body('base', A, P, 2.0, (0.01, 0, 0), (0.05, 0.04, 0.03, 0, 0, 0))
     S = M.point('S', P, M.vec(A, (0.1, 0, 0)))
     B = M.pin('shoulder', A, S, A.z, 'B')
@@ -700,12 +719,14 @@ def spring_pendulum_lagrange():
 def derive(M):
     qd = {qi.diff(t): ui for qi, ui in zip(M.q, M.u)}
     qd.update({e.diff(t): rate for e, rate in zip(M.quaternions, M.quaternion_rates)})
+    qd.update({x.diff(t): rate for x, rate in zip(M.translations, M.translation_rates)})
     kd_eqs = [a - b for a, b in qd.items()]
     if M.chosen_speeds:   # u = Y(q) q': KanesMethod solves kd_eqs for q' itself
         M.u = list(me.dynamicsymbols(' '.join(f'u_{name}' for name, _ in M.chosen_speeds)))
         kd_eqs = [u - y for u, (_, y) in zip(M.u, M.chosen_speeds)]
         qd = sm.solve(kd_eqs, [qi.diff(t) for qi in M.q], dict=True)[0]
-    q_all, u_all = M.q + M.quaternions, M.u + M.angular_speeds
+    q_all = M.q + M.quaternions + M.translations
+    u_all = M.u + M.angular_speeds + M.velocity_speeds
     kane = me.KanesMethod(M.N, q_ind=q_all, u_ind=u_all, kd_eqs=kd_eqs)
     kane.kanes_equations(M.bodies, M.loads)
     ke = sum(b.kinetic_energy(M.N) for b in M.bodies).xreplace(qd)
@@ -756,9 +777,10 @@ def check(name, Mm, F, ke, pe, power, dE, qdot, u):
     return err
 
 
-def states(name, n, quaternions=0):
+def states(name, n, quaternions=0, translations=0):
     """Coordinates and speeds uniform in [-1, 1], then per quaternion a unit quaternion
-    (four normal deviates, normalized) and three angular speeds in [-1, 1]."""
+    (four normal deviates, normalized) and three angular speeds in [-1, 1], then per free
+    joint's translation three coordinates and three speeds in [-1, 1]."""
     rng = random.Random(f'mech-peer:{name}')
 
     def unit():
@@ -770,6 +792,9 @@ def states(name, n, quaternions=0):
         q, u = [rng.uniform(-1, 1) for _ in range(n)], [rng.uniform(-1, 1) for _ in range(n)]
         for _ in range(quaternions):
             q += unit()
+            u += [rng.uniform(-1, 1) for _ in range(3)]
+        for _ in range(translations):
+            q += [rng.uniform(-1, 1) for _ in range(3)]
             u += [rng.uniform(-1, 1) for _ in range(3)]
         out.append((q, u))
     return out
@@ -829,11 +854,11 @@ def main():
         f = derive(M)
         t_derive = time.perf_counter() - t0
         out, worst = [], 0
-        for q, u in states(M.name, len(M.q), len(M.quaternions) // 4):
+        for q, u in states(M.name, len(M.q), len(M.quaternions) // 4, len(M.translations) // 3):
             args = list(map(mpmath.mpf, q + u))
             # Each quaternion at unit norm to working precision (the equations hold on
             # |e| = 1; the doubles written to the fixture are within 1e-16 of it).
-            for k in range(len(M.q), len(q), 4):
+            for k in range(len(M.q), len(M.q) + len(M.quaternions), 4):
                 norm = mpmath.sqrt(sum(x * x for x in args[k:k + 4]))
                 args[k:k + 4] = [x / norm for x in args[k:k + 4]]
             Ms, Fs, ke, pe, power, dE, qdot, *loop = f(*args)
@@ -853,9 +878,10 @@ def main():
                 out[-1].update({'constraints': [f64(phi[i]) for i in range(nc)],
                                 'constraint_jacobian': [[f64(J[i, j]) for j in range(len(q))] for i in range(nc)],
                                 'constraint_bias': [f64(Jdu[i]) for i in range(nc)]})
-        models[M.name] = {'coordinates': M.coords + M.quaternion_names, 'params': M.params, 'states': out}
+        coordinates = M.coords + M.quaternion_names + M.translation_names
+        models[M.name] = {'coordinates': coordinates, 'params': M.params, 'states': out}
         if M.quaternions:
-            models[M.name]['speeds'] = M.coords + M.speed_names
+            models[M.name]['speeds'] = M.coords + M.speed_names + M.velocity_names
         if M.chosen_speeds:
             models[M.name]['speeds'] = [name for name, _ in M.chosen_speeds]
         if M.loops:

@@ -56,11 +56,12 @@ macro_rules! measure_free_chain {
         let model = <$ty>::new();
         let mut q = SVector::<f64, $nq>::zeros();
         let mut u = SVector::<f64, $nu>::zeros();
+        // q = [q1 … qN, e0 … e3, x, y, z], u = [u1 … uN, ω, v].
         for (i, rate) in bench_speeds($n).into_iter().enumerate() {
-            q[3 + i] = 0.5;
-            u[3 + i] = rate;
+            q[i] = 0.5;
+            u[i] = rate;
         }
-        q[3 + $n] = 1.0; // the quaternion's scalar part: the base unrotated
+        q[$n] = 1.0; // the quaternion's scalar part: the base unrotated
         let inputs = SVector::<f64, 0>::zeros();
         let solve = |q: &SVector<f64, $nq>, u: &SVector<f64, $nu>| -> SVector<f64, $nu> {
             let mut m: SMatrix<f64, $nu, $nu> = model.mass_matrix_fixed(0.0, q, &inputs);

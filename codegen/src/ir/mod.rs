@@ -9,13 +9,16 @@
 //!   parents first (the kinematic tree in topological order). A tree joint is nothing but a
 //!   frame with a [`Motion`]; a body is attached to one frame; massless frames are allowed.
 //! - Each coordinate is driven by exactly one frame's motion; `u_i = q̇_i`.
-//! - Each quaternion (`Model::quaternions`) is driven by exactly one spherical motion. The
+//! - Each quaternion (`Model::quaternions`) drives exactly one spherical or free motion. The
 //!   state is laid out as `q = [coordinates…; quaternions, 4 each, scalar first…]` and
 //!   `u = [coordinate speeds…; angular speeds, 3 each…]` ([`Model::quaternion_coordinate`],
 //!   [`Model::angular_speed`]), so a coordinate's index addresses both `q` and `u`. Euler
-//!   angles (`Model::euler_angles`, each driven by one [`Motion::Euler`]) follow, three
+//!   angles (`Model::euler_angles`, each one [`Rotation::Euler`] of a motion) follow, three
 //!   coordinates and three angular speeds each ([`Model::euler_coordinate`],
-//!   [`Model::euler_speed`]).
+//!   [`Model::euler_speed`]). The positions of free joints (`Model::translations`, each
+//!   driven by one [`Motion::Free`]) come last, three coordinates and three speeds each
+//!   ([`Model::translation_coordinate`], [`Model::translation_speed`]): the coordinates with
+//!   `q̇ = u` are a prefix of `q`.
 //! - All expressions are dimensionally consistent and in SI units (kg, m, s, rad, A).
 //! - Joint axes have unit length.
 //! - Loop closures (`Model::loops`) are additional constraints between two points or
@@ -473,6 +476,22 @@ impl EulerAngles {
     pub fn speed_names(&self) -> [String; 3] {
         ["wx", "wy", "wz"].map(|part| format!("{}.{part}", self.name))
     }
+    /// `Cᵀ v` at the initial angles: components in the turned frame of `v`, given in the
+    /// frame's placement (`C = R(a₁, q₁) R(a₂, q₂) R(a₃, q₃)`, each `R` by Rodrigues' formula).
+    pub fn initially_seen_from_frame(&self, v: [f64; 3]) -> [f64; 3] {
+        let mut v = v;
+        for (axis, angle) in self.sequence.into_iter().zip(self.initial_angles) {
+            // Rᵀ(a, θ) v = v cos θ − (a × v) sin θ + a (a·v)(1 − cos θ), a a unit axis.
+            let (sin, cos) = angle.sin_cos();
+            let (next, after) = ((axis + 1) % 3, (axis + 2) % 3);
+            let mut turned = v.map(|x| x * cos);
+            turned[axis] = v[axis];
+            turned[next] += v[after] * sin;
+            turned[after] -= v[next] * sin;
+            v = turned;
+        }
+        v
+    }
     /// The sequence as written: `zxy`.
     pub fn sequence_name(&self) -> String {
         self.sequence
@@ -485,6 +504,34 @@ impl EulerAngles {
     /// singular where `cos q₂ = 0`).
     pub fn is_proper(&self) -> bool {
         self.sequence[0] == self.sequence[2]
+    }
+}
+
+/// The position of a `free` joint's child relative to the joint frame: three coordinates
+/// `NAME.x`, `NAME.y`, `NAME.z` (m), the displacement of the child's origin along the joint
+/// frame's axes, and three speeds `NAME.vx`, `NAME.vy`, `NAME.vz` (m/s), the measure numbers
+/// of that origin's velocity relative to the joint frame in the child's own basis (Kane's
+/// choice for a floating body, Kane & Levinson §4.4; Pinocchio's free flyer). So
+/// `(ẋ, ẏ, ż) = R v` with `R` the child's rotation relative to the joint frame. It starts at
+/// the joint frame's origin.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Translation {
+    /// The joint's name.
+    pub name: String,
+    /// Initial velocity of the child's origin relative to the joint frame, m/s, components in
+    /// the child's basis at its initial orientation.
+    pub initial_velocity: [f64; 3],
+    pub span: Span,
+}
+
+impl Translation {
+    /// Names of the three coordinates, along the joint frame's x, y, z.
+    pub fn coordinate_names(&self) -> [String; 3] {
+        ["x", "y", "z"].map(|part| format!("{}.{part}", self.name))
+    }
+    /// Names of the three speeds, along the child's x, y, z.
+    pub fn speed_names(&self) -> [String; 3] {
+        ["vx", "vy", "vz"].map(|part| format!("{}.{part}", self.name))
     }
 }
 
@@ -511,17 +558,30 @@ pub enum Motion {
         axis: Vec3,
         coordinate: Handle<Coordinate>,
     },
-    /// Rotation by the unit quaternion `quaternion` about the frame's origin (a ball joint).
-    Spherical { quaternion: Handle<Quaternion> },
-    /// Rotation by three Euler angles about the frame's origin (a ball joint with
-    /// `rotation = euler(…)`).
-    Euler { angles: Handle<EulerAngles> },
+    /// Rotation about the frame's origin, by a unit quaternion or three Euler angles (a ball
+    /// joint).
+    Spherical { rotation: Rotation },
+    /// Rotation about the frame's origin and translation of the origin by the three
+    /// coordinates of `translation` along the axes of the frame's placement: `O_F = O_P +
+    /// origin + C₀ (x, y, z)`, `C_{P←F} = C₀ R` (a free joint).
+    Free {
+        rotation: Rotation,
+        translation: Handle<Translation>,
+    },
+}
+
+/// The orientation of a spherical or free motion relative to its placement.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Rotation {
+    Quaternion(Handle<Quaternion>),
+    /// `rotation = euler(…)`.
+    Euler(Handle<EulerAngles>),
 }
 
 impl Motion {
     pub fn coordinate(&self) -> Option<Handle<Coordinate>> {
         match self {
-            Motion::Fixed | Motion::Spherical { .. } | Motion::Euler { .. } => None,
+            Motion::Fixed | Motion::Spherical { .. } | Motion::Free { .. } => None,
             Motion::Revolute { coordinate, .. } | Motion::Prismatic { coordinate, .. } => {
                 Some(*coordinate)
             }
@@ -625,8 +685,8 @@ pub enum JointKind {
     Weld,
     /// Spherical: a unit quaternion and three angular speeds.
     Ball,
-    /// Six degrees of freedom (a floating base): three slides along the joint frame's axes
-    /// (`u = q̇`, the origin's velocity in the parent) and a ball.
+    /// Six degrees of freedom (a floating base): a ball's rotation and a [`Translation`]
+    /// along the joint frame's axes (speeds: the origin's velocity in the child's basis).
     Free,
     /// Two pins in series (a Cardan or Hooke joint): `angle1` about `axis`, then `angle2`
     /// about `axis2` in the frame turned by the first; `u = q̇`.
@@ -976,6 +1036,8 @@ pub struct Model {
     /// Orientations of spherical motions as Euler angles; their coordinates and speeds follow
     /// the quaternions' in `q` and `u`.
     pub euler_angles: Arena<EulerAngles>,
+    /// Positions of free joints; their coordinates and speeds follow the Euler angles'.
+    pub translations: Arena<Translation>,
     /// The kinematic tree, parents first; `frames[NEWTONIAN]` is the root.
     pub frames: Arena<Frame>,
     pub bodies: Arena<Body>,
@@ -1067,15 +1129,60 @@ impl Model {
     /// Number of generalized coordinates: one per coordinate, four per quaternion, three per
     /// set of Euler angles.
     pub fn nq(&self) -> usize {
-        self.coordinates.len() + 4 * self.quaternions.len() + 3 * self.euler_angles.len()
+        self.coordinates.len()
+            + 4 * self.quaternions.len()
+            + 3 * (self.euler_angles.len() + self.translations.len())
     }
-    /// Number of generalized speeds: one per coordinate, three per quaternion or Euler angles.
+    /// Number of generalized speeds: one per coordinate, three per quaternion, Euler angles
+    /// or translation.
     pub fn nu(&self) -> usize {
-        self.coordinates.len() + 3 * self.quaternions.len() + 3 * self.euler_angles.len()
+        self.coordinates.len()
+            + 3 * (self.quaternions.len() + self.euler_angles.len() + self.translations.len())
     }
-    /// Whether `q̇ ≠ u` somewhere: the model has quaternions or Euler angles.
+    /// Whether `q̇ ≠ u` somewhere: the model has quaternions, Euler angles or free joints.
     pub fn has_kinematic_rates(&self) -> bool {
-        !self.quaternions.is_empty() || !self.euler_angles.is_empty()
+        !self.quaternions.is_empty()
+            || !self.euler_angles.is_empty()
+            || !self.translations.is_empty()
+    }
+    /// The dimension of `q[index]`: its coordinate's, an angle for an Euler angle, a length
+    /// for a translation; `None` for a quaternion's part (a plain number, set only as a
+    /// whole) or past the end.
+    pub fn coordinate_dimension(&self, index: usize) -> Option<Dimension> {
+        let quaternions = self.coordinates.len() + 4 * self.quaternions.len();
+        let angles = quaternions + 3 * self.euler_angles.len();
+        match index {
+            i if i < self.coordinates.len() => Some(self.coordinates[Handle::new(i)].dimension),
+            i if i < quaternions => None,
+            i if i < angles => Some(Dimension::NONE),
+            i if i < self.nq() => Some(Dimension::LENGTH),
+            _ => None,
+        }
+    }
+    /// The dimension of the default speed `ū[index]`: its coordinate's rate, an angular
+    /// speed for a quaternion or Euler angles, a velocity for a translation.
+    pub fn default_speed_dimension(&self, index: usize) -> Dimension {
+        let angular =
+            self.coordinates.len() + 3 * (self.quaternions.len() + self.euler_angles.len());
+        let dimension = match index {
+            i if i < self.coordinates.len() => self.coordinates[Handle::new(i)].dimension,
+            i if i < angular => Dimension::NONE,
+            _ => Dimension::LENGTH,
+        };
+        dimension.div(Dimension::TIME)
+    }
+    /// Index in `q` of coordinate `axis` (0 = x) of `translation`.
+    pub fn translation_coordinate(&self, translation: Handle<Translation>, axis: usize) -> usize {
+        self.coordinates.len()
+            + 4 * self.quaternions.len()
+            + 3 * (self.euler_angles.len() + translation.index())
+            + axis
+    }
+    /// Index in `u` of speed `axis` (0 = along the child's x) of `translation`.
+    pub fn translation_speed(&self, translation: Handle<Translation>, axis: usize) -> usize {
+        self.coordinates.len()
+            + 3 * (self.quaternions.len() + self.euler_angles.len() + translation.index())
+            + axis
     }
     /// Index in `q` of angle `part` (0 = the first turn) of `angles`.
     pub fn euler_coordinate(&self, angles: Handle<EulerAngles>, part: usize) -> usize {
@@ -1094,7 +1201,7 @@ impl Model {
         self.coordinates.len() + 3 * quaternion.index() + axis
     }
     /// Names of `q` in order: the coordinates', each quaternion's four, each set of Euler
-    /// angles' three.
+    /// angles' three, each translation's three.
     pub fn coordinate_names(&self) -> Vec<String> {
         let coordinates = self.coordinates.iter().map(|(_, c)| c.name.clone());
         let quaternions = self
@@ -1105,7 +1212,12 @@ impl Model {
             .euler_angles
             .iter()
             .flat_map(|(_, a)| a.coordinate_names());
-        coordinates.chain(quaternions).chain(angles).collect()
+        let translations = self
+            .translations
+            .iter()
+            .flat_map(|(_, t)| t.coordinate_names());
+        let all = coordinates.chain(quaternions).chain(angles);
+        all.chain(translations).collect()
     }
     /// Names of `u` in order: the chosen speeds' if any, else the default speeds'.
     pub fn speed_names(&self) -> Vec<String> {
@@ -1115,20 +1227,24 @@ impl Model {
         self.default_speed_names()
     }
     /// Names of the default speeds `ū`: the coordinates', then each quaternion's and each set
-    /// of Euler angles' three angular speeds.
+    /// of Euler angles' three angular speeds, then each translation's three.
     pub fn default_speed_names(&self) -> Vec<String> {
         let coordinates = self.coordinates.iter().map(|(_, c)| c.name.clone());
         let quaternions = self.quaternions.iter().flat_map(|(_, e)| e.speed_names());
         let angles = self.euler_angles.iter().flat_map(|(_, a)| a.speed_names());
-        coordinates.chain(quaternions).chain(angles).collect()
+        let translations = self.translations.iter().flat_map(|(_, t)| t.speed_names());
+        let all = coordinates.chain(quaternions).chain(angles);
+        all.chain(translations).collect()
     }
     /// Initial `q`: the coordinates' `q0`, identity rotations `(1, 0, 0, 0)`, the Euler angles'
-    /// `q0`.
+    /// `q0`, translations at the joint frame's origin.
     pub fn initial_coordinates(&self) -> Vec<f64> {
         let coordinates = self.coordinates.iter().map(|(_, c)| c.initial);
         let quaternions = self.quaternions.iter().flat_map(|_| [1.0, 0.0, 0.0, 0.0]);
         let angles = self.euler_angles.iter().flat_map(|(_, a)| a.initial_angles);
-        coordinates.chain(quaternions).chain(angles).collect()
+        let translations = self.translations.iter().flat_map(|_| [0.0; 3]);
+        let all = coordinates.chain(quaternions).chain(angles);
+        all.chain(translations).collect()
     }
     /// Initial `u`: the chosen speeds' initial values if any, else the default speeds'.
     pub fn initial_speeds(&self) -> Vec<f64> {
@@ -1138,7 +1254,7 @@ impl Model {
         self.default_initial_speeds()
     }
     /// Initial `ū` of the default speeds (`q̇` of pins and sliders, then the angular
-    /// velocities of quaternions and Euler angles).
+    /// velocities of quaternions and Euler angles, then the translations' velocities).
     pub fn default_initial_speeds(&self) -> Vec<f64> {
         let coordinates = self.coordinates.iter().map(|(_, c)| c.initial_speed);
         let quaternions = self
@@ -1149,7 +1265,12 @@ impl Model {
             .euler_angles
             .iter()
             .flat_map(|(_, a)| a.initial_angular_velocity);
-        coordinates.chain(quaternions).chain(angles).collect()
+        let translations = self
+            .translations
+            .iter()
+            .flat_map(|(_, t)| t.initial_velocity);
+        let all = coordinates.chain(quaternions).chain(angles);
+        all.chain(translations).collect()
     }
 
     /// The chain of frames from the root to `frame`, root first.

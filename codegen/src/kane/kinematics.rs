@@ -14,9 +14,10 @@
 //! ω_k   = Cᵀ ω_p + a u_j                                  (revolute about a, speed u_j)
 //!       = Cᵀ ω_p + Σ_i n_i u_i                            (spherical: C = C₀ C(e) or C₀ C(q₁, q₂, q₃), n_i = k's axes)
 //! W_k,r = Cᵀ W_p,r  (+ a for r = j, revolute; + n_i for r = i, spherical)
-//! V_k,r = Cᵀ (V_p,r + W_p,r × d)  (+ a for r = j, prismatic)
+//! V_k,r = Cᵀ (V_p,r + W_p,r × d)  (+ a for r = j, prismatic; + n_i for r = i, free)
 //! α_k   = Cᵀ α_p + (Cᵀ ω_p) × a u_j                       (u̇-free part; Σ n_i u_i if spherical)
 //! a_O,k = Cᵀ (a_O,p + α_p × d + ω_p × (ω_p × d) + 2 ω_p × a_p u_j)   (last term prismatic)
+//!       + (Cᵀ ω_p + ω_k) × v                              (free: v = Σ n_i u_i, d = d₀ + C₀ (x, y, z))
 //! ```
 
 use super::vector::{self, Mat3, Vec3};
@@ -285,8 +286,8 @@ fn coordinate_run<const N: usize>(pool: &mut ExprPool, first: usize) -> [ExprId;
     std::array::from_fn(|part| pool.symbol(Symbol::Coordinate((first + part) as u32)))
 }
 
-/// The symbols of the three angular speeds from index `first`, with their indices.
-fn angular_speed_run(pool: &mut ExprPool, first: usize) -> [(usize, ExprId); 3] {
+/// The symbols of three consecutive speeds from index `first`, with their indices.
+fn speed_run(pool: &mut ExprPool, first: usize) -> [(usize, ExprId); 3] {
     [0, 1, 2].map(|axis| {
         (
             first + axis,
@@ -310,7 +311,7 @@ pub fn angular_speed_symbols(
     model: &Model,
     quaternion: Handle<ir::Quaternion>,
 ) -> [(usize, ExprId); 3] {
-    angular_speed_run(pool, model.angular_speed(quaternion, 0))
+    speed_run(pool, model.angular_speed(quaternion, 0))
 }
 
 /// The symbols `q₁ … q₃` of a set of Euler angles.
@@ -328,7 +329,34 @@ pub fn euler_speed_symbols(
     model: &Model,
     angles: Handle<ir::EulerAngles>,
 ) -> [(usize, ExprId); 3] {
-    angular_speed_run(pool, model.euler_speed(angles, 0))
+    speed_run(pool, model.euler_speed(angles, 0))
+}
+
+/// `R`, the rotation of a spherical or free motion relative to its placement: `C(e)` of a
+/// quaternion, `R(a₁, q₁) R(a₂, q₂) R(a₃, q₃)` of Euler angles.
+pub fn joint_rotation(pool: &mut ExprPool, model: &Model, rotation: ir::Rotation) -> Mat3 {
+    match rotation {
+        ir::Rotation::Quaternion(quaternion) => {
+            let e = quaternion_symbols(pool, model, quaternion);
+            vector::quaternion_rotation(pool, e)
+        }
+        ir::Rotation::Euler(angles) => {
+            let q = euler_symbols(pool, model, angles);
+            vector::euler_rotation(pool, model.euler_angles[angles].sequence, q)
+        }
+    }
+}
+
+/// The symbols of the three angular speeds of a rotation, with their indices.
+pub fn rotation_speed_symbols(
+    pool: &mut ExprPool,
+    model: &Model,
+    rotation: ir::Rotation,
+) -> [(usize, ExprId); 3] {
+    match rotation {
+        ir::Rotation::Quaternion(quaternion) => angular_speed_symbols(pool, model, quaternion),
+        ir::Rotation::Euler(angles) => euler_speed_symbols(pool, model, angles),
+    }
 }
 
 /// The spins of a spherical motion: each angular speed (from `speeds`, built after the axes
@@ -361,6 +389,9 @@ fn child(
         )
     };
 
+    // A free motion's velocity speeds `v = Σ u_i k_i`: the origin's velocity relative to the
+    // placement, in k's own basis.
+    let mut free_velocity = None;
     let (to_parent, offset, own_rotation, own_translation) = match &frame.motion {
         Motion::Fixed => (placement, origin, Vec::new(), None),
         Motion::Revolute { axis, coordinate } => {
@@ -370,20 +401,27 @@ fn child(
             let dcm = vector::mat_mul(pool, &placement, &rotation);
             (dcm, origin, vec![(coordinate.index(), axis, u)], None)
         }
-        Motion::Spherical { quaternion } => {
-            let e = quaternion_symbols(pool, model, *quaternion);
-            let rotation = vector::quaternion_rotation(pool, e);
-            let dcm = vector::mat_mul(pool, &placement, &rotation);
-            let speeds = |pool: &mut ExprPool| angular_speed_symbols(pool, model, *quaternion);
+        Motion::Spherical { rotation } => {
+            let turn = joint_rotation(pool, model, *rotation);
+            let dcm = vector::mat_mul(pool, &placement, &turn);
+            let speeds = |pool: &mut ExprPool| rotation_speed_symbols(pool, model, *rotation);
             (dcm, origin, spins_about_own_axes(pool, speeds), None)
         }
-        Motion::Euler { angles } => {
-            let q = euler_symbols(pool, model, *angles);
-            let sequence = model.euler_angles[*angles].sequence;
-            let rotation = vector::euler_rotation(pool, sequence, q);
-            let dcm = vector::mat_mul(pool, &placement, &rotation);
-            let speeds = |pool: &mut ExprPool| euler_speed_symbols(pool, model, *angles);
-            (dcm, origin, spins_about_own_axes(pool, speeds), None)
+        Motion::Free {
+            rotation,
+            translation,
+        } => {
+            let first = model.translation_coordinate(*translation, 0);
+            let position = coordinate_run(pool, first);
+            let displacement = vector::mat_vec(pool, &placement, position);
+            let offset = vector::add(pool, origin, displacement);
+            let turn = joint_rotation(pool, model, *rotation);
+            let dcm = vector::mat_mul(pool, &placement, &turn);
+            let speeds = |pool: &mut ExprPool| rotation_speed_symbols(pool, model, *rotation);
+            let spins = spins_about_own_axes(pool, speeds);
+            let first = model.translation_speed(*translation, 0);
+            free_velocity = Some(speed_run(pool, first));
+            (dcm, offset, spins, None)
         }
         Motion::Prismatic { axis, coordinate } => {
             let axis = lower_vec(pool, axis);
@@ -452,10 +490,22 @@ fn child(
         let coriolis = vector::scale_number(pool, coriolis, Number::int(2));
         accel = vector::add(pool, accel, coriolis);
     }
+    let mut accel_rest = to_child(pool, accel);
+    if let Some(speeds) = free_velocity {
+        // d/dt in N of C v: Cᵀ ω_p × v (parent) + ω_k × v (k turning under v) + v̇.
+        let axes = vector::identity(pool);
+        for ((r, _), axis) in speeds.into_iter().zip(axes) {
+            partial_velocity.push((r, axis));
+            joint_partials.push((r, zero, axis));
+        }
+        let velocity = speeds.map(|(_, u)| u);
+        let turning = vector::add(pool, parent_omega_here, omega);
+        let transport = vector::cross(pool, turning, velocity);
+        accel_rest = vector::add(pool, accel_rest, transport);
+    }
     partial_velocity.sort_by_key(|&(r, _)| r);
     partial_omega.sort_by_key(|&(r, _)| r);
     joint_partials.sort_by_key(|&(r, _, _)| r);
-    let accel_rest = to_child(pool, accel);
     let gravity = to_child(pool, parent.gravity);
 
     FrameKinematics {

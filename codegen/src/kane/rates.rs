@@ -1,18 +1,19 @@
 //! The kinematic differential equations `q̇ = W(q) u` and the chain rule through them.
 //!
-//! Consumes: a model's coordinates and unit quaternions. Produces: [`KinematicRates`], which
-//! turns a function `f(q)` into its rate `ḟ = Σᵢ ∂f/∂qᵢ q̇ᵢ` and its partial rates
-//! `∂ḟ/∂u_r = Σᵢ ∂f/∂qᵢ W_ir` (Kane & Levinson §2.14: what a partial velocity is to a
-//! position). Without quaternions `W = I`, and both reduce to `∂f/∂q_r` and `Σ ∂f/∂qᵢ uᵢ`
+//! Consumes: a model's coordinates, rotations and free joints' translations. Produces:
+//! [`KinematicRates`], which turns a function `f(q)` into its rate `ḟ = Σᵢ ∂f/∂qᵢ q̇ᵢ` and
+//! its partial rates `∂ḟ/∂u_r = Σᵢ ∂f/∂qᵢ W_ir` (Kane & Levinson §2.14: what a partial
+//! velocity is to a position). Without quaternions `W = I`, and both reduce to `∂f/∂q_r` and `Σ ∂f/∂qᵢ uᵢ`
 //! built exactly as before quaternions existed, so the equations of such models (and their
 //! golden files) do not change.
 //!
 //! With a quaternion the coordinates `e₀…e₃` have no speeds of their own: their rates are
 //! `ė = ½ e ⊗ (0, ω)`, linear in the body's angular speeds, so a loop row `φ(q)` has
-//! `J_r = ∂φ̇/∂u_r = Σᵢ ∂φ/∂qᵢ W_ir`, `nc × nu` like the mass matrix.
+//! `J_r = ∂φ̇/∂u_r = Σᵢ ∂φ/∂qᵢ W_ir`, `nc × nu` like the mass matrix. A free joint's
+//! position `(x, y, z)` likewise moves by the velocity speeds turned by the child's rotation.
 
 use super::{kinematics, vector};
-use crate::ir::Model;
+use crate::ir::{Model, Motion};
 use crate::sym::{ExprId, ExprPool, Symbol};
 
 /// Per speed r, the nonzero `W_ir = ∂q̇ᵢ/∂u_r` as `(i, W_ir)`.
@@ -114,7 +115,9 @@ impl KinematicRates {
 }
 
 /// `q̇ = W(q) u`: `q̇ᵢ = uᵢ` for the coordinates, `ė = ½ e ⊗ (0, ω)` for each quaternion,
-/// [`vector::euler_rates`] for each set of Euler angles; `None` without either (`q̇ = u`).
+/// [`vector::euler_rates`] for each set of Euler angles, `(ẋ, ẏ, ż) = R v` for each free
+/// joint's translation (`v` in the child's basis, `R` its rotation); `None` without any of
+/// them (`q̇ = u`).
 pub fn rates(pool: &mut ExprPool, model: &Model) -> Option<Vec<ExprId>> {
     if !model.has_kinematic_rates() {
         return None;
@@ -131,6 +134,18 @@ pub fn rates(pool: &mut ExprPool, model: &Model) -> Option<Vec<ExprId>> {
         let q = kinematics::euler_symbols(pool, model, angles);
         let omega = kinematics::euler_speed_symbols(pool, model, angles).map(|(_, u)| u);
         rates.extend(vector::euler_rates(pool, rotation.sequence, q, omega));
+    }
+    for (_, frame) in model.frames.iter() {
+        if let Motion::Free {
+            rotation,
+            translation,
+        } = frame.motion
+        {
+            let turn = kinematics::joint_rotation(pool, model, rotation);
+            let first = model.translation_speed(translation, 0);
+            let velocity = [0, 1, 2].map(|axis| pool.symbol(Symbol::Speed((first + axis) as u32)));
+            rates.extend(vector::mat_vec(pool, &turn, velocity));
+        }
     }
     Some(rates)
 }

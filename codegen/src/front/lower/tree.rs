@@ -1112,54 +1112,27 @@ impl<'a> Lowerer<'a> {
         (parent, coordinates)
     }
 
-    /// The frames of a `ball` joint (one, turned by a quaternion) or a `free` joint (slides
-    /// `j.x`, `j.y`, `j.z` along the axes of the frame at `parent_point` oriented by
-    /// `parent_frame`, then the ball `j`): the free joint's speeds are the velocity of the
-    /// child's origin in that frame (`u = q̇`) and the child's angular velocity in its own.
+    /// The frame of a `ball` joint (turned by a quaternion or Euler angles) or a `free` joint
+    /// (also moved by a [`ir::Translation`] along the axes of the frame at `parent_point`
+    /// oriented by `parent_frame`): the free joint's speeds are the velocity of the child's
+    /// origin and the child's angular velocity, both in the child's own basis. `v0` is written
+    /// in the joint frame and turned into the child's basis at the start orientation.
     fn build_spherical(&mut self, j: usize, parent_frame: Handle<ir::Frame>) -> Handle<ir::Frame> {
         let info = &self.joints[j];
         let decl = info.decl;
         let name = decl.name.name.clone();
-        let mut coordinates = Vec::new();
-        let (mut parent, mut origin, mut orientation) = (
-            parent_frame,
-            info.parent_point.clone(),
-            info.parent_frame.clone(),
-        );
-        if info.kind == Some(JointKind::Free) {
-            let velocity0 = info.velocity0;
-            let steps = ["x", "y", "z"]
-                .into_iter()
-                .enumerate()
-                .map(|(axis, part)| MovingFrame {
-                    frame: format!("{name}.{part}"),
-                    coordinate: format!("{name}.{part}"),
-                    slide: true,
-                    axis: unit_axis(axis),
-                    q0: 0.0,
-                    u0: velocity0[axis],
-                    q0_expr: None,
-                    u0_expr: None,
-                })
-                .collect();
-            let (origin_now, orientation_now) = (
-                std::mem::replace(&mut origin, zeros()),
-                std::mem::take(&mut orientation),
-            );
-            (parent, coordinates) =
-                self.append_moving_frames(decl, parent, origin_now, orientation_now, steps);
-        }
-        let info = &self.joints[j];
-        let (motion, quaternion) = match info.euler {
+        let (rotation, quaternion, velocity0) = match info.euler {
             Some((sequence, initial_angles)) => {
-                let angles = self.model.euler_angles.append(ir::EulerAngles {
+                let angles = ir::EulerAngles {
                     name: name.clone(),
                     sequence,
                     initial_angles,
                     initial_angular_velocity: info.angular_velocity0,
                     span: decl.name.span,
-                });
-                (Motion::Euler { angles }, None)
+                };
+                let velocity0 = angles.initially_seen_from_frame(info.velocity0);
+                let angles = self.model.euler_angles.append(angles);
+                (ir::Rotation::Euler(angles), None, velocity0)
             }
             None => {
                 let quaternion = self.model.quaternions.append(ir::Quaternion {
@@ -1167,18 +1140,35 @@ impl<'a> Lowerer<'a> {
                     initial_angular_velocity: info.angular_velocity0,
                     span: decl.name.span,
                 });
-                (Motion::Spherical { quaternion }, Some(quaternion))
+                let velocity0 = info.velocity0;
+                (
+                    ir::Rotation::Quaternion(quaternion),
+                    Some(quaternion),
+                    velocity0,
+                )
             }
         };
+        let motion = match info.kind {
+            Some(JointKind::Free) => Motion::Free {
+                rotation,
+                translation: self.model.translations.append(ir::Translation {
+                    name: name.clone(),
+                    initial_velocity: velocity0,
+                    span: decl.name.span,
+                }),
+            },
+            _ => Motion::Spherical { rotation },
+        };
+        let info = &self.joints[j];
         let joint_frame = self.model.frames.append(ir::Frame {
             name,
-            parent: Some(parent),
-            origin,
-            orientation,
+            parent: Some(parent_frame),
+            origin: info.parent_point.clone(),
+            orientation: info.parent_frame.clone(),
             motion,
             span: decl.span,
         });
-        self.record_joint(j, coordinates, quaternion, joint_frame);
+        self.record_joint(j, Vec::new(), quaternion, joint_frame);
         joint_frame
     }
 
