@@ -30,7 +30,7 @@ const GRAVITY: f64 = 9.81;
 pub struct Spec {
     #[serde(flatten)]
     pub model: ModelSpec,
-    /// The floating base's free joint (its `.x` coordinate's row of `M` is the total mass).
+    /// The floating base's free joint (its `.vx` speed's row of `M` is the total mass).
     pub base: String,
     /// The output giving the base's position in the Newtonian frame (`chassis`).
     pub position: String,

@@ -642,7 +642,10 @@ fn free_joint_on_a_moving_parent_matches_sliders_and_a_ball() {
     let options = dop853(1.0, 0.01, 1e-12, 1e-14);
     let (qf, uf) = initial_state(&free);
     let (qs, us) = initial_state(&sliders);
-    let (on_free, on_sliders) = (run(&free, &qf, &uf, &options), run(&sliders, &qs, &us, &options));
+    let (on_free, on_sliders) = (
+        run(&free, &qf, &uf, &options),
+        run(&sliders, &qs, &us, &options),
+    );
     let (at_f, at_s) = (
         free.output_index("at.x").unwrap(),
         sliders.output_index("at.x").unwrap(),
@@ -652,7 +655,10 @@ fn free_joint_on_a_moving_parent_matches_sliders_and_a_ball() {
     let (mut worst, mut travel) = (0.0_f64, 0.0_f64);
     for k in 0..on_free.len() {
         for c in 0..3 {
-            let (a, b) = (on_free.outputs[k][at_f + c], on_sliders.outputs[k][at_s + c]);
+            let (a, b) = (
+                on_free.outputs[k][at_f + c],
+                on_sliders.outputs[k][at_s + c],
+            );
             worst = worst.max((a - b).abs());
             travel = travel.max((a - on_free.outputs[0][at_f + c]).abs());
         }
