@@ -1,4 +1,6 @@
-//! The whole HAMR-VI robot, `models/robots/hamr_vi_robot.mech`: its text is
+//! The whole HAMR-VI robot, `models/robots/hamr_vi_robot.mech`, and the HAMR-V2.0 robot
+//! derived from it, `models/robots/hamr_v2_robot.mech` (every leg `hamr_v2.mech`'s: shorter
+//! crank arms, its flexures and preloaded actuators). The VI robot's text is
 //! `mech import urdf HAMR_scaledV2.urdf --length mm --mass g --time ms --snap --base floating`
 //! with `hamr_vi.mech`'s choices applied to every leg (the URDF's joint springs and dampers
 //! dropped for the leg model's flexures and actuators, each leg link L4's products of inertia
@@ -13,7 +15,8 @@
 //! - with the chassis held at rest, the front-left leg's rows of `M`, `F` and its loop rows
 //!   equal `hamr_vi.mech`'s (the hand transcription), and every other foot is the mirror
 //!   image of the front-left one (rear legs in x, right legs in y) when driven alike, the
-//!   right legs' actuators with the opposite sign.
+//!   right legs' actuators with the opposite sign; the same for the V2 robot against
+//!   `hamr_v2.mech` (so its four legs' crank shifts and preloads are right, leg by leg).
 
 use crate::common;
 use crate::support;
@@ -22,8 +25,18 @@ use crate::urdf_import;
 use mech_codegen::urdf::{Base, Options, Units};
 use mech_runtime::{assemble, AssemblyOptions, Model};
 
-const ROBOT: &str = "models/robots/hamr_vi_robot.mech";
 const LEGS: [&str; 4] = ["FL", "RL", "FR", "RR"];
+
+/// Per leg, the signs of its (swing, lift) actuator coordinates that make its foot the mirror
+/// image of the front-left foot (checked by `the_legs_are_mirror_images_of_the_front_left_leg`):
+/// the right legs' actuators run the other way. (The locomotion experiment's wiring also
+/// reverses the rear legs' swing, so that every foot sweeps the same way.)
+fn drive_signs(leg: &str) -> (f64, f64) {
+    match leg.ends_with('R') {
+        true => (-1.0, -1.0),
+        false => (1.0, 1.0),
+    }
+}
 
 /// The leg model's joints and loops by their URDF names without the leg prefix.
 const JOINTS: [(&str, &str); 11] = [
@@ -40,14 +53,41 @@ const JOINTS: [(&str, &str); 11] = [
     ("qfb2", "qfb2"),
 ];
 
+/// The leg model a robot takes its flexures, actuators and crank arms from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LegModel {
+    /// `models/hamr_vi.mech`: the URDF's own crank arms.
+    Vi,
+    /// `models/hamr_v2.mech`: HAMR-V2.0's shorter crank arms, flexures and actuators.
+    V2,
+}
+
+impl LegModel {
+    /// The bundled leg model's name.
+    fn leg(self) -> &'static str {
+        match self {
+            LegModel::Vi => "hamr_vi",
+            LegModel::V2 => "hamr_v2",
+        }
+    }
+    /// The robot's model name, and the committed file's path.
+    fn robot(self) -> (&'static str, &'static str) {
+        match self {
+            LegModel::Vi => ("hamr_vi_robot", "models/robots/hamr_vi_robot.mech"),
+            LegModel::V2 => ("hamr_v2_robot", "models/robots/hamr_v2_robot.mech"),
+        }
+    }
+}
+
 /// The robot's text: the import, its springs and dampers dropped, the L4 products negated,
-/// and per leg the flexures and actuators of `hamr_vi.mech` with their own inputs.
-pub fn robot_text() -> String {
-    robot_text_on(Base::Floating)
+/// every leg's crank arms made the leg model's parameters, and per leg the flexures and
+/// actuators of the leg model with their own inputs.
+pub fn robot_text(legs: LegModel) -> String {
+    robot_text_on(legs, Base::Floating)
 }
 
 /// The robot's text with its chassis on `base` (`Fixed`: welded to the Newtonian frame).
-fn robot_text_on(base: Base) -> String {
+fn robot_text_on(legs: LegModel, base: Base) -> String {
     let options = Options {
         units: Units::new("mm", "g", "ms").unwrap(),
         snap: true,
@@ -57,8 +97,14 @@ fn robot_text_on(base: Base) -> String {
     let imported = urdf_import::import("HAMR_scaledV2", &options).text;
     let text = drop_springs_and_dampers(&imported);
     let text = negate_leg_products(&text);
-    let text = text.replacen("model Hamr;", "model hamr_vi_robot;", 1);
-    let mut text = HEADER.to_string() + &text + &leg_elements() + &ground();
+    let text = crank_arms(&text, legs);
+    let (name, _) = legs.robot();
+    let text = text.replacen("model Hamr;", &format!("model {name};"), 1);
+    let header = match legs {
+        LegModel::Vi => HEADER.to_string(),
+        LegModel::V2 => HEADER_V2.to_string(),
+    };
+    let mut text = header + &text + &leg_elements(legs) + &ground();
     while text.contains("\n\n\n") {
         text = text.replace("\n\n\n", "\n\n");
     }
@@ -78,6 +124,19 @@ const HEADER: &str = "\
 //! published; RR mirrors RL exactly).
 //! Not in `models/` itself: its generated Rust would be about 6 MB, so it is loaded at run
 //! time (tape, compiled to native code by the JIT) rather than by build.rs.
+//!
+";
+
+const HEADER_V2: &str = "\
+//! The whole HAMR-V2.0 robot, DERIVED like its leg `models/hamr_v2.mech` (not a published
+//! geometry): HAMR-VI's chassis and legs from `HAMR_scaledV2.urdf` with every leg's crank
+//! arms shortened to HAMR-V2.0's transmission ratios (`lift_arm`, `swing_arm`; the crank
+//! input hinges and actuators moved as in `hamr_v2.mech`, mirrored leg by leg) and
+//! `hamr_v2.mech`'s flexures (the seed's Table III) and actuators (PS 'a': F_b = 270 mN,
+//! delta_f = 247 um at 225 V, 50 um preload). The chassis is HAMR-VI's (the paper gives
+//! HAMR-V2.0 as 1.41 g nominal; this model weighs HAMR-VI's 1.475 g).
+//! GENERATED by `tests/equations/hamr_robot.rs::robot_text` (`MECH_BLESS=1 cargo test --test
+//! equations hamr_robot` rewrites it); loaded at run time, like `hamr_vi_robot.mech`.
 //!
 ";
 
@@ -168,17 +227,116 @@ fn negate_leg_products(text: &str) -> String {
     out
 }
 
-/// `hamr_vi.mech`'s flexure and actuator parameters once, and per leg its inputs
+/// Every leg's crank arms made the leg model's parameters: the declarations of `lift_arm`,
+/// `swing_arm` and the shifts they make (from the leg model, `legs`) after the model line, and
+/// each leg's crank input hinge and actuator moved by them as `hamr_v2.mech` moves its one
+/// leg's (the crank's centre of mass with them), mirrored leg by leg: the rear legs' frames
+/// are the front legs' with x negated, the right legs' with y negated (z and the shifts along
+/// it are the same for all). With `hamr_vi.mech`'s arms every shift is zero.
+fn crank_arms(text: &str, legs: LegModel) -> String {
+    // (declaration, name after the leg prefix, field, axis, shift, sign on a front leg)
+    const MOVES: [(&str, &str, &str, usize, &str, f64); 8] = [
+        ("body", "S3", "com", 0, "swing_shift", 1.0),
+        ("body", "L3", "com", 2, "lift_shift", -1.0),
+        ("joint", "qsact", "parent_point", 0, "swing_shift", -1.0),
+        ("joint", "qfb1", "parent_point", 0, "swing_shift", 1.0),
+        ("joint", "qlact", "parent_point", 2, "lift_shift", 1.0),
+        ("joint", "qfb3", "parent_point", 2, "lift_shift", -1.0),
+        ("loop", "qs3", "child_point", 0, "swing_shift", 1.0),
+        ("loop", "ql3", "child_point", 2, "lift_shift", -1.0),
+    ];
+    let mut declaration = ("", String::new());
+    let mut moved = 0;
+    let mut out = String::new();
+    for line in text.lines() {
+        for kind in ["body", "joint", "loop"] {
+            if let Some(rest) = line.strip_prefix(kind).and_then(|r| r.strip_prefix(' ')) {
+                let name = rest.split([' ', '{']).next().unwrap_or("");
+                declaration = (kind, name.to_string());
+            }
+        }
+        let field = line.trim_start().split(" = ").next().unwrap_or("");
+        let leg = LEGS.iter().find(|leg| declaration.1.starts_with(*leg));
+        let change = leg.and_then(|leg| {
+            MOVES.iter().find(|(kind, part, name, ..)| {
+                declaration.0 == *kind && declaration.1 == format!("{leg}{part}") && field == *name
+            })
+        });
+        let (Some(leg), Some(&(_, _, _, axis, shift, sign))) = (leg, change) else {
+            out.push_str(line);
+            out.push('\n');
+            continue;
+        };
+        // The rear legs' frames have x negated: a shift along x changes sign there.
+        let rear = if leg.starts_with('R') && axis == 0 {
+            -1.0
+        } else {
+            1.0
+        };
+        let sign = if sign * rear > 0.0 { "+" } else { "-" };
+        let open = line.find('[').unwrap();
+        let close = line.find(']').unwrap();
+        assert_eq!(&line[close..], "] * 1 mm;", "{line}");
+        let parts: Vec<String> = line[open + 1..close]
+            .split(',')
+            .enumerate()
+            .map(|(k, value)| match k == axis {
+                true => format!("{} mm {sign} {shift}", value.trim()),
+                false => format!("{} mm", value.trim()),
+            })
+            .collect();
+        out.push_str(&format!("{}[{}];\n", &line[..open], parts.join(", ")));
+        moved += 1;
+    }
+    assert_eq!(moved, 4 * MOVES.len(), "crank-arm moves made");
+    let model_line = "model Hamr;\n";
+    out.replacen(
+        model_line,
+        &(model_line.to_string() + &crank_arm_declarations(legs)),
+        1,
+    )
+}
+
+/// The leg model's `lift_arm`, `swing_arm` and the shifts they make, with their docs.
+fn crank_arm_declarations(legs: LegModel) -> String {
+    let source = common::bundled_source(legs.leg());
+    let mut out = String::from(
+        "\n// ---------------------------------------------------------------- crank arms (the leg model's)\n\n",
+    );
+    let mut doc = String::new();
+    for line in source.lines() {
+        if line.starts_with("///") {
+            doc.push_str(line);
+            doc.push('\n');
+            continue;
+        }
+        let declares = [
+            "param lift_arm",
+            "param swing_arm",
+            "let lift_shift",
+            "let swing_shift",
+        ];
+        if declares.iter().any(|d| line.starts_with(d)) {
+            out.push_str(&doc);
+            out.push_str(line);
+            out.push('\n');
+        }
+        doc.clear();
+    }
+    out
+}
+
+/// The leg model's flexure and actuator parameters once, and per leg its inputs
 /// (`FL_v_lift`, …), flexures (`FL_s1`, …) and actuators (`FL_lift`, …) on that leg's joints.
-fn leg_elements() -> String {
-    let hamr_vi = common::bundled_source("hamr_vi");
+fn leg_elements(legs: LegModel) -> String {
+    let leg_model = common::bundled_source(legs.leg());
     let mut shared = String::from(
         "\n// ---------------------------------------------------------------- the leg model's elements\n\n",
     );
     let mut elements: Vec<String> = Vec::new();
     let mut block: Option<String> = None;
     let mut doc = String::new();
-    for line in hamr_vi.lines() {
+    for line in leg_model.lines() {
         if line.starts_with("///") {
             doc.push_str(line);
             doc.push('\n');
@@ -191,6 +349,7 @@ fn leg_elements() -> String {
             "param F_b",
             "param delta_f",
             "param V_rated",
+            "param preload",
         ]
         .iter()
         .any(|p| starts(p))
@@ -229,6 +388,19 @@ fn leg_elements() -> String {
             }
             for (ours, urdf) in JOINTS {
                 element = element.replace(&format!(" on {ours} "), &format!(" on {leg}{urdf} "));
+            }
+            // A preload (hamr_v2.mech: the tip held toward −y) is the front-left leg's mirror
+            // image where the leg's actuator runs the other way.
+            let (swing, lift) = drive_signs(leg);
+            for (actuator, sign) in [("swing", swing), ("lift", lift)] {
+                if sign < 0.0 && element.contains(&format!("actuator {leg}_{actuator} ")) {
+                    element = element
+                        .replace("rest = -preload;", "rest = preload;")
+                        .replace(
+                            "preloaded toward -y",
+                            "preloaded toward +y (FL's mirror image)",
+                        );
+                }
             }
             text.push_str(&element);
         }
@@ -290,7 +462,11 @@ output chassis = position(Chassis) in newtonian;
 ";
 
 fn robot() -> mech::tape_model::TapeModel {
-    common::tape_from_text("hamr_vi_robot", &robot_text())
+    robot_of(LegModel::Vi)
+}
+
+fn robot_of(legs: LegModel) -> mech::tape_model::TapeModel {
+    common::tape_from_text(legs.robot().0, &robot_text(legs))
 }
 
 /// The index of the chassis's first velocity speed, `Chassis_base.vx`.
@@ -308,9 +484,16 @@ fn total_mass(robot: &dyn Model, q: &[f64]) -> f64 {
 }
 
 #[test]
-fn the_committed_robot_is_the_import_with_the_leg_model() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(ROBOT);
-    let text = robot_text();
+fn the_committed_robots_are_the_import_with_the_leg_models() {
+    for legs in [LegModel::Vi, LegModel::V2] {
+        committed_robot_is_its_generator(legs);
+    }
+}
+
+fn committed_robot_is_its_generator(legs: LegModel) {
+    let (_, file) = legs.robot();
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(file);
+    let text = robot_text(legs);
     if support::blessing() {
         std::fs::write(&path, &text).unwrap();
     }
@@ -334,7 +517,7 @@ fn the_committed_robot_is_the_import_with_the_leg_model() {
     let committed = std::fs::read_to_string(&path).unwrap_or_default();
     assert!(
         committed == text,
-        "{ROBOT} differs from its generator (MECH_BLESS=1 to rewrite)"
+        "{file} differs from its generator (MECH_BLESS=1 to rewrite)"
     );
 }
 
@@ -358,17 +541,21 @@ fn robot_state(
 
 #[test]
 fn the_robot_has_fourteen_degrees_of_freedom_and_its_mass() {
+    for legs in [LegModel::V2, LegModel::Vi] {
+        let robot = robot_of(legs);
+        let mut q = vec![0.0; robot.nq()];
+        let mut u = vec![0.0; robot.nu()];
+        robot.initial_state(&mut q, &mut u);
+        assemble(&robot, 0.0, &mut q, &[], &AssemblyOptions::default()).unwrap();
+        let mobility = mech_runtime::mobility(&robot, 0.0, &q).unwrap();
+        assert_eq!(
+            (mobility.rows, mobility.rank, mobility.dof()),
+            (60, 24, 14),
+            "{}: {mobility}",
+            robot.name()
+        );
+    }
     let robot = robot();
-    let mut q = vec![0.0; robot.nq()];
-    let mut u = vec![0.0; robot.nu()];
-    robot.initial_state(&mut q, &mut u);
-    assemble(&robot, 0.0, &mut q, &[], &AssemblyOptions::default()).unwrap();
-    let mobility = mech_runtime::mobility(&robot, 0.0, &q).unwrap();
-    assert_eq!(
-        (mobility.rows, mobility.rank, mobility.dof()),
-        (60, 24, 14),
-        "{mobility}"
-    );
     // Every body moves with the free joint's velocity: the translational block of M is the
     // total mass times the identity, at any state.
     let rng = std::cell::RefCell::new(common::Rng::new(3));
@@ -385,7 +572,7 @@ fn the_robot_has_fourteen_degrees_of_freedom_and_its_mass() {
             );
         }
     }
-    let listed: f64 = robot_text()
+    let listed: f64 = robot_text(LegModel::Vi)
         .lines()
         .filter_map(|line| line.trim().strip_prefix("mass = "))
         .map(|value| {
@@ -413,8 +600,14 @@ fn the_robot_has_fourteen_degrees_of_freedom_and_its_mass() {
 /// are those of `hamr_vi.mech`, the hand transcription, at the same leg state and drive.
 #[test]
 fn the_front_left_leg_of_the_robot_is_the_leg_model() {
-    let robot = robot();
-    let leg = common::tape("hamr_vi");
+    for legs in [LegModel::Vi, LegModel::V2] {
+        front_left_leg_is_the_leg_model(legs);
+    }
+}
+
+fn front_left_leg_is_the_leg_model(legs: LegModel) {
+    let robot = robot_of(legs);
+    let leg = common::tape(legs.leg());
     let mut rng = common::Rng::new(5);
     for _ in 0..5 {
         let values: Vec<(f64, f64)> = (0..8)
@@ -534,9 +727,14 @@ fn feet(robot: &dyn Model, drive: &dyn Fn(&str) -> (f64, f64)) -> Vec<[f64; 3]> 
 /// gaits' drive conventions).
 #[test]
 fn the_legs_are_mirror_images_of_the_front_left_leg() {
-    let robot = robot();
+    for legs in [LegModel::Vi, LegModel::V2] {
+        legs_mirror_the_front_left_leg(&robot_of(legs));
+    }
+}
+
+fn legs_mirror_the_front_left_leg(robot: &dyn Model) {
     let (swing, lift) = (60e-6, -40e-6);
-    let reference = feet(&robot, &|_| (swing, lift))[0];
+    let reference = feet(robot, &|_| (swing, lift))[0];
     for (k, leg) in LEGS.iter().enumerate().skip(1) {
         let mirror = [
             if leg.starts_with('R') { -1.0 } else { 1.0 },
@@ -546,7 +744,7 @@ fn the_legs_are_mirror_images_of_the_front_left_leg() {
         let expected: Vec<f64> = (0..3).map(|c| mirror[c] * reference[c]).collect();
         let mut matches = Vec::new();
         for (s, l) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
-            let foot = feet(&robot, &|name| {
+            let foot = feet(robot, &|name| {
                 if name == *leg {
                     (s * swing, l * lift)
                 } else {
@@ -560,8 +758,11 @@ fn the_legs_are_mirror_images_of_the_front_left_leg() {
                 matches.push((s, l));
             }
         }
-        println!("{leg}: drive signs (swing, lift) that mirror the front-left foot: {matches:?}");
-        assert_eq!(matches.len(), 1, "{leg}: {matches:?}");
+        println!(
+            "{}, {leg}: drive signs (swing, lift) that mirror the front-left foot: {matches:?}",
+            robot.name()
+        );
+        assert_eq!(matches, [drive_signs(leg)], "{leg}");
     }
 }
 
@@ -671,7 +872,7 @@ fn dropped_robot_loses_what_its_contacts_dissipate() {
 #[test]
 fn welded_robot_has_the_leg_models_modes() {
     // The chassis is the Newtonian frame now: no payload mount, no chassis output.
-    let text = robot_text_on(Base::Fixed)
+    let text = robot_text_on(LegModel::Vi, Base::Fixed)
         .replace(
             "point floor = [0, 0, -12.54 mm];",
             "point floor = [0, 0, -30 mm];",
