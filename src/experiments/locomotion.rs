@@ -65,6 +65,10 @@ pub struct Spec {
     pub samples_per_cycle: usize,
     #[serde(rename = "leg")]
     pub legs: Vec<LegSpec>,
+    /// A second robot with the same names (inputs, outputs, parameters), walked over the same
+    /// grid and drawn beside the first (Fig. 9 sets HAMR-VI beside HAMR-V2.0).
+    #[serde(default)]
+    pub compare: Option<std::path::PathBuf>,
 }
 
 fn default_gait() -> String {
@@ -185,7 +189,8 @@ impl Spec {
             .iter()
             .map(|f| (self.settle_cycles + self.cycles) / f)
             .sum();
-        seconds * settings.payloads.len() as f64 * 20.0
+        let robots = 1.0 + f64::from(u8::from(self.compare.is_some()));
+        robots * seconds * settings.payloads.len() as f64 * 20.0
     }
 
     /// The drive signals of every leg at frequency `hz` (`NAME=sine(...)`, as for `--input`).
@@ -325,54 +330,77 @@ pub struct Walks {
     pub failed: Vec<String>,
     /// A walk's trajectory to show (the first frequency's unloaded walk), if it ran.
     pub shown: Option<(Walk, Trajectory)>,
+    /// The spec's `compare` robot over the same grid.
+    pub compared: Option<Box<Walks>>,
 }
 
-/// Simulates every (frequency, payload) of the grid on all cores, telling `progress`
-/// `(walks done, walks)` as each finishes.
+/// Simulates every (frequency, payload) of the grid, for the robot and the one it is compared
+/// with, on all cores, telling `progress` `(walks done, walks)` as each finishes.
 pub fn compute(spec: &Spec, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<Walks, Error> {
     let settings = spec.settings()?;
+    let mut specs = vec![spec.clone()];
+    if let Some(path) = &spec.compare {
+        let mut other = spec.clone();
+        other.model.path = path.clone();
+        other.compare = None;
+        specs.push(other);
+    }
     // Check the names once before the runs.
-    let probe = open(spec, settings.frequencies[0], 0.0)?;
-    let model_name = probe.session.model.name().to_string();
-    let jobs: Vec<(usize, f64, f64)> = settings
+    let probes = specs
+        .iter()
+        .map(|spec| open(spec, settings.frequencies[0], 0.0))
+        .collect::<Result<Vec<_>, Error>>()?;
+    let grid: Vec<(f64, f64)> = settings
         .frequencies
         .iter()
         .flat_map(|&f| settings.payloads.iter().map(move |&m| (f, m)))
-        .enumerate()
-        .map(|(k, (f, m))| (k, f, m))
+        .collect();
+    let jobs: Vec<(usize, usize, f64, f64)> = (0..specs.len())
+        .flat_map(|robot| {
+            let grid = &grid;
+            (0..grid.len()).map(move |k| (robot, k, grid[k].0, grid[k].1))
+        })
         .collect();
     let total = jobs.len();
     let done = std::sync::atomic::AtomicUsize::new(0);
-    let results = parallel(jobs, threads(), |(k, frequency, payload)| {
-        let walk = walk(spec, frequency, payload);
+    let results = parallel(jobs, threads(), |(robot, k, frequency, payload)| {
+        let walk = walk(&specs[robot], frequency, payload);
         let finished = done.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
         progress(finished, total);
-        (k, frequency, payload, walk)
+        (robot, k, frequency, payload, walk)
     });
-    let mut walks = Vec::new();
-    let mut failed = Vec::new();
-    let mut shown = None;
-    for (k, frequency, payload, result) in results {
+    let mut robots: Vec<Walks> = probes
+        .into_iter()
+        .map(|probe| Walks {
+            model_name: probe.session.model.name().to_string(),
+            session: probe.session,
+            body_length: settings.body_length,
+            frequencies: settings.frequencies.clone(),
+            payloads: settings.payloads.clone(),
+            walks: Vec::new(),
+            failed: Vec::new(),
+            shown: None,
+            compared: None,
+        })
+        .collect();
+    for (robot, k, frequency, payload, result) in results {
+        let walks = &mut robots[robot];
         match result {
             Ok((walk, trajectory)) => {
                 if k == 0 {
-                    shown = Some((walk.clone(), trajectory));
+                    walks.shown = Some((walk.clone(), trajectory));
                 }
-                walks.push(walk);
+                walks.walks.push(walk);
             }
-            Err(error) => failed.push(format!("{frequency} Hz, {:.2} g: {error}", payload * 1e3)),
+            Err(error) => walks
+                .failed
+                .push(format!("{frequency} Hz, {:.2} g: {error}", payload * 1e3)),
         }
     }
-    Ok(Walks {
-        model_name,
-        session: probe.session,
-        body_length: settings.body_length,
-        frequencies: settings.frequencies,
-        payloads: settings.payloads,
-        walks,
-        failed,
-        shown,
-    })
+    let compared = (robots.len() > 1).then(|| Box::new(robots.remove(1)));
+    let mut walks = robots.remove(0);
+    walks.compared = compared;
+    Ok(walks)
 }
 
 /// The session of one grid point and the indices the measurements read.

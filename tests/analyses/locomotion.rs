@@ -196,6 +196,48 @@ fn a_short_trot_moves_forwards() {
     assert!(trajectory.len() > 100);
 }
 
+/// `compare` walks a second robot over the same grid: the experiment's HAMR-V2.0, with the
+/// same names, the same mass (its links are HAMR-VI's) and another walk (its legs' shorter
+/// crank arms, other flexures and actuators): one 10 Hz unloaded walk each, half a settle
+/// cycle and one measured.
+#[test]
+fn compare_walks_the_second_robot_over_the_same_grid() {
+    let spec = spec(&[
+        ("settle_cycles = 1", "settle_cycles = 0.5"),
+        ("cycles = 2", "cycles = 1"),
+        (
+            r#"frequencies = ["2 Hz", "5 Hz", "10 Hz", "20 Hz"]"#,
+            r#"frequencies = ["10 Hz"]"#,
+        ),
+        (
+            r#"payloads = ["0 g", "1 g", "2 g", "3 g", "4 g"]"#,
+            r#"payloads = ["0 g"]"#,
+        ),
+    ]);
+    let walks = locomotion::compute(&spec, &|_, _| {}).unwrap();
+    let other = walks
+        .compared
+        .as_deref()
+        .expect("the compared robot's walks");
+    assert_eq!(
+        (walks.model_name.as_str(), other.model_name.as_str()),
+        ("hamr_vi_robot", "hamr_v2_robot")
+    );
+    assert_eq!((walks.walks.len(), other.walks.len()), (1, 1));
+    let (vi, v2) = (&walks.walks[0], &other.walks[0]);
+    println!(
+        "VI {:.1} mm/s, V2 {:.1} mm/s",
+        vi.run.speed * 1e3,
+        v2.run.speed * 1e3
+    );
+    assert!((v2.robot_mass - vi.robot_mass).abs() < 1e-12);
+    assert!(v2.run.speed > 10e-3, "V2 speed {} m/s", v2.run.speed);
+    assert!(
+        (v2.run.speed - vi.run.speed).abs() > 1e-3,
+        "the same walk twice"
+    );
+}
+
 /// The HAMR-VI robot with its right legs made the mirror images of its left ones (each right
 /// body given its left twin's mass, centre of mass with y negated and inertia with `Ixy`,
 /// `Iyz` negated, the mirror `y → −y`; the chassis's `Ixy`, `Iyz` zeroed). The imported

@@ -18,6 +18,8 @@ use std::path::Path;
 
 /// The payload the paper's HAMR-VI carries (Sec. V-C), kg.
 const PAPER_PAYLOAD: f64 = 2.9e-3;
+/// How much more HAMR-VI carries than HAMR-V2.0 (Sec. V-C: a 114 % increase), kg.
+const PAPER_PAYLOAD_GAIN: f64 = 1.6e-3;
 
 /// A walk advances if it gains at least this much per cycle (m): a tenth of a millimetre,
 /// well above what the body's sway leaves over whole cycles.
@@ -26,22 +28,39 @@ const ADVANCE_PER_CYCLE: f64 = 0.1e-3;
 pub fn run(spec: &Spec, dir: &Path, progress: super::Progress<'_>) -> Result<Outcome, Error> {
     let walks = compute(spec, progress)?;
     let mut outcome = Outcome::with_method(method_text(spec, &walks));
-    outcome.tables.push(walks_table(&walks));
-    outcome.tables.push(facts_table(&walks));
-    let rows: Vec<Vec<f64>> = walks
-        .walks
-        .iter()
-        .map(|w| row(w, walks.body_length))
+    // The robot, then the one it is compared with (named apart in files and values).
+    let robots: Vec<(&Walks, String)> = std::iter::once((&walks, String::new()))
+        .chain(
+            walks
+                .compared
+                .as_deref()
+                .map(|other| (other, format!("{}_", other.model_name))),
+        )
         .collect();
-    csv(&mut outcome, dir, "locomotion.csv", &HEADER, &rows)?;
-    for walk in &walks.walks {
-        let key = format!("{}Hz_{}mg", walk.frequency, (walk.payload * 1e6).round());
-        outcome
-            .values
-            .insert(format!("speed_{key}"), walk.run.speed);
-        outcome
-            .values
-            .insert(format!("airborne_{key}"), walk.run.airborne);
+    for (robot, _) in &robots {
+        outcome.tables.push(walks_table(robot));
+    }
+    outcome.tables.push(facts_table(&walks));
+    for (robot, prefix) in &robots {
+        let rows: Vec<Vec<f64>> = robot
+            .walks
+            .iter()
+            .map(|w| row(w, robot.body_length))
+            .collect();
+        let file = match prefix.is_empty() {
+            true => "locomotion.csv".to_string(),
+            false => format!("locomotion_{}.csv", robot.model_name),
+        };
+        csv(&mut outcome, dir, &file, &HEADER, &rows)?;
+        for walk in &robot.walks {
+            let key = format!("{}Hz_{}mg", walk.frequency, (walk.payload * 1e6).round());
+            outcome
+                .values
+                .insert(format!("{prefix}speed_{key}"), walk.run.speed);
+            outcome
+                .values
+                .insert(format!("{prefix}airborne_{key}"), walk.run.airborne);
+        }
     }
     if let Some((walk, trajectory)) = &walks.shown {
         let (header, rows) = trajectory_table(&walks.session.model, trajectory);
@@ -64,31 +83,40 @@ pub fn run(spec: &Spec, dir: &Path, progress: super::Progress<'_>) -> Result<Out
         let path = dir.join(format!("walk_{}Hz.html", walk.frequency));
         outcome.add_file(crate::output::File::new(path, page));
     }
-    let curves: Vec<(String, Vec<f64>, Vec<f64>)> = walks
-        .frequencies
-        .iter()
-        .map(|&f| {
-            let points: Vec<&Walk> = walks.walks.iter().filter(|w| w.frequency == f).collect();
+    let mut curves: Vec<(String, Vec<f64>, Vec<f64>)> = Vec::new();
+    for (robot, _) in &robots {
+        for &f in &robot.frequencies {
+            let points: Vec<&Walk> = robot.walks.iter().filter(|w| w.frequency == f).collect();
             let payloads: Vec<f64> = points.iter().map(|w| w.payload * 1e3).collect();
             let speeds: Vec<f64> = points.iter().map(|w| w.run.speed * 1e3).collect();
-            (format!("{f} Hz"), payloads, speeds)
-        })
-        .filter(|(_, xs, _)| !xs.is_empty())
-        .collect();
+            let label = match robots.len() {
+                1 => format!("{f} Hz"),
+                _ => format!("{f} Hz, {}", robot.model_name),
+            };
+            if !payloads.is_empty() {
+                curves.push((label, payloads, speeds));
+            }
+        }
+    }
     if !curves.is_empty() {
+        let names: Vec<&str> = robots.iter().map(|(r, _)| r.model_name.as_str()).collect();
         let title = format!(
             "{}: forward speed against payload (Fig. 9)",
-            walks.model_name
+            names.join(" and ")
         );
         let plot = plot::XyPlot::new(&title, "payload [g]", "forward speed [mm/s]", &curves)
             .render(&dir.join("speed_payload.svg"))?;
         outcome.add_plot(plot);
     }
-    outcome.notes.extend(observations(&walks));
-    if !walks.failed.is_empty() {
-        outcome
-            .notes
-            .push(format!("Did not simulate: {}", walks.failed.join("; ")));
+    for (robot, _) in &robots {
+        outcome.notes.extend(observations(robot, robots.len() > 1));
+        if !robot.failed.is_empty() {
+            outcome.notes.push(format!(
+                "Did not simulate ({}): {}",
+                robot.model_name,
+                robot.failed.join("; ")
+            ));
+        }
     }
     Ok(outcome)
 }
@@ -133,8 +161,12 @@ fn row(walk: &Walk, body_length: f64) -> Vec<f64> {
 }
 
 fn walks_table(walks: &Walks) -> Table {
+    let title = format!(
+        "Walks of `{}`: averages over the measured cycles",
+        walks.model_name
+    );
     let mut table = Table::new(
-        "Walks: averages over the measured cycles",
+        &title,
         &[
             "f [Hz]",
             "payload [g]",
@@ -192,18 +224,31 @@ fn facts_table(walks: &Walks) -> Table {
         "The paper's facts (Sec. V-C) beside the model",
         &["fact", "paper", "model"],
     );
-    for &f in &walks.frequencies {
-        let top = grid_top(walks);
-        let model = match largest_advancing(walks, f) {
-            Some(m) if m >= top => format!("≥ {:.2} g at {f} Hz (the grid's largest)", m * 1e3),
-            Some(m) => format!("{:.2} g at {f} Hz", m * 1e3),
-            None => format!("none of the grid at {f} Hz"),
+    let paper = [
+        format!("{:.1} g (1–10 Hz)", PAPER_PAYLOAD * 1e3),
+        format!(
+            "{:.1} g (HAMR-V2.0 carries {:.1} g less)",
+            (PAPER_PAYLOAD - PAPER_PAYLOAD_GAIN) * 1e3,
+            PAPER_PAYLOAD_GAIN * 1e3
+        ),
+    ];
+    let robots = std::iter::once(walks).chain(walks.compared.as_deref());
+    for (robot, paper) in robots.zip(paper) {
+        let fact = match walks.compared {
+            Some(_) => format!("largest payload carried forwards, `{}`", robot.model_name),
+            None => "largest payload carried forwards".into(),
         };
-        table.row(vec![
-            "largest payload carried forwards".into(),
-            format!("{:.1} g (1–10 Hz)", PAPER_PAYLOAD * 1e3),
-            model,
-        ]);
+        for &f in &robot.frequencies {
+            let top = grid_top(robot);
+            let model = match largest_advancing(robot, f) {
+                Some(m) if m >= top => {
+                    format!("≥ {:.2} g at {f} Hz (the grid's largest)", m * 1e3)
+                }
+                Some(m) => format!("{:.2} g at {f} Hz", m * 1e3),
+                None => format!("none of the grid at {f} Hz"),
+            };
+            table.row(vec![fact.clone(), paper.clone(), model]);
+        }
     }
     if let Some(walk) = walks
         .walks
@@ -221,14 +266,54 @@ fn facts_table(walks: &Walks) -> Table {
             ),
         ]);
     }
+    if let Some(other) = walks.compared.as_deref() {
+        table.row(vec![
+            format!("`{}` faster than `{}`", walks.model_name, other.model_name),
+            "at every frequency and payload except unloaded and lightly loaded at 10 Hz".into(),
+            faster_at(walks, other),
+        ]);
+    }
     table
+}
+
+/// Where the walks of `one` are faster than those of `other` at the same grid point.
+fn faster_at(one: &Walks, other: &Walks) -> String {
+    let pairs: Vec<(&Walk, &Walk)> = one
+        .walks
+        .iter()
+        .filter_map(|a| {
+            let b = other
+                .walks
+                .iter()
+                .find(|b| b.frequency == a.frequency && b.payload == a.payload)?;
+            Some((a, b))
+        })
+        .collect();
+    let slower: Vec<String> = pairs
+        .iter()
+        .filter(|(a, b)| a.run.speed <= b.run.speed)
+        .map(|(a, _)| format!("{} Hz with {:.2} g", a.frequency, a.payload * 1e3))
+        .collect();
+    let faster = pairs.len() - slower.len();
+    match slower.is_empty() {
+        true => format!("at all {} grid points", pairs.len()),
+        false => format!(
+            "at {faster} of {} grid points; not at {}",
+            pairs.len(),
+            slower.join(", ")
+        ),
+    }
 }
 
 fn grid_top(walks: &Walks) -> f64 {
     walks.payloads.iter().fold(0.0, |a: f64, &b| a.max(b))
 }
 
-fn observations(walks: &Walks) -> Vec<String> {
+fn observations(walks: &Walks, named: bool) -> Vec<String> {
+    let robot = match named {
+        true => format!(" `{}`", walks.model_name),
+        false => String::new(),
+    };
     let mut notes = Vec::new();
     for &f in &walks.frequencies {
         let speeds: Vec<String> = walks
@@ -238,7 +323,7 @@ fn observations(walks: &Walks) -> Vec<String> {
             .map(|w| format!("{:.2} g: {:.1} mm/s", w.payload * 1e3, w.run.speed * 1e3))
             .collect();
         if !speeds.is_empty() {
-            notes.push(format!("Model at {f} Hz: {}.", speeds.join(", ")));
+            notes.push(format!("Model{robot} at {f} Hz: {}.", speeds.join(", ")));
         }
     }
     notes
