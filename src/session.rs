@@ -7,7 +7,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use mech_codegen::ir::{Dimension, EulerAngles, OutputKind, Quaternion, Translation};
+use mech_codegen::ir::{Dimension, OutputKind};
 use mech_codegen::{Compiled, Diagnostic, Errors};
 use mech_runtime::constraints::{
     choose_independent, complete_independent, holonomic_jacobian, independent_speeds, jacobian,
@@ -449,39 +449,27 @@ impl Session {
     /// whose rates are not one speed.
     pub fn coordinate_units(&self, name: &str) -> Option<(String, String)> {
         let model = &self.compiled.model;
-        let unit = |dimension| Some((dimension_units(dimension).0, String::new()));
-        if names_contain(&model.quaternions, name, Quaternion::coordinate_names) {
-            return Some(("1".into(), String::new()));
-        }
-        if names_contain(&model.euler_angles, name, EulerAngles::coordinate_names) {
-            return unit(Dimension::NONE);
-        }
-        if names_contain(&model.translations, name, Translation::coordinate_names) {
-            return unit(Dimension::LENGTH);
-        }
-        let (_, coordinate) = model.coordinates.iter().find(|(_, c)| c.name == name)?;
-        Some(dimension_units(coordinate.dimension))
+        let index = model.coordinate_names().iter().position(|n| n == name)?;
+        Some(match model.coordinate_dimension(index) {
+            None => ("1".into(), String::new()),
+            Some(dimension) if index < model.coordinates.len() => dimension_units(dimension),
+            Some(dimension) => (dimension_units(dimension).0, String::new()),
+        })
     }
 
     /// The unit of the speed named `name`: its coordinate's rate (`rad/s`, `m/s`), `rad/s` for
     /// a quaternion's or Euler angles' angular speed (`ball.wx`), `m/s` for a free joint's
     /// velocity (`free.vx`), empty for an unknown name.
     pub fn speed_unit(&self, name: &str) -> String {
-        let chosen = self.compiled.model.speeds.iter().find(|s| s.name == name);
-        if let Some(speed) = chosen {
+        let model = &self.compiled.model;
+        if let Some(speed) = model.speeds.iter().find(|s| s.name == name) {
             return dimension_units(speed.dimension.mul(Dimension::TIME)).1;
         }
-        if let Some((_, speed)) = self.coordinate_units(name) {
-            return speed;
-        }
-        let model = &self.compiled.model;
-        let angular = names_contain(&model.quaternions, name, Quaternion::speed_names)
-            || names_contain(&model.euler_angles, name, EulerAngles::speed_names);
-        let linear = names_contain(&model.translations, name, Translation::speed_names);
-        match (angular, linear) {
-            (true, _) => dimension_units(Dimension::NONE).1,
-            (false, true) => dimension_units(Dimension::LENGTH).1,
-            (false, false) => String::new(),
+        match model.default_speed_names().iter().position(|n| n == name) {
+            Some(index) => {
+                dimension_units(model.default_speed_dimension(index).mul(Dimension::TIME)).1
+            }
+            None => String::new(),
         }
     }
 
@@ -695,13 +683,7 @@ impl Session {
                         reason: "the model's speeds are chosen by `speed` declarations, so no \
                                  coordinate's rate is a speed",
                     },
-                    (false, true)
-                        if names_contain(
-                            &self.compiled.model.translations,
-                            name,
-                            Translation::coordinate_names,
-                        ) =>
-                    {
+                    (false, true) if index >= ir.nq() - 3 * ir.translations.len() => {
                         Error::NotHeld {
                             name: name.to_string(),
                             reason: "a free joint's position moves by its velocity speeds \
@@ -1036,18 +1018,6 @@ pub fn assembly_report(model: &dyn Model, state: &Assembled) -> String {
         );
     }
     text
-}
-
-/// Whether `name` is one of the `names` (coordinates or speeds) of an item of `arena` (a
-/// quaternion, a set of Euler angles, a free joint's translation).
-fn names_contain<T, const N: usize>(
-    arena: &mech_codegen::ir::Arena<T>,
-    name: &str,
-    names: fn(&T) -> [String; N],
-) -> bool {
-    arena
-        .iter()
-        .any(|(_, item)| names(item).iter().any(|n| n == name))
 }
 
 #[cfg(test)]
