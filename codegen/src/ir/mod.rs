@@ -1127,7 +1127,7 @@ impl Model {
     }
 
     /// Number of generalized coordinates: one per coordinate, four per quaternion, three per
-    /// set of Euler angles.
+    /// set of Euler angles or translation.
     pub fn nq(&self) -> usize {
         self.coordinates.len()
             + 4 * self.quaternions.len()

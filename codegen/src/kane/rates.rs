@@ -3,9 +3,9 @@
 //! Consumes: a model's coordinates, rotations and free joints' translations. Produces:
 //! [`KinematicRates`], which turns a function `f(q)` into its rate `ḟ = Σᵢ ∂f/∂qᵢ q̇ᵢ` and
 //! its partial rates `∂ḟ/∂u_r = Σᵢ ∂f/∂qᵢ W_ir` (Kane & Levinson §2.14: what a partial
-//! velocity is to a position). Without quaternions `W = I`, and both reduce to `∂f/∂q_r` and `Σ ∂f/∂qᵢ uᵢ`
-//! built exactly as before quaternions existed, so the equations of such models (and their
-//! golden files) do not change.
+//! velocity is to a position). Where every coordinate is a pin's or slider's `W = I`, and
+//! both reduce to `∂f/∂q_r` and `Σ ∂f/∂qᵢ uᵢ` built exactly as before quaternions existed, so
+//! the equations of such models (and their golden files) do not change.
 //!
 //! With a quaternion the coordinates `e₀…e₃` have no speeds of their own: their rates are
 //! `ė = ½ e ⊗ (0, ω)`, linear in the body's angular speeds, so a loop row `φ(q)` has
@@ -135,17 +135,22 @@ pub fn rates(pool: &mut ExprPool, model: &Model) -> Option<Vec<ExprId>> {
         let omega = kinematics::euler_speed_symbols(pool, model, angles).map(|(_, u)| u);
         rates.extend(vector::euler_rates(pool, rotation.sequence, q, omega));
     }
-    for (_, frame) in model.frames.iter() {
-        if let Motion::Free {
-            rotation,
-            translation,
-        } = frame.motion
-        {
-            let turn = kinematics::joint_rotation(pool, model, rotation);
-            let first = model.translation_speed(translation, 0);
-            let velocity = [0, 1, 2].map(|axis| pool.symbol(Symbol::Speed((first + axis) as u32)));
-            rates.extend(vector::mat_vec(pool, &turn, velocity));
-        }
+    for (translation, _) in model.translations.iter() {
+        let rotation = model
+            .frames
+            .iter()
+            .find_map(|(_, frame)| match frame.motion {
+                Motion::Free {
+                    rotation,
+                    translation: moved,
+                } if moved == translation => Some(rotation),
+                _ => None,
+            });
+        let rotation = rotation.expect("each translation is driven by one free motion (IR)");
+        let turn = kinematics::joint_rotation(pool, model, rotation);
+        let first = model.translation_speed(translation, 0);
+        let velocity = [0, 1, 2].map(|axis| pool.symbol(Symbol::Speed((first + axis) as u32)));
+        rates.extend(vector::mat_vec(pool, &turn, velocity));
     }
     Some(rates)
 }
