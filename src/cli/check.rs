@@ -86,7 +86,8 @@ pub fn run(args: &CheckArgs) -> Result<(), Error> {
     Ok(())
 }
 
-/// Each joint's coordinates (and quaternion or Euler angles) with their initial values, then
+/// Each joint's coordinates (and quaternion, Euler angles or free position) with their initial
+/// values, then
 /// the speeds chosen by `speed` declarations, if any.
 fn print_coordinates(model: &Model) {
     match (model.speeds.is_empty(), model.has_kinematic_rates()) {
@@ -114,50 +115,54 @@ fn print_coordinates(model: &Model) {
                 coordinate.initial_speed
             );
         }
+        let joint_part =
+            |name: &str, what: String, q0: String, speeds: String, u0: ([f64; 3], &str)| {
+                let ([x, y, z], unit) = u0;
+                println!(
+                    "  {name:<16} {:?} joint `{}`: {what}, q0 = {q0}; speeds {speeds}, \
+                 u0 = [{x}, {y}, {z}] {unit}",
+                    joint.kind, joint.name,
+                );
+            };
+        let in_child = |names: [String; 3], what: &str| {
+            format!("{} ({what} in the child frame)", names.join(", "))
+        };
         if let Some(quaternion) = joint.quaternion.map(|e| &model.quaternions[e]) {
-            let [wx, wy, wz] = quaternion.initial_angular_velocity;
-            println!(
-                "  {:<16} {:?} joint `{}`: unit quaternion ({}), q0 = (1, 0, 0, 0); \
-                 speeds {} (angular velocity in the child frame), u0 = [{wx}, {wy}, {wz}] rad/s",
-                quaternion.name,
-                joint.kind,
-                joint.name,
-                quaternion.coordinate_names().join(", "),
-                quaternion.speed_names().join(", "),
+            joint_part(
+                &quaternion.name,
+                format!(
+                    "unit quaternion ({})",
+                    quaternion.coordinate_names().join(", ")
+                ),
+                "(1, 0, 0, 0)".into(),
+                in_child(quaternion.speed_names(), "angular velocity"),
+                (quaternion.initial_angular_velocity, "rad/s"),
             );
         }
-        let translation = model
-            .translations
-            .iter()
-            .find(|(_, t)| t.name == joint.name);
-        if let Some((_, translation)) = translation {
-            let [vx, vy, vz] = translation.initial_velocity;
-            println!(
-                "  {:<16} {:?} joint `{}`: position ({}) in the joint frame, q0 = 0 m; \
-                 speeds {} (velocity in the child frame), u0 = [{vx}, {vy}, {vz}] m/s",
-                translation.name,
-                joint.kind,
-                joint.name,
-                translation.coordinate_names().join(", "),
-                translation.speed_names().join(", "),
+        let same_name = |name: &str| name == joint.name;
+        if let Some((_, angles)) = model.euler_angles.iter().find(|(_, a)| same_name(&a.name)) {
+            joint_part(
+                &angles.name,
+                format!(
+                    "Euler angles {} ({})",
+                    angles.sequence_name(),
+                    angles.coordinate_names().join(", ")
+                ),
+                format!("{:?} rad", angles.initial_angles),
+                in_child(angles.speed_names(), "angular velocity"),
+                (angles.initial_angular_velocity, "rad/s"),
             );
         }
-        let euler = model
-            .euler_angles
-            .iter()
-            .find(|(_, a)| a.name == joint.name);
-        if let Some((_, angles)) = euler {
-            let [wx, wy, wz] = angles.initial_angular_velocity;
-            println!(
-                "  {:<16} {:?} joint `{}`: Euler angles {} ({}), q0 = {:?} rad; \
-                 speeds {} (angular velocity in the child frame), u0 = [{wx}, {wy}, {wz}] rad/s",
-                angles.name,
-                joint.kind,
-                joint.name,
-                angles.sequence_name(),
-                angles.coordinate_names().join(", "),
-                angles.initial_angles,
-                angles.speed_names().join(", "),
+        if let Some((_, position)) = model.translations.iter().find(|(_, t)| same_name(&t.name)) {
+            joint_part(
+                &position.name,
+                format!(
+                    "position ({}) in the joint frame",
+                    position.coordinate_names().join(", ")
+                ),
+                "0 m".into(),
+                in_child(position.speed_names(), "velocity"),
+                (position.initial_velocity, "m/s"),
             );
         }
     }
