@@ -60,11 +60,13 @@ enum Slot {
     DynamicsTerms,
     /// `q̇ = W(q) u`, for models with quaternions.
     KinematicRates,
+    /// The contacts' damping `D`, for models with contacts.
+    ContactDamping,
     OutputRow(usize),
 }
 
 impl Slot {
-    const FIXED: usize = 11;
+    const FIXED: usize = 12;
     fn index(self) -> usize {
         match self {
             Slot::MassMatrix => 0,
@@ -78,6 +80,7 @@ impl Slot {
             Slot::ConstrainedTerms => 8,
             Slot::DynamicsTerms => 9,
             Slot::KinematicRates => 10,
+            Slot::ContactDamping => 11,
             Slot::OutputRow(row) => Slot::FIXED + row,
         }
     }
@@ -293,6 +296,12 @@ impl TapeModel {
                 .map(|_| Slot::KinematicRates),
         )
         .chain(
+            self.tape
+                .contact_damping
+                .as_ref()
+                .map(|_| Slot::ContactDamping),
+        )
+        .chain(
             self.native
                 .as_ref()
                 .filter(|native| native.fused.is_some())
@@ -333,6 +342,7 @@ impl TapeModel {
             Slot::Flexures => &tape.flexures,
             // Only listed in `slots` (and called) for a tape with the program.
             Slot::KinematicRates => tape.kinematic_rates.as_ref().unwrap_or(&tape.forcing),
+            Slot::ContactDamping => tape.contact_damping.as_ref().unwrap_or(&tape.forcing),
             Slot::ConstrainedTerms | Slot::DynamicsTerms => {
                 let fused = self
                     .native
@@ -490,6 +500,20 @@ impl mech_runtime::Model for TapeModel {
             return self.forcing(t, q, &vec![0.0; self.tape.nu], inputs, out);
         };
         self.eval(Slot::StaticForcing, t, q, &[], inputs, out);
+    }
+    fn contact_damping(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        inputs: &[f64],
+        out: &mut [f64],
+    ) -> bool {
+        if self.tape.contact_damping.is_none() {
+            return false;
+        }
+        self.eval(Slot::ContactDamping, t, q, u, inputs, out);
+        true
     }
     fn outputs(&self, t: f64, q: &[f64], u: &[f64], inputs: &[f64], out: &mut [f64]) {
         self.eval(Slot::Outputs, t, q, u, inputs, out);

@@ -148,6 +148,7 @@ fn method(name: &str, rtol: f64, atol: f64, step: Option<f64>) -> PyResult<Metho
         "dopri5" => Method::Dopri5 { rtol, atol, h_max },
         "dop853" => Method::Dop853 { rtol, atol, h_max },
         "rosenbrock" => Method::Rosenbrock { rtol, atol, h_max },
+        "rosenbrock-w" | "rosenbrock_w" => Method::RosenbrockW { rtol, atol, h_max },
         "exp-rosenbrock" | "exp_rosenbrock" => Method::ExpRosenbrock { rtol, atol, h_max },
         "rk4" => Method::Rk4 {
             step: step.ok_or_else(|| error("method `rk4` needs `step` (seconds)"))?,
@@ -155,7 +156,7 @@ fn method(name: &str, rtol: f64, atol: f64, step: Option<f64>) -> PyResult<Metho
         other => {
             return Err(error(format!(
                 "unknown method `{other}`; the methods are dopri5, dop853, rk4, rosenbrock, \
-                 exp-rosenbrock"
+                 rosenbrock-w, exp-rosenbrock"
             )))
         }
     })

@@ -244,6 +244,22 @@ def test_simulations_run_in_parallel_threads():
 # ---------------------------------------------------------------------------- errors
 
 
+def test_contact_implicit_method_ends_rolling_and_balances_energy():
+    """`method="rosenbrock-w"` (implicit in the contact's damping) on the ball thrown sliding:
+    it ends rolling at 5/7 of its speed (the angular momentum about the contact line is kept),
+    and the energy lost is the contact's `dissipated` output, integrated with the motion."""
+    ball = model("contact_ball")
+    run = ball.simulate(t_end=0.4, method="rosenbrock-w", rtol=1e-8, atol=1e-12)
+    v0 = run["u"][0, 0]
+    assert run["u"][-1, 0] == pytest.approx(5 / 7 * v0, rel=1e-6)
+    names = ball.outputs
+    energy = run["outputs"][:, names.index("ke")] + run["outputs"][:, names.index("pe")]
+    lost = energy[0] - energy
+    dissipated = run["outputs"][:, names.index("ground.dissipated")]
+    assert lost[-1] > 1e-4
+    assert np.max(np.abs(lost - dissipated)) < 1e-6 * lost[-1]
+
+
 def test_errors_say_where_and_what(tmp_path):
     with pytest.raises(mech.MechError, match="nope.mech"):
         mech.load(tmp_path / "nope.mech")

@@ -627,8 +627,10 @@ pub struct ConstrainedSolver {
     work: Vec<f64>,
     /// Rows of `J` the accelerations use, increasing (all, until some are found redundant).
     active: Vec<usize>,
-    /// Storage for the next `active` while it is chosen.
-    chosen: Vec<usize>,
+    /// The rows of the last factorization of `Zᵀ Z` (`active`, or all rows where the active
+    /// ones lost rank), and its rank.
+    factored: Vec<usize>,
+    rank: usize,
 }
 
 /// Whether every value is finite (no early exit: branch-free, and these slices are short).
@@ -667,7 +669,8 @@ impl ConstrainedSolver {
             order: vec![0; nc],
             work: vec![0.0; nc],
             active: (0..nc).collect(),
-            chosen: Vec::with_capacity(nc),
+            factored: Vec::with_capacity(nc),
+            rank: 0,
         }
     }
 
@@ -707,37 +710,92 @@ impl ConstrainedSolver {
         rank
     }
 
-    /// The multipliers of the rows `rows` (into `multipliers[..rows.len()]`, their `Z` in
-    /// `scaled`) from `w = L⁻¹F`: `(Zᵀ Z) λ = −J̇u − Zᵀ w`. Returns the rows solved for (`rows`,
-    /// or every row when `rows` has lost rank), whether the right-hand side was finite, and
-    /// whether some of every row were found redundant — then `chosen` holds the independent
-    /// ones, for the next call.
-    fn solve_multipliers(&mut self, mut rows: Vec<usize>, w: &[f64]) -> (Vec<usize>, bool, bool) {
+    /// With `M`'s Cholesky factor `L` in `mass` and `J` in `jacobian`: `Z = L⁻¹ Jᵀ` (into
+    /// `scaled`) and the pivoted factor of `Zᵀ Z = J M⁻¹ Jᵀ` (into `coupling`) on the active
+    /// rows, or on every row where those have lost rank; the rows and rank into `factored`
+    /// and `rank`. When some of every row are found redundant, `active` becomes the
+    /// independent ones, for the next factorization.
+    fn factor_coupling(&mut self) {
         let (n, nc) = (self.nu, self.nc);
+        let mut rows = std::mem::take(&mut self.factored);
+        rows.clear();
+        rows.extend_from_slice(&self.active);
         loop {
             let used = rows.len();
             self.scale_jacobian(&rows);
             dense::gram_lower(&self.scaled, n, used, &mut self.coupling);
-            // Right-hand side −J̇u − J M⁻¹F = −J̇u − Zᵀ w.
-            dense::transpose_times(&self.scaled, n, used, w, &mut self.mismatch);
-            for (m, &row) in self.mismatch.iter_mut().zip(&rows) {
-                *m = -self.bias[row] - *m;
-            }
-            let finite = all_finite(&self.mismatch[..used]);
-            let rank = self.solve_coupling(used);
-            if rank == used || !finite {
-                return (rows, finite, false);
+            self.rank =
+                dense::pivoted_cholesky(&mut self.coupling, used, PIVOT_TOLERANCE, &mut self.order);
+            // A non-finite J says nothing of which rows are redundant.
+            if self.rank == used || !all_finite(&self.scaled[..n * used]) {
+                break;
             }
             if used == nc {
-                self.chosen.clear();
-                self.chosen.extend(self.order[..rank].iter().copied());
-                self.chosen.sort_unstable();
-                return (rows, finite, true);
+                self.active.clear();
+                self.active.extend(self.order[..self.rank].iter().copied());
+                self.active.sort_unstable();
+                break;
             }
-            // The chosen rows lost rank: solve with every row (and choose again).
+            // The active rows lost rank: every row (and choose again).
             rows.clear();
             rows.extend(0..nc);
         }
+        self.factored = rows;
+    }
+
+    /// Solves `M x = f + Jᵀλ`, `J x = −b` with the factors of
+    /// [`factor_coupling`](Self::factor_coupling): `f` in `x` on entry, `x` on return; `b`
+    /// is the model's `J̇u` in `bias` where `with_bias`, 0 otherwise. With `w = L⁻¹ f`,
+    /// `(Zᵀ Z) λ = −b − Zᵀ w` and `x = L⁻ᵀ (w + Z λ)`; `λ` into `multipliers` (0 on the rows
+    /// not factored). Returns whether the right-hand side of `λ` was finite.
+    fn solve_factored(&mut self, x: &mut [f64], with_bias: bool) -> bool {
+        let n = self.nu;
+        dense::forward_substitute(self.mass.as_slice(), n, x);
+        let used = self.factored.len();
+        dense::transpose_times(&self.scaled, n, used, x, &mut self.mismatch);
+        for (m, &row) in self.mismatch.iter_mut().zip(&self.factored) {
+            let bias = if with_bias { self.bias[row] } else { 0.0 };
+            *m = -bias - *m;
+        }
+        let finite = all_finite(&self.mismatch[..used]);
+        dense::pivoted_solve(
+            &self.coupling,
+            used,
+            self.rank,
+            &self.order,
+            &self.mismatch,
+            &mut self.multipliers,
+            &mut self.work,
+        );
+        dense::add_times(&self.scaled, n, used, &self.multipliers, x);
+        dense::back_substitute(self.mass.as_slice(), n, x);
+        self.work[..used].copy_from_slice(&self.multipliers[..used]);
+        self.multipliers.fill(0.0);
+        for (&row, &value) in self.factored.iter().zip(&self.work[..used]) {
+            self.multipliers[row] = value;
+        }
+        finite
+    }
+
+    /// `M`, `F`, `J` and `J̇u` at `(t, q, u)` into the solver's storage.
+    fn evaluate<M: Model + ?Sized>(
+        &mut self,
+        model: &M,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        inputs: &[f64],
+    ) {
+        model.constrained_terms(
+            t,
+            q,
+            u,
+            inputs,
+            self.mass.as_mut_slice(),
+            self.force.as_mut_slice(),
+            self.jacobian.as_mut_slice(),
+            self.bias.as_mut_slice(),
+        );
     }
 
     /// `u̇` of `M u̇ = F + Jᵀλ`, `J u̇ = −J̇u`: with `M = L Lᵀ`, `w = L⁻¹F` and `Z = L⁻¹Jᵀ`,
@@ -753,16 +811,7 @@ impl ConstrainedSolver {
         udot: &mut [f64],
     ) -> Result<(), RuntimeError> {
         let n = self.nu;
-        model.constrained_terms(
-            t,
-            q,
-            u,
-            inputs,
-            self.mass.as_mut_slice(),
-            self.force.as_mut_slice(),
-            self.jacobian.as_mut_slice(),
-            self.bias.as_mut_slice(),
-        );
+        self.evaluate(model, t, q, u, inputs);
         // Non-finite inputs are found where they surface, not by scanning all of them first:
         // a NaN or infinity in (the lower triangle of) M fails the factorization, and one in
         // F, J or J̇u reaches the right-hand side `−J̇u − Zᵀw` or `u̇` (0·∞ and 0·NaN are NaN).
@@ -779,30 +828,48 @@ impl ConstrainedSolver {
             }
             return Err(RuntimeError::SingularMassMatrix { t });
         }
-        // w = L⁻¹ F, into udot.
+        self.factor_coupling();
         let udot = &mut udot[..n];
         udot.copy_from_slice(self.force.as_slice());
-        dense::forward_substitute(self.mass.as_slice(), n, udot);
-        let rows = std::mem::take(&mut self.active);
-        let (rows, mismatch_finite, narrowed) = self.solve_multipliers(rows, udot);
-        // u̇ = L⁻ᵀ (w + Z λ), with λ of the rows solved for; the others' multipliers are zero.
-        let used = rows.len();
-        dense::add_times(&self.scaled, n, used, &self.multipliers, udot);
-        dense::back_substitute(self.mass.as_slice(), n, udot);
-        self.work[..used].copy_from_slice(&self.multipliers[..used]);
-        self.multipliers.fill(0.0);
-        for (&row, &value) in rows.iter().zip(&self.work[..used]) {
-            self.multipliers[row] = value;
-        }
-        self.active = rows;
-        if narrowed {
-            std::mem::swap(&mut self.active, &mut self.chosen);
-        }
+        let mismatch_finite = self.solve_factored(udot, true);
         if !(mismatch_finite && all_finite(udot)) {
             udot.fill(f64::NAN);
             return Err(RuntimeError::NonFiniteState { t });
         }
         Ok(())
+    }
+
+    /// Factors the system of a linearly implicit step at `(t, q, u)`: `M − γ D` with the
+    /// loops' `J` (`D` the caller's, `nu × nu` column-major, e.g. [`Model::contact_damping`];
+    /// `γ ≥ 0`), for [`solve_shifted`](Self::solve_shifted). `M`, `J` are the model's at the
+    /// point (its `F` and `J̇u` are computed and not used). Returns `false` where `M − γ D` is
+    /// not positive definite (or not finite).
+    #[allow(clippy::too_many_arguments)]
+    pub fn factor_shifted<M: Model + ?Sized>(
+        &mut self,
+        model: &M,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        inputs: &[f64],
+        gamma: f64,
+        damping: &[f64],
+    ) -> bool {
+        self.evaluate(model, t, q, u, inputs);
+        for (m, d) in self.mass.as_mut_slice().iter_mut().zip(damping) {
+            *m -= gamma * d;
+        }
+        if !dense::cholesky(self.mass.as_mut_slice(), self.nu) {
+            return false;
+        }
+        self.factor_coupling();
+        true
+    }
+
+    /// Solves `(M − γ D) x = f + Jᵀλ`, `J x = 0` with the factors of
+    /// [`factor_shifted`](Self::factor_shifted): `f` in `x` on entry, `x` on return.
+    pub fn solve_shifted(&mut self, x: &mut [f64]) {
+        self.solve_factored(x, false);
     }
 
     /// Moves `q` back onto `φ(q) = 0` (minimum-norm Gauss–Newton over the loop rows,
@@ -872,15 +939,20 @@ impl ConstrainedSolver {
         if !dense::cholesky(self.mass.as_mut_slice(), n) {
             return Err(RuntimeError::SingularMassMatrix { t });
         }
-        // Every row, and the accelerations choose their rows again: a violation may be a row
-        // they took for redundant.
-        let mut rows = std::mem::take(&mut self.active);
+        // Every row (a violation may be on a row the accelerations took for redundant).
+        let mut rows = std::mem::take(&mut self.factored);
         rows.clear();
         rows.extend(0..nc);
         self.scale_jacobian(&rows);
-        self.active = rows;
         dense::gram_lower(&self.scaled, n, nc, &mut self.coupling);
-        self.solve_coupling(nc);
+        self.rank = self.solve_coupling(nc);
+        self.factored = rows;
+        // The accelerations' rows are independent (their factor checks that); as many as the
+        // rank of every row, they span the same rows. Otherwise they choose again.
+        if self.rank != self.active.len() {
+            self.active.clear();
+            self.active.extend(0..nc);
+        }
         // Δu = −M⁻¹Jᵀλ = −L⁻ᵀ (Z λ), built in `force` (scratch here).
         let correction = self.force.as_mut_slice();
         correction.fill(0.0);

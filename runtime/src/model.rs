@@ -74,6 +74,21 @@ pub trait Model {
     /// Initial `q` and `u` written in the model (`q0`, `u0` of each joint).
     fn initial_state(&self, q: &mut [f64], u: &mut [f64]);
 
+    /// The contacts' damping `D ≈ ∂F/∂u` (`nu × nu`, column-major, symmetric negative
+    /// semidefinite): the stiff part of `F` that [`crate::Method::RosenbrockW`] takes
+    /// implicitly. Writes it and returns `true`, or returns `false` (leaving `out` as it is)
+    /// for a model without contacts or a back end that does not generate it.
+    fn contact_damping(
+        &self,
+        _t: f64,
+        _q: &[f64],
+        _u: &[f64],
+        _inputs: &[f64],
+        _out: &mut [f64],
+    ) -> bool {
+        false
+    }
+
     /// `M(q)`, `nu × nu`, column-major, symmetric positive definite for a well-posed model.
     fn mass_matrix(&self, t: f64, q: &[f64], inputs: &[f64], out: &mut [f64]);
     /// `F(t, q, u, inputs)`: generalized active forces plus the velocity-dependent part of the

@@ -14,7 +14,8 @@
 
 use crate::constraints::{choose_independent, jacobian, ConstrainedSolver};
 use crate::integrate::{
-    check_len, AdaptiveOptions, Dop853, Dopri5, ExpRosenbrock, Ode, Rk4, Rosenbrock, Stats, Stepper,
+    check_len, AdaptiveOptions, Dop853, Dopri5, ExpRosenbrock, Ode, Rk4, Ros34pw2, Rosenbrock,
+    Stats, Stepper,
 };
 use crate::reduced::Reduced;
 pub use crate::signal::default_signals;
@@ -56,6 +57,23 @@ pub enum Method {
         /// Relative tolerance (≥ 0).
         rtol: f64,
         /// Absolute tolerance (> 0), in the units of each reduced state component.
+        atol: f64,
+        /// Largest step in seconds (> 0; `f64::INFINITY` for no limit).
+        h_max: f64,
+    },
+    /// The Rosenbrock W-method ROS34PW2 ([`Ros34pw2`]: order 3, embedded order 2, L-stable)
+    /// in full coordinates `[q; u]` (loops projected, quaternions allowed, as
+    /// [`Method::Dopri5`]), implicit in the contacts' damping only:
+    /// `J̃ = [[0, W(q)], [0, S D]]` with `D` the model's [`Model::contact_damping`] and `S` the
+    /// loops' constrained inverse of `M`, so each stage solves `(M − γD) y + Jᵀν = γ D r`,
+    /// `J y = 0` ([`ConstrainedSolver`]). A W-method keeps its order with any `J̃`; taking the
+    /// regularized friction's damper of a light foot implicitly lifts the explicit methods'
+    /// stability limit on the step. For models without contacts it is an explicit method of
+    /// order 3 (no use).
+    RosenbrockW {
+        /// Relative tolerance (≥ 0).
+        rtol: f64,
+        /// Absolute tolerance (> 0), in the units of each state component (q and u alike).
         atol: f64,
         /// Largest step in seconds (> 0; `f64::INFINITY` for no limit).
         h_max: f64,
@@ -273,6 +291,24 @@ pub struct ModelOde<'a, M: Model + ?Sized> {
     solver: AccelSolver,
     /// Present for models with loop closures: `M u̇ = F + Jᵀλ`, `J u̇ = −J̇u`.
     constrained: Option<ConstrainedSolver>,
+    /// Present for [`Method::RosenbrockW`]: the W-method's linear solve.
+    implicit: Option<ContactImplicit>,
+}
+
+/// The linear solve of [`Method::RosenbrockW`]: `(I − γ J̃) k = r` with
+/// `J̃ = [[0, W(q)], [0, S D]]` ([`Ode::prepare_implicit`]). With `y = k_u − r_u`:
+/// `(M − γD) y + Jᵀν = γ D r_u`, `J y = 0` (since `k_u = r_u + γ S D k_u` and `S` maps into
+/// `J`'s null space), then `k_q = r_q + γ W(q) k_u`.
+struct ContactImplicit {
+    solver: ConstrainedSolver,
+    /// `D` at the prepared point (zero for a model without it), `nu × nu`.
+    damping: Vec<f64>,
+    gamma: f64,
+    t: f64,
+    q: Vec<f64>,
+    /// `γ D r_u`, then `y`; and `W(q) k_u`.
+    speeds: Vec<f64>,
+    rates: Vec<f64>,
 }
 
 impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
@@ -296,7 +332,24 @@ impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
             inputs: vec![0.0; model.ninputs()],
             solver: AccelSolver::new(nu),
             constrained: (model.nc() > 0).then(|| ConstrainedSolver::new(nq, nu, model.nc())),
+            implicit: None,
         })
+    }
+
+    /// The same system, offering [`Method::RosenbrockW`]'s linear solve
+    /// ([`Ode::prepare_implicit`]).
+    pub fn implicit_in_contacts(mut self) -> Self {
+        let (nq, nu) = (self.nq, self.nu);
+        self.implicit = Some(ContactImplicit {
+            solver: ConstrainedSolver::new(nq, nu, self.model.nc()),
+            damping: vec![0.0; nu * nu],
+            gamma: 0.0,
+            t: 0.0,
+            q: vec![0.0; nq],
+            speeds: vec![0.0; nu],
+            rates: vec![0.0; nq],
+        });
+        self
     }
 
     /// The wrapped model.
@@ -437,6 +490,20 @@ impl<O: MotionOde, M: Model + ?Sized> Ode for Integrating<'_, O, M> {
         }
         Ok(())
     }
+
+    /// The integrals' rows of `J̃` are zero: their part of `k` is `r`'s.
+    fn prepare_implicit(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        gamma: f64,
+    ) -> Option<Result<bool, RuntimeError>> {
+        self.inner.prepare_implicit(t, &x[..self.motion], gamma)
+    }
+
+    fn solve_implicit(&mut self, r: &mut [f64]) {
+        self.inner.solve_implicit(&mut r[..self.motion]);
+    }
 }
 
 impl<M: Model + ?Sized> Ode for ModelOde<'_, M> {
@@ -453,6 +520,53 @@ impl<M: Model + ?Sized> Ode for ModelOde<'_, M> {
         match self.solve(t, q, u, udot) {
             Ok(()) | Err(RuntimeError::NonFiniteState { .. }) => Ok(()),
             Err(error) => Err(error),
+        }
+    }
+
+    fn prepare_implicit(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        gamma: f64,
+    ) -> Option<Result<bool, RuntimeError>> {
+        let implicit = self.implicit.as_mut()?;
+        let (q, u) = x.split_at(self.nq);
+        values_at(self.signals, t, &mut self.inputs);
+        let model = self.model;
+        if !model.contact_damping(t, q, u, &self.inputs, &mut implicit.damping) {
+            implicit.damping.fill(0.0);
+        }
+        implicit.gamma = gamma;
+        implicit.t = t;
+        implicit.q.copy_from_slice(q);
+        let damping = &implicit.damping;
+        let factored = implicit
+            .solver
+            .factor_shifted(model, t, q, u, &self.inputs, gamma, damping);
+        Some(Ok(factored))
+    }
+
+    fn solve_implicit(&mut self, r: &mut [f64]) {
+        let Some(implicit) = self.implicit.as_mut() else {
+            return;
+        };
+        let (nu, gamma) = (self.nu, implicit.gamma);
+        let (r_q, r_u) = r.split_at_mut(self.nq);
+        // γ D r_u, then y; k_u = r_u + y.
+        implicit.speeds.fill(0.0);
+        for (column, &value) in implicit.damping.chunks_exact(nu).zip(r_u.iter()) {
+            for (out, &d) in implicit.speeds.iter_mut().zip(column) {
+                *out += gamma * d * value;
+            }
+        }
+        implicit.solver.solve_shifted(&mut implicit.speeds);
+        for (k, y) in r_u.iter_mut().zip(&implicit.speeds) {
+            *k += y;
+        }
+        self.model
+            .kinematic_rates(implicit.t, &implicit.q, r_u, &mut implicit.rates);
+        for (k, rate) in r_q.iter_mut().zip(&implicit.rates) {
+            *k += gamma * rate;
         }
     }
 }
@@ -559,7 +673,10 @@ pub fn simulate<M: Model + ?Sized>(
         };
         return simulate_reduced(model, q0, u0, &independent, signals, options, progress);
     }
-    let ode = ModelOde::new(model, signals)?;
+    let mut ode = ModelOde::new(model, signals)?;
+    if matches!(options.method, Method::RosenbrockW { .. }) {
+        ode = ode.implicit_in_contacts();
+    }
     let sampling = Sampling::new(model, signals, options, progress)?;
     let mut x0 = Vec::with_capacity(nq + model.nu());
     x0.extend_from_slice(q0);
@@ -693,6 +810,7 @@ fn integrate<O: MotionOde, M: Model + ?Sized>(
         Method::Dop853 { .. } => run(Dop853::new(ode, t0, x0, t1, opts)?, sampling, map),
         Method::Rk4 { step } => run(Rk4::new(ode, t0, x0, t1, step)?, sampling, map),
         Method::Rosenbrock { .. } => run(Rosenbrock::new(ode, t0, x0, t1, opts)?, sampling, map),
+        Method::RosenbrockW { .. } => run(Ros34pw2::new(ode, t0, x0, t1, opts)?, sampling, map),
         Method::ExpRosenbrock { .. } => {
             run(ExpRosenbrock::new(ode, t0, x0, t1, opts)?, sampling, map)
         }
@@ -706,7 +824,9 @@ fn adaptive_options(options: &SimOptions) -> AdaptiveOptions {
     let (defaults, rtol, atol, h_max) = match options.method {
         Method::Dopri5 { rtol, atol, h_max } => (AdaptiveOptions::default(), rtol, atol, h_max),
         Method::Dop853 { rtol, atol, h_max } => (AdaptiveOptions::dop853(), rtol, atol, h_max),
-        Method::Rosenbrock { rtol, atol, h_max } | Method::ExpRosenbrock { rtol, atol, h_max } => {
+        Method::Rosenbrock { rtol, atol, h_max }
+        | Method::RosenbrockW { rtol, atol, h_max }
+        | Method::ExpRosenbrock { rtol, atol, h_max } => {
             (AdaptiveOptions::rosenbrock(), rtol, atol, h_max)
         }
         Method::Rk4 { .. } => return AdaptiveOptions::default(),

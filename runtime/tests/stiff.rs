@@ -2,7 +2,8 @@
 //! property of `Rosenbrock`), L-stability, following a lightly damped fast mode over steps
 //! longer than its period (`ExpRosenbrock`), dense output, and adaptive accuracy.
 
-use mech_runtime::integrate::{AdaptiveOptions, ExpRosenbrock, Ode, Rosenbrock, Stepper};
+use mech_runtime::integrate::{AdaptiveOptions, ExpRosenbrock, Ode, Ros34pw2, Rosenbrock, Stepper};
+use mech_runtime::nalgebra::Matrix3;
 use mech_runtime::RuntimeError;
 
 mod common;
@@ -101,6 +102,65 @@ fn rosenbrock_is_second_order_even_with_a_frozen_jacobian() {
     }
 }
 
+/// [`Smooth`] with its own `W = I − γ J̃` for the W-methods ([`Ode::prepare_implicit`]), `J̃`
+/// a fixed matrix that is not its Jacobian.
+struct SmoothWithW {
+    approximation: Matrix3<f64>,
+    inverse: Matrix3<f64>,
+}
+
+impl Ode for SmoothWithW {
+    fn dim(&self) -> usize {
+        3
+    }
+    fn rhs(&mut self, t: f64, y: &[f64], f: &mut [f64]) -> Result<(), RuntimeError> {
+        Smooth.rhs(t, y, f)
+    }
+    fn prepare_implicit(
+        &mut self,
+        _t: f64,
+        _x: &[f64],
+        gamma: f64,
+    ) -> Option<Result<bool, RuntimeError>> {
+        let w = Matrix3::identity() - self.approximation * gamma;
+        Some(Ok(match w.try_inverse() {
+            Some(inverse) => {
+                self.inverse = inverse;
+                true
+            }
+            None => false,
+        }))
+    }
+    fn solve_implicit(&mut self, r: &mut [f64]) {
+        let k = self.inverse * mech_runtime::nalgebra::Vector3::new(r[0], r[1], r[2]);
+        r.copy_from_slice(k.as_slice());
+    }
+}
+
+/// ROS34PW2 (the coefficients transcribed from Rang & Angermann) converges at order 3 with
+/// the Jacobian by differences, and with a `J̃` that is not the Jacobian at all (the
+/// W-method property that [`Method::RosenbrockW`](mech_runtime::Method::RosenbrockW) rests
+/// on: the robot's `J̃` is its contacts' damping only).
+#[test]
+fn ros34pw2_is_third_order_with_any_w() {
+    let y0 = smooth_exact(0.0);
+    let differences = observed_orders(|h| {
+        smooth_error(&mut Ros34pw2::new(Smooth, 0.0, &y0, 2.0, fixed(h)).unwrap())
+    });
+    let approximation = Matrix3::new(-1.0, 0.0, 0.5, 0.0, 0.0, 1.0, 0.5, -1.0, -0.5);
+    let supplied = observed_orders(|h| {
+        let ode = SmoothWithW {
+            approximation,
+            inverse: Matrix3::zeros(),
+        };
+        smooth_error(&mut Ros34pw2::new(ode, 0.0, &y0, 2.0, fixed(h)).unwrap())
+    });
+    println!("ROS34PW2: observed orders {differences:.3?} (J by differences), {supplied:.3?} (a wrong J̃)");
+    for order in differences.into_iter().chain(supplied) {
+        assert!((order - 3.0).abs() < 0.3, "order {order}");
+    }
+}
+
 #[test]
 fn exp_rosenbrock_is_fourth_order() {
     let y0 = smooth_exact(0.0);
@@ -117,7 +177,7 @@ fn exp_rosenbrock_is_fourth_order() {
 /// L-stability is `R(hλ) → 0` as `hλ → −∞`; an A-stable method that is not L-stable (the
 /// trapezoidal rule) keeps `|R| → 1` and the stiff deviation with it.
 #[test]
-fn rosenbrock_is_l_stable() {
+fn rosenbrocks_are_l_stable() {
     struct Relaxation(f64);
     impl Ode for Relaxation {
         fn dim(&self) -> usize {
@@ -138,6 +198,19 @@ fn rosenbrock_is_l_stable() {
     println!("R(hλ) at hλ = −1e2, −1e4, −1e6: {r:?}");
     assert!(
         r[0].abs() < 0.05 && r[1].abs() < 1e-3 && r[2].abs() < 1e-6,
+        "{r:?}"
+    );
+    // ROS34PW2 too (stiffly accurate: R(∞) = 0).
+    let stability = |lambda: f64| {
+        let mut s = Ros34pw2::new(Relaxation(lambda), 0.0, &[0.0], h, fixed(h)).unwrap();
+        run_to_end(&mut s);
+        1.0 - s.state()[0]
+    };
+    let r: Vec<f64> = [-1e3, -1e5, -1e7].map(stability).to_vec();
+    println!("ROS34PW2: R(hλ) at hλ = −1e2, −1e4, −1e6: {r:?}");
+    // R(hλ) = O(1/hλ) as hλ → −∞.
+    assert!(
+        r[0].abs() < 0.05 && r[1].abs() < 1e-3 && r[2].abs() < 1e-5,
         "{r:?}"
     );
 }

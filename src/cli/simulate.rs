@@ -71,6 +71,9 @@ pub enum Integrator {
     Rk4,
     /// Linearly implicit Rosenbrock 2(3) (L-stable), in the independent coordinates.
     Rosenbrock,
+    /// The same formula as a W-method in all coordinates, implicit in the contacts' damping:
+    /// long steps where regularized friction on light feet holds the explicit methods back.
+    RosenbrockW,
     /// Exponential Rosenbrock 4(3): follows lightly damped fast modes at long steps, in the
     /// independent coordinates.
     ExpRosenbrock,
@@ -160,6 +163,7 @@ fn method(request: &SimulateArgs) -> Result<Method, Error> {
             step: parse_time("--step", &request.step)?,
         },
         Integrator::Rosenbrock => Method::Rosenbrock { rtol, atol, h_max },
+        Integrator::RosenbrockW => Method::RosenbrockW { rtol, atol, h_max },
         Integrator::ExpRosenbrock => Method::ExpRosenbrock { rtol, atol, h_max },
     })
 }

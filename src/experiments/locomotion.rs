@@ -57,7 +57,11 @@ pub struct Spec {
     /// Cycles averaged.
     #[serde(default = "default_cycles")]
     pub cycles: f64,
-    /// Relative tolerance of the DOPRI5 integration (the absolute one is 1e-3 of it).
+    /// The integrator: `dopri5` (the default) or `rosenbrock-w` (implicit in the contacts'
+    /// damping; see `Method::RosenbrockW`).
+    #[serde(default)]
+    pub method: WalkMethod,
+    /// Relative tolerance of the integration (the absolute one is 1e-3 of it).
     #[serde(default = "default_rtol")]
     pub rtol: f64,
     /// Samples per cycle (slip and airborne time are read from them).
@@ -69,6 +73,15 @@ pub struct Spec {
     /// grid and drawn beside the first (Fig. 9 sets HAMR-VI beside HAMR-V2.0).
     #[serde(default)]
     pub compare: Option<std::path::PathBuf>,
+}
+
+/// The integrators a walk may take (key `method`).
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq)]
+#[serde(rename_all = "kebab-case")]
+pub enum WalkMethod {
+    #[default]
+    Dopri5,
+    RosenbrockW,
 }
 
 fn default_gait() -> String {
@@ -467,10 +480,12 @@ pub fn walk(spec: &Spec, frequency: f64, payload: f64) -> Result<(Walk, Trajecto
     let options = SimOptions {
         t_end: (spec.settle_cycles + spec.cycles) * period,
         output_interval: period / spec.samples_per_cycle as f64,
-        method: Method::Dopri5 {
-            rtol: spec.rtol,
-            atol: spec.rtol * 1e-3,
-            h_max: f64::INFINITY,
+        method: {
+            let (rtol, atol, h_max) = (spec.rtol, spec.rtol * 1e-3, f64::INFINITY);
+            match spec.method {
+                WalkMethod::Dopri5 => Method::Dopri5 { rtol, atol, h_max },
+                WalkMethod::RosenbrockW => Method::RosenbrockW { rtol, atol, h_max },
+            }
         },
         ..SimOptions::default()
     };

@@ -212,6 +212,9 @@ pub struct Tape {
     /// fraction of `forcing`'s operations, and the statics evaluate it dof times per Newton
     /// iteration.
     pub static_forcing: Option<Program>,
+    /// The contacts' damping `D(t, q, u, inputs)`, column-major `nu × nu`
+    /// (`Equations::contact_damping`); `None` without contacts.
+    pub contact_damping: Option<Program>,
     pub outputs: Program,
     /// Each output row alone: for callers that need a few outputs many times (the fixtures of
     /// the statics hold the foot, 225 of the extended HAMR leg's 2,604 output operations; its
@@ -242,6 +245,10 @@ impl Tape {
             forcing: Program::compile(&equations.pool, &equations.forcing),
             static_forcing: equations
                 .static_forcing
+                .as_ref()
+                .map(|roots| Program::compile(&equations.pool, roots)),
+            contact_damping: equations
+                .contact_damping
                 .as_ref()
                 .map(|roots| Program::compile(&equations.pool, roots)),
             outputs: Program::compile(&equations.pool, &equations.outputs),

@@ -25,6 +25,8 @@
 //! contact's dissipated power is what its force takes from the motion beyond `−V̇`:
 //! `D = −f·v − V̇ = (f_n − k δ^e) δ̇ − f_t·v_t ≥ 0`.
 
+use std::collections::BTreeMap;
+
 use super::kinematics::{self, Partials};
 use super::vector::{self, Vec3};
 use super::{combine_partials, point_position, relative_partials_at, Kinematics};
@@ -44,6 +46,14 @@ pub struct ContactState {
     pub force: Vec3,
     /// `∂v/∂u_r` of the contact point, body relative to plane.
     pub partials: Partials,
+    /// The plane's unit normal `n` and the slip velocity `v_t`, in N's basis.
+    normal: Vec3,
+    slip: Vec3,
+    /// The coefficients of [`ContactState::add_damping`]'s `K`: `c = ∂f_n/∂δ̇`,
+    /// `g = μ f_n / s` and `g / s²`, with `s = √(|v_t|² + v_s²)`.
+    normal_damping: ExprId,
+    friction_rate: ExprId,
+    friction_curvature: ExprId,
 }
 
 /// `max(0, x)`.
@@ -118,6 +128,11 @@ impl ContactState {
         let factor = pool.add(one, damping_term);
         let unclamped = pool.mul(elastic, factor);
         let normal_force = ramp(pool, unclamped);
+        // c = ∂f_n/∂δ̇ = 3/2 α k δ^e where the clamp is open.
+        let open = pool.call(Func::Step, unclamped);
+        let viscous = pool.mul(elastic, alpha);
+        let viscous = pool.scale(viscous, Number::rational(3, 2));
+        let normal_damping = pool.mul(open, viscous);
 
         // f_t = −μ f_n v_t / √(|v_t|² + v_s²).
         let along = vector::scale(pool, n, normal_speed);
@@ -130,8 +145,11 @@ impl ContactState {
         let mu = kinematics::lower_expr(pool, friction);
         let mu_normal = pool.mul(mu, normal_force);
         let magnitude = pool.mul(mu_normal, inverse);
+        let friction_rate = magnitude;
         let magnitude = pool.neg(magnitude);
         let friction = vector::scale(pool, slip, magnitude);
+        let inverse_square = pool.pow(regularized, Number::int(-1));
+        let friction_curvature = pool.mul(friction_rate, inverse_square);
 
         let normal_part = vector::scale(pool, n, normal_force);
         let force = vector::add(pool, normal_part, friction);
@@ -155,7 +173,56 @@ impl ContactState {
             energy,
             force,
             partials,
+            normal: n,
+            slip,
+            normal_damping,
+            friction_rate,
+            friction_curvature,
         })
+    }
+
+    /// Adds the contact's damping `Pᵀ K P` to `damping[(r, s)]` (`r ≤ s`; the matrix is
+    /// symmetric), `P` the partial velocities `∂v/∂u` and `K ≈ ∂f/∂v` the contact force's
+    /// slope in the slip velocity at fixed `q`: `K = −c n nᵀ − g (I − n nᵀ) + (g/s²) v_t v_tᵀ`
+    /// (from `f_n` in `δ̇ = −n·v`, and `f_t = −μ f_n v_t/s` at fixed `f_n`). The term in which
+    /// `f_t` follows `f_n` through `δ̇`, `μ c (v_t/s) nᵀ`, is left out: it is not symmetric,
+    /// and without it `K` is symmetric negative semidefinite (`1/s ≥ |v_t|²/s³`), so that a
+    /// linearly implicit integrator's `M − γ Pᵀ K P` stays positive definite. It is the part
+    /// of `∂F/∂u` that is stiff: on a light foot the regularized friction is a damper of
+    /// microseconds.
+    pub fn add_damping(
+        &self,
+        pool: &mut ExprPool,
+        damping: &mut BTreeMap<(usize, usize), Vec<ExprId>>,
+    ) {
+        // a_r = n·p_r, b_r = v_t·p_r; K's quadratic form on (p_r, p_s) is
+        // (g − c) a_r a_s − g p_r·p_s + (g/s²) b_r b_s.
+        let along: Vec<(ExprId, ExprId)> = self
+            .partials
+            .iter()
+            .map(|&(_, p)| {
+                (
+                    vector::dot(pool, self.normal, p),
+                    vector::dot(pool, self.slip, p),
+                )
+            })
+            .collect();
+        let normal_weight = pool.sub(self.friction_rate, self.normal_damping);
+        let plane_weight = pool.neg(self.friction_rate);
+        for (i, &(r, p_r)) in self.partials.iter().enumerate() {
+            for (j, &(s, p_s)) in self.partials.iter().enumerate().skip(i) {
+                let (a_r, b_r) = along[i];
+                let (a_s, b_s) = along[j];
+                let normal = pool.mul_all(&[normal_weight, a_r, a_s]);
+                let dot = vector::dot(pool, p_r, p_s);
+                let plane = pool.mul(plane_weight, dot);
+                let slip = pool.mul_all(&[self.friction_curvature, b_r, b_s]);
+                damping
+                    .entry((r.min(s), r.max(s)))
+                    .or_default()
+                    .extend([normal, plane, slip]);
+            }
+        }
     }
 
     /// `F_r += f·∂v/∂u_r`.

@@ -49,6 +49,10 @@ pub struct Equations {
     /// `F(t, q, 0, inputs)`: the forcing at rest, for statics (no velocity term of `F_r*`, no
     /// damper); `None` where a speed sits under a negative power (no value at `u = 0`).
     pub static_forcing: Option<Vec<ExprId>>,
+    /// The contacts' damping `D ≈ ∂F/∂u` (`nu × nu`, column-major, symmetric negative
+    /// semidefinite; [`contact::ContactState::add_damping`]): the stiff part of `F` that a
+    /// linearly implicit integrator takes implicitly. `None` for models without contacts.
+    pub contact_damping: Option<Vec<ExprId>>,
     /// Scalar outputs in declaration order (vector outputs expanded to `.x`, `.y`, `.z`).
     pub outputs: Vec<ExprId>,
     pub output_names: Vec<String>,
@@ -220,6 +224,7 @@ pub fn derive(model: &Model) -> Equations {
         .collect();
     let static_forcing =
         pool.substitute(&forcing, &|s| matches!(s, Symbol::Speed(_)).then_some(zero));
+    let contact_damping = contact_damping(&mut pool, &mut kinematics, model);
 
     let mut outputs = Vec::new();
     let mut output_names = Vec::new();
@@ -243,6 +248,7 @@ pub fn derive(model: &Model) -> Equations {
         mass_matrix,
         forcing,
         static_forcing,
+        contact_damping,
         outputs,
         output_names,
         integrated_outputs,
@@ -254,6 +260,33 @@ pub fn derive(model: &Model) -> Equations {
     }
     equations.pool = pool;
     equations
+}
+
+/// [`Equations::contact_damping`]: every contact's `Pᵀ K P`, summed.
+fn contact_damping(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    model: &Model,
+) -> Option<Vec<ExprId>> {
+    let mut terms = BTreeMap::new();
+    let mut any = false;
+    for load in &model.loads {
+        if let Some(contact) = contact::ContactState::new(pool, kinematics, model, load) {
+            contact.add_damping(pool, &mut terms);
+            any = true;
+        }
+    }
+    if !any {
+        return None;
+    }
+    let nu = model.nu();
+    let mut matrix = vec![pool.zero(); nu * nu];
+    for ((r, s), entry) in terms {
+        let entry = pool.add_all(&entry);
+        matrix[r + nu * s] = entry;
+        matrix[s + nu * r] = entry;
+    }
+    Some(matrix)
 }
 
 /// Display names: `q_<coordinate>`, `u_<speed>` (as [`Model::coordinate_names`] and

@@ -160,6 +160,31 @@ fn invert(pool: &mut ExprPool, model: &Model, y: Matrix) -> Matrix {
 }
 
 /// `Σ_j m_j v_j` over the nonzero coefficients.
+/// `Wᵀ A W` of a symmetric `nu × nu` matrix `A` (column-major), `W` given by its columns.
+fn congruence(pool: &mut ExprPool, matrix: &[ExprId], w_columns: &[Vec<ExprId>]) -> Vec<ExprId> {
+    let nu = w_columns.len();
+    // (A W) column s, then (Wᵀ A W)[r, s] = w_rᵀ (A W)_s.
+    let times_w: Matrix = (0..nu)
+        .map(|i| {
+            let row: Vec<ExprId> = (0..nu).map(|j| matrix[i + nu * j]).collect();
+            w_columns
+                .iter()
+                .map(|c| combination(pool, &row, c))
+                .collect()
+        })
+        .collect();
+    let mut out = vec![pool.zero(); nu * nu];
+    for s in 0..nu {
+        let column: Vec<ExprId> = times_w.iter().map(|row| row[s]).collect();
+        for r in 0..=s {
+            let entry = combination(pool, &w_columns[r], &column);
+            out[r + nu * s] = entry;
+            out[s + nu * r] = entry;
+        }
+    }
+    out
+}
+
 fn combination(pool: &mut ExprPool, coefficients: &[ExprId], values: &[ExprId]) -> ExprId {
     let mut terms = Vec::with_capacity(values.len());
     for (&c, &v) in coefficients.iter().zip(values) {
@@ -224,24 +249,7 @@ pub(super) fn change_speeds(
     let mass_rows: Matrix = (0..nu)
         .map(|i| (0..nu).map(|j| equations.mass_matrix[i + nu * j]).collect())
         .collect();
-    let mass_times_w: Matrix = mass_rows
-        .iter()
-        .map(|row| {
-            w_columns
-                .iter()
-                .map(|c| combination(pool, row, c))
-                .collect()
-        })
-        .collect();
-    let mut mass_matrix = equations.mass_matrix.clone();
-    for s in 0..nu {
-        let mw_column = column(&mass_times_w, s);
-        for r in 0..=s {
-            let entry = combination(pool, &w_columns[r], &mw_column);
-            mass_matrix[r + nu * s] = entry;
-            mass_matrix[s + nu * r] = entry;
-        }
-    }
+    let mass_matrix = congruence(pool, &equations.mass_matrix, &w_columns);
     let forcing = in_new_speeds(pool, &equations.forcing);
     let transport: Vec<ExprId> = mass_rows
         .iter()
@@ -257,6 +265,11 @@ pub(super) fn change_speeds(
         .map(|c| combination(pool, c, &net))
         .collect();
     equations.mass_matrix = mass_matrix;
+    // D̃ = Wᵀ D(q, W u) W, as M̃ (D is the slope of F in u).
+    equations.contact_damping = equations.contact_damping.take().map(|damping| {
+        let damping = in_new_speeds(pool, &damping);
+        congruence(pool, &damping, &w_columns)
+    });
     // At rest Ẇu = 0 and F(q, 0) is the default speeds' static forcing.
     equations.static_forcing = equations.static_forcing.take().map(|rest| {
         w_columns

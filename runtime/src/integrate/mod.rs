@@ -59,6 +59,7 @@ mod dopri5;
 mod exp_rosenbrock;
 mod phi;
 mod rk4;
+mod ros34pw2;
 mod rosenbrock;
 
 pub use adaptive::{AdaptiveOptions, AdaptiveStepper};
@@ -66,6 +67,7 @@ pub use dop853::Dop853;
 pub use dopri5::Dopri5;
 pub use exp_rosenbrock::ExpRosenbrock;
 pub use rk4::Rk4;
+pub use ros34pw2::{Ros34pw2, Ros34pw2Method};
 pub use rosenbrock::Rosenbrock;
 
 use crate::RuntimeError;
@@ -81,6 +83,21 @@ pub trait Ode {
     fn dim(&self) -> usize;
     /// Writes `f(t, x)` into `dxdt` (both of length [`Ode::dim`]).
     fn rhs(&mut self, t: f64, x: &[f64], dxdt: &mut [f64]) -> Result<(), RuntimeError>;
+    /// For [`Rosenbrock`], a W-method: prepares solving `(I − γ J̃) k = r` at `(t, x)` with
+    /// `J̃ ≈ ∂f/∂x` of the system's own choosing (the stiff part of `f`, cheaper than `∂f/∂x`
+    /// by differences). `None` (the default): the system has none, and the method takes
+    /// finite differences. `Some(Ok(false))`: the matrix is singular.
+    fn prepare_implicit(
+        &mut self,
+        _t: f64,
+        _x: &[f64],
+        _gamma: f64,
+    ) -> Option<Result<bool, RuntimeError>> {
+        None
+    }
+    /// Solves `(I − γ J̃) k = r` in place (`r` in, `k` out) after [`Ode::prepare_implicit`]
+    /// returned `Some(Ok(true))`.
+    fn solve_implicit(&mut self, _r: &mut [f64]) {}
 }
 
 impl<O: Ode + ?Sized> Ode for &mut O {
@@ -89,6 +106,17 @@ impl<O: Ode + ?Sized> Ode for &mut O {
     }
     fn rhs(&mut self, t: f64, x: &[f64], dxdt: &mut [f64]) -> Result<(), RuntimeError> {
         (**self).rhs(t, x, dxdt)
+    }
+    fn prepare_implicit(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        gamma: f64,
+    ) -> Option<Result<bool, RuntimeError>> {
+        (**self).prepare_implicit(t, x, gamma)
+    }
+    fn solve_implicit(&mut self, r: &mut [f64]) {
+        (**self).solve_implicit(r)
     }
 }
 
@@ -233,6 +261,20 @@ impl Jacobian {
         stats.jacobian_evaluations += 1;
         self.current = true;
         Ok(())
+    }
+}
+
+/// The cubic Hermite interpolant at the fraction `theta` of a step of length `h` from
+/// `(x0, f0)` to `(x1, f1)` (states and derivatives), into `out`.
+fn hermite(theta: f64, h: f64, start: (&[f64], &[f64]), end: (&[f64], &[f64]), out: &mut [f64]) {
+    let (s, s2, s3) = (theta, theta * theta, theta * theta * theta);
+    let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;
+    let h10 = s3 - 2.0 * s2 + s;
+    let h01 = -2.0 * s3 + 3.0 * s2;
+    let h11 = s3 - s2;
+    let ((x0, f0), (x1, f1)) = (start, end);
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = h00 * x0[i] + h10 * h * f0[i] + h01 * x1[i] + h11 * h * f1[i];
     }
 }
 

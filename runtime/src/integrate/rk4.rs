@@ -4,7 +4,8 @@
 //! grid and the cubic Hermite interpolant between them.
 
 use super::{
-    all_finite, begin_interpolation, check_len, check_times, derivative_at, Ode, Stats, Stepper,
+    all_finite, begin_interpolation, check_len, check_times, derivative_at, hermite, Ode, Stats,
+    Stepper,
 };
 use crate::RuntimeError;
 
@@ -180,17 +181,11 @@ impl<O: Ode> Stepper for Rk4<O> {
             return Ok(());
         };
         let h = self.t - self.t_prev;
-        let (s2, s3) = (s * s, s * s * s);
-        let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;
-        let h10 = s3 - 2.0 * s2 + s;
-        let h01 = -2.0 * s3 + 3.0 * s2;
-        let h11 = s3 - s2;
-        for (i, o) in out.iter_mut().enumerate() {
-            *o = h00 * self.x_prev[i]
-                + h10 * h * self.f_prev[i]
-                + h01 * self.x[i]
-                + h11 * h * self.f[i];
-        }
+        let (start, end) = (
+            (&self.x_prev[..], &self.f_prev[..]),
+            (&self.x[..], &self.f[..]),
+        );
+        hermite(s, h, start, end, out);
         Ok(())
     }
 
