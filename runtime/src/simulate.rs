@@ -309,6 +309,9 @@ struct ContactImplicit {
     /// `γ D r_u`, then `y`; and `W(q) k_u`.
     speeds: Vec<f64>,
     rates: Vec<f64>,
+    /// The loops' projection of each accepted step ([`Ode::correct`],
+    /// [`SimOptions::constraint_tolerance`]).
+    tolerance: f64,
 }
 
 impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
@@ -337,8 +340,9 @@ impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
     }
 
     /// The same system, offering [`Method::RosenbrockW`]'s linear solve
-    /// ([`Ode::prepare_implicit`]).
-    pub fn implicit_in_contacts(mut self) -> Self {
+    /// ([`Ode::prepare_implicit`]) and the correction of its accepted steps
+    /// ([`Ode::correct`]: quaternions to unit norm, the loops projected to `tolerance`).
+    pub fn implicit_in_contacts(mut self, tolerance: f64) -> Self {
         let (nq, nu) = (self.nq, self.nu);
         self.implicit = Some(ContactImplicit {
             solver: ConstrainedSolver::new(nq, nu, self.model.nc()),
@@ -348,6 +352,7 @@ impl<'a, M: Model + ?Sized> ModelOde<'a, M> {
             q: vec![0.0; nq],
             speeds: vec![0.0; nu],
             rates: vec![0.0; nq],
+            tolerance,
         });
         self
     }
@@ -504,6 +509,10 @@ impl<O: MotionOde, M: Model + ?Sized> Ode for Integrating<'_, O, M> {
     fn solve_implicit(&mut self, r: &mut [f64]) {
         self.inner.solve_implicit(&mut r[..self.motion]);
     }
+
+    fn correct(&mut self, t: f64, x: &mut [f64]) -> Result<bool, RuntimeError> {
+        self.inner.correct(t, &mut x[..self.motion])
+    }
 }
 
 impl<M: Model + ?Sized> Ode for ModelOde<'_, M> {
@@ -544,6 +553,23 @@ impl<M: Model + ?Sized> Ode for ModelOde<'_, M> {
             .solver
             .factor_shifted(model, t, q, u, &self.inputs, gamma, damping);
         Some(Ok(factored))
+    }
+
+    fn correct(&mut self, t: f64, x: &mut [f64]) -> Result<bool, RuntimeError> {
+        let Some(implicit) = self.implicit.as_mut() else {
+            return Ok(false);
+        };
+        let (q, u) = x.split_at_mut(self.nq);
+        let normalized = normalize_quaternions(self.model.unit_quaternions(), q);
+        if self.model.nc() == 0 {
+            return Ok(normalized);
+        }
+        values_at(self.signals, t, &mut self.inputs);
+        let projected =
+            implicit
+                .solver
+                .project(self.model, t, q, u, &self.inputs, implicit.tolerance)?;
+        Ok(normalized || projected)
     }
 
     fn solve_implicit(&mut self, r: &mut [f64]) {
@@ -674,8 +700,10 @@ pub fn simulate<M: Model + ?Sized>(
         return simulate_reduced(model, q0, u0, &independent, signals, options, progress);
     }
     let mut ode = ModelOde::new(model, signals)?;
-    if matches!(options.method, Method::RosenbrockW { .. }) {
-        ode = ode.implicit_in_contacts();
+    // The W-method's system projects its accepted steps itself (`Ode::correct`).
+    let corrects = matches!(options.method, Method::RosenbrockW { .. });
+    if corrects {
+        ode = ode.implicit_in_contacts(options.constraint_tolerance);
     }
     let sampling = Sampling::new(model, signals, options, progress)?;
     let mut x0 = Vec::with_capacity(nq + model.nu());
@@ -689,6 +717,7 @@ pub fn simulate<M: Model + ?Sized>(
         projector: (model.nc() > 0).then(|| ConstrainedSolver::new(nq, model.nu(), model.nc())),
         inputs: vec![0.0; signals.len()],
         tolerance: options.constraint_tolerance,
+        corrected: corrects,
     };
     integrate(ode, &x0, options, sampling, &mut full)
 }
@@ -856,12 +885,17 @@ struct FullCoordinates<'a, M: Model + ?Sized> {
     projector: Option<ConstrainedSolver>,
     inputs: Vec<f64>,
     tolerance: f64,
+    /// The integrator's system corrects every accepted step itself ([`Ode::correct`]).
+    corrected: bool,
 }
 
 impl<M: Model + ?Sized> StateMap for FullCoordinates<'_, M> {
     /// Projects `x` in place; returns whether it changed (a state already within tolerance is
     /// left bit for bit as it was).
     fn after_step(&mut self, t: f64, x: &mut [f64]) -> Result<bool, RuntimeError> {
+        if self.corrected {
+            return Ok(false);
+        }
         let normalized = normalize_quaternions(self.model.unit_quaternions(), &mut x[..self.nq]);
         let Some(projector) = self.projector.as_mut() else {
             return Ok(normalized);

@@ -98,6 +98,12 @@ pub trait Ode {
     /// Solves `(I − γ J̃) k = r` in place (`r` in, `k` out) after [`Ode::prepare_implicit`]
     /// returned `Some(Ok(true))`.
     fn solve_implicit(&mut self, _r: &mut [f64]) {}
+    /// Moves the state of an accepted step onto the system's manifold (e.g. constraints),
+    /// before [`Ros34pw2`] evaluates the derivative there; returns whether it changed it. The
+    /// default leaves it.
+    fn correct(&mut self, _t: f64, _x: &mut [f64]) -> Result<bool, RuntimeError> {
+        Ok(false)
+    }
 }
 
 impl<O: Ode + ?Sized> Ode for &mut O {
@@ -117,6 +123,9 @@ impl<O: Ode + ?Sized> Ode for &mut O {
     }
     fn solve_implicit(&mut self, r: &mut [f64]) {
         (**self).solve_implicit(r)
+    }
+    fn correct(&mut self, t: f64, x: &mut [f64]) -> Result<bool, RuntimeError> {
+        (**self).correct(t, x)
     }
 }
 

@@ -77,7 +77,7 @@ const B_HAT: [f64; STAGES] = [
 /// consistent (unlike [`Rosenbrock`](super::Rosenbrock)'s, which assumes the exact `J`).
 /// Each trial solves four systems with one `W` and evaluates the right-hand side three
 /// times; an accepted step evaluates it once more at its end (the next step's first stage
-/// and the dense output's slope). Without the system's `J̃`, `J` is taken by differences.
+/// and the dense output's slope), after the system's [`Ode::correct`]. Without the system's `J̃`, `J` is taken by differences.
 pub type Ros34pw2<O> = AdaptiveStepper<O, Ros34pw2Method>;
 
 /// The transformed coefficients (`a`, `c`, `m`, `m − m̂`) and the stage abscissae.
@@ -228,6 +228,9 @@ impl AdaptiveMethod for Ros34pw2Method {
 
     fn accept<O: Ode>(&mut self, ode: &mut O, step: Step<'_>) -> Result<(), RuntimeError> {
         let (t, h) = (step.t, step.h);
+        // The system's correction (the loops' projection) before the end's derivative, so
+        // that the derivative is not evaluated twice.
+        ode.correct(t + h, &mut step.next.x)?;
         ode.rhs(t + h, &step.next.x, &mut step.next.f)?;
         step.stats.rhs_evaluations += 1;
         self.start.x.copy_from_slice(&step.now.x);
