@@ -77,7 +77,7 @@ pub trait Model {
     /// The contacts' damping `D ≈ ∂F/∂u` (`nu × nu`, column-major, symmetric negative
     /// semidefinite): the stiff part of `F` that [`crate::Method::RosenbrockW`] takes
     /// implicitly. Writes it and returns `true`, or returns `false` (leaving `out` as it is)
-    /// for a model without contacts or a back end that does not generate it.
+    /// for a model without contacts (both back ends generate it for the others).
     fn contact_damping(
         &self,
         _t: f64,

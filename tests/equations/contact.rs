@@ -465,7 +465,7 @@ fn the_contact_never_pulls() {
 /// follow `u` and `D` is all of `∂F/∂u`, the block having no velocity terms in `M u̇ = F`) the
 /// two agree to the differences' own error; with α = 0.5 s/m they differ by the term `D`
 /// leaves out on purpose, `μ c (v_t/s) nᵀ` projected (`c = 3/2 α k δ`), which is checked
-/// too. Measured: 2e-9 relative of `|D|`.
+/// too; and the generated Rust's `D` is the tape's. Measured: 2e-9 relative of `|D|`.
 #[test]
 fn contact_damping_is_the_slope_of_the_contact_force() {
     let (theta, mu, v_s) = (20f64.to_radians(), 0.6, 1e-3);
@@ -522,6 +522,21 @@ fn contact_damping_is_the_slope_of_the_contact_force() {
             "D against ∂F/∂u: {worst:e} of {scale:e}"
         );
     }
+    // Both back ends emit it: the generated Rust of `contact_ball` against its tape, the
+    // ball pressed into the floor, sliding and spinning.
+    let tape = common::tape("contact_ball");
+    let generated = mech::models::compiled("contact_ball").unwrap();
+    let (mut q, mut u) = common::initial_state(&tape);
+    q[1] = 0.0099;
+    u.copy_from_slice(&[0.2, -0.05, 3.0]);
+    let nu = tape.nu();
+    let [mut from_tape, mut from_rust] = [vec![0.0; nu * nu], vec![0.0; nu * nu]];
+    assert!(tape.contact_damping(0.0, &q, &u, &[], &mut from_tape));
+    assert!(generated.contact_damping(0.0, &q, &u, &[], &mut from_rust));
+    for (a, b) in from_tape.iter().zip(&from_rust) {
+        common::assert_close("D, generated Rust against the tape", *b, *a, 1e-12, 1e-12);
+    }
+    assert!(from_tape.iter().any(|d| d.abs() > 1e-3), "{from_tape:?}");
 }
 
 /// The regularized friction on a block at rest on the incline is a damper of time constant

@@ -4,9 +4,10 @@
 //! Rust source (quote → syn → prettyplease) with
 //! - `struct <Model> { pub params: <Model>Params }` and the params struct (SI defaults);
 //! - inherent `mass_matrix_fixed`, `forcing_fixed`, `outputs_fixed` (and `constraints_fixed`,
-//!   … for loops, `flexures_fixed`) on fixed-size nalgebra types: straight-line code, one
-//!   `let` per shared subexpression, no allocation, no panics; named apart from the trait's
-//!   methods so that calling either on a value of the generated type does what it says;
+//!   … for loops, `flexures_fixed`, `contact_damping_fixed` for contacts) on fixed-size
+//!   nalgebra types: straight-line code, one `let` per shared subexpression, no allocation,
+//!   no panics; named apart from the trait's methods so that calling either on a value of the
+//!   generated type does what it says;
 //! - `initial_q()`, `initial_u()`: associated functions (no `self`), like `NQ` and the name
 //!   arrays: the `q0`, `u0` written in the model do not depend on `params`;
 //! - `impl Model` (the runtime trait) over slices, each method copying the result of its
@@ -187,6 +188,7 @@ enum Function {
     ConstrainedTerms,
     DynamicsTerms,
     KinematicRates,
+    ContactDamping,
 }
 
 impl Function {
@@ -202,6 +204,7 @@ impl Function {
             Function::ConstrainedTerms => "constrained_terms",
             Function::DynamicsTerms => "dynamics_terms",
             Function::KinematicRates => "kinematic_rates",
+            Function::ContactDamping => "contact_damping",
         }
     }
 
@@ -228,7 +231,8 @@ impl Function {
             Function::Forcing
             | Function::Outputs
             | Function::ConstrainedTerms
-            | Function::DynamicsTerms => &State::ALL,
+            | Function::DynamicsTerms
+            | Function::ContactDamping => &State::ALL,
         }
     }
 }
@@ -319,6 +323,7 @@ impl<'a> Emitter<'a> {
         let (constraint_inherent, constraint_trait) = self.constraint_functions();
         let (flexure_inherent, flexure_trait) = self.flexure_functions();
         let (rates_inherent, rates_trait) = self.kinematic_functions();
+        let (contact_inherent, contact_trait) = self.contact_functions();
         let (output_parts, outputs) =
             self.inherent_function(Function::Outputs, &self.equations.outputs);
         let mass_matrix_in_trait = self.trait_method(Function::MassMatrix, "m");
@@ -407,6 +412,7 @@ impl<'a> Emitter<'a> {
 
                 #constraint_inherent
                 #flexure_inherent
+                #contact_inherent
                 #rates_inherent
             }
 
@@ -447,6 +453,7 @@ impl<'a> Emitter<'a> {
                 #integrated_in_trait
                 #constraint_trait
                 #flexure_trait
+                #contact_trait
                 #rates_trait
             }
         };
@@ -479,6 +486,28 @@ impl<'a> Emitter<'a> {
             fn nflexures(&self) -> usize { #count }
             fn flexure_name(&self, i: usize) -> &str { Self::FLEXURE_NAMES.get(i).copied().unwrap_or("") }
             #flexures_in_trait
+        };
+        (inherent, in_trait)
+    }
+
+    /// For models with contacts: `contact_damping` (`D ≈ ∂F/∂u` of the contacts), inherent
+    /// and in the trait (which returns `true`); other models keep the trait's default (none).
+    fn contact_functions(&self) -> (TokenStream, TokenStream) {
+        let Some(damping) = &self.equations.contact_damping else {
+            return (TokenStream::new(), TokenStream::new());
+        };
+        let (parts, function) = self.inherent_function(Function::ContactDamping, damping);
+        let in_trait = self.trait_method_returning(
+            Function::ContactDamping,
+            "damping",
+            Some((quote!(bool), quote!(true))),
+        );
+        let inherent = quote! {
+            /// The contacts' damping `D ≈ ∂F/∂u` (symmetric, negative semidefinite): the stiff
+            /// part of `F` that a linearly implicit integrator takes implicitly.
+            #function
+
+            #(#parts)*
         };
         (inherent, in_trait)
     }
@@ -681,7 +710,9 @@ impl<'a> Emitter<'a> {
     fn result_shape(&self, function: Function, count: usize) -> (Ident, TokenStream) {
         let nu = self.len(State::U);
         match function {
-            Function::MassMatrix => (format_ident!("SMatrix"), quote!(#nu, #nu)),
+            Function::MassMatrix | Function::ContactDamping => {
+                (format_ident!("SMatrix"), quote!(#nu, #nu))
+            }
             Function::ConstraintJacobian => {
                 let nc = usize_literal(self.equations.nc());
                 (format_ident!("SMatrix"), quote!(#nc, #nu))
@@ -696,6 +727,17 @@ impl<'a> Emitter<'a> {
     /// The trait's `<function>(&self, t, q: &[f64], …, out: &mut [f64])`: the inherent function
     /// on the slices, its result (bound to `result`) copied into `out`.
     fn trait_method(&self, function: Function, result: &str) -> TokenStream {
+        self.trait_method_returning(function, result, None)
+    }
+
+    /// [`Emitter::trait_method`] for a trait method that returns `returns` (type, value)
+    /// after copying the result.
+    fn trait_method_returning(
+        &self,
+        function: Function,
+        result: &str,
+        returns: Option<(TokenStream, TokenStream)>,
+    ) -> TokenStream {
         let (arguments, vectors, call) = self.slice_call(function);
         let (name, fixed, model, result) = (
             function.ident(),
@@ -703,11 +745,16 @@ impl<'a> Emitter<'a> {
             &self.struct_name,
             format_ident!("{result}"),
         );
+        let (signature_tail, value) = match returns {
+            Some((kind, value)) => (quote!(-> #kind), value),
+            None => (TokenStream::new(), TokenStream::new()),
+        };
         quote! {
-            fn #name(&self, #arguments, out: &mut [f64]) {
+            fn #name(&self, #arguments, out: &mut [f64]) #signature_tail {
                 #vectors
                 let #result = #model::#fixed(self, #call);
                 for (slot, value) in out.iter_mut().zip(#result.iter()) { *slot = *value; }
+                #value
             }
         }
     }
