@@ -189,26 +189,25 @@ fn rosenbrocks_are_l_stable() {
         }
     }
     let h = 0.1;
-    let stability = |lambda: f64| {
-        let mut s = Rosenbrock::new(Relaxation(lambda), 0.0, &[0.0], h, fixed(h)).unwrap();
-        run_to_end(&mut s);
-        1.0 - s.state()[0]
+    // 1 − y after one step from 0, at hλ = −1e2, −1e4, −1e6.
+    let stability = |stepper: &mut dyn Stepper| {
+        run_to_end(stepper);
+        1.0 - stepper.state()[0]
     };
-    let r: Vec<f64> = [-1e3, -1e5, -1e7].map(stability).to_vec();
-    println!("R(hλ) at hλ = −1e2, −1e4, −1e6: {r:?}");
+    let lambdas = [-1e3, -1e5, -1e7];
+    let r = lambdas.map(|lambda| {
+        stability(&mut Rosenbrock::new(Relaxation(lambda), 0.0, &[0.0], h, fixed(h)).unwrap())
+    });
+    println!("Rosenbrock: R(hλ) at hλ = −1e2, −1e4, −1e6: {r:?}");
     assert!(
         r[0].abs() < 0.05 && r[1].abs() < 1e-3 && r[2].abs() < 1e-6,
         "{r:?}"
     );
-    // ROS34PW2 too (stiffly accurate: R(∞) = 0).
-    let stability = |lambda: f64| {
-        let mut s = Ros34pw2::new(Relaxation(lambda), 0.0, &[0.0], h, fixed(h)).unwrap();
-        run_to_end(&mut s);
-        1.0 - s.state()[0]
-    };
-    let r: Vec<f64> = [-1e3, -1e5, -1e7].map(stability).to_vec();
+    // ROS34PW2 is stiffly accurate: R(hλ) = O(1/hλ) as hλ → −∞.
+    let r = lambdas.map(|lambda| {
+        stability(&mut Ros34pw2::new(Relaxation(lambda), 0.0, &[0.0], h, fixed(h)).unwrap())
+    });
     println!("ROS34PW2: R(hλ) at hλ = −1e2, −1e4, −1e6: {r:?}");
-    // R(hλ) = O(1/hλ) as hλ → −∞.
     assert!(
         r[0].abs() < 0.05 && r[1].abs() < 1e-3 && r[2].abs() < 1e-5,
         "{r:?}"
