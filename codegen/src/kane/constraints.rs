@@ -314,17 +314,15 @@ pub fn derive(
             jacobian[r + rows * j] = entry;
         }
     }
-    let mut bias = Vec::with_capacity(rows);
-    for r in 0..rows {
-        let terms: Vec<ExprId> = (0..nu)
-            .map(|j| {
-                let u = pool.symbol(Symbol::Speed(j as u32));
-                pool.mul(jacobian[r + rows * j], u)
-            })
-            .collect();
-        let velocity = pool.add_all(&terms);
-        bias.push(rates.rate_at_fixed_speeds(pool, velocity, nq));
-    }
+    // `J̇u` as the second rate of `φ` along `q̇` (`φ̇ = J u` is the first): two forward
+    // passes over `φ`, a fraction of the size of one over `J u`'s `nu` columns.
+    let bias = residual
+        .iter()
+        .map(|&phi| {
+            let velocity = rates.rate_at_fixed_speeds(pool, phi, nq);
+            rates.rate_at_fixed_speeds(pool, velocity, nq)
+        })
+        .collect();
     let mut constraints = Constraints {
         residual,
         jacobian,

@@ -12,6 +12,8 @@
 //! `J_r = ∂φ̇/∂u_r = Σᵢ ∂φ/∂qᵢ W_ir`, `nc × nu` like the mass matrix. A free joint's
 //! position `(x, y, z)` likewise moves by the velocity speeds turned by the child's rotation.
 
+use std::collections::HashMap;
+
 use super::{kinematics, vector};
 use crate::ir::{Model, Motion};
 use crate::sym::{ExprId, ExprPool, Symbol};
@@ -84,34 +86,35 @@ impl KinematicRates {
         let Some((rates, _)) = &self.chain else {
             return pool.time_derivative(f);
         };
-        let mut terms = Vec::new();
-        for symbol in pool.free_symbols(f) {
-            let rate = match symbol {
-                Symbol::Coordinate(i) => rates[i as usize],
-                Symbol::Time => pool.one(),
-                _ => continue,
-            };
-            let partial = pool.diff(f, symbol);
-            terms.push(pool.mul(partial, rate));
-        }
-        pool.add_all(&terms)
+        let mut along = coordinate_rates(pool, rates.len(), Some(rates));
+        along.insert(Symbol::Time, pool.one());
+        pool.derivative_along(f, &along)
     }
 
     /// `ḟ` of `f(q, u)` with `u̇` held (the velocity-dependent part of a second derivative:
     /// `J̇u = Σᵢ ∂(J u)/∂qᵢ q̇ᵢ`), written as the loop bias has always been where `q̇ = u`.
     pub fn rate_at_fixed_speeds(&self, pool: &mut ExprPool, f: ExprId, nq: usize) -> ExprId {
-        let terms: Vec<ExprId> = (0..nq)
-            .map(|i| {
-                let d = pool.diff(f, Symbol::Coordinate(i as u32));
-                let rate = match &self.chain {
-                    Some((rates, _)) => rates[i],
-                    None => pool.symbol(Symbol::Speed(i as u32)),
-                };
-                pool.mul(d, rate)
-            })
-            .collect();
-        pool.add_all(&terms)
+        let rates = self.chain.as_ref().map(|(rates, _)| &rates[..]);
+        let along = coordinate_rates(pool, nq, rates);
+        pool.derivative_along(f, &along)
     }
+}
+
+/// `q̇ᵢ` by coordinate symbol: `rates[i]`, or `uᵢ` where `q̇ = u`.
+fn coordinate_rates(
+    pool: &mut ExprPool,
+    nq: usize,
+    rates: Option<&[ExprId]>,
+) -> HashMap<Symbol, ExprId> {
+    (0..nq)
+        .map(|i| {
+            let rate = match rates {
+                Some(rates) => rates[i],
+                None => pool.symbol(Symbol::Speed(i as u32)),
+            };
+            (Symbol::Coordinate(i as u32), rate)
+        })
+        .collect()
 }
 
 /// `q̇ = W(q) u`: `q̇ᵢ = uᵢ` for the coordinates, `ė = ½ e ⊗ (0, ω)` for each quaternion,

@@ -1,6 +1,7 @@
 //! Differentiation of pool expressions.
 //!
-//! Consumes: an expression and a [`Symbol`]. Produces: the partial derivative, built with the
+//! Consumes: an expression and a [`Symbol`] (or the rates of several). Produces: the partial
+//! derivative, or the directional derivative `Σ_s ∂f/∂s · ṡ` (forward mode), built with the
 //! canonicalizing constructors. Memoized per call, so the cost is linear in the size of the
 //! DAG below the root (shared subexpressions are differentiated once).
 
@@ -12,14 +13,24 @@ use super::Number;
 impl ExprPool {
     /// `∂root/∂symbol`.
     pub fn diff(&mut self, root: ExprId, symbol: Symbol) -> ExprId {
+        let one = self.one();
+        self.derivative_along(root, &HashMap::from([(symbol, one)]))
+    }
+
+    /// `Σ_s ∂root/∂s · rates[s]` over the symbols with a rate (the others held), in one
+    /// forward pass: each node's rate is built once from its operands' rates. Summing the
+    /// partials `∂root/∂s` one symbol at a time gives the same value, but each partial
+    /// repeats the product rule's terms through the whole DAG, and the sum of them (the
+    /// loop bias `J̇u` of a four-legged robot: 47k operations) shares little.
+    pub fn derivative_along(&mut self, root: ExprId, rates: &HashMap<Symbol, ExprId>) -> ExprId {
         let mut memo = HashMap::new();
-        self.diff_memo(root, symbol, &mut memo)
+        self.diff_memo(root, rates, &mut memo)
     }
 
     /// Total time derivative with `q̇ = u`, `u̇ = Acceleration`, explicit `t` (inputs are
     /// treated as constants here: callers that need input rates must add them).
     pub fn time_derivative(&mut self, root: ExprId) -> ExprId {
-        let mut terms = Vec::new();
+        let mut rates = HashMap::new();
         for symbol in self.free_symbols(root) {
             let rate = match symbol {
                 Symbol::Coordinate(i) => self.symbol(Symbol::Speed(i)),
@@ -27,16 +38,15 @@ impl ExprPool {
                 Symbol::Time => self.one(),
                 Symbol::Acceleration(_) | Symbol::Param(_) | Symbol::Input(_) => continue,
             };
-            let partial = self.diff(root, symbol);
-            terms.push(self.mul(partial, rate));
+            rates.insert(symbol, rate);
         }
-        self.add_all(&terms)
+        self.derivative_along(root, &rates)
     }
 
     fn diff_memo(
         &mut self,
         id: ExprId,
-        symbol: Symbol,
+        rates: &HashMap<Symbol, ExprId>,
         memo: &mut HashMap<ExprId, ExprId>,
     ) -> ExprId {
         if let Some(&d) = memo.get(&id) {
@@ -44,17 +54,14 @@ impl ExprPool {
         }
         let result = match self.node(id).clone() {
             Node::Number(_) => self.zero(),
-            Node::Symbol(s) => {
-                if s == symbol {
-                    self.one()
-                } else {
-                    self.zero()
-                }
-            }
+            Node::Symbol(s) => match rates.get(&s) {
+                Some(&rate) => rate,
+                None => self.zero(),
+            },
             Node::Add { terms, .. } => {
                 let mut items = Vec::with_capacity(terms.len());
                 for &(term, c) in terms.iter() {
-                    items.push((self.diff_memo(term, symbol, memo), c));
+                    items.push((self.diff_memo(term, rates, memo), c));
                 }
                 self.sum(&items)
             }
@@ -65,7 +72,7 @@ impl ExprPool {
                 // Product rule: Σᵢ c·eᵢ·bᵢ^(eᵢ−1)·∂bᵢ·Π_{j≠i} bⱼ^eⱼ
                 let mut items = Vec::new();
                 for (i, &(base, exponent)) in factors.iter().enumerate() {
-                    let d_base = self.diff_memo(base, symbol, memo);
+                    let d_base = self.diff_memo(base, rates, memo);
                     if self.is_zero(d_base) {
                         continue;
                     }
@@ -77,7 +84,7 @@ impl ExprPool {
                 self.sum(&items)
             }
             Node::Call(func, x) => {
-                let dx = self.diff_memo(x, symbol, memo);
+                let dx = self.diff_memo(x, rates, memo);
                 if self.is_zero(dx) {
                     self.zero()
                 } else {
@@ -87,8 +94,8 @@ impl ExprPool {
             }
             Node::Atan2(y, x) => {
                 // d atan2(y, x) = (x dy − y dx) / (x² + y²)
-                let dy = self.diff_memo(y, symbol, memo);
-                let dx = self.diff_memo(x, symbol, memo);
+                let dy = self.diff_memo(y, rates, memo);
+                let dx = self.diff_memo(x, rates, memo);
                 let x_dy = self.mul(x, dy);
                 let y_dx = self.mul(y, dx);
                 let numerator = self.sub(x_dy, y_dx);

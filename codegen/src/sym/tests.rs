@@ -1,6 +1,9 @@
 //! One-line tests of the symbolic engine in s-expression form (egg's `test_fn!` style).
 
+use std::collections::HashMap;
+
 use super::*;
+use crate::back::tape::Program;
 
 /// Parsing `input` through the canonicalizing constructors prints as `expected`.
 fn check(input: &str, expected: &str) {
@@ -113,6 +116,46 @@ fn derivative_agrees_with_finite_difference() {
     let fd = (at(x + h) - at(x - h)) / (2.0 * h);
     let exact = pool.eval(&[d], &|_| x)[0];
     assert!((fd - exact).abs() < 1e-8, "{fd} vs {exact}");
+}
+
+/// `derivative_along` (one forward pass) equals the sum of the partials times the rates,
+/// at a point, and for a second rate (`J̇u` from `φ`) is smaller than that sum's DAG.
+#[test]
+fn directional_derivative_is_the_sum_of_partials_times_rates() {
+    let mut pool = ExprPool::new();
+    let phi = pool
+        .parse_sexpr("(+ (* (cos q0) (sin (+ q0 q1))) (* q2 (cos (+ q1 q2))) (atan2 q0 q2))")
+        .unwrap();
+    let symbols = [0, 1, 2].map(Symbol::Coordinate);
+    let rates: HashMap<Symbol, ExprId> = symbols
+        .iter()
+        .enumerate()
+        .map(|(i, &q)| (q, pool.symbol(Symbol::Speed(i as u32))))
+        .collect();
+    let summed = |pool: &mut ExprPool, f: ExprId| {
+        let terms: Vec<ExprId> = symbols
+            .iter()
+            .map(|&q| {
+                let partial = pool.diff(f, q);
+                pool.mul(partial, rates[&q])
+            })
+            .collect();
+        pool.add_all(&terms)
+    };
+    let velocity = pool.derivative_along(phi, &rates);
+    let bias = pool.derivative_along(velocity, &rates);
+    let velocity_summed = summed(&mut pool, phi);
+    let bias_summed = summed(&mut pool, velocity_summed);
+    let state = |s: Symbol| match s {
+        Symbol::Coordinate(i) => [0.3, -1.1, 0.8][i as usize],
+        Symbol::Speed(i) => [2.0, 0.5, -1.5][i as usize],
+        _ => 0.0,
+    };
+    let values = pool.eval(&[velocity, velocity_summed, bias, bias_summed], &state);
+    assert!((values[0] - values[1]).abs() < 1e-14, "{values:?}");
+    assert!((values[2] - values[3]).abs() < 1e-13, "{values:?}");
+    let size = |pool: &ExprPool, root| Program::compile(pool, &[root]).operation_count();
+    assert!(size(&pool, bias) < size(&pool, bias_summed));
 }
 
 /// Reading `input` fails, saying `expected`.
