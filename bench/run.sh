@@ -88,7 +88,7 @@ run() {
   "$@"
 }
 load() { # section name
-  printf '{"section":"%s%s","date":"%s","loadavg":"%s"}\n' "$LOAD_PREFIX" "$1" "$(date -u +%FT%TZ)" "$(cat /proc/loadavg)" >> $R/load.jsonl
+  printf '{"section":"%s%s","date":"%s","loadavg":"%s","cpu":"%s","nproc":%s}\n' "$LOAD_PREFIX" "$1" "$(date -u +%FT%TZ)" "$(cat /proc/loadavg)" "$(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -1)" "$(nproc)" >> $R/load.jsonl
 }
 failed() { # script N rc
   printf '{"script":"%s","N":%s,"status":"process-failed rc=%s"}\n' "$1" "$2" "$3"

@@ -219,15 +219,17 @@ def main():
     w('# Benchmarks: mech vs SymPy and Pinocchio on the N-link 3D chain, and vs SymPy/PyDy + SciPy on two closed loops')
     w('')
     load_rows = read_jsonl(os.path.join(R, 'load.jsonl'))
-    floating_only = [r['date'][:10] for r in load_rows
-                     if r.get('section', '').startswith('floating_')]
+    floating_only = [r for r in load_rows if r.get('section', '').startswith('floating_')]
     if floating_only:
-        # `ONLY_FLOATING=1 bench/run.sh` appended section 17 to an earlier full run.
-        fm = machine()
+        # `ONLY_FLOATING=1 bench/run.sh` appended section 17 to an earlier full run; the
+        # machine is the one its rows recorded (older rows did not record it).
+        last = floating_only[-1]
+        where = (f', on `{last["cpu"]}`, {last["nproc"]} cores' if 'cpu' in last
+                 else ', machine not recorded')
         origin = (f'from one run of `bench/run.sh` on {today} (commit `{m["commit"]}`'
                   f'{", with uncommitted changes" if m["dirty"] else ""}; sections 1 to 16, and '
                   'the machine table) and `ONLY_FLOATING=1 bench/run.sh` on '
-                  f'{floating_only[-1]} (section 17, on `{fm["cpu"]}`, {fm["nproc"]} cores)')
+                  f'{last["date"][:10]} (section 17{where})')
     else:
         origin = (f'from one run of `bench/run.sh` on {today} (commit `{m["commit"]}`'
                   f'{", with uncommitted changes" if m["dirty"] else ""})')
