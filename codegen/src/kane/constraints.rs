@@ -14,7 +14,8 @@
 //!   `n = a × t` are flexure angles held by springs;
 //! - distance: `(|r_C − r_P|² − length²) / (2 length)`, zero where `|r_C − r_P| = length`.
 //!
-//! `J` and `J̇u = Σᵢ ∂(J u)/∂qᵢ q̇ᵢ` are exact symbolic derivatives of `φ`.
+//! `J` and `J̇u = Σᵢ ∂(J u)/∂qᵢ q̇ᵢ` are exact symbolic derivatives of `φ` (`J̇u` as the second
+//! rate of `φ` along `q̇`, two forward passes, [`ExprPool::derivative_along`]).
 //!
 //! Velocity (nonholonomic) constraints `A(q) u = 0` (`model.velocity_constraints`) follow
 //! the loop rows: their `J` rows are `A` (the coefficients of the speeds, exact: a point

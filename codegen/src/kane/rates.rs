@@ -92,7 +92,7 @@ impl KinematicRates {
     }
 
     /// `ḟ` of `f(q, u)` with `u̇` held (the velocity-dependent part of a second derivative:
-    /// `J̇u = Σᵢ ∂(J u)/∂qᵢ q̇ᵢ`), written as the loop bias has always been where `q̇ = u`.
+    /// `J̇u = Σᵢ ∂(J u)/∂qᵢ q̇ᵢ`), by one forward pass along `q̇` ([`ExprPool::derivative_along`]).
     pub fn rate_at_fixed_speeds(&self, pool: &mut ExprPool, f: ExprId, nq: usize) -> ExprId {
         let rates = self.chain.as_ref().map(|(rates, _)| &rates[..]);
         let along = coordinate_rates(pool, nq, rates);
