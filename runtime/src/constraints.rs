@@ -990,7 +990,8 @@ impl ConstrainedSolver {
         Ok(true)
     }
 
-    /// `J u` of every row into `phi` (scratch), from `J` in `jacobian`; returns `max |J u|`.
+    /// `J u` of every row into `phi` (scratch), from `J` in `jacobian`; returns `max |J u|`,
+    /// NaN where a value is not finite (so that it never passes as within a tolerance).
     fn constraint_speeds(&mut self, u: &[f64]) -> f64 {
         let nc = self.nc;
         self.phi.fill(0.0);
@@ -1002,7 +1003,11 @@ impl ConstrainedSolver {
             u,
             self.phi.as_mut_slice(),
         );
-        self.phi.amax()
+        if all_finite(self.phi.as_slice()) {
+            self.phi.amax()
+        } else {
+            f64::NAN
+        }
     }
 
     /// The loop rows `rows` of `J` (`rows.len() × nu`, column-major) into `scaled`; velocity

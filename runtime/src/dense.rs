@@ -94,7 +94,8 @@ fn cholesky_in<D: Dim>(a: &mut [f64], d: D) -> bool {
 /// One right-looking step of the Cholesky factorizations, at a positive diagonal `A_jj`:
 /// column `j` of `L` (`L_jj = √A_jj`, `L_ij = A_ij / L_jj`), then the update of the trailing
 /// lower triangle, `A_ik −= L_ij L_kj` for `j < k ≤ i` (skipped where `L_kj` is zero: a
-/// sparse `A` ordered to fill in little, a mass matrix's leaves first, costs less).
+/// sparse `A` that fills in little costs less, as the mass matrix of a floating robot whose
+/// base's speeds come last, its legs' blocks coupled only through them).
 #[inline(always)]
 fn cholesky_column(a: &mut [f64], n: usize, j: usize) {
     let pivot = a[j + n * j].sqrt();

@@ -401,3 +401,65 @@ fn accelerations_on_the_chosen_rows_meet_every_row() {
         "only {redundant} models with redundant rows"
     );
 }
+
+/// The drift projection on the rows a solve chose (`ConstrainedSolver::project` after
+/// `accelerations`) against the same projection on every row (a fresh solver): from closed
+/// states of every bundled model with loops, moved off the loops by 1e-7 along random speeds
+/// and given speeds that break `J u = 0`, both close every row, `φ` and `J u`, to the
+/// tolerance, and land on the same state: `u` to round-off (the kinetic-energy projection
+/// onto `J`'s null space, which the chosen rows span), `q` to the square of the offset (both
+/// Gauss–Newton steps are minimum-norm on the same row space). What it cannot see: a wrong
+/// step on the chosen rows that leaves a row open is repaired by the fall-back to every row
+/// (by design); the chosen rows' use shows in the time (docs/benchmarks.md §16), not here.
+#[test]
+fn projection_on_the_chosen_rows_is_the_projection_on_every_row() {
+    let mut rng = Rng::new(29);
+    let tolerance = 1e-12;
+    for name in mech::models::NAMES {
+        let model = common::tape(name);
+        let (nu, nc) = (model.nu(), model.nc());
+        if nc == 0 {
+            continue;
+        }
+        let (q0, u0) = assembled(&model, &[]);
+        let inputs = vec![0.0; model.ninputs()];
+        let mut chosen = mech_runtime::ConstrainedSolver::for_model(&model);
+        let mut udot = vec![0.0; nu];
+        chosen
+            .accelerations(&model, 0.0, &q0, &u0, &inputs, &mut udot)
+            .unwrap();
+        for _ in 0..3 {
+            let offset = rng.vector(nu, -1e-7, 1e-7);
+            let mut start_q = step_along(&model, &q0, &offset, 1.0);
+            mech_runtime::normalize_quaternions(model.unit_quaternions(), &mut start_q);
+            let start_u = rng.vector(nu, -1.0, 1.0);
+            let project = |solver: &mut mech_runtime::ConstrainedSolver| {
+                let (mut q, mut u) = (start_q.clone(), start_u.clone());
+                let changed = solver
+                    .project(&model, 0.0, &mut q, &mut u, &inputs, tolerance)
+                    .unwrap();
+                assert!(changed, "{name}: nothing projected");
+                let mut phi = vec![0.0; nc];
+                model.constraints(0.0, &q, &mut phi);
+                let mut j = vec![0.0; nc * nu];
+                model.constraint_jacobian(0.0, &q, &mut j);
+                for (r, value) in phi.iter().enumerate().take(model.holonomic_rows()) {
+                    assert!(value.abs() <= tolerance, "{name}: φ[{r}] = {value:e}");
+                }
+                for r in 0..nc {
+                    let speed: f64 = (0..nu).map(|c| j[r + nc * c] * u[c]).sum();
+                    assert!(speed.abs() <= 1e-12, "{name}: (J u)[{r}] = {speed:e}");
+                }
+                (q, u)
+            };
+            let (q_all, u_all) = project(&mut mech_runtime::ConstrainedSolver::for_model(&model));
+            let (q_chosen, u_chosen) = project(&mut chosen);
+            for (a, b) in u_chosen.iter().zip(&u_all) {
+                assert!((a - b).abs() <= 1e-12, "{name}: u {a} vs {b}");
+            }
+            for (a, b) in q_chosen.iter().zip(&q_all) {
+                assert!((a - b).abs() <= 1e-12, "{name}: q {a} vs {b}");
+            }
+        }
+    }
+}
