@@ -23,10 +23,12 @@
 //! function of its own, run one after the other; a value used by a later chunk goes through a
 //! spill array in memory (constants and symbol loads are re-materialized instead). That keeps
 //! Cranelift's compile time and memory linear in the program's length: register allocation
-//! on one function of 10⁵ instructions is what would not be.
+//! on one function of 10⁵ instructions is what would not be. The chunks compile on every
+//! core (each function apart; linked in order, so the code does not depend on the threads).
 
 use std::fmt;
 
+use cranelift_codegen::control::ControlPlane;
 use cranelift_codegen::ir::{
     types, AbiParam, InstBuilder, MemFlags, Signature, UserFuncName, Value,
 };
@@ -34,7 +36,7 @@ use cranelift_codegen::settings::{self, Configurable};
 use cranelift_codegen::Context;
 use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
 use cranelift_jit::{JITBuilder, JITModule};
-use cranelift_module::{default_libcall_names, Linkage, Module};
+use cranelift_module::{default_libcall_names, Linkage, Module, ModuleReloc};
 use mech_codegen::back::tape::{Env, Op, Program};
 use mech_codegen::sym::{power, Func, Number};
 
@@ -183,38 +185,61 @@ impl JitProgram {
             .map_err(|why| Error::UnsupportedHost(why.to_string()))?
             .finish(settings::Flags::new(flags))
             .map_err(cranelift)?;
-        let mut module = JITModule::new(JITBuilder::with_isa(isa, default_libcall_names()));
+        let mut module = JITModule::new(JITBuilder::with_isa(isa.clone(), default_libcall_names()));
         let layout = Layout::new(program, options.chunk_ops.max(1));
-        let mut context = module.make_context();
-        let mut builder_context = FunctionBuilderContext::new();
-        let mut ids = Vec::with_capacity(layout.chunks.len());
-        for chunk in 0..layout.chunks.len() {
-            let pointer = module.target_config().pointer_type();
-            let signature = &mut context.func.signature;
-            signature.params.extend(
-                [pointer; 4]
-                    .into_iter()
-                    .chain([types::F64])
-                    .chain([pointer; 2])
-                    .map(AbiParam::new),
-            );
-            let id = module
-                .declare_function(&format!("chunk{chunk}"), Linkage::Local, signature)
-                .map_err(cranelift)?;
+        let pointer = module.target_config().pointer_type();
+        let mut signature = module.make_signature();
+        signature.params.extend(
+            [pointer; 4]
+                .into_iter()
+                .chain([types::F64])
+                .chain([pointer; 2])
+                .map(AbiParam::new),
+        );
+        let ids = (0..layout.chunks.len())
+            .map(|chunk| {
+                module
+                    .declare_function(&format!("chunk{chunk}"), Linkage::Local, &signature)
+                    .map_err(cranelift)
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let compile = |chunk: usize,
+                       context: &mut Context,
+                       builder_context: &mut FunctionBuilderContext|
+         -> Result<Machine, Error> {
+            context.clear();
+            context.func.signature = signature.clone();
             context.func.name = UserFuncName::user(0, chunk as u32);
-            emit_chunk(
-                program,
-                &layout,
-                chunk,
-                &mut context,
-                &mut builder_context,
-                pointer,
-            );
+            emit_chunk(program, &layout, chunk, context, builder_context, pointer);
+            context
+                .compile(&*isa, &mut ControlPlane::default())
+                .map_err(|error| cranelift(error.inner))?;
+            let code = context
+                .compiled_code()
+                .ok_or_else(|| cranelift("no code after compiling"))?;
+            Ok(Machine {
+                alignment: u64::from(code.buffer.alignment),
+                bytes: code.code_buffer().to_vec(),
+                relocs: code
+                    .buffer
+                    .relocs()
+                    .iter()
+                    .map(|reloc| ModuleReloc::from_mach_reloc(reloc, &context.func, ids[chunk]))
+                    .collect(),
+            })
+        };
+        for (chunk, machine) in in_parallel(layout.chunks.len(), compile)?
+            .into_iter()
+            .enumerate()
+        {
             module
-                .define_function(id, &mut context)
+                .define_function_bytes(
+                    ids[chunk],
+                    machine.alignment,
+                    &machine.bytes,
+                    &machine.relocs,
+                )
                 .map_err(cranelift)?;
-            module.clear_context(&mut context);
-            ids.push(id);
         }
         module.finalize_definitions().map_err(cranelift)?;
         let chunks = ids
@@ -292,6 +317,57 @@ impl JitProgram {
             out.copy_from_slice(&results[..out.len()]);
         }
     }
+}
+
+/// One chunk's machine code, compiled apart from the module that links it.
+struct Machine {
+    alignment: u64,
+    bytes: Vec<u8>,
+    relocs: Vec<ModuleReloc>,
+}
+
+/// `compile(i, …)` for every chunk `i < count`, on as many threads as the host has cores
+/// (taking chunks in turn), with a Cranelift context per thread; the results in chunk order.
+/// Register allocation dominates the compile time and is independent per function, so a
+/// long program compiles in about `1/cores` of the time; the code is the same bytes whichever
+/// thread compiles it, and is linked in chunk order.
+fn in_parallel<F>(count: usize, compile: F) -> Result<Vec<Machine>, Error>
+where
+    F: Fn(usize, &mut Context, &mut FunctionBuilderContext) -> Result<Machine, Error> + Sync,
+{
+    let threads = std::thread::available_parallelism()
+        .map_or(1, usize::from)
+        .min(count);
+    let worker = |first: usize| -> Vec<(usize, Result<Machine, Error>)> {
+        let mut context = Context::new();
+        let mut builder_context = FunctionBuilderContext::new();
+        (first..count)
+            .step_by(threads.max(1))
+            .map(|chunk| (chunk, compile(chunk, &mut context, &mut builder_context)))
+            .collect()
+    };
+    let mut compiled: Vec<(usize, Result<Machine, Error>)> = if threads <= 1 {
+        worker(0)
+    } else {
+        std::thread::scope(|scope| {
+            let others: Vec<_> = (1..threads)
+                .map(|first| scope.spawn(move || worker(first)))
+                .collect();
+            let mut all = worker(0);
+            for other in others {
+                // A panic in Cranelift on another thread is re-raised here, as it would be
+                // had that chunk compiled on this one.
+                all.extend(
+                    other
+                        .join()
+                        .unwrap_or_else(|panic| std::panic::resume_unwind(panic)),
+                );
+            }
+            all
+        })
+    };
+    compiled.sort_by_key(|(chunk, _)| *chunk);
+    compiled.into_iter().map(|(_, machine)| machine).collect()
 }
 
 /// Where each register lives: which chunk computes it, which spill slot (if any) carries it

@@ -683,13 +683,8 @@ impl ConstrainedSolver {
     /// `Z = L⁻¹ Jᵀ` from the factor in `mass` and the Jacobian in `jacobian`, on the rows
     /// `rows` (column k of `Z` is row `rows[k]` of `J`).
     fn scale_jacobian(&mut self, rows: &[usize]) {
-        let (n, nc) = (self.nu, self.nc);
-        let jacobian = self.jacobian.as_slice();
-        for c in 0..n {
-            for (k, &r) in rows.iter().enumerate() {
-                self.scaled[c + n * k] = jacobian[r + nc * c];
-            }
-        }
+        let n = self.nu;
+        self.gather_rows(rows, self.nc);
         dense::forward_substitute_columns(self.mass.as_slice(), n, &mut self.scaled, rows.len());
     }
 
@@ -912,25 +907,21 @@ impl ConstrainedSolver {
             model.constraint_jacobian(t, q, self.jacobian.as_mut_slice());
             self.gather_rows(&rows, model.holonomic_rows());
             let used = rows.len();
-            dense::outer_gram_lower(&self.scaled, used, n, &mut self.coupling);
+            dense::gram_lower(&self.scaled, n, used, &mut self.coupling);
             for (m, &r) in self.mismatch.iter_mut().zip(&rows) {
                 *m = self.phi[r];
             }
             self.solve_coupling(used);
             // Δq = −J_rowsᵀ x: with quaternions the step is along the speeds, `q ← q ⊕ Δq`.
-            let rows_jacobian = &self.scaled[..used * n];
-            let step = |column: &[f64], multipliers: &[f64]| -> f64 {
-                column.iter().zip(multipliers).map(|(j, x)| j * x).sum()
-            };
+            let delta = self.force.as_mut_slice();
+            delta.fill(0.0);
+            dense::add_times(&self.scaled, n, used, &self.multipliers, delta);
             if self.rates.is_empty() {
-                for (value, column) in q.iter_mut().zip(rows_jacobian.chunks_exact(used)) {
-                    *value -= step(column, &self.multipliers);
+                for (value, step) in q.iter_mut().zip(delta.iter()) {
+                    *value -= step;
                 }
             } else {
-                let delta = self.force.as_mut_slice();
-                for (value, column) in delta.iter_mut().zip(rows_jacobian.chunks_exact(used)) {
-                    *value = -step(column, &self.multipliers);
-                }
+                delta.iter_mut().for_each(|step| *step = -*step);
                 retract(model, t, q, self.force.as_slice(), &mut self.rates);
                 q.copy_from_slice(&self.rates);
             }
@@ -1010,20 +1001,21 @@ impl ConstrainedSolver {
         }
     }
 
-    /// The loop rows `rows` of `J` (`rows.len() × nu`, column-major) into `scaled`; velocity
-    /// rows (index `holonomic` and up, no position form) as zeros, so that the pivoted factor
-    /// drops them and a step moves `φ` of the loop rows alone.
+    /// The loop rows `rows` of `J` as the columns of `J_rowsᵀ` (`nu × rows.len()`, column k
+    /// row `rows[k]`) into `scaled`; velocity rows (index `holonomic` and up, no position
+    /// form) as zeros, so that the pivoted factor drops them and a step moves `φ` of the loop
+    /// rows alone.
     fn gather_rows(&mut self, rows: &[usize], holonomic: usize) {
-        let (n, nc, used) = (self.nu, self.nc, rows.len());
+        let (n, nc) = (self.nu, self.nc);
         let jacobian = self.jacobian.as_slice();
-        for c in 0..n {
-            for (k, &r) in rows.iter().enumerate() {
-                let value = if r < holonomic {
+        for (k, &r) in rows.iter().enumerate() {
+            let column = &mut self.scaled[n * k..n * (k + 1)];
+            for (c, value) in column.iter_mut().enumerate() {
+                *value = if r < holonomic {
                     jacobian[r + nc * c]
                 } else {
                     0.0
                 };
-                self.scaled[k + used * c] = value;
             }
         }
     }

@@ -71,8 +71,9 @@ pub enum Integrator {
     Rk4,
     /// Linearly implicit Rosenbrock 2(3) (L-stable), in the independent coordinates.
     Rosenbrock,
-    /// The same formula as a W-method in all coordinates, implicit in the contacts' damping:
-    /// long steps where regularized friction on light feet holds the explicit methods back.
+    /// Rosenbrock W-method ROS34PW2, order 3(2) (L-stable), in all coordinates, implicit in
+    /// the contacts' damping: long steps where regularized friction on light feet holds the
+    /// explicit methods back.
     RosenbrockW,
     /// Exponential Rosenbrock 4(3): follows lightly damped fast modes at long steps, in the
     /// independent coordinates.
