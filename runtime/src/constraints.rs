@@ -680,12 +680,14 @@ impl ConstrainedSolver {
         &self.multipliers
     }
 
-    /// `Z = L⁻¹ Jᵀ` from the factor in `mass` and the Jacobian in `jacobian`, on the rows
-    /// `rows` (column k of `Z` is row `rows[k]` of `J`).
-    fn scale_jacobian(&mut self, rows: &[usize]) {
+    /// `Z = L⁻¹ Jᵀ` (into `scaled`) from the factor in `mass` and the Jacobian in `jacobian`,
+    /// on the rows `rows` (column k of `Z` is row `rows[k]` of `J`), and the lower triangle of
+    /// `Zᵀ Z = J M⁻¹ Jᵀ` on them (into `coupling`).
+    fn couple_rows(&mut self, rows: &[usize]) {
         let n = self.nu;
         self.gather_rows(rows, self.nc);
         dense::forward_substitute_columns(self.mass.as_slice(), n, &mut self.scaled, rows.len());
+        dense::gram_lower(&self.scaled, n, rows.len(), &mut self.coupling);
     }
 
     /// Factors the first `rows × rows` of `coupling` (pivoted) and solves it for `mismatch`
@@ -717,8 +719,7 @@ impl ConstrainedSolver {
         rows.extend_from_slice(&self.active);
         loop {
             let used = rows.len();
-            self.scale_jacobian(&rows);
-            dense::gram_lower(&self.scaled, n, used, &mut self.coupling);
+            self.couple_rows(&rows);
             self.rank =
                 dense::pivoted_cholesky(&mut self.coupling, used, PIVOT_TOLERANCE, &mut self.order);
             // A non-finite J says nothing of which rows are redundant.
@@ -941,8 +942,7 @@ impl ConstrainedSolver {
         rows.extend_from_slice(&self.active);
         loop {
             let used = rows.len();
-            self.scale_jacobian(&rows);
-            dense::gram_lower(&self.scaled, n, used, &mut self.coupling);
+            self.couple_rows(&rows);
             // `phi` holds `J u` of every row (`constraint_speeds`).
             for (m, &r) in self.mismatch.iter_mut().zip(&rows) {
                 *m = self.phi[r];
