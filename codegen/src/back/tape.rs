@@ -5,7 +5,7 @@
 //! Instruction `i` writes register `i` (static single assignment); operands are earlier
 //! registers. Constants and symbol loads are deduplicated.
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap;
 
 use super::lower::{lower_node, operand, schedule, Binary, Lowered, Operand, Unary};
 use crate::kane::Equations;
@@ -123,9 +123,9 @@ impl Program {
 #[derive(Default)]
 struct Builder {
     ops: Vec<Op>,
-    node_registers: HashMap<ExprId, u32>,
+    node_registers: FxHashMap<ExprId, u32>,
     /// Constants (by bit pattern) and symbol loads already emitted.
-    leaves: HashMap<LeafKey, u32>,
+    leaves: FxHashMap<LeafKey, u32>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, Hash)]

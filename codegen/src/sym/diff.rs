@@ -5,7 +5,9 @@
 //! canonicalizing constructors. Memoized per call, so the cost is linear in the size of the
 //! DAG below the root (shared subexpressions are differentiated once).
 
+use rustc_hash::FxHashMap;
 use std::collections::HashMap;
+use std::hash::BuildHasher;
 
 use super::expr::{ExprId, ExprPool, Func, Node, Symbol};
 use super::Number;
@@ -22,15 +24,19 @@ impl ExprPool {
     /// partials `∂root/∂s` one symbol at a time gives the same value, but each partial
     /// repeats the product rule's terms through the whole DAG, and the sum of them (the
     /// loop bias `J̇u` of a four-legged robot: 47k operations) shares little.
-    pub fn derivative_along(&mut self, root: ExprId, rates: &HashMap<Symbol, ExprId>) -> ExprId {
-        let mut memo = HashMap::new();
+    pub fn derivative_along<S: BuildHasher>(
+        &mut self,
+        root: ExprId,
+        rates: &HashMap<Symbol, ExprId, S>,
+    ) -> ExprId {
+        let mut memo = FxHashMap::default();
         self.diff_memo(root, rates, &mut memo)
     }
 
     /// Total time derivative with `q̇ = u`, `u̇ = Acceleration`, explicit `t` (inputs are
     /// treated as constants here: callers that need input rates must add them).
     pub fn time_derivative(&mut self, root: ExprId) -> ExprId {
-        let mut rates = HashMap::new();
+        let mut rates = FxHashMap::default();
         for symbol in self.free_symbols(root) {
             let rate = match symbol {
                 Symbol::Coordinate(i) => self.symbol(Symbol::Speed(i)),
@@ -43,11 +49,11 @@ impl ExprPool {
         self.derivative_along(root, &rates)
     }
 
-    fn diff_memo(
+    fn diff_memo<S: BuildHasher>(
         &mut self,
         id: ExprId,
-        rates: &HashMap<Symbol, ExprId>,
-        memo: &mut HashMap<ExprId, ExprId>,
+        rates: &HashMap<Symbol, ExprId, S>,
+        memo: &mut FxHashMap<ExprId, ExprId>,
     ) -> ExprId {
         if let Some(&d) = memo.get(&id) {
             return d;

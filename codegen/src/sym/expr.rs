@@ -17,6 +17,7 @@
 //! Simplification is local to construction (bounded work per node), so a big model gets a
 //! bigger answer, never a hang.
 
+use rustc_hash::FxHashMap;
 use std::collections::HashMap;
 
 use super::Number;
@@ -140,7 +141,7 @@ impl Default for Limits {
 #[derive(Clone, Debug, Default)]
 pub struct ExprPool {
     nodes: Vec<Node>,
-    memo: HashMap<Node, ExprId>,
+    memo: FxHashMap<Node, ExprId>,
     names: HashMap<Symbol, String>,
     limits: Limits,
 }
