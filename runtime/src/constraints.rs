@@ -631,6 +631,14 @@ pub struct ConstrainedSolver {
     /// ones lost rank), and its rank.
     factored: Vec<usize>,
     rank: usize,
+    /// Where `mass` holds the factor of `M` (its strict upper triangle still `M`'s, the
+    /// diagonal of `M` in `mass_diagonal`) and `jacobian` holds `J`: the `(t, q, inputs)` of
+    /// the last successful [`accelerations`](Self::accelerations), for
+    /// [`factor_shifted_from`](Self::factor_shifted_from); `None` once they are overwritten.
+    evaluated_at: Option<f64>,
+    evaluated_q: Vec<f64>,
+    evaluated_inputs: Vec<f64>,
+    mass_diagonal: Vec<f64>,
 }
 
 /// Whether every value is finite (no early exit: branch-free, and these slices are short).
@@ -671,6 +679,10 @@ impl ConstrainedSolver {
             active: (0..nc).collect(),
             factored: Vec::with_capacity(nc),
             rank: 0,
+            evaluated_at: None,
+            evaluated_q: Vec::with_capacity(nq),
+            evaluated_inputs: Vec::new(),
+            mass_diagonal: vec![0.0; nu],
         }
     }
 
@@ -782,6 +794,7 @@ impl ConstrainedSolver {
         u: &[f64],
         inputs: &[f64],
     ) {
+        self.evaluated_at = None;
         model.constrained_terms(
             t,
             q,
@@ -808,6 +821,9 @@ impl ConstrainedSolver {
     ) -> Result<(), RuntimeError> {
         let n = self.nu;
         self.evaluate(model, t, q, u, inputs);
+        for (i, diagonal) in self.mass_diagonal.iter_mut().enumerate() {
+            *diagonal = self.mass[(i, i)];
+        }
         // Non-finite inputs are found where they surface, not by scanning all of them first:
         // a NaN or infinity in (the lower triangle of) M fails the factorization, and one in
         // F, J or J̇u reaches the right-hand side `−J̇u − Zᵀw` or `u̇` (0·∞ and 0·NaN are NaN).
@@ -832,7 +848,26 @@ impl ConstrainedSolver {
             udot.fill(f64::NAN);
             return Err(RuntimeError::NonFiniteState { t });
         }
+        self.evaluated_at = Some(t);
+        self.evaluated_q.clear();
+        self.evaluated_q.extend_from_slice(q);
+        self.evaluated_inputs.clear();
+        self.evaluated_inputs.extend_from_slice(inputs);
         Ok(())
+    }
+
+    /// Whether the last successful [`accelerations`](Self::accelerations) was at exactly
+    /// `(t, q, inputs)` and its `M` and `J` are still held (see
+    /// [`factor_shifted_from`](Self::factor_shifted_from)).
+    pub fn evaluated_at(&self, t: f64, q: &[f64], inputs: &[f64]) -> bool {
+        // Bit for bit: a state that merely compares equal (−0 and 0) is another point.
+        let same = |a: &[f64], b: &[f64]| {
+            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+        };
+        self.evaluated_at
+            .is_some_and(|at| at.to_bits() == t.to_bits())
+            && same(&self.evaluated_q, q)
+            && same(&self.evaluated_inputs, inputs)
     }
 
     /// Factors the system of a linearly implicit step at `(t, q, u)`: `M − γ D` with the
@@ -852,6 +887,43 @@ impl ConstrainedSolver {
         damping: &[f64],
     ) -> bool {
         self.evaluate(model, t, q, u, inputs);
+        self.factor_shifted_mass(gamma, damping)
+    }
+
+    /// [`factor_shifted`](Self::factor_shifted) at the point of `evaluated`'s last
+    /// [`accelerations`](Self::accelerations) (check [`evaluated_at`](Self::evaluated_at)
+    /// first), with its `M` and `J` instead of evaluating them again: a linearly implicit
+    /// step factors at the state whose derivative it has just evaluated. `M` comes back from
+    /// its factor's untouched strict upper triangle and the saved diagonal: bit for bit for
+    /// generated models, whose `M` is symmetric to the bit (one expression for both
+    /// triangles); a hand-written `Model` whose triangles differ in round-off gets its upper
+    /// one, as good a matrix for a W-method. Returns `false` as `factor_shifted` does, and
+    /// where `evaluated` no longer holds `M` and `J`.
+    pub fn factor_shifted_from(
+        &mut self,
+        evaluated: &ConstrainedSolver,
+        gamma: f64,
+        damping: &[f64],
+    ) -> bool {
+        let n = self.nu;
+        if evaluated.evaluated_at.is_none() || evaluated.nu != n || evaluated.nc != self.nc {
+            return false;
+        }
+        self.evaluated_at = None;
+        let (source, target) = (evaluated.mass.as_slice(), self.mass.as_mut_slice());
+        for j in 0..n {
+            for i in 0..j {
+                target[i + n * j] = source[i + n * j];
+                target[j + n * i] = source[i + n * j];
+            }
+            target[j + n * j] = evaluated.mass_diagonal[j];
+        }
+        self.jacobian.copy_from(&evaluated.jacobian);
+        self.factor_shifted_mass(gamma, damping)
+    }
+
+    /// With `M` in `mass` and `J` in `jacobian`: the factors of `M − γ D` and of the coupling.
+    fn factor_shifted_mass(&mut self, gamma: f64, damping: &[f64]) -> bool {
         for (m, d) in self.mass.as_mut_slice().iter_mut().zip(damping) {
             *m -= gamma * d;
         }
@@ -889,6 +961,7 @@ impl ConstrainedSolver {
         tolerance: f64,
     ) -> Result<bool, RuntimeError> {
         let (n, nc) = (self.nu, self.nc);
+        self.evaluated_at = None;
         let mut rows = std::mem::take(&mut self.factored);
         rows.clear();
         rows.extend_from_slice(&self.active);

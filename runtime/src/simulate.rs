@@ -549,9 +549,16 @@ impl<M: Model + ?Sized> Ode for ModelOde<'_, M> {
         implicit.t = t;
         implicit.q.copy_from_slice(q);
         let damping = &implicit.damping;
-        let factored = implicit
-            .solver
-            .factor_shifted(model, t, q, u, &self.inputs, gamma, damping);
+        // The step's first trial factors where the derivative was just evaluated (the
+        // accepted state, after its correction): M and J are the right-hand side's.
+        let factored = match &self.constrained {
+            Some(evaluated) if evaluated.evaluated_at(t, q, &self.inputs) => implicit
+                .solver
+                .factor_shifted_from(evaluated, gamma, damping),
+            _ => implicit
+                .solver
+                .factor_shifted(model, t, q, u, &self.inputs, gamma, damping),
+        };
         Some(Ok(factored))
     }
 

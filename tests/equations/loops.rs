@@ -463,3 +463,69 @@ fn projection_on_the_chosen_rows_is_the_projection_on_every_row() {
         }
     }
 }
+
+/// A linearly implicit step's factorization from the `M` and `J` of the accelerations just
+/// solved at the same point (`ConstrainedSolver::factor_shifted_from`, what the W-method's
+/// first trial of a step uses) against evaluating them again (`factor_shifted`): at closed
+/// random states of every bundled model with loops, with a random symmetric negative
+/// semidefinite `D`, the two solve the shifted system to the same bits; and the reuse is
+/// offered only at that very point, not after the solver has moved on (`project`) or at
+/// another `q`.
+#[test]
+fn shifted_factors_from_the_last_evaluation_are_the_evaluated_ones() {
+    let mut rng = Rng::new(31);
+    for name in mech::models::NAMES {
+        let model = common::tape(name);
+        let (nu, nc) = (model.nu(), model.nc());
+        if nc == 0 {
+            continue;
+        }
+        let (q0, u0) = assembled(&model, &[]);
+        let inputs = rng.vector(model.ninputs(), -1.0, 1.0);
+        let mut evaluated = mech_runtime::ConstrainedSolver::for_model(&model);
+        let mut udot = vec![0.0; nu];
+        evaluated
+            .accelerations(&model, 0.25, &q0, &u0, &inputs, &mut udot)
+            .unwrap();
+        assert!(evaluated.evaluated_at(0.25, &q0, &inputs), "{name}");
+        assert!(!evaluated.evaluated_at(0.5, &q0, &inputs), "{name}");
+        let mut moved = q0.clone();
+        moved[0] += 1e-9;
+        assert!(!evaluated.evaluated_at(0.25, &moved, &inputs), "{name}");
+        // D = −G Gᵀ.
+        let g = rng.vector(nu * nu, -1.0, 1.0);
+        let mut damping = vec![0.0; nu * nu];
+        for r in 0..nu {
+            for c in 0..nu {
+                damping[r + nu * c] = -(0..nu).map(|k| g[r + nu * k] * g[c + nu * k]).sum::<f64>();
+            }
+        }
+        let gamma = 1e-3;
+        let mut reused = mech_runtime::ConstrainedSolver::for_model(&model);
+        assert!(
+            reused.factor_shifted_from(&evaluated, gamma, &damping),
+            "{name}"
+        );
+        let mut fresh = mech_runtime::ConstrainedSolver::for_model(&model);
+        assert!(
+            fresh.factor_shifted(&model, 0.25, &q0, &u0, &inputs, gamma, &damping),
+            "{name}"
+        );
+        let rhs = rng.vector(nu, -1.0, 1.0);
+        let (mut x_reused, mut x_fresh) = (rhs.clone(), rhs);
+        reused.solve_shifted(&mut x_reused);
+        fresh.solve_shifted(&mut x_fresh);
+        for (a, b) in x_reused.iter().zip(&x_fresh) {
+            assert_eq!(a.to_bits(), b.to_bits(), "{name}: {a} vs {b}");
+        }
+        let (mut q, mut u) = (q0.clone(), u0.clone());
+        evaluated
+            .project(&model, 0.25, &mut q, &mut u, &inputs, 1e-12)
+            .unwrap();
+        assert!(!evaluated.evaluated_at(0.25, &q0, &inputs), "{name}");
+        assert!(
+            !reused.factor_shifted_from(&evaluated, gamma, &damping),
+            "{name}"
+        );
+    }
+}
