@@ -58,19 +58,34 @@ impl Default for Options {
     }
 }
 
-/// Programs longer than this compile without Cranelift's optimizer. Measured
-/// (`examples/jit_performance.rs`, docs/benchmarks.md §13): on the 32-link chain's `M` (88,768
-/// instructions, chunks of 2,000) `opt_level=speed` compiles 2.6–3.6× slower than `none`
-/// (1.5–2.1 s against 0.43–0.69 s) and ran no faster in three runs; on HAMR-VI's `M` and `F`
-/// (1,281) both compile in 5–10 ms and `speed` ran 1.1–2.5× faster.
-pub const OPTIMIZE_UP_TO: usize = 20_000;
+/// Programs longer than this compile without Cranelift's optimizer, in chunks of
+/// [`UNOPTIMIZED_CHUNK_OPS`]. Measured (`examples/jit_performance.rs`, docs/benchmarks.md §13):
+/// on the 32-link chain's `M` (88,768 instructions, chunks of 2,000) `opt_level=speed`
+/// compiles 2.6–3.6× slower than `none` (1.5–2.1 s against 0.43–0.69 s) and ran no faster in
+/// three runs; on HAMR-VI's `M` and `F` (1,281) both compile in 5–10 ms and `speed` ran
+/// 1.1–2.5× faster. On the HAMR-VI robot's programs of 4,334 to 8,877 instructions (`M`, `J`,
+/// the outputs, the contacts' damping; two runs of a scratch harness, minima over 30 batches)
+/// `speed` compiled 1.5–2.5× slower than `none` in chunks of 500 and ran −13 % to +7 % as
+/// fast: no gain, so the optimizer stops below them.
+pub const OPTIMIZE_UP_TO: usize = 4_000;
+
+/// Chunk length of the programs compiled without the optimizer. Register allocation's time
+/// grows faster than a chunk's length: on the robot's fused `M, F, J, J̇u` (37,744
+/// instructions) chunks of 500 compiled in 108–112 ms against 183–186 ms for 2,000, and its
+/// `J` (8,877) in 28–29 ms against 48–52 ms, evaluating as fast (within 2 %, the machine's
+/// noise); longer chunks pay off only with the optimizer.
+pub const UNOPTIMIZED_CHUNK_OPS: usize = 500;
 
 impl Options {
-    /// The default chunks, the optimizer up to [`OPTIMIZE_UP_TO`] instructions.
+    /// The optimizer and the default chunks up to [`OPTIMIZE_UP_TO`] instructions; longer
+    /// programs without it, in chunks of [`UNOPTIMIZED_CHUNK_OPS`].
     pub fn for_length(ops: usize) -> Options {
-        Options {
-            optimize: ops <= OPTIMIZE_UP_TO,
-            ..Options::default()
+        match ops <= OPTIMIZE_UP_TO {
+            true => Options::default(),
+            false => Options {
+                chunk_ops: UNOPTIMIZED_CHUNK_OPS,
+                optimize: false,
+            },
         }
     }
 }
