@@ -20,6 +20,7 @@ pub mod error;
 pub mod integrate;
 pub mod linearize;
 pub mod model;
+mod partition;
 pub mod reduced;
 pub mod signal;
 pub mod simulate;

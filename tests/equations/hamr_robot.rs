@@ -943,3 +943,140 @@ fn welded_robot_has_the_leg_models_modes() {
         );
     }
 }
+
+/// The constrained accelerations by coordinate partitioning (each leg's loop rows solved for
+/// six of its speeds, then the 14 independent speeds' system; `ConstrainedSolver` switches to
+/// it once a range-space solve has found the independent rows and they fall into blocks)
+/// against the range-space solve of a fresh solver (`J M⁻¹ Jᵀ`, another formulation), on both
+/// robots at closed states with the chassis turned and every speed moving: `u̇` and `λ` agree
+/// to 1e-9 of their size, and both meet the equations they solve, `M u̇ = F + Jᵀλ` and
+/// `J u̇ = −J̇u` on every row (the redundant ones included). The same for a linearly implicit
+/// step's `(M − γD) x = f + Jᵀν`, `J x = 0`, `D` symmetric negative semidefinite.
+#[test]
+fn partitioned_accelerations_are_the_range_space_ones() {
+    let mut rng = common::Rng::new(41);
+    for legs in [LegModel::Vi, LegModel::V2] {
+        let robot = robot_of(legs);
+        let (nu, nc) = (robot.nu(), robot.nc());
+        let mut partitioned = mech_runtime::ConstrainedSolver::for_model(&robot);
+        let mut implicit = mech_runtime::ConstrainedSolver::for_model(&robot);
+        for trial in 0..3 {
+            let offsets = std::cell::RefCell::new(rng.vector(32, -0.02, 0.02).into_iter());
+            let (mut q, mut u) =
+                robot_state(&robot, &|_, _| (offsets.borrow_mut().next().unwrap(), 0.0));
+            let e = robot.unit_quaternions()[0];
+            q[e] = 1.0;
+            q[e + 1..e + 4].copy_from_slice(&rng.vector(3, -0.2, 0.2));
+            mech_runtime::normalize_quaternions(robot.unit_quaternions(), &mut q);
+            assemble(&robot, 0.0, &mut q, &[], &AssemblyOptions::default()).unwrap();
+            u.copy_from_slice(&rng.vector(nu, -0.5, 0.5));
+            let free = mech_runtime::constraints::choose_independent(
+                &mech_runtime::constraints::jacobian(&robot, 0.0, &q),
+            );
+            mech_runtime::assemble_speeds(&robot, 0.0, &q, &mut u, &free).unwrap();
+            let inputs = rng.vector(robot.ninputs(), -100.0, 100.0);
+            let mut reference = mech_runtime::ConstrainedSolver::for_model(&robot);
+            let mut udot_reference = vec![0.0; nu];
+            reference
+                .accelerations(&robot, 0.0, &q, &u, &inputs, &mut udot_reference)
+                .unwrap();
+            assert_eq!(reference.partition_blocks(), None);
+            // The first call finds the independent rows, the second chooses the partition on
+            // them (both in the range space), the next ones use it.
+            let mut udot = vec![0.0; nu];
+            for _ in 0..3 {
+                partitioned
+                    .accelerations(&robot, 0.0, &q, &u, &inputs, &mut udot)
+                    .unwrap();
+            }
+            assert_eq!(partitioned.partition_blocks(), Some(4), "{legs:?} {trial}");
+            let scale = udot_reference.iter().fold(0.0_f64, |s, v| s.max(v.abs()));
+            for (a, b) in udot.iter().zip(&udot_reference) {
+                assert!((a - b).abs() <= 1e-9 * scale, "{legs:?}: u̇ {a} vs {b}");
+            }
+            let (lambda, lambda_reference) = (partitioned.multipliers(), reference.multipliers());
+            let lambda_scale = lambda_reference.iter().fold(0.0_f64, |s, v| s.max(v.abs()));
+            // λ on redundant rows is a choice; J^T λ is what both determine.
+            let mut j = vec![0.0; nc * nu];
+            robot.constraint_jacobian(0.0, &q, &mut j);
+            let constraint_force = |lambda: &[f64]| -> Vec<f64> {
+                (0..nu)
+                    .map(|c| (0..nc).map(|r| j[r + nc * c] * lambda[r]).sum())
+                    .collect()
+            };
+            let (force, force_reference) =
+                (constraint_force(lambda), constraint_force(lambda_reference));
+            let force_scale = force_reference.iter().fold(0.0_f64, |s, v| s.max(v.abs()));
+            for (a, b) in force.iter().zip(&force_reference) {
+                assert!(
+                    (a - b).abs() <= 1e-9 * force_scale,
+                    "{legs:?}: Jᵀλ {a} vs {b}"
+                );
+            }
+            assert!(lambda_scale > 0.0);
+            let mass = common::mass_matrix(&robot, &q);
+            let mut forcing = vec![0.0; nu];
+            robot.forcing(0.0, &q, &u, &inputs, &mut forcing);
+            for i in 0..nu {
+                let inertia: f64 = (0..nu).map(|c| mass[i][c] * udot[c]).sum();
+                let size = (0..nu).map(|c| (mass[i][c] * udot[c]).abs()).sum::<f64>();
+                let residual = inertia - forcing[i] - force[i];
+                assert!(
+                    residual.abs() <= 1e-9 * size.max(forcing[i].abs()).max(force_scale),
+                    "{legs:?}: row {i} of M u̇ − F − Jᵀλ = {residual:e}"
+                );
+            }
+            let mut bias = vec![0.0; nc];
+            robot.constraint_bias(0.0, &q, &u, &mut bias);
+            // Against the largest row's terms: a redundant row of tiny entries (a planar
+            // loop's out-of-plane rows) follows the others only to their round-off.
+            let row_size =
+                |x: &[f64], r: usize| (0..nu).map(|c| (j[r + nc * c] * x[c]).abs()).sum::<f64>();
+            let rows_scale = (0..nc).map(|r| row_size(&udot, r)).fold(0.0, f64::max);
+            for r in 0..nc {
+                let row: f64 = (0..nu).map(|c| j[r + nc * c] * udot[c]).sum();
+                assert!(
+                    (row + bias[r]).abs() <= 1e-9 * rows_scale,
+                    "{legs:?}: row {r}: J u̇ = {row:e}, −J̇u = {:e}",
+                    -bias[r]
+                );
+            }
+            // The shifted system of a linearly implicit step, D = −G Gᵀ.
+            let g = rng.vector(nu * nu, -1e-3, 1e-3);
+            let damping: Vec<f64> = (0..nu * nu)
+                .map(|k| {
+                    -(0..nu)
+                        .map(|l| g[k % nu + nu * l] * g[k / nu + nu * l])
+                        .sum::<f64>()
+                })
+                .collect();
+            let gamma = 1e-4;
+            for _ in 0..3 {
+                assert!(implicit.factor_shifted(&robot, 0.0, &q, &u, &inputs, gamma, &damping));
+            }
+            assert_eq!(implicit.partition_blocks(), Some(4), "{legs:?} {trial}");
+            let mut fresh = mech_runtime::ConstrainedSolver::for_model(&robot);
+            assert!(fresh.factor_shifted(&robot, 0.0, &q, &u, &inputs, gamma, &damping));
+            assert_eq!(fresh.partition_blocks(), None);
+            let rhs = rng.vector(nu, -1.0, 1.0);
+            let (mut x, mut x_reference) = (rhs.clone(), rhs);
+            implicit.solve_shifted(&mut x);
+            fresh.solve_shifted(&mut x_reference);
+            let scale = x_reference.iter().fold(0.0_f64, |s, v| s.max(v.abs()));
+            for (a, b) in x.iter().zip(&x_reference) {
+                assert!(
+                    (a - b).abs() <= 1e-9 * scale,
+                    "{legs:?}: shifted x {a} vs {b}"
+                );
+            }
+            let rows_scale = (0..nc).map(|r| row_size(&x, r)).fold(0.0, f64::max);
+            for r in 0..nc {
+                let row: f64 = (0..nu).map(|c| j[r + nc * c] * x[c]).sum();
+                assert!(
+                    row.abs() <= 1e-9 * rows_scale,
+                    "{legs:?}: row {r}: J x = {row:e}"
+                );
+            }
+        }
+    }
+}
