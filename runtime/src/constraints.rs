@@ -942,9 +942,10 @@ impl ConstrainedSolver {
 
     /// The number of blocks of the coordinate partitioning (dependent speeds solved for blocks
     /// of loop rows apart, then the independent speeds' system) by which
-    /// the last [`accelerations`](Self::accelerations) or
-    /// [`factor_shifted`](Self::factor_shifted) solved; `None` where it was the range-space
-    /// solve (the first call, loops in one block, or a partition that no longer fitted).
+    /// the last [`accelerations`](Self::accelerations),
+    /// [`factor_shifted`](Self::factor_shifted) or [`project`](Self::project) (its speeds)
+    /// solved; `None` where it was the range-space solve (the first calls, loops in one
+    /// block, or a partition that no longer fitted).
     pub fn partition_blocks(&self) -> Option<usize> {
         self.partition
             .as_ref()
@@ -1114,6 +1115,11 @@ impl ConstrainedSolver {
             return Ok(changed);
         }
         model.mass_matrix(t, q, inputs, self.mass.as_mut_slice());
+        self.last_by_partition = self.project_speeds_partitioned(u);
+        if self.last_by_partition && self.constraint_speeds(u) <= tolerance {
+            self.factored = rows;
+            return Ok(true);
+        }
         if !dense::cholesky(self.mass.as_mut_slice(), n) {
             self.factored = rows;
             return Err(RuntimeError::SingularMassMatrix { t });
@@ -1140,13 +1146,11 @@ impl ConstrainedSolver {
                 }
             }
             if used == nc {
-                // The accelerations' rows are independent (their factor checks that); as
-                // many as the rank of every row, they span the same rows. Otherwise they
-                // choose again.
-                if self.rank != self.active.len() {
-                    self.active.clear();
-                    self.active.extend(0..nc);
-                }
+                // Every row's pivoted factor chose the independent ones: the next
+                // projections and accelerations use those.
+                self.active.clear();
+                self.active.extend(self.order[..self.rank].iter().copied());
+                self.active.sort_unstable();
                 break;
             }
             if spanning && self.constraint_speeds(u) <= tolerance {
@@ -1158,7 +1162,31 @@ impl ConstrainedSolver {
             rows.extend(0..nc);
         }
         self.factored = rows;
+        self.choose_partition();
         Ok(true)
+    }
+
+    /// The kinetic-energy-closest `u` with `J u = 0` on the partition's rows, `N (NᵀMN)⁻¹
+    /// NᵀM u` (the range-space correction's result, in the independent speeds), with `M` in
+    /// `mass` (left as it is) and `J` in `jacobian`; `false`, `u` untouched, where there is
+    /// no partition that fits.
+    fn project_speeds_partitioned(&mut self, u: &mut [f64]) -> bool {
+        if !self.factor_partitioned(false) {
+            return false;
+        }
+        let Some(partition) = self.partition.as_mut() else {
+            return false;
+        };
+        let n = self.nu;
+        let momentum = self.force.as_mut_slice();
+        momentum.fill(0.0);
+        dense::add_times(self.mass.as_slice(), n, n, u, momentum);
+        partition.solve(self.mass.as_slice(), momentum);
+        if !all_finite(momentum) {
+            return false;
+        }
+        u.copy_from_slice(momentum);
+        true
     }
 
     /// `J u` of every row into `phi` (scratch), from `J` in `jacobian`; returns `max |J u|`,

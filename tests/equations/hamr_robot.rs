@@ -951,7 +951,8 @@ fn welded_robot_has_the_leg_models_modes() {
 /// robots at closed states with the chassis turned and every speed moving: `u̇` and `λ` agree
 /// to 1e-9 of their size, and both meet the equations they solve, `M u̇ = F + Jᵀλ` and
 /// `J u̇ = −J̇u` on every row (the redundant ones included). The same for a linearly implicit
-/// step's `(M − γD) x = f + Jᵀν`, `J x = 0`, `D` symmetric negative semidefinite.
+/// step's `(M − γD) x = f + Jᵀν`, `J x = 0`, `D` symmetric negative semidefinite, and the
+/// projection of the speeds onto `J u = 0`.
 #[test]
 fn partitioned_accelerations_are_the_range_space_ones() {
     let mut rng = common::Rng::new(41);
@@ -1075,6 +1076,38 @@ fn partitioned_accelerations_are_the_range_space_ones() {
                 assert!(
                     row.abs() <= 1e-9 * rows_scale,
                     "{legs:?}: row {r}: J x = {row:e}"
+                );
+            }
+            // The speeds' projection onto J u = 0 (kinetic-energy closest), by the partition
+            // against a fresh solver's range space (every row).
+            let off = rng.vector(nu, -0.5, 0.5);
+            let tolerance = 1e-10;
+            let project = |solver: &mut mech_runtime::ConstrainedSolver| {
+                let (mut q_projected, mut u_projected) = (q.clone(), off.clone());
+                solver
+                    .project(
+                        &robot,
+                        0.0,
+                        &mut q_projected,
+                        &mut u_projected,
+                        &inputs,
+                        tolerance,
+                    )
+                    .unwrap();
+                assert_eq!(q_projected, q, "{legs:?}: q moved");
+                u_projected
+            };
+            let projected = project(&mut implicit);
+            assert_eq!(implicit.partition_blocks(), Some(4), "{legs:?} {trial}");
+            let projected_reference =
+                project(&mut mech_runtime::ConstrainedSolver::for_model(&robot));
+            let scale = projected_reference
+                .iter()
+                .fold(0.0_f64, |s, v| s.max(v.abs()));
+            for (a, b) in projected.iter().zip(&projected_reference) {
+                assert!(
+                    (a - b).abs() <= 1e-9 * scale,
+                    "{legs:?}: projected u {a} vs {b}"
                 );
             }
         }
