@@ -593,6 +593,22 @@ pub fn lu_solve(lu: &[f64], n: usize, pivots: &[usize], b: &mut [f64]) {
     }
 }
 
+/// Solves `Aᵀ y = b` in place with the factor and pivots from [`lu`] (`Aᵀ = Uᵀ Lᵀ P`).
+pub fn lu_solve_transposed(lu: &[f64], n: usize, pivots: &[usize], b: &mut [f64]) {
+    // Uᵀ z = b (forward), then Lᵀ w = z (backward), then y = Pᵀ w.
+    for j in 0..n {
+        let sum: f64 = (0..j).map(|i| lu[i + n * j] * b[i]).sum();
+        b[j] = (b[j] - sum) / lu[j + n * j];
+    }
+    for j in (0..n).rev() {
+        let sum: f64 = (j + 1..n).map(|i| lu[i + n * j] * b[i]).sum();
+        b[j] -= sum;
+    }
+    for j in (0..n).rev() {
+        b.swap(j, pivots[j]);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -680,6 +696,34 @@ mod tests {
     }
 
     /// Values uniform in [−0.5, 0.5) from `seed` (xorshift64), the same on every run.
+    /// `A x = b` and `Aᵀ y = b` by one partially pivoted LU, against the products.
+    #[test]
+    fn lu_solves_and_transposed_solves_meet_the_products() {
+        let mut next = uniform(7);
+        let n = 5;
+        let a: Vec<f64> = (0..n * n).map(|_| next()).collect();
+        let mut factor = a.clone();
+        let mut pivots = vec![0; n];
+        assert!(lu(&mut factor, n, &mut pivots));
+        assert!(
+            pivots.iter().enumerate().any(|(k, &p)| p != k),
+            "no row swapped"
+        );
+        let b: Vec<f64> = (0..n).map(|_| next()).collect();
+        let mut x = b.clone();
+        lu_solve(&factor, n, &pivots, &mut x);
+        for i in 0..n {
+            let row: f64 = (0..n).map(|j| a[i + n * j] * x[j]).sum();
+            assert!((row - b[i]).abs() < 1e-12, "A x: {row} vs {}", b[i]);
+        }
+        let mut y = b.clone();
+        lu_solve_transposed(&factor, n, &pivots, &mut y);
+        for j in 0..n {
+            let column: f64 = (0..n).map(|i| a[i + n * j] * y[i]).sum();
+            assert!((column - b[j]).abs() < 1e-12, "Aᵀ y: {column} vs {}", b[j]);
+        }
+    }
+
     fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
         move || {
             seed ^= seed << 13;

@@ -21,6 +21,8 @@
 //! ([`Partition::factor`] declines where an entry outside it is not zero), so an entry that
 //! happened to be zero where the partition was chosen cannot be dropped.
 
+use crate::dense;
+
 /// Relative size below which an LU pivot of a block counts as zero (the partition no
 /// longer fits the state: choose again).
 const PIVOT_TOLERANCE: f64 = 1e-9;
@@ -263,7 +265,14 @@ impl Partition {
                 }
             }
             let pivots = &mut self.pivots[members.clone()];
-            if !lu_factor(lu, k, pivots) {
+            // A pivot small against the block's entries: the dependent speeds no longer
+            // suit this state (NaN fails too).
+            let scale = lu.iter().fold(0.0_f64, |s, v| s.max(v.abs()));
+            if !dense::lu(lu, k, pivots)
+                || (0..k).any(|j| {
+                    lu[j + k * j].is_nan() || lu[j + k * j].abs() <= PIVOT_TOLERANCE * scale
+                })
+            {
                 return false;
             }
             let rhs = &mut self.work[..k];
@@ -272,7 +281,7 @@ impl Partition {
                 for (value, &row) in rhs.iter_mut().zip(&self.rows[members.clone()]) {
                     *value = jacobian[row + nc * c];
                 }
-                lu_solve(lu, k, pivots, rhs);
+                dense::lu_solve(lu, k, pivots, rhs);
                 for (&d, &value) in self.dependent[members.clone()].iter().zip(rhs.iter()) {
                     self.basis[d + nu * position] = -value;
                 }
@@ -281,7 +290,7 @@ impl Partition {
                 for (value, &row) in rhs.iter_mut().zip(&self.rows[members.clone()]) {
                     *value = bias[row];
                 }
-                lu_solve(lu, k, pivots, rhs);
+                dense::lu_solve(lu, k, pivots, rhs);
                 for (&d, &value) in self.dependent[members].iter().zip(rhs.iter()) {
                     self.offset[d] = -value;
                 }
@@ -313,7 +322,7 @@ impl Partition {
                     .sum();
             }
         }
-        crate::dense::cholesky(&mut self.reduced, m)
+        dense::cholesky(&mut self.reduced, m)
     }
 
     /// `x` of `A x = f + Jᵀλ`, `J x = −b` (`b` as given to [`factor`](Self::factor); 0
@@ -339,7 +348,7 @@ impl Partition {
                 .map(|&i| self.basis[i + nu * position] * h[i])
                 .sum();
         }
-        crate::dense::cholesky_solve(&self.reduced, m, g);
+        dense::cholesky_solve(&self.reduced, m, g);
         x.copy_from_slice(&self.offset);
         for (position, rows) in self.nonzeros.iter().enumerate() {
             for &i in rows {
@@ -367,126 +376,10 @@ impl Partition {
                 *value = row - f[d];
             }
             let lu = &self.lu[block.lu_offset..block.lu_offset + k * k];
-            lu_solve_transposed(lu, k, &self.pivots[members.clone()], rhs);
+            dense::lu_solve_transposed(lu, k, &self.pivots[members.clone()], rhs);
             for (&row, &value) in self.rows[members].iter().zip(rhs.iter()) {
                 multipliers[row] = value;
             }
-        }
-    }
-}
-
-/// LU factorization with partial pivoting of a `k × k` column-major matrix in place (`P A =
-/// L U`, unit `L` below the diagonal); `pivots[j]` the row swapped with `j` at step `j`.
-/// `false` where a pivot is below [`PIVOT_TOLERANCE`] of the largest entry, or not finite.
-fn lu_factor(lu: &mut [f64], k: usize, pivots: &mut [usize]) -> bool {
-    let scale = lu.iter().fold(0.0_f64, |s, v| s.max(v.abs()));
-    if !scale.is_finite() || scale == 0.0 {
-        return false;
-    }
-    for j in 0..k {
-        let (mut best, mut size) = (j, lu[j + k * j].abs());
-        for i in j + 1..k {
-            if lu[i + k * j].abs() > size {
-                (best, size) = (i, lu[i + k * j].abs());
-            }
-        }
-        // NaN fails too.
-        if size.is_nan() || size <= PIVOT_TOLERANCE * scale {
-            return false;
-        }
-        pivots[j] = best;
-        if best != j {
-            for c in 0..k {
-                lu.swap(j + k * c, best + k * c);
-            }
-        }
-        let pivot = lu[j + k * j];
-        for i in j + 1..k {
-            lu[i + k * j] /= pivot;
-        }
-        for c in j + 1..k {
-            let u_jc = lu[j + k * c];
-            if u_jc != 0.0 {
-                for i in j + 1..k {
-                    lu[i + k * c] -= lu[i + k * j] * u_jc;
-                }
-            }
-        }
-    }
-    true
-}
-
-/// Solves `A y = b` in place with the factor of [`lu_factor`].
-fn lu_solve(lu: &[f64], k: usize, pivots: &[usize], b: &mut [f64]) {
-    for (j, &pivot) in pivots[..k].iter().enumerate() {
-        b.swap(j, pivot);
-    }
-    for j in 0..k {
-        let y = b[j];
-        for i in j + 1..k {
-            b[i] -= lu[i + k * j] * y;
-        }
-    }
-    for j in (0..k).rev() {
-        b[j] /= lu[j + k * j];
-        let y = b[j];
-        for i in 0..j {
-            b[i] -= lu[i + k * j] * y;
-        }
-    }
-}
-
-/// Solves `Aᵀ y = b` in place with the factor of [`lu_factor`] (`Aᵀ = Uᵀ Lᵀ P`).
-fn lu_solve_transposed(lu: &[f64], k: usize, pivots: &[usize], b: &mut [f64]) {
-    // Uᵀ z = b (forward), then Lᵀ w = z (backward), then y = Pᵀ w.
-    for j in 0..k {
-        let sum: f64 = (0..j).map(|i| lu[i + k * j] * b[i]).sum();
-        b[j] = (b[j] - sum) / lu[j + k * j];
-    }
-    for j in (0..k).rev() {
-        let sum: f64 = (j + 1..k).map(|i| lu[i + k * j] * b[i]).sum();
-        b[j] -= sum;
-    }
-    for j in (0..k).rev() {
-        b.swap(j, pivots[j]);
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A small deterministic stream in [−1, 1).
-    fn stream(seed: u64) -> impl FnMut() -> f64 {
-        let mut state = seed;
-        move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-        }
-    }
-
-    #[test]
-    fn lu_solves_and_transposed_solves_against_the_products() {
-        let mut next = stream(7);
-        let k = 5;
-        let a: Vec<f64> = (0..k * k).map(|_| next()).collect();
-        let mut lu = a.clone();
-        let mut pivots = vec![0; k];
-        assert!(lu_factor(&mut lu, k, &mut pivots));
-        let b: Vec<f64> = (0..k).map(|_| next()).collect();
-        let mut y = b.clone();
-        lu_solve(&lu, k, &pivots, &mut y);
-        for i in 0..k {
-            let row: f64 = (0..k).map(|j| a[i + k * j] * y[j]).sum();
-            assert!((row - b[i]).abs() < 1e-12, "A y: {row} vs {}", b[i]);
-        }
-        let mut y = b.clone();
-        lu_solve_transposed(&lu, k, &pivots, &mut y);
-        for j in 0..k {
-            let column: f64 = (0..k).map(|i| a[i + k * j] * y[i]).sum();
-            assert!((column - b[j]).abs() < 1e-12, "Aᵀ y: {column} vs {}", b[j]);
         }
     }
 }
