@@ -1147,10 +1147,15 @@ impl ConstrainedSolver {
             }
             if used == nc {
                 // Every row's pivoted factor chose the independent ones: the next
-                // projections and accelerations use those.
+                // projections and accelerations use those (as `factor_coupling` does; a
+                // non-finite `J` says nothing of which rows are redundant: every row).
                 self.active.clear();
-                self.active.extend(self.order[..self.rank].iter().copied());
-                self.active.sort_unstable();
+                if all_finite(&self.scaled[..n * nc]) {
+                    self.active.extend(self.order[..self.rank].iter().copied());
+                    self.active.sort_unstable();
+                } else {
+                    self.active.extend(0..nc);
+                }
                 break;
             }
             if spanning && self.constraint_speeds(u) <= tolerance {
