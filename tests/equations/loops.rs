@@ -9,6 +9,14 @@ use mech_runtime::{
     assemble, assemble_speeds, mobility, AssemblyOptions, Method, Model, SimOptions,
 };
 
+/// The bundled models with constraint rows, by name.
+fn models_with_loops() -> impl Iterator<Item = (&'static str, mech::tape_model::TapeModel)> {
+    mech::models::NAMES
+        .iter()
+        .map(|&name| (name, common::tape(name)))
+        .filter(|(_, model)| model.nc() > 0)
+}
+
 fn assembled(model: &dyn Model, fixed: &[usize]) -> (Vec<f64>, Vec<f64>) {
     let mut q = vec![0.0; model.nq()];
     let mut u = vec![0.0; model.nu()];
@@ -345,12 +353,8 @@ fn spherical_five_bar_mobility_and_motion() {
 fn accelerations_on_the_chosen_rows_meet_every_row() {
     let mut rng = Rng::new(23);
     let mut redundant = 0;
-    for name in mech::models::NAMES {
-        let model = common::tape(name);
+    for (name, model) in models_with_loops() {
         let (nu, nc) = (model.nu(), model.nc());
-        if nc == 0 {
-            continue;
-        }
         let (q0, _) = assembled(&model, &[]);
         let mut reused = mech_runtime::ConstrainedSolver::for_model(&model);
         for _ in 0..4 {
@@ -415,12 +419,8 @@ fn accelerations_on_the_chosen_rows_meet_every_row() {
 fn projection_on_the_chosen_rows_is_the_projection_on_every_row() {
     let mut rng = Rng::new(29);
     let tolerance = 1e-12;
-    for name in mech::models::NAMES {
-        let model = common::tape(name);
+    for (name, model) in models_with_loops() {
         let (nu, nc) = (model.nu(), model.nc());
-        if nc == 0 {
-            continue;
-        }
         let (q0, u0) = assembled(&model, &[]);
         let inputs = vec![0.0; model.ninputs()];
         let mut chosen = mech_runtime::ConstrainedSolver::for_model(&model);
@@ -474,12 +474,8 @@ fn projection_on_the_chosen_rows_is_the_projection_on_every_row() {
 #[test]
 fn shifted_factors_from_the_last_evaluation_are_the_evaluated_ones() {
     let mut rng = Rng::new(31);
-    for name in mech::models::NAMES {
-        let model = common::tape(name);
-        let (nu, nc) = (model.nu(), model.nc());
-        if nc == 0 {
-            continue;
-        }
+    for (name, model) in models_with_loops() {
+        let nu = model.nu();
         let (q0, u0) = assembled(&model, &[]);
         let inputs = rng.vector(model.ninputs(), -1.0, 1.0);
         let mut evaluated = mech_runtime::ConstrainedSolver::for_model(&model);
