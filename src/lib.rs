@@ -12,6 +12,7 @@ pub mod diagnose;
 pub mod experiments;
 pub mod flexure_fit;
 pub mod frequency;
+pub mod helper_thread;
 pub mod output;
 pub mod parallel;
 pub mod physics;

@@ -18,6 +18,8 @@ use std::sync::{Arc, OnceLock};
 use mech_codegen::back::tape::{Env, Program, Tape};
 use mech_codegen::Compiled;
 use mech_jit::{JitProgram, Scratch};
+
+use crate::helper_thread::{Evaluation, HelperThread};
 use mech_runtime::model::{rates_equal_speeds, terms_by_part};
 
 /// How a [`TapeModel`] evaluates its programs.
@@ -43,6 +45,11 @@ impl Backend {
 /// once or twice (a check, one output row) never pays Cranelift's compile time.
 pub const NATIVE_AFTER_CALLS: u32 = 3;
 
+/// The size of `[M, F, J, J̇u]` (instructions) from which [`TapeModel::use_second_thread`]
+/// splits it: a hand-over to the helper thread and back costs about a microsecond, the
+/// evaluation of this many instructions a few.
+const TWO_THREADS_FROM_OPS: usize = 5_000;
+
 /// The tape's programs in a fixed order: the slot of each in [`Native::programs`].
 #[derive(Clone, Copy, Debug)]
 enum Slot {
@@ -58,6 +65,10 @@ enum Slot {
     ConstrainedTerms,
     /// `[M, F, J̇u]` in one program (native code only).
     DynamicsTerms,
+    /// `[M, J, J̇u]` and `F`: `ConstrainedTerms` in two programs, run on two threads
+    /// ([`TapeModel::use_second_thread`]).
+    ConstrainedHere,
+    ConstrainedBeside,
     /// `q̇ = W(q) u`, for models with quaternions.
     KinematicRates,
     /// The contacts' damping `D`, for models with contacts.
@@ -66,7 +77,7 @@ enum Slot {
 }
 
 impl Slot {
-    const FIXED: usize = 12;
+    const FIXED: usize = 14;
     fn index(self) -> usize {
         match self {
             Slot::MassMatrix => 0,
@@ -81,6 +92,8 @@ impl Slot {
             Slot::DynamicsTerms => 9,
             Slot::KinematicRates => 10,
             Slot::ContactDamping => 11,
+            Slot::ConstrainedHere => 12,
+            Slot::ConstrainedBeside => 13,
             Slot::OutputRow(row) => Slot::FIXED + row,
         }
     }
@@ -103,6 +116,10 @@ struct Native {
     /// `dynamics_terms` (for models without loops too). Each value is computed by the same
     /// instructions as in the separate programs, so the numbers are the same.
     fused: Option<(Program, Program)>,
+    /// `ConstrainedTerms` split by [`Program::restricted`] into `[M, J, J̇u]` and `F`
+    /// (made on first use): the two parts share few instructions (the robot's 37,206 are
+    /// 20,621 + 17,008), so on two threads they take about the time of the larger.
+    split: OnceLock<(Program, Program)>,
 }
 
 /// The tape of a model with its names, defaults and current parameter values.
@@ -140,6 +157,10 @@ pub struct TapeModel {
     scratch: RefCell<Scratch>,
     /// The values of a fused program before they are split into its parts.
     fused_out: RefCell<Vec<f64>>,
+    /// Whether `constrained_terms` may evaluate `F` on a second thread.
+    second_thread: bool,
+    /// That thread, started on first use (each clone its own).
+    helper: HelperSlot,
     /// `q` with its unit quaternions at unit norm, where the programs evaluate
     /// ([`TapeModel::with_env`]).
     unit_q: RefCell<Vec<f64>>,
@@ -221,6 +242,7 @@ impl TapeModel {
                     .map(|_| NativeProgram::default())
                     .collect(),
                 fused,
+                split: OnceLock::new(),
             })
         });
         TapeModel {
@@ -259,8 +281,27 @@ impl TapeModel {
             native,
             scratch: RefCell::new(Scratch::default()),
             fused_out: RefCell::new(Vec::new()),
+            second_thread: false,
+            helper: HelperSlot::default(),
             unit_q: RefCell::new(Vec::new()),
         }
+    }
+
+    /// Lets `constrained_terms` (the loops' `M`, `F`, `J`, `J̇u`, every step's work) evaluate
+    /// `F` on a second thread beside the rest, with native code: for a simulation that runs
+    /// alone on a machine with a free core. The values are the same bits. Off by default:
+    /// where simulations already fill every core (sweeps, diagnoses), the helper would only
+    /// contend with them.
+    pub fn use_second_thread(&mut self, on: bool) {
+        self.second_thread = on;
+        if !on {
+            *self.helper.0.borrow_mut() = None;
+        }
+    }
+
+    /// Whether `constrained_terms` has run on two threads (a helper thread is started).
+    pub fn runs_on_two_threads(&self) -> bool {
+        self.helper.0.borrow().is_some()
     }
 
     pub fn tape(&self) -> &Tape {
@@ -343,27 +384,65 @@ impl TapeModel {
             // Only listed in `slots` (and called) for a tape with the program.
             Slot::KinematicRates => tape.kinematic_rates.as_ref().unwrap_or(&tape.forcing),
             Slot::ContactDamping => tape.contact_damping.as_ref().unwrap_or(&tape.forcing),
-            Slot::ConstrainedTerms | Slot::DynamicsTerms => {
-                let fused = self
-                    .native
-                    .as_ref()
-                    .and_then(|native| native.fused.as_ref());
+            Slot::ConstrainedTerms
+            | Slot::DynamicsTerms
+            | Slot::ConstrainedHere
+            | Slot::ConstrainedBeside => {
+                let native = self.native.as_ref();
+                let fused = native.and_then(|native| native.fused.as_ref());
                 let (constrained, dynamics) = fused.expect("fused programs with native code");
                 match slot {
                     Slot::ConstrainedTerms => constrained,
-                    _ => dynamics,
+                    Slot::DynamicsTerms => dynamics,
+                    _ => {
+                        let (nu, nc) = (self.tape.nu, self.tape.nc);
+                        let (here, beside) = native
+                            .expect("fused programs with native code")
+                            .split
+                            .get_or_init(|| {
+                                // [M, F, J, J̇u] → [M, J, J̇u] and F.
+                                let forcing = nu * nu..nu * nu + nu;
+                                let rest: Vec<usize> = (0..nu * nu)
+                                    .chain(forcing.end..forcing.end + nc * nu + nc)
+                                    .collect();
+                                let forcing: Vec<usize> = forcing.collect();
+                                (
+                                    constrained.restricted(&rest),
+                                    constrained.restricted(&forcing),
+                                )
+                            });
+                        match slot {
+                            Slot::ConstrainedHere => here,
+                            _ => beside,
+                        }
+                    }
                 }
             }
             Slot::OutputRow(row) => &tape.output_rows[row],
         }
     }
 
-    /// Runs a fused program into its parts (`out` of the fused length as scratch).
-    fn run_fused(&self, slot: Slot, env: &Env, parts: &mut [&mut [f64]]) {
-        let lengths = self.fused_lengths(slot);
+    /// Runs a fused program into its parts (`out` of the fused length as scratch), by
+    /// `code` where given (else as [`run`](Self::run) does).
+    fn run_fused(
+        &self,
+        slot: Slot,
+        code: Option<&JitProgram>,
+        env: &Env,
+        parts: &mut [&mut [f64]],
+    ) {
+        let (nu, nc) = (self.tape.nu, self.tape.nc);
+        let lengths = match slot {
+            Slot::ConstrainedTerms => [nu * nu, nu, nc * nu, nc],
+            Slot::ConstrainedHere => [nu * nu, nc * nu, nc, 0],
+            _ => [nu * nu, nu, nc, 0],
+        };
         let mut out = std::mem::take(&mut *self.fused_out.borrow_mut());
         out.resize(lengths.iter().sum(), 0.0);
-        self.run(slot, env, &mut out);
+        match code {
+            Some(code) => code.eval(env, &mut self.scratch.borrow_mut(), &mut out),
+            None => self.run(slot, env, &mut out),
+        }
         let mut rest = &out[..];
         for (part, &length) in parts.iter_mut().zip(&lengths) {
             let (values, tail) = rest.split_at(length);
@@ -375,13 +454,51 @@ impl TapeModel {
         *self.fused_out.borrow_mut() = out;
     }
 
-    /// The lengths of the parts of a fused program.
-    fn fused_lengths(&self, slot: Slot) -> Vec<usize> {
-        let (nu, nc) = (self.tape.nu, self.tape.nc);
-        match slot {
-            Slot::ConstrainedTerms => vec![nu * nu, nu, nc * nu, nc],
-            _ => vec![nu * nu, nu, nc],
+    /// `M`, `F`, `J`, `J̇u` with `F` on the second thread ([`use_second_thread`]), compiling
+    /// the two programs now (a simulation calls them at every step): `false` where there is
+    /// no native code or no thread (the caller then runs the fused program).
+    ///
+    /// [`use_second_thread`]: Self::use_second_thread
+    fn run_on_two_threads(&self, env: &Env, parts: [&mut [f64]; 4]) -> bool {
+        let Some(native) = &self.native else {
+            return false;
+        };
+        if self.program(Slot::ConstrainedTerms).ops.len() < TWO_THREADS_FROM_OPS {
+            return false;
         }
+        let compiled = |slot: Slot| {
+            native.programs[slot.index()]
+                .code
+                .get_or_init(|| JitProgram::compile(self.program(slot)).ok())
+                .as_ref()
+        };
+        let (Some(here), Some(_)) = (
+            compiled(Slot::ConstrainedHere),
+            compiled(Slot::ConstrainedBeside),
+        ) else {
+            return false;
+        };
+        let mut helper = self.helper.0.borrow_mut();
+        if helper.is_none() {
+            let native = Arc::clone(native);
+            let mut scratch = Scratch::default();
+            let beside: Evaluation = Box::new(move |env, out| {
+                let code = native.programs[Slot::ConstrainedBeside.index()].code.get();
+                if let Some(Some(code)) = code {
+                    code.eval(env, &mut scratch, out);
+                }
+            });
+            *helper = HelperThread::spawn(beside, self.tape.nu);
+        }
+        let Some(helper) = helper.as_mut() else {
+            return false;
+        };
+        let [mass, forcing, jacobian, bias] = parts;
+        helper.eval_beside(env, forcing, || {
+            let parts = &mut [mass, jacobian, bias];
+            self.run_fused(Slot::ConstrainedHere, Some(here), env, parts)
+        });
+        true
     }
 
     /// Whether the fused programs exist (native code).
@@ -569,11 +686,15 @@ impl mech_runtime::Model for TapeModel {
             return terms_by_part(self, t, q, u, inputs, parts, Some(jacobian));
         }
         self.with_env((t, q, u, inputs), |env| {
-            self.run_fused(
-                Slot::ConstrainedTerms,
-                env,
-                &mut [mass, forcing, jacobian, bias],
-            )
+            if self.second_thread {
+                // Reborrowed: the fused program below needs them where this declines.
+                let parts = [&mut *mass, &mut *forcing, &mut *jacobian, &mut *bias];
+                if self.run_on_two_threads(env, parts) {
+                    return;
+                }
+            }
+            let parts = &mut [mass, forcing, jacobian, bias];
+            self.run_fused(Slot::ConstrainedTerms, None, env, parts)
         });
     }
     #[allow(clippy::too_many_arguments)]
@@ -591,7 +712,7 @@ impl mech_runtime::Model for TapeModel {
             return terms_by_part(self, t, q, u, inputs, [mass, forcing, bias], None);
         }
         self.with_env((t, q, u, inputs), |env| {
-            self.run_fused(Slot::DynamicsTerms, env, &mut [mass, forcing, bias])
+            self.run_fused(Slot::DynamicsTerms, None, env, &mut [mass, forcing, bias])
         });
     }
     fn nflexures(&self) -> usize {
@@ -602,5 +723,15 @@ impl mech_runtime::Model for TapeModel {
     }
     fn flexures(&self, t: f64, q: &[f64], out: &mut [f64]) {
         self.eval(Slot::Flexures, t, q, &[], &[], out);
+    }
+}
+
+/// A model's helper thread: each clone starts its own (a clone may run on another thread).
+#[derive(Debug, Default)]
+struct HelperSlot(RefCell<Option<HelperThread>>);
+
+impl Clone for HelperSlot {
+    fn clone(&self) -> HelperSlot {
+        HelperSlot::default()
     }
 }

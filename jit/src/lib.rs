@@ -404,18 +404,6 @@ fn is_leaf(op: &Op) -> bool {
     !op.is_arithmetic()
 }
 
-fn operands(op: &Op) -> (Option<u32>, Option<u32>) {
-    match *op {
-        Op::Add(a, b) | Op::Sub(a, b) | Op::Mul(a, b) | Op::Div(a, b) | Op::Atan2(a, b) => {
-            (Some(a), Some(b))
-        }
-        Op::Neg(a) | Op::Sqrt(a) | Op::Call(_, a) | Op::Powi(a, _) | Op::Powf(a, _) => {
-            (Some(a), None)
-        }
-        _ => (None, None),
-    }
-}
-
 impl Layout {
     fn new(program: &Program, chunk_ops: usize) -> Layout {
         let n = program.ops.len();
@@ -427,7 +415,7 @@ impl Layout {
         let mut spills = 0;
         let mut needs = [0usize; 4];
         for (i, op) in program.ops.iter().enumerate() {
-            let (a, b) = operands(op);
+            let (a, b) = op.operands();
             for operand in [a, b].into_iter().flatten() {
                 let defined = operand as usize;
                 if chunk_of(operand) != i / chunk_ops

@@ -59,6 +59,12 @@ pub struct SimulateArgs {
     /// is used up.
     #[arg(long, default_value_t = SimOptions::default().max_steps, value_parser = super::positive_count)]
     pub max_steps: usize,
+    /// Threads for one run: with 2, the loops' forcing `F` is evaluated beside `M`, `J` and
+    /// `J̇u` (models with loops, native code), the same numbers; 1 keeps the run on one core
+    /// (for running several simulations side by side). Default: 2 where the machine has two
+    /// cores or more.
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=2))]
+    pub threads: Option<u8>,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -84,7 +90,11 @@ pub fn run(request: &SimulateArgs) -> Result<(), Error> {
     let path = request.common.model.as_path();
     let plot_path = request.plot.as_deref();
     let reads = (request.common).check_outputs(&[Some(&request.out)], plot_path)?;
-    let session = request.common.open_with_signals()?;
+    let mut session = request.common.open_with_signals()?;
+    let threads = request
+        .threads
+        .map_or_else(crate::parallel::threads, usize::from);
+    session.model.use_second_thread(threads >= 2);
     let start = session.initial_state(&request.q0, &request.u0)?;
     let state = session.assemble_from(&request.common.independent, start)?;
     if let Some(mobility) = &state.mobility {

@@ -1113,3 +1113,50 @@ fn partitioned_accelerations_are_the_range_space_ones() {
         }
     }
 }
+
+/// `M`, `F`, `J`, `J̇u` with `F` evaluated on a second thread (`mech simulate`'s default on
+/// two cores) are the fused program's to the bit, call after call and in a clone (which
+/// starts its own helper), with the fused program compiled to native code as well.
+#[test]
+fn two_threads_give_the_fused_programs_bits() {
+    let mut rng = common::Rng::new(7);
+    let one = robot();
+    let mut two = one.clone();
+    two.use_second_thread(true);
+    let (nu, nc) = (one.nu(), one.nc());
+    let evaluate = |model: &dyn Model, q: &[f64], u: &[f64], inputs: &[f64]| {
+        let (mut mass, mut forcing) = (vec![0.0; nu * nu], vec![0.0; nu]);
+        let (mut jacobian, mut bias) = (vec![0.0; nc * nu], vec![0.0; nc]);
+        model.constrained_terms(
+            0.1,
+            q,
+            u,
+            inputs,
+            &mut mass,
+            &mut forcing,
+            &mut jacobian,
+            &mut bias,
+        );
+        [mass, forcing, jacobian, bias]
+            .concat()
+            .iter()
+            .map(|v| v.to_bits())
+            .collect::<Vec<u64>>()
+    };
+    let clone = two.clone();
+    for call in 0..8 {
+        let offsets = std::cell::RefCell::new(rng.vector(32, -0.05, 0.05).into_iter());
+        let (mut q, _) = robot_state(&one, &|_, _| (offsets.borrow_mut().next().unwrap(), 0.0));
+        let e = one.unit_quaternions()[0];
+        q[e + 1..e + 4].copy_from_slice(&rng.vector(3, -0.3, 0.3));
+        let u = rng.vector(nu, -0.5, 0.5);
+        let inputs = rng.vector(one.ninputs(), -100.0, 100.0);
+        let fused = evaluate(&one, &q, &u, &inputs);
+        assert!(fused.iter().any(|&bits| f64::from_bits(bits) != 0.0));
+        for model in [&two, &clone] {
+            assert!(evaluate(model, &q, &u, &inputs) == fused, "call {call}");
+            assert!(model.runs_on_two_threads());
+        }
+    }
+    assert!(!one.runs_on_two_threads());
+}

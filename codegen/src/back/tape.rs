@@ -45,6 +45,41 @@ impl Op {
                 | Op::Time
         )
     }
+
+    /// The registers it reads: none for a leaf, the second only for a binary operation.
+    pub fn operands(&self) -> (Option<u32>, Option<u32>) {
+        match *self {
+            Op::Add(a, b) | Op::Sub(a, b) | Op::Mul(a, b) | Op::Div(a, b) | Op::Atan2(a, b) => {
+                (Some(a), Some(b))
+            }
+            Op::Neg(a) | Op::Sqrt(a) | Op::Call(_, a) | Op::Powi(a, _) | Op::Powf(a, _) => {
+                (Some(a), None)
+            }
+            Op::Const(_)
+            | Op::Coordinate(_)
+            | Op::Speed(_)
+            | Op::Param(_)
+            | Op::Input(_)
+            | Op::Time => (None, None),
+        }
+    }
+
+    /// The instruction with each register it reads renamed by `rename`.
+    fn with_operands(self, rename: impl Fn(u32) -> u32) -> Op {
+        match self {
+            Op::Add(a, b) => Op::Add(rename(a), rename(b)),
+            Op::Sub(a, b) => Op::Sub(rename(a), rename(b)),
+            Op::Mul(a, b) => Op::Mul(rename(a), rename(b)),
+            Op::Div(a, b) => Op::Div(rename(a), rename(b)),
+            Op::Atan2(a, b) => Op::Atan2(rename(a), rename(b)),
+            Op::Neg(a) => Op::Neg(rename(a)),
+            Op::Sqrt(a) => Op::Sqrt(rename(a)),
+            Op::Call(f, a) => Op::Call(f, rename(a)),
+            Op::Powi(a, n) => Op::Powi(rename(a), n),
+            Op::Powf(a, e) => Op::Powf(rename(a), e),
+            leaf => leaf,
+        }
+    }
 }
 
 /// Values of the free symbols during one evaluation.
@@ -80,6 +115,35 @@ impl Program {
             ops: builder.ops,
             results,
         }
+    }
+
+    /// The program of the results at `results` (indices into `self.results`, in that order):
+    /// the instructions they need, in the same order, so each value is computed by the same
+    /// operations and comes out the same bits.
+    pub fn restricted(&self, results: &[usize]) -> Program {
+        let mut needed = vec![false; self.ops.len()];
+        for &k in results {
+            needed[self.results[k] as usize] = true;
+        }
+        for i in (0..self.ops.len()).rev() {
+            if needed[i] {
+                let (first, second) = self.ops[i].operands();
+                for operand in first.into_iter().chain(second) {
+                    needed[operand as usize] = true;
+                }
+            }
+        }
+        let mut renamed = vec![u32::MAX; self.ops.len()];
+        let mut ops = Vec::new();
+        for (i, op) in self.ops.iter().enumerate().filter(|&(i, _)| needed[i]) {
+            renamed[i] = ops.len() as u32;
+            ops.push(op.with_operands(|k| renamed[k as usize]));
+        }
+        let results = results
+            .iter()
+            .map(|&k| renamed[self.results[k] as usize])
+            .collect();
+        Program { ops, results }
     }
 
     /// Number of arithmetic operations (additions, multiplications, function calls, ...).

@@ -290,3 +290,44 @@ fn func_all_lists_every_function_in_declaration_order() {
         assert_eq!((i, f as usize), (declared, declared), "{}", f.name());
     }
 }
+
+/// A program restricted to some of its results keeps only what they need and computes
+/// them to the same bits, in the order asked.
+#[test]
+fn restricted_programs_compute_the_same_bits() {
+    let mut pool = ExprPool::new();
+    let roots: Vec<ExprId> = [
+        "(* (sin q0) (+ u0 (cos q1)))",
+        "(+ (^ (sin q0) 3) (sqrt (+ 2 (* q1 q1))))",
+        "(atan2 (- u1 q0) (+ 1 (^ (cos q1) 2)))",
+    ]
+    .iter()
+    .map(|text| pool.parse_sexpr(text).unwrap())
+    .collect();
+    let program = Program::compile(&pool, &roots);
+    let env = crate::back::tape::Env {
+        t: 0.0,
+        q: &[0.3, -1.1],
+        u: &[2.0, 0.5],
+        params: &[],
+        inputs: &[],
+    };
+    let mut registers = Vec::new();
+    let mut all = [0.0; 3];
+    program.eval(&env, &mut registers, &mut all);
+    for picked in [vec![0], vec![2, 1], vec![1]] {
+        let part = program.restricted(&picked);
+        assert!(part.ops.len() < program.ops.len(), "{picked:?}");
+        let mut values = vec![0.0; picked.len()];
+        part.eval(&env, &mut registers, &mut values);
+        let expected: Vec<u64> = picked.iter().map(|&k| all[k].to_bits()).collect();
+        let got: Vec<u64> = values.iter().map(|v| v.to_bits()).collect();
+        assert_eq!(got, expected, "{picked:?}");
+    }
+    // The first root alone does not need the atan2 or the square root.
+    let first = program.restricted(&[0]);
+    assert!(!first.ops.iter().any(|op| matches!(
+        op,
+        crate::back::tape::Op::Atan2(..) | crate::back::tape::Op::Sqrt(_)
+    )));
+}
