@@ -118,14 +118,17 @@ impl HelperThread {
             thread.thread().unpark();
         }
         let result = here();
-        let waiting = Instant::now();
+        // The clock is read only once the wait is longer than a few spins (mostly it is not).
+        let mut waiting: Option<Instant> = None;
         let mut spins = 0;
         while self.shared.finished.load(Ordering::Acquire) != self.requests {
             if self.shared.failed.load(Ordering::Acquire) {
                 panic!("the helper thread's evaluation panicked");
             }
             spins += 1;
-            if spins % SPINS_PER_READING != 0 || waiting.elapsed() < PATIENCE {
+            if spins % SPINS_PER_READING != 0
+                || waiting.get_or_insert_with(Instant::now).elapsed() < PATIENCE
+            {
                 std::hint::spin_loop();
             } else {
                 std::thread::yield_now();
