@@ -5,8 +5,9 @@
 //! Produces: [`HelperThread::eval_beside`], which starts that evaluation on the helper,
 //! runs the caller's own work meanwhile, waits and copies the helper's values out.
 //!
-//! Why hand-written: a pool (rayon, or [`crate::parallel`]) wakes a sleeping thread through
-//! the kernel for each job, ~10–50 µs, as long as the work. Here the helper spins on an
+//! Why hand-written: [`crate::parallel`] starts threads per batch of jobs, and a pool's idle
+//! worker (rayon's) goes to sleep in the kernel between jobs, to be woken by a system call
+//! whose latency is of the order of the work itself (~10 µs). Here the helper spins on an
 //! atomic request counter while requests come (an integration asks every ~20 µs) and parks
 //! only after [`SPIN`] of silence; the caller unparks it with each request (an atomic
 //! operation when it is not parked). The arguments and values pass through a mutex that the
