@@ -315,8 +315,9 @@ fn analyses_not_written_for_quaternions_refuse_a_ball_joint_model() {
     );
 }
 
-/// `simulate --q0`, `--u0` (each value in its coordinate's or speed's unit) and
-/// `--max-steps` (a budget the run stops at, with the time it reached; `bode --chirp` too).
+/// `simulate --q0`, `--u0` (each value in its coordinate's or speed's unit),
+/// `--max-steps` (a budget the run stops at, with the time it reached; `bode --chirp` too)
+/// and `--threads` (1 or 2).
 #[test]
 fn initial_states_and_the_step_budget_are_checked() {
     let dir = scratch("initial_state");
@@ -361,6 +362,10 @@ fn initial_states_and_the_step_budget_are_checked() {
         (
             with("{model:floating_four_bar}", ["--independent", "base.e1"]),
             "--independent base.e1: a quaternion's parts cannot be held one by one",
+        ),
+        (
+            with("{model:pendulum}", ["--threads", "3"]),
+            "invalid value '3' for '--threads <THREADS>': 3 is not in 1..=2",
         ),
     ];
     let bode = [
