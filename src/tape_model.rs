@@ -295,13 +295,13 @@ impl TapeModel {
     pub fn use_second_thread(&mut self, on: bool) {
         self.second_thread = on;
         if !on {
-            *self.helper.0.borrow_mut() = None;
+            *self.helper.0.borrow_mut() = Helper::NotStarted;
         }
     }
 
     /// Whether `constrained_terms` has run on two threads (a helper thread is started).
     pub fn runs_on_two_threads(&self) -> bool {
-        self.helper.0.borrow().is_some()
+        matches!(*self.helper.0.borrow(), Helper::Running(_))
     }
 
     pub fn tape(&self) -> &Tape {
@@ -479,18 +479,22 @@ impl TapeModel {
             return false;
         };
         let mut helper = self.helper.0.borrow_mut();
-        if helper.is_none() {
+        if matches!(*helper, Helper::NotStarted) {
             let native = Arc::clone(native);
             let mut scratch = Scratch::default();
             let beside: Evaluation = Box::new(move |env, out| {
                 let code = native.programs[Slot::ConstrainedBeside.index()].code.get();
-                if let Some(Some(code)) = code {
-                    code.eval(env, &mut scratch, out);
-                }
+                let code = code.and_then(Option::as_ref);
+                // A panic here reaches the caller (`HelperThread::eval_beside`).
+                let code = code.expect("`F`'s native code, compiled before the helper started");
+                code.eval(env, &mut scratch, out);
             });
-            *helper = HelperThread::spawn(beside, self.tape.nu);
+            *helper = match HelperThread::spawn(beside, self.tape.nu) {
+                Some(thread) => Helper::Running(thread),
+                None => Helper::Unavailable,
+            };
         }
-        let Some(helper) = helper.as_mut() else {
+        let Helper::Running(helper) = &mut *helper else {
             return false;
         };
         let [mass, forcing, jacobian, bias] = parts;
@@ -728,7 +732,16 @@ impl mech_runtime::Model for TapeModel {
 
 /// A model's helper thread: each clone starts its own (a clone may run on another thread).
 #[derive(Debug, Default)]
-struct HelperSlot(RefCell<Option<HelperThread>>);
+struct HelperSlot(RefCell<Helper>);
+
+#[derive(Debug, Default)]
+enum Helper {
+    #[default]
+    NotStarted,
+    Running(HelperThread),
+    /// The system refused a thread: not asked again at every evaluation.
+    Unavailable,
+}
 
 impl Clone for HelperSlot {
     fn clone(&self) -> HelperSlot {

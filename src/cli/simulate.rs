@@ -59,8 +59,8 @@ pub struct SimulateArgs {
     /// is used up.
     #[arg(long, default_value_t = SimOptions::default().max_steps, value_parser = super::positive_count)]
     pub max_steps: usize,
-    /// Threads for one run: with 2, the loops' forcing `F` is evaluated beside `M`, `J` and
-    /// `J̇u` (models with loops, native code), the same numbers; 1 keeps the run on one core
+    /// Threads for one run: with 2, the forcing `F` is evaluated beside `M`, `J` and `J̇u`
+    /// (models of 5,000 instructions or more, native code), the same numbers; 1 keeps the run on one core
     /// (for running several simulations side by side). Default: 2 where the machine has two
     /// cores or more.
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=2))]

@@ -1120,7 +1120,10 @@ fn partitioned_accelerations_are_the_range_space_ones() {
 #[test]
 fn two_threads_give_the_fused_programs_bits() {
     let mut rng = common::Rng::new(7);
-    let one = robot();
+    // Native code whatever `MECH_JIT` says: the interpreter never splits.
+    let compiled = common::compile_text(LegModel::Vi.robot().0, &robot_text(LegModel::Vi));
+    let one =
+        mech::tape_model::TapeModel::with_backend(&compiled, mech::tape_model::Backend::Native);
     let mut two = one.clone();
     two.use_second_thread(true);
     let (nu, nc) = (one.nu(), one.nc());
