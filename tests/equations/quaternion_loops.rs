@@ -121,6 +121,54 @@ fn a_floating_four_bar_conserves_energy_and_momentum() {
     assert!(swing > 1.0, "crank swing {swing}");
 }
 
+/// The loop closes within the floating body's four-bar, so its rows are measured in the
+/// chassis (the nearest body both sides hang from): `φ`, `J` and `J̇u` must not change when
+/// only the base's pose and speeds do, and `J`'s base columns must be zero. Checked off the
+/// constraint (`q` not assembled, so `φ ≠ 0`): rows measured in N would turn with the base.
+#[test]
+fn loop_rows_hold_nothing_of_the_floating_base() {
+    let model = common::tape("floating_four_bar");
+    let (nq, nu, nc) = (model.nq(), model.nu(), model.nc());
+    let (mut q, mut u) = (vec![0.0; nq], vec![0.0; nu]);
+    model.initial_state(&mut q, &mut u);
+    let mut moved = (q.clone(), u.clone());
+    let spin = model.unit_quaternions()[0];
+    let turned = [0.3_f64, -0.5, 0.7, 0.4];
+    let norm = turned.iter().map(|e| e * e).sum::<f64>().sqrt();
+    for (k, e) in turned.iter().enumerate() {
+        moved.0[spin + k] = e / norm;
+    }
+    for (name, value) in [("base.x", 0.02), ("base.y", -0.01), ("base.z", 0.05)] {
+        moved.0[model.coordinate_index(name).unwrap()] = value;
+    }
+    let base_speeds: Vec<usize> = (0..nu)
+        .filter(|&i| model.speed_name(i).starts_with("base."))
+        .collect();
+    assert_eq!(base_speeds.len(), 6);
+    for (k, &i) in base_speeds.iter().enumerate() {
+        moved.1[i] = 1.5 - 0.7 * k as f64;
+    }
+    let rows = |q: &[f64], u: &[f64]| {
+        let (mut phi, mut jacobian, mut bias) = (vec![0.0; nc], vec![0.0; nc * nu], vec![0.0; nc]);
+        model.constraints(0.0, q, &mut phi);
+        model.constraint_jacobian(0.0, q, &mut jacobian);
+        model.constraint_bias(0.0, q, u, &mut bias);
+        (phi, jacobian, bias)
+    };
+    let (phi, jacobian, bias) = rows(&q, &u);
+    let (phi_moved, jacobian_moved, bias_moved) = rows(&moved.0, &moved.1);
+    assert!(
+        phi.iter().any(|v| v.abs() > 1e-6),
+        "the start is off the loop: {phi:?}"
+    );
+    assert_eq!(phi, phi_moved);
+    assert_eq!(jacobian, jacobian_moved);
+    assert_eq!(bias, bias_moved);
+    for &i in &base_speeds {
+        assert!(jacobian[i * nc..(i + 1) * nc].iter().all(|&v| v == 0.0));
+    }
+}
+
 /// The chassis on three sliders and three pins (z, then y, then x: Euler angles, all zero at
 /// the start, where the chassis's angular velocity in its basis is the pins' rates in the
 /// order x, y, z) in place of the free joint: another set of coordinates and speeds, no

@@ -5,9 +5,10 @@
 //! Consumes: `model.loops` and the tree kinematics. Produces: [`Constraints`] (root ids in
 //! the pool) and the generalized forces of closure springs and dampers.
 //!
-//! Rows per closure (all positions measured from the Newtonian origin):
+//! Rows per closure, measured in the closure's frame A (the nearest common ancestor of its
+//! two points' frames, N for a tree on fixed ground; positions from A's origin):
 //! - coincident: the listed components of `r_C − r_P` in the basis of the named frame;
-//! - revolute: `r_C − r_P` in N (3 rows), then `a_P·e₁_C` and `a_P·e₂_C`, where `a_P` is
+//! - revolute: `r_C − r_P` in A (3 rows), then `a_P·e₁_C` and `a_P·e₂_C`, where `a_P` is
 //!   the axis in the parent interframe and `e₁, e₂ ⊥ a` are fixed in the child interframe
 //!   (zero exactly when the two axes are parallel); a compliant closure (with a twist axis
 //!   `t`) keeps only the 3 position rows: its twist about `t` and its lateral bending about
@@ -48,10 +49,25 @@ pub struct Constraints {
     pub velocity_rows: usize,
 }
 
-/// Orientation (`C_{N←F}`) of a loop's interframe and position of its point, in N.
+/// Orientation (`C_{A←F}`) of a loop's interframe and position of its point, in the basis
+/// of the closure's frame A ([`closure_frame`]).
 struct Side {
     dcm: Mat3,
     position: Vec3,
+}
+
+/// The frame A a closure is measured in: the nearest common ancestor of its two points'
+/// frames. Its rows are then functions of the coordinates below A only, the same zeros as in
+/// N (`φ_A = C_{N←A}ᵀ φ_N` for the vector rows, the alignment rows are dot products): on a
+/// floating robot the base's pose stays out of `φ`, `J` and `J̇u` (all of it, not just in
+/// exact arithmetic).
+fn closure_frame(
+    kinematics: &Kinematics,
+    model: &Model,
+    closure: &ir::LoopClosure,
+) -> ir::Handle<ir::Frame> {
+    let frame = |point: ir::Handle<ir::Point>| model.points[point].frame;
+    kinematics.common_ancestor(frame(closure.parent), frame(closure.child))
 }
 
 fn side(
@@ -60,9 +76,10 @@ fn side(
     model: &Model,
     point: ir::Handle<ir::Point>,
     rotation: &[ir::AxisAngle],
+    ancestor: ir::Handle<ir::Frame>,
 ) -> Side {
     let point = &model.points[point];
-    let (frame_dcm, origin) = kinematics.to_newtonian(pool, point.frame);
+    let (frame_dcm, origin) = kinematics.relative_to(pool, point.frame, ancestor);
     let offset = lower_vec(pool, &point.position);
     let offset = vector::mat_vec(pool, &frame_dcm, offset);
     let position = vector::add(pool, origin, offset);
@@ -103,9 +120,11 @@ fn number_vector(pool: &mut ExprPool, v: [f64; 3]) -> Vec3 {
     [number(pool, v[0]), number(pool, v[1]), number(pool, v[2])]
 }
 
-/// The revolute closure's axis in N (from the parent side) and the reference directions
-/// `e₁` fixed in each interframe, in N.
+/// The revolute closure's axis (from the parent side) and the reference directions `e₁`
+/// fixed in each interframe, in the basis of `frame`.
 pub(super) struct RevoluteGeometry {
+    /// The closure's frame A ([`closure_frame`]), the basis of every vector here.
+    pub frame: ir::Handle<ir::Frame>,
     pub axis: Vec3,
     pub reference_parent: Vec3,
     pub reference_child: Vec3,
@@ -115,7 +134,7 @@ pub(super) struct RevoluteGeometry {
 }
 
 /// A compliant closure's twist axis `t` and its normal `n = a × t`, fixed in the child
-/// interframe (in N), and the hinge axis `a_C` seen from the child.
+/// interframe (in A), and the hinge axis `a_C` seen from the child.
 pub(super) struct TwistGeometry {
     pub axis_child: Vec3,
     pub twist_child: Vec3,
@@ -124,6 +143,7 @@ pub(super) struct TwistGeometry {
 
 fn revolute_geometry(
     pool: &mut ExprPool,
+    frame: ir::Handle<ir::Frame>,
     parent: &Side,
     child: &Side,
     axis: &ir::Vec3,
@@ -144,6 +164,7 @@ fn revolute_geometry(
         }
     });
     RevoluteGeometry {
+        frame,
         axis: vector::mat_vec(pool, &parent.dcm, axis_local),
         reference_parent: vector::mat_vec(pool, &parent.dcm, e1),
         reference_child: vector::mat_vec(pool, &child.dcm, e1),
@@ -185,10 +206,26 @@ pub(super) fn closure_geometry(
     else {
         return None;
     };
-    let parent = side(pool, kinematics, model, closure.parent, parent_orientation);
-    let child = side(pool, kinematics, model, closure.child, child_orientation);
+    let frame = closure_frame(kinematics, model, closure);
+    let parent = side(
+        pool,
+        kinematics,
+        model,
+        closure.parent,
+        parent_orientation,
+        frame,
+    );
+    let child = side(
+        pool,
+        kinematics,
+        model,
+        closure.child,
+        child_orientation,
+        frame,
+    );
     Some(revolute_geometry(
         pool,
+        frame,
         &parent,
         &child,
         axis,
@@ -247,13 +284,27 @@ pub fn derive(
             } => (&parent_orientation[..], &child_orientation[..]),
             _ => (no_rotation, no_rotation),
         };
-        let parent = side(pool, kinematics, model, closure.parent, parent_rotation);
-        let child = side(pool, kinematics, model, closure.child, child_rotation);
+        let ancestor = closure_frame(kinematics, model, closure);
+        let parent = side(
+            pool,
+            kinematics,
+            model,
+            closure.parent,
+            parent_rotation,
+            ancestor,
+        );
+        let child = side(
+            pool,
+            kinematics,
+            model,
+            closure.child,
+            child_rotation,
+            ancestor,
+        );
         let gap = vector::sub(pool, child.position, parent.position);
         match &closure.kind {
             ClosureKind::Coincident { frame, components } => {
-                let (frame_dcm, _) = kinematics.to_newtonian(pool, *frame);
-                let local = vector::mat_t_vec(pool, &frame_dcm, gap);
+                let local = kinematics.express(pool, gap, ancestor, *frame);
                 for &c in components {
                     residual.push(local[c]);
                     names.push(format!("{}.{}", closure.name, ["x", "y", "z"][c]));
@@ -267,7 +318,7 @@ pub fn derive(
                     names.push(format!("{}.{}", closure.name, ["x", "y", "z"][c]));
                 }
                 let geometry =
-                    revolute_geometry(pool, &parent, &child, axis, twist_axis.as_deref());
+                    revolute_geometry(pool, ancestor, &parent, &child, axis, twist_axis.as_deref());
                 // A compliant closure's axes are held by springs (its twist and lateral
                 // flexure angles), not by rows.
                 if geometry.twist.is_none() {
@@ -541,7 +592,7 @@ pub(super) fn closure_torque_forces(
     ];
     for (point, sign) in sides {
         let frame = model.points[point].frame;
-        let local = kinematics.express(pool, torque_vector, Model::NEWTONIAN, frame);
+        let local = kinematics.express(pool, torque_vector, geometry.frame, frame);
         for (r, w) in kinematics.frames[frame.index()].partial_omega.clone() {
             let power = vector::dot(pool, local, w);
             forcing[r].push(pool.scale(power, sign));
@@ -549,7 +600,7 @@ pub(super) fn closure_torque_forces(
     }
 }
 
-/// `(ω_C − ω_P)·a` of a revolute closure, in N.
+/// `(ω_C − ω_P)·a` of a revolute closure, in the closure's frame.
 pub(super) fn relative_rate(
     pool: &mut ExprPool,
     kinematics: &mut Kinematics,
@@ -565,7 +616,7 @@ pub(super) fn relative_rate(
     ] {
         let frame = model.points[point].frame;
         let omega = kinematics.frames[frame.index()].omega;
-        let omega = kinematics.express(pool, omega, frame, Model::NEWTONIAN);
+        let omega = kinematics.express(pool, omega, frame, geometry.frame);
         let along = vector::dot(pool, omega, geometry.axis);
         let signed = pool.scale(along, sign);
         rate = pool.add(rate, signed);

@@ -186,6 +186,47 @@ impl Kinematics {
         result
     }
 
+    /// `(C_{A←k}, r)`: the orientation of frame k and the position of its origin relative to
+    /// its ancestor A, both in A's basis; [`Kinematics::to_newtonian`] when A is the root.
+    /// Loop closures are measured here from the nearest common ancestor of their two frames,
+    /// so their rows hold no coordinate above it (on a floating robot, not the base's pose).
+    pub fn relative_to(
+        &mut self,
+        pool: &mut ExprPool,
+        frame: Handle<ir::Frame>,
+        ancestor: Handle<ir::Frame>,
+    ) -> (Mat3, Vec3) {
+        if self.frames[ancestor.index()].parent.is_none() {
+            return self.to_newtonian(pool, frame);
+        }
+        let chain = self.ancestors(frame);
+        let below = chain
+            .iter()
+            .position(|&f| f == ancestor)
+            .expect("relative_to an ancestor of the frame");
+        let (mut dcm, mut origin) = (vector::identity(pool), vector::zero(pool));
+        for &step in chain[..below].iter().rev() {
+            let kinematics = &self.frames[step.index()];
+            let (to_parent, offset) = (kinematics.to_parent, kinematics.offset);
+            let shift = vector::mat_vec(pool, &dcm, offset);
+            origin = vector::add(pool, origin, shift);
+            dcm = vector::mat_mul(pool, &dcm, &to_parent);
+        }
+        (dcm, origin)
+    }
+
+    /// The nearest frame that is an ancestor of both `a` and `b` (either one itself).
+    pub fn common_ancestor(&self, a: Handle<ir::Frame>, b: Handle<ir::Frame>) -> Handle<ir::Frame> {
+        let ancestors_of_a = self.ancestors(a);
+        let mut current = b;
+        while !ancestors_of_a.contains(&current) {
+            current = self.frames[current.index()]
+                .parent
+                .expect("the root is an ancestor of every frame");
+        }
+        current
+    }
+
     /// Re-expresses `v` (components in `from`) in the basis of `to`, walking up to the
     /// common ancestor and down again, so only the DCMs on that path are used.
     pub fn express(
