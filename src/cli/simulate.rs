@@ -65,6 +65,10 @@ pub struct SimulateArgs {
     /// cores or more.
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=2))]
     pub threads: Option<u8>,
+    /// Print the integrator's work after the run: its wall time, steps accepted and rejected,
+    /// evaluations of the right-hand side (each a constrained solve for `u̇`), Jacobians.
+    #[arg(long)]
+    pub stats: bool,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -121,7 +125,9 @@ pub fn run(request: &SimulateArgs) -> Result<(), Error> {
         bar.set_position((1000.0 * t / t_end) as u64);
         bar.set_message(format!("{t:.4} s"));
     };
+    let clock = std::time::Instant::now();
     let trajectory = session.simulate(&state, &options, &mut progress);
+    let integration_seconds = clock.elapsed().as_secs_f64();
     bar.finish_and_clear();
     let trajectory = trajectory?;
 
@@ -161,7 +167,25 @@ pub fn run(request: &SimulateArgs) -> Result<(), Error> {
     if let Some(plot_path) = &request.plot {
         println!("plot written to {}", plot_path.display());
     }
+    if request.stats {
+        println!(
+            "integrated in {integration_seconds:.3} s: {}",
+            work(&trajectory.stats)
+        );
+    }
     Ok(())
+}
+
+/// `N steps accepted, R rejected, E evaluations of the right-hand side[, J Jacobians]`.
+fn work(stats: &mech_runtime::Stats) -> String {
+    let mut text = format!(
+        "{} steps accepted, {} rejected, {} evaluations of the right-hand side",
+        stats.accepted_steps, stats.rejected_steps, stats.rhs_evaluations
+    );
+    if stats.jacobian_evaluations > 0 {
+        text.push_str(&format!(", {} Jacobians", stats.jacobian_evaluations));
+    }
+    text
 }
 
 /// The integrator and its settings as `--method`, `--rtol`, `--atol` and `--step` give them.
