@@ -70,6 +70,35 @@ fn closure_frame(
     kinematics.common_ancestor(frame(closure.parent), frame(closure.child))
 }
 
+/// The closure's frame A and its parent and child sides measured there.
+fn sides(
+    pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    model: &Model,
+    closure: &ir::LoopClosure,
+    parent_rotation: &[ir::AxisAngle],
+    child_rotation: &[ir::AxisAngle],
+) -> (ir::Handle<ir::Frame>, Side, Side) {
+    let frame = closure_frame(kinematics, model, closure);
+    let parent = side(
+        pool,
+        kinematics,
+        model,
+        closure.parent,
+        parent_rotation,
+        frame,
+    );
+    let child = side(
+        pool,
+        kinematics,
+        model,
+        closure.child,
+        child_rotation,
+        frame,
+    );
+    (frame, parent, child)
+}
+
 fn side(
     pool: &mut ExprPool,
     kinematics: &mut Kinematics,
@@ -206,22 +235,13 @@ pub(super) fn closure_geometry(
     else {
         return None;
     };
-    let frame = closure_frame(kinematics, model, closure);
-    let parent = side(
+    let (frame, parent, child) = sides(
         pool,
         kinematics,
         model,
-        closure.parent,
+        closure,
         parent_orientation,
-        frame,
-    );
-    let child = side(
-        pool,
-        kinematics,
-        model,
-        closure.child,
         child_orientation,
-        frame,
     );
     Some(revolute_geometry(
         pool,
@@ -284,22 +304,13 @@ pub fn derive(
             } => (&parent_orientation[..], &child_orientation[..]),
             _ => (no_rotation, no_rotation),
         };
-        let ancestor = closure_frame(kinematics, model, closure);
-        let parent = side(
+        let (ancestor, parent, child) = sides(
             pool,
             kinematics,
             model,
-            closure.parent,
+            closure,
             parent_rotation,
-            ancestor,
-        );
-        let child = side(
-            pool,
-            kinematics,
-            model,
-            closure.child,
             child_rotation,
-            ancestor,
         );
         let gap = vector::sub(pool, child.position, parent.position);
         match &closure.kind {
