@@ -6,7 +6,7 @@
 //! the pool) and the generalized forces of closure springs and dampers.
 //!
 //! Rows per closure, measured in the closure's frame A (the nearest common ancestor of its
-//! two points' frames, N for a tree on fixed ground; positions from A's origin):
+//! two points' frames, N where their chains meet only there; positions from A's origin):
 //! - coincident: the listed components of `r_C − r_P` in the basis of the named frame;
 //! - revolute: `r_C − r_P` in A (3 rows), then `a_P·e₁_C` and `a_P·e₂_C`, where `a_P` is
 //!   the axis in the parent interframe and `e₁, e₂ ⊥ a` are fixed in the child interframe
@@ -57,10 +57,11 @@ struct Side {
 }
 
 /// The frame A a closure is measured in: the nearest common ancestor of its two points'
-/// frames. Its rows are then functions of the coordinates below A only, the same zeros as in
-/// N (`φ_A = C_{N←A}ᵀ φ_N` for the vector rows, the alignment rows are dot products): on a
-/// floating robot the base's pose stays out of `φ`, `J` and `J̇u` (all of it, not just in
-/// exact arithmetic).
+/// frames. The same zeros as in N (`φ_A = C_{N←A}ᵀ φ_N` for the vector rows, the alignment
+/// rows are dot products), but the revolute and distance rows are then functions of the
+/// coordinates below A only: on a floating robot whose loops close within a leg, the base's
+/// pose is absent from their `φ`, `J` and `J̇u` symbolically, not just in exact arithmetic.
+/// (A coincident row named in a frame outside A's subtree goes back through that frame.)
 fn closure_frame(
     kinematics: &Kinematics,
     model: &Model,
