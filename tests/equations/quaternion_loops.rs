@@ -178,12 +178,14 @@ fn loop_rows_hold_nothing_of_the_floating_base() {
 #[test]
 fn a_loop_spring_and_damper_balance_energy_on_a_tumbling_base() {
     let damping = 2e-6;
+    let spring_and_damper =
+        format!("    stiffness = 1e-3 N*m/rad;\n    damping = {damping:e} N*m*s/rad;\n");
     let source = common::bundled_source("floating_four_bar").replace(
         "    axis = z;\n}\nflexure tip_hinge",
-        "    axis = z;\n    stiffness = 1e-3 N*m/rad;\n    damping = 2e-6 N*m*s/rad;\n}\nflexure tip_hinge",
+        &format!("    axis = z;\n{spring_and_damper}}}\nflexure tip_hinge"),
     );
     assert!(
-        source.contains("damping = 2e-6"),
+        source.contains(&spring_and_damper),
         "the loop's block changed"
     );
     let model = common::tape_from_text("floating_four_bar", &source);

@@ -236,20 +236,19 @@ impl Kinematics {
         from: Handle<ir::Frame>,
         to: Handle<ir::Frame>,
     ) -> Vec3 {
-        let ancestors_of_to = self.ancestors(to);
+        let meeting = self.common_ancestor(from, to);
         let mut v = v;
         let mut current = from;
-        while !ancestors_of_to.contains(&current) {
+        while current != meeting {
             let kinematics = &self.frames[current.index()];
             v = vector::mat_vec(pool, &kinematics.to_parent, v);
-            current = kinematics
-                .parent
-                .expect("the root is an ancestor of every frame");
+            current = kinematics.parent.expect("below the common ancestor");
         }
+        let ancestors_of_to = self.ancestors(to);
         let position = ancestors_of_to
             .iter()
-            .position(|&f| f == current)
-            .unwrap_or(0);
+            .position(|&f| f == meeting)
+            .expect("the common ancestor is an ancestor of `to`");
         for &frame in ancestors_of_to[..position].iter().rev() {
             v = vector::mat_t_vec(pool, &self.frames[frame.index()].to_parent, v);
         }
