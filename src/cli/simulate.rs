@@ -65,8 +65,9 @@ pub struct SimulateArgs {
     /// cores or more.
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=2))]
     pub threads: Option<u8>,
-    /// Print the integrator's work after the run: its wall time, steps accepted and rejected,
-    /// evaluations of the right-hand side (each a constrained solve for `u̇`), Jacobians.
+    /// Print the integrator's work after the run: its wall time (with the JIT compile of the
+    /// programs it calls), steps accepted and rejected, evaluations of the right-hand side
+    /// (each a constrained solve for `u̇`), Jacobians.
     #[arg(long)]
     pub stats: bool,
 }
