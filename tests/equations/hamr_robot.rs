@@ -445,8 +445,11 @@ const GROUND: &str = "
 param k_ground = 100 N/m;
 /// Hunt-Crossley damping of the foot contacts (restitution about 0.9 at 0.05 m/s).
 param alpha_ground = 2 s/m;
-/// Foot-floor friction coefficient. A placeholder, not yet taken from measured data.
-param mu = 0.5;
+/// Foot-floor friction coefficient. Not measured on HAMR's feet (no published value found):
+/// 1, the value N. Doshi (the paper's first author) set for every contact of his published
+/// simulations of this robot (HarvardAgileRoboticsLab/drake, `contactConstraints.m`, 'CHANGED
+/// BY NEEL (7/18/17)'). The speeds' sensitivity to it: docs/experiments.md.
+param mu = 1;
 /// Transition speed of the regularized Coulomb friction.
 param v_slip = 2 mm/s;
 /// Payload carried on the chassis (a point mass above its origin).
