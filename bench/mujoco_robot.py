@@ -35,8 +35,8 @@ The MuJoCo model (MJCF written here from the URDF):
   the force source F_b V(t) / V_rated;
 - each foot: a sphere of radius `--foot-radius` at the URDF's collision point (mech: a point),
   the floor plane lowered by that radius so the gap is the same; then either
-  - MuJoCo's soft contact: friction mu (elliptic cone), `solref` = (time constant, damping
-    ratio 1) with the time constant calibrated at each timestep so that each foot at rest
+  - MuJoCo's soft contact: friction mu on feet and floor (elliptic cone), `solref` = (time
+    constant, damping ratio 1) with the time constant calibrated at each timestep so that each foot at rest
     sinks as far as mech's (m g / (4 k_ground), about 36 um): MuJoCo's contact stiffness is
     in the constraint's acceleration units, so mech's k_ground cannot be entered as such;
   - or mech's contact law, computed here and applied as a force before each step
@@ -237,7 +237,10 @@ def build_mjcf(args, params, flexures, actuators):
         f'iterations="{args.iterations}" tolerance="{args.tolerance}"/>',
         f'  <default><geom {contact}/></default>',
         '  <worldbody>',
+        # The floor's friction is the feet's: MuJoCo takes the larger of the two geoms'
+        # (its default 1 would otherwise override any smaller mu).
         '    <geom name="floor" type="plane" size="100 100 1" '
+        f'friction="{params["mu"]} 0 0" '
         f'pos="0 0 FLOOR" contype="0" conaffinity="{int(args.contact == "mujoco")}"/>',
         *chassis,
         '  </worldbody>',
