@@ -199,8 +199,9 @@ fn a_short_trot_moves_forwards() {
 /// The experiment's integrator (`method = "rosenbrock-w"`, implicit in the feet's friction,
 /// rtol 1e-4) against DOPRI5 at rtol 1e-6 (the explicit method, whose step the friction holds
 /// at ~25 µs): the same 10 Hz walk, half a settle cycle and one measured, at the same speed
-/// to 0.5 %. Measured: 71.298 and 71.297 mm/s, the slip 1.6425 mm per cycle in both; the
-/// full grid (40 walks) agrees to 0.1 % (docs/benchmarks.md §16).
+/// to 0.5 %. Measured: 68.475 and 68.471 mm/s, the slip 0.911 and 0.910 mm per cycle; the
+/// full grid (40 walks, 1 settle and 2 measured cycles each) agrees to 3 % (docs/benchmarks.md
+/// §16: with `mu` = 1 some of those walks' headings wander, and any error moves them).
 #[test]
 fn the_contact_implicit_walk_is_the_explicit_one() {
     let short = [
@@ -232,7 +233,7 @@ fn the_contact_implicit_walk_is_the_explicit_one() {
 
 /// `compare` walks a second robot over the same grid: the experiment's HAMR-V2.0, with the
 /// same names, the same mass (its links are HAMR-VI's) and another walk (its legs' shorter
-/// crank arms, other flexures and actuators): one 10 Hz unloaded walk each, half a settle
+/// crank arms, other flexures and actuators): one 10 Hz walk with 2 g each, half a settle
 /// cycle and one measured.
 #[test]
 fn compare_walks_the_second_robot_over_the_same_grid() {
@@ -245,7 +246,7 @@ fn compare_walks_the_second_robot_over_the_same_grid() {
         ),
         (
             r#"payloads = ["0 g", "1 g", "2 g", "3 g", "4 g"]"#,
-            r#"payloads = ["0 g"]"#,
+            r#"payloads = ["2 g"]"#,
         ),
     ]);
     let walks = locomotion::compute(&spec, &|_, _| {}).unwrap();
@@ -423,7 +424,15 @@ fn a_mirror_symmetric_robot_trots_straight() {
     };
     let (settle, measured) = (14, 20);
     let trot = |model| {
-        let samples = heading(model, &[], &[], 5.0, (settle + measured) as f64, 1.0, method);
+        let samples = heading(
+            model,
+            &[],
+            &[],
+            5.0,
+            (settle + measured) as f64,
+            1.0,
+            method,
+        );
         let window = &samples[settle..=settle + measured];
         let yaw: Vec<f64> = window.iter().map(|(yaw, _)| *yaw).collect();
         let drift = window[measured].1 - window[0].1;
