@@ -157,7 +157,7 @@ fn bad_locomotion_files_give_clear_errors() {
         ),
         (
             (
-                "frequencies = [\"2 Hz\", \"5 Hz\", \"10 Hz\", \"20 Hz\"]",
+                "frequencies = [\"1 Hz\", \"2 Hz\", \"5 Hz\", \"10 Hz\", \"20 Hz\", \"50 Hz\"]",
                 "frequencies = [\"10 V\"]",
             ),
             "key `frequencies`: expected a frequency",
@@ -241,7 +241,7 @@ fn compare_walks_the_second_robot_over_the_same_grid() {
         ("settle_cycles = 1", "settle_cycles = 0.5"),
         ("cycles = 2", "cycles = 1"),
         (
-            r#"frequencies = ["2 Hz", "5 Hz", "10 Hz", "20 Hz"]"#,
+            r#"frequencies = ["1 Hz", "2 Hz", "5 Hz", "10 Hz", "20 Hz", "50 Hz"]"#,
             r#"frequencies = ["10 Hz"]"#,
         ),
         (

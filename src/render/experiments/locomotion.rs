@@ -6,7 +6,7 @@
 //! the files it lists.
 
 use super::csv;
-use crate::experiments::locomotion::{compute, Spec, Walk, Walks};
+use crate::experiments::locomotion::{compute, Spec, Walk, WalkMethod, Walks};
 use crate::experiments::Error;
 use crate::output::CsvTable;
 use crate::render::plot;
@@ -334,7 +334,7 @@ fn method_text(spec: &Spec, walks: &Walks) -> String {
         "The whole robot (`{}`, {}) from rest on the floor, driven by a {} gait: each leg's \
          swing drive {} sin(2πft + φ) with its leg's phase φ, the lift drive {} from it, the \
          legs wired the other way given half a cycle more. {} settle cycle(s), then averages \
-         over {} cycle(s), {} samples per cycle (DOPRI5, rtol {:e}). Speed is the base's \
+         over {} cycle(s), {} samples per cycle ({}, rtol {:e}). Speed is the base's \
          forward (+x) travel over the measured cycles; height, pitch and roll are the base's \
          (mean and peak to peak); slip is the feet's travel on the floor while pressing on \
          it; airborne is the share of samples with no foot on the floor; the cost of \
@@ -349,6 +349,10 @@ fn method_text(spec: &Spec, walks: &Walks) -> String {
         spec.settle_cycles,
         spec.cycles,
         spec.samples_per_cycle,
+        match spec.method {
+            WalkMethod::Dopri5 => "DOPRI5",
+            WalkMethod::RosenbrockW => "the W-method ROS34PW2, implicit in the feet's friction",
+        },
         spec.rtol,
         ADVANCE_PER_CYCLE * 1e3,
         walks.body_length * 1e3,
