@@ -43,8 +43,8 @@ pub struct Spec {
     /// Drive amplitude (half the peak-to-peak voltage).
     pub amplitude: String,
     /// `trot` (diagonal pairs half a cycle apart), `pronk` (all in phase), `bound` (front
-    /// and rear pairs half a cycle apart), `pace` (left and right), or `custom` (each leg's
-    /// `phase`).
+    /// and rear pairs half a cycle apart), `jump` (the rear pair a quarter cycle behind the
+    /// front), `pace` (left and right half a cycle apart), or `custom` (each leg's `phase`).
     #[serde(default = "default_gait")]
     pub gait: String,
     /// The lift drive's phase relative to the swing drive's.
@@ -249,6 +249,9 @@ impl LegSpec {
             "trot" => half * f64::from(u8::from(self.front != self.left)),
             "pronk" => 0.0,
             "bound" => half * f64::from(u8::from(!self.front)),
+            // The HAMR authors' `JUMP` (HarvardAgileRoboticsLab/drake,
+            // `GenerateHueristicActTraj.m`): the rear pair a quarter cycle behind the front.
+            "jump" => -half / 2.0 * f64::from(u8::from(!self.front)),
             "pace" => half * f64::from(u8::from(!self.left)),
             "custom" => match &self.phase {
                 Some(text) => quantity("leg.phase", text, Dimension::NONE)?,
@@ -259,11 +262,9 @@ impl LegSpec {
                     )))
                 }
             },
-            other => {
-                return Err(key_error(format!(
-                    "key `gait`: unknown gait `{other}`; one of trot, pronk, bound, pace, custom"
-                )))
-            }
+            other => return Err(key_error(format!(
+                "key `gait`: unknown gait `{other}`; one of trot, pronk, bound, jump, pace, custom"
+            ))),
         };
         if gait != "custom" && self.phase.is_some() {
             return Err(key_error(format!(

@@ -74,6 +74,19 @@ fn gaits_give_the_mirror_tests_drive_phases() {
         .map(|p| p.1)
         .collect();
     assert_eq!(swing, [0.0, 180.0, 180.0, 0.0], "FL, FR, RL, RR");
+    // The HAMR authors' jump: the rear legs a quarter cycle (90°) behind the front ones, on
+    // top of the wiring's half cycles.
+    let jump = phases(
+        &spec(&[("gait = \"trot\"", "gait = \"jump\"")])
+            .drives(20.0)
+            .unwrap(),
+    );
+    let swing: Vec<f64> = jump
+        .iter()
+        .filter(|(n, _)| n.ends_with("swing"))
+        .map(|p| p.1.rem_euclid(360.0))
+        .collect();
+    assert_eq!(swing, [0.0, 180.0, 90.0, 270.0], "FL, FR, RL, RR");
 }
 
 fn quaternion_product(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
