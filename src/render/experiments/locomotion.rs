@@ -83,9 +83,11 @@ pub fn run(spec: &Spec, dir: &Path, progress: super::Progress<'_>) -> Result<Out
         let path = dir.join(format!("walk_{}Hz.html", walk.frequency));
         outcome.add_file(crate::output::File::new(path, page));
     }
+    // One colour per frequency; the compared robot's curves dashed in its frequency's colour.
     let mut curves: Vec<(String, Vec<f64>, Vec<f64>)> = Vec::new();
-    for (robot, _) in &robots {
-        for &f in &robot.frequencies {
+    let mut styles = Vec::new();
+    for (index, (robot, _)) in robots.iter().enumerate() {
+        for (color, &f) in robot.frequencies.iter().enumerate() {
             let points: Vec<&Walk> = robot.walks.iter().filter(|w| w.frequency == f).collect();
             let payloads: Vec<f64> = points.iter().map(|w| w.payload * 1e3).collect();
             let speeds: Vec<f64> = points.iter().map(|w| w.run.speed * 1e3).collect();
@@ -95,6 +97,10 @@ pub fn run(spec: &Spec, dir: &Path, progress: super::Progress<'_>) -> Result<Out
             };
             if !payloads.is_empty() {
                 curves.push((label, payloads, speeds));
+                styles.push(plot::CurveStyle {
+                    color,
+                    dashed: index > 0,
+                });
             }
         }
     }
@@ -104,8 +110,11 @@ pub fn run(spec: &Spec, dir: &Path, progress: super::Progress<'_>) -> Result<Out
             "{}: forward speed against payload (Fig. 9)",
             names.join(" and ")
         );
-        let plot = plot::XyPlot::new(&title, "payload [g]", "forward speed [mm/s]", &curves)
-            .render(&dir.join("speed_payload.svg"))?;
+        let plot = plot::XyPlot {
+            styles: Some(&styles),
+            ..plot::XyPlot::new(&title, "payload [g]", "forward speed [mm/s]", &curves)
+        }
+        .render(&dir.join("speed_payload.svg"))?;
         outcome.add_plot(plot);
     }
     for (robot, _) in &robots {
