@@ -211,7 +211,7 @@ fn a_short_trot_moves_forwards() {
 
 /// The experiment's integrator (`method = "rosenbrock-w"`, implicit in the feet's friction,
 /// rtol 1e-4) against DOPRI5 at rtol 1e-6 (the explicit method, whose step the friction holds
-/// at ~25 µs): the same 10 Hz walk, half a settle cycle and one measured, at the same speed
+/// at ~9 µs): the same 10 Hz walk, half a settle cycle and one measured, at the same speed
 /// to 0.5 %. Measured: 68.475 and 68.471 mm/s, the slip 0.911 and 0.910 mm per cycle; the
 /// full grid (40 walks, 1 settle and 2 measured cycles each) agrees to 3 % (docs/benchmarks.md
 /// §16: with `mu` = 1 some of those walks' headings wander, and any error moves them).
@@ -418,7 +418,7 @@ fn slope(values: &[f64]) -> f64 {
 /// every cycle: its trend (least-squares slope × 20 cycles) within 0.1° (1.7e-3 rad), twice the
 /// cycle-to-cycle scatter of those samples (±0.05°, measured: the trend itself is 0.03°), and
 /// the sideways drift within 0.5 mm (measured 0.2 mm, 120 mm forward). The robot as imported
-/// (the URDF's unmirrored products of inertia) fails it: its trend −0.5°, its drift 2 mm. At
+/// (the URDF's unmirrored products of inertia) fails it: its trend −0.59°, its drift 1.8 mm. At
 /// 5 Hz, the file's integrator (rosenbrock-w, rtol 1e-4; DOPRI5 at 1e-6 gives the same
 /// heading to 0.05°) and the default `mu` = 1: with `mu` = 0.5 the symmetric trot is not what
 /// the model settles into (it slides into one of two mirror-image turning gaits, 38° and 77 mm

@@ -771,7 +771,7 @@ fn legs_mirror_the_front_left_leg(robot: &dyn Model) {
 
 /// Set down on the floor at its zero pose, the robot settles on its four feet and stands
 /// still: at rest the floor carries its weight, with and without a payload (`Σ f_n =
-/// (m + m_payload) g` to 1e-6 relative after 3 s; the friction forces cancel) and the chassis
+/// (m + m_payload) g` to 1e-6 relative after 5 s; the friction forces cancel) and the chassis
 /// no longer moves sideways (less than 0.1 µm over the last second), while it sinks by the
 /// compliance of legs and contacts. The regularized friction lets the feet creep while they
 /// carry a sideways force, so the robot settles exponentially rather than sticking (time
