@@ -63,30 +63,19 @@ fn gaits_give_the_mirror_tests_drive_phases() {
         let found = trot.iter().find(|(n, _)| n == name).unwrap().1;
         assert!((found - phase).abs() < 1e-9, "{name}: {found} vs {phase}");
     }
-    let pronk = phases(
-        &spec(&[("gait = \"trot\"", "gait = \"pronk\"")])
-            .drives(20.0)
-            .unwrap(),
-    );
-    let swing: Vec<f64> = pronk
-        .iter()
-        .filter(|(n, _)| n.ends_with("swing"))
-        .map(|p| p.1)
-        .collect();
-    assert_eq!(swing, [0.0, 180.0, 180.0, 0.0], "FL, FR, RL, RR");
+    // The swing drives' phases (deg, in [0, 360)) of `gait`, in the order FL, FR, RL, RR.
+    let swing_phases = |gait: &str| -> Vec<f64> {
+        let file = spec(&[("gait = \"trot\"", &format!("gait = \"{gait}\""))]);
+        phases(&file.drives(20.0).unwrap())
+            .iter()
+            .filter(|(n, _)| n.ends_with("swing"))
+            .map(|p| p.1.rem_euclid(360.0))
+            .collect()
+    };
+    assert_eq!(swing_phases("pronk"), [0.0, 180.0, 180.0, 0.0]);
     // The HAMR authors' jump: the rear legs a quarter cycle (90°) behind the front ones, on
     // top of the wiring's half cycles.
-    let jump = phases(
-        &spec(&[("gait = \"trot\"", "gait = \"jump\"")])
-            .drives(20.0)
-            .unwrap(),
-    );
-    let swing: Vec<f64> = jump
-        .iter()
-        .filter(|(n, _)| n.ends_with("swing"))
-        .map(|p| p.1.rem_euclid(360.0))
-        .collect();
-    assert_eq!(swing, [0.0, 180.0, 90.0, 270.0], "FL, FR, RL, RR");
+    assert_eq!(swing_phases("jump"), [0.0, 180.0, 90.0, 270.0]);
 }
 
 fn quaternion_product(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
@@ -351,6 +340,14 @@ fn heading(
         .collect()
 }
 
+/// The bundled HAMR-VI robot's IR, as imported from the URDF.
+fn imported_robot() -> mech_codegen::ir::Model {
+    let path = root().join("models/robots/hamr_vi_robot.mech");
+    let text = std::fs::read_to_string(path).unwrap();
+    let source = mech_codegen::SourceFile::new("hamr_vi_robot.mech", text);
+    mech_codegen::Compiled::from_source(source).unwrap().model
+}
+
 /// 20 cycles of a 10 Hz pronk (every leg in phase, so the gait is its own mirror image at
 /// every instant) from rest: the largest |yaw| (rad) and |y| (m) of the chassis.
 fn pronk_heading(model: mech_codegen::ir::Model) -> (f64, f64) {
@@ -378,10 +375,7 @@ fn pronk_heading(model: mech_codegen::ir::Model) -> (f64, f64) {
 /// time). (The trot, its own mirror image only half a cycle later, is checked next.)
 #[test]
 fn a_mirror_symmetric_robot_pronks_straight() {
-    let path = root().join("models/robots/hamr_vi_robot.mech");
-    let text = std::fs::read_to_string(path).unwrap();
-    let source = mech_codegen::SourceFile::new("hamr_vi_robot.mech", text);
-    let imported = mech_codegen::Compiled::from_source(source).unwrap().model;
+    let imported = imported_robot();
     let (yaw, sideways) = pronk_heading(mirrored(imported.clone()));
     let (yaw_imported, sideways_imported) = pronk_heading(imported);
     println!(
@@ -426,10 +420,7 @@ fn slope(values: &[f64]) -> f64 {
 /// cycle), so neither can be held to "no net yaw".
 #[test]
 fn a_mirror_symmetric_robot_trots_straight() {
-    let path = root().join("models/robots/hamr_vi_robot.mech");
-    let text = std::fs::read_to_string(path).unwrap();
-    let source = mech_codegen::SourceFile::new("hamr_vi_robot.mech", text);
-    let imported = mech_codegen::Compiled::from_source(source).unwrap().model;
+    let imported = imported_robot();
     let method = mech_runtime::Method::RosenbrockW {
         rtol: 1e-4,
         atol: 1e-7,
