@@ -36,9 +36,10 @@ The MuJoCo model (MJCF written here from the URDF):
 - each foot: a sphere of radius `--foot-radius` at the URDF's collision point (mech: a point),
   the floor plane lowered by that radius so the gap is the same; then either
   - MuJoCo's soft contact: friction mu on feet and floor (elliptic cone), `solref` = (time
-    constant, damping ratio 1) with the time constant calibrated at each timestep so that each foot at rest
-    sinks as far as mech's (m g / (4 k_ground), about 36 um): MuJoCo's contact stiffness is
-    in the constraint's acceleration units, so mech's k_ground cannot be entered as such;
+    constant, damping ratio 1) with the time constant calibrated at each timestep so that
+    each foot at rest sinks as far as mech's (m g / (4 k_ground), about 36 um): MuJoCo's
+    contact stiffness is in the constraint's acceleration units, so mech's k_ground cannot be
+    entered as such;
   - or mech's contact law, computed here and applied as a force before each step
     (`MechContact`; `--mech-contact-timestep-us`).
 """

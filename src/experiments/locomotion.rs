@@ -264,8 +264,9 @@ impl LegSpec {
             },
             other => {
                 return Err(key_error(format!(
-                "key `gait`: unknown gait `{other}`; one of trot, pronk, bound, jump, pace, custom"
-            )))
+                    "key `gait`: unknown gait `{other}`; \
+                     one of trot, pronk, bound, jump, pace, custom"
+                )))
             }
         };
         if gait != "custom" && self.phase.is_some() {

@@ -413,8 +413,9 @@ fn slope(values: &[f64]) -> f64 {
 /// cycle-to-cycle scatter of those samples (±0.05°, measured: the trend itself is 0.03°), and
 /// the sideways drift within 0.5 mm (measured 0.2 mm, 120 mm forward). The robot as imported
 /// (the URDF's unmirrored products of inertia) fails it: its trend −0.59°, its drift 1.8 mm. At
-/// 5 Hz, the file's integrator (rosenbrock-w, rtol 1e-4; DOPRI5 at 1e-6 gives the same
-/// heading to 0.05°) and the default `mu` = 1: with `mu` = 0.5 the symmetric trot is not what
+/// 5 Hz, the file's integrator (rosenbrock-w, rtol 1e-4; DOPRI5 at 1e-6 gives headings within
+/// 0.2° of it and as flat a trend, −0.03° per 20 cycles over cycles 14–30) and the default
+/// `mu` = 1: with `mu` = 0.5 the symmetric trot is not what
 /// the model settles into (it slides into one of two mirror-image turning gaits, 38° and 77 mm
 /// sideways in 34 cycles), and at 10 Hz the trot is irregular (the heading moves by degrees a
 /// cycle), so neither can be held to "no net yaw".
