@@ -21,6 +21,13 @@ pub struct File {
     pub bytes: Vec<u8>,
 }
 
+/// A file's name without its extension (`experiments/bode.toml` → `bode`), or `fallback`
+/// for a path that has none: outputs and keys are named after the files they come from.
+pub fn file_stem(path: &Path, fallback: &str) -> String {
+    path.file_stem()
+        .map_or(fallback.into(), |s| s.to_string_lossy().into_owned())
+}
+
 impl File {
     pub fn new(path: impl Into<PathBuf>, bytes: impl Into<Vec<u8>>) -> File {
         File {

@@ -8,7 +8,8 @@ use std::fmt::Write as _;
 use clap::Args;
 use mech_codegen::ir::Dimension;
 
-use super::{length, positive, voltage, Error};
+use super::args::{length, positive, voltage};
+use super::Error;
 use crate::physics::actuator::{
     energy_density, SEED_DRIVE_VOLTAGE, SEED_TABLE_II, SEED_TABLE_I_MODEL,
 };

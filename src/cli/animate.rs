@@ -10,7 +10,8 @@ use std::path::PathBuf;
 use clap::Args;
 use mech_runtime::Model;
 
-use super::{Error, ModelArgs};
+use super::args::ModelArgs;
+use super::Error;
 use crate::output;
 use crate::render::animation;
 

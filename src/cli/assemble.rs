@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use clap::Args;
 use mech_runtime::Model;
 
-use super::ModelArgs;
+use super::args::ModelArgs;
 use crate::output;
 use crate::session;
 

@@ -11,7 +11,8 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use mech_runtime::Model;
 
-use super::{frequency_value, Error, ModelArgs};
+use super::args::{frequency_value, ModelArgs};
+use super::Error;
 use crate::frequency::{self, ChirpSweep, Point};
 use crate::output;
 use crate::render::plot;
@@ -33,7 +34,7 @@ pub struct BodeArgs {
     #[arg(long)]
     pub to: String,
     /// Number of log-spaced frequencies.
-    #[arg(long, default_value_t = 400, value_parser = super::point_count)]
+    #[arg(long, default_value_t = 400, value_parser = super::args::point_count)]
     pub points: usize,
     /// How flexure losses enter: `hysteretic` (complex stiffness k(1 + iη), exact at every
     /// frequency) or `viscous` (the time-domain dampers b = kη/ω_ref, as a simulation sees them).
@@ -46,7 +47,7 @@ pub struct BodeArgs {
     #[arg(long)]
     pub chirp_amplitude: Option<String>,
     /// Budget of the chirp simulation's integration steps, accepted and rejected.
-    #[arg(long, default_value_t = mech_runtime::SimOptions::default().max_steps, value_parser = super::positive_count)]
+    #[arg(long, default_value_t = mech_runtime::SimOptions::default().max_steps, value_parser = super::args::positive_count)]
     pub max_steps: usize,
     /// CSV file (frequency, magnitude, phase, and the chirp estimate if any).
     #[arg(long)]

@@ -71,7 +71,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), Error> {
     if let Some(model) = &args.model {
         experiment.set_model(model.clone());
     }
-    let reads = super::data_run_reads(experiment_path, &experiment, data_path);
+    let reads = super::args::data_run_reads(experiment_path, &experiment, data_path);
     let known = ["diagnosis.json", "diagnosis.html"].map(|name| args.out_dir.join(name));
     output::check_outputs(known.iter().map(PathBuf::as_path), &reads)?;
     let data = MeasuredData::load(data_path)?;

@@ -33,6 +33,9 @@ pub enum Error {
     Equations(#[from] crate::describe::TooLarge),
     #[error(transparent)]
     Experiments(#[from] experiments::Error),
+    /// The model of `mech fit` or `mech diagnose`, opened as a leg.
+    #[error(transparent)]
+    Leg(#[from] experiments::leg::Error),
     #[error(transparent)]
     Sweep(#[from] crate::sweep::Error),
     #[error(transparent)]

@@ -25,8 +25,9 @@ pub fn run(args: &ExperimentArgs) -> Result<(), Error> {
     // Drawn once an experiment reports parts (a locomotion grid's walks).
     let bar = std::sync::OnceLock::new();
     let progress = |done: usize, total: usize| {
-        let bar =
-            bar.get_or_init(|| super::progress_bar(total as u64, "runs {bar:30} {pos}/{len}"));
+        let bar = bar.get_or_init(|| {
+            super::progress::progress_bar(total as u64, "runs {bar:30} {pos}/{len}")
+        });
         bar.set_position(done as u64);
     };
     let outcome =

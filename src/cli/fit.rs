@@ -37,7 +37,7 @@ pub struct FitArgs {
 
 pub fn run(args: &FitArgs) -> Result<(), Error> {
     let experiment = experiment::load(&args.experiment)?;
-    let reads = super::data_run_reads(&args.experiment, &experiment, &args.data);
+    let reads = super::args::data_run_reads(&args.experiment, &experiment, &args.data);
     let known = ["fit.json", "fit.csv"].map(|name| args.out_dir.join(name));
     output::check_outputs(known.iter().map(PathBuf::as_path), &reads)?;
     let data = MeasuredData::load(&args.data)?;

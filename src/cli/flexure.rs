@@ -11,7 +11,8 @@ use std::path::PathBuf;
 use clap::{Args, Subcommand};
 use mech_codegen::ir::Dimension;
 
-use super::{angular_frequency, length, positive, Error};
+use super::args::{angular_frequency, length, positive};
+use super::Error;
 use crate::flexure_fit::fit::{fit_files, FitOptions, FitReport, PLAUSIBLE_MODULUS};
 use crate::flexure_fit::rig::specimen_files;
 use crate::output;
@@ -59,10 +60,10 @@ pub struct StiffnessArgs {
     #[arg(long)]
     pub modulus: Option<String>,
     /// Override Poisson's ratio.
-    #[arg(long, value_parser = super::poisson_ratio)]
+    #[arg(long, value_parser = super::args::poisson_ratio)]
     pub poisson: Option<f64>,
     /// Override the loss factor η.
-    #[arg(long, value_parser = super::non_negative_number)]
+    #[arg(long, value_parser = super::args::non_negative_number)]
     pub loss_factor: Option<f64>,
     /// Reference frequency of the time-domain damping b = kη/ω: `40 Hz`, or `250 rad/s`.
     #[arg(long, default_value = "40 Hz")]

@@ -15,7 +15,7 @@ use clap::Args;
 use mech_runtime::nalgebra::{Complex, DMatrix};
 use mech_runtime::{Linearization, Model, SteadyLinearization};
 
-use super::ModelArgs;
+use super::args::ModelArgs;
 use crate::output;
 use crate::render::plot::{CurveStyle, XyPlot};
 use crate::session::list;
@@ -248,7 +248,7 @@ fn run_steady(args: &LinearizeArgs) -> Result<(), Error> {
         return write_files(&files, &reads);
     };
     let sweep = Sweep::parse(&session, text)?;
-    let bar = super::progress_bar(
+    let bar = super::progress::progress_bar(
         sweep.values.len() as u64,
         "linearizing {bar:30} {pos}/{len} values",
     );

@@ -28,7 +28,7 @@ pub struct ReportArgs {
 pub fn run(args: &ReportArgs) -> Result<(), Error> {
     let start = Instant::now();
     let experiment_files = experiment_files(&args.experiments)?;
-    let bar = super::progress_bar(
+    let bar = super::progress::progress_bar(
         experiment_files.len() as u64,
         "experiments {bar:40} {pos}/{len} {msg} [{elapsed}]",
     );

@@ -9,7 +9,8 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 use mech_runtime::{Method, Model, SimOptions, Trajectory};
 
-use super::{parse_time, Error, ModelArgs};
+use super::args::{parse_time, ModelArgs};
+use super::Error;
 use crate::output;
 use crate::render::plot;
 use crate::render::run::{coordinate_names, output_names, speed_names, trajectory_table};
@@ -32,10 +33,10 @@ pub struct SimulateArgs {
     #[arg(long, value_enum, default_value_t = Integrator::Dopri5)]
     pub method: Integrator,
     /// Relative tolerance (adaptive methods).
-    #[arg(long, default_value_t = 1e-9, value_parser = super::positive_number)]
+    #[arg(long, default_value_t = 1e-9, value_parser = super::args::positive_number)]
     pub rtol: f64,
     /// Absolute tolerance (adaptive methods).
-    #[arg(long, default_value_t = 1e-12, value_parser = super::positive_number)]
+    #[arg(long, default_value_t = 1e-12, value_parser = super::args::positive_number)]
     pub atol: f64,
     /// Step size for rk4, with a unit or in seconds.
     #[arg(long, default_value = "0.1 ms")]
@@ -57,7 +58,7 @@ pub struct SimulateArgs {
     pub accelerations: bool,
     /// Budget of integration steps, accepted and rejected: the run stops with an error when it
     /// is used up.
-    #[arg(long, default_value_t = SimOptions::default().max_steps, value_parser = super::positive_count)]
+    #[arg(long, default_value_t = SimOptions::default().max_steps, value_parser = super::args::positive_count)]
     pub max_steps: usize,
     /// Threads for one run: with 2, the forcing `F` is evaluated beside `M`, `J` and `J̇u`
     /// (models of 5,000 instructions or more, native code), the same numbers; 1 keeps the run on one core
@@ -118,7 +119,7 @@ pub fn run(request: &SimulateArgs) -> Result<(), Error> {
         ..SimOptions::default()
     };
 
-    let bar = super::progress_bar(
+    let bar = super::progress::progress_bar(
         1000,
         "simulating {bar:40} {percent:>3}% t = {msg} [{elapsed} / ~{eta}]",
     );

@@ -12,7 +12,7 @@ use std::path::PathBuf;
 use clap::Args;
 use mech_runtime::{Fixture, Model};
 
-use super::ModelArgs;
+use super::args::ModelArgs;
 use crate::output;
 
 #[derive(Args, Clone, Debug)]

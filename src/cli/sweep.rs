@@ -46,11 +46,10 @@ pub fn run(args: &SweepArgs) -> Result<(), Error> {
     if let Some(seed) = args.seed {
         study.seed = seed;
     }
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("out/sweep").join(crate::experiments::stem(&args.study)));
-    let bar = super::progress_bar(
+    let out = args.out.clone().unwrap_or_else(|| {
+        PathBuf::from("out/sweep").join(output::file_stem(&args.study, "experiment"))
+    });
+    let bar = super::progress::progress_bar(
         study.samples as u64,
         "samples {bar:40} {pos}/{len} [{elapsed} < {eta}]",
     );
@@ -58,7 +57,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Error> {
     let table = study.run_all(threads, &|| bar.inc(1))?;
     bar.finish_and_clear();
     let mut outcome = crate::render::sweep::render(&study, &table, &out)?;
-    outcome.name = crate::experiments::stem(&args.study);
+    outcome.name = output::file_stem(&args.study, "experiment");
     let study_file = output::Read {
         path: args.study.clone(),
         what: "the study file",

@@ -22,7 +22,7 @@ use mech_runtime::RuntimeError;
 
 use super::data::DataError;
 use super::lm::LmError;
-use crate::experiments;
+use crate::experiments::leg;
 use crate::session;
 use crate::toml_file::TomlError;
 
@@ -125,10 +125,7 @@ pub enum Error {
         error: Box<session::Error>,
     },
     /// No static equilibrium for the drive of one data row.
-    Equilibrium {
-        line: usize,
-        error: Box<experiments::Error>,
-    },
+    Equilibrium { line: usize, error: Box<leg::Error> },
     /// The model cannot be linearized about its rest equilibrium.
     Linearization(RuntimeError),
     /// The linear model has no frequency response at this frequency (Hz).
@@ -138,7 +135,7 @@ pub enum Error {
     /// Levenberg–Marquardt could not fit (whose residuals may have failed with an [`Error`]).
     Fit(Box<LmError<Error>>),
     /// The HAMR leg (`experiments/leg.rs`): opening it, its ports, its equilibria.
-    Leg(Box<experiments::Error>),
+    Leg(Box<leg::Error>),
 }
 
 /// What is wrong with a key of an experiment file; the key is part of each message.
@@ -205,7 +202,7 @@ pub enum KeyError {
 
 impl Error {
     /// An error of the HAMR leg.
-    pub fn leg(error: experiments::Error) -> Error {
+    pub fn leg(error: leg::Error) -> Error {
         Error::Leg(Box::new(error))
     }
 }

@@ -10,7 +10,7 @@
 use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
-use super::leg::Leg;
+use super::leg::{self, Leg};
 use super::Error;
 use crate::frequency::{self, Channel, ChirpSweep, Point, Resonance};
 use crate::parallel::{parallel, threads};
@@ -138,7 +138,7 @@ pub fn compute(spec: &Spec) -> Result<Responses, Error> {
     let leg = Leg::open(&spec.model)?;
     let model = leg.model();
     let (rest_q, linear) = leg.rest_linearization()?;
-    let modes = linear.modes().ok_or(Error::NoModes)?;
+    let modes = linear.modes().ok_or(leg::Error::NoModes)?;
     let frequencies = frequency::log_space(from, to, spec.points);
     let indices = channel_ports(spec, &leg)?;
     let estimates = match &spec.chirp {

@@ -75,11 +75,9 @@ pub fn compute(spec: &Spec, voltage: f64) -> Result<Vec<RobotTests>, Error> {
                     Some(row) => row.parse(&format!("paper.{}", dof.name()))?.direction,
                     None => None,
                 };
-                ForceTest::new(dof, voltage, Sensor::Blocked).run_toward(
-                    &leg,
-                    wanted,
-                    &mut WarmStarts::default(),
-                )
+                ForceTest::new(dof, voltage, Sensor::Blocked)
+                    .run_toward(&leg, wanted, &mut WarmStarts::default())
+                    .map_err(Error::from)
             });
             Ok((fbdf, tests))
         },

@@ -9,6 +9,7 @@ use std::path::PathBuf;
 
 use mech_runtime::RuntimeError;
 
+use super::leg;
 use crate::frequency::RefineError;
 use crate::render::plot::PlotError;
 use crate::toml_file::TomlError;
@@ -44,42 +45,17 @@ pub enum Error {
         part: String,
         error: Box<Error>,
     },
-    /// The model could not be opened (`model` as the experiment names it).
-    Model {
-        model: PathBuf,
-        error: Box<session::Error>,
-    },
-    /// Boxed, as in `Model`: a session error is large and these errors travel by value.
+    /// Boxed: a session error is large and these errors travel by value.
     Session(Box<session::Error>),
+    /// The HAMR leg the experiment drives: its model, ports, equilibria and tests.
+    Leg(leg::Error),
     /// A diagnosis of the paper's values (`table_diagnosis`) failed.
     Diagnosis(Box<crate::diagnose::Error>),
-    /// The model lacks a port the HAMR experiments drive or read.
-    NotHamr {
-        model: String,
-        missing: String,
-    },
-    NoParameter {
-        model: String,
-        name: String,
-        /// What the experiment needs it for, if it says.
-        purpose: Option<String>,
-    },
-    /// No static equilibrium (of `model`).
-    Statics {
-        model: String,
-        error: RuntimeError,
-    },
-    Assembly(RuntimeError),
-    Linearization(RuntimeError),
-    /// The reduced mass matrix is not positive definite: no modes.
-    NoModes,
     /// The linear model is singular at a frequency of the sweep.
     SingularResponse,
     /// A resonance could not be refined on the linear model's response.
     Refine(RefineError),
     Chirp(RuntimeError),
-    /// A force/deflection test that cannot be set up or does not end.
-    Test(&'static str),
     /// A sweep whose own design point is missing from its results.
     ChosenDesignMissing,
     Write {
@@ -136,31 +112,14 @@ impl fmt::Display for Error {
                 write!(f, "experiment `{}`: {error}", path.display())
             }
             Error::In { part, error } => write!(f, "{part}: {error}"),
-            Error::Model { model, error } => write!(f, "model `{}`: {error}", model.display()),
             Error::Session(error) => write!(f, "{error}"),
+            Error::Leg(error) => write!(f, "{error}"),
             Error::Diagnosis(error) => write!(f, "{error}"),
-            Error::NotHamr { model, missing } => write!(f, "model `{model}` has no {missing}"),
-            Error::NoParameter {
-                model,
-                name,
-                purpose,
-            } => {
-                write!(f, "model `{model}` has no parameter `{name}`")?;
-                match purpose {
-                    Some(purpose) => write!(f, " ({purpose})"),
-                    None => Ok(()),
-                }
-            }
-            Error::Statics { model, error } => write!(f, "statics of `{model}`: {error}"),
-            Error::Assembly(error) => write!(f, "{error}"),
-            Error::Linearization(error) => write!(f, "linearization failed: {error}"),
-            Error::NoModes => f.write_str("the reduced mass matrix is not positive definite"),
             Error::SingularResponse => {
                 f.write_str("the linear model is singular at some frequency")
             }
             Error::Refine(error) => write!(f, "resonance refinement: {error}"),
             Error::Chirp(error) => write!(f, "chirp simulation failed: {error}"),
-            Error::Test(message) => f.write_str(message),
             Error::ChosenDesignMissing => f.write_str("the chosen design is missing"),
             Error::Write { path, message } => {
                 write!(f, "cannot write {}: {message}", path.display())
@@ -178,6 +137,12 @@ impl std::error::Error for Error {}
 impl From<session::Error> for Error {
     fn from(error: session::Error) -> Error {
         Error::Session(Box::new(error))
+    }
+}
+
+impl From<leg::Error> for Error {
+    fn from(error: leg::Error) -> Error {
+        Error::Leg(error)
     }
 }
 

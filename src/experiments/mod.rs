@@ -111,6 +111,20 @@ impl Experiment {
     }
 }
 
+/// The `compare` experiment at `path` (the table a `table_diagnosis` experiment diagnoses).
+pub fn load_compare(path: &Path) -> Result<compare::Spec, Error> {
+    match load(path)?.kind {
+        Kind::Compare(compare) => Ok(compare),
+        _ => Err(Error::Key {
+            message: format!(
+                "key `table`: `{}` is not a `compare` experiment (the one with the robots and \
+                 their `paper` rows)",
+                path.display()
+            ),
+        }),
+    }
+}
+
 /// The experiment files of a folder, sorted by name.
 pub fn experiment_files(folder: &Path) -> Result<Vec<PathBuf>, Error> {
     let entries = std::fs::read_dir(folder).map_err(|e| Error::Read {
@@ -129,11 +143,4 @@ pub fn experiment_files(folder: &Path) -> Result<Vec<PathBuf>, Error> {
         });
     }
     Ok(files)
-}
-
-/// The experiment's name: its file's stem.
-pub fn stem(path: &Path) -> String {
-    path.file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "experiment".into())
 }

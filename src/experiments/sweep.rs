@@ -9,8 +9,9 @@ use mech_codegen::ir::Dimension;
 use serde::Deserialize;
 
 use super::force::actuator_work;
-use super::leg::{Dof, ForceTest, Leg, Sensor};
+use super::leg::{self, Dof, ForceTest, Leg, Sensor};
 use super::Error;
+use crate::output::file_stem;
 use crate::parallel::{parallel, threads};
 use crate::quantity::positive;
 use crate::session::ModelSpec;
@@ -153,11 +154,13 @@ pub fn sweep_point(series: &Series, voltage: f64, arm: Option<f64>) -> Result<Sw
     let dof = series.dof;
     let set: Vec<(&str, f64)> = arm.map(|a| (dof.arm(), a)).into_iter().collect();
     let leg = Leg::open_with(&series.model, &set)?;
-    let arm = leg.param(dof.arm()).ok_or_else(|| Error::NoParameter {
-        model: series.model.path.display().to_string(),
-        name: dof.arm().to_string(),
-        purpose: Some(format!("the crank arm that sets the {} ratio", dof.name())),
-    })?;
+    let arm = leg
+        .param(dof.arm())
+        .ok_or_else(|| leg::Error::NoParameter {
+            model: series.model.path.display().to_string(),
+            name: dof.arm().to_string(),
+            purpose: Some(format!("the crank arm that sets the {} ratio", dof.name())),
+        })?;
     let ratio = leg.kinematic_ratio(&leg.q0, dof, dof.axis())?.abs();
     let ratio_y = leg.kinematic_ratio(&leg.q0, dof, 1)?.abs();
     let test = ForceTest::new(dof, voltage, Sensor::Blocked).run(&leg)?;
@@ -194,7 +197,7 @@ fn arms(low: f64, high: f64, n: usize) -> Vec<f64> {
 pub(crate) fn keys(series: &[Series]) -> Vec<String> {
     let mut keys: Vec<String> = Vec::new();
     for (k, s) in series.iter().enumerate() {
-        let key = format!("{}_{}", super::stem(&s.model.path), s.dof.name());
+        let key = format!("{}_{}", file_stem(&s.model.path, "model"), s.dof.name());
         let key = if keys.contains(&key) {
             format!("{key}_{}", k + 1)
         } else {

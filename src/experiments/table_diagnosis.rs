@@ -21,8 +21,8 @@ use mech_codegen::Compiled;
 use mech_runtime::FlexureDamping;
 
 use super::compare;
-use super::leg::{Dof, Leg, WarmStarts};
-use super::{Error, Kind};
+use super::leg::{self, Dof, Leg, WarmStarts};
+use super::Error;
 use crate::diagnose::candidates::{diagnose, Diagnosis, Holdout, Trial, Verdict};
 use crate::diagnose::data::MeasuredData;
 use crate::diagnose::experiment::{self as diagnosis, ForceDeflectionTable, TableTest};
@@ -87,19 +87,10 @@ pub struct Resonances {
 /// legs' modes are (65–110 Hz).
 const RESONANCE_BAND: (f64, f64, usize) = (10.0, 400.0, 200);
 
-/// The `compare` file's robots, each diagnosed on its rows of the paper's table (one robot
-/// per thread; each diagnosis runs its candidates on the cores it gets).
-pub fn compute(spec: &Spec) -> Result<Vec<RobotDiagnosis>, Error> {
-    let table = super::load(&spec.table)?;
-    let Kind::Compare(compare) = &table.kind else {
-        return Err(Error::Key {
-            message: format!(
-                "key `table`: `{}` is not a `compare` experiment (the one with the robots and \
-                 their `paper` rows)",
-                spec.table.display()
-            ),
-        });
-    };
+/// The robots of `compare` (the `compare` file `spec.table` names, read by
+/// [`super::load_compare`]), each diagnosed on its rows of the paper's table (one robot per
+/// thread; each diagnosis runs its candidates on the cores it gets).
+pub fn compute(spec: &Spec, compare: &compare::Spec) -> Result<Vec<RobotDiagnosis>, Error> {
     let cases = compare
         .robot
         .iter()
@@ -219,7 +210,7 @@ fn largest_resonances(leg: &Leg) -> Result<[f64; 2], Error> {
     let inputs = leg.inputs(0.0, 0.0);
     let rest = leg.warm_rest(&mut WarmStarts::default(), 0, &inputs)?.q;
     let linear = mech_runtime::linearize(leg.model(), 0.0, &rest, &inputs, &leg.independent)
-        .map_err(Error::Linearization)?;
+        .map_err(leg::Error::Linearization)?;
     let (from, to, points) = RESONANCE_BAND;
     let grid = frequency::log_space(from, to, points);
     let foot = leg.foot();

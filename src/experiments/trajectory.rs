@@ -101,7 +101,9 @@ fn cycle(
         let inputs = leg.inputs(lift, swing);
         q = leg
             .equilibrium(&q, &inputs, &[])
-            .map_err(|e| e.within(format!("v_lift = {lift:.1} V, v_swing = {swing:.1} V")))?
+            .map_err(|e| {
+                Error::from(e).within(format!("v_lift = {lift:.1} V, v_swing = {swing:.1} V"))
+            })?
             .q;
         let foot = leg.foot_at(&q, &inputs);
         let d = [0, 1, 2].map(|i| foot[i] - rest[i]);

@@ -122,6 +122,8 @@ pub enum Error {
         unit: &'static str,
         /// The specimen file that declares it.
         specimen: PathBuf,
+        /// The largest amplitude (rad) the analysis accepts.
+        limit: f64,
     },
     /// The measured stiffness k_m (Eq. 4) is zero or negative: the pendulum swings slower than
     /// its gravity stiffness alone would make it.
@@ -303,10 +305,12 @@ impl fmt::Display for Error {
                 amplitude,
                 unit,
                 specimen,
+                limit,
             } => {
                 let head = format!("`{}`, column {column} (`{name}`)", path.display());
-                let limit = super::rig::MAX_AMPLITUDE.to_degrees();
-                if *unit == "rad" && amplitude.to_radians() <= super::rig::MAX_AMPLITUDE {
+                let plausible_in_degrees = amplitude.to_radians() <= *limit;
+                let limit = limit.to_degrees();
+                if *unit == "rad" && plausible_in_degrees {
                     write!(
                         f,
                         "{head}: the angles look like degrees: amplitude {amplitude:.4} read as \

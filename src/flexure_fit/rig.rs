@@ -215,10 +215,9 @@ fn parse_specimen_text(path: &Path, text: &str) -> Result<Specimen, SpecimenErro
     }
     let dir = path.parent().unwrap_or(Path::new(""));
     let traces = raw.traces.iter().map(|t| dir.join(t)).collect();
-    let name = raw.name.unwrap_or_else(|| {
-        path.file_stem()
-            .map_or("specimen".into(), |s| s.to_string_lossy().into_owned())
-    });
+    let name = raw
+        .name
+        .unwrap_or_else(|| crate::output::file_stem(path, "specimen"));
     Ok(Specimen {
         name,
         source: path.to_path_buf(),
@@ -441,6 +440,7 @@ pub fn read_trace(specimen: &Specimen, path: &Path) -> Result<Trace, Error> {
             amplitude: amplitude / angle_scale,
             unit: if angle_scale == 1.0 { "rad" } else { "deg" },
             specimen: specimen.source.clone(),
+            limit: MAX_AMPLITUDE,
         });
     }
     Ok(Trace {

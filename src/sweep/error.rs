@@ -11,8 +11,10 @@ use mech_codegen::front::units::parse_quantity;
 use mech_codegen::ir::Dimension;
 
 use super::sample::DrawError;
+use crate::experiments::leg;
+use crate::frequency::RefineError;
 use crate::toml_file::TomlError;
-use crate::{experiments, quantity, session};
+use crate::{quantity, session};
 
 #[derive(Debug)]
 pub enum Error {
@@ -58,7 +60,7 @@ pub enum Error {
     /// Neither `model` nor `[[robot]]`, or both.
     ModelOrRobots,
     /// A model that cannot be opened, or is not the kind the outputs need.
-    Model(Box<experiments::Error>),
+    Model(Box<leg::Error>),
     /// In the `[[robot]]` of this name.
     Robot {
         name: String,
@@ -205,7 +207,9 @@ pub enum SampleError {
     /// A value breaks the model's physical rules (a negative stiffness).
     Setting(Box<session::Error>),
     /// The analysis failed (e.g. statics did not converge).
-    Analysis(Box<experiments::Error>),
+    Analysis(Box<leg::Error>),
+    /// A resonance could not be refined on the linear model's response.
+    Resonances(RefineError),
 }
 
 impl fmt::Display for SampleError {
@@ -214,11 +218,24 @@ impl fmt::Display for SampleError {
             SampleError::Draw(e) => write!(f, "{e}"),
             SampleError::Setting(e) => write!(f, "{e}"),
             SampleError::Analysis(e) => write!(f, "{e}"),
+            SampleError::Resonances(e) => write!(f, "resonance refinement: {e}"),
         }
     }
 }
 
 impl std::error::Error for SampleError {}
+
+impl From<leg::Error> for SampleError {
+    fn from(error: leg::Error) -> SampleError {
+        SampleError::Analysis(Box::new(error))
+    }
+}
+
+impl From<RefineError> for SampleError {
+    fn from(error: RefineError) -> SampleError {
+        SampleError::Resonances(error)
+    }
+}
 
 /// A parameter's value `text` (key `key`, on `line`) in SI, checked against `expected`
 /// (the model parameter `parameter`'s dimension, or none for a relative factor).
@@ -270,22 +287,4 @@ pub(crate) fn ordered(key: &str, line: usize, low: f64, high: f64) -> Result<(),
         true => Ok(()),
         false => Err(Error::key(key, line, "must be above `low`")),
     }
-}
-
-/// `"LOW .. HIGH : N"`: the two ends' text and the count (1 to the sample cap).
-pub(crate) fn range(key: &str, line: usize, text: &str) -> Result<(String, String, usize), Error> {
-    let bad = || {
-        Error::key(
-            key,
-            line,
-            format!("`{text}`: expected `LOW .. HIGH : N`, e.g. `\"0.5 mm .. 0.7 mm : 5\"`"),
-        )
-    };
-    let (low, rest) = text.split_once("..").ok_or_else(bad)?;
-    let (high, count) = rest.rsplit_once(':').ok_or_else(bad)?;
-    let count: usize = count.trim().parse().map_err(|_| bad())?;
-    if !(1..=super::MAX_SAMPLES).contains(&count) {
-        return Err(bad());
-    }
-    Ok((low.trim().to_string(), high.trim().to_string(), count))
 }

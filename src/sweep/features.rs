@@ -8,8 +8,8 @@
 
 use mech_runtime::FlexureDamping;
 
-use crate::experiments::leg::{Dof, ForceDeflection, ForceTest, Leg, Sensor};
-use crate::experiments::Error;
+use super::SampleError;
+use crate::experiments::leg::{self, Dof, ForceDeflection, ForceTest, Leg, Sensor};
 use crate::frequency;
 
 /// One output of a study.
@@ -104,7 +104,11 @@ impl Feature {
 
 /// Every feature of `features` on `leg`, in order. Each force test and the linearization are
 /// run once however many features read them.
-pub fn evaluate(leg: &Leg, features: &[Feature], settings: &Settings) -> Result<Vec<f64>, Error> {
+pub fn evaluate(
+    leg: &Leg,
+    features: &[Feature],
+    settings: &Settings,
+) -> Result<Vec<f64>, SampleError> {
     let mut tests: Vec<(Dof, ForceDeflection)> = Vec::new();
     for dof in features.iter().filter_map(|f| f.force_dof()) {
         if !tests.iter().any(|(d, _)| *d == dof) {
@@ -125,7 +129,7 @@ pub fn evaluate(leg: &Leg, features: &[Feature], settings: &Settings) -> Result<
                 (Feature::BlockedForce(d), _) => test(d).map_or(f64::NAN, |t| t.blocked_force()),
                 (Feature::Work(d), _) => test(d).map_or(f64::NAN, |t| t.work()),
                 (Feature::NaturalFrequency(k), Some(linear)) => {
-                    let modes = linear.modes().ok_or(Error::NoModes)?;
+                    let modes = linear.modes().ok_or(leg::Error::NoModes)?;
                     modes.get(k - 1).map_or(f64::NAN, |m| m.frequency_hz())
                 }
                 (Feature::Resonance(d) | Feature::QualityFactor(d), Some(linear)) => {

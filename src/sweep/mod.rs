@@ -22,7 +22,7 @@ use std::sync::{Mutex, MutexGuard};
 
 use mech_codegen::ir::Dimension;
 
-use crate::experiments::leg::Leg;
+use crate::experiments::leg::{self, Leg};
 use crate::parallel::parallel;
 use crate::session::{ModelSpec, Session};
 pub use error::{Error, SampleError};
@@ -208,7 +208,7 @@ fn open_robots(file: &StudyFile) -> Result<Vec<Robot>, Error> {
         .into_iter()
         .map(|(name, spec)| {
             let session = Session::open(&spec.path, &spec.set, &[]).map_err(|error| {
-                Error::Model(Box::new(crate::experiments::Error::Model {
+                Error::Model(Box::new(leg::Error::Model {
                     model: spec.path.clone(),
                     error: Box::new(error),
                 }))
@@ -326,7 +326,7 @@ fn parameter(
         let session = robot.session().clone();
         let model = &session.model;
         let index = mech_runtime::Model::param_index(model, &name).ok_or_else(|| {
-            let error = crate::experiments::Error::NoParameter {
+            let error = leg::Error::NoParameter {
                 model: robot.spec.path.display().to_string(),
                 name: name.clone(),
                 purpose: None,
@@ -434,7 +434,7 @@ fn source(k: usize, p: &ParameterFile, text: &str, read: ValueReader<'_>) -> Res
         }
         (None, None, Some(range)) => {
             let rline = line_of(text, range.span().start);
-            let (low, high, n) = error::range(&key("range"), rline, range.get_ref())?;
+            let (low, high, n) = parse_range(&key("range"), rline, range.get_ref())?;
             let value = |t: &str| {
                 read(
                     "range",
@@ -456,6 +456,24 @@ fn source(k: usize, p: &ParameterFile, text: &str, read: ValueReader<'_>) -> Res
             "give exactly one of `distribution` (Monte-Carlo), `values` or `range` (a grid)",
         )),
     }
+}
+
+/// `"LOW .. HIGH : N"`: the two ends' text and the count (1 to the sample cap).
+fn parse_range(key: &str, line: usize, text: &str) -> Result<(String, String, usize), Error> {
+    let bad = || {
+        Error::key(
+            key,
+            line,
+            format!("`{text}`: expected `LOW .. HIGH : N`, e.g. `\"0.5 mm .. 0.7 mm : 5\"`"),
+        )
+    };
+    let (low, rest) = text.split_once("..").ok_or_else(bad)?;
+    let (high, count) = rest.rsplit_once(':').ok_or_else(bad)?;
+    let count: usize = count.trim().parse().map_err(|_| bad())?;
+    if !(1..=MAX_SAMPLES).contains(&count) {
+        return Err(bad());
+    }
+    Ok((low.trim().to_string(), high.trim().to_string(), count))
 }
 
 /// The number of samples: the grid's size, or `samples` for a Monte-Carlo study; capped.
@@ -584,9 +602,8 @@ impl Study {
                 .set_si(index, si)
                 .map_err(|e| SampleError::Setting(Box::new(e)))?;
         }
-        let analysis = |e| SampleError::Analysis(Box::new(e));
-        let leg = Leg::from_session(session, &robot.spec, &[]).map_err(analysis)?;
-        features::evaluate(&leg, &self.features, &self.settings).map_err(analysis)
+        let leg = Leg::from_session(session, &robot.spec, &[])?;
+        features::evaluate(&leg, &self.features, &self.settings)
     }
 
     /// Runs the samples `indices` on `threads` threads (each index below `samples`);

@@ -4,7 +4,7 @@
 //! Consumes: the kind's spec and what its `compute` returns. Produces: an [`Outcome`] and
 //! the files it lists.
 
-use super::csv;
+use super::shared::csv;
 use crate::experiments::bode::{compute, Source, Spec};
 use crate::experiments::Error;
 use crate::frequency::{self, Channel, Point};

@@ -4,8 +4,8 @@
 //! Consumes: the kind's spec and what its `compute` returns. Produces: an [`Outcome`] and
 //! the files it lists.
 
-use super::csv;
 use super::force::table_iv_points;
+use super::shared::csv;
 use crate::experiments::compare::{compute, Spec};
 use crate::experiments::leg::Dof;
 use crate::experiments::Error;

@@ -4,7 +4,7 @@
 //! Consumes: the kind's spec and what its `compute` returns. Produces: an [`Outcome`] and
 //! the files it lists.
 
-use super::{csv, percent_diff};
+use super::shared::{csv, percent_diff};
 use crate::experiments::force::{compute, ForceDeflections, Paper, PaperRow, Spec};
 use crate::experiments::leg::{Dof, ForceDeflection};
 use crate::experiments::Error;

@@ -5,7 +5,7 @@
 //! Consumes: the kind's spec and what its `compute` returns. Produces: an [`Outcome`] and
 //! the files it lists.
 
-use super::csv;
+use super::shared::csv;
 use crate::experiments::locomotion::{compute, Spec, Walk, WalkMethod, Walks};
 use crate::experiments::Error;
 use crate::output::CsvTable;
@@ -25,7 +25,11 @@ const PAPER_PAYLOAD_GAIN: f64 = 1.6e-3;
 /// well above what the body's sway leaves over whole cycles.
 const ADVANCE_PER_CYCLE: f64 = 0.1e-3;
 
-pub fn run(spec: &Spec, dir: &Path, progress: super::Progress<'_>) -> Result<Outcome, Error> {
+pub fn run(
+    spec: &Spec,
+    dir: &Path,
+    progress: super::shared::Progress<'_>,
+) -> Result<Outcome, Error> {
     let walks = compute(spec, progress)?;
     let mut outcome = Outcome::with_method(method_text(spec, &walks));
     // The robot, then the one it is compared with (named apart in files and values).

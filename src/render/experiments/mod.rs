@@ -4,6 +4,8 @@
 //! Consumes: parsed experiment files. Produces: [`Outcome`]s, with the files they list
 //! written under the output folder.
 
+mod shared;
+
 pub mod bode;
 pub mod compare;
 pub mod force;
@@ -15,13 +17,11 @@ pub mod trajectory;
 
 use std::path::{Path, PathBuf};
 
-use crate::experiments::{load, stem, Error, Experiment, Kind};
+use crate::experiments::{load, Error, Experiment, Kind};
+use crate::output::file_stem;
 use crate::parallel::{parallel, threads};
 use crate::render::report::Outcome;
-
-/// Told `(done, total)` as the parts of one experiment finish (the walks of a locomotion
-/// grid); kinds that run as one piece do not call it.
-pub type Progress<'a> = &'a (dyn Fn(usize, usize) + Sync);
+pub use shared::Progress;
 
 /// Runs the experiment, writing its files under `out_dir` (named by `name`): the file's
 /// notes first, then what the kind observes.
@@ -63,7 +63,7 @@ pub fn run_all(
     let experiments: Vec<(usize, String, Experiment)> = files
         .iter()
         .enumerate()
-        .map(|(k, f)| Ok((k, stem(f), load(f)?)))
+        .map(|(k, f)| Ok((k, file_stem(f, "experiment"), load(f)?)))
         .collect::<Result<_, Error>>()?;
     let mut jobs = experiments;
     jobs.sort_by(|a, b| b.2.cost().total_cmp(&a.2.cost()));
@@ -90,33 +90,7 @@ pub fn run_file_with_progress(
     progress: Progress<'_>,
 ) -> Result<Outcome, Error> {
     let experiment = load(path)?;
-    let name = stem(path);
+    let name = file_stem(path, "experiment");
     run_with_progress(&experiment, &name, &out_dir.join(&name), progress)
         .map_err(|e| e.in_file(path))
-}
-
-/// Renders a CSV under `dir` into the outcome.
-pub(crate) fn csv(
-    outcome: &mut Outcome,
-    dir: &Path,
-    file: &str,
-    header: &[&str],
-    rows: &[Vec<f64>],
-) -> Result<(), Error> {
-    let path = dir.join(file);
-    let header: Vec<String> = header.iter().map(|s| s.to_string()).collect();
-    let file = crate::output::File::csv(&path, &header, rows).map_err(|e| Error::Write {
-        path: path.clone(),
-        message: e.to_string(),
-    })?;
-    outcome.add_file(file);
-    Ok(())
-}
-
-/// `a` relative to `b` in percent, `+12 %`.
-pub(crate) fn percent_diff(model: f64, paper: f64) -> String {
-    if paper == 0.0 {
-        return "–".into();
-    }
-    format!("{:+.0} %", 100.0 * (model / paper - 1.0))
 }

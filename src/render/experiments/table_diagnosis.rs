@@ -21,7 +21,8 @@ use crate::render::table::Table;
 type FootWork = (f64, f64, Option<f64>);
 
 pub fn run(spec: &Spec, dir: &Path) -> Result<Outcome, Error> {
-    let robots = compute(spec)?;
+    let table = crate::experiments::load_compare(&spec.table)?;
+    let robots = compute(spec, &table)?;
     let mut outcome = Outcome::with_method(method_text(spec));
     let mut causes = Table::new(
         "What the diagnosis names, per robot",

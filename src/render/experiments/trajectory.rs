@@ -4,7 +4,7 @@
 //! Consumes: the kind's spec and what its `compute` returns. Produces: an [`Outcome`] and
 //! the files it lists.
 
-use super::csv;
+use super::shared::csv;
 use crate::experiments::trajectory::{compute, peak_to_peak, Spec};
 use crate::experiments::Error;
 use crate::render::plot;

@@ -14,7 +14,10 @@ use mech_runtime::{
 };
 use serde::Deserialize;
 
-use super::Error;
+mod error;
+
+pub use error::Error;
+
 use crate::session::ModelSpec;
 use crate::session::Session;
 
