@@ -32,6 +32,7 @@ use cranelift_codegen::control::ControlPlane;
 use cranelift_codegen::ir::{
     types, AbiParam, InstBuilder, MemFlags, Signature, UserFuncName, Value,
 };
+use cranelift_codegen::packed_option::ReservedValue;
 use cranelift_codegen::settings::{self, Configurable};
 use cranelift_codegen::Context;
 use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
@@ -534,56 +535,34 @@ fn emit_chunk(
             let inst = b.ins().call_indirect(signature, callee, args);
             b.inst_results(inst)[0]
         };
+        // The operands first, in the order the operation reads them (`Op::operands`, as the
+        // layout counted them); one it does not have is Cranelift's reserved value, which no
+        // arm below reads.
+        let (first, second) = op.operands();
+        let mut value_of =
+            |register: Option<u32>| register.map_or(Value::reserved_value(), |r| get(&mut b, r));
+        let (x, y) = (value_of(first), value_of(second));
         let value = match op {
-            Op::Add(x, y) => {
-                let (x, y) = (get(&mut b, x), get(&mut b, y));
-                b.ins().fadd(x, y)
-            }
-            Op::Sub(x, y) => {
-                let (x, y) = (get(&mut b, x), get(&mut b, y));
-                b.ins().fsub(x, y)
-            }
-            Op::Mul(x, y) => {
-                let (x, y) = (get(&mut b, x), get(&mut b, y));
-                b.ins().fmul(x, y)
-            }
-            Op::Div(x, y) => {
-                let (x, y) = (get(&mut b, x), get(&mut b, y));
-                b.ins().fdiv(x, y)
-            }
-            Op::Atan2(y, x) => {
-                let (y, x) = (get(&mut b, y), get(&mut b, x));
-                call(&mut b, binary, shim_atan2 as *const () as usize, &[y, x])
-            }
-            Op::Neg(x) => {
-                let x = get(&mut b, x);
-                b.ins().fneg(x)
-            }
-            Op::Sqrt(x) => {
-                let x = get(&mut b, x);
-                b.ins().sqrt(x)
-            }
-            Op::Call(Func::Abs, x) => {
-                let x = get(&mut b, x);
-                b.ins().fabs(x)
-            }
-            Op::Call(f, x) => {
-                let x = get(&mut b, x);
+            Op::Add(..) => b.ins().fadd(x, y),
+            Op::Sub(..) => b.ins().fsub(x, y),
+            Op::Mul(..) => b.ins().fmul(x, y),
+            Op::Div(..) => b.ins().fdiv(x, y),
+            // `atan2` of the first operand over the second (the tape's `Atan2(y, x)`).
+            Op::Atan2(..) => call(&mut b, binary, shim_atan2 as *const () as usize, &[x, y]),
+            Op::Neg(_) => b.ins().fneg(x),
+            Op::Sqrt(_) => b.ins().sqrt(x),
+            Op::Call(Func::Abs, _) => b.ins().fabs(x),
+            Op::Call(f, _) => {
                 // `Func::ALL` is in declaration order (a codegen test checks it).
                 let shim = FUNC_SHIMS[f as usize];
                 call(&mut b, unary, shim as *const () as usize, &[x])
             }
-            Op::Powi(x, n) => {
-                let x = get(&mut b, x);
-                if n.unsigned_abs() <= MAX_INLINE_POWI {
-                    powi_inline(&mut b, x, n)
-                } else {
-                    let n = b.ins().iconst(types::I32, i64::from(n));
-                    call(&mut b, integer, shim_powi as *const () as usize, &[x, n])
-                }
+            Op::Powi(_, n) if n.unsigned_abs() <= MAX_INLINE_POWI => powi_inline(&mut b, x, n),
+            Op::Powi(_, n) => {
+                let n = b.ins().iconst(types::I32, i64::from(n));
+                call(&mut b, integer, shim_powi as *const () as usize, &[x, n])
             }
-            Op::Powf(x, e) => {
-                let x = get(&mut b, x);
+            Op::Powf(_, e) => {
                 let e = b.ins().f64const(e);
                 call(&mut b, binary, shim_powf as *const () as usize, &[x, e])
             }

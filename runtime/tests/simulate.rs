@@ -343,6 +343,19 @@ impl Model for TwoDof {
     fn outputs(&self, _t: f64, _q: &[f64], _u: &[f64], _inputs: &[f64], _out: &mut [f64]) {}
 }
 
+/// The name lookups of [`Model`] (`coordinate_index` and the like), found and not found.
+#[test]
+fn every_kind_of_name_is_looked_up() {
+    let two_dof = TwoDof { mass: [0.0; 4] };
+    assert_eq!(two_dof.coordinate_index("a"), Some(0));
+    assert_eq!(two_dof.coordinate_index("b"), Some(1));
+    assert_eq!(PENDULUM.coordinate_index("phi"), None);
+    assert_eq!(PENDULUM.param_index("l"), Some(1));
+    assert_eq!(PENDULUM.input_index("torque"), Some(0));
+    assert_eq!(PENDULUM.output_index("torque"), Some(1));
+    assert_eq!(PENDULUM.output_index("m"), None);
+}
+
 fn udot_of(mass: [f64; 4]) -> Result<[f64; 2], RuntimeError> {
     let mut udot = [0.0; 2];
     accelerations(&TwoDof { mass }, 0.0, &[0.0; 2], &[0.0; 2], &[], &mut udot)?;
