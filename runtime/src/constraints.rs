@@ -409,7 +409,7 @@ pub fn retract<M: Model + ?Sized>(model: &M, t: f64, q: &[f64], delta: &[f64], o
     for (value, start) in out.iter_mut().zip(q) {
         *value += start;
     }
-    crate::simulate::normalize_quaternions(model.unit_quaternions(), out);
+    crate::model::normalize_quaternions(model.unit_quaternions(), out);
 }
 
 /// [`assemble`] for any residual `φ(q)` and its Jacobian (e.g. loops and fixtures together,

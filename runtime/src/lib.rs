@@ -36,7 +36,7 @@ pub use integrate::{
     AdaptiveOptions, Dop853, Dopri5, ExpRosenbrock, Ode, Rk4, Rosenbrock, Stats, Stepper,
 };
 pub use linearize::{linearize, FlexureDamping, Linearization, Mode, StateSpace};
-pub use model::Model;
+pub use model::{normalize_quaternions, Model};
 pub use nalgebra;
 /// The fixed-size vector and matrix types of the generated models' inherent `*_fixed`
 /// methods (also reachable as `nalgebra::SVector`, `nalgebra::SMatrix`).
@@ -44,8 +44,8 @@ pub use nalgebra::{SMatrix, SVector};
 pub use reduced::Reduced;
 pub use signal::{default_signals, Signal, Table};
 pub use simulate::{
-    accelerations, accelerations_along, normalize_quaternions, simulate, simulate_reduced, Method,
-    ModelOde, SampledAccelerations, SimOptions, Trajectory,
+    accelerations, accelerations_along, simulate, simulate_reduced, Method, ModelOde,
+    SampledAccelerations, SimOptions, Trajectory,
 };
 pub use statics::{
     reduced_equilibrium, solve_statics, solve_statics_with_loads, Equilibrium, Fixture,
@@ -91,7 +91,7 @@ pub mod __codegen {
         firsts: &[usize],
     ) -> SVector<f64, N> {
         let mut unit = *q;
-        crate::simulate::normalize_quaternions(firsts, unit.as_mut_slice());
+        crate::model::normalize_quaternions(firsts, unit.as_mut_slice());
         unit
     }
 

@@ -269,3 +269,42 @@ pub trait Model {
         (0..self.noutputs()).find(|&i| self.output_name(i) == name)
     }
 }
+
+/// Scales each unit quaternion of `q` (four coordinates from each index in `quaternions`)
+/// back to unit norm, the projection onto `|e| = 1` along `e`; returns whether any changed.
+/// Integrating `ė = ½ e ⊗ (0, ω)` keeps `|e|` constant only up to the integrator's error.
+pub fn normalize_quaternions(quaternions: &[usize], q: &mut [f64]) -> bool {
+    let mut changed = false;
+    for &start in quaternions {
+        let Some(e) = q.get_mut(start..start + 4) else {
+            continue;
+        };
+        let norm = e.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if norm > 0.0 && norm.is_finite() && norm != 1.0 {
+            e.iter_mut().for_each(|v| *v /= norm);
+            changed = true;
+        }
+    }
+    changed
+}
+
+#[cfg(test)]
+mod tests {
+    use super::normalize_quaternions;
+
+    #[test]
+    fn quaternions_are_scaled_to_unit_norm_and_nothing_else_moves() {
+        let mut q = [0.5, 2.0, 0.0, 0.0, 0.0, 3.0, 0.25];
+        assert!(normalize_quaternions(&[1], &mut q));
+        assert_eq!(q[0], 0.5);
+        assert_eq!(&q[1..5], &[1.0, 0.0, 0.0, 0.0]);
+        assert_eq!(&q[5..], &[3.0, 0.25]);
+        // Already unit: unchanged, reported as such; an index past the end is skipped.
+        assert!(!normalize_quaternions(&[1, 6], &mut q));
+        let mut zero = [0.0; 4];
+        assert!(
+            !normalize_quaternions(&[0], &mut zero),
+            "no direction to scale"
+        );
+    }
+}

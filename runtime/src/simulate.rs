@@ -17,6 +17,7 @@ use crate::integrate::{
     check_len, AdaptiveOptions, Dop853, Dopri5, ExpRosenbrock, Ode, Rk4, Ros34pw2, Rosenbrock,
     Stats, Stepper,
 };
+use crate::model::normalize_quaternions;
 use crate::reduced::Reduced;
 pub use crate::signal::default_signals;
 use crate::signal::{check_inputs, values_at};
@@ -774,24 +775,6 @@ fn check_initial_state<M: Model + ?Sized>(
     Ok(nq)
 }
 
-/// Scales each unit quaternion of `q` (four coordinates from each index in `quaternions`)
-/// back to unit norm, the projection onto `|e| = 1` along `e`; returns whether any changed.
-/// Integrating `ė = ½ e ⊗ (0, ω)` keeps `|e|` constant only up to the integrator's error.
-pub fn normalize_quaternions(quaternions: &[usize], q: &mut [f64]) -> bool {
-    let mut changed = false;
-    for &start in quaternions {
-        let Some(e) = q.get_mut(start..start + 4) else {
-            continue;
-        };
-        let norm = e.iter().map(|v| v * v).sum::<f64>().sqrt();
-        if norm > 0.0 && norm.is_finite() && norm != 1.0 {
-            e.iter_mut().for_each(|v| *v /= norm);
-            changed = true;
-        }
-    }
-    changed
-}
-
 /// Most samples a trajectory stores: a typo in the output interval (`1e-12 s`) must not
 /// allocate without bound (each sample holds q, u and the outputs).
 pub const MAX_SAMPLES: usize = 1_000_000;
@@ -1049,25 +1032,4 @@ fn run<M: Model + ?Sized, S: Stepper>(
     traj.times = grid;
     traj.stats = stepper.stats();
     Ok(traj)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::normalize_quaternions;
-
-    #[test]
-    fn quaternions_are_scaled_to_unit_norm_and_nothing_else_moves() {
-        let mut q = [0.5, 2.0, 0.0, 0.0, 0.0, 3.0, 0.25];
-        assert!(normalize_quaternions(&[1], &mut q));
-        assert_eq!(q[0], 0.5);
-        assert_eq!(&q[1..5], &[1.0, 0.0, 0.0, 0.0]);
-        assert_eq!(&q[5..], &[3.0, 0.25]);
-        // Already unit: unchanged, reported as such; an index past the end is skipped.
-        assert!(!normalize_quaternions(&[1, 6], &mut q));
-        let mut zero = [0.0; 4];
-        assert!(
-            !normalize_quaternions(&[0], &mut zero),
-            "no direction to scale"
-        );
-    }
 }
