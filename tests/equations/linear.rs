@@ -267,6 +267,26 @@ fn free_and_blocked(model: &dyn Model, volts: f64) -> (f64, f64) {
     (q[0], -held.fixture_forces[0][1])
 }
 
+/// Asserts that the actuator model's free deflection and blocked force at `volts`
+/// ([`free_and_blocked`]) are `expected` to `tol` relative; returns them.
+fn assert_free_and_blocked(
+    model: &dyn Model,
+    volts: f64,
+    (expected_free, expected_blocked): (f64, f64),
+    tol: f64,
+) -> (f64, f64) {
+    let (free, blocked) = free_and_blocked(model, volts);
+    assert!(
+        (free - expected_free).abs() < tol * expected_free,
+        "free deflection {free} vs {expected_free}"
+    );
+    assert!(
+        (blocked - expected_blocked).abs() < tol * expected_blocked,
+        "blocked force {blocked} vs {expected_blocked}"
+    );
+    (free, blocked)
+}
+
 /// A piezo actuator along a slider: free, it deflects δ_f·V/V_rated; held by a fixture at
 /// zero, it pushes with F_b·V/V_rated (Doshi et al. §III: force source in parallel with
 /// k_a = F_b/δ_f).
@@ -277,17 +297,9 @@ fn actuator_free_deflection_and_blocked_force() {
         "blocked_force = 320 mN; free_deflection = 300 um; rated_voltage = 225 V;",
     );
     let volts = 150.0;
-    let (free, blocked) = free_and_blocked(&model, volts);
     // Statics converges to 1e-10 of the initial force imbalance.
-    let (expected_free, expected_blocked) = (300e-6 * volts / 225.0, 0.320 * volts / 225.0);
-    assert!(
-        (free - expected_free).abs() < 1e-10 * expected_free,
-        "free deflection {free}"
-    );
-    assert!(
-        (blocked - expected_blocked).abs() < 1e-10 * expected_blocked,
-        "blocked force {blocked}"
-    );
+    let expected = (300e-6 * volts / 225.0, 0.320 * volts / 225.0);
+    assert_free_and_blocked(&model, volts, expected, 1e-10);
 }
 
 /// A flexure with `twist_axis` gains a twist coordinate with stiffness 2k/(1 + ν) (Doshi et
@@ -352,17 +364,8 @@ fn bimorph_actuator_matches_the_closed_form() {
     );
     let bimorph = mech::physics::actuator::Bimorph::SEED_NEW_GEOMETRY;
     let volts = 225.0;
-    let (free, blocked) = free_and_blocked(&model, volts);
-    let (expected_free, expected_blocked) =
-        (bimorph.free_deflection(volts), bimorph.blocked_force(volts));
-    assert!(
-        (free - expected_free).abs() < 1e-9 * expected_free,
-        "free deflection {free} vs {expected_free}"
-    );
-    assert!(
-        (blocked - expected_blocked).abs() < 1e-9 * expected_blocked,
-        "blocked force {blocked} vs {expected_blocked}"
-    );
+    let expected = (bimorph.free_deflection(volts), bimorph.blocked_force(volts));
+    let (free, blocked) = assert_free_and_blocked(&model, volts, expected, 1e-9);
     // Doshi et al. Table I "new geometry" model row: 300 µm and 320 mN (within 10%).
     assert!((free / 300e-6 - 1.0).abs() < 0.1 && (blocked / 0.320 - 1.0).abs() < 0.1);
 }
