@@ -33,6 +33,21 @@ fn close(a: f64, b: f64, tolerance: f64) -> bool {
     (a / b - 1.0).abs() < tolerance
 }
 
+/// The leg of an experiment's `model` as written (without its `set` overrides) and its lift
+/// force test at 225 V against a blocked sensor: the independent check of the experiment's
+/// numbers.
+fn lift_test_as_written(model: &mech::session::ModelSpec) -> (leg::Leg, leg::ForceDeflection) {
+    let leg = leg::Leg::open(&mech::session::ModelSpec {
+        set: vec![],
+        ..model.clone()
+    })
+    .unwrap();
+    let test = leg::ForceTest::new(leg::Dof::Lift, 225.0, leg::Sensor::Blocked)
+        .run(&leg)
+        .unwrap();
+    (leg, test)
+}
+
 /// Every experiment file parses, and every `mech sweep` study of `experiments/studies/`
 /// (experiment 7's) is ready to run against its models.
 #[test]
@@ -87,14 +102,7 @@ fn trajectory_peak_equals_the_statics_deflection_at_the_peak_voltage() {
     let Kind::Trajectory(t) = &spec.kind else {
         panic!()
     };
-    let leg = leg::Leg::open(&mech::session::ModelSpec {
-        set: vec![],
-        ..t.model.clone()
-    })
-    .unwrap();
-    let test = leg::ForceTest::new(leg::Dof::Lift, 225.0, leg::Sensor::Blocked)
-        .run(&leg)
-        .unwrap();
+    let (_, test) = lift_test_as_written(&t.model);
     let dz = test.free[2] - test.rest[2];
     assert!(
         close(outcome.values["lift_peak_dz"], dz, 1e-9),
@@ -239,14 +247,7 @@ fn force_deflection_blocked_force_and_work() {
     let Kind::ForceDeflection(f) = &spec.kind else {
         panic!()
     };
-    let leg = leg::Leg::open(&mech::session::ModelSpec {
-        set: vec![],
-        ..f.model.clone()
-    })
-    .unwrap();
-    let test = leg::ForceTest::new(leg::Dof::Lift, 225.0, leg::Sensor::Blocked)
-        .run(&leg)
-        .unwrap();
+    let (leg, test) = lift_test_as_written(&f.model);
     let inputs = leg.drive(leg::Dof::Lift, 225.0);
     let rest_q = leg
         .equilibrium(&leg.q0, &leg.inputs(0.0, 0.0), &[])
