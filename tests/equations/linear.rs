@@ -4,9 +4,28 @@ use crate::common;
 
 use mech::tape_model::TapeModel;
 use mech_runtime::{
-    linearize, solve_statics, Fixture, FlexureDamping, Method, Model, SimOptions, StaticsOptions,
+    linearize, solve_statics, Fixture, FlexureDamping, Linearization, Method, Model, SimOptions,
+    StaticsOptions,
 };
 use nalgebra::{Complex, Matrix2, Vector2};
+
+/// Asserts that `linear`'s response of `output` to input 0 at `omega` (rad/s) under `damping`
+/// is `expected` to 1e-7 relative.
+fn assert_response(
+    linear: &Linearization,
+    output: usize,
+    omega: f64,
+    damping: FlexureDamping,
+    expected: Complex<f64>,
+) {
+    let ours = linear
+        .frequency_response(0, output, omega, damping)
+        .unwrap();
+    assert!(
+        (ours - expected).norm() < 1e-7 * expected.norm(),
+        "ω = {omega}: {ours} vs {expected}"
+    );
+}
 
 /// `models/two_mass_chain.mech`: the wall–m1 spring/damper (k1, c1) and the m1–m2 one (k2,
 /// c2); a force on m2; output: the position of m2.
@@ -18,13 +37,7 @@ fn two_mass_chain_frequency_response_matches_closed_form() {
     let output = model.output_index("x2.x").unwrap();
     for omega in [0.5, 5.0, 11.0, 13.9, 20.0, 31.6, 100.0] {
         let x2 = two_mass_chain_response(omega);
-        let ours = linear
-            .frequency_response(0, output, omega, FlexureDamping::Viscous)
-            .unwrap();
-        assert!(
-            (ours - x2).norm() < 1e-7 * x2.norm(),
-            "ω = {omega}: {ours} vs {x2}"
-        );
+        assert_response(&linear, output, omega, FlexureDamping::Viscous, x2);
     }
     // Modes: the undamped natural frequencies of the same chain.
     let modes = linear.modes().unwrap();
@@ -182,20 +195,14 @@ fn flexure_losses_as_complex_stiffness_a_power_law_or_viscous_damper() {
         let hysteretic = Complex::new(1.0, 0.0) / Complex::new(static_stiffness, k * eta);
         let viscous =
             Complex::new(1.0, 0.0) / Complex::new(static_stiffness, omega * k * eta / omega_ref);
-        let ours = linear
-            .frequency_response(0, output, omega, FlexureDamping::Hysteretic)
-            .unwrap();
-        assert!(
-            (ours - hysteretic).norm() < 1e-7 * hysteretic.norm(),
-            "ω = {omega}: {ours} vs {hysteretic}"
+        assert_response(
+            &linear,
+            output,
+            omega,
+            FlexureDamping::Hysteretic,
+            hysteretic,
         );
-        let ours = linear
-            .frequency_response(0, output, omega, FlexureDamping::Viscous)
-            .unwrap();
-        assert!(
-            (ours - viscous).norm() < 1e-7 * viscous.norm(),
-            "ω = {omega}: {ours} vs {viscous}"
-        );
+        assert_response(&linear, output, omega, FlexureDamping::Viscous, viscous);
         let (exponent, reference_hz) = (0.3, 5.0);
         let eta_at = eta * (omega / (std::f64::consts::TAU * reference_hz)).powf(exponent);
         let power_law = Complex::new(1.0, 0.0) / Complex::new(static_stiffness, k * eta_at);
@@ -203,11 +210,7 @@ fn flexure_losses_as_complex_stiffness_a_power_law_or_viscous_damper() {
             exponent,
             reference_hz,
         };
-        let ours = linear.frequency_response(0, output, omega, law).unwrap();
-        assert!(
-            (ours - power_law).norm() < 1e-7 * power_law.norm(),
-            "ω = {omega}: {ours} vs {power_law}"
-        );
+        assert_response(&linear, output, omega, law, power_law);
     }
 }
 
