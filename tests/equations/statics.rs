@@ -33,6 +33,13 @@ fn rest(leg: &Leg) -> Vec<f64> {
         .q
 }
 
+/// The leg at rest ([`rest`]) and its foot's position there.
+fn rest_and_foot(leg: &Leg) -> (Vec<f64>, [f64; 3]) {
+    let rest = rest(leg);
+    let foot = leg.foot_at(&rest, &leg.inputs(0.0, 0.0));
+    (rest, foot)
+}
+
 /// The leg's loops closed with the actuators at `z`, from `near`, to 1e-16 (the default
 /// 1e-13 would leave first-order errors of ~1e-9 N in the energy's differences).
 fn closed(leg: &Leg, near: &[f64], z: Vector2<f64>) -> Vec<f64> {
@@ -227,8 +234,7 @@ fn both_actuators_driven_equilibrium_is_the_potential_energy_minimum() {
 #[test]
 fn fixture_reactions_make_the_potential_energy_stationary() {
     let leg = hamr_vi();
-    let rest = rest(&leg);
-    let foot = leg.foot_at(&rest, &leg.inputs(0.0, 0.0));
+    let (rest, foot) = rest_and_foot(&leg);
     let cases = [(2, 0.0), (0, 0.0), (2, 0.3), (0, -0.3)];
     for (lift, swing) in DRIVES {
         for (held, ratio) in cases {
@@ -255,8 +261,7 @@ fn fixture_reactions_make_the_potential_energy_stationary() {
 #[test]
 fn force_test_reaction_agrees_with_the_energy() {
     let leg = hamr_vi();
-    let rest = rest(&leg);
-    let foot = leg.foot_at(&rest, &leg.inputs(0.0, 0.0));
+    let (rest, foot) = rest_and_foot(&leg);
     let inputs = leg.drive(Dof::Lift, 225.0);
     for ratio in [0.0, -0.3] {
         let mut target = foot;
@@ -278,8 +283,7 @@ fn force_test_reaction_agrees_with_the_energy() {
 #[test]
 fn both_actuators_driven_converge_in_a_few_newton_iterations() {
     let leg = hamr_vi();
-    let rest = rest(&leg);
-    let foot = leg.foot_at(&rest, &leg.inputs(0.0, 0.0));
+    let (rest, foot) = rest_and_foot(&leg);
     for (lift, swing) in DRIVES {
         let inputs = leg.inputs(lift, swing);
         let free = statics(&leg, &rest, &inputs, &[], &[]);
@@ -417,8 +421,7 @@ fn reduced_stiffness_on_the_extended_leg_matches_differences_of_the_generalized_
     let model = leg.model();
     let (nq, nc) = (model.nq(), model.nc());
     assert_eq!(nq, 20);
-    let rest = rest(&leg);
-    let foot = leg.foot_at(&rest, &leg.inputs(0.0, 0.0));
+    let (rest, foot) = rest_and_foot(&leg);
     let inputs = leg.drive(Dof::Swing, 225.0);
     let free = leg.equilibrium(&rest, &inputs, &[]).unwrap().q;
     let mut target = foot;
