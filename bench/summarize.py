@@ -868,42 +868,17 @@ def loop_sections(loops, paired_loops, sympy_loops, paired_sympy_fourbar, target
     return L
 
 
-def hamr_section(R):
-    """Section 9: the HAMR leg (`examples/hamr_performance.rs`, its Markdown table as printed)
-    and the hand-written interpretation in bench/analysis_hamr.md."""
-    L = ['', '## 9. The HAMR leg (issue 6): derivation, u̇, motion, chirp, Bode', '']
-    table = os.path.join(R, 'hamr.md')
-    if not os.path.exists(table):
-        L.append('Not measured in this run (`bench/results/hamr.md` missing).')
+def measured_section(R, heading, table, intro, analysis):
+    """A section of Markdown tables an example printed (`R/<table>`, each table kept apart by a
+    blank line) under `heading` and `intro`, then the hand-written interpretation in
+    bench/<analysis>.md."""
+    L = ['', heading, '']
+    path = os.path.join(R, table)
+    if not os.path.exists(path):
+        L.append(f'Not measured in this run (`bench/results/{table}` missing).')
         return L
-    L.append('`cargo run --release --example hamr_performance` (run by `bench/run.sh` after the loop '
-             'rounds), both bundled legs, generated Rust for the dynamics and the tape model only for '
-             'the statics that pick the starting state. Medians of repeated runs within ~1.5 s per row.')
-    L.append('')
-    with open(table) as f:
-        L.extend(line.rstrip('\n') for line in f if line.startswith('|'))
-    L.append('')
-    path = analysis_path('analysis_hamr')
-    if os.path.exists(path):
-        L.append(analysis_text(path).rstrip('\n'))
-    return L
-
-
-def statics_section(R):
-    """Section 10: static equilibria of the HAMR leg (`examples/statics_timing.rs`, its Markdown
-    tables as printed) and the hand-written interpretation in bench/analysis_statics.md."""
-    L = ['', '## 10. Static equilibria of the HAMR leg', '']
-    table = os.path.join(R, 'statics.md')
-    if not os.path.exists(table):
-        L.append('Not measured in this run (`bench/results/statics.md` missing).')
-        return L
-    L.append('`cargo run --release --example statics_timing` (run by `bench/run.sh` after the HAMR '
-             'leg): one static equilibrium of HAMR-VI from its rest position (`solve_statics`, '
-             'tape model, as `mech diagnose` and the experiments use it), with one or both '
-             'actuators at ±112.5 V, free, with the foot held along z or x, and held along z with '
-             'a 30 % side load along y; then the force/deflection experiment\'s sensor sweep. '
-             'Fastest of 5 runs per case.')
-    with open(table) as f:
+    L.append(intro)
+    with open(path) as f:
         lines = [line.rstrip('\n') for line in f]
     for line in lines:
         if line.startswith('|'):
@@ -911,10 +886,35 @@ def statics_section(R):
                 L.append('')
             L.append(line)
     L.append('')
-    path = analysis_path('analysis_statics')
+    path = analysis_path(analysis)
     if os.path.exists(path):
         L.append(analysis_text(path).rstrip('\n'))
     return L
+
+
+def hamr_section(R):
+    """Section 9: the HAMR leg (`examples/hamr_performance.rs`, its Markdown table as printed)
+    and the hand-written interpretation in bench/analysis_hamr.md."""
+    return measured_section(
+        R, '## 9. The HAMR leg (issue 6): derivation, u̇, motion, chirp, Bode', 'hamr.md',
+        '`cargo run --release --example hamr_performance` (run by `bench/run.sh` after the loop '
+        'rounds), both bundled legs, generated Rust for the dynamics and the tape model only for '
+        'the statics that pick the starting state. Medians of repeated runs within ~1.5 s per row.',
+        'analysis_hamr')
+
+
+def statics_section(R):
+    """Section 10: static equilibria of the HAMR leg (`examples/statics_timing.rs`, its Markdown
+    tables as printed) and the hand-written interpretation in bench/analysis_statics.md."""
+    return measured_section(
+        R, '## 10. Static equilibria of the HAMR leg', 'statics.md',
+        '`cargo run --release --example statics_timing` (run by `bench/run.sh` after the HAMR '
+        'leg): one static equilibrium of HAMR-VI from its rest position (`solve_statics`, '
+        'tape model, as `mech diagnose` and the experiments use it), with one or both '
+        'actuators at ±112.5 V, free, with the foot held along z or x, and held along z with '
+        'a 30 % side load along y; then the force/deflection experiment\'s sensor sweep. '
+        'Fastest of 5 runs per case.',
+        'analysis_statics')
 
 
 def diagnose_section():

@@ -13,7 +13,7 @@ use mech_runtime::{
     Model, ModelOde, SimOptions, Stats, Stepper,
 };
 
-use crate::timing::{num, per_call_ns, per_run_s, summary_json, Summary};
+use crate::timing::{list_json, num, per_call_ns, per_run_s, summary_json, Summary};
 
 #[allow(non_snake_case)]
 pub mod four_bar {
@@ -361,13 +361,6 @@ pub fn measure_loops(config: &LoopConfig) -> Vec<LoopRecord> {
     ]
 }
 
-fn list(values: &[f64]) -> String {
-    format!(
-        "[{}]",
-        values.iter().map(|&x| num(x)).collect::<Vec<_>>().join(",")
-    )
-}
-
 fn motion_json(m: &Motion) -> String {
     format!(
         "{{\"wall_s\":{},\"accepted_steps\":{},\"rejected_steps\":{},\"rhs_evaluations\":{},\
@@ -376,8 +369,8 @@ fn motion_json(m: &Motion) -> String {
         m.stats.accepted_steps,
         m.stats.rejected_steps,
         m.stats.rhs_evaluations,
-        list(&m.q_final),
-        list(&m.u_final),
+        list_json(&m.q_final),
+        list_json(&m.u_final),
         num(m.phi_final),
         num(m.ju_final),
         num(m.energy_drift)
@@ -401,9 +394,9 @@ pub fn loop_json(r: &LoopRecord) -> String {
             .collect::<Vec<_>>()
             .join(","),
         num(TOLERANCE),
-        list(&r.q0),
-        list(&r.q),
-        list(&r.u),
+        list_json(&r.q0),
+        list_json(&r.q),
+        list_json(&r.u),
         summary_json(&r.assemble),
         r.assemble_iterations,
         summary_json(&r.assemble_speeds),
@@ -413,7 +406,7 @@ pub fn loop_json(r: &LoopRecord) -> String {
         summary_json(&r.bias),
         summary_json(&r.constraints),
         summary_json(&r.udot),
-        list(&r.udot_value),
+        list_json(&r.udot_value),
         summary_json(&r.project),
         motion_json(&r.motion),
         motion_json(&r.motion_dopri5),

@@ -17,7 +17,7 @@ use std::io::Write as _;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use mech_bench::timing::{num, per_call_ns, per_run_s, summary_json, Summary};
+use mech_bench::timing::{list_json, num, per_call_ns, per_run_s, summary_json, Summary};
 use mech_bench::{
     bench_speeds, chain_source, chain_source_per_link, cholesky_solve, param_values, SIZES,
 };
@@ -412,13 +412,6 @@ fn measure(n: usize, config: &Config) -> Record {
 }
 
 // ---- output ----
-
-fn list_json(values: &[f64]) -> String {
-    format!(
-        "[{}]",
-        values.iter().map(|&x| num(x)).collect::<Vec<_>>().join(",")
-    )
-}
 
 fn eval_json(e: &Eval) -> String {
     format!(

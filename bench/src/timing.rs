@@ -128,6 +128,14 @@ pub fn num(x: f64) -> String {
     }
 }
 
+/// A JSON array of numbers ([`num`] each).
+pub fn list_json(values: &[f64]) -> String {
+    format!(
+        "[{}]",
+        values.iter().map(|&x| num(x)).collect::<Vec<_>>().join(",")
+    )
+}
+
 /// A [`Summary`] as a JSON object.
 pub fn summary_json(s: &Summary) -> String {
     format!(

@@ -142,14 +142,6 @@ const TOKENS: &[&str] = &[
     "*/",
 ];
 
-fn mutation() -> impl Strategy<Value = (usize, usize, Vec<u8>)> {
-    let insert = prop_oneof![
-        prop::collection::vec(any::<u8>(), 0..8),
-        prop::sample::select(TOKENS).prop_map(|t| t.as_bytes().to_vec()),
-    ];
-    (0..VALID.len(), 0usize..12, insert)
-}
-
 proptest! {
     #![proptest_config(ProptestConfig { cases: 256, failure_persistence: None, ..ProptestConfig::default() })]
 
@@ -164,7 +156,7 @@ proptest! {
     }
 
     #[test]
-    fn mutated_models_do_not_panic(mutations in prop::collection::vec(mutation(), 1..6)) {
+    fn mutated_models_do_not_panic(mutations in prop::collection::vec(mutate::mutation(VALID.len(), 12, TOKENS), 1..6)) {
         load_bytes(&mutate::mutated(VALID, mutations));
     }
 

@@ -96,14 +96,6 @@ const TOKENS: &[&str] = &[
     "inertia",
 ];
 
-fn mutation() -> impl Strategy<Value = (usize, usize, Vec<u8>)> {
-    let insert = prop_oneof![
-        prop::collection::vec(any::<u8>(), 0..8),
-        prop::sample::select(TOKENS).prop_map(|t| t.as_bytes().to_vec()),
-    ];
-    (0..VALID.len(), 0usize..16, insert)
-}
-
 proptest! {
     #![proptest_config(ProptestConfig { cases: 256, failure_persistence: None, ..ProptestConfig::default() })]
 
@@ -113,7 +105,7 @@ proptest! {
     }
 
     #[test]
-    fn mutated_urdf_does_not_panic(mutations in prop::collection::vec(mutation(), 1..6), snap in any::<bool>()) {
+    fn mutated_urdf_does_not_panic(mutations in prop::collection::vec(mutate::mutation(VALID.len(), 16, TOKENS), 1..6), snap in any::<bool>()) {
         import_bytes(&mutate::mutated(VALID, mutations), snap);
     }
 

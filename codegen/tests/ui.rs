@@ -11,31 +11,25 @@
 #[path = "support/golden.rs"]
 mod support;
 
-use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use mech_codegen::diag::SourceFile;
 use mech_codegen::front;
 
-fn ui_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/ui")
-}
-
-/// What `front::load` prints for a file, or a note that it unexpectedly loaded.
-fn render(path: &Path) -> String {
-    let name = path.file_name().expect("a file name").to_string_lossy();
-    let shown = format!("tests/ui/{name}");
-    let text = std::fs::read_to_string(path).expect("readable .mech file");
-    match front::load(Arc::new(SourceFile::new(shown, text))) {
-        Ok(_) => "(loaded without errors)\n".to_string(),
-        Err(errors) => errors.to_string(),
-    }
-}
-
-/// Checks (or, with `MECH_BLESS=1`, rewrites) the golden file of `tests/ui/<stem>.mech`.
+/// Checks (or, with `MECH_BLESS=1`, rewrites) the golden file of `tests/ui/<stem>.mech`: what
+/// `front::load` prints for it.
 fn check(stem: &str) {
-    let path = ui_dir().join(format!("{stem}.mech"));
-    support::check_failure(&path, &render(&path), "(loaded without errors)\n");
+    support::check_failing_input(
+        "tests/ui",
+        stem,
+        "mech",
+        "(loaded without errors)\n",
+        |shown, text| {
+            front::load(Arc::new(SourceFile::new(shown, text)))
+                .map(drop)
+                .map_err(|errors| errors.to_string())
+        },
+    );
 }
 
 tests_per_file! {
@@ -144,9 +138,5 @@ tests_per_file! {
 
 #[test]
 fn every_ui_file_has_a_test_and_a_golden_file() {
-    support::assert_lists_every_file(LISTED, &ui_dir(), "mech", "codegen/tests/ui.rs");
-    // Blessing writes the missing .stderr files, possibly after this test has listed them.
-    if !support::blessing() {
-        support::assert_lists_every_file(LISTED, &ui_dir(), "stderr", "codegen/tests/ui.rs");
-    }
+    support::assert_lists_every_input_and_golden(LISTED, "tests/ui", "mech", "codegen/tests/ui.rs");
 }

@@ -10,30 +10,28 @@
 #[path = "support/golden.rs"]
 mod support;
 
-use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use mech_codegen::diag::SourceFile;
 use mech_codegen::urdf;
 
-fn ui_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/urdf_ui")
-}
-
-/// What the import reports for a file, or a note that it unexpectedly imported.
-fn render(path: &Path) -> String {
-    let name = path.file_name().expect("a file name").to_string_lossy();
-    let text = std::fs::read_to_string(path).expect("readable URDF file");
-    let file = Arc::new(SourceFile::new(format!("tests/urdf_ui/{name}"), text));
-    match urdf::import(file, &urdf::Options::default()) {
-        Ok(_) => "(imported without errors)\n".to_string(),
-        Err(errors) => errors.to_string(),
-    }
-}
-
+/// Checks (or, with `MECH_BLESS=1`, rewrites) the golden file of `tests/urdf_ui/<stem>.urdf`:
+/// what the import reports for it.
 fn check(stem: &str) {
-    let path = ui_dir().join(format!("{stem}.urdf"));
-    support::check_failure(&path, &render(&path), "(imported without errors)\n");
+    support::check_failing_input(
+        "tests/urdf_ui",
+        stem,
+        "urdf",
+        "(imported without errors)\n",
+        |shown, text| {
+            urdf::import(
+                Arc::new(SourceFile::new(shown, text)),
+                &urdf::Options::default(),
+            )
+            .map(drop)
+            .map_err(|errors| errors.to_string())
+        },
+    );
 }
 
 tests_per_file! {
@@ -56,8 +54,10 @@ tests_per_file! {
 
 #[test]
 fn every_ui_file_has_a_test_and_a_golden_file() {
-    support::assert_lists_every_file(LISTED, &ui_dir(), "urdf", "codegen/tests/urdf_ui.rs");
-    if !support::blessing() {
-        support::assert_lists_every_file(LISTED, &ui_dir(), "stderr", "codegen/tests/urdf_ui.rs");
-    }
+    support::assert_lists_every_input_and_golden(
+        LISTED,
+        "tests/urdf_ui",
+        "urdf",
+        "codegen/tests/urdf_ui.rs",
+    );
 }

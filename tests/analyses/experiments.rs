@@ -23,6 +23,16 @@ fn bundled(file: &str, replace: &[(&str, &str)]) -> Experiment {
     experiments::parse(&text).unwrap_or_else(|e| panic!("{file}: {e}"))
 }
 
+/// `hamr_vi_trajectory.toml` with 8 points instead of 72.
+fn thinned_trajectory() -> Experiment {
+    bundled("hamr_vi_trajectory.toml", &[("points = 72", "points = 8")])
+}
+
+/// `hamr_vi_force.toml` with the sensor every 1000 µm instead of every 127 µm.
+fn thinned_force() -> Experiment {
+    bundled("hamr_vi_force.toml", &[("\"127 um\"", "\"1000 um\"")])
+}
+
 fn out(name: &str) -> PathBuf {
     std::env::temp_dir()
         .join(format!("mech-experiments-test-{}", std::process::id()))
@@ -31,6 +41,21 @@ fn out(name: &str) -> PathBuf {
 
 fn close(a: f64, b: f64, tolerance: f64) -> bool {
     (a / b - 1.0).abs() < tolerance
+}
+
+/// The leg of an experiment's `model` as written (without its `set` overrides) and its lift
+/// force test at 225 V against a blocked sensor: the independent check of the experiment's
+/// numbers.
+fn lift_test_as_written(model: &mech::session::ModelSpec) -> (leg::Leg, leg::ForceDeflection) {
+    let leg = leg::Leg::open(&mech::session::ModelSpec {
+        set: vec![],
+        ..model.clone()
+    })
+    .unwrap();
+    let test = leg::ForceTest::new(leg::Dof::Lift, 225.0, leg::Sensor::Blocked)
+        .run(&leg)
+        .unwrap();
+    (leg, test)
 }
 
 /// Every experiment file parses, and every `mech sweep` study of `experiments/studies/`
@@ -80,21 +105,14 @@ fn bad_experiment_files_give_clear_errors() {
 
 #[test]
 fn trajectory_peak_equals_the_statics_deflection_at_the_peak_voltage() {
-    let spec = bundled("hamr_vi_trajectory.toml", &[("points = 72", "points = 8")]);
+    let spec = thinned_trajectory();
     let outcome = run_and_write(&spec, "trajectory", &out("trajectory")).unwrap();
     println!("{:?}", outcome.values);
     // The statics of the free leg at +225 V on the lift, independently.
     let Kind::Trajectory(t) = &spec.kind else {
         panic!()
     };
-    let leg = leg::Leg::open(&mech::session::ModelSpec {
-        set: vec![],
-        ..t.model.clone()
-    })
-    .unwrap();
-    let test = leg::ForceTest::new(leg::Dof::Lift, 225.0, leg::Sensor::Blocked)
-        .run(&leg)
-        .unwrap();
+    let (_, test) = lift_test_as_written(&t.model);
     let dz = test.free[2] - test.rest[2];
     assert!(
         close(outcome.values["lift_peak_dz"], dz, 1e-9),
@@ -119,7 +137,7 @@ fn trajectory_peak_equals_the_statics_deflection_at_the_peak_voltage() {
 /// is the quarter-period sample, where the lift (or the swing alone) is at +225 V.
 #[test]
 fn trajectory_compute_returns_closed_cycles_from_rest() {
-    let spec = bundled("hamr_vi_trajectory.toml", &[("points = 72", "points = 8")]);
+    let spec = thinned_trajectory();
     let Kind::Trajectory(t) = &spec.kind else {
         panic!()
     };
@@ -166,7 +184,7 @@ fn trajectory_compute_returns_closed_cycles_from_rest() {
 /// with the force falling to the last one, all short of the free deflection.
 #[test]
 fn force_compute_returns_the_sensor_points() {
-    let spec = bundled("hamr_vi_force.toml", &[("\"127 um\"", "\"1000 um\"")]);
+    let spec = thinned_force();
     let Kind::ForceDeflection(f) = &spec.kind else {
         panic!()
     };
@@ -202,7 +220,7 @@ fn force_compute_returns_the_sensor_points() {
 
 #[test]
 fn force_deflection_blocked_force_and_work() {
-    let spec = bundled("hamr_vi_force.toml", &[("\"127 um\"", "\"1000 um\"")]);
+    let spec = thinned_force();
     let outcome = run_and_write(&spec, "force", &out("force")).unwrap();
     let v = &outcome.values;
     println!("{v:?}");
@@ -239,14 +257,7 @@ fn force_deflection_blocked_force_and_work() {
     let Kind::ForceDeflection(f) = &spec.kind else {
         panic!()
     };
-    let leg = leg::Leg::open(&mech::session::ModelSpec {
-        set: vec![],
-        ..f.model.clone()
-    })
-    .unwrap();
-    let test = leg::ForceTest::new(leg::Dof::Lift, 225.0, leg::Sensor::Blocked)
-        .run(&leg)
-        .unwrap();
+    let (leg, test) = lift_test_as_written(&f.model);
     let inputs = leg.drive(leg::Dof::Lift, 225.0);
     let rest_q = leg
         .equilibrium(&leg.q0, &leg.inputs(0.0, 0.0), &[])
@@ -550,7 +561,7 @@ fn ratio_sweep_matches_the_force_experiments_and_the_papers_trend() {
     // At the model's own arm the sweep runs the procedure of experiments 2 and 4: the same
     // blocked force, free deflection and work as the force/deflection experiment (HAMR-VI)
     // and the comparison (HAMR-V2.0).
-    let force_spec = bundled("hamr_vi_force.toml", &[("\"127 um\"", "\"1000 um\"")]);
+    let force_spec = thinned_force();
     let force = run_and_write(&force_spec, "force", &out("sweep_force")).unwrap();
     let compare_spec = bundled("hamr_v2_vs_vi.toml", &[]);
     let compare = run_and_write(&compare_spec, "compare", &out("sweep_compare")).unwrap();

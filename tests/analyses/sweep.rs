@@ -195,81 +195,71 @@ fn a_grid_is_the_cartesian_product() {
     assert_eq!(points, expected.map(|p| p.to_vec()));
 }
 
+/// The error `prepare` gives for a study it refuses.
+fn refused(body: &str) -> String {
+    prepare(body).err().expect("an error")
+}
+
 /// Errors name the key and its line: a unit of another dimension than the parameter's, an
 /// unknown key, an unknown parameter, a grid mixed with draws, too many samples.
 #[test]
 fn study_errors_name_the_key_and_line() {
     let normal = "[[parameter]]\nname = \"k1\"\ndistribution = \"normal\"\n";
     let outputs = "samples = 10\noutputs = [\"natural_frequency.1\"]\n";
-    let e = prepare(&format!(
+    let e = refused(&format!(
         "{outputs}{normal}mean = \"300 mm\"\nsd = \"1 N/m\"\n"
-    ))
-    .err()
-    .expect("an error");
+    ));
     assert_eq!(
         e,
         "line 8: key `parameter[1].mean`: `300 mm` has unit m, but parameter `k1` is in N/m"
     );
-    let e = prepare(&format!("{outputs}{normal}mean = 300\nsd = \"1 N/m\"\n"))
-        .err()
-        .expect("an error");
+    let e = refused(&format!("{outputs}{normal}mean = 300\nsd = \"1 N/m\"\n"));
     assert!(
         e.starts_with("line 8: key `parameter[1].mean`: `300.0` has no unit"),
         "{e}"
     );
-    let e = prepare(&format!(
+    let e = refused(&format!(
         "{outputs}{normal}mean = \"1 N/m\"\nsd = \"1 N/m\"\nspread = 2\n"
-    ))
-    .err()
-    .expect("an error");
+    ));
     assert!(e.starts_with("line 10: unknown key `spread`"), "{e}");
-    let e = prepare(&format!(
+    let e = refused(&format!(
         "{outputs}[[parameter]]\nname = \"k9\"\nvalues = [\"1 N/m\"]\n"
-    ))
-    .err()
-    .expect("an error");
+    ));
     assert!(
         e.starts_with("line 6: key `parameter[1].name`: model"),
         "{e}"
     );
     assert!(e.contains("has no parameter `k9`"), "{e}");
-    let e = prepare("samples = 2000000\noutputs = [\"natural_frequency.1\"]\n[[parameter]]\nname = \"k1\"\ndistribution = \"uniform\"\nlow = \"1 N/m\"\nhigh = \"2 N/m\"\n").err().expect("an error");
+    let e = refused("samples = 2000000\noutputs = [\"natural_frequency.1\"]\n[[parameter]]\nname = \"k1\"\ndistribution = \"uniform\"\nlow = \"1 N/m\"\nhigh = \"2 N/m\"\n");
     assert_eq!(
         e,
         "line 3: key `samples`: more than 1000000 samples; split the study"
     );
-    let e = prepare(&format!(
+    let e = refused(&format!(
         "{outputs}{normal}mean = \"1 N/m\"\nsd = \"1 N/m\"\n[[parameter]]\nname = \"k2\"\nvalues = [\"1 N/m\"]\n"
-    ))
-    .err().expect("an error");
+    ));
     assert!(e.contains("a study is a grid"), "{e}");
     let big = |unit: &str| format!("range = \"1 {unit} .. 2 {unit} : 1000\"\n");
-    let e = prepare(&format!(
+    let e = refused(&format!(
         "outputs = [\"natural_frequency.1\"]\n[[parameter]]\nname = \"k1\"\n{}\
          [[parameter]]\nname = \"k2\"\n{}[[parameter]]\nname = \"m1\"\n{}",
         big("N/m"),
         big("N/m"),
         big("kg")
-    ))
-    .err()
-    .expect("an error");
+    ));
     assert_eq!(
         e,
         "line 11: key `parameter[3]`: more than 1000000 samples; split the study"
     );
     let twice = "[[parameter]]\nname = \"k1\"\nvalues = [\"1 N/m\"]\n";
-    let e = prepare(&format!(
+    let e = refused(&format!(
         "outputs = [\"natural_frequency.1\"]\n{twice}{twice}"
-    ))
-    .err()
-    .expect("an error");
+    ));
     assert_eq!(
         e,
         "line 8: key `parameter[2].name`: `k1` is already parameter[1]; give each parameter once"
     );
-    let e = prepare("samples = 3\noutputs = [\"stroke\"]\nparameter = []\n")
-        .err()
-        .expect("an error");
+    let e = refused("samples = 3\noutputs = [\"stroke\"]\nparameter = []\n");
     assert!(
         e.starts_with("line 4: key `outputs`: unknown output `stroke`"),
         "{e}"

@@ -9,11 +9,34 @@ use std::path::Path;
 use common::Rng;
 use mech::diagnose::candidates::{diagnose, Diagnosis, Holdout, Verdict};
 use mech::diagnose::experiment::{Experiment, Kind};
-use mech::diagnose::fit::{fit, parameters, FitRequest};
+use mech::diagnose::fit::{fit, parameters, FitReport, FitRequest};
 use mech::experiments::leg::Leg;
 
 fn param(leg: &Leg, name: &str) -> f64 {
     leg.param(name).unwrap()
+}
+
+/// Fits the one parameter `request` names to the data `text` (written to `dir`) against the
+/// model as written, and asserts that the fit leaves residuals at the noise (χ²/dof within
+/// 0.3–2.5); returns the report and the fitted value with its standard error.
+fn fit_one(
+    dir: &Path,
+    experiment: &Experiment,
+    text: &str,
+    request: &str,
+) -> (FitReport, f64, f64) {
+    let data = common::measured_data(dir, text);
+    let mut leg = Leg::open(&experiment.model).unwrap();
+    let requests = [FitRequest::parse(request).unwrap()];
+    let fitted = parameters(&leg, &requests).unwrap();
+    let report = fit(experiment, &data, &mut leg, &fitted).unwrap();
+    let chi2_dof = 2.0 * report.result.cost / report.result.degrees_of_freedom as f64;
+    assert!(
+        (0.3..2.5).contains(&chi2_dof),
+        "{request}: χ²/dof = {chi2_dof}"
+    );
+    let (value, se) = (report.result.params[0], report.result.standard_errors[0]);
+    (report, value, se)
 }
 
 /// HAMR-VI's swing flexure s3 made 30 % stiffer than the model says; 8 quasi-static points
@@ -40,13 +63,7 @@ fn quasi_static_fit_recovers_a_hidden_stiffness() {
         let z = foot[2] + 1e-6 * rng.normal();
         text += &format!("{lift}, {swing}, {}, {}\n", x * 1e3, z * 1e3);
     }
-    let data = common::measured_data(&dir, &text);
-
-    let mut leg = Leg::open(&experiment.model).unwrap();
-    let requests = [FitRequest::parse("k_s3").unwrap()];
-    let fitted = parameters(&leg, &requests).unwrap();
-    let report = fit(&experiment, &data, &mut leg, &fitted).unwrap();
-    let (value, se) = (report.result.params[0], report.result.standard_errors[0]);
+    let (report, value, se) = fit_one(&dir, &experiment, &text, "k_s3");
     let truth_value = 1.3 * nominal;
     assert!(
         (value - truth_value).abs() < 3.0 * se,
@@ -62,8 +79,6 @@ fn quasi_static_fit_recovers_a_hidden_stiffness() {
         "{:?}",
         report.residuals
     );
-    let chi2_dof = 2.0 * report.result.cost / report.result.degrees_of_freedom as f64;
-    assert!((0.3..2.5).contains(&chi2_dof), "χ²/dof = {chi2_dof}");
 }
 
 /// HAMR-VI's loss factor η made 0.12 instead of 0.08: the lift resonance's quality factor
@@ -77,17 +92,9 @@ fn frequency_response_fit_recovers_the_loss_factor() {
         panic!("a frequency-response experiment");
     };
     let text = bode_data(&experiment, 0.12, 0.0, 3);
-    let data = common::measured_data(&dir, &text);
-
-    let mut leg = Leg::open(&experiment.model).unwrap();
-    let requests = [FitRequest::parse("eta=0.01..0.5").unwrap()];
-    let fitted = parameters(&leg, &requests).unwrap();
-    let report = fit(&experiment, &data, &mut leg, &fitted).unwrap();
-    let (value, se) = (report.result.params[0], report.result.standard_errors[0]);
+    let (_, value, se) = fit_one(&dir, &experiment, &text, "eta=0.01..0.5");
     assert!((value - 0.12).abs() < 3.0 * se, "η = {value} ± {se}");
     assert!((value - 0.12).abs() < 0.01, "η = {value}");
-    let chi2_dof = 2.0 * report.result.cost / report.result.degrees_of_freedom as f64;
-    assert!((0.3..2.5).contains(&chi2_dof), "χ²/dof = {chi2_dof}");
 }
 
 /// A lift Bode curve of HAMR-VI (40 points, 20–150 Hz) from the model with loss factor `eta`

@@ -14,8 +14,8 @@
 
 use crate::common;
 
-use crate::markdown::examples;
-use crate::quaternion_joints::{dop853, run};
+use crate::language_doc::language_reference_examples;
+use crate::quaternion_joints::energy_drift_over_one_second;
 use common::Rng;
 use mech_runtime::Model;
 
@@ -202,22 +202,17 @@ fn planar_about_a_slanted_normal() {
 /// 1 s; those without a damper keep their energy to 1e-9.
 #[test]
 fn language_reference_examples_of_compound_joints_simulate() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/mech-language.md");
-    let markdown = std::fs::read_to_string(path).unwrap();
     let mut checked = 0;
-    for example in examples(&markdown).iter().filter(|e| !e.must_fail) {
+    for (name, text) in language_reference_examples() {
         let kinds = ["= universal(", "= cylindrical(", "= planar("];
-        if !kinds.iter().any(|kind| example.text.contains(kind)) {
+        if !kinds.iter().any(|kind| text.contains(kind)) {
             continue;
         }
         checked += 1;
-        let name = format!("docs/mech-language.md:{}", example.line);
-        let model = common::tape_from_text(&name, &example.text);
-        let (q0, u0) = common::initial_state(&model);
-        let trajectory = run(&model, &q0, &u0, &dop853(1.0, 0.01, 1e-11, 1e-13));
-        let (_, drift) = common::energy_drift(&model, &trajectory);
+        let model = common::tape_from_text(&name, &text);
+        let drift = energy_drift_over_one_second(&model);
         eprintln!("{name}: energy drift {drift:.1e} over 1 s");
-        if !example.text.contains("damping") {
+        if !text.contains("damping") {
             assert!(drift < 1e-9, "{name}: energy drift {drift:e}");
         }
     }

@@ -297,31 +297,39 @@ fn crank_arms(text: &str, legs: LegModel) -> String {
     )
 }
 
+/// Each line of `source` that is not a doc comment, with the `///` lines just before it.
+fn documented_lines(source: &str) -> Vec<(String, &str)> {
+    let mut lines = Vec::new();
+    let mut doc = String::new();
+    for line in source.lines() {
+        if line.starts_with("///") {
+            doc.push_str(line);
+            doc.push('\n');
+        } else {
+            lines.push((std::mem::take(&mut doc), line));
+        }
+    }
+    lines
+}
+
 /// The leg model's `lift_arm`, `swing_arm` and the shifts they make, with their docs.
 fn crank_arm_declarations(legs: LegModel) -> String {
     let source = common::bundled_source(legs.leg());
     let mut out = String::from(
         "\n// ---------------------------------------------------------------- crank arms (the leg model's)\n\n",
     );
-    let mut doc = String::new();
-    for line in source.lines() {
-        if line.starts_with("///") {
-            doc.push_str(line);
-            doc.push('\n');
-            continue;
-        }
-        let declares = [
-            "param lift_arm",
-            "param swing_arm",
-            "let lift_shift",
-            "let swing_shift",
-        ];
+    let declares = [
+        "param lift_arm",
+        "param swing_arm",
+        "let lift_shift",
+        "let swing_shift",
+    ];
+    for (doc, line) in documented_lines(&source) {
         if declares.iter().any(|d| line.starts_with(d)) {
             out.push_str(&doc);
             out.push_str(line);
             out.push('\n');
         }
-        doc.clear();
     }
     out
 }
@@ -335,13 +343,7 @@ fn leg_elements(legs: LegModel) -> String {
     );
     let mut elements: Vec<String> = Vec::new();
     let mut block: Option<String> = None;
-    let mut doc = String::new();
-    for line in leg_model.lines() {
-        if line.starts_with("///") {
-            doc.push_str(line);
-            doc.push('\n');
-            continue;
-        }
+    for (doc, line) in documented_lines(&leg_model) {
         let starts = |prefix: &str| line.starts_with(prefix);
         if [
             "param k_",
@@ -368,7 +370,6 @@ fn leg_elements(legs: LegModel) -> String {
                 elements.push(block.take().unwrap());
             }
         }
-        doc.clear();
     }
     let mut text = shared;
     for leg in LEGS {

@@ -9,15 +9,24 @@ use mech_codegen::diag::SourceFile;
 use mech_codegen::Compiled;
 use mech_runtime::Model;
 
-#[test]
-fn language_reference_examples_with_loops_assemble() {
+/// The examples of `docs/mech-language.md` that load (not the ```` ```mech,fail ```` ones):
+/// (`docs/mech-language.md:LINE`, text).
+pub(crate) fn language_reference_examples() -> Vec<(String, String)> {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/mech-language.md");
     let markdown = std::fs::read_to_string(path).unwrap();
+    examples(&markdown)
+        .into_iter()
+        .filter(|e| !e.must_fail)
+        .map(|e| (format!("docs/mech-language.md:{}", e.line), e.text))
+        .collect()
+}
+
+#[test]
+fn language_reference_examples_with_loops_assemble() {
     let mut looped = 0;
     let mut failures = Vec::new();
-    for example in examples(&markdown).iter().filter(|e| !e.must_fail) {
-        let name = format!("docs/mech-language.md:{}", example.line);
-        let compiled = Compiled::from_source(SourceFile::new(name.clone(), example.text.clone()))
+    for (name, text) in language_reference_examples() {
+        let compiled = Compiled::from_source(SourceFile::new(name.clone(), text))
             .unwrap_or_else(|errors| panic!("{name}: {errors}"));
         let session = Session::from_compiled(compiled, &[], &[]).unwrap();
         if session.model.nc() == 0 {

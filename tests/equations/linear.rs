@@ -4,9 +4,28 @@ use crate::common;
 
 use mech::tape_model::TapeModel;
 use mech_runtime::{
-    linearize, solve_statics, Fixture, FlexureDamping, Method, Model, SimOptions, StaticsOptions,
+    linearize, solve_statics, Fixture, FlexureDamping, Linearization, Method, Model, SimOptions,
+    StaticsOptions,
 };
 use nalgebra::{Complex, Matrix2, Vector2};
+
+/// Asserts that `linear`'s response of `output` to input 0 at `omega` (rad/s) under `damping`
+/// is `expected` to 1e-7 relative.
+fn assert_response(
+    linear: &Linearization,
+    output: usize,
+    omega: f64,
+    damping: FlexureDamping,
+    expected: Complex<f64>,
+) {
+    let ours = linear
+        .frequency_response(0, output, omega, damping)
+        .unwrap();
+    assert!(
+        (ours - expected).norm() < 1e-7 * expected.norm(),
+        "ω = {omega}: {ours} vs {expected}"
+    );
+}
 
 /// `models/two_mass_chain.mech`: the wall–m1 spring/damper (k1, c1) and the m1–m2 one (k2,
 /// c2); a force on m2; output: the position of m2.
@@ -18,13 +37,7 @@ fn two_mass_chain_frequency_response_matches_closed_form() {
     let output = model.output_index("x2.x").unwrap();
     for omega in [0.5, 5.0, 11.0, 13.9, 20.0, 31.6, 100.0] {
         let x2 = two_mass_chain_response(omega);
-        let ours = linear
-            .frequency_response(0, output, omega, FlexureDamping::Viscous)
-            .unwrap();
-        assert!(
-            (ours - x2).norm() < 1e-7 * x2.norm(),
-            "ω = {omega}: {ours} vs {x2}"
-        );
+        assert_response(&linear, output, omega, FlexureDamping::Viscous, x2);
     }
     // Modes: the undamped natural frequencies of the same chain.
     let modes = linear.modes().unwrap();
@@ -182,20 +195,14 @@ fn flexure_losses_as_complex_stiffness_a_power_law_or_viscous_damper() {
         let hysteretic = Complex::new(1.0, 0.0) / Complex::new(static_stiffness, k * eta);
         let viscous =
             Complex::new(1.0, 0.0) / Complex::new(static_stiffness, omega * k * eta / omega_ref);
-        let ours = linear
-            .frequency_response(0, output, omega, FlexureDamping::Hysteretic)
-            .unwrap();
-        assert!(
-            (ours - hysteretic).norm() < 1e-7 * hysteretic.norm(),
-            "ω = {omega}: {ours} vs {hysteretic}"
+        assert_response(
+            &linear,
+            output,
+            omega,
+            FlexureDamping::Hysteretic,
+            hysteretic,
         );
-        let ours = linear
-            .frequency_response(0, output, omega, FlexureDamping::Viscous)
-            .unwrap();
-        assert!(
-            (ours - viscous).norm() < 1e-7 * viscous.norm(),
-            "ω = {omega}: {ours} vs {viscous}"
-        );
+        assert_response(&linear, output, omega, FlexureDamping::Viscous, viscous);
         let (exponent, reference_hz) = (0.3, 5.0);
         let eta_at = eta * (omega / (std::f64::consts::TAU * reference_hz)).powf(exponent);
         let power_law = Complex::new(1.0, 0.0) / Complex::new(static_stiffness, k * eta_at);
@@ -203,11 +210,7 @@ fn flexure_losses_as_complex_stiffness_a_power_law_or_viscous_damper() {
             exponent,
             reference_hz,
         };
-        let ours = linear.frequency_response(0, output, omega, law).unwrap();
-        assert!(
-            (ours - power_law).norm() < 1e-7 * power_law.norm(),
-            "ω = {omega}: {ours} vs {power_law}"
-        );
+        assert_response(&linear, output, omega, law, power_law);
     }
 }
 
@@ -267,6 +270,26 @@ fn free_and_blocked(model: &dyn Model, volts: f64) -> (f64, f64) {
     (q[0], -held.fixture_forces[0][1])
 }
 
+/// Asserts that the actuator model's free deflection and blocked force at `volts`
+/// ([`free_and_blocked`]) are `expected` to `tol` relative; returns them.
+fn assert_free_and_blocked(
+    model: &dyn Model,
+    volts: f64,
+    (expected_free, expected_blocked): (f64, f64),
+    tol: f64,
+) -> (f64, f64) {
+    let (free, blocked) = free_and_blocked(model, volts);
+    assert!(
+        (free - expected_free).abs() < tol * expected_free,
+        "free deflection {free} vs {expected_free}"
+    );
+    assert!(
+        (blocked - expected_blocked).abs() < tol * expected_blocked,
+        "blocked force {blocked} vs {expected_blocked}"
+    );
+    (free, blocked)
+}
+
 /// A piezo actuator along a slider: free, it deflects δ_f·V/V_rated; held by a fixture at
 /// zero, it pushes with F_b·V/V_rated (Doshi et al. §III: force source in parallel with
 /// k_a = F_b/δ_f).
@@ -277,17 +300,9 @@ fn actuator_free_deflection_and_blocked_force() {
         "blocked_force = 320 mN; free_deflection = 300 um; rated_voltage = 225 V;",
     );
     let volts = 150.0;
-    let (free, blocked) = free_and_blocked(&model, volts);
     // Statics converges to 1e-10 of the initial force imbalance.
-    let (expected_free, expected_blocked) = (300e-6 * volts / 225.0, 0.320 * volts / 225.0);
-    assert!(
-        (free - expected_free).abs() < 1e-10 * expected_free,
-        "free deflection {free}"
-    );
-    assert!(
-        (blocked - expected_blocked).abs() < 1e-10 * expected_blocked,
-        "blocked force {blocked}"
-    );
+    let expected = (300e-6 * volts / 225.0, 0.320 * volts / 225.0);
+    assert_free_and_blocked(&model, volts, expected, 1e-10);
 }
 
 /// A flexure with `twist_axis` gains a twist coordinate with stiffness 2k/(1 + ν) (Doshi et
@@ -352,17 +367,8 @@ fn bimorph_actuator_matches_the_closed_form() {
     );
     let bimorph = mech::physics::actuator::Bimorph::SEED_NEW_GEOMETRY;
     let volts = 225.0;
-    let (free, blocked) = free_and_blocked(&model, volts);
-    let (expected_free, expected_blocked) =
-        (bimorph.free_deflection(volts), bimorph.blocked_force(volts));
-    assert!(
-        (free - expected_free).abs() < 1e-9 * expected_free,
-        "free deflection {free} vs {expected_free}"
-    );
-    assert!(
-        (blocked - expected_blocked).abs() < 1e-9 * expected_blocked,
-        "blocked force {blocked} vs {expected_blocked}"
-    );
+    let expected = (bimorph.free_deflection(volts), bimorph.blocked_force(volts));
+    let (free, blocked) = assert_free_and_blocked(&model, volts, expected, 1e-9);
     // Doshi et al. Table I "new geometry" model row: 300 µm and 320 mN (within 10%).
     assert!((free / 300e-6 - 1.0).abs() < 0.1 && (blocked / 0.320 - 1.0).abs() < 0.1);
 }

@@ -6,7 +6,7 @@ use crate::common;
 
 use common::Rng;
 use mech_runtime::{
-    assemble, assemble_speeds, mobility, AssemblyOptions, Method, Model, SimOptions,
+    assemble, assemble_speeds, mobility, AssemblyOptions, Method, Model, SimOptions, Trajectory,
 };
 
 /// The bundled models with constraint rows, by name.
@@ -61,13 +61,35 @@ fn four_bar_motion_matches_sympy_and_holds_the_loop() {
         Box::new(common::tape("four_bar")) as Box<dyn Model>,
         mech::models::compiled("four_bar").unwrap(),
     ] {
-        let (q, u) = assembled(model.as_ref(), &[0]);
-        let run =
-            mech_runtime::simulate(model.as_ref(), &q, &u, &[], &tight(1.0, 0.01), &mut |_| {})
-                .unwrap();
-        let q1 = run.q.last().unwrap()[0];
-        assert!((q1 - 3.3500951900).abs() < 5e-9, "q1(1 s) = {q1}");
+        four_bar_second_matches_sympy(model.as_ref(), tight(1.0, 0.01).method, 5e-9);
     }
+}
+
+/// q1(1 s) of the four-bar's free motion from SymPy's equations integrated by SciPy's DOP853
+/// at rtol = atol = 1e-9 (`sim1s_DOP853.q1_final` of `tests/peers/sympy_fourbar.py`).
+const SYMPY_FOUR_BAR_Q1_AT_1_S: f64 = 3.350095189957;
+
+/// The bundled four-bar `model`'s free motion with `method` for 1 s (101 samples) from its
+/// `q0`, `u0` assembled holding the crank; asserts that q1(1 s) is SymPy's to `tol`.
+pub(crate) fn four_bar_second_matches_sympy(
+    model: &dyn Model,
+    method: Method,
+    tol: f64,
+) -> Trajectory {
+    let (q, u) = assembled(model, &[0]);
+    let options = SimOptions {
+        t_end: 1.0,
+        output_interval: 0.01,
+        method,
+        ..SimOptions::default()
+    };
+    let run = mech_runtime::simulate(model, &q, &u, &[], &options, &mut |_| {}).unwrap();
+    let q1 = run.q.last().unwrap()[0];
+    assert!(
+        (q1 - SYMPY_FOUR_BAR_Q1_AT_1_S).abs() < tol,
+        "q1(1 s) = {q1}"
+    );
+    run
 }
 
 /// The same motion with DOP853 at the peer's own tolerance (rtol = atol = 1e-9, the
@@ -77,20 +99,12 @@ fn four_bar_motion_matches_sympy_and_holds_the_loop() {
 #[test]
 fn four_bar_dop853_at_the_peer_tolerance_matches_sympy() {
     let model = mech::models::compiled("four_bar").unwrap();
-    let (q, u) = assembled(model.as_ref(), &[0]);
-    let options = SimOptions {
-        t_end: 1.0,
-        output_interval: 0.01,
-        method: Method::Dop853 {
-            rtol: 1e-9,
-            atol: 1e-9,
-            h_max: f64::INFINITY,
-        },
-        ..SimOptions::default()
+    let method = Method::Dop853 {
+        rtol: 1e-9,
+        atol: 1e-9,
+        h_max: f64::INFINITY,
     };
-    let run = mech_runtime::simulate(model.as_ref(), &q, &u, &[], &options, &mut |_| {}).unwrap();
-    let q1 = run.q.last().unwrap()[0];
-    assert!((q1 - 3.350095189957).abs() < 3e-9, "q1(1 s) = {q1}");
+    let run = four_bar_second_matches_sympy(model.as_ref(), method, 3e-9);
     let mut phi = vec![0.0; model.nc()];
     for q in &run.q {
         model.constraints(0.0, q, &mut phi);

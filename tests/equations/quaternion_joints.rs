@@ -14,7 +14,7 @@
 //!   simulate and conserve energy.
 
 use crate::common;
-use crate::markdown::examples;
+use crate::language_doc::language_reference_examples;
 
 use common::Rng;
 use mech::tape_model::TapeModel;
@@ -117,10 +117,12 @@ pub(crate) fn run(model: &dyn Model, q0: &[f64], u0: &[f64], options: &SimOption
     simulate(model, q0, u0, &signals, options, &mut |_| {}).unwrap()
 }
 
-fn initial_state(model: &dyn Model) -> (Vec<f64>, Vec<f64>) {
-    let (mut q, mut u) = (vec![0.0; model.nq()], vec![0.0; model.nu()]);
-    model.initial_state(&mut q, &mut u);
-    (q, u)
+/// The energy drift ([`common::energy_drift`]) of `model` over 1 s from its written state,
+/// DOP853 at rtol 1e-11, atol 1e-13, sampled every 10 ms.
+pub(crate) fn energy_drift_over_one_second(model: &dyn Model) -> f64 {
+    let (q0, u0) = common::initial_state(model);
+    let trajectory = run(model, &q0, &u0, &dop853(1.0, 0.01, 1e-11, 1e-13));
+    common::energy_drift(model, &trajectory).1
 }
 
 const TORQUE_FREE: &str = "
@@ -140,7 +142,7 @@ fn torque_free_body_conserves_energy_and_momentum_and_flips() {
     // q = [e0…e3; x, y, z], u = [ω in the body; v in the body].
     assert_eq!(model.unit_quaternions(), &[0]);
     let inertia = [1.0, 2.0, 3.0];
-    let (q0, u0) = initial_state(&model);
+    let (q0, u0) = common::initial_state(&model);
     assert_eq!(
         &q0[0..4],
         &[1.0, 0.0, 0.0, 0.0],
@@ -304,7 +306,7 @@ fn free_body_under_gravity_falls_on_a_parabola() {
         output ke = kinetic_energy; output pe = potential_energy;
     ";
     let model = common::tape_from_text("throw", text);
-    let (q0, u0) = initial_state(&model);
+    let (q0, u0) = common::initial_state(&model);
     assert_eq!(model.speed_name(0), "throw.wx");
     assert_eq!(model.speed_name(3), "throw.vx");
     assert_eq!(model.coordinate_name(0), "throw.e0");
@@ -524,7 +526,7 @@ fn ball_double_pendulum_matches_newton_euler() {
 #[test]
 fn ball_double_pendulum_conserves_energy_and_vertical_momentum() {
     let model = common::tape("ball_double_pendulum");
-    let (q0, u0) = initial_state(&model);
+    let (q0, u0) = common::initial_state(&model);
     let trajectory = run(&model, &q0, &u0, &dop853(20.0, 0.01, 1e-12, 1e-14));
     let (_, energy_drift) = common::energy_drift(&model, &trajectory);
     let vertical_momentum = |q: &[f64], u: &[f64]| -> (f64, f64) {
@@ -564,21 +566,16 @@ fn ball_double_pendulum_conserves_energy_and_vertical_momentum() {
 /// written state and keep their energy (to 1e-9 of the largest kinetic energy).
 #[test]
 fn language_reference_quaternion_examples_simulate() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/mech-language.md");
-    let markdown = std::fs::read_to_string(path).unwrap();
     let mut checked = 0;
-    for example in examples(&markdown).iter().filter(|e| !e.must_fail) {
-        if !(example.text.contains("= ball(") || example.text.contains("= free(")) {
+    for (name, text) in language_reference_examples() {
+        if !(text.contains("= ball(") || text.contains("= free(")) {
             continue;
         }
         checked += 1;
-        let name = format!("docs/mech-language.md:{}", example.line);
-        let model = common::tape_from_text(&name, &example.text);
-        let euler = example.text.contains("rotation = euler(");
+        let model = common::tape_from_text(&name, &text);
+        let euler = text.contains("rotation = euler(");
         assert!(euler || !model.unit_quaternions().is_empty(), "{name}");
-        let (q0, u0) = initial_state(&model);
-        let trajectory = run(&model, &q0, &u0, &dop853(1.0, 0.01, 1e-11, 1e-13));
-        let (_, drift) = common::energy_drift(&model, &trajectory);
+        let drift = energy_drift_over_one_second(&model);
         assert!(drift < 1e-9, "{name}: energy drift {drift:e}");
     }
     assert!(
@@ -640,8 +637,8 @@ fn free_joint_on_a_moving_parent_matches_sliders_and_a_ball() {
     let free = common::tape_from_text("thrown_free", &free);
     let sliders = common::tape_from_text("thrown_sliders", &sliders);
     let options = dop853(1.0, 0.01, 1e-12, 1e-14);
-    let (qf, uf) = initial_state(&free);
-    let (qs, us) = initial_state(&sliders);
+    let (qf, uf) = common::initial_state(&free);
+    let (qs, us) = common::initial_state(&sliders);
     let (on_free, on_sliders) = (
         run(&free, &qf, &uf, &options),
         run(&sliders, &qs, &us, &options),

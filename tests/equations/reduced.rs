@@ -4,13 +4,14 @@
 //! with both Rosenbrock methods against DOP853 at a tight tolerance.
 
 use crate::common;
+use crate::loops::four_bar_second_matches_sympy;
 
 use common::Rng;
 use mech::experiments::leg::Leg;
 use mech_runtime::constraints::choose_independent;
 use mech_runtime::{
-    assemble, assemble_speeds, AssemblyOptions, ConstrainedSolver, Method, Model, Reduced, Signal,
-    SimOptions, Trajectory,
+    assemble, AssemblyOptions, ConstrainedSolver, Method, Model, Reduced, Signal, SimOptions,
+    Trajectory,
 };
 
 fn max_abs(values: &[f64]) -> f64 {
@@ -109,30 +110,12 @@ fn reduced_accelerations_match_the_multiplier_form() {
 #[test]
 fn four_bar_reduced_motion_matches_sympy() {
     let model = mech::models::compiled("four_bar").unwrap();
-    let (mut q, mut u) = (vec![0.0; model.nq()], vec![0.0; model.nu()]);
-    model.initial_state(&mut q, &mut u);
-    assemble(
-        model.as_ref(),
-        0.0,
-        &mut q,
-        &[0],
-        &AssemblyOptions::default(),
-    )
-    .unwrap();
-    assemble_speeds(model.as_ref(), 0.0, &q, &mut u, &[0]).unwrap();
-    let options = SimOptions {
-        t_end: 1.0,
-        output_interval: 0.01,
-        method: Method::ExpRosenbrock {
-            rtol: 1e-10,
-            atol: 1e-10,
-            h_max: f64::INFINITY,
-        },
-        ..SimOptions::default()
+    let method = Method::ExpRosenbrock {
+        rtol: 1e-10,
+        atol: 1e-10,
+        h_max: f64::INFINITY,
     };
-    let run = mech_runtime::simulate(model.as_ref(), &q, &u, &[], &options, &mut |_| {}).unwrap();
-    let q1 = run.q.last().unwrap()[0];
-    assert!((q1 - 3.3500951900).abs() < 5e-9, "q1(1 s) = {q1}");
+    let run = four_bar_second_matches_sympy(model.as_ref(), method, 5e-9);
     for (q, u) in run.q.iter().zip(&run.u) {
         let (phi, ju) = residuals(model.as_ref(), q, u);
         assert!(phi <= 1e-12 && ju <= 1e-11, "|φ| = {phi:e}, |J u| = {ju:e}");

@@ -33,6 +33,13 @@ fn rest(leg: &Leg) -> Vec<f64> {
         .q
 }
 
+/// The leg at rest ([`rest`]) and its foot's position there.
+fn rest_and_foot(leg: &Leg) -> (Vec<f64>, [f64; 3]) {
+    let rest = rest(leg);
+    let foot = leg.foot_at(&rest, &leg.inputs(0.0, 0.0));
+    (rest, foot)
+}
+
 /// The leg's loops closed with the actuators at `z`, from `near`, to 1e-16 (the default
 /// 1e-13 would leave first-order errors of ~1e-9 N in the energy's differences).
 fn closed(leg: &Leg, near: &[f64], z: Vector2<f64>) -> Vec<f64> {
@@ -100,6 +107,20 @@ impl<'a> Energy<'a> {
         pe - self.drive.dot(&z) - held
     }
 
+    /// With the foot held along `held` (side load `ratio`) at the fixture's reaction μ of
+    /// `equilibrium`: (μ, the gradient at the equilibrium's actuator coordinates).
+    fn held_gradient(
+        &mut self,
+        equilibrium: &Equilibrium,
+        held: usize,
+        ratio: f64,
+    ) -> (f64, Vector2<f64>) {
+        let mu = equilibrium.fixture_forces[0][held];
+        self.hold = Some((held, 1, ratio, mu));
+        let z = actuators(self.leg, &equilibrium.q);
+        (mu, self.gradient(&equilibrium.q, z))
+    }
+
     /// Central differences in `z` (steps of 10 and 20 nm, Richardson-extrapolated; the
     /// actuators move ~0.1 mm).
     fn gradient(&self, near: &[f64], z: Vector2<f64>) -> Vector2<f64> {
@@ -151,6 +172,26 @@ fn statics(
         .unwrap()
 }
 
+/// The leg's equilibrium from `start` with the foot held at `target` along `held` and pushed
+/// along y by `ratio` times the fixture's reaction (the force tests' side load).
+fn held_with_side_load(
+    leg: &Leg,
+    start: &[f64],
+    inputs: &[f64],
+    target: [f64; 3],
+    held: usize,
+    ratio: f64,
+) -> Equilibrium {
+    let fixture = leg.fixture(target, vec![held]);
+    let loads = [SideLoad {
+        fixture: 0,
+        held,
+        along: 1,
+        ratio,
+    }];
+    statics(leg, start, inputs, &[fixture], &loads)
+}
+
 /// Both actuators driven, foot free: the equilibrium satisfies `F + Jᵀλ = 0` and `φ = 0` to
 /// round-off, and is the minimum of the potential energy over the two actuator coordinates
 /// (to ~3e-15 m of actuator motion; the actuators move ~100 µm).
@@ -193,28 +234,16 @@ fn both_actuators_driven_equilibrium_is_the_potential_energy_minimum() {
 #[test]
 fn fixture_reactions_make_the_potential_energy_stationary() {
     let leg = hamr_vi();
-    let rest = rest(&leg);
-    let foot = leg.foot_at(&rest, &leg.inputs(0.0, 0.0));
+    let (rest, foot) = rest_and_foot(&leg);
     let cases = [(2, 0.0), (0, 0.0), (2, 0.3), (0, -0.3)];
     for (lift, swing) in DRIVES {
         for (held, ratio) in cases {
             let inputs = leg.inputs(lift, swing);
-            let fixture = leg.fixture(foot, vec![held]);
-            let loads = [SideLoad {
-                fixture: 0,
-                held,
-                along: 1,
-                ratio,
-            }];
-            let equilibrium = statics(&leg, &rest, &inputs, &[fixture], &loads);
+            let equilibrium = held_with_side_load(&leg, &rest, &inputs, foot, held, ratio);
             assert!(equilibrium.constraint_residual < 1e-15);
-            let force = equilibrium.fixture_forces[0];
-            let mu = force[held];
-            assert_eq!(force[1], ratio * mu);
             let mut energy = Energy::new(&leg, lift, swing);
-            energy.hold = Some((held, 1, ratio, mu));
-            let z = actuators(&leg, &equilibrium.q);
-            let gradient = energy.gradient(&equilibrium.q, z);
+            let (mu, gradient) = energy.held_gradient(&equilibrium, held, ratio);
+            assert_eq!(equilibrium.fixture_forces[0][1], ratio * mu);
             // Each term of the gradient is of the order of the drive, 0.16 N; the rest is
             // ~1e-10 of it (central differences, here and in the fixture's Jacobian).
             assert!(
@@ -232,25 +261,13 @@ fn fixture_reactions_make_the_potential_energy_stationary() {
 #[test]
 fn force_test_reaction_agrees_with_the_energy() {
     let leg = hamr_vi();
-    let rest = rest(&leg);
-    let foot = leg.foot_at(&rest, &leg.inputs(0.0, 0.0));
+    let (rest, foot) = rest_and_foot(&leg);
     let inputs = leg.drive(Dof::Lift, 225.0);
     for ratio in [0.0, -0.3] {
         let mut target = foot;
         target[2] += 1.27e-3;
-        let fixture = leg.fixture(target, vec![2]);
-        let loads = [SideLoad {
-            fixture: 0,
-            held: 2,
-            along: 1,
-            ratio,
-        }];
-        let equilibrium = statics(&leg, &rest, &inputs, &[fixture], &loads);
-        let mu = equilibrium.fixture_forces[0][2];
-        let mut energy = Energy::new(&leg, 225.0, 0.0);
-        energy.hold = Some((2, 1, ratio, mu));
-        let z = actuators(&leg, &equilibrium.q);
-        let gradient = energy.gradient(&equilibrium.q, z);
+        let equilibrium = held_with_side_load(&leg, &rest, &inputs, target, 2, ratio);
+        let (mu, gradient) = Energy::new(&leg, 225.0, 0.0).held_gradient(&equilibrium, 2, ratio);
         // μ·∂y/∂z alone is ~μ·13 (the lift ratio): the gradient is relative to that.
         assert!(
             gradient.amax() < 1e-9 * (mu * 13.0).abs(),
@@ -266,8 +283,7 @@ fn force_test_reaction_agrees_with_the_energy() {
 #[test]
 fn both_actuators_driven_converge_in_a_few_newton_iterations() {
     let leg = hamr_vi();
-    let rest = rest(&leg);
-    let foot = leg.foot_at(&rest, &leg.inputs(0.0, 0.0));
+    let (rest, foot) = rest_and_foot(&leg);
     for (lift, swing) in DRIVES {
         let inputs = leg.inputs(lift, swing);
         let free = statics(&leg, &rest, &inputs, &[], &[]);
@@ -278,19 +294,13 @@ fn both_actuators_driven_converge_in_a_few_newton_iterations() {
         );
         for held in [0, 2] {
             let fixture = leg.fixture(foot, vec![held]);
-            let equilibrium = statics(&leg, &rest, &inputs, std::slice::from_ref(&fixture), &[]);
+            let equilibrium = statics(&leg, &rest, &inputs, &[fixture], &[]);
             assert!(
                 equilibrium.iterations <= 5,
                 "{lift} V, {swing} V, held {held}: {}",
                 equilibrium.iterations
             );
-            let loads = [SideLoad {
-                fixture: 0,
-                held,
-                along: 1,
-                ratio: 0.3,
-            }];
-            let loaded = statics(&leg, &rest, &inputs, &[fixture], &loads);
+            let loaded = held_with_side_load(&leg, &rest, &inputs, foot, held, 0.3);
             assert!(
                 loaded.iterations <= 5,
                 "{lift} V, {swing} V, held {held}, side load: {}",
@@ -411,8 +421,7 @@ fn reduced_stiffness_on_the_extended_leg_matches_differences_of_the_generalized_
     let model = leg.model();
     let (nq, nc) = (model.nq(), model.nc());
     assert_eq!(nq, 20);
-    let rest = rest(&leg);
-    let foot = leg.foot_at(&rest, &leg.inputs(0.0, 0.0));
+    let (rest, foot) = rest_and_foot(&leg);
     let inputs = leg.drive(Dof::Swing, 225.0);
     let free = leg.equilibrium(&rest, &inputs, &[]).unwrap().q;
     let mut target = foot;

@@ -351,20 +351,36 @@ def rod_inertia(m, l, axes):
     return [i if k in axes else 0 for k in 'xyz'] + [0, 0, 0]
 
 
+def rod(M, name, frame, origin, m, l, axes):
+    """Body `name` of `M`: a uniform slender rod of mass m and length l along `frame`'s x from
+    `origin` (com at l/2, inertia `rod_inertia` on `axes`)."""
+    return M.body(name, frame, origin, m, (l / 2, 0, 0), rod_inertia(m, l, axes))
+
+
+def four_bar_tree(M, p, m_crank, m_coupler, m_rocker):
+    """The open tree of a planar four-bar in `M` (the lengths `crank_length`, `coupler_length`,
+    `rocker_length` and `ground` of `p`): the crank pinned at O about N.z, the coupler pinned
+    at the crank's tip, the rocker pinned at `ground` along N.x, each a slender rod of its mass
+    about z. Returns the coupler's and rocker's frames and their tips (the closure's points)."""
+    A = M.pin('crank_angle', M.N, M.O, M.N.z, 'A')
+    rod(M, 'crank', A, M.O, m_crank, p['crank_length'], 'z')
+    Bo = M.point('Bo', M.O, R(p['crank_length']) * A.x)
+    B = M.pin('coupler_angle', A, Bo, A.z, 'B')
+    rod(M, 'coupler', B, Bo, m_coupler, p['coupler_length'], 'z')
+    Co = M.point('Co', M.O, R(p['ground']) * M.N.x)
+    C = M.pin('rocker_angle', M.N, Co, M.N.z, 'C')
+    rod(M, 'rocker', C, Co, m_rocker, p['rocker_length'], 'z')
+    Bt = M.point('Bt', Bo, R(p['coupler_length']) * B.x)
+    Ct = M.point('Ct', Co, R(p['rocker_length']) * C.x)
+    return B, C, Bt, Ct
+
+
 def four_bar():
     p = FOUR_BAR
     M = Model('four_bar')
     M.up = M.N.y
-    A = M.pin('crank_angle', M.N, M.O, M.N.z, 'A')
-    M.body('crank', A, M.O, p['m'], (p['crank_length'] / 2, 0, 0), rod_inertia(p['m'], p['crank_length'], 'z'))
-    Bo = M.point('Bo', M.O, R(p['crank_length']) * A.x)
-    B = M.pin('coupler_angle', A, Bo, A.z, 'B')
-    M.body('coupler', B, Bo, p['m'], (p['coupler_length'] / 2, 0, 0), rod_inertia(p['m'], p['coupler_length'], 'z'))
-    Co = M.point('Co', M.O, R(p['ground']) * M.N.x)
-    C = M.pin('rocker_angle', M.N, Co, M.N.z, 'C')
-    M.body('rocker', C, Co, p['m'], (p['rocker_length'] / 2, 0, 0), rod_inertia(p['m'], p['rocker_length'], 'z'))
-    M.coincident('tip', M.point('Bt', Bo, R(p['coupler_length']) * B.x),
-                 M.point('Ct', Co, R(p['rocker_length']) * C.x), 'xy')
+    _, _, Bt, Ct = four_bar_tree(M, p, p['m'], p['m'], p['m'])
+    M.coincident('tip', Bt, Ct, 'xy')
     M.params = {'g': float(G_ACC), 'gravity': [0, -float(G_ACC), 0], **p,
                 'inertia': 'slender rods: m l^2/12 about com z', 'loop tip': 'coincident x, y in N'}
     return M
@@ -378,10 +394,10 @@ def slider_crank():
     M = Model('slider_crank')
     M.up = M.N.y
     A = M.pin('crank_angle', M.N, M.O, M.N.z, 'A')
-    M.body('crank', A, M.O, p['m_crank'], (p['r'] / 2, 0, 0), rod_inertia(p['m_crank'], p['r'], 'yz'))
+    rod(M, 'crank', A, M.O, p['m_crank'], p['r'], 'yz')
     Bo = M.point('Bo', M.O, R(p['r']) * A.x)
     B = M.pin('rod_angle', A, Bo, A.z, 'B')
-    M.body('connecting_rod', B, Bo, p['m_rod'], (p['rod'] / 2, 0, 0), rod_inertia(p['m_rod'], p['rod'], 'yz'))
+    rod(M, 'connecting_rod', B, Bo, p['m_rod'], p['rod'], 'yz')
     S, So = M.slider('slide', M.N, M.O, me.Vector(0), M.N.x, 'S')
     M.body('slider', S, So, p['m_slider'], (0, 0, 0), (0, 0, 0, 0, 0, 0))
     M.damper('slide', p['c_slider'])
@@ -403,21 +419,10 @@ def compliant_four_bar():
     p = COMPLIANT
     M = Model('compliant_four_bar')
     M.up = M.N.y
-    A = M.pin('crank_angle', M.N, M.O, M.N.z, 'A')
-    M.body('crank', A, M.O, p['m_crank'], (p['crank_length'] / 2, 0, 0),
-           rod_inertia(p['m_crank'], p['crank_length'], 'z'))
-    Bo = M.point('Bo', M.O, R(p['crank_length']) * A.x)
-    B = M.pin('coupler_angle', A, Bo, A.z, 'B')
-    M.body('coupler', B, Bo, p['m_coupler'], (p['coupler_length'] / 2, 0, 0),
-           rod_inertia(p['m_coupler'], p['coupler_length'], 'z'))
-    Co = M.point('Co', M.O, R(p['ground']) * M.N.x)
-    C = M.pin('rocker_angle', M.N, Co, M.N.z, 'C')
-    M.body('rocker', C, Co, p['m_rocker'], (p['rocker_length'] / 2, 0, 0),
-           rod_inertia(p['m_rocker'], p['rocker_length'], 'z'))
+    B, C, Bt, Ct = four_bar_tree(M, p, p['m_crank'], p['m_coupler'], p['m_rocker'])
     # mech's perpendiculars for axis z are e1 = z x x = y and e2 = z x e1 = -x (child
     # frame); in this planar model both rows are identically zero for any choice.
-    M.revolute('tip', M.point('Bt', Bo, R(p['coupler_length']) * B.x),
-               M.point('Ct', Co, R(p['rocker_length']) * C.x), B.z, C.y, -C.x)
+    M.revolute('tip', Bt, Ct, B.z, C.y, -C.x)
     M.params = {'g': float(G_ACC), 'gravity': [0, -float(G_ACC), 0], **p,
                 'inertia': 'slender rods: m l^2/12 about com z', 'loop tip': 'revolute about z',
                 'kapton': KAPTON}

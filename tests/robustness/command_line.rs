@@ -67,6 +67,20 @@ fn a_unit_of_the_wrong_dimension_is_refused() {
 #[test]
 fn negative_and_non_finite_numbers_get_the_options_own_check() {
     let dir = scratch("negative_numbers");
+    let stiffness = |option: &'static str, value: &'static str| {
+        vec![
+            "flexure",
+            "stiffness",
+            "--width",
+            "1 mm",
+            "--thickness",
+            "25 um",
+            "--length",
+            "100 um",
+            option,
+            value,
+        ]
+    };
     // clap's tip ("to pass '-1' as a value, use '-- -1'") was printed for these.
     expect_errors(
         &dir,
@@ -109,33 +123,11 @@ fn negative_and_non_finite_numbers_get_the_options_own_check() {
                 "expected a number above zero",
             ),
             (
-                &[
-                    "flexure",
-                    "stiffness",
-                    "--width",
-                    "1 mm",
-                    "--thickness",
-                    "25 um",
-                    "--length",
-                    "100 um",
-                    "--poisson",
-                    "0.7",
-                ],
+                &stiffness("--poisson", "0.7"),
                 "Poisson's ratio between -1 and 0.5",
             ),
             (
-                &[
-                    "flexure",
-                    "stiffness",
-                    "--width",
-                    "1 mm",
-                    "--thickness",
-                    "25 um",
-                    "--length",
-                    "100 um",
-                    "--loss-factor",
-                    "inf",
-                ],
+                &stiffness("--loss-factor", "inf"),
                 "expected a number at or above zero",
             ),
         ],
@@ -321,75 +313,74 @@ fn analyses_not_written_for_quaternions_refuse_a_ball_joint_model() {
 #[test]
 fn initial_states_and_the_step_budget_are_checked() {
     let dir = scratch("initial_state");
-    let simulate = |model: &'static str| ["simulate", model, "--t-end", "1 s", "--out", "run.csv"];
-    let with = |model: &'static str, extra: [&'static str; 2]| {
-        let [a, b, c, d, e, f] = simulate(model);
-        [a, b, c, d, e, f, extra[0], extra[1]]
+    let simulate = |model: &'static str, option: &'static str, value: &'static str| {
+        vec![
+            "simulate", model, "--t-end", "1 s", "--out", "run.csv", option, value,
+        ]
     };
-    let cases = [
-        (
-            with("{model:pendulum}", ["--q0", "hinge=10 mm"]),
-            "--q0 hinge: `10 mm` has unit m, but `hinge` needs no unit",
-        ),
-        (
-            with("{model:pendulum}", ["--u0", "hinge=2"]),
-            "--u0 hinge: `2` has no unit, but `hinge` needs an angular speed (e.g. `hinge=2 rad/s`)",
-        ),
-        (
-            with("{model:cart_pendulum}", ["--u0", "x=2 rad/s"]),
-            "--u0 x: `2 rad/s` is an angular speed, but `x` needs m/s (e.g. `x=2 m/s`)",
-        ),
-        (
-            with("{model:pendulum}", ["--q0", "hing=2 deg"]),
-            "--q0: unknown coordinate `hing`; coordinates of `pendulum`: hinge",
-        ),
-        (
-            with("{model:pendulum}", ["--u0", "hing=2 rad/s"]),
-            "--u0: unknown speed `hing`; speeds of `pendulum`: hinge",
-        ),
-        (
-            with("{model:ball_double_pendulum}", ["--q0", "shoulder.e0=1"]),
-            "--q0 shoulder.e0: a quaternion's parts cannot be set one by one",
-        ),
-        (
-            with("{model:pendulum}", ["--max-steps", "0"]),
-            "expected a whole number of at least 1",
-        ),
-        (
-            with("{model:pendulum}", ["--max-steps", "20"]),
-            "simulation of `pendulum` failed: gave up at t = ",
-        ),
-        (
-            with("{model:floating_four_bar}", ["--independent", "base.e1"]),
-            "--independent base.e1: a quaternion's parts cannot be held one by one",
-        ),
-        (
-            with("{model:pendulum}", ["--threads", "3"]),
-            "invalid value '3' for '--threads <THREADS>': 3 is not in 1..=2",
-        ),
-    ];
-    let bode = [
-        "bode",
-        "{model:two_mass_chain}",
-        "--drive",
-        "push",
-        "--output",
-        "x2.x",
-        "--from",
-        "1 Hz",
-        "--to",
-        "10 Hz",
-        "--chirp",
-        "--max-steps",
-        "50",
-    ];
-    let chirp = (&bode[..], "gave up at t = ");
-    let mut cases: Vec<(&[&str], &str)> = cases
-        .iter()
-        .map(|(args, message)| (&args[..], *message))
-        .collect();
-    cases.push(chirp);
-    expect_errors(&dir, &cases);
+    expect_errors(
+        &dir,
+        &[
+            (
+                &simulate("{model:pendulum}", "--q0", "hinge=10 mm"),
+                "--q0 hinge: `10 mm` has unit m, but `hinge` needs no unit",
+            ),
+            (
+                &simulate("{model:pendulum}", "--u0", "hinge=2"),
+                "--u0 hinge: `2` has no unit, but `hinge` needs an angular speed (e.g. `hinge=2 rad/s`)",
+            ),
+            (
+                &simulate("{model:cart_pendulum}", "--u0", "x=2 rad/s"),
+                "--u0 x: `2 rad/s` is an angular speed, but `x` needs m/s (e.g. `x=2 m/s`)",
+            ),
+            (
+                &simulate("{model:pendulum}", "--q0", "hing=2 deg"),
+                "--q0: unknown coordinate `hing`; coordinates of `pendulum`: hinge",
+            ),
+            (
+                &simulate("{model:pendulum}", "--u0", "hing=2 rad/s"),
+                "--u0: unknown speed `hing`; speeds of `pendulum`: hinge",
+            ),
+            (
+                &simulate("{model:ball_double_pendulum}", "--q0", "shoulder.e0=1"),
+                "--q0 shoulder.e0: a quaternion's parts cannot be set one by one",
+            ),
+            (
+                &simulate("{model:pendulum}", "--max-steps", "0"),
+                "expected a whole number of at least 1",
+            ),
+            (
+                &simulate("{model:pendulum}", "--max-steps", "20"),
+                "simulation of `pendulum` failed: gave up at t = ",
+            ),
+            (
+                &simulate("{model:floating_four_bar}", "--independent", "base.e1"),
+                "--independent base.e1: a quaternion's parts cannot be held one by one",
+            ),
+            (
+                &simulate("{model:pendulum}", "--threads", "3"),
+                "invalid value '3' for '--threads <THREADS>': 3 is not in 1..=2",
+            ),
+            (
+                &[
+                    "bode",
+                    "{model:two_mass_chain}",
+                    "--drive",
+                    "push",
+                    "--output",
+                    "x2.x",
+                    "--from",
+                    "1 Hz",
+                    "--to",
+                    "10 Hz",
+                    "--chirp",
+                    "--max-steps",
+                    "50",
+                ],
+                "gave up at t = ",
+            ),
+        ],
+    );
 }
 
 /// `--q0` and `--u0` are where the run starts: the CSV's first row holds them, in SI.

@@ -76,3 +76,44 @@ pub fn check_failure(input: &Path, actual: &str, succeeded: &str) {
         golden.display()
     );
 }
+
+/// The golden test of `<crate root>/<dir>/<stem>.<extension>`, an input that must fail:
+/// `render` takes the file's path as shown (`<dir>/<file name>`, relative to the crate root so
+/// the goldens do not depend on the machine) and its text, and returns `Ok(())` if it loaded,
+/// else its rendered errors; these (or `succeeded`) are checked by [`check_failure`].
+#[allow(dead_code)] // used by the ui tests, not by every file that includes this one
+pub fn check_failing_input(
+    dir: &str,
+    stem: &str,
+    extension: &str,
+    succeeded: &str,
+    render: impl FnOnce(String, String) -> Result<(), String>,
+) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join(dir)
+        .join(format!("{stem}.{extension}"));
+    let text = std::fs::read_to_string(&path)
+        .unwrap_or_else(|error| panic!("cannot read {}: {error}", path.display()));
+    let actual = match render(format!("{dir}/{stem}.{extension}"), text) {
+        Ok(()) => succeeded.to_string(),
+        Err(errors) => errors,
+    };
+    check_failure(&path, &actual, succeeded);
+}
+
+/// Fails unless `listed` names exactly the inputs `<crate root>/<dir>/*.<extension>` and,
+/// unless blessing (which writes the missing ones, possibly after this has listed them),
+/// their golden `.stderr` files.
+#[allow(dead_code)] // used by the ui tests, not by every file that includes this one
+pub fn assert_lists_every_input_and_golden(
+    listed: &[&str],
+    dir: &str,
+    extension: &str,
+    list_in: &str,
+) {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join(dir);
+    assert_lists_every_file(listed, &dir, extension, list_in);
+    if !blessing() {
+        assert_lists_every_file(listed, &dir, "stderr", list_in);
+    }
+}
