@@ -32,6 +32,28 @@ pub struct Channel {
     pub output: String,
 }
 
+/// How the flexures' losses enter a frequency response, as an experiment file
+/// (`damping = "viscous"`) or `mech bode --damping` names it.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "snake_case")]
+pub enum Damping {
+    // Plain comments: `mech bode --help` says what each is in the option's own text.
+    // The complex stiffness `k(1 + iη)`, exact at every frequency.
+    #[default]
+    Hysteretic,
+    // The viscous dampers `b = kη/ω_ref` of the time-domain model.
+    Viscous,
+}
+
+impl From<Damping> for FlexureDamping {
+    fn from(damping: Damping) -> FlexureDamping {
+        match damping {
+            Damping::Hysteretic => FlexureDamping::Hysteretic,
+            Damping::Viscous => FlexureDamping::Viscous,
+        }
+    }
+}
+
 /// One point of a frequency response.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Point {

@@ -13,7 +13,7 @@ use mech_runtime::Model;
 
 use super::args::{frequency_value, ModelArgs};
 use super::Error;
-use crate::frequency::{self, ChirpSweep, Point};
+use crate::frequency::{self, ChirpSweep, Damping, Point};
 use crate::output;
 use crate::render::plot;
 
@@ -57,13 +57,6 @@ pub struct BodeArgs {
     pub plot: Option<PathBuf>,
 }
 
-/// `--damping` of `mech bode`.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Damping {
-    Hysteretic,
-    Viscous,
-}
-
 pub fn run(args: &BodeArgs) -> Result<(), Error> {
     let reads = (args.common).check_outputs(&[args.out.as_deref()], args.plot.as_deref())?;
     let (session, inputs) = args.common.open("bode")?;
@@ -81,10 +74,7 @@ pub fn run(args: &BodeArgs) -> Result<(), Error> {
     }
     let linear = session.linearization(&args.common.independent, &inputs)?;
     let frequencies = frequency::log_space(from, to, args.points);
-    let damping = match args.damping {
-        Damping::Hysteretic => mech_runtime::FlexureDamping::Hysteretic,
-        Damping::Viscous => mech_runtime::FlexureDamping::Viscous,
-    };
+    let damping = args.damping.into();
     let response = frequency::linear_response(&linear, input, output, &frequencies, damping)
         .ok_or(Error::SingularResponse)?;
     let chirp = if args.chirp {

@@ -42,7 +42,7 @@ pub use super::observations::Observations;
 use super::observations::{key_quantity, noise_value};
 use super::pendulum::{self, Pendulum, Screening};
 use crate::experiments::leg::{Dof, ForceTest, Leg, Sensor, WarmStarts};
-use crate::frequency::Channel;
+use crate::frequency::{Channel, Damping};
 use crate::session::ModelSpec;
 use crate::toml_file;
 
@@ -153,14 +153,6 @@ impl FrequencyResponse {
                 .collect(),
         }
     }
-}
-
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Damping {
-    #[default]
-    Hysteretic,
-    Viscous,
 }
 
 /// Model-form extensions that act in the prediction rather than through a model parameter.
@@ -468,8 +460,7 @@ impl FrequencyResponse {
                 exponent,
                 reference_hz: geometric_mean(frequencies),
             },
-            (None, Damping::Hysteretic) => FlexureDamping::Hysteretic,
-            (None, Damping::Viscous) => FlexureDamping::Viscous,
+            (None, damping) => damping.into(),
         };
         // Per channel: `rows` values of ln|H|, then `rows` phases (as observed).
         let mut predicted = Vec::with_capacity(measured.values.len());

@@ -17,10 +17,10 @@ use serde::Serialize;
 
 use super::data::MeasuredData;
 use super::experiment::{
-    Damping, Experiment, Extensions, ForceDeflectionTest, FrequencyResponse, Kind, QuasiStatic,
+    Experiment, Extensions, ForceDeflectionTest, FrequencyResponse, Kind, QuasiStatic,
 };
 use crate::experiments::leg::{Dof, Leg};
-use crate::frequency::Channel;
+use crate::frequency::{Channel, Damping};
 use crate::session::ModelSpec;
 
 /// A χ² above this separates two causes (3σ).
