@@ -1,0 +1,347 @@
+//! No circle among the files of a crate (issue #14): if `a.rs` uses `b.rs`, nothing `b.rs`
+//! uses, directly or through other files, uses `a.rs`. A circle means two files that cannot
+//! be read, tested or moved apart; layers stay layers only if this holds.
+//!
+//! Each source file is parsed with `syn`; a file uses another when a path in it (`use`
+//! items, types, expressions, patterns: every `syn::Path` outside test and doc-only items)
+//! names an item of the other's module, or of a module the other's `pub use` re-exports it
+//! from (`experiments::Error` is `experiments/error.rs`). `pub use` and `mod` lines are the
+//! module tree's own structure, not uses. Paths inside macro calls (`format!`, `matches!`)
+//! are not seen: a circle made only of those would be missed.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+use syn::visit::Visit;
+
+/// A module path inside the crate (`["experiments", "leg"]`), the crate root being `[]`.
+type Module = Vec<String>;
+
+/// Every `.rs` file below `root`, by module path.
+fn module_files(root: &Path) -> BTreeMap<Module, PathBuf> {
+    let mut files = BTreeMap::new();
+    let mut folders = vec![root.to_path_buf()];
+    while let Some(folder) = folders.pop() {
+        for entry in std::fs::read_dir(&folder).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                folders.push(path);
+            } else if path.extension().is_some_and(|x| x == "rs") {
+                let relative = path.strip_prefix(root).unwrap().with_extension("");
+                let mut module: Module = relative
+                    .components()
+                    .map(|c| c.as_os_str().to_string_lossy().into_owned())
+                    .collect();
+                if matches!(
+                    module.last().map(String::as_str),
+                    Some("mod" | "lib" | "main")
+                ) {
+                    module.pop();
+                }
+                files.insert(module, path);
+            }
+        }
+    }
+    files
+}
+
+/// Whether an item is compiled only for tests or documentation.
+fn test_or_doc_only(attributes: &[syn::Attribute]) -> bool {
+    attributes.iter().any(|attribute| {
+        attribute.path().is_ident("cfg") && {
+            let text = attribute.meta.require_list().map(|l| l.tokens.to_string());
+            matches!(text.as_deref(), Ok("test" | "doc"))
+        }
+    })
+}
+
+fn attributes(item: &syn::Item) -> &[syn::Attribute] {
+    match item {
+        syn::Item::Use(i) => &i.attrs,
+        syn::Item::Mod(i) => &i.attrs,
+        syn::Item::Fn(i) => &i.attrs,
+        syn::Item::Impl(i) => &i.attrs,
+        syn::Item::Struct(i) => &i.attrs,
+        syn::Item::Enum(i) => &i.attrs,
+        syn::Item::Const(i) => &i.attrs,
+        syn::Item::Static(i) => &i.attrs,
+        syn::Item::Trait(i) => &i.attrs,
+        syn::Item::Type(i) => &i.attrs,
+        syn::Item::Macro(i) => &i.attrs,
+        _ => &[],
+    }
+}
+
+/// The leaves of a `use` tree as paths (`a::{b, c::d}` → `a::b`, `a::c::d`); `self` leaves
+/// name the module itself, renames keep the original path.
+fn use_paths(tree: &syn::UseTree, prefix: &mut Vec<String>, out: &mut Vec<Vec<String>>) {
+    match tree {
+        syn::UseTree::Path(p) => {
+            prefix.push(p.ident.to_string());
+            use_paths(&p.tree, prefix, out);
+            prefix.pop();
+        }
+        syn::UseTree::Name(n) if n.ident == "self" => out.push(prefix.clone()),
+        syn::UseTree::Name(n) => out.push([prefix.clone(), vec![n.ident.to_string()]].concat()),
+        syn::UseTree::Rename(r) => out.push([prefix.clone(), vec![r.ident.to_string()]].concat()),
+        syn::UseTree::Glob(_) => out.push(prefix.clone()),
+        syn::UseTree::Group(g) => g.items.iter().for_each(|t| use_paths(t, prefix, out)),
+    }
+}
+
+/// The paths a file writes, outside `use` items (those are read apart).
+#[derive(Default)]
+struct Paths(Vec<Vec<String>>);
+
+impl<'a> Visit<'a> for Paths {
+    fn visit_path(&mut self, path: &'a syn::Path) {
+        self.0
+            .push(path.segments.iter().map(|s| s.ident.to_string()).collect());
+        syn::visit::visit_path(self, path);
+    }
+    fn visit_item_use(&mut self, _: &'a syn::ItemUse) {}
+    // `pub(crate)`, `pub(super)`: where an item is seen from, not a use.
+    fn visit_vis_restricted(&mut self, _: &'a syn::VisRestricted) {}
+    fn visit_item_mod(&mut self, module: &'a syn::ItemMod) {
+        if !test_or_doc_only(&module.attrs) {
+            syn::visit::visit_item_mod(self, module);
+        }
+    }
+}
+
+/// One parsed file: what it writes, and what it imports or re-exports.
+struct Source {
+    module: Module,
+    /// A `mod.rs`, `lib.rs` or `main.rs`: its `self` is its folder.
+    is_folder: bool,
+    uses: Vec<Vec<String>>,
+    reexports: Vec<Vec<String>>,
+    paths: Vec<Vec<String>>,
+}
+
+fn parse(module: &Module, path: &Path) -> Source {
+    let text = std::fs::read_to_string(path).unwrap();
+    let file = syn::parse_file(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let is_folder = matches!(
+        path.file_stem().and_then(|s| s.to_str()),
+        Some("mod" | "lib" | "main")
+    );
+    let (mut uses, mut reexports, mut paths) = (Vec::new(), Vec::new(), Paths::default());
+    for item in file
+        .items
+        .iter()
+        .filter(|i| !test_or_doc_only(attributes(i)))
+    {
+        match item {
+            syn::Item::Use(u) if matches!(u.vis, syn::Visibility::Inherited) => {
+                use_paths(&u.tree, &mut Vec::new(), &mut uses)
+            }
+            syn::Item::Use(u) => use_paths(&u.tree, &mut Vec::new(), &mut reexports),
+            item => paths.visit_item(item),
+        }
+    }
+    Source {
+        module: module.clone(),
+        is_folder,
+        uses,
+        reexports,
+        paths: paths.0,
+    }
+}
+
+/// The crate-absolute form of a path written in `source`, if it starts at `crate`, `self`,
+/// `super`, a module the file imported, or (in a folder's own file) a child module.
+fn absolute(
+    source: &Source,
+    path: &[String],
+    imported: &BTreeMap<String, Module>,
+    files: &BTreeMap<Module, PathBuf>,
+) -> Option<Module> {
+    let first = path.first()?;
+    // A file's module is its folder for `mod.rs`, so `self` and `super` count alike in both:
+    // in `a/b.rs` and in `a/b/mod.rs`, `self::x` is `a::b::x` and `super::x` is `a::x`.
+    let here = source.module.clone();
+    let rest = |n: usize| path[n..].to_vec();
+    Some(match first.as_str() {
+        "crate" => rest(1),
+        "self" => [here, rest(1)].concat(),
+        "super" => {
+            let supers = path.iter().take_while(|s| *s == "super").count();
+            let keep = source.module.len().checked_sub(supers)?;
+            [source.module[..keep].to_vec(), rest(supers)].concat()
+        }
+        name if imported.contains_key(name) => [imported[name].clone(), rest(1)].concat(),
+        name if source.is_folder
+            && files.contains_key(&[here.clone(), vec![name.into()]].concat()) =>
+        {
+            [here, path.to_vec()].concat()
+        }
+        _ => return None,
+    })
+}
+
+/// The file an absolute path lands in: its longest module prefix that is a file, or the
+/// file that module re-exports the next name from.
+fn file_of(
+    path: &[String],
+    files: &BTreeMap<Module, PathBuf>,
+    reexported: &BTreeMap<(Module, String), Module>,
+) -> Option<Module> {
+    (0..=path.len()).rev().find_map(|n| {
+        let module = path[..n].to_vec();
+        files.contains_key(&module).then(|| {
+            match path
+                .get(n)
+                .and_then(|next| reexported.get(&(module.clone(), next.clone())))
+            {
+                Some(child) => child.clone(),
+                None => module,
+            }
+        })
+    })
+}
+
+/// Which file uses which, over the crate whose sources are under `root`.
+fn uses_graph(root: &Path) -> BTreeMap<Module, BTreeSet<Module>> {
+    let files = module_files(root);
+    let sources: Vec<Source> = files.iter().map(|(m, p)| parse(m, p)).collect();
+    // `pub use …::Name` in a module: `module::Name` is in the file the path lands in.
+    // Twice, for a re-export of a re-export.
+    let mut reexported = BTreeMap::new();
+    for _ in 0..2 {
+        for source in &sources {
+            for path in &source.reexports {
+                let full = absolute(source, path, &BTreeMap::new(), &files);
+                if let Some(file) = full.and_then(|f| file_of(&f, &files, &reexported)) {
+                    let name = path.last().unwrap().clone();
+                    reexported.insert((source.module.clone(), name), file);
+                }
+            }
+        }
+    }
+    let mut graph = BTreeMap::new();
+    for source in &sources {
+        let none = BTreeMap::new();
+        let mut imported = BTreeMap::new();
+        let mut used = BTreeSet::new();
+        for path in &source.uses {
+            let Some(full) = absolute(source, path, &none, &files) else {
+                continue;
+            };
+            if files.contains_key(&full) {
+                imported.insert(full.last().cloned().unwrap_or_default(), full.clone());
+            }
+            used.extend(file_of(&full, &files, &reexported));
+        }
+        for path in &source.paths {
+            if let Some(full) = absolute(source, path, &imported, &files) {
+                used.extend(file_of(&full, &files, &reexported));
+            }
+        }
+        used.remove(&source.module);
+        graph.insert(source.module.clone(), used);
+    }
+    graph
+}
+
+/// A circle of the graph, as the files along it, if there is one.
+fn circle(graph: &BTreeMap<Module, BTreeSet<Module>>) -> Option<Vec<Module>> {
+    // Depth-first search; a use of a file still on the stack closes a circle.
+    fn visit(
+        node: &Module,
+        graph: &BTreeMap<Module, BTreeSet<Module>>,
+        stack: &mut Vec<Module>,
+        done: &mut BTreeSet<Module>,
+    ) -> Option<Vec<Module>> {
+        if let Some(start) = stack.iter().position(|m| m == node) {
+            return Some([&stack[start..], std::slice::from_ref(node)].concat());
+        }
+        if done.contains(node) {
+            return None;
+        }
+        stack.push(node.clone());
+        for next in graph.get(node).into_iter().flatten() {
+            if let Some(found) = visit(next, graph, stack, done) {
+                return Some(found);
+            }
+        }
+        stack.pop();
+        done.insert(node.clone());
+        None
+    }
+    let mut done = BTreeSet::new();
+    graph
+        .keys()
+        .find_map(|node| visit(node, graph, &mut Vec::new(), &mut done))
+}
+
+fn assert_no_circle(crate_sources: &str) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join(crate_sources);
+    let graph = uses_graph(&root);
+    assert!(graph.len() > 5, "{crate_sources}: too few files read");
+    if let Some(files) = circle(&graph) {
+        let shown: Vec<String> = files
+            .iter()
+            .map(|m| format!("{crate_sources}/{}", m.join("/")))
+            .collect();
+        panic!("a circle among the files: {}", shown.join(" → "));
+    }
+}
+
+#[test]
+fn no_circle_among_the_application_crates_files() {
+    assert_no_circle("src");
+}
+
+#[test]
+fn no_circle_among_the_runtimes_files() {
+    assert_no_circle("runtime/src");
+}
+
+#[test]
+fn no_circle_among_the_compilers_files() {
+    assert_no_circle("codegen/src");
+}
+
+/// The check sees a circle where there is one, through a re-export as the leg's errors were
+/// (`leg.rs` returned `experiments::Error`, which wrapped what wraps the leg's), and none in
+/// the same files once the error no longer wraps back.
+#[test]
+fn a_circle_through_a_reexport_is_found() {
+    let root = std::env::temp_dir().join(format!("mech-file-circles-{}", std::process::id()));
+    let write = |file: &str, text: &str| {
+        let path = root.join(file);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(path, text).unwrap();
+    };
+    write("lib.rs", "pub mod experiments;\npub mod sweep;\n");
+    write(
+        "experiments/mod.rs",
+        "pub mod error;\npub mod leg;\npub use error::Error;\n",
+    );
+    write(
+        "experiments/leg.rs",
+        "use super::Error;\npub struct Leg;\npub fn open() -> Result<Leg, Error> { Ok(Leg) }\n",
+    );
+    write(
+        "experiments/error.rs",
+        "pub enum Error { Sweep(Box<crate::sweep::Error>) }\n",
+    );
+    write(
+        "sweep.rs",
+        "use crate::experiments;\npub enum Error { Model(experiments::Error) }\n",
+    );
+    write("extra1.rs", "");
+    write("extra2.rs", "");
+    let graph = uses_graph(&root);
+    let found = circle(&graph).expect("the errors' circle");
+    let names: Vec<String> = found.iter().map(|m| m.join("/")).collect();
+    assert!(
+        names.contains(&"experiments/error".to_string()) && names.contains(&"sweep".to_string()),
+        "{names:?}"
+    );
+    // The leg's error no longer wrapped by what it wraps: no circle.
+    write("experiments/error.rs", "pub enum Error { Io }\n");
+    assert_eq!(circle(&uses_graph(&root)), None);
+    std::fs::remove_dir_all(&root).unwrap();
+}
