@@ -425,11 +425,8 @@ impl<'a> Lowerer<'a> {
         }
         let [axis, angle] = args.as_slice() else {
             self.error(
-                Diagnostic::error(
-                    "E0404",
-                    format!("`rotate` takes 2 arguments, found {}", args.len()),
-                )
-                .with_label(e.span, "expected `rotate(axis, angle)`"),
+                wrong_argument_count("rotate", "2 arguments", args.len())
+                    .with_label(e.span, "expected `rotate(axis, angle)`"),
             );
             return None;
         };
@@ -700,6 +697,12 @@ pub(super) fn missing_field(what: &str, name: &Ident, field: &str, help: &str) -
     Diagnostic::error("E0402", format!("{what} `{}` has no `{field}`", name.name))
         .with_label(name.span, format!("missing `{field} = ...;`"))
         .with_help(help)
+}
+
+/// E0404: a call with the wrong number of arguments; `takes` is what it takes (`2 arguments`,
+/// `1 or 2 arguments`). The caller labels the call with what a right one looks like.
+pub(super) fn wrong_argument_count(name: &str, takes: &str, found: usize) -> Diagnostic {
+    Diagnostic::error("E0404", format!("`{name}` takes {takes}, found {found}"))
 }
 
 /// Flattens `a * b * c` (through parentheses) into its factors, left to right.

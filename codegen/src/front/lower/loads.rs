@@ -9,7 +9,7 @@ use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, ExprKind, Ident};
 use crate::ir::{self, Dimension, Expr, Handle, JointKind, Vec3};
 
-use super::body::{missing_field, FrameRef, PointRef};
+use super::body::{missing_field, wrong_argument_count, FrameRef, PointRef};
 use super::expr::{unparen, Ctx, Expect, Typed};
 use super::names::Namespace;
 use super::Lowerer;
@@ -619,11 +619,8 @@ impl Lowerer<'_> {
     ) -> Option<PendingKind> {
         let [arg] = args else {
             self.error(
-                Diagnostic::error(
-                    "E0404",
-                    format!("`{}` takes 1 argument, found {}", function.name, args.len()),
-                )
-                .with_label(span, format!("expected `{}(point)`", function.name)),
+                wrong_argument_count(&function.name, "1 argument", args.len())
+                    .with_label(span, format!("expected `{}(point)`", function.name)),
             );
             return None;
         };
