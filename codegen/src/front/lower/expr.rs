@@ -92,18 +92,19 @@ pub struct Expect<'w> {
 }
 
 impl<'w> Expect<'w> {
+    pub fn new(dim: Dimension, what: &'w str, example: &'static str) -> Self {
+        Expect { dim, what, example }
+    }
+
     /// A mechanical quantity (no current) of dimension mass^m · length^l · time^t.
     pub fn mechanical(what: &'w str, example: &'static str, [mass, length, time]: [i8; 3]) -> Self {
-        Expect {
-            dim: Dimension {
-                mass,
-                length,
-                time,
-                current: 0,
-            },
-            what,
-            example,
-        }
+        let dim = Dimension {
+            mass,
+            length,
+            time,
+            current: 0,
+        };
+        Expect::new(dim, what, example)
     }
 }
 

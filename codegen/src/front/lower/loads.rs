@@ -212,21 +212,13 @@ impl Lowerer<'_> {
     }
 
     fn lower_gravity(&mut self, decl: &ast::GravityDecl) {
-        let expect = Expect {
-            dim: Dimension::ACCELERATION,
-            what: "`gravity`",
-            example: "[0, -9.81 m/s^2, 0]",
-        };
+        let expect = Expect::new(Dimension::ACCELERATION, "`gravity`", "[0, -9.81 m/s^2, 0]");
         self.model.gravity = self.lower_vector_as(&decl.value, Ctx::Static("gravity"), &expect);
     }
 
     fn lower_force(&mut self, decl: &ast::ForceDecl) {
         let point = self.resolve_point(&decl.point);
-        let expect = Expect {
-            dim: Dimension::FORCE,
-            what: "a force",
-            example: "[0, 1 mN, 0]",
-        };
+        let expect = Expect::new(Dimension::FORCE, "a force", "[0, 1 mN, 0]");
         let vector = self.load_vector(&decl.value, decl.frame.as_ref(), &expect);
         if let (Some(point), Some((components, frame))) = (point, vector) {
             self.loads.push(PendingLoad::Force {
@@ -250,11 +242,7 @@ impl Lowerer<'_> {
                 None
             }
         };
-        let expect = Expect {
-            dim: Dimension::TORQUE,
-            what: "a torque",
-            example: "[0, 0, 1 uN*m]",
-        };
+        let expect = Expect::new(Dimension::TORQUE, "a torque", "[0, 0, 1 uN*m]");
         let vector = self.load_vector(&decl.value, decl.frame.as_ref(), &expect);
         if let (Some(body), Some((components, frame))) = (body, vector) {
             self.loads.push(PendingLoad::Torque {

@@ -53,7 +53,7 @@ fn closure_expect(field: &'static str) -> Expect<'static> {
         "rest" => (Dimension::NONE, "`rest`", "0 deg"),
         _ => (Dimension::LENGTH, "`length`", "5 mm"),
     };
-    Expect { dim, what, example }
+    Expect::new(dim, what, example)
 }
 
 impl<'a> Lowerer<'a> {

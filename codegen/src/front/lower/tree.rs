@@ -693,11 +693,7 @@ impl<'a> Lowerer<'a> {
         let value = unparen(&field.value);
         match &value.kind {
             _ if is_vector(value) => {
-                let expect = Expect {
-                    dim: Dimension::LENGTH,
-                    what,
-                    example: "[0, 5 mm, 0]",
-                };
+                let expect = Expect::new(Dimension::LENGTH, what, "[0, 5 mm, 0]");
                 self.lower_vector_as(value, Ctx::Static("a joint point"), &expect)
             }
             ExprKind::Path(path) => {
