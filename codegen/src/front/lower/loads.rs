@@ -154,6 +154,18 @@ impl Lowerer<'_> {
             }
         }
         for item in items {
+            // Every kind of load is named in one namespace, declared before it is lowered.
+            let load_name = match item {
+                ast::Item::Force(decl) => Some(&decl.name),
+                ast::Item::Torque(decl) => Some(&decl.name),
+                ast::Item::Spring(decl) | ast::Item::Contact(decl) | ast::Item::Bushing(decl) => {
+                    Some(&decl.name)
+                }
+                _ => None,
+            };
+            if let Some(name) = load_name {
+                self.declare_in(&mut load_names, name, "the load");
+            }
             match item {
                 ast::Item::Gravity(decl) => {
                     if let Some(previous) = gravity {
@@ -171,26 +183,11 @@ impl Lowerer<'_> {
                     gravity = Some(decl.span);
                     self.lower_gravity(decl);
                 }
-                ast::Item::Force(decl) => {
-                    self.declare_in(&mut load_names, &decl.name, "the load");
-                    self.lower_force(decl);
-                }
-                ast::Item::Torque(decl) => {
-                    self.declare_in(&mut load_names, &decl.name, "the load");
-                    self.lower_torque(decl);
-                }
-                ast::Item::Spring(decl) => {
-                    self.declare_in(&mut load_names, &decl.name, "the load");
-                    self.lower_spring(decl);
-                }
-                ast::Item::Contact(decl) => {
-                    self.declare_in(&mut load_names, &decl.name, "the load");
-                    self.lower_contact(decl);
-                }
-                ast::Item::Bushing(decl) => {
-                    self.declare_in(&mut load_names, &decl.name, "the load");
-                    self.lower_bushing(decl);
-                }
+                ast::Item::Force(decl) => self.lower_force(decl),
+                ast::Item::Torque(decl) => self.lower_torque(decl),
+                ast::Item::Spring(decl) => self.lower_spring(decl),
+                ast::Item::Contact(decl) => self.lower_contact(decl),
+                ast::Item::Bushing(decl) => self.lower_bushing(decl),
                 ast::Item::Output(decl)
                     if self.declare_in(&mut output_names, &decl.name, "the output") =>
                 {
