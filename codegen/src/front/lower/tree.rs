@@ -565,15 +565,6 @@ impl<'a> Lowerer<'a> {
         if let Some(&(_, known)) = JOINT_KINDS.iter().find(|(name, _)| *name == kind.name) {
             return Some(known);
         }
-        let mut diagnostic = names::unknown(
-            "E0208",
-            "joint kind",
-            "joint kinds",
-            &kind.name,
-            kind.span,
-            &JOINT_KINDS.map(|(name, _)| name),
-            "not a joint kind",
-        );
         let synonym = match kind.name.as_str() {
             "revolute" | "hinge" => Some("pin"),
             "prismatic" => Some("slider"),
@@ -585,11 +576,8 @@ impl<'a> Lowerer<'a> {
             "plane" | "planar_joint" => Some("planar"),
             _ => None,
         };
-        if let Some(synonym) = synonym {
-            diagnostic =
-                diagnostic.with_help(format!("a {} joint is called `{synonym}` here", kind.name));
-        }
-        self.error(diagnostic);
+        let known = JOINT_KINDS.map(|(name, _)| name);
+        self.error(names::unknown_kind("joint", "joint", kind, &known, synonym));
         None
     }
 
