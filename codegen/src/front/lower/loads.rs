@@ -156,8 +156,7 @@ impl Lowerer<'_> {
         for item in items {
             // Every kind of load is named in one namespace, declared before it is lowered.
             let load_name = match item {
-                ast::Item::Force(decl) => Some(&decl.name),
-                ast::Item::Torque(decl) => Some(&decl.name),
+                ast::Item::Force(decl) | ast::Item::Torque(decl) => Some(&decl.name),
                 ast::Item::Spring(decl) | ast::Item::Contact(decl) | ast::Item::Bushing(decl) => {
                     Some(&decl.name)
                 }
@@ -213,8 +212,8 @@ impl Lowerer<'_> {
         self.model.gravity = self.lower_vector_as(&decl.value, Ctx::Static("gravity"), &expect);
     }
 
-    fn lower_force(&mut self, decl: &ast::ForceDecl) {
-        let point = self.resolve_point(&decl.point);
+    fn lower_force(&mut self, decl: &ast::VectorLoadDecl) {
+        let point = self.resolve_point(&decl.target);
         let expect = Expect::new(Dimension::FORCE, "a force", "[0, 1 mN, 0]");
         let vector = self.load_vector(&decl.value, decl.frame.as_ref(), &expect);
         if let (Some(point), Some((components, frame))) = (point, vector) {
@@ -227,13 +226,13 @@ impl Lowerer<'_> {
         }
     }
 
-    fn lower_torque(&mut self, decl: &ast::TorqueDecl) {
-        let body = match decl.body.segments.as_slice() {
+    fn lower_torque(&mut self, decl: &ast::VectorLoadDecl) {
+        let body = match decl.target.segments.as_slice() {
             [name] if name.name != "newtonian" => self.resolve_body(name),
             _ => {
                 self.error(
                     Diagnostic::error("E0213", "a torque acts on a body")
-                        .with_label(decl.body.span, "expected a body name")
+                        .with_label(decl.target.span, "expected a body name")
                         .with_help("write `torque NAME on BODY = [tx, ty, tz] in FRAME;`"),
                 );
                 None
