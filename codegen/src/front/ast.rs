@@ -52,8 +52,8 @@ pub enum Item {
     Contact(SpringDecl),
     /// `bushing NAME between FRAME and FRAME { fields }`: same shape as a spring.
     Bushing(SpringDecl),
-    Force(ForceDecl),
-    Torque(TorqueDecl),
+    Force(VectorLoadDecl),
+    Torque(VectorLoadDecl),
     Output(OutputDecl),
     Constraint(ConstraintDecl),
     /// `rolling NAME between CENTRE and PLANE_POINT { fields }`: same shape as a spring.
@@ -166,23 +166,14 @@ pub struct SpringDecl {
     pub span: Span,
 }
 
-/// `force NAME at POINT = VECTOR in FRAME;`
+/// `force NAME at POINT = VECTOR in FRAME;` (and `torque NAME on BODY = VECTOR in FRAME;`,
+/// of the same shape)
 #[derive(Clone, Debug, PartialEq)]
-pub struct ForceDecl {
+pub struct VectorLoadDecl {
     pub docs: Vec<String>,
     pub name: Ident,
-    pub point: Path,
-    pub value: Expr,
-    pub frame: Option<Path>,
-    pub span: Span,
-}
-
-/// `torque NAME on BODY = VECTOR in FRAME;`
-#[derive(Clone, Debug, PartialEq)]
-pub struct TorqueDecl {
-    pub docs: Vec<String>,
-    pub name: Ident,
-    pub body: Path,
+    /// The point a force acts at, or the body a torque acts on, as written.
+    pub target: Path,
     pub value: Expr,
     pub frame: Option<Path>,
     pub span: Span,

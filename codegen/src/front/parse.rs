@@ -130,8 +130,8 @@ fn build_item(pair: Pair<Rule>) -> Result<ast::Item> {
             Rule::spring_decl => Ok(ast::Item::Spring(two_point_decl(inner, docs)?)),
             Rule::contact_decl => Ok(ast::Item::Contact(two_point_decl(inner, docs)?)),
             Rule::bushing_decl => Ok(ast::Item::Bushing(two_point_decl(inner, docs)?)),
-            Rule::force_decl => force_decl(inner, docs),
-            Rule::torque_decl => torque_decl(inner, docs),
+            Rule::force_decl => Ok(ast::Item::Force(vector_load_decl(inner, docs)?)),
+            Rule::torque_decl => Ok(ast::Item::Torque(vector_load_decl(inner, docs)?)),
             Rule::output_decl => output_decl(inner, docs),
             Rule::constraint_decl => constraint_decl(inner, docs).map(ast::Item::Constraint),
             Rule::speed_decl => constraint_decl(inner, docs).map(ast::Item::Speed),
@@ -394,30 +394,19 @@ fn two_point_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::SpringDecl
     })
 }
 
-fn force_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
+/// `force NAME at POINT = VECTOR in FRAME;` or `torque NAME on BODY = VECTOR in FRAME;`.
+fn vector_load_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::VectorLoadDecl> {
     let mut parts = Parts::of(pair);
     let name = parts.ident()?;
-    parts.take(Rule::kw_at);
-    Ok(ast::Item::Force(ast::ForceDecl {
+    parts.take(Rule::kw_at); // a force's (a torque's `on` is punctuation)
+    Ok(ast::VectorLoadDecl {
         docs,
         name,
-        point: parts.path()?,
+        target: parts.path()?,
         value: parts.expr()?,
         frame: parts.frame_clause()?,
         span: parts.span,
-    }))
-}
-
-fn torque_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {
-    let mut parts = Parts::of(pair);
-    Ok(ast::Item::Torque(ast::TorqueDecl {
-        docs,
-        name: parts.ident()?,
-        body: parts.path()?,
-        value: parts.expr()?,
-        frame: parts.frame_clause()?,
-        span: parts.span,
-    }))
+    })
 }
 
 fn output_decl(pair: Pair<Rule>, docs: Vec<String>) -> Result<ast::Item> {

@@ -435,14 +435,23 @@ pub struct Quaternion {
     pub span: Span,
 }
 
+/// The angular speeds of a quaternion or a set of Euler angles: the measure numbers of the
+/// frame's angular velocity along its own x, y, z.
+const ANGULAR_SPEEDS: [&str; 3] = ["wx", "wy", "wz"];
+
+/// `NAME.part` for each part: the names of a joint's coordinates or speeds.
+fn member_names<const N: usize>(joint: &str, parts: [&str; N]) -> [String; N] {
+    parts.map(|part| format!("{joint}.{part}"))
+}
+
 impl Quaternion {
     /// Names of the four coordinates, scalar first.
     pub fn coordinate_names(&self) -> [String; 4] {
-        ["e0", "e1", "e2", "e3"].map(|part| format!("{}.{part}", self.name))
+        member_names(&self.name, ["e0", "e1", "e2", "e3"])
     }
     /// Names of the three angular speeds.
     pub fn speed_names(&self) -> [String; 3] {
-        ["wx", "wy", "wz"].map(|part| format!("{}.{part}", self.name))
+        member_names(&self.name, ANGULAR_SPEEDS)
     }
 }
 
@@ -470,11 +479,11 @@ pub struct EulerAngles {
 impl EulerAngles {
     /// Names of the three angles, in the order of the sequence.
     pub fn coordinate_names(&self) -> [String; 3] {
-        ["angle1", "angle2", "angle3"].map(|part| format!("{}.{part}", self.name))
+        member_names(&self.name, ["angle1", "angle2", "angle3"])
     }
     /// Names of the three angular speeds.
     pub fn speed_names(&self) -> [String; 3] {
-        ["wx", "wy", "wz"].map(|part| format!("{}.{part}", self.name))
+        member_names(&self.name, ANGULAR_SPEEDS)
     }
     /// `Cᵀ v` at the initial angles: components in the turned frame of `v`, given in the
     /// frame's placement (`C = R(a₁, q₁) R(a₂, q₂) R(a₃, q₃)`, each `R` by Rodrigues' formula).
@@ -527,11 +536,11 @@ pub struct Translation {
 impl Translation {
     /// Names of the three coordinates, along the joint frame's x, y, z.
     pub fn coordinate_names(&self) -> [String; 3] {
-        ["x", "y", "z"].map(|part| format!("{}.{part}", self.name))
+        member_names(&self.name, ["x", "y", "z"])
     }
     /// Names of the three speeds, along the child's x, y, z.
     pub fn speed_names(&self) -> [String; 3] {
-        ["vx", "vy", "vz"].map(|part| format!("{}.{part}", self.name))
+        member_names(&self.name, ["vx", "vy", "vz"])
     }
 }
 

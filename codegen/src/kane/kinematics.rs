@@ -321,13 +321,15 @@ fn root(model: &Model, pool: &mut ExprPool) -> FrameKinematics {
     }
 }
 
-/// The symbols of `N` consecutive coordinates from index `first`.
-fn coordinate_run<const N: usize>(pool: &mut ExprPool, first: usize) -> [ExprId; N] {
+/// The symbols of `N` consecutive coordinates from index `first` (a quaternion's `e₀ … e₃`
+/// from `model.quaternion_coordinate(q, 0)`, a set of Euler angles' `q₁ … q₃`).
+pub fn coordinate_run<const N: usize>(pool: &mut ExprPool, first: usize) -> [ExprId; N] {
     std::array::from_fn(|part| pool.symbol(Symbol::Coordinate((first + part) as u32)))
 }
 
-/// The symbols of three consecutive speeds from index `first`, with their indices.
-fn speed_run(pool: &mut ExprPool, first: usize) -> [(usize, ExprId); 3] {
+/// The symbols of three consecutive speeds from index `first`, with their indices (the
+/// angular speeds of a quaternion or a set of Euler angles).
+pub fn speed_run(pool: &mut ExprPool, first: usize) -> [(usize, ExprId); 3] {
     [0, 1, 2].map(|axis| {
         (
             first + axis,
@@ -336,52 +338,16 @@ fn speed_run(pool: &mut ExprPool, first: usize) -> [(usize, ExprId); 3] {
     })
 }
 
-/// The symbols `e₀ … e₃` of a quaternion.
-pub fn quaternion_symbols(
-    pool: &mut ExprPool,
-    model: &Model,
-    quaternion: Handle<ir::Quaternion>,
-) -> [ExprId; 4] {
-    coordinate_run(pool, model.quaternion_coordinate(quaternion, 0))
-}
-
-/// The speed symbols `u_i` of a quaternion's angular velocity, with their indices.
-pub fn angular_speed_symbols(
-    pool: &mut ExprPool,
-    model: &Model,
-    quaternion: Handle<ir::Quaternion>,
-) -> [(usize, ExprId); 3] {
-    speed_run(pool, model.angular_speed(quaternion, 0))
-}
-
-/// The symbols `q₁ … q₃` of a set of Euler angles.
-pub fn euler_symbols(
-    pool: &mut ExprPool,
-    model: &Model,
-    angles: Handle<ir::EulerAngles>,
-) -> [ExprId; 3] {
-    coordinate_run(pool, model.euler_coordinate(angles, 0))
-}
-
-/// The speed symbols `u_i` of a set of Euler angles' angular velocity, with their indices.
-pub fn euler_speed_symbols(
-    pool: &mut ExprPool,
-    model: &Model,
-    angles: Handle<ir::EulerAngles>,
-) -> [(usize, ExprId); 3] {
-    speed_run(pool, model.euler_speed(angles, 0))
-}
-
 /// `R`, the rotation of a spherical or free motion relative to its placement: `C(e)` of a
 /// quaternion, `R(a₁, q₁) R(a₂, q₂) R(a₃, q₃)` of Euler angles.
 pub fn joint_rotation(pool: &mut ExprPool, model: &Model, rotation: ir::Rotation) -> Mat3 {
     match rotation {
         ir::Rotation::Quaternion(quaternion) => {
-            let e = quaternion_symbols(pool, model, quaternion);
+            let e = coordinate_run(pool, model.quaternion_coordinate(quaternion, 0));
             vector::quaternion_rotation(pool, e)
         }
         ir::Rotation::Euler(angles) => {
-            let q = euler_symbols(pool, model, angles);
+            let q = coordinate_run(pool, model.euler_coordinate(angles, 0));
             vector::euler_rotation(pool, model.euler_angles[angles].sequence, q)
         }
     }
@@ -394,8 +360,8 @@ pub fn rotation_speed_symbols(
     rotation: ir::Rotation,
 ) -> [(usize, ExprId); 3] {
     match rotation {
-        ir::Rotation::Quaternion(quaternion) => angular_speed_symbols(pool, model, quaternion),
-        ir::Rotation::Euler(angles) => euler_speed_symbols(pool, model, angles),
+        ir::Rotation::Quaternion(quaternion) => speed_run(pool, model.angular_speed(quaternion, 0)),
+        ir::Rotation::Euler(angles) => speed_run(pool, model.euler_speed(angles, 0)),
     }
 }
 

@@ -158,18 +158,24 @@ fn bushing_offsets(
     [dx, dy, dz, tx, ty, tz]
 }
 
-/// The bushing's `[k…, c…]` per offset, in [`bushing_offsets`] order.
-fn bushing_laws(
+/// A bushing's six springs: each offset `s` ([`bushing_offsets`]) with its stiffness `k` and
+/// damping `c`. The laws are lowered before the offsets: the order fixes the pool's
+/// numbering, and with it the generated code.
+fn bushing_springs(
     pool: &mut ExprPool,
+    kinematics: &mut Kinematics,
+    frames: [ir::Handle<ir::Frame>; 2],
     stiffness: &[ir::Vec3; 2],
     damping: &[ir::Vec3; 2],
-) -> [[ExprId; 6]; 2] {
+) -> [(ExprId, ExprId, ExprId); 6] {
     let six = |pool: &mut ExprPool, v: &[ir::Vec3; 2]| {
         let [a, b, c] = kinematics::lower_vec(pool, &v[0]);
         let [d, e, f] = kinematics::lower_vec(pool, &v[1]);
         [a, b, c, d, e, f]
     };
-    [six(pool, stiffness), six(pool, damping)]
+    let (k, c) = (six(pool, stiffness), six(pool, damping));
+    let s = bushing_offsets(pool, kinematics, frames);
+    std::array::from_fn(|i| (s[i], k[i], c[i]))
 }
 
 impl Equations {
@@ -633,9 +639,7 @@ fn add_load(
             ..
         } => {
             // Q_r = −(k s + c ṡ) ∂ṡ/∂u_r for each offset s, as an angle spring's.
-            let [k, c] = bushing_laws(pool, stiffness, damping);
-            let offsets = bushing_offsets(pool, kinematics, *frames);
-            for ((s, k), c) in offsets.into_iter().zip(k).zip(c) {
+            for (s, k, c) in bushing_springs(pool, kinematics, *frames, stiffness, damping) {
                 let rate = rates.rate(pool, s);
                 let spring = pool.mul(k, s);
                 let damper = pool.mul(c, rate);
@@ -856,9 +860,7 @@ fn potential_energy(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Mo
                 ..
             } => {
                 // ½ Σ k s².
-                let [k, _] = bushing_laws(pool, stiffness, damping);
-                let offsets = bushing_offsets(pool, kinematics, *frames);
-                for (s, k) in offsets.into_iter().zip(k) {
+                for (s, k, _) in bushing_springs(pool, kinematics, *frames, stiffness, damping) {
                     let square = pool.pow(s, Number::int(2));
                     let energy = pool.mul(k, square);
                     terms.push(pool.scale(energy, Number::rational(1, 2)));

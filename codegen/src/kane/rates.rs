@@ -129,13 +129,13 @@ pub fn rates(pool: &mut ExprPool, model: &Model) -> Option<Vec<ExprId>> {
         .map(|i| pool.symbol(Symbol::Speed(i as u32)))
         .collect();
     for (quaternion, _) in model.quaternions.iter() {
-        let e = kinematics::quaternion_symbols(pool, model, quaternion);
-        let omega = kinematics::angular_speed_symbols(pool, model, quaternion).map(|(_, u)| u);
+        let e = kinematics::coordinate_run(pool, model.quaternion_coordinate(quaternion, 0));
+        let omega = kinematics::speed_run(pool, model.angular_speed(quaternion, 0)).map(|(_, u)| u);
         rates.extend(vector::quaternion_rates(pool, e, omega));
     }
     for (angles, rotation) in model.euler_angles.iter() {
-        let q = kinematics::euler_symbols(pool, model, angles);
-        let omega = kinematics::euler_speed_symbols(pool, model, angles).map(|(_, u)| u);
+        let q = kinematics::coordinate_run(pool, model.euler_coordinate(angles, 0));
+        let omega = kinematics::speed_run(pool, model.euler_speed(angles, 0)).map(|(_, u)| u);
         rates.extend(vector::euler_rates(pool, rotation.sequence, q, omega));
     }
     for (translation, _) in model.translations.iter() {

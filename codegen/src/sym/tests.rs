@@ -212,6 +212,14 @@ fn substitution_drops_vanishing_terms() {
     check_at_rest("(* q0 (^ u0 -1))", None);
 }
 
+/// Each s-expression of `texts`, parsed into `pool`.
+fn parsed(pool: &mut ExprPool, texts: &[&str]) -> Vec<ExprId> {
+    texts
+        .iter()
+        .map(|text| pool.parse_sexpr(text).unwrap())
+        .collect()
+}
+
 /// Every token of the printout but the brackets.
 fn printed_tokens(text: &str) -> u64 {
     text.replace(['(', ')'], " ").split_whitespace().count() as u64
@@ -220,16 +228,16 @@ fn printed_tokens(text: &str) -> u64 {
 #[test]
 fn printed_size_counts_the_printout_without_making_it() {
     let mut pool = ExprPool::new();
-    let roots: Vec<ExprId> = [
-        "(+ 1 (* 2 x) (* 3 (^ x 2) y) (sin q0))",
-        "(* -1/2 (cos q0) (^ u0 2) m)",
-        "(atan2 (* 2 q0) (- x))",
-        "(/ (+ x 1) (^ (+ y 2) 3))",
-        "x",
-    ]
-    .iter()
-    .map(|text| pool.parse_sexpr(text).unwrap())
-    .collect();
+    let roots = parsed(
+        &mut pool,
+        &[
+            "(+ 1 (* 2 x) (* 3 (^ x 2) y) (sin q0))",
+            "(* -1/2 (cos q0) (^ u0 2) m)",
+            "(atan2 (* 2 q0) (- x))",
+            "(/ (+ x 1) (^ (+ y 2) 3))",
+            "x",
+        ],
+    );
     for &root in &roots {
         let text = pool.sexpr(root);
         assert_eq!(pool.printed_size(&[root]), printed_tokens(&text), "{text}");
@@ -296,14 +304,14 @@ fn func_all_lists_every_function_in_declaration_order() {
 #[test]
 fn restricted_programs_compute_the_same_bits() {
     let mut pool = ExprPool::new();
-    let roots: Vec<ExprId> = [
-        "(* (sin q0) (+ u0 (cos q1)))",
-        "(+ (^ (sin q0) 3) (sqrt (+ 2 (* q1 q1))))",
-        "(atan2 (- u1 q0) (+ 1 (^ (cos q1) 2)))",
-    ]
-    .iter()
-    .map(|text| pool.parse_sexpr(text).unwrap())
-    .collect();
+    let roots = parsed(
+        &mut pool,
+        &[
+            "(* (sin q0) (+ u0 (cos q1)))",
+            "(+ (^ (sin q0) 3) (sqrt (+ 2 (* q1 q1))))",
+            "(atan2 (- u1 q0) (+ 1 (^ (cos q1) 2)))",
+        ],
+    );
     let program = Program::compile(&pool, &roots);
     let env = crate::back::tape::Env {
         t: 0.0,

@@ -868,18 +868,16 @@ impl<'a> Translation<'a> {
             out,
             "//! Gravity: a URDF gives none; 9.81 m/s^2 along -z, as Drake and ROS assume."
         );
-        if !self.snap_notes.is_empty() {
-            let _ = writeln!(out, "//! --snap: loop points that miss each other at the zero pose by round-off were moved:");
-            for note in &self.snap_notes {
-                let _ = writeln!(out, "//! - {note}.");
-            }
-        }
-        if !self.notes.is_empty() {
-            let _ = writeln!(out, "//! Not translated (also reported as warnings):");
-            for note in &self.notes {
-                let _ = writeln!(out, "//! - {note}.");
-            }
-        }
+        write_header_list(
+            out,
+            "--snap: loop points that miss each other at the zero pose by round-off were moved:",
+            &self.snap_notes,
+        );
+        write_header_list(
+            out,
+            "Not translated (also reported as warnings):",
+            &self.notes,
+        );
         let model_name = Identifiers::default().take(&robot.name);
         let _ = writeln!(out, "model {model_name};\n");
         let _ = writeln!(out, "gravity = [0, 0, -9.81 m/s^2];\n");
@@ -1305,6 +1303,18 @@ struct Members {
     of_link: Vec<Vec<String>>,
     joint_frames: Vec<Option<String>>,
     loop_frames: Vec<[Option<String>; 2]>,
+}
+
+/// A list in the model's header: `heading`, then `//! - note.` for each note; nothing
+/// without notes.
+fn write_header_list(out: &mut String, heading: &str, notes: &[String]) {
+    if notes.is_empty() {
+        return;
+    }
+    let _ = writeln!(out, "//! {heading}");
+    for note in notes {
+        let _ = writeln!(out, "//! - {note}.");
+    }
 }
 
 /// A loop closure's head, axis and points (the frames and springs follow).

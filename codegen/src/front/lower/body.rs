@@ -171,11 +171,7 @@ impl<'a> Lowerer<'a> {
         let static_ctx = Ctx::Static("a body property");
         let mass = match fields.iter().find(|f| f.name.name == "mass") {
             Some(field) => {
-                let expect = Expect {
-                    dim: Dimension::MASS,
-                    what: "`mass`",
-                    example: "10 g",
-                };
+                let expect = Expect::new(Dimension::MASS, "`mass`", "10 g");
                 match self.lower_scalar_as(&field.value, static_ctx, &expect) {
                     Some(mass) => {
                         let rule = Rule::Mass(mass.clone());
@@ -193,11 +189,7 @@ impl<'a> Lowerer<'a> {
         };
         let com = match fields.iter().find(|f| f.name.name == "com") {
             Some(field) => {
-                let expect = Expect {
-                    dim: LENGTH,
-                    what: "`com`",
-                    example: "[0, -5 mm, 0]",
-                };
+                let expect = Expect::new(LENGTH, "`com`", "[0, -5 mm, 0]");
                 self.lower_vector_as(&field.value, static_ctx, &expect)
                     .unwrap_or_else(zeros)
             }
@@ -234,11 +226,7 @@ impl<'a> Lowerer<'a> {
             );
             return None;
         }
-        let expect = Expect {
-            dim: Dimension::INERTIA,
-            what: "`inertia`",
-            example: "[1, 1, 2] * 1e-12 kg*m^2",
-        };
+        let expect = Expect::new(Dimension::INERTIA, "`inertia`", "[1, 1, 2] * 1e-12 kg*m^2");
         let ctx = Ctx::Static("a body property");
         let entries: Vec<Option<Expr>> = items
             .iter()
@@ -363,11 +351,7 @@ impl<'a> Lowerer<'a> {
 
     fn lower_point(&mut self, owner: usize, point: &ast::PointDecl) {
         let declared = self.declare_member(owner, &point.name, "the point or frame");
-        let expect = Expect {
-            dim: LENGTH,
-            what: "a point position",
-            example: "[0, -25 mm, 0]",
-        };
+        let expect = Expect::new(LENGTH, "a point position", "[0, -25 mm, 0]");
         let position =
             self.lower_vector_as(&point.position, Ctx::Static("a point position"), &expect);
         if declared {
@@ -387,11 +371,7 @@ impl<'a> Lowerer<'a> {
         };
         let origin = match &frame.origin {
             Some(e) => {
-                let expect = Expect {
-                    dim: LENGTH,
-                    what: "a frame origin",
-                    example: "[0, -25 mm, 0]",
-                };
+                let expect = Expect::new(LENGTH, "a frame origin", "[0, -25 mm, 0]");
                 self.lower_vector_as(e, Ctx::Static("a frame origin"), &expect)
                     .unwrap_or_else(zeros)
             }
@@ -425,20 +405,13 @@ impl<'a> Lowerer<'a> {
         }
         let [axis, angle] = args.as_slice() else {
             self.error(
-                Diagnostic::error(
-                    "E0404",
-                    format!("`rotate` takes 2 arguments, found {}", args.len()),
-                )
-                .with_label(e.span, "expected `rotate(axis, angle)`"),
+                wrong_argument_count("rotate", "2 arguments", args.len())
+                    .with_label(e.span, "expected `rotate(axis, angle)`"),
             );
             return None;
         };
         let axis = self.axis(axis, "a rotation axis");
-        let expect = Expect {
-            dim: Dimension::NONE,
-            what: "a rotation angle",
-            example: "30 deg",
-        };
+        let expect = Expect::new(Dimension::NONE, "a rotation angle", "30 deg");
         let angle = self.lower_scalar_as(angle, Ctx::Static("a rotation angle"), &expect);
         Some(AxisAngle {
             axis: axis?,
@@ -700,6 +673,12 @@ pub(super) fn missing_field(what: &str, name: &Ident, field: &str, help: &str) -
     Diagnostic::error("E0402", format!("{what} `{}` has no `{field}`", name.name))
         .with_label(name.span, format!("missing `{field} = ...;`"))
         .with_help(help)
+}
+
+/// E0404: a call with the wrong number of arguments; `takes` is what it takes (`2 arguments`,
+/// `1 or 2 arguments`). The caller labels the call with what a right one looks like.
+pub(super) fn wrong_argument_count(name: &str, takes: &str, found: usize) -> Diagnostic {
+    Diagnostic::error("E0404", format!("`{name}` takes {takes}, found {found}"))
 }
 
 /// Flattens `a * b * c` (through parentheses) into its factors, left to right.

@@ -138,11 +138,7 @@ fn expect(field: &'static str) -> Expect<'static> {
         "rated_voltage" | "voltage" => (VOLTAGE, "225 V"),
         _ => (Dimension::NONE, "1"),
     };
-    Expect {
-        dim,
-        what: field,
-        example,
-    }
+    Expect::new(dim, field, example)
 }
 
 fn mul(a: Expr, b: Expr) -> Expr {
@@ -580,11 +576,7 @@ impl<'a> Lowerer<'a> {
             return;
         };
         // `rest`: where the tip sits at zero voltage (a preload offsets it), a length.
-        let rest_expect = Expect {
-            dim: Dimension::LENGTH,
-            what: "rest",
-            example: "-50 um",
-        };
+        let rest_expect = Expect::new(Dimension::LENGTH, "rest", "-50 um");
         let rest = fields
             .iter()
             .find(|f| f.name.name == "rest")

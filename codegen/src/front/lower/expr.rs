@@ -10,6 +10,7 @@ use crate::front::units::{self, describe, dim_div, dim_mul, dim_pow, UnitError};
 use crate::ir::{self, Dimension, Expr, Function};
 use crate::sym::Number;
 
+use super::body::wrong_argument_count;
 use super::{names, Lowerer, Value};
 
 /// Largest expression (in nodes) and deepest tree accepted after inlining `let`s.
@@ -91,18 +92,19 @@ pub struct Expect<'w> {
 }
 
 impl<'w> Expect<'w> {
+    pub fn new(dim: Dimension, what: &'w str, example: &'static str) -> Self {
+        Expect { dim, what, example }
+    }
+
     /// A mechanical quantity (no current) of dimension mass^m · length^l · time^t.
     pub fn mechanical(what: &'w str, example: &'static str, [mass, length, time]: [i8; 3]) -> Self {
-        Expect {
-            dim: Dimension {
-                mass,
-                length,
-                time,
-                current: 0,
-            },
-            what,
-            example,
-        }
+        let dim = Dimension {
+            mass,
+            length,
+            time,
+            current: 0,
+        };
+        Expect::new(dim, what, example)
     }
 }
 
@@ -429,15 +431,7 @@ impl Lowerer<'_> {
         self.allow_state(ctx, function.span, "a distance between points")?;
         let [a, b] = args else {
             self.error(
-                Diagnostic::error(
-                    "E0404",
-                    format!(
-                        "`{}` takes 2 arguments, found {}",
-                        function.name,
-                        args.len()
-                    ),
-                )
-                .with_label(
+                wrong_argument_count(&function.name, "2 arguments", args.len()).with_label(
                     span,
                     format!("expected `{}(A, B)` of two points", function.name),
                 ),
@@ -586,17 +580,10 @@ impl Lowerer<'_> {
             } else {
                 "arguments"
             };
+            let takes = format!("{} {plural}", f.arity());
             self.error(
-                Diagnostic::error(
-                    "E0404",
-                    format!(
-                        "`{}` takes {} {plural}, found {}",
-                        f.name(),
-                        f.arity(),
-                        args.len()
-                    ),
-                )
-                .with_label(span, format!("expected {} {plural}", f.arity())),
+                wrong_argument_count(f.name(), &takes, args.len())
+                    .with_label(span, format!("expected {takes}")),
             );
             return None;
         }

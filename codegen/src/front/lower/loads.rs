@@ -9,7 +9,7 @@ use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, ExprKind, Ident};
 use crate::ir::{self, Dimension, Expr, Handle, JointKind, Vec3};
 
-use super::body::{missing_field, FrameRef, PointRef};
+use super::body::{missing_field, wrong_argument_count, FrameRef, PointRef};
 use super::expr::{unparen, Ctx, Expect, Typed};
 use super::names::Namespace;
 use super::Lowerer;
@@ -154,6 +154,17 @@ impl Lowerer<'_> {
             }
         }
         for item in items {
+            // Every kind of load is named in one namespace, declared before it is lowered.
+            let load_name = match item {
+                ast::Item::Force(decl) | ast::Item::Torque(decl) => Some(&decl.name),
+                ast::Item::Spring(decl) | ast::Item::Contact(decl) | ast::Item::Bushing(decl) => {
+                    Some(&decl.name)
+                }
+                _ => None,
+            };
+            if let Some(name) = load_name {
+                self.declare_in(&mut load_names, name, "the load");
+            }
             match item {
                 ast::Item::Gravity(decl) => {
                     if let Some(previous) = gravity {
@@ -171,26 +182,11 @@ impl Lowerer<'_> {
                     gravity = Some(decl.span);
                     self.lower_gravity(decl);
                 }
-                ast::Item::Force(decl) => {
-                    self.declare_in(&mut load_names, &decl.name, "the load");
-                    self.lower_force(decl);
-                }
-                ast::Item::Torque(decl) => {
-                    self.declare_in(&mut load_names, &decl.name, "the load");
-                    self.lower_torque(decl);
-                }
-                ast::Item::Spring(decl) => {
-                    self.declare_in(&mut load_names, &decl.name, "the load");
-                    self.lower_spring(decl);
-                }
-                ast::Item::Contact(decl) => {
-                    self.declare_in(&mut load_names, &decl.name, "the load");
-                    self.lower_contact(decl);
-                }
-                ast::Item::Bushing(decl) => {
-                    self.declare_in(&mut load_names, &decl.name, "the load");
-                    self.lower_bushing(decl);
-                }
+                ast::Item::Force(decl) => self.lower_force(decl),
+                ast::Item::Torque(decl) => self.lower_torque(decl),
+                ast::Item::Spring(decl) => self.lower_spring(decl),
+                ast::Item::Contact(decl) => self.lower_contact(decl),
+                ast::Item::Bushing(decl) => self.lower_bushing(decl),
                 ast::Item::Output(decl)
                     if self.declare_in(&mut output_names, &decl.name, "the output") =>
                 {
@@ -212,21 +208,13 @@ impl Lowerer<'_> {
     }
 
     fn lower_gravity(&mut self, decl: &ast::GravityDecl) {
-        let expect = Expect {
-            dim: Dimension::ACCELERATION,
-            what: "`gravity`",
-            example: "[0, -9.81 m/s^2, 0]",
-        };
+        let expect = Expect::new(Dimension::ACCELERATION, "`gravity`", "[0, -9.81 m/s^2, 0]");
         self.model.gravity = self.lower_vector_as(&decl.value, Ctx::Static("gravity"), &expect);
     }
 
-    fn lower_force(&mut self, decl: &ast::ForceDecl) {
-        let point = self.resolve_point(&decl.point);
-        let expect = Expect {
-            dim: Dimension::FORCE,
-            what: "a force",
-            example: "[0, 1 mN, 0]",
-        };
+    fn lower_force(&mut self, decl: &ast::VectorLoadDecl) {
+        let point = self.resolve_point(&decl.target);
+        let expect = Expect::new(Dimension::FORCE, "a force", "[0, 1 mN, 0]");
         let vector = self.load_vector(&decl.value, decl.frame.as_ref(), &expect);
         if let (Some(point), Some((components, frame))) = (point, vector) {
             self.loads.push(PendingLoad::Force {
@@ -238,23 +226,19 @@ impl Lowerer<'_> {
         }
     }
 
-    fn lower_torque(&mut self, decl: &ast::TorqueDecl) {
-        let body = match decl.body.segments.as_slice() {
+    fn lower_torque(&mut self, decl: &ast::VectorLoadDecl) {
+        let body = match decl.target.segments.as_slice() {
             [name] if name.name != "newtonian" => self.resolve_body(name),
             _ => {
                 self.error(
                     Diagnostic::error("E0213", "a torque acts on a body")
-                        .with_label(decl.body.span, "expected a body name")
+                        .with_label(decl.target.span, "expected a body name")
                         .with_help("write `torque NAME on BODY = [tx, ty, tz] in FRAME;`"),
                 );
                 None
             }
         };
-        let expect = Expect {
-            dim: Dimension::TORQUE,
-            what: "a torque",
-            example: "[0, 0, 1 uN*m]",
-        };
+        let expect = Expect::new(Dimension::TORQUE, "a torque", "[0, 0, 1 uN*m]");
         let vector = self.load_vector(&decl.value, decl.frame.as_ref(), &expect);
         if let (Some(body), Some((components, frame))) = (body, vector) {
             self.loads.push(PendingLoad::Torque {
@@ -619,11 +603,8 @@ impl Lowerer<'_> {
     ) -> Option<PendingKind> {
         let [arg] = args else {
             self.error(
-                Diagnostic::error(
-                    "E0404",
-                    format!("`{}` takes 1 argument, found {}", function.name, args.len()),
-                )
-                .with_label(span, format!("expected `{}(point)`", function.name)),
+                wrong_argument_count(&function.name, "1 argument", args.len())
+                    .with_label(span, format!("expected `{}(point)`", function.name)),
             );
             return None;
         };

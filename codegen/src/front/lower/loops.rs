@@ -53,7 +53,7 @@ fn closure_expect(field: &'static str) -> Expect<'static> {
         "rest" => (Dimension::NONE, "`rest`", "0 deg"),
         _ => (Dimension::LENGTH, "`length`", "5 mm"),
     };
-    Expect { dim, what, example }
+    Expect::new(dim, what, example)
 }
 
 impl<'a> Lowerer<'a> {
@@ -131,27 +131,18 @@ impl<'a> Lowerer<'a> {
         if let Some(&known) = LOOP_KINDS.iter().find(|&&k| k == kind.name) {
             return Some(known);
         }
-        let mut diagnostic = names::unknown(
-            "E0208",
-            "loop kind",
-            "loop kinds",
-            &kind.name,
-            kind.span,
-            &LOOP_KINDS,
-            "not a loop kind",
-        );
         let synonym = match kind.name.as_str() {
             "pin" | "hinge" | "continuous" => Some("revolute"),
             "point" | "spherical" | "ball" => Some("coincident"),
             _ => None,
         };
-        if let Some(synonym) = synonym {
-            diagnostic = diagnostic.with_help(format!(
-                "a {} closure is called `{synonym}` here",
-                kind.name
-            ));
-        }
-        self.error(diagnostic);
+        self.error(names::unknown_kind(
+            "loop",
+            "closure",
+            kind,
+            &LOOP_KINDS,
+            synonym,
+        ));
         None
     }
 

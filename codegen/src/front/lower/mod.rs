@@ -336,48 +336,54 @@ impl<'a> Lowerer<'a> {
     }
 
     fn lower_param(&mut self, decl: &ast::ValueDecl) {
-        let declared = self.declare_value(&decl.name);
-        let ctx = expr::Ctx::Constant("a param value");
-        let lowered = self.lower_constant(&decl.value, ctx);
-        let (value, dimension) = match lowered {
-            Some((number, dimension)) => (number.to_f64(), dimension),
-            None => (0.0, ir::Dimension::NONE),
-        };
-        let handle = self.model.params.append(ir::Param {
-            name: decl.name.name.clone(),
-            value,
-            dimension,
-            docs: decl.docs.clone(),
-            span: decl.name.span,
+        self.lower_constant_decl(decl, "a param value", |this, value, dimension| {
+            let handle = this.model.params.append(ir::Param {
+                name: decl.name.name.clone(),
+                value,
+                dimension,
+                docs: decl.docs.clone(),
+                span: decl.name.span,
+            });
+            this.param_values.push(value);
+            Value::Param(handle)
         });
-        self.param_values.push(value);
-        if declared {
-            let value = match lowered {
-                Some(_) => Value::Param(handle),
-                None => Value::Failed,
-            };
-            self.values.insert(decl.name.name.clone(), value);
-        }
     }
 
     fn lower_input(&mut self, decl: &ast::ValueDecl) {
+        self.lower_constant_decl(
+            decl,
+            "an input's default value",
+            |this, default, dimension| {
+                Value::Input(this.model.inputs.append(ir::Input {
+                    name: decl.name.name.clone(),
+                    default,
+                    dimension,
+                    docs: decl.docs.clone(),
+                    span: decl.name.span,
+                }))
+            },
+        );
+    }
+
+    /// A param or input: its name declared, its value folded to a number (0, dimensionless,
+    /// where it does not fold, so that lowering goes on), `add` puts it in the model, and the
+    /// name stands for what `add` returns (a failed value where the value did not fold).
+    fn lower_constant_decl(
+        &mut self,
+        decl: &ast::ValueDecl,
+        what: &'static str,
+        add: impl FnOnce(&mut Self, f64, ir::Dimension) -> Value,
+    ) {
         let declared = self.declare_value(&decl.name);
-        let ctx = expr::Ctx::Constant("an input's default value");
-        let lowered = self.lower_constant(&decl.value, ctx);
-        let (default, dimension) = match lowered {
+        let lowered = self.lower_constant(&decl.value, expr::Ctx::Constant(what));
+        let (number, dimension) = match lowered {
             Some((number, dimension)) => (number.to_f64(), dimension),
             None => (0.0, ir::Dimension::NONE),
         };
-        let handle = self.model.inputs.append(ir::Input {
-            name: decl.name.name.clone(),
-            default,
-            dimension,
-            docs: decl.docs.clone(),
-            span: decl.name.span,
-        });
+        let value = add(self, number, dimension);
         if declared {
             let value = match lowered {
-                Some(_) => Value::Input(handle),
+                Some(_) => value,
                 None => Value::Failed,
             };
             self.values.insert(decl.name.name.clone(), value);

@@ -78,6 +78,33 @@ pub fn unknown(
     }
 }
 
+/// E0208: `kind` is not a known `joint` or `loop` kind (`of`), with the name used here as help
+/// where `synonym` is it: what other tools call a `thing` (`joint`, `closure`) of that kind.
+pub fn unknown_kind(
+    of: &str,
+    thing: &str,
+    kind: &Ident,
+    known: &[&str],
+    synonym: Option<&str>,
+) -> Diagnostic {
+    let diagnostic = unknown(
+        "E0208",
+        &format!("{of} kind"),
+        &format!("{of} kinds"),
+        &kind.name,
+        kind.span,
+        known,
+        &format!("not a {of} kind"),
+    );
+    match synonym {
+        Some(synonym) => diagnostic.with_help(format!(
+            "a {} {thing} is called `{synonym}` here",
+            kind.name
+        )),
+        None => diagnostic,
+    }
+}
+
 /// Up to 12 names, comma separated.
 pub fn list(names: &[&str]) -> String {
     const SHOWN: usize = 12;

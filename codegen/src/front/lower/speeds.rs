@@ -17,6 +17,7 @@ use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, ExprKind};
 use crate::ir::{self, Dimension};
 
+use super::body::wrong_argument_count;
 use super::expr::unparen;
 use super::velocity::{DegreeErrors, LinearScalar};
 use super::Lowerer;
@@ -143,11 +144,8 @@ impl Lowerer<'_> {
                 false => "expected `velocity(point)`",
             };
             self.error(
-                Diagnostic::error(
-                    "E0404",
-                    format!("`{}` takes 1 argument, found {}", function.name, args.len()),
-                )
-                .with_label(decl.head.value.span, expected),
+                wrong_argument_count(&function.name, "1 argument", args.len())
+                    .with_label(decl.head.value.span, expected),
             );
             return None;
         };

@@ -565,15 +565,6 @@ impl<'a> Lowerer<'a> {
         if let Some(&(_, known)) = JOINT_KINDS.iter().find(|(name, _)| *name == kind.name) {
             return Some(known);
         }
-        let mut diagnostic = names::unknown(
-            "E0208",
-            "joint kind",
-            "joint kinds",
-            &kind.name,
-            kind.span,
-            &JOINT_KINDS.map(|(name, _)| name),
-            "not a joint kind",
-        );
         let synonym = match kind.name.as_str() {
             "revolute" | "hinge" => Some("pin"),
             "prismatic" => Some("slider"),
@@ -585,11 +576,8 @@ impl<'a> Lowerer<'a> {
             "plane" | "planar_joint" => Some("planar"),
             _ => None,
         };
-        if let Some(synonym) = synonym {
-            diagnostic =
-                diagnostic.with_help(format!("a {} joint is called `{synonym}` here", kind.name));
-        }
-        self.error(diagnostic);
+        let known = JOINT_KINDS.map(|(name, _)| name);
+        self.error(names::unknown_kind("joint", "joint", kind, &known, synonym));
         None
     }
 
@@ -693,11 +681,7 @@ impl<'a> Lowerer<'a> {
         let value = unparen(&field.value);
         match &value.kind {
             _ if is_vector(value) => {
-                let expect = Expect {
-                    dim: Dimension::LENGTH,
-                    what,
-                    example: "[0, 5 mm, 0]",
-                };
+                let expect = Expect::new(Dimension::LENGTH, what, "[0, 5 mm, 0]");
                 self.lower_vector_as(value, Ctx::Static("a joint point"), &expect)
             }
             ExprKind::Path(path) => {

@@ -16,6 +16,7 @@ use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, BinaryOp, ExprKind};
 use crate::ir::{self, Dimension};
 
+use super::body::wrong_argument_count;
 use super::expr::{unparen, Ctx};
 use super::Lowerer;
 
@@ -126,11 +127,7 @@ impl Lowerer<'_> {
             [point, body] => (point, Some(body)),
             _ => {
                 self.error(
-                    Diagnostic::error(
-                        "E0404",
-                        format!("`velocity` takes 1 or 2 arguments, found {}", args.len()),
-                    )
-                    .with_label(
+                    wrong_argument_count("velocity", "1 or 2 arguments", args.len()).with_label(
                         decl.head.value.span,
                         "expected `velocity(point)` or `velocity(point, body)`",
                     ),
