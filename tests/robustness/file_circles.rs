@@ -8,6 +8,12 @@
 //! from (`experiments::Error` is `experiments/error.rs`). `pub use` and `mod` lines are the
 //! module tree's own structure, not uses. Paths inside macro calls (`format!`, `matches!`)
 //! are not seen: a circle made only of those would be missed.
+//!
+//! `src/` and `runtime/src` hold to it strictly. In `codegen/src` a file may also use its own
+//! folder's `mod.rs`, the module it is declared in: the front end's `Lowerer` and Kane's
+//! `derive` are one type and one function whose parts live in the folder's files (each file
+//! an `impl Lowerer` or a group of terms), which name the parent's state while the parent
+//! calls them. Every other use there is one-way too.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -275,9 +281,21 @@ fn circle(graph: &BTreeMap<Module, BTreeSet<Module>>) -> Option<Vec<Module>> {
         .find_map(|node| visit(node, graph, &mut Vec::new(), &mut done))
 }
 
-fn assert_no_circle(crate_sources: &str) {
+/// Whether a file may use its own folder's `mod.rs` (see the module's text).
+#[derive(Clone, Copy, PartialEq)]
+enum Parents {
+    Counted,
+    Allowed,
+}
+
+fn assert_no_circle(crate_sources: &str, parents: Parents) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join(crate_sources);
-    let graph = uses_graph(&root);
+    let mut graph = uses_graph(&root);
+    if parents == Parents::Allowed {
+        for (file, used) in graph.iter_mut() {
+            used.remove(&file[..file.len().saturating_sub(1)].to_vec());
+        }
+    }
     assert!(graph.len() > 5, "{crate_sources}: too few files read");
     if let Some(files) = circle(&graph) {
         let shown: Vec<String> = files
@@ -290,17 +308,17 @@ fn assert_no_circle(crate_sources: &str) {
 
 #[test]
 fn no_circle_among_the_application_crates_files() {
-    assert_no_circle("src");
+    assert_no_circle("src", Parents::Counted);
 }
 
 #[test]
 fn no_circle_among_the_runtimes_files() {
-    assert_no_circle("runtime/src");
+    assert_no_circle("runtime/src", Parents::Counted);
 }
 
 #[test]
 fn no_circle_among_the_compilers_files() {
-    assert_no_circle("codegen/src");
+    assert_no_circle("codegen/src", Parents::Allowed);
 }
 
 /// The check sees a circle where there is one, through a re-export as the leg's errors were

@@ -6,6 +6,10 @@
 
 use crate::diag::Span;
 
+/// Largest expression (in nodes) accepted after inlining `let`s: a limit of the language the
+/// parser checks on a statement's operators and the lowering on the inlined expression.
+pub const MAX_SIZE: usize = 100_000;
+
 /// An identifier with its place in the source.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Ident {

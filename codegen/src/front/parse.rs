@@ -8,8 +8,8 @@
 use pest::iterators::Pair;
 use pest::Parser as _;
 
+use super::ast::MAX_SIZE;
 use super::ast::{self, BinaryOp, Expr, ExprKind, Ident};
-use super::lower::MAX_SIZE;
 use crate::diag::{Diagnostic, SourceFile, Span};
 
 #[derive(pest_derive::Parser)]

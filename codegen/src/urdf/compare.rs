@@ -20,7 +20,7 @@ pub fn compare(
     robot: &Robot,
     other: &Robot,
     other_file: &Arc<SourceFile>,
-    units: &super::Units,
+    units: &super::options::Units,
 ) -> Vec<Diagnostic> {
     let mut warnings = Vec::new();
     for link in &robot.links {

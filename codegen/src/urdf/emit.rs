@@ -10,10 +10,10 @@
 use std::fmt::Write;
 use std::sync::Arc;
 
+use super::options::{Base, Import, Options};
 use super::pose::{self, Axis, Vec3};
 use super::read::{float_literal, ForceKind, LinearSpring, LoopJoint, Num, Robot, SkippedKind};
 use super::tree::{listing, rotation, values, Tree};
-use super::{Base, Import, Options};
 use crate::diag::{self, Diagnostic, Errors, SourceFile, Span};
 use crate::front::DECLARATION_KEYWORDS;
 

@@ -11,7 +11,7 @@ use crate::ir::plausible::Rule;
 use crate::ir::{self, AxisAngle, Dimension, Expr, Handle, Vec3};
 use crate::sym::Number;
 
-use super::expr::{is_vector, unparen, Ctx, Expect};
+use super::expr::{is_vector, unparen, wrong_argument_count, Ctx, Expect};
 use super::names::{self, Namespace};
 use super::Lowerer;
 
@@ -673,12 +673,6 @@ pub(super) fn missing_field(what: &str, name: &Ident, field: &str, help: &str) -
     Diagnostic::error("E0402", format!("{what} `{}` has no `{field}`", name.name))
         .with_label(name.span, format!("missing `{field} = ...;`"))
         .with_help(help)
-}
-
-/// E0404: a call with the wrong number of arguments; `takes` is what it takes (`2 arguments`,
-/// `1 or 2 arguments`). The caller labels the call with what a right one looks like.
-pub(super) fn wrong_argument_count(name: &str, takes: &str, found: usize) -> Diagnostic {
-    Diagnostic::error("E0404", format!("`{name}` takes {takes}, found {found}"))
 }
 
 /// Flattens `a * b * c` (through parentheses) into its factors, left to right.

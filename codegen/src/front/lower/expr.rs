@@ -5,17 +5,21 @@
 //! where possible) with their dimension; `E02xx`/`E03xx`/`E04xx` diagnostics.
 
 use crate::diag::{Diagnostic, Span};
-use crate::front::ast::{self, BinaryOp, ExprKind};
+use crate::front::ast::{self, BinaryOp, ExprKind, MAX_SIZE};
 use crate::front::units::{self, describe, dim_div, dim_mul, dim_pow, UnitError};
 use crate::ir::{self, Dimension, Expr, Function};
 use crate::sym::Number;
 
-use super::body::wrong_argument_count;
 use super::{names, Lowerer, Value};
 
-/// Largest expression (in nodes) and deepest tree accepted after inlining `let`s.
-pub(in crate::front) const MAX_SIZE: usize = 100_000;
+/// Deepest expression tree accepted after inlining `let`s (the largest: [`MAX_SIZE`]).
 const MAX_DEPTH: usize = 400;
+
+/// E0404: a call with the wrong number of arguments; `takes` is what it takes (`2 arguments`,
+/// `1 or 2 arguments`). The caller labels the call with what a right one looks like.
+pub(super) fn wrong_argument_count(name: &str, takes: &str, found: usize) -> Diagnostic {
+    Diagnostic::error("E0404", format!("`{name}` takes {takes}, found {found}"))
+}
 
 /// What an expression may refer to.
 #[derive(Clone, Copy, Debug)]

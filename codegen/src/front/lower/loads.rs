@@ -9,7 +9,8 @@ use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, ExprKind, Ident};
 use crate::ir::{self, Dimension, Expr, Handle, JointKind, Vec3};
 
-use super::body::{missing_field, wrong_argument_count, FrameRef, PointRef};
+use super::body::{missing_field, FrameRef, PointRef};
+use super::expr::wrong_argument_count;
 use super::expr::{unparen, Ctx, Expect, Typed};
 use super::names::Namespace;
 use super::Lowerer;

@@ -22,8 +22,6 @@ mod speeds;
 mod tree;
 mod velocity;
 
-pub(super) use expr::MAX_SIZE;
-
 use std::collections::BTreeMap;
 use std::sync::Arc;
 

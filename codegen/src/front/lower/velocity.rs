@@ -16,7 +16,7 @@ use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, BinaryOp, ExprKind};
 use crate::ir::{self, Dimension};
 
-use super::body::wrong_argument_count;
+use super::expr::wrong_argument_count;
 use super::expr::{unparen, Ctx};
 use super::Lowerer;
 
