@@ -9,7 +9,7 @@
 //!
 //! Typed errors of lower layers are kept as they are ([`session::Error`], [`DataError`],
 //! [`LmError`], [`TransformError`], [`RuntimeError`], codegen's [`Errors`], the HAMR leg's
-//! [`experiments::Error`], codegen's [`QuantityError`]).
+//! [`leg::Error`], codegen's [`QuantityError`]).
 
 use std::fmt;
 use std::path::PathBuf;

@@ -1,8 +1,9 @@
-//! Why an experiment cannot run: the errors of the HAMR experiments and of the leg they
-//! drive, each naming the file, key, model or part of the experiment it concerns.
+//! Why an experiment cannot run: the errors of the HAMR experiments, each naming the file,
+//! key, model or part of the experiment it concerns.
 //!
-//! Consumes: the typed errors of the layers below ([`session::Error`], [`RuntimeError`],
-//! [`PlotError`], [`RefineError`], [`TomlError`]). Produces: [`Error`], whose `Display` is the message users read.
+//! Consumes: the typed errors of the layers below ([`leg::Error`] of the leg they drive,
+//! [`session::Error`], [`RuntimeError`], [`PlotError`], [`RefineError`], [`TomlError`], and
+//! those of the diagnosis and the study that two kinds run). Produces: [`Error`], whose `Display` is the message users read.
 
 use std::fmt;
 use std::path::PathBuf;

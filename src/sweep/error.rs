@@ -1,7 +1,7 @@
 //! Why a study cannot run, and why one of its samples has no outputs.
 //!
-//! Consumes: the typed errors of the layers below (experiments, session, quantities, the
-//! sampler). Produces: [`Error`], naming the study file, the key and its line, and
+//! Consumes: the typed errors of the layers below (the leg the outputs are computed on,
+//! session, quantities, resonance refinement, the sampler). Produces: [`Error`], naming the study file, the key and its line, and
 //! [`SampleError`], kept in the table beside the failed sample.
 
 use std::fmt;
