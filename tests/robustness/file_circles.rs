@@ -5,9 +5,11 @@
 //! Each source file is parsed with `syn`; a file uses another when a path in it (`use`
 //! items, types, expressions, patterns: every `syn::Path` outside test and doc-only items)
 //! names an item of the other's module, or of a module the other's `pub use` re-exports it
-//! from (`experiments::Error` is `experiments/error.rs`). `pub use` and `mod` lines are the
-//! module tree's own structure, not uses. Paths inside macro calls (`format!`, `matches!`)
-//! are not seen: a circle made only of those would be missed.
+//! from (`experiments::Error` is `experiments/error.rs`). A `pub use` is a use of what it
+//! re-exports, but for a folder's face: `mod.rs` (or `lib.rs`) re-exporting its own files'
+//! items, which those files may use, is the module tree's structure, as its `mod` lines are.
+//! Paths inside macro calls (`format!`, `matches!`) are not seen: a circle made only of those
+//! would be missed.
 //!
 //! `src/` and `runtime/src` hold to it strictly. In `codegen/src` a file may also use its own
 //! folder's `mod.rs`, the module it is declared in: the front end's `Lowerer` and Kane's
@@ -230,7 +232,14 @@ fn uses_graph(root: &Path) -> BTreeMap<Module, BTreeSet<Module>> {
         let none = BTreeMap::new();
         let mut imported = BTreeMap::new();
         let mut used = BTreeSet::new();
-        for path in &source.uses {
+        // A re-export names what it re-exports: a use like any other, but for a folder's
+        // face (`mod.rs` re-exporting its own files' items, which those files may use).
+        let own_child = |path: &&Vec<String>| {
+            source.is_folder
+                && files.contains_key(&[source.module.clone(), vec![path[0].clone()]].concat())
+        };
+        let reexports = source.reexports.iter().filter(|p| !own_child(p));
+        for path in source.uses.iter().chain(reexports) {
             let Some(full) = absolute(source, path, &none, &files) else {
                 continue;
             };
@@ -349,8 +358,6 @@ fn a_circle_through_a_reexport_is_found() {
         "sweep.rs",
         "use crate::experiments;\npub enum Error { Model(experiments::Error) }\n",
     );
-    write("extra1.rs", "");
-    write("extra2.rs", "");
     let graph = uses_graph(&root);
     let found = circle(&graph).expect("the errors' circle");
     let names: Vec<String> = found.iter().map(|m| m.join("/")).collect();
@@ -361,5 +368,18 @@ fn a_circle_through_a_reexport_is_found() {
     // The leg's error no longer wrapped by what it wraps: no circle.
     write("experiments/error.rs", "pub enum Error { Io }\n");
     assert_eq!(circle(&uses_graph(&root)), None);
+    // A re-export outside a folder's face is a use: back to a circle through it alone.
+    write(
+        "experiments/error.rs",
+        "pub enum Error { Sweep(Box<crate::sweep::Error>) }\n",
+    );
+    write(
+        "sweep.rs",
+        "pub use crate::experiments::leg::Leg;\npub enum Error { Io }\n",
+    );
+    assert!(
+        circle(&uses_graph(&root)).is_some(),
+        "the re-export's circle"
+    );
     std::fs::remove_dir_all(&root).unwrap();
 }
