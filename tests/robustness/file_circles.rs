@@ -158,7 +158,8 @@ fn parse(module: &Module, path: &Path) -> Source {
 }
 
 /// The crate-absolute form of a path written in `source`, if it starts at `crate`, `self`,
-/// `super`, a module the file imported, or (in a folder's own file) a child module.
+/// `super`, a module the file imported, or (in a folder's own file) a child module named
+/// with what follows it.
 fn absolute(
     source: &Source,
     path: &[String],
@@ -179,7 +180,10 @@ fn absolute(
             [source.module[..keep].to_vec(), rest(supers)].concat()
         }
         name if imported.contains_key(name) => [imported[name].clone(), rest(1)].concat(),
+        // A lone name is a value or a type, never the module: `match hinge` in
+        // `transform/mod.rs` is a variable, not `transform/hinge.rs`.
         name if source.is_folder
+            && path.len() > 1
             && files.contains_key(&[here.clone(), vec![name.into()]].concat()) =>
         {
             [here, path.to_vec()].concat()
@@ -381,5 +385,33 @@ fn a_circle_through_a_reexport_is_found() {
         circle(&uses_graph(&root)).is_some(),
         "the re-export's circle"
     );
+    std::fs::remove_dir_all(&root).unwrap();
+}
+
+/// A lone name in a folder's `mod.rs` that matches one of its files (`match hinge` in
+/// `ir/transform/mod.rs`) is a variable, not a use of the file; `hinge::twist()` is one.
+#[test]
+fn a_variable_named_like_a_child_module_is_not_a_use() {
+    let root = std::env::temp_dir().join(format!("mech-file-lone-name-{}", std::process::id()));
+    let write = |file: &str, text: &str| {
+        let path = root.join(file);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(path, text).unwrap();
+    };
+    write("lib.rs", "pub mod transform;\n");
+    write(
+        "transform/hinge.rs",
+        "use super::Axis;\npub fn twist() {}\n",
+    );
+    write(
+        "transform/mod.rs",
+        "pub mod hinge;\npub struct Axis;\npub fn axis(hinge: u8) -> u8 { hinge }\n",
+    );
+    assert_eq!(circle(&uses_graph(&root)), None);
+    write(
+        "transform/mod.rs",
+        "pub mod hinge;\npub struct Axis;\npub fn axis() { hinge::twist() }\n",
+    );
+    assert!(circle(&uses_graph(&root)).is_some(), "mod.rs ⇄ hinge.rs");
     std::fs::remove_dir_all(&root).unwrap();
 }
