@@ -27,9 +27,10 @@
 
 use std::collections::BTreeMap;
 
+use super::kinematics::Kinematics;
 use super::kinematics::{self, Partials};
+use super::points::{combine_partials, point_position, relative_partials_at};
 use super::vector::{self, Vec3};
-use super::{combine_partials, point_position, relative_partials_at, Kinematics};
 use crate::ir::{self, Model};
 use crate::sym::{ExprId, ExprPool, Func, Number};
 

@@ -135,6 +135,12 @@ pub fn lower_vec(pool: &mut ExprPool, v: &ir::Vec3) -> Vec3 {
     ]
 }
 
+/// The symmetric inertia matrix from tensor entries.
+pub fn inertia_matrix(pool: &mut ExprPool, inertia: &ir::Inertia) -> [[ExprId; 3]; 3] {
+    let [xx, yy, zz, xy, yz, zx] = inertia.entries().map(|e| lower_expr(pool, e));
+    [[xx, xy, zx], [xy, yy, yz], [zx, yz, zz]]
+}
+
 /// `C_{p←F0}` of a constant orientation sequence `R(a₀,θ₀)·R(a₁,θ₁)·…`.
 pub(crate) fn orientation(pool: &mut ExprPool, sequence: &[ir::AxisAngle]) -> Mat3 {
     let mut dcm = vector::identity(pool);

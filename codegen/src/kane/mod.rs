@@ -14,85 +14,41 @@
 //! `F_r = F_r + F_r*|_{u̇=0}` (SymPy's `forcing`). `M` is never inverted symbolically. The
 //! bodies' sums are taken subtree by subtree (`composite.rs`: composite bodies for `M`, one
 //! backward pass for their gravity and inertia forces), the other loads point by point.
+//!
+//! This file assembles; the folder's files compute the parts and never call back here:
+//! `kinematics.rs` and `rates.rs` (frames, partial velocities, `q̇ = W(q) u`), `points.rs`
+//! (point positions, relative partial velocities, spring lines), `closure.rs` (a loop
+//! closure's geometry and angles), `bushing.rs`, `contact.rs`, `state.rs` (state terms of
+//! expressions, the energies), `constraints.rs` (`φ`, `J`, `J̇u`), `speeds.rs` (chosen
+//! speeds) and `equations.rs` (the result's data).
 
+mod bushing;
+mod closure;
 mod composite;
 pub mod constraints;
 mod contact;
+mod equations;
 mod kinematics;
+mod points;
 mod rates;
 mod speeds;
+mod state;
 pub mod vector;
 
 use std::collections::BTreeMap;
 
 use crate::ir::{self, Load, Model, OutputKind};
-use crate::sym::{ExprId, ExprPool, Number, Symbol};
+use crate::sym::{ExprId, ExprPool, Symbol};
+use bushing::bushing_springs;
+use closure::flexure_angle;
+pub use equations::{Equations, FlexureRows};
 pub use kinematics::{lower_expr, lower_expr_with, Kinematics};
+use points::{combine_partials, point_position, relative_partials, spring_length, SpringLine};
 use rates::KinematicRates;
 pub use speeds::{chosen_speeds_at_start, describe as describe_speeds};
+pub use state::lower_state_expr;
+use state::{kinetic_energy, lower_state_vec, potential_energy};
 use vector::Vec3;
-
-/// The equations of motion of a model, ready for the back ends.
-#[derive(Clone, Debug)]
-pub struct Equations {
-    pub pool: ExprPool,
-    /// Number of generalized coordinates and speeds (equal without quaternions).
-    pub nq: usize,
-    pub nu: usize,
-    /// The kinematic differential equations `q̇ = W(q) u`, length `nq`, where they are not
-    /// `q̇ = u`: `None` for models without quaternions or Euler angles.
-    pub kinematic_rates: Option<Vec<ExprId>>,
-    /// `M(q)`, `nu × nu`, column-major; symmetric (`M[r + nu*s] == M[s + nu*r]`, same id).
-    pub mass_matrix: Vec<ExprId>,
-    /// `F(t, q, u, inputs)`, length `nu`.
-    pub forcing: Vec<ExprId>,
-    /// `F(t, q, 0, inputs)`: the forcing at rest, for statics (no velocity term of `F_r*`, no
-    /// damper); `None` where a speed sits under a negative power (no value at `u = 0`).
-    pub static_forcing: Option<Vec<ExprId>>,
-    /// The contacts' damping `D ≈ ∂F/∂u` (`nu × nu`, column-major, symmetric negative
-    /// semidefinite; [`contact::ContactState::add_damping`]): the stiff part of `F` that a
-    /// linearly implicit integrator takes implicitly. `None` for models without contacts.
-    pub contact_damping: Option<Vec<ExprId>>,
-    /// Scalar outputs in declaration order (vector outputs expanded to `.x`, `.y`, `.z`).
-    pub outputs: Vec<ExprId>,
-    pub output_names: Vec<String>,
-    /// Outputs that a simulation integrates, as `(target, rate)` indices into `outputs`: the
-    /// target (0 in `outputs`) is sampled as `∫ rate dt` from the start of the run (a
-    /// contact's dissipated energy; `Model::integrated_outputs` in the runtime).
-    pub integrated_outputs: Vec<(usize, usize)>,
-    /// Loop-closure rows: `φ(q)`, `J = ∂φ/∂q` (`nc × nq`, column-major) and `J̇u`; the
-    /// velocity constraints' rows `A(q) u = 0` last (`φ` = 0, `J` rows `A`, bias `Ȧu`).
-    pub constraints: constraints::Constraints,
-    /// Flexures: their angles `θ(q)`, stiffness `k`, time-domain damping `b` and loss factor
-    /// `η`, for frequency-domain analyses (complex stiffness `k(1 + iη)`).
-    pub flexures: FlexureRows,
-}
-
-/// Per-flexure expressions, in `Model::flexures` order.
-#[derive(Clone, Debug, Default)]
-pub struct FlexureRows {
-    pub names: Vec<String>,
-    pub angles: Vec<ExprId>,
-    pub stiffness: Vec<ExprId>,
-    pub damping: Vec<ExprId>,
-    pub loss_factor: Vec<ExprId>,
-}
-
-impl FlexureRows {
-    /// `[θ…, k…, b…, η…]`, the layout of the generated `flexures` function.
-    pub fn all(&self) -> Vec<ExprId> {
-        [
-            &self.angles,
-            &self.stiffness,
-            &self.damping,
-            &self.loss_factor,
-        ]
-        .into_iter()
-        .flatten()
-        .copied()
-        .collect()
-    }
-}
 
 /// The angle, stiffness, damping and loss factor of every flexure.
 fn flexure_rows(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Model) -> FlexureRows {
@@ -110,79 +66,6 @@ fn flexure_rows(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Model)
             .push(lower_expr(pool, &flexure.loss_factor));
     }
     rows
-}
-
-/// `θ(q)` of a flexure angle.
-fn flexure_angle(
-    pool: &mut ExprPool,
-    kinematics: &mut Kinematics,
-    model: &Model,
-    angle: ir::FlexureAngle,
-) -> ExprId {
-    use ir::FlexureAngle::{Coordinate, Loop, LoopLateral, LoopTwist};
-    let closure = match angle {
-        Coordinate(c) => return pool.symbol(Symbol::Coordinate(c.index() as u32)),
-        Loop(closure) | LoopTwist(closure) | LoopLateral(closure) => closure,
-    };
-    let Some(geometry) = constraints::closure_geometry(pool, kinematics, model, closure) else {
-        return pool.zero();
-    };
-    match angle {
-        LoopTwist(_) => constraints::off_axis_angle(pool, &geometry, false),
-        LoopLateral(_) => constraints::off_axis_angle(pool, &geometry, true),
-        _ => constraints::relative_angle(pool, &geometry),
-    }
-}
-
-/// The six offsets `s(q)` of a bushing's frame B from its frame A ([`Load::Bushing`]), in
-/// A's basis: `d = C_Aᵀ (o_B − o_A)`, then `θ = vee(R − Rᵀ)/2` of `R = C_Aᵀ C_B`
-/// (`R_ij = (column i of C_A)·(column j of C_B)`).
-fn bushing_offsets(
-    pool: &mut ExprPool,
-    kinematics: &mut Kinematics,
-    frames: [ir::Handle<ir::Frame>; 2],
-) -> [ExprId; 6] {
-    let (dcm_a, origin_a) = kinematics.to_newtonian(pool, frames[0]);
-    let (dcm_b, origin_b) = kinematics.to_newtonian(pool, frames[1]);
-    let apart = vector::sub(pool, origin_b, origin_a);
-    let [dx, dy, dz] = vector::mat_t_vec(pool, &dcm_a, apart);
-    let column = |c: &vector::Mat3, i: usize| [c[0][i], c[1][i], c[2][i]];
-    let mut r = |i: usize, j: usize| vector::dot(pool, column(&dcm_a, i), column(&dcm_b, j));
-    let pairs = [((2, 1), (1, 2)), ((0, 2), (2, 0)), ((1, 0), (0, 1))];
-    let [tx, ty, tz] = pairs.map(|((i, j), (k, l))| (r(i, j), r(k, l)));
-    let half = |pool: &mut ExprPool, (a, b): (ExprId, ExprId)| {
-        let difference = pool.sub(a, b);
-        pool.scale(difference, Number::rational(1, 2))
-    };
-    let (tx, ty, tz) = (half(pool, tx), half(pool, ty), half(pool, tz));
-    [dx, dy, dz, tx, ty, tz]
-}
-
-/// A bushing's six springs: each offset `s` ([`bushing_offsets`]) with its stiffness `k` and
-/// damping `c`. The laws are lowered before the offsets: the order fixes the pool's
-/// numbering, and with it the generated code.
-fn bushing_springs(
-    pool: &mut ExprPool,
-    kinematics: &mut Kinematics,
-    frames: [ir::Handle<ir::Frame>; 2],
-    stiffness: &[ir::Vec3; 2],
-    damping: &[ir::Vec3; 2],
-) -> [(ExprId, ExprId, ExprId); 6] {
-    let six = |pool: &mut ExprPool, v: &[ir::Vec3; 2]| {
-        let [a, b, c] = kinematics::lower_vec(pool, &v[0]);
-        let [d, e, f] = kinematics::lower_vec(pool, &v[1]);
-        [a, b, c, d, e, f]
-    };
-    let (k, c) = (six(pool, stiffness), six(pool, damping));
-    let s = bushing_offsets(pool, kinematics, frames);
-    std::array::from_fn(|i| (s[i], k[i], c[i]))
-}
-
-impl Equations {
-    /// Number of constraint rows `NC` (redundant rows and velocity rows included).
-    pub fn nc(&self) -> usize {
-        self.constraints.residual.len()
-    }
 }
 
 /// Derives the equations of motion by Kane's method.
@@ -312,12 +195,6 @@ fn name_symbols(model: &Model, pool: &mut ExprPool) {
     }
 }
 
-/// The symmetric inertia matrix from tensor entries.
-fn inertia_matrix(pool: &mut ExprPool, inertia: &ir::Inertia) -> [[ExprId; 3]; 3] {
-    let [xx, yy, zz, xy, yz, zx] = inertia.entries().map(|e| lower_expr(pool, e));
-    [[xx, xy, zx], [xy, yy, yz], [zx, yz, zz]]
-}
-
 /// `k (x − rest)`, a spring's restoring force or moment at `x`; `x` is built after `k` and
 /// `rest`, the order the pool (and so the golden equations) numbers them in.
 fn spring_moment(
@@ -347,137 +224,6 @@ fn push_angle_forces(
         let force = pool.mul(moment, slope);
         forcing[r].push(pool.neg(force));
     }
-}
-
-/// The line of a point-to-point spring between `ends = [A, B]`, in N's basis.
-struct SpringLine {
-    /// `L = |r_B − r_A|`.
-    length: ExprId,
-    /// `ê·∂(v_B − v_A)/∂u_r = ∂L/∂q_r` for every speed r that moves an end (`ê = d/L`).
-    stretch_rates: Vec<(usize, ExprId)>,
-}
-
-/// `d = r_B − r_A` and `L = |d|` of a spring's ends, in N (positions from [`point_position`]).
-fn spring_length(
-    pool: &mut ExprPool,
-    kinematics: &mut Kinematics,
-    model: &Model,
-    ends: [ir::Handle<ir::Point>; 2],
-) -> (Vec3, ExprId) {
-    let [a, b] = ends.map(|end| point_position(pool, kinematics, &model.points[end]));
-    let d = vector::sub(pool, b, a);
-    let square = vector::dot(pool, d, d);
-    (d, pool.sqrt(square))
-}
-
-/// `∂(v_B − v_A)/∂u_r` of two points `ends = [A, B]`, in N's basis ([`relative_partials_at`]).
-fn relative_partials(
-    pool: &mut ExprPool,
-    kinematics: &mut Kinematics,
-    model: &Model,
-    ends: [ir::Handle<ir::Point>; 2],
-) -> kinematics::Partials {
-    relative_partials_at(pool, kinematics, |pool, end| {
-        let point = &model.points[ends[end]];
-        (point.frame, kinematics::lower_vec(pool, &point.position))
-    })
-}
-
-/// `∂(v_B − v_A)/∂u_r` of two points A (`end(pool, 0)`) and B (`end(pool, 1)`), each given by
-/// the frame it is fixed in and its offset in that frame's basis, in N's basis: the partial
-/// velocities of each end (B with `+`, A with `−`, each from [`Kinematics::point_partials`]
-/// re-expressed in N). Each end is built when its turn comes (B first), the order the pool
-/// numbers them in.
-fn relative_partials_at(
-    pool: &mut ExprPool,
-    kinematics: &mut Kinematics,
-    mut end: impl FnMut(&mut ExprPool, usize) -> (ir::Handle<ir::Frame>, Vec3),
-) -> kinematics::Partials {
-    let mut relative: kinematics::Partials = Vec::new();
-    for (index, sign) in [(1, Number::ONE), (0, Number::MINUS_ONE)] {
-        let (frame, offset) = end(pool, index);
-        let partials: kinematics::Partials = kinematics
-            .point_partials(pool, frame, offset)
-            .into_iter()
-            .map(|(r, v)| {
-                let v = kinematics.express(pool, v, frame, Model::NEWTONIAN);
-                (r, vector::scale_number(pool, v, sign))
-            })
-            .collect();
-        relative = kinematics::merge(pool, &relative, &partials);
-    }
-    relative
-}
-
-impl SpringLine {
-    /// `ê` from the ends' positions, and the ends' relative partial velocities projected on it.
-    fn new(
-        pool: &mut ExprPool,
-        kinematics: &mut Kinematics,
-        model: &Model,
-        ends: [ir::Handle<ir::Point>; 2],
-    ) -> SpringLine {
-        let (d, length) = spring_length(pool, kinematics, model, ends);
-        let inverse = pool.pow(length, Number::MINUS_ONE);
-        let direction = vector::scale(pool, d, inverse);
-        let relative = relative_partials(pool, kinematics, model, ends);
-        let stretch_rates = relative
-            .into_iter()
-            .map(|(r, v)| (r, vector::dot(pool, direction, v)))
-            .collect();
-        SpringLine {
-            length,
-            stretch_rates,
-        }
-    }
-
-    /// `L̇ = ê·(v_B − v_A) = Σ_r (ê·∂(v_B − v_A)/∂u_r) u_r`.
-    fn stretch_speed(&self, pool: &mut ExprPool) -> ExprId {
-        let terms: Vec<ExprId> = self
-            .stretch_rates
-            .iter()
-            .map(|&(r, rate)| {
-                let u = pool.symbol(Symbol::Speed(r as u32));
-                pool.mul(rate, u)
-            })
-            .collect();
-        pool.add_all(&terms)
-    }
-}
-
-/// Lowers an expression of a load or output: its [`ir::StateTerm`]s become the coordinate
-/// and speed symbols, a distance `L = |r_B − r_A|`, its rate `L̇ = ê·(v_B − v_A)`, or the
-/// energies, from the kinematics.
-pub fn lower_state_expr(
-    pool: &mut ExprPool,
-    kinematics: &mut Kinematics,
-    model: &Model,
-    expr: &ir::Expr,
-) -> ExprId {
-    lower_expr_with(pool, expr, &mut |pool, term| match term {
-        ir::StateTerm::Coordinate(c) => pool.symbol(Symbol::Coordinate(c.index() as u32)),
-        ir::StateTerm::Speed(c) => pool.symbol(Symbol::Speed(c.index() as u32)),
-        ir::StateTerm::Distance(ends) => spring_length(pool, kinematics, model, ends).1,
-        ir::StateTerm::DistanceRate(ends) => {
-            SpringLine::new(pool, kinematics, model, ends).stretch_speed(pool)
-        }
-        ir::StateTerm::KineticEnergy => kinetic_energy(pool, kinematics, model),
-        ir::StateTerm::PotentialEnergy => potential_energy(pool, kinematics, model),
-    })
-}
-
-/// [`lower_state_expr`] of each component.
-fn lower_state_vec(
-    pool: &mut ExprPool,
-    kinematics: &mut Kinematics,
-    model: &Model,
-    v: &ir::Vec3,
-) -> Vec3 {
-    [
-        lower_state_expr(pool, kinematics, model, &v[0]),
-        lower_state_expr(pool, kinematics, model, &v[1]),
-        lower_state_expr(pool, kinematics, model, &v[2]),
-    ]
 }
 
 /// The length `L` of each point-to-point spring whose direction `ê = d/L` enters its force
@@ -653,15 +399,14 @@ fn add_load(
             rest,
             ..
         } => {
-            let torque = |pool: &mut ExprPool,
-                          _: &mut Kinematics,
-                          geometry: &constraints::RevoluteGeometry| {
-                let moment = spring_moment(pool, stiffness, rest, |pool| {
-                    constraints::relative_angle(pool, geometry)
-                });
-                pool.neg(moment)
-            };
-            constraints::closure_torque_forces(pool, kinematics, model, *closure, torque, forcing);
+            let torque =
+                |pool: &mut ExprPool, _: &mut Kinematics, geometry: &closure::RevoluteGeometry| {
+                    let moment = spring_moment(pool, stiffness, rest, |pool| {
+                        closure::relative_angle(pool, geometry)
+                    });
+                    pool.neg(moment)
+                };
+            closure::closure_torque_forces(pool, kinematics, model, *closure, torque, forcing);
         }
         Load::AngleSpring {
             angle,
@@ -690,13 +435,13 @@ fn add_load(
         } => {
             let torque = |pool: &mut ExprPool,
                           kinematics: &mut Kinematics,
-                          geometry: &constraints::RevoluteGeometry| {
+                          geometry: &closure::RevoluteGeometry| {
                 let c = lower_expr(pool, damping);
-                let rate = constraints::relative_rate(pool, kinematics, model, *closure, geometry);
+                let rate = closure::relative_rate(pool, kinematics, model, *closure, geometry);
                 let moment = pool.mul(c, rate);
                 pool.neg(moment)
             };
-            constraints::closure_torque_forces(pool, kinematics, model, *closure, torque, forcing);
+            closure::closure_torque_forces(pool, kinematics, model, *closure, torque, forcing);
         }
     }
 }
@@ -740,143 +485,6 @@ fn lower_output(
                     .collect()
             }),
     }
-}
-
-/// Position of a point from the Newtonian origin, in N's basis.
-fn point_position(pool: &mut ExprPool, kinematics: &mut Kinematics, point: &ir::Point) -> Vec3 {
-    let (dcm, origin) = kinematics.to_newtonian(pool, point.frame);
-    let offset = kinematics::lower_vec(pool, &point.position);
-    let offset = vector::mat_vec(pool, &dcm, offset);
-    vector::add(pool, origin, offset)
-}
-
-/// `Σ_r partial_r · u_r`.
-fn combine_partials(pool: &mut ExprPool, partials: &kinematics::Partials) -> Vec3 {
-    let mut total = vector::zero(pool);
-    for &(r, v) in partials {
-        let u = pool.symbol(Symbol::Speed(r as u32));
-        let term = vector::scale(pool, v, u);
-        total = vector::add(pool, total, term);
-    }
-    total
-}
-
-/// `½ Σ_bodies (m v_G·v_G + ω·I ω)`.
-fn kinetic_energy(pool: &mut ExprPool, kinematics: &Kinematics, model: &Model) -> ExprId {
-    let mut terms = Vec::new();
-    for (_, body) in model.bodies.iter() {
-        let mass = lower_expr(pool, &body.mass);
-        let com = kinematics::lower_vec(pool, &body.center_of_mass);
-        let partials = kinematics.point_partials(pool, body.frame, com);
-        let v = combine_partials(pool, &partials);
-        let omega = kinematics.frames[body.frame.index()].omega;
-        let inertia = inertia_matrix(pool, &body.inertia);
-        let i_omega = vector::mat_vec(pool, &inertia, omega);
-        let v2 = vector::dot(pool, v, v);
-        terms.push(pool.mul(mass, v2));
-        terms.push(vector::dot(pool, omega, i_omega));
-    }
-    let twice = pool.add_all(&terms);
-    pool.scale(twice, Number::rational(1, 2))
-}
-
-/// `−Σ_bodies m g·r_G + Σ_springs ½ k (x − rest)²`, x a joint coordinate, a closure or
-/// flexure angle, or a point-to-point spring's length, plus each contact's
-/// `k δ^(e+1)/(e+1)` and each bushing's `½ Σ k s²`.
-fn potential_energy(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Model) -> ExprId {
-    let mut terms = Vec::new();
-    let gravity = kinematics.frames[ir::Model::NEWTONIAN.index()].gravity;
-    for (_, body) in model.bodies.iter() {
-        let mass = lower_expr(pool, &body.mass);
-        let (dcm, origin) = kinematics.to_newtonian(pool, body.frame);
-        let com = kinematics::lower_vec(pool, &body.center_of_mass);
-        let com = vector::mat_vec(pool, &dcm, com);
-        let position = vector::add(pool, origin, com);
-        let height_work = vector::dot(pool, gravity, position);
-        let work = pool.mul(mass, height_work);
-        terms.push(pool.neg(work));
-    }
-    for load in &model.loads {
-        // ½ k (x − rest)² for joint springs (x = q), closure and angle springs (x = θ),
-        // point-to-point springs (x = L).
-        let (stiffness, rest, stretched) = match load {
-            Load::Spring {
-                coordinate,
-                stiffness,
-                rest,
-                ..
-            } => (
-                stiffness,
-                rest,
-                pool.symbol(Symbol::Coordinate(coordinate.index() as u32)),
-            ),
-            Load::LoopSpring {
-                closure,
-                stiffness,
-                rest,
-                ..
-            } => {
-                let Some(geometry) =
-                    constraints::closure_geometry(pool, kinematics, model, *closure)
-                else {
-                    continue;
-                };
-                (
-                    stiffness,
-                    rest,
-                    constraints::relative_angle(pool, &geometry),
-                )
-            }
-            Load::AngleSpring {
-                angle,
-                stiffness,
-                rest,
-                ..
-            } => (
-                stiffness,
-                rest,
-                flexure_angle(pool, kinematics, model, *angle),
-            ),
-            Load::PointSpring {
-                ends,
-                stiffness,
-                rest_length,
-                ..
-            } => (
-                stiffness,
-                rest_length,
-                spring_length(pool, kinematics, model, *ends).1,
-            ),
-            Load::Contact { .. } => {
-                if let Some(contact) = contact::ContactState::new(pool, kinematics, model, load) {
-                    terms.push(contact.energy);
-                }
-                continue;
-            }
-            Load::Bushing {
-                frames,
-                stiffness,
-                damping,
-                ..
-            } => {
-                // ½ Σ k s².
-                for (s, k, _) in bushing_springs(pool, kinematics, *frames, stiffness, damping) {
-                    let square = pool.pow(s, Number::int(2));
-                    let energy = pool.mul(k, square);
-                    terms.push(pool.scale(energy, Number::rational(1, 2)));
-                }
-                continue;
-            }
-            _ => continue,
-        };
-        let k = lower_expr(pool, stiffness);
-        let rest = lower_expr(pool, rest);
-        let stretch = pool.sub(stretched, rest);
-        let square = pool.pow(stretch, Number::int(2));
-        let energy = pool.mul(k, square);
-        terms.push(pool.scale(energy, Number::rational(1, 2)));
-    }
-    pool.add_all(&terms)
 }
 
 #[cfg(test)]

@@ -18,7 +18,11 @@
 //!
 //! `Ẇ u = Σ_k ∂(W u)/∂q_k q̇_k` at fixed u.
 
-use super::{combine_partials, kinematics, lower_state_expr, vector, Equations, Kinematics};
+use super::equations::Equations;
+use super::kinematics::{self, Kinematics};
+use super::points::combine_partials;
+use super::state::lower_state_expr;
+use super::vector;
 use crate::ir::{self, Model, SpeedKind};
 use crate::sym::{ExprId, ExprPool, Symbol};
 
