@@ -331,17 +331,20 @@ fn no_circle_among_the_compilers_files() {
     assert_no_circle("codegen/src", &["front/lower"]);
 }
 
+/// Writes `text` to `file` below the temporary crate `root`.
+fn write_source(root: &Path, file: &str, text: &str) {
+    let path = root.join(file);
+    std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+    std::fs::write(path, text).unwrap();
+}
+
 /// The check sees a circle where there is one, through a re-export as the leg's errors were
 /// (`leg.rs` returned `experiments::Error`, which wrapped what wraps the leg's), and none in
 /// the same files once the error no longer wraps back.
 #[test]
 fn a_circle_through_a_reexport_is_found() {
-    let root = std::env::temp_dir().join(format!("mech-file-circles-{}", std::process::id()));
-    let write = |file: &str, text: &str| {
-        let path = root.join(file);
-        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
-        std::fs::write(path, text).unwrap();
-    };
+    let root = super::support::scratch("file_circles_reexport");
+    let write = |file: &str, text: &str| write_source(&root, file, text);
     write("lib.rs", "pub mod experiments;\npub mod sweep;\n");
     write(
         "experiments/mod.rs",
@@ -389,12 +392,8 @@ fn a_circle_through_a_reexport_is_found() {
 /// `ir/transform/mod.rs`) is a variable, not a use of the file; `hinge::twist()` is one.
 #[test]
 fn a_variable_named_like_a_child_module_is_not_a_use() {
-    let root = std::env::temp_dir().join(format!("mech-file-lone-name-{}", std::process::id()));
-    let write = |file: &str, text: &str| {
-        let path = root.join(file);
-        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
-        std::fs::write(path, text).unwrap();
-    };
+    let root = super::support::scratch("file_circles_lone_name");
+    let write = |file: &str, text: &str| write_source(&root, file, text);
     write("lib.rs", "pub mod transform;\n");
     write(
         "transform/hinge.rs",
