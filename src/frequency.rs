@@ -376,7 +376,7 @@ impl<M: Fn(f64) -> f64> CostFunction for LogFrequency<'_, M> {
 }
 
 /// Swept-sine estimate from a chirp record: `H(f) = Y(f) / U(f)` with single-bin Fourier
-/// transforms of the whole input and output records ([`single_bin`]), evaluated at each
+/// transforms of the whole input and output records (`single_bin`), evaluated at each
 /// analysis frequency; both means are removed. No taper: in a swept sine each frequency lives
 /// at one time of the record, and a window over the whole record would suppress the sweep's
 /// start and end, where its lowest and highest frequencies are.

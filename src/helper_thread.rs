@@ -9,7 +9,7 @@
 //! worker (rayon's) goes to sleep in the kernel between jobs, to be woken by a system call
 //! whose latency is of the order of the work itself (~10 µs). Here the helper spins on an
 //! atomic request counter while requests come (an integration asks every ~20 µs) and parks
-//! only after [`SPIN`] of silence; the caller unparks it with each request (an atomic
+//! only after `SPIN` of silence; the caller unparks it with each request (an atomic
 //! operation when it is not parked). The arguments and values pass through a mutex that the
 //! two sides take in turn, never at the same time, so it costs an uncontended lock.
 

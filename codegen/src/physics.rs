@@ -2,7 +2,7 @@
 //! the named materials and the closed forms of flexure hinges and piezoelectric bimorphs.
 //!
 //! Consumes: constants in SI units (m, Pa, kg/m³, V), as `f64` (the `mech` CLI's numbers) or
-//! as model expressions ([`ir::Expr`], the front end's `material`, `flexure` and `actuator`
+//! as model expressions ([`crate::ir::Expr`], the front end's `material`, `flexure` and `actuator`
 //! lowering, where any value may be a `param`). Produces: the same quantities in either form,
 //! through [`Scalar`]. Both evaluate the arithmetic as written here, in this order (the
 //! expressions are the trees the language has always built, so generated code is unchanged).
@@ -81,7 +81,7 @@ impl Material {
         loss_factor: 0.05,
     };
 
-    /// Kapton HN with the datasheet modulus E = 2.5 GPa (DuPont; seed ref. [21]).
+    /// Kapton HN with the datasheet modulus E = 2.5 GPa (DuPont; seed ref. \[21\]).
     pub const KAPTON_HN_DATASHEET: Material = Material {
         name: "kapton-datasheet",
         youngs_modulus: 2.5e9,

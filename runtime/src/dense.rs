@@ -12,7 +12,7 @@
 //!
 //! Multibody models are small (a few coordinates, a few loop rows), where loop and
 //! bounds-check overhead costs more than the arithmetic. So every kernel is written once,
-//! generic over a [`Dim`], and the public functions dispatch: sizes 1 to [`UNROLLED`] get a
+//! generic over a `Dim`, and the public functions dispatch: sizes 1 to [`UNROLLED`] get a
 //! copy with the size known at compile time (loops fully unrolled, no bounds checks), larger
 //! ones the same code with the size at run time.
 
@@ -267,7 +267,7 @@ fn cholesky_inverse_in<D: Dim>(l: &[f64], d: D, out: &mut [f64]) {
 }
 
 /// Solves `L Y = B` in place for the `m` columns of the `n × m` matrix `b`: column by column
-/// of `L`, each applied to every column of `B` over its nonzero rows ([`Runs`], found once for
+/// of `L`, each applied to every column of `B` over its nonzero rows (`Runs`, found once for
 /// all of them). The same operations in the same order as [`forward_substitute`] on each
 /// column, less those with an exact zero. On a synthetic arrowhead like HAMR-VI's robot's
 /// `M` (four 8-speed legs, 6 base speeds) and 24 constraint rows: 3.9 → 2.5 µs against the

@@ -64,8 +64,8 @@ pub use steady::{linearize_steady, SecondOrder, SteadyLinearization, SteadyState
 /// }
 /// ```
 ///
-/// A name that `build.rs` did not compile is one error, `couldn't read
-/// \`$OUT_DIR/<name>.rs\``: the name is the `model NAME;` of the file (else its stem).
+/// A name that `build.rs` did not compile is one error,
+/// ``couldn't read `$OUT_DIR/<name>.rs` ``: the name is the `model NAME;` of the file (else its stem).
 #[macro_export]
 macro_rules! include_model {
     ($name:literal) => {

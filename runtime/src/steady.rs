@@ -14,7 +14,7 @@
 //! so every state it reaches satisfies every constraint; `ẋ = [q̇_z; u̇_w]` with `u̇` from the
 //! multiplier form (`ModelOde::accelerations`), which for ideal constraints equals Kane's reduced
 //! equations `M̃ ẇ = F̃`. Its Jacobian is taken by central differences with one Richardson step
-//! (as [`linearize`](crate::linearize)), over all independent coordinates; the largest set of
+//! (as [`linearize`](fn@crate::linearize)), over all independent coordinates; the largest set of
 //! coordinates that no state outside the set feels (their columns are zero there) is cyclic
 //! and is dropped with its rows, which leaves the block on which the steady motion is an
 //! equilibrium (the dropped rows may depend on anything: a wheel's position on its heading).

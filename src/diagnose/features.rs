@@ -6,7 +6,7 @@
 //! per frequency-response channel the low-frequency gain and phase, the largest gain, the
 //! resonance frequency and its quality factor (where the sampling resolves it); for
 //! force/deflection the blocked force and the free deflection (each from the points nearest
-//! its end of the curve: [`force_ends`]); for a force/deflection table its values; per
+//! its end of the curve: `force_ends`); for a force/deflection table its values; per
 //! quasi-static
 //! output its peak-to-peak range; for a ring-down its natural frequency and quality factor
 //! (`mech flexure fit`'s trace analysis). Also [`series_rms`]: the residual RMS per series.

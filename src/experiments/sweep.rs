@@ -1,6 +1,6 @@
 //! Experiment 3, the transmission-ratio sweep (seed Fig. 8, Sec. V.B): the work done by the
 //! foot, blocked force × free deflection exactly as in experiments 2 and 4
-//! ([`force_deflection`] with the sensor at the rest position only), against the transmission
+//! ([`ForceTest`] with the sensor at the rest position only), against the transmission
 //! ratio for a given actuator. The ratio is changed through the model's crank arm (`lift_arm`
 //! or `swing_arm`) and measured from the model's own kinematics at the zero configuration
 //! (foot displacement per actuator displacement along the test axis: lift z, swing x).

@@ -25,7 +25,7 @@
 //! amplitude (air drag, friction at the clamp). `c(τ)` is the oscillation's centre: an
 //! oscillation centred at `c` crosses zero early or late, so the half-cycles on the side of `c`
 //! measure larger and those on the other side smaller, by the factor `g(±c/A) ≈ 1 ± (3/π)
-//! c/A` ([`offset_factor`], exact to all orders) — an alternation the smooth decay cannot
+//! c/A` (`offset_factor`, exact to all orders) — an alternation the smooth decay cannot
 //! mimic. `c₁ ≠ 0` is a drifting baseline, `c₀ ≠ 0` an offset.
 //!
 //! **Crossing times** (weighted linear least squares, each crossing's weight the inverse

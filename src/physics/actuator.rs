@@ -303,7 +303,7 @@ pub const SEED_TABLE_II: [TableIIRow; 5] = [
     },
 ];
 
-/// Seed Table I, model values (from [16]) at 225 V: old geometry δ_f = 184 µm, F_b = 549 mN;
+/// Seed Table I, model values (from \[16\]) at 225 V: old geometry δ_f = 184 µm, F_b = 549 mN;
 /// new geometry δ_f = 300 µm, F_b = 320 mN. Pairs `(δ_f m, F_b N)`.
 pub const SEED_TABLE_I_MODEL: [(&str, f64, f64); 2] = [
     ("old geometry", 184e-6, 0.549),

@@ -72,7 +72,7 @@ pub struct Panel {
     pub series: Vec<Series>,
 }
 
-/// How [`plot_xy_styled`] draws one curve.
+/// How an [`XyPlot`] draws one curve.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct CurveStyle {
     /// Palette index (wraps), so that curves that belong together can share a colour.
@@ -81,7 +81,7 @@ pub struct CurveStyle {
     pub dashed: bool,
 }
 
-/// A point of a [`plot_xy_styled`] figure marked with a star, in the colour of curve `curve`.
+/// A point of an [`XyPlot`] figure marked with a star, in the colour of curve `curve`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Star {
     pub curve: usize,

@@ -1,7 +1,7 @@
 //! Units of measure: the unit table, SI prefixes, and checked dimension arithmetic.
 //!
 //! Consumes: unit names (`mN`, `kg`, `deg`) and unit expressions from the AST.
-//! Produces: a scale to SI (an exact [`Number`] where possible) and an [`ir::Dimension`].
+//! Produces: a scale to SI (an exact [`Number`] where possible) and an [`crate::ir::Dimension`].
 //! The internal unit system is SI: kg, m, s, A, and rad (dimensionless).
 
 use crate::ir::Dimension;

@@ -1,5 +1,5 @@
 //! Loop-closure constraints: `φ(q) = 0`, its Jacobian `J` with `φ̇ = J u` (`J = ∂φ/∂q` where
-//! `q̇ = u`; `∂φ/∂q W(q)` with quaternions, [`KinematicRates`]) and the acceleration bias
+//! `q̇ = u`; `∂φ/∂q W(q)` with quaternions, `KinematicRates` in `rates.rs`) and the acceleration bias
 //! `J̇u`, so that `J u = 0` and `J u̇ + J̇u = 0` along any motion.
 //!
 //! Consumes: `model.loops` and the tree kinematics. Produces: [`Constraints`] (root ids in

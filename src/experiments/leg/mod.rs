@@ -547,7 +547,7 @@ pub struct StrokeLimit {
     pub actuator: f64,
 }
 
-/// Where the force sensor of [`force_deflection`] is placed: distances from the foot's rest
+/// Where the force sensor of a [`ForceTest`] is placed: distances from the foot's rest
 /// position along its free motion.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Sensor {

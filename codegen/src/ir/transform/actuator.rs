@@ -10,15 +10,15 @@
 use super::{append_param, scaled, TransformError};
 use crate::ir::{Body, Dimension, Expr, Load, Model, Motion};
 
-/// The base compliance of [`Extension::BaseCompliance`], per unit actuator compliance.
+/// The base compliance of `Extension::BaseCompliance` (the diagnosis), per unit actuator compliance.
 pub const BASE_COMPLIANCE: &str = "base_compliance";
 /// The factor on one actuator's stiffness `k_a` of [`stiffness_factor`].
 pub const STIFFNESS_FACTOR: &str = "actuator_stiffness_factor";
 /// The factor on one actuator's force source `F_b V/V_rated` of [`force_factor`].
 pub const FORCE_FACTOR: &str = "actuator_force_factor";
-/// The mass (kg) of [`Extension::TipMass`].
+/// The mass (kg) of `Extension::TipMass` (the diagnosis).
 pub const TIP_MASS: &str = "tip_mass";
-/// The offset (m, positive along the slider axes) of [`Extension::Preload`].
+/// The offset (m, positive along the slider axes) of `Extension::Preload` (the diagnosis).
 pub const TIP_PRELOAD: &str = "tip_preload";
 
 /// The actuator (force source and series spring) on slider coordinate `slider`: indices

@@ -31,7 +31,7 @@ pub const OFF_AXIS_COMPLIANCE: &str = "off_axis_compliance";
 /// Poisson's ratio of Kapton (seed Sec. V-A), in Eq. 8's `2/(1 + ν)` = 100/67.
 const TWIST_RATIO: (i128, i128) = (100, 67);
 
-/// The fitted misalignment angle (rad) of [`Extension::Misalignment`].
+/// The fitted misalignment angle (rad) of `Extension::Misalignment` (the diagnosis).
 pub const MISALIGNMENT: &str = "misalignment";
 /// `hinges` (name, length axis in the hinge's frame: 0 = x, 1 = y, 2 = z) twist with
 /// stiffness [`TWIST_FACTOR`] · 2k/(1 + ν); every other hinge is compliant off its axis.
@@ -194,7 +194,7 @@ fn compliant_off_axis(
 /// Tilts `name`'s bending axis `a` by the fitted angle α about the coordinate axis `p` (a
 /// rotation about `p`, so `a` leans towards `p × a`). At α = 0 it is the base model.
 ///
-/// A pin's axis and its off-axis axes turn by Rodrigues' formula ([`rotate`]). A loop
+/// A pin's axis and its off-axis axes turn by Rodrigues' formula (`rotate`). A loop
 /// closure's axis is read as a constant by the closure's geometry (its reference and twist
 /// directions are built ⊥ it): instead both interframes turn by α about `p` (the last
 /// rotation of each, so `p` is in the axis's own coordinates), which tilts the axis and every
