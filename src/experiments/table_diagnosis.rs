@@ -1,4 +1,4 @@
-//! Experiment 5, "What the model gets wrong, and why": the paper's Table IV taken as measured
+//! Experiment 6, "What the model gets wrong, and why": the paper's Table IV taken as measured
 //! data and diagnosed. For each robot of a `compare` experiment file, its rows (free
 //! deflection d and blocked force F of the lift and swing tests, mean ± s.d., n = 2) become
 //! a diagnosis experiment of kind `force_deflection_table` (the sensor's ~30 % off-axis load

@@ -8,8 +8,9 @@
 //! from (`experiments::Error` is `experiments/error.rs`). A `pub use` is a use of what it
 //! re-exports, but for a folder's face: `mod.rs` (or `lib.rs`) re-exporting its own files'
 //! items, which those files may use, is the module tree's structure, as its `mod` lines are.
-//! Paths inside macro calls (`format!`, `matches!`) are not seen: a circle made only of those
-//! would be missed.
+//! A `use` inside a function counts as well; test and doc-only items are skipped at any depth.
+//! Paths inside macro calls (`format!`, `matches!`) and method calls (resolved by type) are
+//! not seen: a circle made only of those would be missed.
 //!
 //! `src/` and `runtime/src` hold to it strictly, and `codegen/src` but for one folder: in
 //! `front/lower/` a file may also use the folder's `mod.rs`. The front end's `Lowerer` is one
@@ -98,7 +99,8 @@ fn use_paths(tree: &syn::UseTree, prefix: &mut Vec<String>, out: &mut Vec<Vec<St
     }
 }
 
-/// The paths a file writes, outside `use` items (those are read apart).
+/// The paths a file writes outside its top-level `use` items (those are read apart): a `use`
+/// inside a function counts as the paths it names.
 #[derive(Default)]
 struct Paths(Vec<Vec<String>>);
 
@@ -108,12 +110,20 @@ impl<'a> Visit<'a> for Paths {
             .push(path.segments.iter().map(|s| s.ident.to_string()).collect());
         syn::visit::visit_path(self, path);
     }
-    fn visit_item_use(&mut self, _: &'a syn::ItemUse) {}
+    fn visit_item_use(&mut self, item: &'a syn::ItemUse) {
+        use_paths(&item.tree, &mut Vec::new(), &mut self.0);
+    }
     // `pub(crate)`, `pub(super)`: where an item is seen from, not a use.
     fn visit_vis_restricted(&mut self, _: &'a syn::VisRestricted) {}
-    fn visit_item_mod(&mut self, module: &'a syn::ItemMod) {
-        if !test_or_doc_only(&module.attrs) {
-            syn::visit::visit_item_mod(self, module);
+    // Test and doc-only items at any depth: a module, a function in a block, a method.
+    fn visit_item(&mut self, item: &'a syn::Item) {
+        if !test_or_doc_only(attributes(item)) {
+            syn::visit::visit_item(self, item);
+        }
+    }
+    fn visit_impl_item_fn(&mut self, method: &'a syn::ImplItemFn) {
+        if !test_or_doc_only(&method.attrs) {
+            syn::visit::visit_impl_item_fn(self, method);
         }
     }
 }
@@ -388,26 +398,58 @@ fn a_circle_through_a_reexport_is_found() {
     std::fs::remove_dir_all(&root).unwrap();
 }
 
+/// Writes `files` as a temporary crate, checks that it has no circle, then writes `change`
+/// over one of them and checks that it has one (`what`).
+fn circle_only_after(name: &str, files: &[(&str, &str)], change: (&str, &str), what: &str) {
+    let root = super::support::scratch(name);
+    for (file, text) in files {
+        write_source(&root, file, text);
+    }
+    assert_eq!(circle(&uses_graph(&root)), None, "before: {what}");
+    write_source(&root, change.0, change.1);
+    assert!(circle(&uses_graph(&root)).is_some(), "{what}");
+    std::fs::remove_dir_all(&root).unwrap();
+}
+
 /// A lone name in a folder's `mod.rs` that matches one of its files (`match hinge` in
 /// `ir/transform/mod.rs`) is a variable, not a use of the file; `hinge::twist()` is one.
 #[test]
 fn a_variable_named_like_a_child_module_is_not_a_use() {
-    let root = super::support::scratch("file_circles_lone_name");
-    let write = |file: &str, text: &str| write_source(&root, file, text);
-    write("lib.rs", "pub mod transform;\n");
-    write(
-        "transform/hinge.rs",
-        "use super::Axis;\npub fn twist() {}\n",
+    circle_only_after(
+        "file_circles_lone_name",
+        &[
+            ("lib.rs", "pub mod transform;\n"),
+            (
+                "transform/hinge.rs",
+                "use super::Axis;\npub fn twist() {}\n",
+            ),
+            (
+                "transform/mod.rs",
+                "pub mod hinge;\npub struct Axis;\npub fn axis(hinge: u8) -> u8 { hinge }\n",
+            ),
+        ],
+        (
+            "transform/mod.rs",
+            "pub mod hinge;\npub struct Axis;\npub fn axis() { hinge::twist() }\n",
+        ),
+        "mod.rs ⇄ hinge.rs",
     );
-    write(
-        "transform/mod.rs",
-        "pub mod hinge;\npub struct Axis;\npub fn axis(hinge: u8) -> u8 { hinge }\n",
+}
+
+/// A `use` inside a function is a use of what it names; a test-only method is not read.
+#[test]
+fn a_use_inside_a_function_counts_and_a_test_method_does_not() {
+    circle_only_after(
+        "file_circles_nested",
+        &[
+            ("lib.rs", "pub mod a;\npub mod b;\n"),
+            ("a.rs", "pub struct A;\npub fn make() -> crate::b::B { crate::b::B }\n"),
+            (
+                "b.rs",
+                "pub struct B;\nimpl B {\n    #[cfg(test)]\n    fn probe() -> crate::a::A { crate::a::A }\n}\n",
+            ),
+        ],
+        ("b.rs", "pub struct B;\npub fn probe() { use crate::a::A; let _ = A; }\n"),
+        "a.rs ⇄ b.rs",
     );
-    assert_eq!(circle(&uses_graph(&root)), None);
-    write(
-        "transform/mod.rs",
-        "pub mod hinge;\npub struct Axis;\npub fn axis() { hinge::twist() }\n",
-    );
-    assert!(circle(&uses_graph(&root)).is_some(), "mod.rs ⇄ hinge.rs");
-    std::fs::remove_dir_all(&root).unwrap();
 }

@@ -10,7 +10,7 @@ use super::vector;
 use crate::ir;
 use crate::sym::{ExprId, ExprPool, Number};
 
-/// The six offsets `s(q)` of a bushing's frame B from its frame A ([`Load::Bushing`]), in
+/// The six offsets `s(q)` of a bushing's frame B from its frame A ([`ir::Load::Bushing`]), in
 /// A's basis: `d = C_Aᵀ (o_B − o_A)`, then `θ = vee(R − Rᵀ)/2` of `R = C_Aᵀ C_B`
 /// (`R_ij = (column i of C_A)·(column j of C_B)`).
 pub(super) fn bushing_offsets(

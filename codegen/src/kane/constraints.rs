@@ -1,9 +1,9 @@
 //! Loop-closure constraints: `φ(q) = 0`, its Jacobian `J` with `φ̇ = J u` (`J = ∂φ/∂q` where
-//! `q̇ = u`; `∂φ/∂q W(q)` with quaternions, `KinematicRates` in `rates.rs`) and the acceleration bias
-//! `J̇u`, so that `J u = 0` and `J u̇ + J̇u = 0` along any motion.
+//! `q̇ = u`; `∂φ/∂q W(q)` with quaternions, `KinematicRates` in `rates.rs`) and the
+//! acceleration bias `J̇u`, so that `J u = 0` and `J u̇ + J̇u = 0` along any motion.
 //!
-//! Consumes: `model.loops` and the tree kinematics. Produces: [`Constraints`] (root ids in
-//! the pool) and the generalized forces of closure springs and dampers.
+//! Consumes: `model.loops`, `model.velocity_constraints` and the tree kinematics (a closure's
+//! sides and axes from `closure.rs`). Produces: [`Constraints`] (root ids in the pool).
 //!
 //! Rows per closure, measured in the closure's frame A (the nearest common ancestor of its
 //! two points' frames, N where their chains meet only there; positions from A's origin):

@@ -15,7 +15,8 @@ pub struct Equations {
     pub nq: usize,
     pub nu: usize,
     /// The kinematic differential equations `q̇ = W(q) u`, length `nq`, where they are not
-    /// `q̇ = u`: `None` for models without quaternions or Euler angles.
+    /// `q̇ = u`: `None` for models without quaternions, Euler angles or chosen speeds
+    /// (`speed` declarations, whose `W = Y⁻¹` this carries).
     pub kinematic_rates: Option<Vec<ExprId>>,
     /// `M(q)`, `nu × nu`, column-major; symmetric (`M[r + nu*s] == M[s + nu*r]`, same id).
     pub mass_matrix: Vec<ExprId>,
@@ -35,7 +36,7 @@ pub struct Equations {
     /// target (0 in `outputs`) is sampled as `∫ rate dt` from the start of the run (a
     /// contact's dissipated energy; `Model::integrated_outputs` in the runtime).
     pub integrated_outputs: Vec<(usize, usize)>,
-    /// Loop-closure rows: `φ(q)`, `J = ∂φ/∂q` (`nc × nq`, column-major) and `J̇u`; the
+    /// Loop-closure rows: `φ(q)`, `J` (`nc × nu`, column-major; `∂φ/∂q` where `q̇ = u`) and `J̇u`; the
     /// velocity constraints' rows `A(q) u = 0` last (`φ` = 0, `J` rows `A`, bias `Ȧu`).
     pub constraints: constraints::Constraints,
     /// Flexures: their angles `θ(q)`, stiffness `k`, time-domain damping `b` and loss factor
