@@ -664,45 +664,7 @@ impl Session {
         }
         let mut fixed = Vec::new();
         for item in independent {
-            let (name, value) = match item.split_once('=') {
-                Some((name, value)) => (name.trim(), Some(value.trim())),
-                None => (item.trim(), None),
-            };
-            let index = self.coordinate_index(name)?;
-            if index >= model.plain_coordinates() {
-                let ir = &self.compiled.model;
-                let quaternion = index >= ir.coordinates.len()
-                    && index < ir.coordinates.len() + 4 * ir.quaternions.len();
-                return Err(match (quaternion, ir.speeds.is_empty()) {
-                    (true, _) => Error::QuaternionPart {
-                        option: "--independent",
-                        name: name.to_string(),
-                    },
-                    (false, false) => Error::NotHeld {
-                        name: name.to_string(),
-                        reason: "the model's speeds are chosen by `speed` declarations, so no \
-                                 coordinate's rate is a speed",
-                    },
-                    (false, true) if index >= ir.nq() - 3 * ir.translations.len() => {
-                        Error::NotHeld {
-                            name: name.to_string(),
-                            reason: "a free joint's position moves by its velocity speeds \
-                                     turned by its rotation ((ẋ, ẏ, ż) = R v), not by one speed",
-                        }
-                    }
-                    (false, true) => Error::NotHeld {
-                        name: name.to_string(),
-                        reason: "an Euler angle's rate is not its speed (q̇ = W(q) u)",
-                    },
-                });
-            }
-            if let Some(value) = value {
-                let coordinates = &self.compiled.model.coordinates;
-                let expected = coordinates.iter().nth(index).map(|(_, c)| c.dimension);
-                let expected = expected.unwrap_or_default();
-                q[index] = quantity("--independent", name, value, expected)?;
-            }
-            fixed.push(index);
+            fixed.push(self.held_coordinate(item, &mut q)?);
         }
         let named = fixed.clone();
         if fixed.is_empty() {
@@ -755,6 +717,50 @@ impl Session {
             mobility,
             iterations,
         })
+    }
+
+    /// The index of the coordinate `--independent NAME[=VALUE]` holds, with `q` set to VALUE
+    /// where one is given. Errors where the coordinate's rate is not one speed (a quaternion's
+    /// part, a free joint's position, an Euler angle, any coordinate under chosen speeds).
+    fn held_coordinate(&self, item: &str, q: &mut [f64]) -> Result<usize, Error> {
+        let model = &self.model;
+        let (name, value) = match item.split_once('=') {
+            Some((name, value)) => (name.trim(), Some(value.trim())),
+            None => (item.trim(), None),
+        };
+        let index = self.coordinate_index(name)?;
+        if index >= model.plain_coordinates() {
+            let ir = &self.compiled.model;
+            let quaternion = index >= ir.coordinates.len()
+                && index < ir.coordinates.len() + 4 * ir.quaternions.len();
+            return Err(match (quaternion, ir.speeds.is_empty()) {
+                (true, _) => Error::QuaternionPart {
+                    option: "--independent",
+                    name: name.to_string(),
+                },
+                (false, false) => Error::NotHeld {
+                    name: name.to_string(),
+                    reason: "the model's speeds are chosen by `speed` declarations, so no \
+                         coordinate's rate is a speed",
+                },
+                (false, true) if index >= ir.nq() - 3 * ir.translations.len() => Error::NotHeld {
+                    name: name.to_string(),
+                    reason: "a free joint's position moves by its velocity speeds \
+                             turned by its rotation ((ẋ, ẏ, ż) = R v), not by one speed",
+                },
+                (false, true) => Error::NotHeld {
+                    name: name.to_string(),
+                    reason: "an Euler angle's rate is not its speed (q̇ = W(q) u)",
+                },
+            });
+        }
+        if let Some(value) = value {
+            let coordinates = &self.compiled.model.coordinates;
+            let expected = coordinates.iter().nth(index).map(|(_, c)| c.dimension);
+            let expected = expected.unwrap_or_default();
+            q[index] = quantity("--independent", name, value, expected)?;
+        }
+        Ok(index)
     }
 
     /// `error` of closing the loops, pointing at the declaration of the loop whose row it

@@ -13,7 +13,7 @@ use crate::render::plot;
 use crate::render::report::Outcome;
 use crate::render::run::trajectory_table;
 use crate::render::table::Table;
-use mech_runtime::Model;
+use mech_runtime::{Model, Trajectory};
 use std::path::Path;
 
 /// The payload the paper's HAMR-VI carries (Sec. V-C), kg.
@@ -66,28 +66,60 @@ pub fn run(
                 .insert(format!("{prefix}airborne_{key}"), walk.run.airborne);
         }
     }
-    if let Some((walk, trajectory)) = &walks.shown {
-        let (header, rows) = trajectory_table(&walks.session.model, trajectory);
-        let names: Vec<&str> = header.iter().map(String::as_str).collect();
-        let file = format!("walk_{}Hz.csv", walk.frequency);
-        csv(&mut outcome, dir, &file, &names, &rows)?;
-        // The same walk in 3D (as `mech animate` plays the CSV).
-        let table = CsvTable {
-            columns: (0..header.len())
-                .map(|j| rows.iter().map(|row| row[j]).collect())
-                .collect(),
-            lines: (2..).take(rows.len()).collect(),
-            header,
-        };
-        let model = &walks.session.model;
-        let values: Vec<f64> = (0..model.nparams()).map(|i| model.param(i)).collect();
-        let motion = crate::animation::animate(&walks.session.compiled, &values, &table)
-            .map_err(Error::Animation)?;
-        let page = crate::render::animation::page(&motion);
-        let path = dir.join(format!("walk_{}Hz.html", walk.frequency));
-        outcome.add_file(crate::output::File::new(path, page));
+    if let Some(shown) = &walks.shown {
+        shown_walk(&mut outcome, dir, &walks, shown)?;
     }
-    // One colour per frequency; the compared robot's curves dashed in its frequency's colour.
+    speed_payload_plot(&mut outcome, dir, &robots)?;
+    for (robot, _) in &robots {
+        outcome.notes.extend(observations(robot, robots.len() > 1));
+        if !robot.failed.is_empty() {
+            outcome.notes.push(format!(
+                "Did not simulate ({}): {}",
+                robot.model_name,
+                robot.failed.join("; ")
+            ));
+        }
+    }
+    Ok(outcome)
+}
+
+/// The walk shown in full: its trajectory as a CSV table and, from it, the 3D page that
+/// `mech animate` would make of that table.
+fn shown_walk(
+    outcome: &mut Outcome,
+    dir: &Path,
+    walks: &Walks,
+    (walk, trajectory): &(Walk, Trajectory),
+) -> Result<(), Error> {
+    let (header, rows) = trajectory_table(&walks.session.model, trajectory);
+    let names: Vec<&str> = header.iter().map(String::as_str).collect();
+    let file = format!("walk_{}Hz.csv", walk.frequency);
+    csv(outcome, dir, &file, &names, &rows)?;
+    // The same walk in 3D (as `mech animate` plays the CSV).
+    let table = CsvTable {
+        columns: (0..header.len())
+            .map(|j| rows.iter().map(|row| row[j]).collect())
+            .collect(),
+        lines: (2..).take(rows.len()).collect(),
+        header,
+    };
+    let model = &walks.session.model;
+    let values: Vec<f64> = (0..model.nparams()).map(|i| model.param(i)).collect();
+    let motion = crate::animation::animate(&walks.session.compiled, &values, &table)
+        .map_err(Error::Animation)?;
+    let page = crate::render::animation::page(&motion);
+    let path = dir.join(format!("walk_{}Hz.html", walk.frequency));
+    outcome.add_file(crate::output::File::new(path, page));
+    Ok(())
+}
+
+/// Forward speed against payload (Fig. 9): one colour per frequency, the compared robot's
+/// curves dashed in its frequency's colour.
+fn speed_payload_plot(
+    outcome: &mut Outcome,
+    dir: &Path,
+    robots: &[(&Walks, String)],
+) -> Result<(), Error> {
     let mut curves: Vec<(String, Vec<f64>, Vec<f64>)> = Vec::new();
     let mut styles = Vec::new();
     for (index, (robot, _)) in robots.iter().enumerate() {
@@ -121,17 +153,7 @@ pub fn run(
         .render(&dir.join("speed_payload.svg"))?;
         outcome.add_plot(plot);
     }
-    for (robot, _) in &robots {
-        outcome.notes.extend(observations(robot, robots.len() > 1));
-        if !robot.failed.is_empty() {
-            outcome.notes.push(format!(
-                "Did not simulate ({}): {}",
-                robot.model_name,
-                robot.failed.join("; ")
-            ));
-        }
-    }
-    Ok(outcome)
+    Ok(())
 }
 
 const HEADER: [&str; 15] = [
