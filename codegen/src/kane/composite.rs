@@ -24,8 +24,7 @@
 
 use std::collections::BTreeMap;
 
-use super::kinematics::{inertia_matrix, lower_expr};
-use super::kinematics::{lower_vec, Kinematics};
+use super::kinematics::{inertia_matrix, lower_expr, lower_vec, Kinematics};
 use super::vector::{self, Mat3, Vec3};
 use crate::ir::Model;
 use crate::sym::{ExprId, ExprPool, Number};

@@ -27,8 +27,7 @@
 
 use std::collections::BTreeMap;
 
-use super::kinematics::Kinematics;
-use super::kinematics::{self, Partials};
+use super::kinematics::{self, Kinematics, Partials};
 use super::points::{combine_partials, point_position, relative_partials_at};
 use super::vector::{self, Vec3};
 use crate::ir::{self, Model};
