@@ -8,8 +8,7 @@
 use pest::iterators::Pair;
 use pest::Parser as _;
 
-use super::ast::MAX_SIZE;
-use super::ast::{self, BinaryOp, Expr, ExprKind, Ident};
+use super::ast::{self, BinaryOp, Expr, ExprKind, Ident, MAX_SIZE};
 use crate::diag::{Diagnostic, SourceFile, Span};
 
 #[derive(pest_derive::Parser)]

@@ -13,7 +13,7 @@ use crate::sym::{ExprId, ExprPool, Number};
 /// The six offsets `s(q)` of a bushing's frame B from its frame A ([`ir::Load::Bushing`]), in
 /// A's basis: `d = C_Aᵀ (o_B − o_A)`, then `θ = vee(R − Rᵀ)/2` of `R = C_Aᵀ C_B`
 /// (`R_ij = (column i of C_A)·(column j of C_B)`).
-pub(super) fn bushing_offsets(
+fn bushing_offsets(
     pool: &mut ExprPool,
     kinematics: &mut Kinematics,
     frames: [ir::Handle<ir::Frame>; 2],

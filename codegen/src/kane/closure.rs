@@ -9,7 +9,7 @@
 //! the potential energy.
 
 use super::kinematics::{lower_vec, orientation, Kinematics};
-use super::vector::{self, Mat3, Vec3};
+use super::vector::{self, constant_vector, number_vector, perpendiculars, Mat3, Vec3};
 use crate::ir::{self, ClosureKind, Model};
 use crate::sym::{ExprId, ExprPool, Number, Symbol};
 
@@ -26,7 +26,7 @@ pub(super) struct Side {
 /// coordinates below A only: on a floating robot whose loops close within a leg, the base's
 /// pose is absent from their `φ`, `J` and `J̇u` symbolically, not just in exact arithmetic.
 /// (A coincident row named in a frame outside A's subtree goes back through that frame.)
-pub(super) fn closure_frame(
+fn closure_frame(
     kinematics: &Kinematics,
     model: &Model,
     closure: &ir::LoopClosure,
@@ -64,7 +64,7 @@ pub(super) fn sides(
     (frame, parent, child)
 }
 
-pub(super) fn side(
+fn side(
     pool: &mut ExprPool,
     kinematics: &mut Kinematics,
     model: &Model,
@@ -80,38 +80,6 @@ pub(super) fn side(
     let interframe = orientation(pool, rotation);
     let dcm = vector::mat_mul(pool, &frame_dcm, &interframe);
     Side { dcm, position }
-}
-
-/// Two unit vectors perpendicular to the unit `axis` and to each other (`e₂ = a × e₁`),
-/// built from the coordinate axis least aligned with `a`.
-pub fn perpendiculars(axis: [f64; 3]) -> ([f64; 3], [f64; 3]) {
-    let least = (0..3)
-        .min_by(|&i, &j| axis[i].abs().total_cmp(&axis[j].abs()))
-        .unwrap_or(0);
-    let mut helper = [0.0; 3];
-    helper[least] = 1.0;
-    let cross = |a: [f64; 3], b: [f64; 3]| {
-        [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ]
-    };
-    let e1 = cross(axis, helper);
-    let norm = (e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]).sqrt();
-    let e1 = [e1[0] / norm, e1[1] / norm, e1[2] / norm];
-    (e1, cross(axis, e1))
-}
-
-/// Numeric values of a constant vector (loop axes are constants after lowering).
-pub(super) fn constant_vector(pool: &ExprPool, v: Vec3) -> [f64; 3] {
-    let value = |id| pool.as_number(id).map_or(f64::NAN, Number::to_f64);
-    [value(v[0]), value(v[1]), value(v[2])]
-}
-
-pub(super) fn number_vector(pool: &mut ExprPool, v: [f64; 3]) -> Vec3 {
-    let number = |pool: &mut ExprPool, x: f64| if x == 0.0 { pool.zero() } else { pool.float(x) };
-    [number(pool, v[0]), number(pool, v[1]), number(pool, v[2])]
 }
 
 /// The revolute closure's axis (from the parent side) and the reference directions `e₁`
@@ -169,7 +137,7 @@ pub(super) fn revolute_geometry(
 
 /// The unit twist axis `t` (the given direction with its component along the unit hinge
 /// axis `a` removed) and `n = a × t`. The front end rejects twist axes parallel to `a`.
-pub(super) fn twist_directions(axis: [f64; 3], twist: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+fn twist_directions(axis: [f64; 3], twist: [f64; 3]) -> ([f64; 3], [f64; 3]) {
     let along = axis[0] * twist[0] + axis[1] * twist[1] + axis[2] * twist[2];
     let t = [0, 1, 2].map(|i| twist[i] - along * axis[i]);
     let norm = (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();
@@ -232,11 +200,7 @@ pub(super) fn relative_angle(pool: &mut ExprPool, geometry: &RevoluteGeometry) -
 /// `a` (`n_C = n cos β + a sin β`), lateral bending by γ turns `t` away from it
 /// (`t_C = t cos γ − a sin γ`), so `β = atan2(a_P·n_C, a_P·a_C)` and
 /// `γ = atan2(−a_P·t_C, a_P·a_C)`. Zero for a rigid closure.
-pub(super) fn off_axis_angle(
-    pool: &mut ExprPool,
-    geometry: &RevoluteGeometry,
-    lateral: bool,
-) -> ExprId {
+fn off_axis_angle(pool: &mut ExprPool, geometry: &RevoluteGeometry, lateral: bool) -> ExprId {
     let Some(twist) = &geometry.twist else {
         return pool.zero();
     };

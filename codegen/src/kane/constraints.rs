@@ -27,12 +27,12 @@
 //! `M u̇ = F + Jᵀλ`, `J u̇ = −J̇u`: for ideal constraints that is Kane's nonholonomic form
 //! (the multipliers' forces `Aᵀλ` do no work on any motion with `A u = 0`).
 
-use super::closure::{constant_vector, number_vector, perpendiculars, revolute_geometry, sides};
+use super::closure::{revolute_geometry, sides};
 use super::kinematics::{self, lower_vec, Kinematics};
 use super::points::point_position;
 use super::rates::KinematicRates;
 use super::state::lower_state_expr;
-use super::vector::{self, Vec3};
+use super::vector::{self, constant_vector, number_vector, perpendiculars, Vec3};
 use crate::ir::{self, ClosureKind, Model};
 use crate::sym::{ExprId, ExprPool, Number, Symbol};
 

@@ -36,8 +36,9 @@ pub struct Equations {
     /// target (0 in `outputs`) is sampled as `∫ rate dt` from the start of the run (a
     /// contact's dissipated energy; `Model::integrated_outputs` in the runtime).
     pub integrated_outputs: Vec<(usize, usize)>,
-    /// Loop-closure rows: `φ(q)`, `J` (`nc × nu`, column-major; `∂φ/∂q` where `q̇ = u`) and `J̇u`; the
-    /// velocity constraints' rows `A(q) u = 0` last (`φ` = 0, `J` rows `A`, bias `Ȧu`).
+    /// Loop-closure rows: `φ(q)`, `J` (`nc × nu`, column-major; `∂φ/∂q` where `q̇ = u`) and
+    /// `J̇u`; the velocity constraints' rows `A(q) u = 0` last (`φ` = 0, `J` rows `A`, bias
+    /// `Ȧu`).
     pub constraints: constraints::Constraints,
     /// Flexures: their angles `θ(q)`, stiffness `k`, time-domain damping `b` and loss factor
     /// `η`, for frequency-domain analyses (complex stiffness `k(1 + iη)`).

@@ -54,10 +54,7 @@ use vector::Vec3;
 fn flexure_rows(pool: &mut ExprPool, kinematics: &mut Kinematics, model: &Model) -> FlexureRows {
     let mut rows = FlexureRows::default();
     for flexure in &model.flexures {
-        let angle = match flexure.angle {
-            ir::FlexureAngle::Coordinate(c) => pool.symbol(Symbol::Coordinate(c.index() as u32)),
-            angle => flexure_angle(pool, kinematics, model, angle),
-        };
+        let angle = flexure_angle(pool, kinematics, model, flexure.angle);
         rows.names.push(flexure.name.clone());
         rows.angles.push(angle);
         rows.stiffness.push(lower_expr(pool, &flexure.stiffness));

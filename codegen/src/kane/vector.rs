@@ -1,7 +1,9 @@
 //! Small symbolic 3-vectors and 3×3 direction cosine matrices over an [`ExprPool`].
 //!
 //! A `Vec3` holds components in one frame's basis; a `Mat3` `C_{A←B}` maps components in B
-//! to components in A (rows indexed by A's axes).
+//! to components in A (rows indexed by A's axes). Constant vectors go to and from numbers
+//! (`constant_vector`, `number_vector`) where directions are built numerically
+//! (`perpendiculars` of a loop's axis or a plane's normal).
 
 use crate::sym::{ExprId, ExprPool, Number};
 
@@ -232,4 +234,37 @@ pub fn euler_rates(
         let rate3 = pool.sub(omega2[third], along);
         [rate1, middle, rate3]
     }
+}
+
+/// Two unit vectors perpendicular to the unit `axis` and to each other (`e₂ = a × e₁`),
+/// built from the coordinate axis least aligned with `a`.
+pub(super) fn perpendiculars(axis: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    let least = (0..3)
+        .min_by(|&i, &j| axis[i].abs().total_cmp(&axis[j].abs()))
+        .unwrap_or(0);
+    let mut helper = [0.0; 3];
+    helper[least] = 1.0;
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let e1 = cross(axis, helper);
+    let norm = (e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]).sqrt();
+    let e1 = [e1[0] / norm, e1[1] / norm, e1[2] / norm];
+    (e1, cross(axis, e1))
+}
+
+/// Numeric values of a constant vector (loop axes are constants after lowering).
+pub(super) fn constant_vector(pool: &ExprPool, v: Vec3) -> [f64; 3] {
+    let value = |id| pool.as_number(id).map_or(f64::NAN, Number::to_f64);
+    [value(v[0]), value(v[1]), value(v[2])]
+}
+
+/// A vector of numbers as pool constants (exact zeros kept as zero).
+pub(super) fn number_vector(pool: &mut ExprPool, v: [f64; 3]) -> Vec3 {
+    let number = |pool: &mut ExprPool, x: f64| if x == 0.0 { pool.zero() } else { pool.float(x) };
+    [number(pool, v[0]), number(pool, v[1]), number(pool, v[2])]
 }

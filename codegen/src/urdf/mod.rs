@@ -3,9 +3,10 @@
 //!
 //! Consumes: the URDF text as a [`SourceFile`] and the [`Options`] (the units the file's
 //! numbers are in, whether the root link is fixed or floating, `--snap`). Produces: an
-//! [`Import`]: the `.mech` text and the warnings (spanned [`Diagnostic`](crate::diag::Diagnostic)s into the URDF) for
-//! everything not translated or suspicious; or [`Errors`] with file, line and column for
-//! malformed XML, a bad number, an unknown link or joint, a cycle without a loop joint.
+//! [`Import`]: the `.mech` text and the warnings (spanned
+//! [`Diagnostic`](crate::diag::Diagnostic)s into the URDF) for everything not translated or
+//! suspicious; or [`Errors`] with file, line and column for malformed XML, a bad number, an
+//! unknown link or joint, a cycle without a loop joint.
 //!
 //! The translation:
 //! - link → `body` (mass, centre of mass, inertia about it in link axes; an inertial frame

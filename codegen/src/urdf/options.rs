@@ -2,8 +2,8 @@
 //! (checked against the `.mech` units of each quantity), whether the root link is fixed or
 //! floating, `--snap` and `--compare`; and the translated robot with its warnings.
 //!
-//! Consumes: option text (`--length mm`). Produces: [`Options`] for `read`, `emit` and
-//! `compare`, and the [`Import`] that `emit` fills.
+//! Consumes: option text (`--length mm`). Produces: [`Options`] for `import` and `emit`
+//! (its [`Units`] for `compare`), and the [`Import`] that `emit` fills.
 
 use std::sync::Arc;
 

@@ -1,5 +1,6 @@
-//! Golden-file tests with one `#[test]` per input file, shared by `codegen/tests/ui.rs` and
-//! the `mech` crate's `tests/equations/` (included there by `#[path]`).
+//! Golden-file tests with one `#[test]` per input file, shared by `codegen/tests/ui.rs`,
+//! `codegen/tests/urdf_ui.rs` and the `mech` crate's `tests/equations/` (included there by
+//! `#[path]`).
 //!
 //! Consumes: a directory of inputs and the list of their stems written in the test file.
 //! Produces: the tests (`tests_per_file!`) and the check that the list and the directory
@@ -57,7 +58,7 @@ macro_rules! tests_per_file {
 /// `.stderr` file beside it, or rewrites that with `MECH_BLESS=1`. `succeeded` is what
 /// `actual` reads when the input did not fail.
 #[allow(dead_code)] // used by the ui tests, not by every file that includes this one
-pub fn check_failure(input: &Path, actual: &str, succeeded: &str) {
+fn check_failure(input: &Path, actual: &str, succeeded: &str) {
     let golden = input.with_extension("stderr");
     if blessing() {
         std::fs::write(&golden, actual).expect("writable .stderr file");

@@ -10,8 +10,7 @@ use crate::front::ast::{self, ExprKind, Ident};
 use crate::ir::{self, Dimension, Expr, Handle, JointKind, Vec3};
 
 use super::body::{missing_field, FrameRef, PointRef};
-use super::expr::wrong_argument_count;
-use super::expr::{unparen, Ctx, Expect, Typed};
+use super::expr::{unparen, wrong_argument_count, Ctx, Expect, Typed};
 use super::names::Namespace;
 use super::Lowerer;
 

@@ -17,8 +17,7 @@ use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, ExprKind};
 use crate::ir::{self, Dimension};
 
-use super::expr::unparen;
-use super::expr::wrong_argument_count;
+use super::expr::{unparen, wrong_argument_count};
 use super::velocity::{DegreeErrors, LinearScalar};
 use super::Lowerer;
 

@@ -16,8 +16,7 @@ use crate::diag::{Diagnostic, Span};
 use crate::front::ast::{self, BinaryOp, ExprKind};
 use crate::ir::{self, Dimension};
 
-use super::expr::wrong_argument_count;
-use super::expr::{unparen, Ctx};
+use super::expr::{unparen, wrong_argument_count, Ctx};
 use super::Lowerer;
 
 /// Degree of an expression in the speeds: constant in them, or linear and homogeneous.
