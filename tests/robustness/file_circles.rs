@@ -7,17 +7,20 @@
 //! names an item of the other's module, or of a module the other's `pub use` re-exports it
 //! from (`experiments::Error` is `experiments/error.rs`). A `pub use` is a use of what it
 //! re-exports, but for a folder's face: `mod.rs` (or `lib.rs`) re-exporting its own files'
-//! items, which those files may use, is the module tree's structure, as its `mod` lines are.
-//! A `use` inside a function counts as well; test and doc-only items are skipped at any depth.
+//! items, which those files may use, is the module tree's structure, as its `mod` lines are;
+//! where the face itself names such an item (`pub use error::Error;` then `-> Error`), it
+//! uses that file. Imports are followed by the name they bring in (`use a as b;` then
+//! `b::x`). A `use` inside a function counts as well; test and doc-only items are skipped at any depth.
 //! Paths inside macro calls (`format!`, `matches!`) and method calls (resolved by type) are
 //! not seen: a circle made only of those would be missed.
 //!
-//! `src/` and `runtime/src` hold to it strictly, and `codegen/src` but for one folder: in
-//! `front/lower/` a file may also use the folder's `mod.rs`. The front end's `Lowerer` is one
-//! struct whose `impl` blocks fill the folder's files, one topic each; its fields' types
-//! (a body's record, a typed expression, a pending load) live with their topic, so the
-//! struct names them while each file names the struct. Calls between those `impl` blocks
-//! are method calls, which a path does not show either.
+//! `src/` and `runtime/src` hold to it strictly, and `codegen/src` but for two folders whose
+//! files may also use the folder's `mod.rs`: `front/lower/`, where the front end's `Lowerer`
+//! is one struct whose `impl` blocks fill the folder's files, one topic each, its fields'
+//! types (a body's record, a typed expression, a pending load) living with their topic; and
+//! `ir/`, whose `Model` holds the plausibility requirements `plausible.rs` states over the
+//! model's expressions. The struct names its fields' types while each file names the struct.
+//! Calls between `impl` blocks are method calls, which a path does not show either.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -42,13 +45,19 @@ fn module_files(root: &Path) -> BTreeMap<Module, PathBuf> {
                     .components()
                     .map(|c| c.as_os_str().to_string_lossy().into_owned())
                     .collect();
+                // A `main.rs` beside a `lib.rs` is the root of another crate (the binary).
+                if module.last().is_some_and(|m| m == "main") && folder.join("lib.rs").exists() {
+                    continue;
+                }
                 if matches!(
                     module.last().map(String::as_str),
                     Some("mod" | "lib" | "main")
                 ) {
                     module.pop();
                 }
-                files.insert(module, path);
+                let file = path.display().to_string();
+                let twin = files.insert(module, path);
+                assert!(twin.is_none(), "two files of one module: {file}, {twin:?}");
             }
         }
     }
@@ -82,19 +91,34 @@ fn attributes(item: &syn::Item) -> &[syn::Attribute] {
     }
 }
 
-/// The leaves of a `use` tree as paths (`a::{b, c::d}` → `a::b`, `a::c::d`); `self` leaves
-/// name the module itself, renames keep the original path.
-fn use_paths(tree: &syn::UseTree, prefix: &mut Vec<String>, out: &mut Vec<Vec<String>>) {
+/// One leaf of a `use` tree: the path it names and the name it is known by in the file.
+struct UseLeaf {
+    path: Vec<String>,
+    name: String,
+}
+
+/// The leaves of a `use` tree (`a::{b, c::d as e}` → `a::b` as `b`, `a::c::d` as `e`); a
+/// `self` leaf names the module itself, a glob the module it reads (known by no name).
+fn use_paths(tree: &syn::UseTree, prefix: &mut Vec<String>, out: &mut Vec<UseLeaf>) {
+    let mut leaf = |path: Vec<String>, name: String| out.push(UseLeaf { path, name });
     match tree {
         syn::UseTree::Path(p) => {
             prefix.push(p.ident.to_string());
             use_paths(&p.tree, prefix, out);
             prefix.pop();
         }
-        syn::UseTree::Name(n) if n.ident == "self" => out.push(prefix.clone()),
-        syn::UseTree::Name(n) => out.push([prefix.clone(), vec![n.ident.to_string()]].concat()),
-        syn::UseTree::Rename(r) => out.push([prefix.clone(), vec![r.ident.to_string()]].concat()),
-        syn::UseTree::Glob(_) => out.push(prefix.clone()),
+        syn::UseTree::Name(n) if n.ident == "self" => {
+            leaf(prefix.clone(), prefix.last().cloned().unwrap_or_default())
+        }
+        syn::UseTree::Name(n) => leaf(
+            [prefix.clone(), vec![n.ident.to_string()]].concat(),
+            n.ident.to_string(),
+        ),
+        syn::UseTree::Rename(r) => leaf(
+            [prefix.clone(), vec![r.ident.to_string()]].concat(),
+            r.rename.to_string(),
+        ),
+        syn::UseTree::Glob(_) => leaf(prefix.clone(), String::new()),
         syn::UseTree::Group(g) => g.items.iter().for_each(|t| use_paths(t, prefix, out)),
     }
 }
@@ -111,7 +135,9 @@ impl<'a> Visit<'a> for Paths {
         syn::visit::visit_path(self, path);
     }
     fn visit_item_use(&mut self, item: &'a syn::ItemUse) {
-        use_paths(&item.tree, &mut Vec::new(), &mut self.0);
+        let mut leaves = Vec::new();
+        use_paths(&item.tree, &mut Vec::new(), &mut leaves);
+        self.0.extend(leaves.into_iter().map(|leaf| leaf.path));
     }
     // `pub(crate)`, `pub(super)`: where an item is seen from, not a use.
     fn visit_vis_restricted(&mut self, _: &'a syn::VisRestricted) {}
@@ -131,20 +157,14 @@ impl<'a> Visit<'a> for Paths {
 /// One parsed file: what it writes, and what it imports or re-exports.
 struct Source {
     module: Module,
-    /// A `mod.rs`, `lib.rs` or `main.rs`: its `self` is its folder.
-    is_folder: bool,
-    uses: Vec<Vec<String>>,
-    reexports: Vec<Vec<String>>,
+    uses: Vec<UseLeaf>,
+    reexports: Vec<UseLeaf>,
     paths: Vec<Vec<String>>,
 }
 
 fn parse(module: &Module, path: &Path) -> Source {
     let text = std::fs::read_to_string(path).unwrap();
     let file = syn::parse_file(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let is_folder = matches!(
-        path.file_stem().and_then(|s| s.to_str()),
-        Some("mod" | "lib" | "main")
-    );
     let (mut uses, mut reexports, mut paths) = (Vec::new(), Vec::new(), Paths::default());
     for item in file
         .items
@@ -161,7 +181,6 @@ fn parse(module: &Module, path: &Path) -> Source {
     }
     Source {
         module: module.clone(),
-        is_folder,
         uses,
         reexports,
         paths: paths.0,
@@ -169,12 +188,12 @@ fn parse(module: &Module, path: &Path) -> Source {
 }
 
 /// The crate-absolute form of a path written in `source`, if it starts at `crate`, `self`,
-/// `super`, a module the file imported, or (in a folder's own file) a child module named
-/// with what follows it.
+/// `super`, a name the file imported, or a child module of the file's named with what
+/// follows it.
 fn absolute(
     source: &Source,
     path: &[String],
-    imported: &BTreeMap<String, Module>,
+    imported: &BTreeMap<String, Vec<String>>,
     files: &BTreeMap<Module, PathBuf>,
 ) -> Option<Module> {
     let first = path.first()?;
@@ -193,8 +212,7 @@ fn absolute(
         name if imported.contains_key(name) => [imported[name].clone(), rest(1)].concat(),
         // A lone name is a value or a type, never the module: `match hinge` in
         // `transform/mod.rs` is a variable, not `transform/hinge.rs`.
-        name if source.is_folder
-            && path.len() > 1
+        name if path.len() > 1
             && files.contains_key(&[here.clone(), vec![name.into()]].concat()) =>
         {
             [here, path.to_vec()].concat()
@@ -228,40 +246,54 @@ fn file_of(
 fn uses_graph(root: &Path) -> BTreeMap<Module, BTreeSet<Module>> {
     let files = module_files(root);
     let sources: Vec<Source> = files.iter().map(|(m, p)| parse(m, p)).collect();
-    // `pub use …::Name` in a module: `module::Name` is in the file the path lands in.
-    // Twice, for a re-export of a re-export.
+    // `pub use …::Name` in a module: `module::Name` is in the file the path lands in; again
+    // until nothing changes, for re-exports of re-exports.
     let mut reexported = BTreeMap::new();
-    for _ in 0..2 {
+    loop {
+        let before = reexported.clone();
         for source in &sources {
-            for path in &source.reexports {
-                let full = absolute(source, path, &BTreeMap::new(), &files);
+            for leaf in &source.reexports {
+                let full = absolute(source, &leaf.path, &BTreeMap::new(), &files);
                 if let Some(file) = full.and_then(|f| file_of(&f, &files, &reexported)) {
-                    let name = path.last().unwrap().clone();
-                    reexported.insert((source.module.clone(), name), file);
+                    reexported.insert((source.module.clone(), leaf.name.clone()), file);
                 }
             }
+        }
+        if reexported == before {
+            break;
         }
     }
     let mut graph = BTreeMap::new();
     for source in &sources {
         let none = BTreeMap::new();
+        // Names the file imported or re-exported, by the name it knows them by.
         let mut imported = BTreeMap::new();
         let mut used = BTreeSet::new();
-        // A re-export names what it re-exports: a use like any other, but for a folder's
-        // face (`mod.rs` re-exporting its own files' items, which those files may use).
-        let own_child = |path: &&Vec<String>| {
-            source.is_folder
-                && files.contains_key(&[source.module.clone(), vec![path[0].clone()]].concat())
+        // A module's face (its file re-exporting its own child files' items, which those
+        // files may use) is the module tree's structure, as its `mod` lines are; every other
+        // `use` or re-export is a use. Either way the names it brings in count where they are
+        // written.
+        let own_child = |full: &Module| {
+            let depth = source.module.len();
+            full.len() > depth + 1
+                && full.starts_with(&source.module)
+                && files.contains_key(&full[..=depth])
         };
-        let reexports = source.reexports.iter().filter(|p| !own_child(p));
-        for path in source.uses.iter().chain(reexports) {
-            let Some(full) = absolute(source, path, &none, &files) else {
+        for (leaf, reexport) in source
+            .uses
+            .iter()
+            .map(|leaf| (leaf, false))
+            .chain(source.reexports.iter().map(|leaf| (leaf, true)))
+        {
+            let Some(full) = absolute(source, &leaf.path, &none, &files) else {
                 continue;
             };
-            if files.contains_key(&full) {
-                imported.insert(full.last().cloned().unwrap_or_default(), full.clone());
+            if !leaf.name.is_empty() {
+                imported.insert(leaf.name.clone(), full.clone());
             }
-            used.extend(file_of(&full, &files, &reexported));
+            if !(reexport && own_child(&full)) {
+                used.extend(file_of(&full, &files, &reexported));
+            }
         }
         for path in &source.paths {
             if let Some(full) = absolute(source, path, &imported, &files) {
@@ -338,7 +370,7 @@ fn no_circle_among_the_runtimes_files() {
 
 #[test]
 fn no_circle_among_the_compilers_files() {
-    assert_no_circle("codegen/src", &["front/lower"]);
+    assert_no_circle("codegen/src", &["front/lower", "ir"]);
 }
 
 /// Writes `text` to `file` below the temporary crate `root`.
@@ -451,5 +483,45 @@ fn a_use_inside_a_function_counts_and_a_test_method_does_not() {
         ],
         ("b.rs", "pub struct B;\npub fn probe() { use crate::a::A; let _ = A; }\n"),
         "a.rs ⇄ b.rs",
+    );
+}
+
+/// A module's face uses what it re-exports from its own files where it names it
+/// (`pub use error::Error;` then `-> Error`), and a module imported under another name
+/// (`use crate::experiments as exp;`) is followed through that name.
+#[test]
+fn a_faces_own_names_and_renamed_imports_are_followed() {
+    circle_only_after(
+        "file_circles_face",
+        &[
+            ("lib.rs", "pub mod experiments;\n"),
+            (
+                "experiments/mod.rs",
+                "pub mod error;\npub use error::Error;\npub struct Kind;\npub fn f() -> Option<Error> { None }\n",
+            ),
+            ("experiments/error.rs", "pub struct Error;\n"),
+        ],
+        (
+            "experiments/error.rs",
+            "use super::Kind;\npub struct Error(pub Kind);\n",
+        ),
+        "mod.rs ⇄ error.rs",
+    );
+    circle_only_after(
+        "file_circles_rename",
+        &[
+            ("lib.rs", "pub mod experiments;\npub mod top;\n"),
+            ("experiments/mod.rs", "pub mod leg;\n"),
+            ("experiments/leg.rs", "pub fn open() {}\n"),
+            (
+                "top.rs",
+                "use crate::experiments as exp;\npub fn run() { exp::leg::open() }\n",
+            ),
+        ],
+        (
+            "experiments/leg.rs",
+            "pub fn open() { crate::top::run() }\n",
+        ),
+        "top.rs ⇄ leg.rs",
     );
 }
