@@ -37,7 +37,7 @@ pub struct ModelArgs {
 
 impl ModelArgs {
     /// The files the run reads: the model and the tables of `--input x=csv(...)`.
-    pub(super) fn reads(&self) -> Vec<crate::output::Read> {
+    fn reads(&self) -> Vec<crate::output::Read> {
         let model = crate::output::Read {
             path: self.model.clone(),
             what: "the model",

@@ -33,7 +33,7 @@ pub enum Error {
     Equations(#[from] crate::describe::TooLarge),
     #[error(transparent)]
     Experiments(#[from] experiments::Error),
-    /// The model of `mech fit` or `mech diagnose`, opened as a leg.
+    /// The model of `mech fit`, opened as a leg.
     #[error(transparent)]
     Leg(#[from] experiments::leg::Error),
     #[error(transparent)]

@@ -1,5 +1,5 @@
-//! The progress bars of long commands (`mech sweep`, `mech diagnose`, `mech report`), on
-//! stderr.
+//! The progress bars of long commands (`mech sweep`, `mech report`, `mech experiment`,
+//! `mech simulate`, `mech linearize`), on stderr.
 
 /// A progress bar drawn with `template` (indicatif's syntax) on stderr.
 pub(super) fn progress_bar(length: u64, template: &str) -> indicatif::ProgressBar {

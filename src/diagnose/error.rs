@@ -134,7 +134,7 @@ pub enum Error {
     RingDown { model: String, error: RuntimeError },
     /// Levenberg–Marquardt could not fit (whose residuals may have failed with an [`Error`]).
     Fit(Box<LmError<Error>>),
-    /// The HAMR leg (`experiments/leg.rs`): opening it, its ports, its equilibria.
+    /// The HAMR leg (`experiments/leg/`): opening it, its ports, its equilibria.
     Leg(Box<leg::Error>),
 }
 

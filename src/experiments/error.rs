@@ -3,7 +3,8 @@
 //!
 //! Consumes: the typed errors of the layers below ([`leg::Error`] of the leg they drive,
 //! [`session::Error`], [`RuntimeError`], [`PlotError`], [`RefineError`], [`TomlError`], and
-//! those of the diagnosis and the study that two kinds run). Produces: [`Error`], whose `Display` is the message users read.
+//! those of the diagnosis and the study that two kinds run). Produces: [`Error`], whose
+//! `Display` is the message users read.
 
 use std::fmt;
 use std::path::PathBuf;

@@ -197,7 +197,11 @@ fn arms(low: f64, high: f64, n: usize) -> Vec<f64> {
 pub(crate) fn keys(series: &[Series]) -> Vec<String> {
     let mut keys: Vec<String> = Vec::new();
     for (k, s) in series.iter().enumerate() {
-        let key = format!("{}_{}", file_stem(&s.model.path, "model"), s.dof.name());
+        let key = format!(
+            "{}_{}",
+            file_stem(&s.model.path, "experiment"),
+            s.dof.name()
+        );
         let key = if keys.contains(&key) {
             format!("{key}_{}", k + 1)
         } else {

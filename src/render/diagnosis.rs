@@ -649,8 +649,8 @@ fn inert_tables(d: &Diagnosis) -> Vec<Table> {
 }
 
 /// What the data show against what the base model and the best candidate predict: the
-/// features of the response ([`crate::diagnose::features`]), each read the same way off the data and
-/// off both predictions, and the residual RMS per series on the held-out values.
+/// features of the response ([`crate::diagnose::features`]), each read the same way off the
+/// data and off both predictions, and the residual RMS per series on the held-out values.
 pub struct Comparison {
     /// `cause at location` of the best candidate (the combined pair when there is one).
     pub best_label: Option<String>,

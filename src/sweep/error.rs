@@ -1,8 +1,9 @@
 //! Why a study cannot run, and why one of its samples has no outputs.
 //!
 //! Consumes: the typed errors of the layers below (the leg the outputs are computed on,
-//! session, quantities, resonance refinement, the sampler). Produces: [`Error`], naming the study file, the key and its line, and
-//! [`SampleError`], kept in the table beside the failed sample.
+//! session, quantities, resonance refinement, the sampler). Produces: [`Error`], naming the
+//! study file, the key and its line, and [`SampleError`], kept in the table beside the
+//! failed sample.
 
 use std::fmt;
 use std::path::PathBuf;

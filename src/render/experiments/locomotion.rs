@@ -13,7 +13,7 @@ use crate::render::plot;
 use crate::render::report::Outcome;
 use crate::render::run::trajectory_table;
 use crate::render::table::Table;
-use mech_runtime::{Model, Trajectory};
+use mech_runtime::Model;
 use std::path::Path;
 
 /// The payload the paper's HAMR-VI carries (Sec. V-C), kg.
@@ -66,9 +66,7 @@ pub fn run(
                 .insert(format!("{prefix}airborne_{key}"), walk.run.airborne);
         }
     }
-    if let Some(shown) = &walks.shown {
-        shown_walk(&mut outcome, dir, &walks, shown)?;
-    }
+    shown_walk(&mut outcome, dir, &walks)?;
     speed_payload_plot(&mut outcome, dir, &robots)?;
     for (robot, _) in &robots {
         outcome.notes.extend(observations(robot, robots.len() > 1));
@@ -83,14 +81,12 @@ pub fn run(
     Ok(outcome)
 }
 
-/// The walk shown in full: its trajectory as a CSV table and, from it, the 3D page that
-/// `mech animate` would make of that table.
-fn shown_walk(
-    outcome: &mut Outcome,
-    dir: &Path,
-    walks: &Walks,
-    (walk, trajectory): &(Walk, Trajectory),
-) -> Result<(), Error> {
+/// The walk shown in full, if one ran: its trajectory as a CSV table and, from it, the 3D
+/// page that `mech animate` would make of that table.
+fn shown_walk(outcome: &mut Outcome, dir: &Path, walks: &Walks) -> Result<(), Error> {
+    let Some((walk, trajectory)) = &walks.shown else {
+        return Ok(());
+    };
     let (header, rows) = trajectory_table(&walks.session.model, trajectory);
     let names: Vec<&str> = header.iter().map(String::as_str).collect();
     let file = format!("walk_{}Hz.csv", walk.frequency);
