@@ -880,11 +880,14 @@ def measured_section(R, heading, table, intro, analysis):
     L.append(intro)
     with open(path) as f:
         lines = [line.rstrip('\n') for line in f]
+    previous = ''
     for line in lines:
+        # A table starts where the example's previous line was not a row of one.
         if line.startswith('|'):
-            if not L[-1].startswith('|'):
+            if not previous.startswith('|'):
                 L.append('')
             L.append(line)
+        previous = line
     L.append('')
     path = analysis_path(analysis)
     if os.path.exists(path):

@@ -23,7 +23,7 @@ use std::io::Write as _;
 use std::path::PathBuf;
 use std::time::Duration;
 
-use mech_bench::timing::{num, per_call_cpu_ns, per_call_ns, per_run_s, summary_json};
+use mech_bench::timing::{list_json, per_call_cpu_ns, per_call_ns, per_run_s, summary_json};
 use mech_bench::{bench_speeds, cholesky_solve_fixed};
 use mech_codegen::{Compiled, SourceFile};
 use mech_runtime::{Model, SimOptions};
@@ -41,11 +41,6 @@ struct Timing {
     min_runs: usize,
     max_runs: usize,
     budget: Duration,
-}
-
-fn list_json(values: &[f64]) -> String {
-    let items: Vec<String> = values.iter().map(|v| num(*v)).collect();
-    format!("[{}]", items.join(","))
 }
 
 /// Times `u̇` of one floating chain's generated Rust; one JSON line.
