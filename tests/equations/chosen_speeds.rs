@@ -199,14 +199,11 @@ fn the_bundled_model_as_generated_rust_moves_as_the_joint_rates() {
 /// The language reference's `speed` example simulates and keeps its energy.
 #[test]
 fn language_reference_speed_example_conserves_energy() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/mech-language.md");
-    let markdown = std::fs::read_to_string(path).unwrap();
-    let examples = crate::markdown::examples(&markdown);
-    let example = examples
-        .iter()
-        .find(|e| e.text.contains("speed w_upper"))
+    let (_, text) = crate::language_doc::language_reference_examples()
+        .into_iter()
+        .find(|(_, text)| text.contains("speed w_upper"))
         .expect("an example of `speed`");
-    let model = common::tape_from_text("speed_example", &example.text);
+    let model = common::tape_from_text("speed_example", &text);
     assert_eq!(model.speed_name(1), "w_lower");
     let (scale, drift) = common::energy_drift(&model, &run(&model));
     assert!(scale > 0.1 && drift < 1e-10, "drift {drift:e}");

@@ -53,8 +53,7 @@ fn four_bar_assembly_matches_sympy() {
     );
 }
 
-/// After 1 s of free motion SymPy + SciPy DOP853 (rtol = atol = 1e-9) give q1 = 3.3500951900
-/// (`sim1s_DOP853.q1_final` of `tests/peers/sympy_fourbar.py`).
+/// After 1 s of free motion the four-bar's q1 is SymPy's ([`SYMPY_FOUR_BAR_Q1_AT_1_S`]).
 #[test]
 fn four_bar_motion_matches_sympy_and_holds_the_loop() {
     for model in [
@@ -239,7 +238,10 @@ fn redundant_closure_reports_mobility_and_simulates() {
     );
     let run = mech_runtime::simulate(&model, &q, &u, &[], &tight(1.0, 0.01), &mut |_| {}).unwrap();
     let q1 = run.q.last().unwrap()[0];
-    assert!((q1 - 3.3500951900).abs() < 5e-9, "q1(1 s) = {q1}");
+    assert!(
+        (q1 - SYMPY_FOUR_BAR_Q1_AT_1_S).abs() < 5e-9,
+        "q1(1 s) = {q1}"
+    );
 }
 
 /// `q + h W(q) v`: a straight step along the coordinates' rates for speeds `v` (`q + h v`

@@ -103,7 +103,7 @@ fn reduced_accelerations_match_the_multiplier_form() {
     assert!(checked >= 4, "only {checked} models with loops");
 }
 
-/// The four-bar's free motion (SymPy + SciPy DOP853 at 1e-9 give q1(1 s) = 3.3500951900,
+/// The four-bar's free motion (SymPy + SciPy DOP853 at 1e-9 give q1(1 s) = 3.350095189957,
 /// `sim1s_DOP853.q1_final` of `tests/peers/sympy_fourbar.py`) with the exponential Rosenbrock
 /// method through `simulate`, which picks the crank as the independent coordinate: the same
 /// value, the loop closed at every sample.
